@@ -1,0 +1,59 @@
+// trueaxis::io — CSV tables with a header row.
+//
+// Format: first non-blank line is the header (comma-separated names); every further non-blank
+// line holds one number per column. Fields may be padded with spaces; "\r\n" line ends are
+// accepted. Readers reject anything malformed with an Error whose message names the file, the
+// 1-based line and the 1-based character column: non-numbers, NaN/Inf, missing or extra fields,
+// duplicated or empty column names.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace trueaxis::io {
+
+// A parsed numeric CSV table, column-major.
+class CsvTable {
+ public:
+  // Parses `text`; `path` is used only in error messages.
+  static CsvTable parse(std::string text, std::string path);
+  // Reads and parses the file at `path`. Throws Error when the file cannot be read.
+  static CsvTable read(const std::string& path);
+
+  const std::string& path() const { return path_; }
+  const std::vector<std::string>& header() const { return header_; }
+  std::size_t rows() const { return rows_; }
+  std::size_t cols() const { return header_.size(); }
+
+  // Index of the column called `name`, or -1.
+  int find(std::string_view name) const;
+  // Index of the column called `name`; throws Error naming the file and header line otherwise.
+  int require(std::string_view name) const;
+  // Column values (length rows()).
+  const Eigen::VectorXd& column(int c) const { return columns_[static_cast<std::size_t>(c)]; }
+
+  // "path:line:col: " for the field at (row, col); row -1 means the header line.
+  std::string where(long row, int col) const;
+
+ private:
+  std::string path_;
+  std::string text_;
+  std::vector<std::string> header_;
+  std::vector<Eigen::VectorXd> columns_;
+  std::vector<std::size_t> line_start_;  // byte offset of each data row's line (row order)
+  std::vector<std::size_t> line_no_;     // 1-based line number of each data row
+  std::size_t header_start_ = 0, header_line_ = 1;
+  std::size_t rows_ = 0;
+};
+
+// Writes a CSV with a header row. All columns must have the same length. Numbers are written
+// with the shortest representation that reads back exactly. Throws Error if the file cannot be
+// written.
+void write_csv(const std::string& path, const std::vector<std::string>& header,
+               const std::vector<const Eigen::VectorXd*>& columns);
+
+}  // namespace trueaxis::io

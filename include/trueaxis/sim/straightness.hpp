@@ -1,0 +1,55 @@
+// trueaxis::sim — a seeded virtual carriage for straightness campaigns (spec 06, used by spec 01).
+//
+// The carriage moves along x over a workpiece. Truth: workpiece profile w (sinusoids of random
+// wavelength and phase plus a fine random-walk texture), guide straightness g (a bow plus
+// sinusoids), pitch θ (a drift plus a sinusoid), probe zero offsets o_i and an angle-channel
+// offset. Readings follow spec 01: m_i(K) = w(x_K + s_i) + g(x_K) + s_i·θ(x_K) + o_i + noise.
+// Units: mm and rad. The same options and seed give the same data on the same build.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "trueaxis/separation/separation.hpp"
+
+namespace trueaxis::sim {
+
+struct StraightnessOptions {
+  long stations = 201;                     // number of stops
+  double step = 10;                        // mm between stops
+  double x0 = 0;                           // mm, first stop
+  std::vector<double> offsets{0, 10, 20};  // probe offsets from probe A (mm), whole steps
+  double workpiece_amplitude = 5e-3;       // mm, scale of the workpiece form error
+  double guide_amplitude = 3e-3;           // mm, scale of the guide straightness error
+  double pitch_amplitude = 5e-6;           // rad, scale of the pitch error (0: no pitch)
+  double offset_amplitude = 20e-3;         // mm, scale of the probes' zero offsets
+  double noise = 0;                        // mm, probe noise standard deviation
+  bool angle = false;                      // add an angle (pitch) channel
+  double angle_noise = 0;                  // rad, its noise standard deviation
+  std::uint64_t seed = 1;
+
+  void validate() const;  // throws Error
+};
+
+struct StraightnessTruth {
+  // On the workpiece grid: every position a probe visits, x_q = x0 + (q + min offset/h)·h.
+  Eigen::VectorXd x;         // mm
+  Eigen::VectorXd workpiece; // mm
+  Eigen::VectorXd guide;     // mm (the carriage functions evaluated at x)
+  Eigen::VectorXd pitch;     // rad
+  std::vector<double> probe_offsets;  // o_i, mm
+  double angle_offset = 0;            // rad
+  // Index of station K on this grid.
+  long station_index(long K) const { return K + first_station_index; }
+  long first_station_index = 0;
+};
+
+struct StraightnessCampaign {
+  separation::ProbeData data;
+  StraightnessTruth truth;
+};
+
+StraightnessCampaign simulate_straightness(const StraightnessOptions& options);
+
+}  // namespace trueaxis::sim

@@ -1,0 +1,90 @@
+#include "trueaxis/io/probes.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/csv.hpp"
+
+namespace trueaxis::io {
+
+separation::ProbeData read_probes(const std::string& path, const ProbeReadOptions& opt) {
+  const CsvTable t = CsvTable::read(path);
+  if (t.cols() < 1 || t.header()[0] != "x")
+    throw Error(fmt::format("{}first column must be 'x' (station position, mm), found '{}'",
+                            t.where(-1, 0), t.cols() ? t.header()[0] : ""));
+  int angle_col = -1;
+  if (opt.angle_column) angle_col = t.require(*opt.angle_column);
+  std::vector<int> probe_cols;
+  for (int c = 1; c < static_cast<int>(t.cols()); ++c)
+    if (c != angle_col) probe_cols.push_back(c);
+  if (probe_cols.size() < 2)
+    throw Error(fmt::format("{}need at least two probe columns after 'x', found {}", t.where(-1, 0),
+                            probe_cols.size()));
+  const long n = static_cast<long>(t.rows());
+  if (n < opt.min_stations)
+    throw Error(fmt::format("{}: too few stations: {} (need at least {})", path, n, opt.min_stations));
+  const Eigen::VectorXd& x = t.column(0);
+  const double h = (x[n - 1] - x[0]) / static_cast<double>(n - 1);
+  for (long k = 1; k < n; ++k) {
+    const double d = x[k] - x[k - 1];
+    if (!(d > 0))
+      throw Error(fmt::format("{}x = {} does not increase (previous {})", t.where(k, 0), x[k], x[k - 1]));
+  }
+  for (long k = 1; k < n; ++k) {
+    const double d = x[k] - x[k - 1];
+    if (std::abs(d - h) > 1e-6 * h + 1e-12)
+      throw Error(fmt::format("{}uneven step: x goes from {} to {} ({} mm; the mean step is {} mm)",
+                              t.where(k, 0), x[k - 1], x[k], d, h));
+  }
+  separation::ProbeData d;
+  d.x = x;
+  if (opt.offsets.empty()) {
+    for (std::size_t i = 0; i < probe_cols.size(); ++i) d.offsets.push_back(static_cast<double>(i) * h);
+  } else {
+    if (opt.offsets.size() != probe_cols.size())
+      throw Error(fmt::format("{}{} probe columns but {} offsets given", t.where(-1, probe_cols[0]),
+                              probe_cols.size(), opt.offsets.size()));
+    d.offsets = opt.offsets;
+    if (d.offsets[0] != 0) throw Error(fmt::format("offsets: the first offset must be 0 (probe A), got {}", d.offsets[0]));
+    for (std::size_t i = 0; i < d.offsets.size(); ++i) {
+      const double r = d.offsets[i] / h;
+      if (std::abs(r - std::round(r)) > 1e-6 * std::max(1.0, std::abs(r)))
+        throw Error(fmt::format(
+            "offsets: probe '{}' at {} mm is not a whole multiple of the step {} mm (from {})",
+            t.header()[static_cast<std::size_t>(probe_cols[i])], d.offsets[i], h, path));
+      for (std::size_t j = 0; j < i; ++j)
+        if (std::lround(d.offsets[j] / h) == std::lround(r))
+          throw Error(fmt::format("offsets: probes '{}' and '{}' share the offset {} mm",
+                                  t.header()[static_cast<std::size_t>(probe_cols[j])],
+                                  t.header()[static_cast<std::size_t>(probe_cols[i])], d.offsets[i]));
+    }
+  }
+  const double sign = opt.invert ? -1.0 : 1.0;
+  d.readings.resize(n, static_cast<Eigen::Index>(probe_cols.size()));
+  for (std::size_t i = 0; i < probe_cols.size(); ++i)
+    d.readings.col(static_cast<Eigen::Index>(i)) = t.column(probe_cols[i]) * (sign * 1e-3);
+  if (angle_col >= 0) d.angle = t.column(angle_col) * 1e-6;
+  return d;
+}
+
+void write_probes(const std::string& path, const separation::ProbeData& d,
+                  const std::string& angle_column) {
+  std::vector<std::string> header{"x"};
+  std::vector<Eigen::VectorXd> cols;
+  cols.reserve(static_cast<std::size_t>(d.readings.cols()) + 1);
+  for (Eigen::Index i = 0; i < d.readings.cols(); ++i) {
+    header.push_back(i < 26 ? std::string(1, static_cast<char>('a' + i)) : fmt::format("p{}", i + 1));
+    cols.emplace_back(d.readings.col(i) * 1e3);
+  }
+  if (d.angle.size()) {
+    header.push_back(angle_column);
+    cols.emplace_back(d.angle * 1e6);
+  }
+  std::vector<const Eigen::VectorXd*> ptrs{&d.x};
+  for (const auto& c : cols) ptrs.push_back(&c);
+  write_csv(path, header, ptrs);
+}
+
+}  // namespace trueaxis::io

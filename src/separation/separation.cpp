@@ -1,0 +1,792 @@
+#include "trueaxis/separation/separation.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numeric>
+
+#include "sequential_lsq.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/geometry/straightness.hpp"
+
+namespace trueaxis::separation {
+namespace {
+
+constexpr double kStepTolerance = 1e-6;  // relative tolerance for equal steps / whole multiples
+
+}  // namespace
+
+const char* to_string(Method m) {
+  switch (m) {
+    case Method::TwoPoint: return "two-point";
+    case Method::ThreePoint: return "three-point";
+    case Method::Lsq: return "lsq";
+  }
+  return "?";
+}
+
+const char* to_string(Reference r) {
+  switch (r) {
+    case Reference::LeastSquares: return "ls";
+    case Reference::Seed: return "seed";
+    case Reference::MinZone: return "min-zone";
+  }
+  return "?";
+}
+
+Method method_from_string(const std::string& s) {
+  if (s == "two-point") return Method::TwoPoint;
+  if (s == "three-point") return Method::ThreePoint;
+  if (s == "lsq") return Method::Lsq;
+  throw Error(fmt::format("unknown method '{}' (expected two-point, three-point or lsq)", s));
+}
+
+Reference reference_from_string(const std::string& s) {
+  if (s == "ls") return Reference::LeastSquares;
+  if (s == "seed") return Reference::Seed;
+  if (s == "min-zone") return Reference::MinZone;
+  throw Error(fmt::format("unknown reference '{}' (expected ls, seed or min-zone)", s));
+}
+
+double ProbeData::step() const {
+  if (x.size() < 2) throw Error("need at least two stations");
+  return (x[x.size() - 1] - x[0]) / static_cast<double>(x.size() - 1);
+}
+
+void ProbeData::validate() const {
+  const Eigen::Index n = x.size();
+  if (n < 3) throw Error(fmt::format("too few stations: {} (need at least 3)", n));
+  if (readings.rows() != n)
+    throw Error(fmt::format("readings have {} rows but there are {} stations", readings.rows(), n));
+  if (readings.cols() < 2) throw Error("need at least two probes");
+  if (static_cast<Eigen::Index>(offsets.size()) != readings.cols())
+    throw Error(fmt::format("{} probe offsets for {} probe columns", offsets.size(), readings.cols()));
+  if (angle.size() != 0 && angle.size() != n)
+    throw Error(fmt::format("angle channel has {} values for {} stations", angle.size(), n));
+  if (!x.allFinite() || !readings.allFinite() || !angle.allFinite())
+    throw Error("non-finite value (NaN or Inf) in the data");
+  const double h = step();
+  if (!(h > 0)) throw Error("station positions must increase");
+  for (Eigen::Index k = 1; k < n; ++k) {
+    const double d = x[k] - x[k - 1];
+    if (!(d > 0)) throw Error(fmt::format("station {} does not increase (x = {} after {})", k, x[k], x[k - 1]));
+    if (std::abs(d - h) > kStepTolerance * h + 1e-12)
+      throw Error(fmt::format("uneven step at station {}: {} mm instead of {} mm", k, d, h));
+  }
+  if (offsets[0] != 0) throw Error("the first probe offset must be 0 (offsets are from probe A)");
+  for (std::size_t i = 0; i < offsets.size(); ++i) {
+    const double r = offsets[i] / h;
+    if (!std::isfinite(r) || std::abs(r - std::round(r)) > kStepTolerance * std::max(1.0, std::abs(r)))
+      throw Error(fmt::format("probe offset {} mm is not a whole multiple of the step {} mm", offsets[i], h));
+    for (std::size_t j = 0; j < i; ++j)
+      if (std::round(offsets[j] / h) == std::round(r))
+        throw Error(fmt::format("probes {} and {} have the same offset {} mm", j + 1, i + 1, offsets[i]));
+  }
+}
+
+void Options::validate() const {
+  if (sigma && !(*sigma > 0 && std::isfinite(*sigma))) throw Error("sigma must be positive");
+  if (!(angle_sigma > 0 && std::isfinite(angle_sigma))) throw Error("angle sigma must be positive");
+  if (!(nominal_sigma > 0)) throw Error("nominal sigma must be positive");
+  if (!(filter_cutoff >= 0 && std::isfinite(filter_cutoff))) throw Error("filter cut-off must be >= 0");
+  if (zero_difference && !std::isfinite(*zero_difference)) throw Error("zero difference must be finite");
+  if (reference == Reference::Seed && method != Method::ThreePoint)
+    throw Error("reference 'seed' is defined for the three-point method only");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Design of the least-squares problem, shared by the solver and the layout analysis.
+namespace {
+
+struct Design {
+  long n = 0;                 // stations
+  int N = 0;                  // probes
+  std::vector<long> p;        // offsets in steps (p[0] = 0)
+  std::vector<long> q;        // p - pmin: position index offsets (>= 0)
+  long span = 0;              // max q
+  long Q = 0;                 // number of workpiece positions: n + span
+  bool pitch = false;         // θ modelled (>= 3 probes or angle channel)
+  bool angle = false;
+  bool parabola_free = false; // parabola fixed by a pin + the guide-quadratic gauge afterwards
+  double wa = 0;              // weight of angle rows (relative to probe rows)
+  int nvars = 0;
+  std::vector<char> pinned;
+  std::vector<double> pin_value;
+
+  int w(long pos) const { return static_cast<int>(pos); }
+  int g(long K) const { return static_cast<int>(Q + K); }
+  int t(long K) const { return static_cast<int>(Q + n + K); }  // θ scaled by h (mm)
+  int o(int i) const { return static_cast<int>(Q + n * (pitch ? 2 : 1) + i); }
+  int oa() const { return o(N); }
+};
+
+Design make_design(const std::vector<long>& p, long n, bool angle, std::optional<double> zero_diff,
+                   double wa) {
+  Design D;
+  D.n = n;
+  D.N = static_cast<int>(p.size());
+  D.p = p;
+  const long pmin = *std::min_element(p.begin(), p.end());
+  for (long v : p) D.q.push_back(v - pmin);
+  D.span = *std::max_element(D.q.begin(), D.q.end());
+  D.Q = n + D.span;
+  D.angle = angle;
+  D.pitch = D.N >= 3 || angle;
+  D.wa = wa;
+  D.nvars = static_cast<int>(D.Q + n * (D.pitch ? 2 : 1) + D.N + (angle ? 1 : 0));
+  D.pinned.assign(static_cast<std::size_t>(D.nvars), 0);
+  D.pin_value.assign(static_cast<std::size_t>(D.nvars), 0.0);
+  auto pin = [&](int id, double v) {
+    D.pinned[static_cast<std::size_t>(id)] = 1;
+    D.pin_value[static_cast<std::size_t>(id)] = v;
+  };
+  // Line: fix the workpiece at its first and last positions. Pinning far-apart points keeps the
+  // pinned solution as small as the profile itself (adjacent pins would tilt it by n times the
+  // local slope and cost precision); the reference line is applied afterwards.
+  pin(D.w(0), 0);
+  pin(D.w(D.Q - 1), 0);
+  // Offsets: a common offset is absorbed by g; with pitch, an offset ∝ s_i by θ.
+  pin(D.o(0), 0);
+  int last = 0;
+  for (int i = 1; i < D.N; ++i)
+    if (std::abs(p[static_cast<std::size_t>(i)]) > std::abs(p[static_cast<std::size_t>(last)])) last = i;
+  if (D.pitch) {
+    if (angle)
+      pin(D.oa(), 0);
+    else
+      pin(D.o(last), 0);
+  }
+  if (D.pitch && !angle) {
+    // Parabola: offsets ∝ s_i² trade against w + c·x². Fixed by a known zero difference (three
+    // probes), or else by pinning the middle of the workpiece and applying the guide-quadratic
+    // gauge afterwards.
+    int other = -1;
+    for (int i = 1; i < D.N && other < 0; ++i)
+      if (i != last) other = i;
+    if (zero_diff) {
+      if (D.N != 3) throw Error("a zero difference is defined for three-probe layouts only");
+      const double sb = static_cast<double>(p[static_cast<std::size_t>(other)]);
+      const double sc = static_cast<double>(p[static_cast<std::size_t>(last)]);
+      // z_A = 1 and z annihilates 1 and s: z_other = −s_last/(s_last − s_other).
+      const double z_other = -sc / (sc - sb);
+      pin(D.o(other), *zero_diff / z_other);
+    } else {
+      pin(D.w(D.Q / 2), 0);
+      D.parabola_free = true;
+    }
+  } else if (zero_diff) {
+    throw Error(angle ? "a zero difference is not needed with an angle channel"
+                      : "a zero difference is defined for three-probe layouts only");
+  }
+  return D;
+}
+
+// Rows of station K: probes then angle. Coefficients on free ids; pinned values moved to rhs.
+template <class Emit>
+void station_rows(const Design& D, long K, const double* m, double angle_mm, Emit&& emit) {
+  std::vector<std::pair<int, double>> c;
+  auto add = [&](int id, double v, double& rhs) {
+    if (D.pinned[static_cast<std::size_t>(id)])
+      rhs -= v * D.pin_value[static_cast<std::size_t>(id)];
+    else
+      c.emplace_back(id, v);
+  };
+  for (int i = 0; i < D.N; ++i) {
+    c.clear();
+    double rhs = m ? m[i] : 0.0;
+    add(D.w(K + D.q[static_cast<std::size_t>(i)]), 1.0, rhs);
+    add(D.g(K), 1.0, rhs);
+    if (D.pitch && D.p[static_cast<std::size_t>(i)] != 0)
+      add(D.t(K), static_cast<double>(D.p[static_cast<std::size_t>(i)]), rhs);
+    add(D.o(i), 1.0, rhs);
+    emit(c, rhs);
+  }
+  if (D.angle) {
+    c.clear();
+    double rhs = D.wa * angle_mm;
+    add(D.t(K), D.wa, rhs);
+    add(D.oa(), D.wa, rhs);
+    emit(c, rhs);
+  }
+}
+
+long gcd_of_steps(const std::vector<long>& q) {
+  long d = 0;
+  for (long v : q) d = std::gcd(d, v);
+  return d;
+}
+
+std::string steps_text(const std::vector<long>& p) {
+  std::string s;
+  for (long v : p) s += (s.empty() ? "" : ", ") + std::to_string(v);
+  return s;
+}
+
+}  // namespace
+
+LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel,
+                              bool zero_difference_known, long stations) {
+  LayoutAnalysis a;
+  a.steps = steps;
+  const long pmin = *std::min_element(steps.begin(), steps.end());
+  const long pmax = *std::max_element(steps.begin(), steps.end());
+  const long span = pmax - pmin;
+  const long na = std::min<long>(stations, std::max<long>(64, 8 * span + 16));
+  const Design D = make_design(steps, na, angle_channel,
+                               zero_difference_known ? std::optional<double>(0.0) : std::nullopt, 1.0);
+  a.pitch_modelled = D.pitch;
+  a.unobservable.push_back("line");
+  if (D.parabola_free) a.unobservable.push_back("parabola");
+  if (!D.pitch) a.unobservable.push_back("pitch (not separable with two probes)");
+  // Dense design over free variables.
+  std::vector<int> col(static_cast<std::size_t>(D.nvars), -1);
+  int nf = 0;
+  for (int id = 0; id < D.nvars; ++id)
+    if (!D.pinned[static_cast<std::size_t>(id)]) col[static_cast<std::size_t>(id)] = nf++;
+  std::vector<std::vector<std::pair<int, double>>> rows;
+  for (long K = 0; K < na; ++K)
+    station_rows(D, K, nullptr, 0.0, [&](const auto& c, double) { rows.push_back(c); });
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), nf);
+  for (std::size_t r = 0; r < rows.size(); ++r)
+    for (const auto& [id, v] : rows[r]) A(static_cast<Eigen::Index>(r), col[static_cast<std::size_t>(id)]) += v;
+  Eigen::BDCSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::VectorXd sv = svd.singularValues();
+  const double tol = 1e-9 * std::max(1.0, sv.size() ? sv[0] : 1.0);
+  long rank = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i)
+    if (sv[i] > tol) ++rank;
+  a.extra_null_modes = nf - rank;
+  if (a.extra_null_modes == 0) return a;
+
+  a.observable = false;
+  std::vector<long> q;
+  for (long v : steps) q.push_back(v - pmin);
+  const long d = gcd_of_steps(q);
+  long named = 0;
+  std::string why;
+  if (d > 1) {
+    a.unobservable.push_back(fmt::format("chain offsets ({} chains)", d));
+    a.unobservable.push_back(fmt::format("chain tilts ({} chains)", d));
+    named = std::min<long>(a.extra_null_modes, 2 * (d - 1));
+    why = fmt::format(
+        "the probe offsets are multiples of {} steps, so the stations form {} interleaved chains "
+        "that no reading ties together",
+        d, d);
+  }
+  if (a.extra_null_modes > named) {
+    a.unobservable.push_back(fmt::format("{} blind or edge mode(s)", a.extra_null_modes - named));
+    if (!why.empty()) why += "; ";
+    why += fmt::format(
+        "the layout's difference equation has roots other than 1, whose modes (blind harmonics or "
+        "modes that die away from the ends) no reading sees");
+  }
+  if (stations < na) why += " (or there are too few stations)";
+  a.message = fmt::format(
+      "unobservable layout: probe offsets {} steps{} leave {} mode(s) undetermined beyond the "
+      "reference line{}: {}. Use offsets whose step multiples have no common factor and "
+      "consecutive spacing of one step, add probes or an angle channel",
+      steps_text(steps), angle_channel ? " with an angle channel" : "", a.extra_null_modes,
+      D.parabola_free ? " and parabola" : "", why);
+  return a;
+}
+
+// ---------------------------------------------------------------------------------------------
+namespace {
+
+// A solution before the reference is applied, on its own grids.
+struct Raw {
+  Eigen::VectorXd xw, w;     // workpiece grid and values (mm)
+  Eigen::VectorXd xg, g;     // station grid, guide (mm)
+  Eigen::VectorXd xt, theta; // pitch grid and values (rad); empty if not modelled
+  bool parabola_free = false;
+};
+
+// Everything the uncertainty propagation needs from a least-squares solve.
+struct LsqState {
+  Design D;
+  std::unique_ptr<detail::SequentialLsq> engine;
+  Eigen::VectorXd zdiag;
+  double h = 0;
+  double ssr = 0;
+  long dof = 0;
+};
+
+Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
+  const long n = data.x.size();
+  const double h = data.step();
+  std::vector<long> p;
+  for (double s : data.offsets) p.push_back(std::lround(s / h));
+  const bool angle = data.angle.size() == n;
+  const double sp = opt.sigma.value_or(opt.nominal_sigma);
+  const double wa = sp / (opt.angle_sigma * h);
+  // Centre every channel: only the (nuisance) offsets change, and the pinned offsets then sit
+  // close to their true values, so no large parabola enters the pinned solution.
+  const Eigen::RowVectorXd mu = data.readings.colwise().mean();
+  const double mu_a = angle ? data.angle.mean() : 0.0;
+  std::optional<double> e = opt.zero_difference;
+  if (e) {
+    // e refers to the raw offsets; the centred offsets are o_i − μ_i.
+    const Eigen::Index last = std::max_element(p.begin(), p.end(), [](long a, long b) {
+                                return std::abs(a) < std::abs(b);
+                              }) - p.begin();
+    const Eigen::Index other = last == 1 ? 2 : 1;
+    const double sb = static_cast<double>(p[static_cast<std::size_t>(other)]);
+    const double sc = static_cast<double>(p[static_cast<std::size_t>(last)]);
+    *e -= mu[0] + (-sc / (sc - sb)) * mu[other] + (sb / (sc - sb)) * mu[last];
+  }
+  st.D = make_design(p, n, angle, e, wa);
+  st.h = h;
+  const Design& D = st.D;
+  std::vector<int> globals;
+  for (int i = 0; i < D.N + (angle ? 1 : 0); ++i)
+    if (!D.pinned[static_cast<std::size_t>(D.o(i))]) globals.push_back(D.o(i));
+  // One pass: factor the system with right-hand side (readings − A·v). Iterative refinement
+  // (same factorisation, residual right-hand side) removes the error the long chain's
+  // conditioning puts into a single QR pass (~1e-3 relative at a million stations otherwise).
+  std::vector<double> m(static_cast<std::size_t>(D.N));
+  std::vector<int> elim;
+  auto pass = [&](const Eigen::VectorXd& v) {
+    auto E = std::make_unique<detail::SequentialLsq>(D.nvars, globals);
+    for (long K = 0; K < n; ++K) {
+      for (int i = 0; i < D.N; ++i) m[static_cast<std::size_t>(i)] = data.readings(K, i) - mu[i];
+      station_rows(D, K, m.data(), angle ? (data.angle[K] - mu_a) * h : 0.0,
+                   [&](const auto& c, double rhs) {
+                     double r = rhs;
+                     for (const auto& [id, coef] : c) r -= coef * v[id];
+                     E->add_row(c, r);
+                   });
+      elim.clear();
+      for (int id : {D.g(K), D.pitch ? D.t(K) : -1, D.w(K)})
+        if (id >= 0 && !D.pinned[static_cast<std::size_t>(id)]) elim.push_back(id);
+      E->eliminate(elim);
+    }
+    E->finish();
+    return E;
+  };
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
+  double ssr0 = 0;
+  for (int iter = 0; iter < 4; ++iter) {
+    st.engine = pass(v);
+    if (iter == 0) {
+      if (st.engine->min_pivot_ratio() < 1e-10) {
+        const LayoutAnalysis a = analyze_layout(p, angle, opt.zero_difference.has_value(), n);
+        throw Error(a.observable ? "the data do not determine the solution (rank-deficient system)"
+                                 : a.message);
+      }
+      ssr0 = st.engine->ssr();
+    }
+    const Eigen::VectorXd dv = st.engine->solve();
+    v += dv;
+    if (dv.cwiseAbs().maxCoeff() <= 1e-14 * std::max(1e-300, v.cwiseAbs().maxCoeff())) break;
+  }
+  st.ssr = ssr0;
+  st.dof = st.engine->rows() - st.engine->unknowns();
+  auto value = [&](int id) {
+    return D.pinned[static_cast<std::size_t>(id)] ? D.pin_value[static_cast<std::size_t>(id)] : v[id];
+  };
+  const long pmin = *std::min_element(p.begin(), p.end());
+  Raw r;
+  r.xw.resize(D.Q);
+  r.w.resize(D.Q);
+  for (long j = 0; j < D.Q; ++j) {
+    r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
+    r.w[j] = value(D.w(j));
+  }
+  r.xg = data.x;
+  r.g.resize(n);
+  for (long K = 0; K < n; ++K) r.g[K] = value(D.g(K));
+  if (D.pitch) {
+    r.xt = data.x;
+    r.theta.resize(n);
+    for (long K = 0; K < n; ++K) r.theta[K] = value(D.t(K)) / h;
+  }
+  r.parabola_free = D.parabola_free;
+  return r;
+}
+
+void require_offsets(const ProbeData& d, std::initializer_list<long> want, const char* method) {
+  const double h = d.step();
+  bool ok = d.offsets.size() == want.size();
+  std::size_t i = 0;
+  for (long w : want) {
+    if (!ok) break;
+    ok = std::lround(d.offsets[i++] / h) == w;
+  }
+  if (!ok) {
+    std::string s;
+    for (long w : want) s += (s.empty() ? "" : ", ") + fmt::format("{}", static_cast<double>(w) * h);
+    throw Error(fmt::format(
+        "method {} needs probes at offsets {} mm (spacing equal to the step {} mm); use --method "
+        "lsq for other layouts",
+        method, s, h));
+  }
+  if (d.angle.size() != 0)
+    throw Error(fmt::format("method {} does not use an angle channel; use --method lsq", method));
+}
+
+Raw two_point(const ProbeData& d) {
+  require_offsets(d, {0, 1}, "two-point");
+  const long n = d.x.size();
+  const double h = d.step();
+  Raw r;
+  r.xw = Eigen::VectorXd::LinSpaced(n + 1, d.x[0], d.x[0] + static_cast<double>(n) * h);
+  r.w = Eigen::VectorXd::Zero(n + 1);
+  r.xg = d.x;
+  r.g.resize(n);
+  const auto mA = d.readings.col(0);
+  const auto mB = d.readings.col(1);
+  // Spec 01 method A with w_0 = g_0 = 0 and the unknown slope w_1 = 0 (reference line later).
+  for (long K = 0; K < n; ++K) {
+    if (K + 1 <= n) r.w[K + 1] = r.w[K] + (mB[K] - mB[0]) - (mA[K] - mA[0]);
+    r.g[K] = mA[K] - mA[0] - r.w[K];
+  }
+  return r;
+}
+
+}  // namespace
+
+// The seed's three-point recurrence (JPH0464003B2 eqs. 12–17), exposed for the "seed" reference.
+namespace {
+
+Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
+  require_offsets(d, {0, 1, 2}, "three-point");
+  const long n = d.x.size();  // stations K = 0..n-1
+  if (n < 4) throw Error(fmt::format("three-point needs at least 4 stations, got {}", n));
+  const double l = d.step();
+  Eigen::VectorXd dA = d.readings.col(0).array() - d.readings(0, 0);
+  Eigen::VectorXd dB = d.readings.col(1).array() - d.readings(0, 1);
+  Eigen::VectorXd dC = d.readings.col(2).array() - d.readings(0, 2);
+  // Eq. 12 run from X_0 = 0, X_1 = α with the constant β: X_K = K·α + K(K−1)/2·β + C_K (eq. 15).
+  auto recurrence = [&](double alpha, double beta) {
+    Eigen::VectorXd X = Eigen::VectorXd::Zero(n);
+    X[1] = alpha;
+    for (long K = 0; K + 2 < n; ++K)
+      X[K + 2] = 2 * X[K + 1] - X[K] - 2 * dA[K + 1] + dA[K + 2] + 2 * dB[K] - dC[K] + beta;
+    return X;
+  };
+  // α, β (or α alone when β is known) minimising Σ_{K=2}^{n−1} (X_K + K·α + K(K−1)/2·β)²: the
+  // 2×2 normal equations whose closed form is the seed's eqs. 16–17.
+  const bool beta_known = zero_difference.has_value();
+  auto fit = [&](const Eigen::VectorXd& X) {
+    Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    for (long K = 2; K < n; ++K) {
+      const double k = static_cast<double>(K);
+      const Eigen::Vector2d a(k, k * (k - 1) / 2);
+      M += a * a.transpose();
+      b -= a * X[K];
+    }
+    if (beta_known) return Eigen::Vector2d(b[0] / M(0, 0), 0.0);
+    return Eigen::Vector2d(M.ldlt().solve(b));
+  };
+  // β = 2Y_1 − Y_2 = e − (D_0A − 2D_0B + D_0C) when the zero difference e is known.
+  const double beta0 =
+      beta_known ? *zero_difference - (d.readings(0, 0) - 2 * d.readings(0, 1) + d.readings(0, 2)) : 0.0;
+  // Two passes, identical in exact arithmetic to the one-shot formula: C_K can grow like K²·β
+  // (1e9 mm at a million stations), so the first fit is used to rerun the recurrence near its
+  // final size and the second fit corrects the small remainder.
+  const Eigen::Vector2d ab1 = fit(recurrence(0.0, beta0));
+  Eigen::VectorXd X = recurrence(ab1[0], beta0 + ab1[1]);
+  const Eigen::Vector2d ab2 = fit(X);
+  for (long K = 0; K < n; ++K) {
+    const double k = static_cast<double>(K);
+    X[K] += k * ab2[0] + k * (k - 1) / 2 * ab2[1];
+  }
+  Raw r;
+  r.xg = d.x;
+  r.g = X;
+  r.xw = d.x;
+  r.w = dA - r.g;  // eq. 13
+  r.xt = d.x.head(n - 1);
+  r.theta.resize(n - 1);
+  for (long K = 0; K + 1 < n; ++K) r.theta[K] = (dB[K] - r.w[K + 1] - r.g[K] + r.w[1]) / l;  // eq. 14
+  r.parabola_free = !zero_difference.has_value();
+  return r;
+}
+
+// Coordinates for the parabola gauge: t = (x - xc)/L.
+struct Scale {
+  double xc = 0, L = 1;
+};
+
+Scale scale_of(const Eigen::VectorXd& x) {
+  const double lo = x.minCoeff(), hi = x.maxCoeff();
+  return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
+}
+
+// Functional φ with φᵀg = coefficient of t² in the LS fit of g by {1, t, t²}.
+Eigen::VectorXd quad_functional(const Eigen::VectorXd& x, const Scale& s) {
+  const Eigen::Index n = x.size();
+  Eigen::MatrixXd T(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double t = (x[i] - s.xc) / s.L;
+    T(i, 0) = 1;
+    T(i, 1) = t;
+    T(i, 2) = t * t;
+  }
+  const Eigen::Matrix3d G = T.transpose() * T;
+  const Eigen::Vector3d e3 = G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
+  return T * e3;
+}
+
+// Orthonormal basis of {1, x} on a grid.
+Eigen::MatrixXd line_basis(const Eigen::VectorXd& x) {
+  Eigen::MatrixXd B(x.size(), 2);
+  B.col(0).setOnes();
+  B.col(1) = x.array() - x.mean();
+  B.col(0) /= B.col(0).norm();
+  const double nn = B.col(1).norm();
+  B.col(1) /= nn > 0 ? nn : 1.0;
+  return B;
+}
+
+Eigen::VectorXd project_out(const Eigen::MatrixXd& B, const Eigen::VectorXd& v) {
+  return v - B * (B.transpose() * v);
+}
+
+// Applies the ls / min-zone reference in place (parabola gauge first, if free).
+void apply_reference(Raw& r, Reference ref) {
+  const Scale s = scale_of(r.xg);
+  if (r.parabola_free) {
+    const double c = quad_functional(r.xg, s).dot(r.g);
+    auto t2 = [&](double x) {
+      const double t = (x - s.xc) / s.L;
+      return t * t;
+    };
+    for (Eigen::Index i = 0; i < r.w.size(); ++i) r.w[i] += c * t2(r.xw[i]);
+    for (Eigen::Index i = 0; i < r.g.size(); ++i) r.g[i] -= c * t2(r.xg[i]);
+    for (Eigen::Index i = 0; i < r.theta.size(); ++i)
+      r.theta[i] -= 2 * c * (r.xt[i] - s.xc) / (s.L * s.L);
+  }
+  if (ref == Reference::MinZone) {
+    r.w = geometry::residuals(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
+    r.g = geometry::residuals(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
+  } else {
+    r.w = geometry::residuals(r.xw, r.w, geometry::fit_line(r.xw, r.w));
+    r.g = geometry::residuals(r.xg, r.g, geometry::fit_line(r.xg, r.g));
+  }
+  if (r.theta.size()) r.theta.array() -= r.theta.mean();
+}
+
+// Variance of y = scale·v[id] − U·(Vᵀ v) for each reported point (unit-weight covariance).
+Eigen::VectorXd propagate(const LsqState& st, const std::vector<int>& ids, double scale,
+                          const Eigen::MatrixXd& U, const Eigen::MatrixXd& V) {
+  const Eigen::MatrixXd ZV = st.engine->solve_normal(V);
+  const Eigen::MatrixXd VZV = V.transpose() * ZV;
+  Eigen::VectorXd var(static_cast<Eigen::Index>(ids.size()));
+  for (std::size_t i = 0; i < ids.size(); ++i) {
+    const int id = ids[i];
+    const bool pinned = st.D.pinned[static_cast<std::size_t>(id)] != 0;
+    const Eigen::RowVectorXd u = U.row(static_cast<Eigen::Index>(i));
+    double v = u * VZV * u.transpose();
+    if (!pinned) v += scale * scale * st.zdiag[id] - 2 * scale * u.dot(ZV.row(id));
+    var[static_cast<Eigen::Index>(i)] = std::max(0.0, v);
+  }
+  return var;
+}
+
+// Uncertainties (unit weight) of the reported w, g, θ under the ls reference, on the grids of
+// `r` (which may be a leading subset of the lsq grids, as for the seed's own methods).
+void uncertainties(const LsqState& st, const Raw& r, Eigen::VectorXd& uw, Eigen::VectorXd& ug,
+                   Eigen::VectorXd& ut) {
+  const Design& D = st.D;
+  const int nv = D.nvars;
+  const Scale s = scale_of(r.xg);
+  const bool par = r.parabola_free;
+  Eigen::VectorXd phi;
+  if (par) phi = quad_functional(r.xg, s);
+  auto free_row = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] ? 0.0 : 1.0; };
+  // Workpiece.
+  {
+    const Eigen::Index m = r.xw.size();
+    std::vector<int> ids;
+    for (Eigen::Index j = 0; j < m; ++j) ids.push_back(D.w(j));
+    const Eigen::MatrixXd B = line_basis(r.xw);
+    Eigen::MatrixXd U(m, par ? 3 : 2), V = Eigen::MatrixXd::Zero(nv, par ? 3 : 2);
+    U.leftCols(2) = B;
+    for (Eigen::Index j = 0; j < m; ++j)
+      for (int k = 0; k < 2; ++k) V(ids[static_cast<std::size_t>(j)], k) = B(j, k) * free_row(ids[static_cast<std::size_t>(j)]);
+    if (par) {
+      Eigen::VectorXd t2(m);
+      for (Eigen::Index j = 0; j < m; ++j) t2[j] = std::pow((r.xw[j] - s.xc) / s.L, 2);
+      U.col(2) = -project_out(B, t2);
+      for (long K = 0; K < D.n; ++K) V(D.g(K), 2) = phi[K] * free_row(D.g(K));
+    }
+    uw = propagate(st, ids, 1.0, U, V);
+  }
+  // Guide.
+  {
+    const Eigen::Index m = r.xg.size();
+    std::vector<int> ids;
+    for (Eigen::Index K = 0; K < m; ++K) ids.push_back(D.g(K));
+    const Eigen::MatrixXd B = line_basis(r.xg);
+    Eigen::MatrixXd U(m, par ? 3 : 2), V = Eigen::MatrixXd::Zero(nv, par ? 3 : 2);
+    U.leftCols(2) = B;
+    for (Eigen::Index K = 0; K < m; ++K)
+      for (int k = 0; k < 2; ++k) V(D.g(K), k) = B(K, k) * free_row(D.g(K));
+    if (par) {
+      Eigen::VectorXd t2(m);
+      for (Eigen::Index K = 0; K < m; ++K) t2[K] = std::pow((r.xg[K] - s.xc) / s.L, 2);
+      U.col(2) = project_out(B, t2);
+      for (long K = 0; K < D.n; ++K) V(D.g(K), 2) = phi[K] * free_row(D.g(K));
+    }
+    ug = propagate(st, ids, 1.0, U, V);
+  }
+  // Pitch (θ scaled by h in the design).
+  if (r.theta.size() && D.pitch) {
+    const Eigen::Index m = r.xt.size();
+    std::vector<int> ids;
+    for (Eigen::Index K = 0; K < m; ++K) ids.push_back(D.t(K));
+    Eigen::MatrixXd U(m, par ? 2 : 1), V = Eigen::MatrixXd::Zero(nv, par ? 2 : 1);
+    U.col(0).setConstant(1.0 / (st.h * static_cast<double>(m)));
+    for (Eigen::Index K = 0; K < m; ++K) V(D.t(K), 0) = free_row(D.t(K));
+    if (par) {
+      Eigen::VectorXd lin = (r.xt.array() - s.xc) * (2.0 / (s.L * s.L));
+      U.col(1) = lin.array() - lin.mean();
+      for (long K = 0; K < D.n; ++K) V(D.g(K), 1) = phi[K] * free_row(D.g(K));
+    }
+    ut = propagate(st, ids, 1.0 / st.h, U, V);
+  }
+}
+
+Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v) {
+  return {geometry::ls_straightness(x, v), geometry::min_zone(x, v).width};
+}
+
+}  // namespace
+
+Result separate(const ProbeData& data, const Options& opt) {
+  data.validate();
+  opt.validate();
+  Result res;
+  res.method = opt.method;
+  res.reference = opt.reference;
+  const long n = data.x.size();
+  const double h = data.step();
+  std::vector<long> p;
+  for (double s : data.offsets) p.push_back(std::lround(s / h));
+  const bool angle = data.angle.size() == n;
+
+  // The layout must be observable (beyond line and, by convention, parabola) for every method.
+  const LayoutAnalysis la = analyze_layout(p, angle, opt.zero_difference.has_value(), n);
+  if (!la.observable) throw Error(la.message);
+  res.unobservable = la.unobservable;
+
+  Raw raw;
+  switch (opt.method) {
+    case Method::TwoPoint: raw = two_point(data); break;
+    case Method::ThreePoint: raw = three_point(data, opt.zero_difference); break;
+    case Method::Lsq: break;
+  }
+  // The least-squares solve gives the Lsq answer, and the covariance for every method: for the
+  // seed's layouts the system is square, so A and B are its exact solution.
+  // Without redundancy (A, B) the noise level cannot be estimated, so their uncertainty needs a
+  // given sigma.
+  const bool want_unc = opt.compute_uncertainty && opt.filter_cutoff == 0 &&
+                        opt.reference != Reference::Seed &&
+                        (opt.method == Method::Lsq || opt.sigma.has_value());
+  LsqState st;
+  if (opt.method == Method::Lsq || want_unc) {
+    Raw lsq = solve_lsq(data, opt, st);
+    if (opt.method == Method::Lsq) raw = std::move(lsq);
+  }
+  res.dof = st.engine ? st.dof : 0;
+
+  if (opt.reference == Reference::Seed) {
+    res.gauge =
+        "seed: X_0 = Y_0 = 0, alpha = X_1 and beta = 2Y_1 - Y_2 minimise sum of X_K^2 (K >= 2); "
+        "pitch relative to the first station";
+    if (opt.zero_difference) res.gauge += "; beta from the known zero difference";
+  } else {
+    apply_reference(raw, opt.reference);
+    res.gauge = opt.reference == Reference::MinZone
+                    ? "workpiece and guide relative to the middle lines of their minimum zones"
+                    : "workpiece and guide are residuals from their own least-squares lines";
+    if (raw.theta.size()) res.gauge += "; pitch about its mean";
+    if (raw.parabola_free)
+      res.gauge += "; parabola: the guide is taken to have no quadratic (least-squares) component";
+    else if (opt.zero_difference)
+      res.gauge += "; parabola fixed by the known zero difference";
+    else if (angle)
+      res.gauge += "; parabola fixed by the angle channel";
+  }
+
+  Eigen::VectorXd uw, ug, ut;
+  if (want_unc && st.engine) {
+    double s2 = 0;
+    if (opt.sigma) {
+      s2 = (*opt.sigma) * (*opt.sigma);
+      res.sigma = opt.sigma;
+    } else if (st.dof > 0) {
+      // Every row (probe, or angle scaled by its weight) carries the probe noise, so the
+      // residual variance estimates the probe variance directly.
+      s2 = st.ssr / static_cast<double>(st.dof);
+      res.sigma = std::sqrt(s2);
+      res.sigma_estimated = true;
+    }
+    if (res.sigma) {
+      st.zdiag = st.engine->covariance_diagonal();
+      uncertainties(st, raw, uw, ug, ut);
+      uw = (uw * s2).cwiseSqrt();
+      ug = (ug * s2).cwiseSqrt();
+      if (ut.size()) ut = (ut * s2).cwiseSqrt();
+    }
+  }
+  if (st.engine && st.dof > 0) res.residual_rms = std::sqrt(st.ssr / static_cast<double>(st.engine->rows()));
+
+  if (opt.filter_cutoff > 0) {
+    raw.w = geometry::gaussian_filter(raw.w, h, opt.filter_cutoff);
+    raw.g = geometry::gaussian_filter(raw.g, h, opt.filter_cutoff);
+  }
+  res.workpiece = {raw.xw, raw.w, uw};
+  res.guide = {raw.xg, raw.g, ug};
+  if (raw.theta.size()) res.pitch = Profile{raw.xt, raw.theta, ut};
+  res.workpiece_straightness = straightness_of(raw.xw, raw.w);
+  res.guide_straightness = straightness_of(raw.xg, raw.g);
+  return res;
+}
+
+void express_in_reference(Profile& workpiece, Profile& guide, Profile* pitch, Reference reference,
+                          bool parabola_free) {
+  if (reference == Reference::Seed)
+    throw Error("express_in_reference: the seed reference depends on the readings");
+  Raw r;
+  r.xw = workpiece.x;
+  r.w = workpiece.value;
+  r.xg = guide.x;
+  r.g = guide.value;
+  if (pitch) {
+    r.xt = pitch->x;
+    r.theta = pitch->value;
+  }
+  r.parabola_free = parabola_free;
+  apply_reference(r, reference);
+  workpiece.value = r.w;
+  guide.value = r.g;
+  if (pitch) pitch->value = r.theta;
+}
+
+std::string Result::summary() const {
+  std::string s = fmt::format("method {}, reference {}\n", to_string(method), to_string(reference));
+  s += fmt::format("  workpiece straightness: {:.4f} um (LS), {:.4f} um (min-zone), {} points\n",
+                   workpiece_straightness.ls * 1e3, workpiece_straightness.min_zone * 1e3,
+                   workpiece.x.size());
+  s += fmt::format("  guide straightness:     {:.4f} um (LS), {:.4f} um (min-zone), {} stations\n",
+                   guide_straightness.ls * 1e3, guide_straightness.min_zone * 1e3, guide.x.size());
+  if (pitch && pitch->value.size())
+    s += fmt::format("  pitch range:            {:.4f} urad\n",
+                     (pitch->value.maxCoeff() - pitch->value.minCoeff()) * 1e6);
+  if (workpiece.uncertainty.size())
+    s += fmt::format("  max standard uncertainty: workpiece {:.4f} um, guide {:.4f} um (sigma {:.4f} um{})\n",
+                     workpiece.uncertainty.maxCoeff() * 1e3, guide.uncertainty.maxCoeff() * 1e3,
+                     sigma.value_or(0) * 1e3, sigma_estimated ? ", estimated from residuals" : "");
+  std::string u;
+  for (const auto& m : unobservable) u += (u.empty() ? "" : ", ") + m;
+  s += fmt::format("  unobservable: {}\n  gauge: {}\n", u, gauge);
+  return s;
+}
+
+}  // namespace trueaxis::separation

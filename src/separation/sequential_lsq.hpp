@@ -1,0 +1,70 @@
+// Private: sequential (square-root information) least squares for long chain-structured systems.
+//
+// The system is ||A v - b||² over variables v identified by integer ids in [0, nvars). Rows are
+// added in batches; after each batch the caller names the variables that no later row touches
+// and the engine eliminates them with a small dense Householder QR (Eigen) of the batch stacked
+// on the information carried so far. "Global" variables (probe offsets) stay in the carried
+// information until finish(). This is a banded QR with a dense border: backward stable (errors
+// like the seed's own recurrences, not the squared condition of normal equations), O(n) time,
+// and the stored triangular rows give the solution, the exact diagonal of (AᵀA)⁻¹ by a backward
+// selected-inversion pass, and (AᵀA)⁻¹V for a few columns V.
+#pragma once
+
+#include <Eigen/Dense>
+#include <utility>
+#include <vector>
+
+namespace trueaxis::separation::detail {
+
+class SequentialLsq {
+ public:
+  SequentialLsq(int nvars, std::vector<int> globals);
+
+  // Adds one row sum_j coef_j * v[id_j] = rhs. Ids must be distinct within a row.
+  void add_row(const std::vector<std::pair<int, double>>& coefs, double rhs);
+  // Eliminates `ids` (in this order) using the pending rows and the carried information.
+  void eliminate(const std::vector<int>& ids);
+  // Eliminates everything still open, globals last.
+  void finish();
+
+  double ssr() const { return ssr_; }
+  long rows() const { return rows_; }
+  long unknowns() const { return unknowns_; }
+  // Smallest |R_ii| relative to its block's scale, and the variable where it occurred.
+  double min_pivot_ratio() const { return min_pivot_; }
+  int weakest_variable() const { return weakest_; }
+
+  // Least-squares solution (ids never eliminated stay 0).
+  Eigen::VectorXd solve() const;
+  // diag((AᵀA)⁻¹) for every eliminated id (others 0).
+  Eigen::VectorXd covariance_diagonal() const;
+  // (AᵀA)⁻¹ V for V with nvars rows (rows of never-eliminated ids are ignored/0).
+  Eigen::MatrixXd solve_normal(const Eigen::MatrixXd& V) const;
+
+ private:
+  struct Step {
+    int nelim = 0;        // eliminated ids are cols[0..nelim)
+    int ncols = 0;        // columns of the block (excluding rhs)
+    std::size_t id_at;    // offset into ids_
+    std::size_t val_at;   // offset into vals_: nelim rows of (ncols + 1) values (last = rhs)
+  };
+  void factor_block(const std::vector<int>& elim, bool all);
+
+  int nvars_;
+  std::vector<int> globals_;
+  std::vector<int> active_;         // open non-global ids carried in prior_
+  Eigen::MatrixXd prior_;           // rows x (active_ + globals_ + 1)
+  std::vector<std::pair<std::vector<std::pair<int, double>>, double>> pending_;
+  std::vector<Step> steps_;
+  std::vector<int> ids_;
+  std::vector<double> vals_;
+  std::vector<int> col_of_;  // scratch: id -> block column, -1 when absent
+  double ssr_ = 0;
+  long rows_ = 0, unknowns_ = 0;
+  double min_pivot_ = 1;
+  int weakest_ = -1;
+  Eigen::MatrixXd block_;
+  Eigen::HouseholderQR<Eigen::MatrixXd> qr_;
+};
+
+}  // namespace trueaxis::separation::detail

@@ -1,0 +1,106 @@
+#include "trueaxis/sim/straightness.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::sim {
+
+void StraightnessOptions::validate() const {
+  if (stations < 3) throw Error(fmt::format("stations must be at least 3 (got {})", stations));
+  if (!(step > 0 && std::isfinite(step))) throw Error("step must be positive");
+  if (offsets.size() < 2) throw Error("need at least two probe offsets");
+  if (offsets[0] != 0) throw Error("the first probe offset must be 0");
+  for (double s : offsets) {
+    const double r = s / step;
+    if (!std::isfinite(r) || std::abs(r - std::round(r)) > 1e-9 * std::max(1.0, std::abs(r)))
+      throw Error(fmt::format("probe offset {} mm is not a whole multiple of the step {} mm", s, step));
+  }
+  for (double v : {workpiece_amplitude, guide_amplitude, pitch_amplitude, offset_amplitude, noise, angle_noise})
+    if (!(v >= 0 && std::isfinite(v))) throw Error("amplitudes and noise must be >= 0");
+}
+
+StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
+  o.validate();
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::normal_distribution<double> Nd(0.0, 1.0);
+  const double h = o.step;
+  std::vector<long> p;
+  for (double s : o.offsets) p.push_back(std::lround(s / h));
+  const long pmin = std::min(0L, *std::min_element(p.begin(), p.end()));
+  const long pmax = std::max(0L, *std::max_element(p.begin(), p.end()));
+  const long n = o.stations;
+  const long Q = n + (pmax - pmin);
+  const double L = static_cast<double>(Q - 1) * h;
+  const double xs = o.x0 + static_cast<double>(pmin) * h;  // first position
+
+  // Smooth parts as sums of sinusoids with random wavelength/phase.
+  struct Wave {
+    double a, k, ph;
+  };
+  auto waves = [&](int count, double amp, double lmin, double lmax) {
+    std::vector<Wave> w;
+    for (int i = 0; i < count; ++i) {
+      const double lambda = L * (lmin + (lmax - lmin) * U(rng));
+      w.push_back({amp * (0.3 + 0.7 * U(rng)) / std::sqrt(static_cast<double>(count)),
+                   2 * M_PI / lambda, 2 * M_PI * U(rng)});
+    }
+    return w;
+  };
+  auto eval = [](const std::vector<Wave>& ws, double u) {
+    double s = 0;
+    for (const auto& w : ws) s += w.a * std::sin(w.k * u + w.ph);
+    return s;
+  };
+  const auto w_waves = waves(4, o.workpiece_amplitude, 0.08, 1.2);
+  const auto g_waves = waves(2, 0.5 * o.guide_amplitude, 0.2, 1.5);
+  const double g_bow = o.guide_amplitude * (U(rng) < 0.5 ? -1 : 1) * (0.5 + 0.5 * U(rng));
+  const auto t_waves = waves(2, o.pitch_amplitude, 0.15, 1.0);
+  const double t_drift = o.pitch_amplitude * (2 * U(rng) - 1);
+
+  StraightnessCampaign c;
+  StraightnessTruth& T = c.truth;
+  T.first_station_index = -pmin;
+  T.x.resize(Q);
+  T.workpiece.resize(Q);
+  T.guide.resize(Q);
+  T.pitch.resize(Q);
+  const double tex = 0.2 * o.workpiece_amplitude / std::sqrt(static_cast<double>(Q));
+  double walk = 0;
+  for (long q = 0; q < Q; ++q) {
+    const double x = xs + static_cast<double>(q) * h;
+    const double u = x - xs;
+    const double t = 2 * u / std::max(L, 1e-12) - 1;  // -1..1
+    walk += tex * Nd(rng);
+    T.x[q] = x;
+    T.workpiece[q] = eval(w_waves, u) + walk;
+    T.guide[q] = g_bow * (t * t - 1.0 / 3.0) + eval(g_waves, u);
+    T.pitch[q] = t_drift * t + eval(t_waves, u);
+  }
+  for (std::size_t i = 0; i < p.size(); ++i) T.probe_offsets.push_back(o.offset_amplitude * (2 * U(rng) - 1));
+  T.angle_offset = o.angle ? 20e-6 * (2 * U(rng) - 1) : 0.0;
+
+  separation::ProbeData& d = c.data;
+  d.offsets = o.offsets;
+  d.x.resize(n);
+  d.readings.resize(n, static_cast<Eigen::Index>(p.size()));
+  if (o.angle) d.angle.resize(n);
+  for (long K = 0; K < n; ++K) {
+    const long qs = K - pmin;
+    d.x[K] = o.x0 + static_cast<double>(K) * h;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double s = static_cast<double>(p[i]) * h;
+      d.readings(K, static_cast<Eigen::Index>(i)) = T.workpiece[qs + p[i]] + T.guide[qs] + s * T.pitch[qs] +
+                                                    T.probe_offsets[i] + o.noise * Nd(rng);
+    }
+    if (o.angle) d.angle[K] = T.pitch[qs] + T.angle_offset + o.angle_noise * Nd(rng);
+  }
+  return c;
+}
+
+}  // namespace trueaxis::sim

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# End-to-end tests of the trueaxis command line: files, exit codes, one-line errors.
+set -u
+T=${TRUEAXIS:?set TRUEAXIS to the trueaxis binary}
+dir=${1:-$(mktemp -d)}
+rm -rf "$dir"; mkdir -p "$dir"; cd "$dir" || exit 1
+fails=0; passes=0
+ok() { passes=$((passes+1)); }
+bad() { echo "FAIL: $*"; fails=$((fails+1)); }
+expect_ok() { if "$@" >out.txt 2>err.txt; then ok; else bad "$* -> $(cat err.txt)"; fi; }
+# expect_err PATTERN cmd...: non-zero exit, a one-line message on stderr matching PATTERN
+expect_err() {
+  local pat=$1; shift
+  if "$@" >out.txt 2>err.txt; then bad "should fail: $*"; return; fi
+  if grep -q -- "$pat" err.txt && [ "$(wc -l <err.txt)" -le 2 ]; then ok; else bad "$*: stderr '$(cat err.txt)' lacks '$pat'"; fi
+}
+
+expect_ok "$T" --help
+expect_ok "$T" separate --help
+grep -q "two-point" out.txt && ok || bad "separate --help lists the methods"
+
+expect_ok "$T" simulate straightness --stations 300 --offsets 0,10,20 --seed 3 --output p3.csv --truth t3.csv
+head -1 p3.csv | grep -qx "x,a,b,c" && ok || bad "probes header"
+head -1 t3.csv | grep -qx "x,workpiece_um,guide_um,pitch_urad" && ok || bad "truth header"
+for m in two-point three-point lsq; do
+  expect_ok "$T" separate --input p3.csv --method $m --output r-$m.json --csv r-$m.csv $([ $m = two-point ] && echo --offsets 0,10)
+done
+# two-point needs exactly two probe columns: give it a two-probe file.
+cut -d, -f1-3 p3.csv > p2.csv
+expect_ok "$T" separate --input p2.csv --method two-point --output r-two.json
+expect_ok "$T" separate --input p3.csv --method three-point --reference seed --output r-seed.json
+grep -q '"reference": "seed"' r-seed.json && ok || bad "seed reference recorded"
+expect_ok "$T" separate --input p3.csv --method lsq --reference min-zone --sigma 0.05 --output r-mz.json
+grep -q '"uncertainty"' r-mz.json && ok || bad "uncertainty written with --sigma"
+expect_ok "$T" report r-lsq.json -o rep.html
+grep -q "uPlot" rep.html && ok || bad "report embeds uPlot"
+
+# Bad inputs: each a clear one-line error naming the file (and line:column where it applies).
+printf 'x,a,b\n0,1,2\n10,1,2\n10,1,2\n' > nonincr.csv
+expect_err "nonincr.csv:4:1: x = 10 does not increase" "$T" separate --input nonincr.csv --method two-point --output o.json
+printf 'x,a,b\n0,1,2\n10,1,2\n25,1,2\n' > uneven.csv
+expect_err "uneven.csv:3:1: uneven step" "$T" separate --input uneven.csv --method two-point --output o.json
+printf 'x,a,b\n0,1,2\n10,nan,2\n20,1,2\n' > nan.csv
+expect_err "nan.csv:3:4: NaN is not allowed" "$T" separate --input nan.csv --method two-point --output o.json
+printf 'x,a,b\n0,1,2\n10,1\n20,1,2\n' > missing.csv
+expect_err "missing.csv:3:5: missing field for column 'b'" "$T" separate --input missing.csv --method two-point --output o.json
+printf 'x,a,b\n0,1,2\n10,1,2\n' > short.csv
+expect_err "too few stations" "$T" separate --input short.csv --method two-point --output o.json
+expect_err "not a whole multiple of the step" "$T" separate --input p3.csv --offsets 0,15,20 --output o.json
+expect_err "missing column 'level'" "$T" separate --input p3.csv --angle level --output o.json
+"$T" simulate straightness --stations 100 --offsets 0,20,40 --output chain.csv --truth tc.csv -q
+expect_err "chain offsets" "$T" separate --input chain.csv --offsets 0,20,40 --output o.json
+expect_err "seed' is defined for the three-point method only" "$T" separate --input p3.csv --reference seed --output o.json
+printf '{"workpiece": {"x": [0,1], "value": [1,' > broken.json
+expect_err "broken.json:1:" "$T" report broken.json -o x.html
+expect_err "" "$T" separate --input does-not-exist.csv --output o.json
+
+echo "cli: $passes passed, $fails failed"
+[ "$fails" -eq 0 ]

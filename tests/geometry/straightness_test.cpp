@@ -1,0 +1,77 @@
+#include "trueaxis/geometry/straightness.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace trueaxis::geometry;
+
+namespace {
+constexpr double kRoundOff = 1e-12;
+
+// Width by brute force: the minimum width is attained with one side through two of the points.
+double brute_width(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  double best = INFINITY;
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    for (Eigen::Index j = i + 1; j < x.size(); ++j) {
+      const double dx = x[j] - x[i], dy = y[j] - y[i], len = std::hypot(dx, dy);
+      if (len == 0) continue;
+      double lo = INFINITY, hi = -INFINITY;
+      for (Eigen::Index k = 0; k < x.size(); ++k) {
+        const double d = (dx * (y[k] - y[i]) - dy * (x[k] - x[i])) / len;
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+      }
+      best = std::min(best, hi - lo);
+    }
+  return best;
+}
+}  // namespace
+
+TEST(Straightness, MinZoneEqualsBruteForceOnRandomSets) {
+  std::mt19937_64 rng(42);
+  std::normal_distribution<double> N(0, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int n = 3 + trial % 40;
+    Eigen::VectorXd x(n), y(n);
+    for (int i = 0; i < n; ++i) {
+      x[i] = trial % 2 ? static_cast<double>(i) * 10 : 100 * N(rng);  // profiles and scattered sets
+      y[i] = (trial % 3 ? 1e-3 : 1.0) * N(rng);
+    }
+    const double bw = brute_width(x, y);
+    EXPECT_NEAR(min_zone(x, y).width, bw, kRoundOff * std::max(1.0, bw)) << "trial " << trial;
+  }
+}
+
+TEST(Straightness, MinZoneMiddleLineCentresTheZone) {
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(101, 0, 1000), y(101);
+  for (int i = 0; i < 101; ++i) y[i] = 0.002 * std::sin(x[i] / 50) + 1e-5 * x[i] + 3;
+  const MinZone z = min_zone(x, y);
+  const Eigen::VectorXd r = residuals(x, y, z.middle);
+  EXPECT_NEAR(r.maxCoeff(), -r.minCoeff(), 1e-12);
+  EXPECT_LE(z.width, ls_straightness(x, y) + 1e-15);  // min zone never exceeds the LS value
+}
+
+TEST(Straightness, LineHasZeroStraightness) {
+  Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(50, 1000, 1490);
+  Eigen::VectorXd y = 0.3 + 2e-4 * x.array();
+  EXPECT_NEAR(ls_straightness(x, y), 0, 1e-13);
+  EXPECT_NEAR(min_zone(x, y).width, 0, 1e-13);
+  const Line l = fit_line(x, y);
+  EXPECT_NEAR(l.slope, 2e-4, 1e-15);
+}
+
+TEST(Straightness, GaussianFilterTransmitsHalfAtCutoff) {
+  const double dx = 0.01, cutoff = 0.8;
+  const int n = 4001;
+  Eigen::VectorXd y(n);
+  for (int i = 0; i < n; ++i) y[i] = std::sin(2 * M_PI * i * dx / cutoff);
+  const Eigen::VectorXd m = gaussian_filter(y, dx, cutoff);
+  // Amplitude in the middle, away from the ends.
+  const double amp = m.segment(1000, 2000).cwiseAbs().maxCoeff();
+  EXPECT_NEAR(amp, 0.5, 2e-3);
+  // A straight line passes unchanged in the interior; constants everywhere.
+  Eigen::VectorXd c = Eigen::VectorXd::Constant(n, 2.5);
+  EXPECT_NEAR((gaussian_filter(c, dx, cutoff).array() - 2.5).abs().maxCoeff(), 0, 1e-12);
+}

@@ -1,0 +1,110 @@
+#include "trueaxis/io/probes.hpp"
+
+#include <gtest/gtest.h>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+std::string read_error(const std::string& content, io::ProbeReadOptions o = {}) {
+  const std::string p = test::temp_file("p.csv", content);
+  try {
+    io::read_probes(p, o);
+  } catch (const Error& e) {
+    std::string m = e.what();
+    const auto at = m.find("p.csv");
+    return at == std::string::npos ? m : m.substr(at);
+  }
+  return "";
+}
+
+const char* kGood = "x,a,b,c,ang\n0,1,2,3,10\n10,1,2,3,11\n20,1,2,3,12\n30,1,2,3,13\n";
+
+}  // namespace
+
+TEST(Probes, ReadsUnitsOffsetsAngleAndInvert) {
+  io::ProbeReadOptions o;
+  o.angle_column = "ang";
+  o.invert = true;
+  const auto d = io::read_probes(test::temp_file("g.csv", kGood), o);
+  EXPECT_EQ(d.readings.cols(), 3);
+  EXPECT_DOUBLE_EQ(d.readings(0, 1), -2e-3);
+  EXPECT_DOUBLE_EQ(d.angle[3], 13e-6);
+  EXPECT_EQ(d.offsets, (std::vector<double>{0, 10, 20}));
+}
+
+TEST(Probes, NonIncreasingX) {
+  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,1,2\n10,1,2\n"), "p.csv:4:1: x = 10 does not increase (previous 10)");
+}
+
+TEST(Probes, UnevenSpacing) {
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n25,1,2\n30,1,2\n").find("p.csv:3:1: uneven step"), std::string::npos);
+}
+
+TEST(Probes, TooFewStations) {
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n").find("too few stations: 2"), std::string::npos);
+}
+
+TEST(Probes, OffsetsNotWholeSteps) {
+  io::ProbeReadOptions o;
+  o.offsets = {0, 15};
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o).find("not a whole multiple of the step 10 mm"),
+            std::string::npos);
+}
+
+TEST(Probes, OffsetCountAndDuplicates) {
+  io::ProbeReadOptions o;
+  o.offsets = {0, 10, 20};
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o).find("2 probe columns but 3 offsets"), std::string::npos);
+  o.offsets = {0, 10, 10};
+  EXPECT_NE(read_error("x,a,b,c\n0,1,2,3\n10,1,2,3\n20,1,2,3\n", o).find("share the offset"), std::string::npos);
+}
+
+TEST(Probes, MissingColumnsAndBadHeader) {
+  io::ProbeReadOptions o;
+  o.angle_column = "level";
+  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o), "p.csv:1:1: missing column 'level' (header has: x, a, b)");
+  EXPECT_NE(read_error("pos,a,b\n0,1,2\n").find("p.csv:1:1: first column must be 'x'"), std::string::npos);
+  EXPECT_NE(read_error("x,a\n0,1\n10,1\n20,1\n").find("need at least two probe columns"), std::string::npos);
+}
+
+TEST(Probes, NanInData) {
+  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,NaN,2\n20,1,2\n"), "p.csv:3:4: NaN is not allowed (column 'a')");
+}
+
+TEST(ResultJson, RoundTripAndBadInput) {
+  separation::Result r;
+  r.method = separation::Method::ThreePoint;
+  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::Vector3d(1e-3, -2e-3, 0.5e-3), Eigen::Vector3d(1e-4, 1e-4, 2e-4)};
+  r.guide = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::Vector3d(0, 1e-3, 0), {}};
+  r.pitch = separation::Profile{Eigen::VectorXd::LinSpaced(2, 0, 1), Eigen::Vector2d(1e-6, -1e-6), {}};
+  r.unobservable = {"line", "parabola"};
+  const std::string p = test::temp_file("r.json", "");
+  io::write_result(p, r);
+  const auto back = io::read_result(p);
+  EXPECT_EQ(back.method, separation::Method::ThreePoint);
+  EXPECT_TRUE(back.workpiece.value.isApprox(r.workpiece.value, 1e-15));
+  EXPECT_TRUE(back.workpiece.uncertainty.isApprox(r.workpiece.uncertainty, 1e-15));
+  ASSERT_TRUE(back.pitch);
+  EXPECT_TRUE(back.pitch->value.isApprox(r.pitch->value, 1e-15));
+  EXPECT_EQ(back.unobservable, r.unobservable);
+
+  auto err = [](const std::string& text) {
+    try {
+      io::read_result(test::temp_file("bad.json", text));
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, 1], \n\"value\": [1, }").find("bad.json:2:"), std::string::npos);
+  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, 1], \"value\": [1]}, \"guide\": {\"x\": [0, 1], \"value\": [1, 2]}}")
+                .find("x has 2 values but value has 1"),
+            std::string::npos);
+  EXPECT_NE(err("{\"guide\": {}}").find("object 'workpiece' is missing"), std::string::npos);
+  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, \"a\"], \"value\": [1, 2]}}").find("'workpiece.x[1]' is not a number"),
+            std::string::npos);
+}

@@ -1,0 +1,50 @@
+"""The HTML report renders its plots in headless Chromium without script errors."""
+import os
+import re
+import shutil
+import subprocess
+
+import pytest
+
+TRUEAXIS = os.environ.get("TRUEAXIS", "trueaxis")
+
+
+def chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    raise RuntimeError("Chromium is needed for the report test (Debian package 'chromium')")
+
+
+def dump_dom(html, tmp_path):
+    out = subprocess.run(
+        [chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+         "--disable-background-networking", "--disable-component-update", "--disable-sync",
+         f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=5000", "--dump-dom",
+         f"file://{html}"],
+        capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    return out.stdout
+
+
+def test_demo_report_renders_every_plot(tmp_path):
+    report = tmp_path / "demo" / "index.html"
+    subprocess.run([TRUEAXIS, "demo", "-o", str(report), "--stations", "200", "-q"], check=True)
+    dom = dump_dom(report, tmp_path)
+    total = re.search(r'data-plots-total="(\d+)"', dom)
+    rendered = re.search(r'data-plots-rendered="(\d+)"', dom)
+    assert total and rendered, "report script did not run"
+    assert int(total.group(1)) >= 8
+    assert rendered.group(1) == total.group(1)
+    assert "data-script-errors" not in dom
+    assert dom.count("<canvas") >= int(total.group(1))
+
+
+def test_report_command_renders(tmp_path):
+    p, t, r, h = (tmp_path / n for n in ("p.csv", "t.csv", "r.json", "r.html"))
+    subprocess.run([TRUEAXIS, "simulate", "straightness", "-o", str(p), "--truth", str(t), "-q"], check=True)
+    subprocess.run([TRUEAXIS, "separate", "-i", str(p), "-o", str(r), "--sigma", "0.1", "-q"], check=True)
+    subprocess.run([TRUEAXIS, "report", str(r), "-o", str(h), "-q"], check=True)
+    dom = dump_dom(h, tmp_path)
+    assert 'data-plots-rendered="3"' in dom and "data-script-errors" not in dom

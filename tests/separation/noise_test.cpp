@@ -1,0 +1,94 @@
+// Noisy data: the reported uncertainty must describe the actual errors.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "trueaxis/separation/separation.hpp"
+#include "trueaxis/sim/straightness.hpp"
+
+using namespace trueaxis;
+using separation::Method;
+using separation::Options;
+using separation::Profile;
+
+namespace {
+
+struct Stats {
+  double within2 = 0;  // fraction of |error| <= 2u
+  double rms_z = 0;    // RMS of error/u
+  double rms_err = 0;  // RMS error (mm)
+  double mean_u = 0;
+};
+
+// Repeats a noisy campaign over `runs` seeds and compares errors against the stated uncertainty
+// at every workpiece point (runs are independent; points within a run are correlated).
+Stats run(Method m, std::vector<double> offsets, bool angle, bool given_sigma, int runs = 120) {
+  long cnt = 0, in = 0;
+  double z2 = 0, e2 = 0, u = 0;
+  for (int s = 0; s < runs; ++s) {
+    sim::StraightnessOptions so;
+    so.stations = 60;
+    so.step = 10;
+    so.offsets = offsets;
+    so.noise = 0.1e-3;
+    so.angle = angle;
+    so.angle_noise = 0.5e-6;
+    so.seed = 1000 + static_cast<std::uint64_t>(s);
+    const auto camp = sim::simulate_straightness(so);
+    Options o;
+    o.method = m;
+    if (given_sigma) o.sigma = so.noise;
+    o.angle_sigma = so.angle_noise;
+    const auto r = separation::separate(camp.data, o);
+    EXPECT_EQ(r.workpiece.uncertainty.size(), r.workpiece.value.size());
+    const bool par = std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
+    Profile tw{r.workpiece.x, Eigen::VectorXd(r.workpiece.x.size()), {}}, tg{r.guide.x, Eigen::VectorXd(r.guide.x.size()), {}};
+    const auto& T = camp.truth;
+    for (Eigen::Index i = 0; i < tw.x.size(); ++i) tw.value[i] = T.workpiece[std::lround((tw.x[i] - T.x[0]) / so.step)];
+    for (Eigen::Index i = 0; i < tg.x.size(); ++i) tg.value[i] = T.guide[std::lround((tg.x[i] - T.x[0]) / so.step)];
+    separation::express_in_reference(tw, tg, nullptr, separation::Reference::LeastSquares, par);
+    for (Eigen::Index i = 0; i < tw.x.size(); ++i) {
+      const double uu = r.workpiece.uncertainty[i];
+      if (!(uu > 0)) continue;  // pinned/degenerate points carry zero uncertainty
+      const double e = r.workpiece.value[i] - tw.value[i];
+      ++cnt;
+      in += std::abs(e) <= 2 * uu;
+      z2 += (e / uu) * (e / uu);
+      e2 += e * e;
+      u += uu;
+    }
+  }
+  return {static_cast<double>(in) / cnt, std::sqrt(z2 / cnt), std::sqrt(e2 / cnt), u / cnt};
+}
+
+}  // namespace
+
+// About 95 % of the errors within ±2u, and error/u of unit RMS, for each method.
+TEST(SeparationNoise, ErrorsAgreeWithStatedUncertainty) {
+  struct Case {
+    const char* name;
+    Method m;
+    std::vector<double> off;
+    bool angle, given;
+  };
+  for (const Case& c : {Case{"two-point", Method::TwoPoint, {0, 10}, false, true},
+                        Case{"three-point", Method::ThreePoint, {0, 10, 20}, false, true},
+                        Case{"lsq 3 probes + level", Method::Lsq, {0, 10, 20}, true, true},
+                        Case{"lsq 5 probes, sigma estimated", Method::Lsq, {0, 10, 20, 30, 40}, false, false}}) {
+    const Stats s = run(c.m, c.off, c.angle, c.given);
+    EXPECT_GT(s.within2, 0.90) << c.name;
+    EXPECT_LT(s.within2, 0.99) << c.name;
+    EXPECT_NEAR(s.rms_z, 1.0, 0.2) << c.name;
+  }
+}
+
+// Redundancy (more probes, or a level) lowers both the stated uncertainty and the actual error.
+TEST(SeparationNoise, RedundancyLowersTheError) {
+  const Stats three = run(Method::Lsq, {0, 10, 20}, false, true);
+  const Stats five = run(Method::Lsq, {0, 10, 20, 30, 40}, false, true);
+  const Stats level = run(Method::Lsq, {0, 10, 20}, true, true);
+  EXPECT_LT(five.mean_u, three.mean_u);
+  EXPECT_LT(five.rms_err, three.rms_err);
+  EXPECT_LT(level.mean_u, three.mean_u);
+  EXPECT_LT(level.rms_err, three.rms_err);
+}
