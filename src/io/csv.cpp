@@ -107,7 +107,7 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
       while (e > b && is_space(e[-1])) --e;
       const std::size_t colno = static_cast<std::size_t>(b - l.data()) + 1;
       if (b == e)
-        throw Error(fmt::format("{}:{}:{}: empty field in column '{}'", t.path_, line, colno,
+        throw Error(fmt::format("{}:{}:{}: empty field in column '{}'", t.path_, line, f0 + 1,
                                 t.header_[c]));
       if (*b == '+') ++b;  // from_chars rejects a leading '+'
       double v = 0;
@@ -128,7 +128,7 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
     }
     if (f0 <= l.size())
       throw Error(fmt::format("{}:{}:{}: extra field: the header has {} columns", t.path_, line,
-                              f0, ncol));
+                              f0 + 1, ncol));
     t.line_start_.push_back(start);
     t.line_no_.push_back(line);
   }

@@ -284,12 +284,15 @@ LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel
         "modes that die away from the ends) no reading sees");
   }
   if (stations < na) why += " (or there are too few stations)";
+  std::string modes;
+  for (std::size_t i = D.parabola_free ? 2 : 1; i < a.unobservable.size(); ++i)
+    if (a.unobservable[i].rfind("pitch", 0) != 0) modes += (modes.empty() ? "" : ", ") + a.unobservable[i];
   a.message = fmt::format(
       "unobservable layout: probe offsets {} steps{} leave {} mode(s) undetermined beyond the "
-      "reference line{}: {}. Use offsets whose step multiples have no common factor and "
+      "reference line{} ({}): {}. Use offsets whose step multiples have no common factor and "
       "consecutive spacing of one step, add probes or an angle channel",
       steps_text(steps), angle_channel ? " with an angle channel" : "", a.extra_null_modes,
-      D.parabola_free ? " and parabola" : "", why);
+      D.parabola_free ? " and parabola" : "", modes, why);
   return a;
 }
 

@@ -37,7 +37,7 @@ def test_demo_report_renders_every_plot(tmp_path):
     assert total and rendered, "report script did not run"
     assert int(total.group(1)) >= 8
     assert rendered.group(1) == total.group(1)
-    assert "data-script-errors" not in dom
+    assert 'data-script-errors="' not in dom, "script errors in the report"
     assert dom.count("<canvas") >= int(total.group(1))
 
 
@@ -47,4 +47,4 @@ def test_report_command_renders(tmp_path):
     subprocess.run([TRUEAXIS, "separate", "-i", str(p), "-o", str(r), "--sigma", "0.1", "-q"], check=True)
     subprocess.run([TRUEAXIS, "report", str(r), "-o", str(h), "-q"], check=True)
     dom = dump_dom(h, tmp_path)
-    assert 'data-plots-rendered="3"' in dom and "data-script-errors" not in dom
+    assert 'data-plots-rendered="3"' in dom and 'data-script-errors="' not in dom

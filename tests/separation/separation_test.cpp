@@ -191,11 +191,14 @@ TEST(Separation, SeedReferenceMatchesAnIndependentImplementation) {
   ASSERT_EQ(r.guide.value.size(), n);
   ASSERT_TRUE(r.pitch);
   ASSERT_EQ(r.pitch->value.size(), n - 1);
+  // The one-pass reference cancels C_K ~ K²β against the fit, so it carries ~1e-15 mm of
+  // rounding itself; agreement to 1e-13 mm (1e-10 µm) is agreement to round-off.
+  constexpr double kSeedRoundOff = 1e-13;
   for (long K = 0; K < n; ++K) {
-    EXPECT_NEAR(r.guide.value[K], X[K], 1e-15) << K;
-    EXPECT_NEAR(r.workpiece.value[K], Y[K], 1e-15) << K;
+    EXPECT_NEAR(r.guide.value[K], X[K], kSeedRoundOff) << K;
+    EXPECT_NEAR(r.workpiece.value[K], Y[K], kSeedRoundOff) << K;
   }
-  for (long K = 0; K + 1 < n; ++K) EXPECT_NEAR(r.pitch->value[K], th[K], 1e-16) << K;
+  for (long K = 0; K + 1 < n; ++K) EXPECT_NEAR(r.pitch->value[K], th[K], kSeedRoundOff / l) << K;
   EXPECT_EQ(r.pitch->value[0], 0.0);  // relative to the first station
   EXPECT_TRUE(r.workpiece.uncertainty.size() == 0);
 }
