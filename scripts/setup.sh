@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Fresh Debian machine -> dependencies, build, install trueaxis (CLI + Python module for
+# /usr/bin/python3), then run 'trueaxis demo'. Run from the repository root, as root (or with sudo).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
+if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
+  $SUDO apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+    g++ cmake ninja-build git nodejs npm \
+    libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev \
+    libgtest-dev libgmock-dev libbenchmark-dev \
+    pybind11-dev python3-dev python3-numpy python3-pytest \
+    chromium gawk clang-format >/dev/null
+fi
+(cd web && npm ci --no-audit --no-fund --silent)
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTRUEAXIS_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr/local
+cmake --build build
+$SUDO cmake --install build
+trueaxis demo

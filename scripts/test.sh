@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Runs every test (GoogleTest + CLI end-to-end + pytest with the browser check) via ctest.
+# Expects scripts/setup.sh to have run (it builds ./build).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cmake --build build
+ctest --test-dir build --output-on-failure -j"$(nproc)"
