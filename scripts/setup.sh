@@ -6,8 +6,13 @@ cd "$(dirname "$0")/.."
 SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
 if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
   $SUDO apt-get update -qq
+  # Node.js is needed once, for the report's plotting library. Some machines carry a Node.js
+  # build that bundles npm (and conflicts with Debian's npm package): install only what is missing.
+  node_pkgs=""
+  command -v node >/dev/null || node_pkgs+=" nodejs"
+  command -v npm >/dev/null || node_pkgs+=" npm"
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
-    g++ cmake ninja-build git nodejs npm \
+    g++ cmake ninja-build git $node_pkgs \
     libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev \
     libgtest-dev libgmock-dev libbenchmark-dev \
     pybind11-dev python3-dev python3-numpy python3-pytest \
