@@ -1,13 +1,23 @@
 #pragma once
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
 
 namespace trueaxis::test {
 
+// A directory of the running test's own (ctest runs tests in parallel processes).
+inline std::string temp_dir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const std::string d =
+      std::string(TRUEAXIS_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
+  std::filesystem::create_directories(d);
+  return d;
+}
+
 inline std::string temp_file(const std::string& name, const std::string& content) {
-  std::filesystem::create_directories(TRUEAXIS_TEST_TMP);
-  const std::string p = std::string(TRUEAXIS_TEST_TMP) + "/" + name;
+  const std::string p = temp_dir() + "/" + name;
   std::ofstream(p) << content;
   return p;
 }

@@ -15,8 +15,8 @@ namespace trueaxis::cli {
 namespace {
 
 // The truth on a result's grids, in the result's reference.
-separation::Result truth_like(const separation::Result& r, const sim::StraightnessTruth& T, double h,
-                              bool parabola_free) {
+separation::Result truth_like(const separation::Result& r, const sim::StraightnessTruth& T,
+                              double h, bool parabola_free) {
   auto on = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& v) {
     Eigen::VectorXd out(x.size());
     for (Eigen::Index i = 0; i < x.size(); ++i) out[i] = v[std::lround((x[i] - T.x[0]) / h)];
@@ -27,7 +27,9 @@ separation::Result truth_like(const separation::Result& r, const sim::Straightne
   t.guide = {r.guide.x, on(r.guide.x, T.guide), {}};
   if (r.pitch) t.pitch = separation::Profile{r.pitch->x, on(r.pitch->x, T.pitch), {}};
   separation::express_in_reference(t.workpiece, t.guide, t.pitch ? &*t.pitch : nullptr,
-                                   r.reference == separation::Reference::Seed ? separation::Reference::LeastSquares : r.reference,
+                                   r.reference == separation::Reference::Seed
+                                       ? separation::Reference::LeastSquares
+                                       : r.reference,
                                    parabola_free);
   return t;
 }
@@ -46,10 +48,13 @@ separation::ProbeData subset(const separation::ProbeData& d, int probes, bool an
 int run_demo(const DemoOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   auto say = [&](const std::string& s) {
-    if (!o.quiet) fmt::print("[{:5.2f}s] {}\n", std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), s);
+    if (!o.quiet)
+      fmt::print("[{:5.2f}s] {}\n",
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), s);
   };
   const std::filesystem::path out(o.output);
-  const std::filesystem::path dir = out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
+  const std::filesystem::path dir =
+      out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
   std::filesystem::create_directories(dir);
 
   // Scenario 1: straightness separation on a pitching carriage with four probes and a level.
@@ -65,7 +70,9 @@ int run_demo(const DemoOptions& o) {
   so.angle_noise = 0.2e-6;
   so.seed = o.seed;
   const auto camp = sim::simulate_straightness(so);
-  say(fmt::format("straightness: simulated a pitching carriage, {} stations x {} mm, 4 probes + level, noise {} um",
+  say(
+      fmt::format("straightness: simulated a pitching carriage, {} stations x {} mm, 4 probes + "
+                  "level, noise {} um",
                   so.stations, so.step, so.noise * 1e3));
   io::write_probes((dir / "probes.csv").string(), camp.data);
 
@@ -75,12 +82,14 @@ int run_demo(const DemoOptions& o) {
   intro.intro_html =
       "<p>A virtual carriage pitches by a few µrad while four displacement probes (5 mm apart) and "
       "an electronic level read a workpiece. Each method recovers the workpiece profile and the "
-      "guide's straightness; the dashed red curves are the simulator's truth in the same reference. "
+      "guide's straightness; the dashed red curves are the simulator's truth in the same "
+      "reference. "
       "The two-point method cannot see pitch, so it integrates it into the profiles; the seed's "
       "three-point method removes pitch but cannot tell a parabola in the guide from one in the "
       "workpiece (and its noise grows fastest); the least-squares solver uses all four probes and "
       "the level, recovers the curvature and has the smallest uncertainty.</p>";
-  intro.table.push_back({"method", "data used", "max error workpiece (µm)", "max error guide (µm)", "max u workpiece (µm)"});
+  intro.table.push_back({"method", "data used", "max error workpiece (µm)", "max error guide (µm)",
+                         "max u workpiece (µm)"});
   struct Run {
     const char* label;
     separation::Method m;
@@ -97,17 +106,22 @@ int run_demo(const DemoOptions& o) {
     opt.angle_sigma = so.angle_noise;
     const auto data = subset(camp.data, run.probes, run.angle);
     const auto r = separation::separate(data, opt);
-    const bool par = std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
+    const bool par =
+        std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
     const auto t = truth_like(r, camp.truth, so.step, par);
     const std::string file = fmt::format("result-{}.json", separation::to_string(run.m));
     io::write_result((dir / file).string(), r);
     const double ew = (r.workpiece.value - t.workpiece.value).cwiseAbs().maxCoeff() * 1e3;
     const double eg = (r.guide.value - t.guide.value).cwiseAbs().maxCoeff() * 1e3;
-    intro.table.push_back({run.label, fmt::format("{} probes{}", run.probes, run.angle ? " + level" : ""),
+    intro.table.push_back({run.label,
+                           fmt::format("{} probes{}", run.probes, run.angle ? " + level" : ""),
                            fmt::format("{:.3f}", ew), fmt::format("{:.3f}", eg),
-                           r.workpiece.uncertainty.size() ? fmt::format("{:.3f}", r.workpiece.uncertainty.maxCoeff() * 1e3) : "-"});
+                           r.workpiece.uncertainty.size()
+                               ? fmt::format("{:.3f}", r.workpiece.uncertainty.maxCoeff() * 1e3)
+                               : "-"});
     sections.push_back(report::separation_section(run.label, r, &t));
-    say(fmt::format("straightness: {:<20} max error workpiece {:.3f} um, guide {:.3f} um -> {}", run.label, ew, eg, file));
+    say(fmt::format("straightness: {:<20} max error workpiece {:.3f} um, guide {:.3f} um -> {}",
+                    run.label, ew, eg, file));
   }
   sections.insert(sections.begin(), intro);
   report::write(o.output, report::render("trueaxis demo", sections));

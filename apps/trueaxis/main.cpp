@@ -1,9 +1,9 @@
 // trueaxis — command-line tool. A thin client of the library: parse options, read files, call
 // the library, write files. Library errors (trueaxis::Error) become one line on stderr and exit
 // code 1; command-line mistakes exit with code 2 (CLI11's).
-#include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
 
@@ -44,7 +44,8 @@ int cmd_separate(const SeparateArgs& a) {
   const separation::Result r = separation::separate(data, o);
   io::write_result(a.output, r);
   if (!a.csv.empty()) io::write_result_csv(a.csv, r);
-  if (!a.quiet) fmt::print("{}wrote {}{}\n", r.summary(), a.output, a.csv.empty() ? "" : " and " + a.csv);
+  if (!a.quiet)
+    fmt::print("{}wrote {}{}\n", r.summary(), a.output, a.csv.empty() ? "" : " and " + a.csv);
   return 0;
 }
 
@@ -63,18 +64,20 @@ int cmd_simulate_straightness(SimArgs a) {
   a.o.angle_noise = a.angle_noise_urad * 1e-6;
   const auto c = sim::simulate_straightness(a.o);
   io::write_probes(a.output, c.data);
-  const Eigen::VectorXd w = c.truth.workpiece * 1e3, g = c.truth.guide * 1e3, t = c.truth.pitch * 1e6;
+  const Eigen::VectorXd w = c.truth.workpiece * 1e3, g = c.truth.guide * 1e3,
+                        t = c.truth.pitch * 1e6;
   io::write_csv(a.truth, {"x", "workpiece_um", "guide_um", "pitch_urad"}, {&c.truth.x, &w, &g, &t});
   if (!a.quiet)
-    fmt::print("simulated {} stations, {} probes{}: wrote {} and {}\n", a.o.stations, a.o.offsets.size(),
-               a.o.angle ? " + angle channel" : "", a.output, a.truth);
+    fmt::print("simulated {} stations, {} probes{}: wrote {} and {}\n", a.o.stations,
+               a.o.offsets.size(), a.o.angle ? " + angle channel" : "", a.output, a.truth);
   return 0;
 }
 
 int cmd_report(const std::string& input, const std::string& output, bool quiet) {
   const separation::Result r = io::read_result(input);
   const std::string html = report::render(
-      "trueaxis straightness report", {report::separation_section(std::filesystem::path(input).filename().string(), r)});
+      "trueaxis straightness report",
+      {report::separation_section(std::filesystem::path(input).filename().string(), r)});
   report::write(output, html);
   if (!quiet) fmt::print("wrote {}\n", output);
   return 0;
@@ -95,67 +98,99 @@ int main(int argc, char** argv) {
   auto* sep = app.add_subcommand(
       "separate",
       "Separate a workpiece profile from the guide's straightness (and pitch) using displacement "
-      "probes on a moving carriage.\n\nprobes.csv: header row; column 'x' (mm, equal steps), then one "
-      "column per probe (um) in the order of --offsets.\nExample: trueaxis separate --input probes.csv "
+      "probes on a moving carriage.\n\nprobes.csv: header row; column 'x' (mm, equal steps), then "
+      "one "
+      "column per probe (um) in the order of --offsets.\nExample: trueaxis separate --input "
+      "probes.csv "
       "--method three-point --output result.json");
-  sep->add_option("--input,-i", sa.input, "probes CSV (x in mm, one column of um per probe)")->required()->check(CLI::ExistingFile);
-  sep->add_option("--method,-m", sa.method,
-                  "two-point: probes at 0,h (no pitch); three-point: the seed method, probes at 0,h,2h; "
-                  "lsq: least squares, any whole-step offsets, optional angle channel")
+  sep->add_option("--input,-i", sa.input, "probes CSV (x in mm, one column of um per probe)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sep->add_option(
+         "--method,-m", sa.method,
+         "two-point: probes at 0,h (no pitch); three-point: the seed method, probes at 0,h,2h; "
+         "lsq: least squares, any whole-step offsets, optional angle channel")
       ->check(CLI::IsMember({"two-point", "three-point", "lsq"}))
       ->capture_default_str();
-  sep->add_option("--offsets", sa.offsets, "probe offsets from the first probe, mm (default 0,h,2h,...)")->delimiter(',');
-  sep->add_option("--angle", sa.angle, "name of a pitch column (urad) from an autocollimator or level (lsq)");
-  sep->add_option("--zero-difference", sa.zero_difference,
-                  "known zero difference of a three-probe layout, um (o_A - 2 o_B + o_C for equal spacing); "
-                  "removes the parabola ambiguity");
+  sep->add_option("--offsets", sa.offsets,
+                  "probe offsets from the first probe, mm (default 0,h,2h,...)")
+      ->delimiter(',');
+  sep->add_option("--angle", sa.angle,
+                  "name of a pitch column (urad) from an autocollimator or level (lsq)");
+  sep->add_option(
+      "--zero-difference", sa.zero_difference,
+      "known zero difference of a three-probe layout, um (o_A - 2 o_B + o_C for equal spacing); "
+      "removes the parabola ambiguity");
   sep->add_flag("--invert", sa.invert, "negate probe readings (probes that read the gap)");
-  sep->add_option("--reference", sa.reference,
-                  "ls: residuals from least-squares lines; seed: the patent's own numbers (three-point); "
-                  "min-zone: relative to minimum-zone lines")
+  sep->add_option(
+         "--reference", sa.reference,
+         "ls: residuals from least-squares lines; seed: the patent's own numbers (three-point); "
+         "min-zone: relative to minimum-zone lines")
       ->check(CLI::IsMember({"ls", "seed", "min-zone"}))
       ->capture_default_str();
-  sep->add_option("--sigma", sa.sigma, "probe noise, um (standard deviation) for the uncertainties; "
-                                       "default: estimated from the residuals when the data are redundant");
-  sep->add_option("--angle-sigma", sa.angle_sigma, "angle channel noise, urad")->capture_default_str();
-  sep->add_option("--filter-cutoff", sa.filter_cutoff, "apply an ISO 16610-21 Gaussian filter with this cut-off, mm");
+  sep->add_option("--sigma", sa.sigma,
+                  "probe noise, um (standard deviation) for the uncertainties; "
+                  "default: estimated from the residuals when the data are redundant");
+  sep->add_option("--angle-sigma", sa.angle_sigma, "angle channel noise, urad")
+      ->capture_default_str();
+  sep->add_option("--filter-cutoff", sa.filter_cutoff,
+                  "apply an ISO 16610-21 Gaussian filter with this cut-off, mm");
   sep->add_option("--output,-o", sa.output, "result JSON")->required();
   sep->add_option("--csv", sa.csv, "also write the profiles as CSV");
   sep->add_flag("--quiet,-q", sa.quiet, "print nothing on success");
 
   // simulate ---------------------------------------------------------------------------------
-  auto* simc = app.add_subcommand("simulate", "Generate data from a virtual machine (with the truth, to check methods)");
+  auto* simc = app.add_subcommand(
+      "simulate", "Generate data from a virtual machine (with the truth, to check methods)");
   simc->require_subcommand(1);
   SimArgs ma;
-  auto* simst = simc->add_subcommand("straightness", "A seeded virtual carriage with probes over a workpiece: writes probes.csv and truth.csv");
+  auto* simst = simc->add_subcommand(
+      "straightness",
+      "A seeded virtual carriage with probes over a workpiece: writes probes.csv and truth.csv");
   simst->add_option("--stations", ma.o.stations, "number of stops")->capture_default_str();
   simst->add_option("--step", ma.o.step, "distance between stops, mm")->capture_default_str();
-  simst->add_option("--offsets", ma.o.offsets, "probe offsets from the first probe, mm")->delimiter(',')->capture_default_str();
-  simst->add_option("--noise", ma.noise_um, "probe noise, um (standard deviation)")->capture_default_str();
-  simst->add_option("--pitch", ma.pitch_urad, "pitch error amplitude, urad (0: no pitch)")->capture_default_str();
-  simst->add_option("--workpiece", ma.workpiece_um, "workpiece form error amplitude, um")->capture_default_str();
-  simst->add_option("--guide", ma.guide_um, "guide straightness amplitude, um")->capture_default_str();
+  simst->add_option("--offsets", ma.o.offsets, "probe offsets from the first probe, mm")
+      ->delimiter(',')
+      ->capture_default_str();
+  simst->add_option("--noise", ma.noise_um, "probe noise, um (standard deviation)")
+      ->capture_default_str();
+  simst->add_option("--pitch", ma.pitch_urad, "pitch error amplitude, urad (0: no pitch)")
+      ->capture_default_str();
+  simst->add_option("--workpiece", ma.workpiece_um, "workpiece form error amplitude, um")
+      ->capture_default_str();
+  simst->add_option("--guide", ma.guide_um, "guide straightness amplitude, um")
+      ->capture_default_str();
   simst->add_flag("--angle", ma.o.angle, "add a pitch (angle) channel, column 'angle' in urad");
-  simst->add_option("--angle-noise", ma.angle_noise_urad, "angle channel noise, urad")->capture_default_str();
-  simst->add_option("--seed", ma.o.seed, "random seed (same seed, same data)")->capture_default_str();
+  simst->add_option("--angle-noise", ma.angle_noise_urad, "angle channel noise, urad")
+      ->capture_default_str();
+  simst->add_option("--seed", ma.o.seed, "random seed (same seed, same data)")
+      ->capture_default_str();
   simst->add_option("--output,-o", ma.output, "probes CSV to write")->capture_default_str();
-  simst->add_option("--truth", ma.truth, "truth CSV to write (x, workpiece_um, guide_um, pitch_urad)")->capture_default_str();
+  simst
+      ->add_option("--truth", ma.truth,
+                   "truth CSV to write (x, workpiece_um, guide_um, pitch_urad)")
+      ->capture_default_str();
   simst->add_flag("--quiet,-q", ma.quiet, "print nothing on success");
 
   // report -----------------------------------------------------------------------------------
   std::string rin, rout = "report.html";
   bool rquiet = false;
-  auto* rep = app.add_subcommand("report", "Write an HTML report (interactive plots, works offline) of a result JSON");
-  rep->add_option("result", rin, "result JSON written by 'trueaxis separate'")->required()->check(CLI::ExistingFile);
+  auto* rep = app.add_subcommand(
+      "report", "Write an HTML report (interactive plots, works offline) of a result JSON");
+  rep->add_option("result", rin, "result JSON written by 'trueaxis separate'")
+      ->required()
+      ->check(CLI::ExistingFile);
   rep->add_option("--output,-o", rout, "HTML file to write")->capture_default_str();
   rep->add_flag("--quiet,-q", rquiet, "print nothing on success");
 
   // demo -------------------------------------------------------------------------------------
   cli::DemoOptions da;
-  auto* demo = app.add_subcommand("demo", "Run every capability on the built-in virtual machine and write an HTML report");
+  auto* demo = app.add_subcommand(
+      "demo", "Run every capability on the built-in virtual machine and write an HTML report");
   demo->add_option("--output,-o", da.output, "HTML report to write")->capture_default_str();
   demo->add_option("--seed", da.seed, "random seed of the virtual machine")->capture_default_str();
-  demo->add_option("--stations", da.stations, "stations of the straightness campaign")->capture_default_str();
+  demo->add_option("--stations", da.stations, "stations of the straightness campaign")
+      ->capture_default_str();
   demo->add_flag("--quiet,-q", da.quiet, "print only errors");
 
   CLI11_PARSE(app, argc, argv);

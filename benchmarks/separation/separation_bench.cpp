@@ -53,9 +53,14 @@ void BM_MemcpyReadings(benchmark::State& st) {
 }  // namespace
 
 BENCHMARK(BM_MemcpyReadings)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(run, two_point, separation::Method::TwoPoint, 2, false, false)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(run, three_point, separation::Method::ThreePoint, 3, false, false)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(run, lsq_3probes, separation::Method::Lsq, 3, false, false)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(run, lsq_3probes_uncertainty, separation::Method::Lsq, 3, false, true)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(run, lsq_3probes_level_uncertainty, separation::Method::Lsq, 3, true, true)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, two_point, separation::Method::TwoPoint, 2, false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, three_point, separation::Method::ThreePoint, 3, false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, lsq_3probes, separation::Method::Lsq, 3, false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, lsq_3probes_uncertainty, separation::Method::Lsq, 3, false, true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, lsq_3probes_level_uncertainty, separation::Method::Lsq, 3, true, true)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

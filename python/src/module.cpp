@@ -38,8 +38,10 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
   if (offsets) {
     d.offsets = *offsets;
   } else {
-    const double h = x.size() > 1 ? (x[x.size() - 1] - x[0]) / static_cast<double>(x.size() - 1) : 1.0;
-    for (Eigen::Index i = 0; i < readings.cols(); ++i) d.offsets.push_back(static_cast<double>(i) * h);
+    const double h =
+        x.size() > 1 ? (x[x.size() - 1] - x[0]) / static_cast<double>(x.size() - 1) : 1.0;
+    for (Eigen::Index i = 0; i < readings.cols(); ++i)
+      d.offsets.push_back(static_cast<double>(i) * h);
   }
   if (angle) d.angle = *angle * 1e-6;
   separation::Options o;
@@ -77,9 +79,9 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
   return out;
 }
 
-py::dict simulate_straightness(long stations, double step, std::vector<double> offsets, double noise,
-                               double pitch, double workpiece, double guide, bool angle,
-                               double angle_noise, std::uint64_t seed) {
+py::dict simulate_straightness(long stations, double step, std::vector<double> offsets,
+                               double noise, double pitch, double workpiece, double guide,
+                               bool angle, double angle_noise, std::uint64_t seed) {
   sim::StraightnessOptions o;
   o.stations = stations;
   o.step = step;
@@ -96,7 +98,8 @@ py::dict simulate_straightness(long stations, double step, std::vector<double> o
   d["x"] = c.data.x;
   d["readings"] = Eigen::MatrixXd(c.data.readings * 1e3);
   d["offsets"] = c.data.offsets;
-  d["angle"] = c.data.angle.size() ? py::object(py::cast(Eigen::VectorXd(c.data.angle * 1e6))) : py::object(py::none());
+  d["angle"] = c.data.angle.size() ? py::object(py::cast(Eigen::VectorXd(c.data.angle * 1e6)))
+                                   : py::object(py::none());
   t["x"] = c.truth.x;
   t["workpiece"] = Eigen::VectorXd(c.truth.workpiece * 1e3);
   t["guide"] = Eigen::VectorXd(c.truth.guide * 1e3);
@@ -132,13 +135,14 @@ offsets from the first probe in mm (default 0, h, 2h, ...); method: 'two-point',
 Returns a dict with 'workpiece', 'guide' and 'pitch' (each {'x', 'value', 'uncertainty'}; µm or
 µrad), 'straightness', 'unobservable', 'gauge', 'summary'. Raises trueaxis.Error on bad input or
 an unobservable layout.)doc");
-  m.def("simulate_straightness", &simulate_straightness, py::kw_only(), py::arg("stations") = 201,
-        py::arg("step") = 10.0, py::arg("offsets") = std::vector<double>{0, 10, 20},
-        py::arg("noise") = 0.0, py::arg("pitch") = 5.0, py::arg("workpiece") = 5.0,
-        py::arg("guide") = 3.0, py::arg("angle") = false, py::arg("angle_noise") = 0.0,
-        py::arg("seed") = 1,
-        "Seeded virtual carriage: returns {'x', 'readings' (µm), 'offsets', 'angle' (µrad) or None, "
-        "'truth': {'x', 'workpiece', 'guide', 'pitch'}}.");
+  m.def(
+      "simulate_straightness", &simulate_straightness, py::kw_only(), py::arg("stations") = 201,
+      py::arg("step") = 10.0, py::arg("offsets") = std::vector<double>{0, 10, 20},
+      py::arg("noise") = 0.0, py::arg("pitch") = 5.0, py::arg("workpiece") = 5.0,
+      py::arg("guide") = 3.0, py::arg("angle") = false, py::arg("angle_noise") = 0.0,
+      py::arg("seed") = 1,
+      "Seeded virtual carriage: returns {'x', 'readings' (µm), 'offsets', 'angle' (µrad) or None, "
+      "'truth': {'x', 'workpiece', 'guide', 'pitch'}}.");
   m.def(
       "straightness",
       [](const Eigen::VectorXd& x, const Eigen::VectorXd& values) {

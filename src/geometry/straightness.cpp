@@ -65,7 +65,8 @@ MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
   // Work about the centroid: widths are tiny compared with lengths.
   const double cx = x.mean(), cy = y.mean();
   std::vector<P> p(static_cast<std::size_t>(x.size()));
-  for (Eigen::Index i = 0; i < x.size(); ++i) p[static_cast<std::size_t>(i)] = {x[i] - cx, y[i] - cy};
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    p[static_cast<std::size_t>(i)] = {x[i] - cx, y[i] - cy};
   auto less = [](const P& a, const P& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
   if (!std::is_sorted(p.begin(), p.end(), less)) std::sort(p.begin(), p.end(), less);
   const std::vector<P> h = hull_sorted(p);

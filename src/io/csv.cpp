@@ -14,7 +14,9 @@
 namespace trueaxis::io {
 namespace {
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+bool is_space(char c) {
+  return c == ' ' || c == '\t' || c == '\r';
+}
 
 std::string_view trim(std::string_view s) {
   while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
@@ -22,7 +24,9 @@ std::string_view trim(std::string_view s) {
   return s;
 }
 
-bool blank(std::string_view line) { return trim(line).empty(); }
+bool blank(std::string_view line) {
+  return trim(line).empty();
+}
 
 }  // namespace
 
@@ -73,12 +77,12 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
           trim(l.substr(f0, comma == std::string_view::npos ? std::string_view::npos : comma - f0));
       const int col = static_cast<int>(t.header_.size());
       if (field.empty())
-        throw Error(fmt::format("{}:{}:{}: empty column name (column {})", t.path_, line, f0 + 1,
-                                col + 1));
+        throw Error(
+            fmt::format("{}:{}:{}: empty column name (column {})", t.path_, line, f0 + 1, col + 1));
       for (const auto& h : t.header_)
         if (h == field)
-          throw Error(fmt::format("{}:{}:{}: duplicated column name '{}'", t.path_, line, f0 + 1,
-                                  field));
+          throw Error(
+              fmt::format("{}:{}:{}: duplicated column name '{}'", t.path_, line, f0 + 1, field));
       t.header_.emplace_back(field);
       if (comma == std::string_view::npos) break;
       f0 = comma + 1;
@@ -117,9 +121,9 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
                                 colno, t.header_[c]));
       }
       if (r.ec != std::errc() || r.ptr != e)
-        throw Error(fmt::format("{}:{}:{}: '{}' is not a number (column '{}')", t.path_, line,
-                                colno, std::string_view(l.data() + colno - 1, e - (l.data() + colno - 1)),
-                                t.header_[c]));
+        throw Error(fmt::format(
+            "{}:{}:{}: '{}' is not a number (column '{}')", t.path_, line, colno,
+            std::string_view(l.data() + colno - 1, e - (l.data() + colno - 1)), t.header_[c]));
       if (!std::isfinite(v))
         throw Error(fmt::format("{}:{}:{}: {} is not allowed (column '{}')", t.path_, line, colno,
                                 std::isnan(v) ? "NaN" : "Inf", t.header_[c]));

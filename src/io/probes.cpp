@@ -24,13 +24,15 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
                             probe_cols.size()));
   const long n = static_cast<long>(t.rows());
   if (n < opt.min_stations)
-    throw Error(fmt::format("{}: too few stations: {} (need at least {})", path, n, opt.min_stations));
+    throw Error(
+        fmt::format("{}: too few stations: {} (need at least {})", path, n, opt.min_stations));
   const Eigen::VectorXd& x = t.column(0);
   const double h = (x[n - 1] - x[0]) / static_cast<double>(n - 1);
   for (long k = 1; k < n; ++k) {
     const double d = x[k] - x[k - 1];
     if (!(d > 0))
-      throw Error(fmt::format("{}x = {} does not increase (previous {})", t.where(k, 0), x[k], x[k - 1]));
+      throw Error(
+          fmt::format("{}x = {} does not increase (previous {})", t.where(k, 0), x[k], x[k - 1]));
   }
   for (long k = 1; k < n; ++k) {
     const double d = x[k] - x[k - 1];
@@ -41,13 +43,16 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   separation::ProbeData d;
   d.x = x;
   if (opt.offsets.empty()) {
-    for (std::size_t i = 0; i < probe_cols.size(); ++i) d.offsets.push_back(static_cast<double>(i) * h);
+    for (std::size_t i = 0; i < probe_cols.size(); ++i)
+      d.offsets.push_back(static_cast<double>(i) * h);
   } else {
     if (opt.offsets.size() != probe_cols.size())
       throw Error(fmt::format("{}{} probe columns but {} offsets given", t.where(-1, probe_cols[0]),
                               probe_cols.size(), opt.offsets.size()));
     d.offsets = opt.offsets;
-    if (d.offsets[0] != 0) throw Error(fmt::format("offsets: the first offset must be 0 (probe A), got {}", d.offsets[0]));
+    if (d.offsets[0] != 0)
+      throw Error(
+          fmt::format("offsets: the first offset must be 0 (probe A), got {}", d.offsets[0]));
     for (std::size_t i = 0; i < d.offsets.size(); ++i) {
       const double r = d.offsets[i] / h;
       if (std::abs(r - std::round(r)) > 1e-6 * std::max(1.0, std::abs(r)))
@@ -58,7 +63,8 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
         if (std::lround(d.offsets[j] / h) == std::lround(r))
           throw Error(fmt::format("offsets: probes '{}' and '{}' share the offset {} mm",
                                   t.header()[static_cast<std::size_t>(probe_cols[j])],
-                                  t.header()[static_cast<std::size_t>(probe_cols[i])], d.offsets[i]));
+                                  t.header()[static_cast<std::size_t>(probe_cols[i])],
+                                  d.offsets[i]));
     }
   }
   const double sign = opt.invert ? -1.0 : 1.0;
@@ -75,7 +81,8 @@ void write_probes(const std::string& path, const separation::ProbeData& d,
   std::vector<Eigen::VectorXd> cols;
   cols.reserve(static_cast<std::size_t>(d.readings.cols()) + 1);
   for (Eigen::Index i = 0; i < d.readings.cols(); ++i) {
-    header.push_back(i < 26 ? std::string(1, static_cast<char>('a' + i)) : fmt::format("p{}", i + 1));
+    header.push_back(i < 26 ? std::string(1, static_cast<char>('a' + i))
+                            : fmt::format("p{}", i + 1));
     cols.emplace_back(d.readings.col(i) * 1e3);
   }
   if (d.angle.size()) {

@@ -40,7 +40,9 @@ void profile(fmt::memory_buffer& b, const char* name, const Profile& p, double s
   fmt::format_to(std::back_inserter(b), "\n  }},\n");
 }
 
-std::string quoted(const std::string& s) { return nlohmann::json(s).dump(); }
+std::string quoted(const std::string& s) {
+  return nlohmann::json(s).dump();
+}
 
 void write_file(const std::string& path, const fmt::memory_buffer& b) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "wb"), &std::fclose);
@@ -66,14 +68,16 @@ std::string line_col(const std::string& text, std::size_t byte) {
 
 void write_result(const std::string& path, const Result& r) {
   fmt::memory_buffer b;
-  fmt::format_to(std::back_inserter(b), "{{\n  \"method\": {},\n  \"reference\": {},\n  \"gauge\": {},\n",
-                 quoted(separation::to_string(r.method)), quoted(separation::to_string(r.reference)),
-                 quoted(r.gauge));
+  fmt::format_to(std::back_inserter(b),
+                 "{{\n  \"method\": {},\n  \"reference\": {},\n  \"gauge\": {},\n",
+                 quoted(separation::to_string(r.method)),
+                 quoted(separation::to_string(r.reference)), quoted(r.gauge));
   fmt::format_to(std::back_inserter(b), "  \"unobservable\": [");
   for (std::size_t i = 0; i < r.unobservable.size(); ++i)
     fmt::format_to(std::back_inserter(b), "{}{}", i ? ", " : "", quoted(r.unobservable[i]));
-  fmt::format_to(std::back_inserter(b), "],\n  \"units\": {{\"x\": \"mm\", \"workpiece\": \"um\", "
-                                        "\"guide\": \"um\", \"pitch\": \"urad\"}},\n");
+  fmt::format_to(std::back_inserter(b),
+                 "],\n  \"units\": {{\"x\": \"mm\", \"workpiece\": \"um\", "
+                 "\"guide\": \"um\", \"pitch\": \"urad\"}},\n");
   profile(b, "workpiece", r.workpiece, 1e3);
   profile(b, "guide", r.guide, 1e3);
   if (r.pitch) profile(b, "pitch", *r.pitch, 1e6);
@@ -99,8 +103,8 @@ Result read_result(const std::string& path) {
   try {
     j = nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
-    throw Error(fmt::format("{}:{}: invalid JSON: {}", path, line_col(text, e.byte ? e.byte - 1 : 0),
-                            e.what()));
+    throw Error(fmt::format("{}:{}: invalid JSON: {}", path,
+                            line_col(text, e.byte ? e.byte - 1 : 0), e.what()));
   }
   auto fail = [&](const std::string& what) { return Error(fmt::format("{}: {}", path, what)); };
   if (!j.is_object()) throw fail("expected a JSON object at the top level");
@@ -115,8 +119,7 @@ Result read_result(const std::string& path) {
     if (!a.is_array()) throw fail(fmt::format("'{}.{}' must be an array of numbers", obj, key));
     v.resize(static_cast<Eigen::Index>(a.size()));
     for (std::size_t i = 0; i < a.size(); ++i) {
-      if (!a[i].is_number())
-        throw fail(fmt::format("'{}.{}[{}]' is not a number", obj, key, i));
+      if (!a[i].is_number()) throw fail(fmt::format("'{}.{}[{}]' is not a number", obj, key, i));
       const double x = a[i].get<double>();
       if (!std::isfinite(x)) throw fail(fmt::format("'{}.{}[{}]' is not finite", obj, key, i));
       v[static_cast<Eigen::Index>(i)] = x * scale;
@@ -124,14 +127,17 @@ Result read_result(const std::string& path) {
     return v;
   };
   auto prof = [&](const char* name, double scale) {
-    if (!j.contains(name) || !j[name].is_object()) throw fail(fmt::format("object '{}' is missing", name));
+    if (!j.contains(name) || !j[name].is_object())
+      throw fail(fmt::format("object '{}' is missing", name));
     const auto& o = j[name];
     Profile p{vec(o, name, "x", 1.0, true), vec(o, name, "value", scale, true),
               vec(o, name, "uncertainty", scale, false)};
     if (p.x.size() != p.value.size())
-      throw fail(fmt::format("'{}': x has {} values but value has {}", name, p.x.size(), p.value.size()));
+      throw fail(
+          fmt::format("'{}': x has {} values but value has {}", name, p.x.size(), p.value.size()));
     if (p.uncertainty.size() && p.uncertainty.size() != p.x.size())
-      throw fail(fmt::format("'{}': uncertainty has {} values for {} points", name, p.uncertainty.size(), p.x.size()));
+      throw fail(fmt::format("'{}': uncertainty has {} values for {} points", name,
+                             p.uncertainty.size(), p.x.size()));
     if (p.x.size() < 2) throw fail(fmt::format("'{}': needs at least two points", name));
     return p;
   };
@@ -159,7 +165,8 @@ Result read_result(const std::string& path) {
     r.workpiece_straightness = {get("workpiece", "ls"), get("workpiece", "min_zone")};
     r.guide_straightness = {get("guide", "ls"), get("guide", "min_zone")};
   }
-  if (j.contains("sigma_um") && j["sigma_um"].is_number()) r.sigma = j["sigma_um"].get<double>() * 1e-3;
+  if (j.contains("sigma_um") && j["sigma_um"].is_number())
+    r.sigma = j["sigma_um"].get<double>() * 1e-3;
   r.sigma_estimated = j.value("sigma_estimated", false);
   r.dof = j.value("dof", 0L);
   r.residual_rms = j.value("residual_rms_um", 0.0) * 1e-3;
@@ -169,7 +176,8 @@ Result read_result(const std::string& path) {
 void write_result_csv(const std::string& path, const Result& r) {
   // One row per workpiece position; guide and pitch values where their stations coincide.
   const Eigen::Index m = r.workpiece.x.size();
-  const double h = m > 1 ? (r.workpiece.x[m - 1] - r.workpiece.x[0]) / static_cast<double>(m - 1) : 1.0;
+  const double h =
+      m > 1 ? (r.workpiece.x[m - 1] - r.workpiece.x[0]) / static_cast<double>(m - 1) : 1.0;
   auto spread = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& v, double scale) {
     Eigen::VectorXd out = Eigen::VectorXd::Constant(m, std::nan(""));
     for (Eigen::Index i = 0; i < x.size(); ++i) {
@@ -202,7 +210,8 @@ void write_result_csv(const std::string& path, const Result& r) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "wb"), &std::fclose);
   if (!f) throw Error(fmt::format("{}: cannot open file for writing", path));
   fmt::memory_buffer b;
-  for (std::size_t c = 0; c < header.size(); ++c) fmt::format_to(std::back_inserter(b), "{}{}", c ? "," : "", header[c]);
+  for (std::size_t c = 0; c < header.size(); ++c)
+    fmt::format_to(std::back_inserter(b), "{}{}", c ? "," : "", header[c]);
   b.push_back('\n');
   for (Eigen::Index i = 0; i < m; ++i) {
     for (std::size_t c = 0; c < cols.size(); ++c) {
@@ -211,7 +220,8 @@ void write_result_csv(const std::string& path, const Result& r) {
     }
     b.push_back('\n');
   }
-  if (std::fwrite(b.data(), 1, b.size(), f.get()) != b.size()) throw Error(fmt::format("{}: write error", path));
+  if (std::fwrite(b.data(), 1, b.size(), f.get()) != b.size())
+    throw Error(fmt::format("{}: write error", path));
 }
 
 }  // namespace trueaxis::io

@@ -82,11 +82,20 @@ std::string escape(const std::string& s) {
   std::string o;
   for (char c : s) {
     switch (c) {
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '&': o += "&amp;"; break;
-      case '"': o += "&quot;"; break;
-      default: o += c;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '&':
+        o += "&amp;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
@@ -95,8 +104,8 @@ std::string escape(const std::string& s) {
 std::string render(const std::string& title, const std::vector<Section>& sections,
                    std::size_t max_points) {
   std::string h;
-  h += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>" + escape(title) +
-       "</title>\n<style>";
+  h += "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>" +
+       escape(title) + "</title>\n<style>";
   h += detail::kUplotCss;
   h += R"CSS(
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:24px auto;max-width:1100px;color:#222;padding:0 16px}
@@ -106,7 +115,10 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
 .plot{margin:16px 0} .plot h3{font-size:1em;margin:4px 0}
 .note{color:#666;font-size:.9em}
 )CSS";
-  h += "</style>\n<script>window.__taErrors=[];window.addEventListener('error',function(e){window.__taErrors.push(String(e.message));document.documentElement.setAttribute('data-script-errors',window.__taErrors.length);});</script>\n<script>";
+  h += "</"
+       "style>\n<script>window.__taErrors=[];window.addEventListener('error',function(e){window.__"
+       "taErrors.push(String(e.message));document.documentElement.setAttribute('data-script-errors'"
+       ",window.__taErrors.length);});</script>\n<script>";
   h += detail::kUplotJs;
   h += "</script>\n</head><body>\n<h1>" + escape(title) + "</h1>\n";
   h += "<p class=\"note\">Drag across a plot to zoom, double-click to reset. Bands are ±2 standard "
@@ -119,7 +131,8 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
       h += "<table>";
       for (std::size_t r = 0; r < s.table.size(); ++r) {
         h += "<tr>";
-        for (const auto& c : s.table[r]) h += (r == 0 ? "<th>" : "<td>") + escape(c) + (r == 0 ? "</th>" : "</td>");
+        for (const auto& c : s.table[r])
+          h += (r == 0 ? "<th>" : "<td>") + escape(c) + (r == 0 ? "</th>" : "</td>");
         h += "</tr>";
       }
       h += "</table>\n";
@@ -141,17 +154,17 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
         const std::string color = s2.color.empty() ? kPalette[col++ % 6] : s2.color;
         data += ',';
         js_array(data, s2.y, idx);
-        series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label),
-                              color, s2.dashed ? ",dash:[6,4]" : "");
+        series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label), color,
+                              s2.dashed ? ",dash:[6,4]" : "");
         const int main_idx = si++;
         if (s2.band.size() == s2.y.size()) {
           data += ',';
           js_array(data, s2.y, idx, +2.0, &s2.band);
           data += ',';
           js_array(data, s2.y, idx, -2.0, &s2.band);
-          series += fmt::format(",{{label:{},stroke:'{}44',width:0.5}},{{label:{},stroke:'{}44',width:0.5}}",
-                                js_string(s2.label + " +2u"), color,
-                                js_string(s2.label + " -2u"), color);
+          series += fmt::format(
+              ",{{label:{},stroke:'{}44',width:0.5}},{{label:{},stroke:'{}44',width:0.5}}",
+              js_string(s2.label + " +2u"), color, js_string(s2.label + " -2u"), color);
           bands += fmt::format("{{series:[{},{}],fill:'{}22'}},", si, si + 1, color);
           si += 2;
         }
@@ -160,9 +173,8 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
       data += "]";
       series += "]";
       bands += "]";
-      script += fmt::format(
-          "TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{}}});\n", id, data, series,
-          bands, js_string(p.x_label), js_string(p.y_label));
+      script += fmt::format("TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{}}});\n",
+                            id, data, series, bands, js_string(p.x_label), js_string(p.y_label));
     }
   }
   h += "<script>\n" + script + R"JS(
@@ -207,20 +219,26 @@ Section separation_section(const std::string& title, const separation::Result& r
       "<p>Method <b>{}</b>, reference <b>{}</b>. {}.<br>Not determined by the data: {}.</p>",
       escape(separation::to_string(r.method)), escape(separation::to_string(r.reference)),
       escape(r.gauge), escape(unobs));
-  s.table.push_back({"profile", "LS straightness (µm)", "min-zone straightness (µm)", "max u (µm)"});
+  s.table.push_back(
+      {"profile", "LS straightness (µm)", "min-zone straightness (µm)", "max u (µm)"});
   auto maxu = [](const separation::Profile& p) {
-    return p.uncertainty.size() ? fmt::format("{:.4f}", p.uncertainty.maxCoeff() * 1e3) : std::string("-");
+    return p.uncertainty.size() ? fmt::format("{:.4f}", p.uncertainty.maxCoeff() * 1e3)
+                                : std::string("-");
   };
   s.table.push_back({"workpiece", fmt::format("{:.4f}", r.workpiece_straightness.ls * 1e3),
-                     fmt::format("{:.4f}", r.workpiece_straightness.min_zone * 1e3), maxu(r.workpiece)});
+                     fmt::format("{:.4f}", r.workpiece_straightness.min_zone * 1e3),
+                     maxu(r.workpiece)});
   s.table.push_back({"guide", fmt::format("{:.4f}", r.guide_straightness.ls * 1e3),
                      fmt::format("{:.4f}", r.guide_straightness.min_zone * 1e3), maxu(r.guide)});
   if (truth) {
     auto err = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
-      return a.size() == b.size() ? fmt::format("{:.3g}", (a - b).cwiseAbs().maxCoeff() * 1e3) : std::string("-");
+      return a.size() == b.size() ? fmt::format("{:.3g}", (a - b).cwiseAbs().maxCoeff() * 1e3)
+                                  : std::string("-");
     };
-    s.table.push_back({"max |recovered − true| workpiece (µm)", err(r.workpiece.value, truth->workpiece.value), "", ""});
-    s.table.push_back({"max |recovered − true| guide (µm)", err(r.guide.value, truth->guide.value), "", ""});
+    s.table.push_back({"max |recovered − true| workpiece (µm)",
+                       err(r.workpiece.value, truth->workpiece.value), "", ""});
+    s.table.push_back(
+        {"max |recovered − true| guide (µm)", err(r.guide.value, truth->guide.value), "", ""});
   }
   auto plot = [&](const char* name, const separation::Profile& p, const separation::Profile* t,
                   double scale, const char* unit) {
@@ -229,7 +247,9 @@ Section separation_section(const std::string& title, const separation::Result& r
     pl.x_label = "x (mm)";
     pl.y_label = fmt::format("{} ({})", name, unit);
     pl.x = p.x;
-    Series a{"recovered", p.value * scale, p.uncertainty.size() ? Eigen::VectorXd(p.uncertainty * scale) : Eigen::VectorXd(), "", false};
+    Series a{"recovered", p.value * scale,
+             p.uncertainty.size() ? Eigen::VectorXd(p.uncertainty * scale) : Eigen::VectorXd(), "",
+             false};
     pl.series.push_back(a);
     if (t && t->value.size() == p.value.size())
       pl.series.push_back({"true", t->value * scale, {}, "#d62728", true});
@@ -237,7 +257,8 @@ Section separation_section(const std::string& title, const separation::Result& r
   };
   plot("workpiece", r.workpiece, truth ? &truth->workpiece : nullptr, 1e3, "µm");
   plot("guide straightness", r.guide, truth ? &truth->guide : nullptr, 1e3, "µm");
-  if (r.pitch) plot("pitch", *r.pitch, truth && truth->pitch ? &*truth->pitch : nullptr, 1e6, "µrad");
+  if (r.pitch)
+    plot("pitch", *r.pitch, truth && truth->pitch ? &*truth->pitch : nullptr, 1e6, "µrad");
   return s;
 }
 

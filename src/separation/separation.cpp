@@ -21,18 +21,24 @@ constexpr double kStepTolerance = 1e-6;  // relative tolerance for equal steps /
 
 const char* to_string(Method m) {
   switch (m) {
-    case Method::TwoPoint: return "two-point";
-    case Method::ThreePoint: return "three-point";
-    case Method::Lsq: return "lsq";
+    case Method::TwoPoint:
+      return "two-point";
+    case Method::ThreePoint:
+      return "three-point";
+    case Method::Lsq:
+      return "lsq";
   }
   return "?";
 }
 
 const char* to_string(Reference r) {
   switch (r) {
-    case Reference::LeastSquares: return "ls";
-    case Reference::Seed: return "seed";
-    case Reference::MinZone: return "min-zone";
+    case Reference::LeastSquares:
+      return "ls";
+    case Reference::Seed:
+      return "seed";
+    case Reference::MinZone:
+      return "min-zone";
   }
   return "?";
 }
@@ -63,7 +69,8 @@ void ProbeData::validate() const {
     throw Error(fmt::format("readings have {} rows but there are {} stations", readings.rows(), n));
   if (readings.cols() < 2) throw Error("need at least two probes");
   if (static_cast<Eigen::Index>(offsets.size()) != readings.cols())
-    throw Error(fmt::format("{} probe offsets for {} probe columns", offsets.size(), readings.cols()));
+    throw Error(
+        fmt::format("{} probe offsets for {} probe columns", offsets.size(), readings.cols()));
   if (angle.size() != 0 && angle.size() != n)
     throw Error(fmt::format("angle channel has {} values for {} stations", angle.size(), n));
   if (!x.allFinite() || !readings.allFinite() || !angle.allFinite())
@@ -72,18 +79,22 @@ void ProbeData::validate() const {
   if (!(h > 0)) throw Error("station positions must increase");
   for (Eigen::Index k = 1; k < n; ++k) {
     const double d = x[k] - x[k - 1];
-    if (!(d > 0)) throw Error(fmt::format("station {} does not increase (x = {} after {})", k, x[k], x[k - 1]));
+    if (!(d > 0))
+      throw Error(fmt::format("station {} does not increase (x = {} after {})", k, x[k], x[k - 1]));
     if (std::abs(d - h) > kStepTolerance * h + 1e-12)
       throw Error(fmt::format("uneven step at station {}: {} mm instead of {} mm", k, d, h));
   }
   if (offsets[0] != 0) throw Error("the first probe offset must be 0 (offsets are from probe A)");
   for (std::size_t i = 0; i < offsets.size(); ++i) {
     const double r = offsets[i] / h;
-    if (!std::isfinite(r) || std::abs(r - std::round(r)) > kStepTolerance * std::max(1.0, std::abs(r)))
-      throw Error(fmt::format("probe offset {} mm is not a whole multiple of the step {} mm", offsets[i], h));
+    if (!std::isfinite(r) ||
+        std::abs(r - std::round(r)) > kStepTolerance * std::max(1.0, std::abs(r)))
+      throw Error(fmt::format("probe offset {} mm is not a whole multiple of the step {} mm",
+                              offsets[i], h));
     for (std::size_t j = 0; j < i; ++j)
       if (std::round(offsets[j] / h) == std::round(r))
-        throw Error(fmt::format("probes {} and {} have the same offset {} mm", j + 1, i + 1, offsets[i]));
+        throw Error(
+            fmt::format("probes {} and {} have the same offset {} mm", j + 1, i + 1, offsets[i]));
   }
 }
 
@@ -91,8 +102,10 @@ void Options::validate() const {
   if (sigma && !(*sigma > 0 && std::isfinite(*sigma))) throw Error("sigma must be positive");
   if (!(angle_sigma > 0 && std::isfinite(angle_sigma))) throw Error("angle sigma must be positive");
   if (!(nominal_sigma > 0)) throw Error("nominal sigma must be positive");
-  if (!(filter_cutoff >= 0 && std::isfinite(filter_cutoff))) throw Error("filter cut-off must be >= 0");
-  if (zero_difference && !std::isfinite(*zero_difference)) throw Error("zero difference must be finite");
+  if (!(filter_cutoff >= 0 && std::isfinite(filter_cutoff)))
+    throw Error("filter cut-off must be >= 0");
+  if (zero_difference && !std::isfinite(*zero_difference))
+    throw Error("zero difference must be finite");
   if (reference == Reference::Seed && method != Method::ThreePoint)
     throw Error("reference 'seed' is defined for the three-point method only");
 }
@@ -102,16 +115,16 @@ void Options::validate() const {
 namespace {
 
 struct Design {
-  long n = 0;                 // stations
-  int N = 0;                  // probes
-  std::vector<long> p;        // offsets in steps (p[0] = 0)
-  std::vector<long> q;        // p - pmin: position index offsets (>= 0)
-  long span = 0;              // max q
-  long Q = 0;                 // number of workpiece positions: n + span
-  bool pitch = false;         // θ modelled (>= 3 probes or angle channel)
+  long n = 0;           // stations
+  int N = 0;            // probes
+  std::vector<long> p;  // offsets in steps (p[0] = 0)
+  std::vector<long> q;  // p - pmin: position index offsets (>= 0)
+  long span = 0;        // max q
+  long Q = 0;           // number of workpiece positions: n + span
+  bool pitch = false;   // θ modelled (>= 3 probes or angle channel)
   bool angle = false;
-  bool parabola_free = false; // parabola fixed by a pin + the guide-quadratic gauge afterwards
-  double wa = 0;              // weight of angle rows (relative to probe rows)
+  bool parabola_free = false;  // parabola fixed by a pin + the guide-quadratic gauge afterwards
+  double wa = 0;               // weight of angle rows (relative to probe rows)
   int nvars = 0;
   std::vector<char> pinned;
   std::vector<double> pin_value;
@@ -152,7 +165,8 @@ Design make_design(const std::vector<long>& p, long n, bool angle, std::optional
   pin(D.o(0), 0);
   int last = 0;
   for (int i = 1; i < D.N; ++i)
-    if (std::abs(p[static_cast<std::size_t>(i)]) > std::abs(p[static_cast<std::size_t>(last)])) last = i;
+    if (std::abs(p[static_cast<std::size_t>(i)]) > std::abs(p[static_cast<std::size_t>(last)]))
+      last = i;
   if (D.pitch) {
     if (angle)
       pin(D.oa(), 0);
@@ -235,8 +249,9 @@ LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel
   const long pmax = *std::max_element(steps.begin(), steps.end());
   const long span = pmax - pmin;
   const long na = std::min<long>(stations, std::max<long>(64, 8 * span + 16));
-  const Design D = make_design(steps, na, angle_channel,
-                               zero_difference_known ? std::optional<double>(0.0) : std::nullopt, 1.0);
+  const Design D =
+      make_design(steps, na, angle_channel,
+                  zero_difference_known ? std::optional<double>(0.0) : std::nullopt, 1.0);
   a.pitch_modelled = D.pitch;
   a.unobservable.push_back("line");
   if (D.parabola_free) a.unobservable.push_back("parabola");
@@ -251,7 +266,8 @@ LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel
     station_rows(D, K, nullptr, 0.0, [&](const auto& c, double) { rows.push_back(c); });
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), nf);
   for (std::size_t r = 0; r < rows.size(); ++r)
-    for (const auto& [id, v] : rows[r]) A(static_cast<Eigen::Index>(r), col[static_cast<std::size_t>(id)]) += v;
+    for (const auto& [id, v] : rows[r])
+      A(static_cast<Eigen::Index>(r), col[static_cast<std::size_t>(id)]) += v;
   Eigen::BDCSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
   const Eigen::VectorXd sv = svd.singularValues();
   const double tol = 1e-9 * std::max(1.0, sv.size() ? sv[0] : 1.0);
@@ -286,7 +302,8 @@ LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel
   if (stations < na) why += " (or there are too few stations)";
   std::string modes;
   for (std::size_t i = D.parabola_free ? 2 : 1; i < a.unobservable.size(); ++i)
-    if (a.unobservable[i].rfind("pitch", 0) != 0) modes += (modes.empty() ? "" : ", ") + a.unobservable[i];
+    if (a.unobservable[i].rfind("pitch", 0) != 0)
+      modes += (modes.empty() ? "" : ", ") + a.unobservable[i];
   a.message = fmt::format(
       "unobservable layout: probe offsets {} steps{} leave {} mode(s) undetermined beyond the "
       "reference line{} ({}): {}. Use offsets whose step multiples have no common factor and "
@@ -301,9 +318,9 @@ namespace {
 
 // A solution before the reference is applied, on its own grids.
 struct Raw {
-  Eigen::VectorXd xw, w;     // workpiece grid and values (mm)
-  Eigen::VectorXd xg, g;     // station grid, guide (mm)
-  Eigen::VectorXd xt, theta; // pitch grid and values (rad); empty if not modelled
+  Eigen::VectorXd xw, w;      // workpiece grid and values (mm)
+  Eigen::VectorXd xg, g;      // station grid, guide (mm)
+  Eigen::VectorXd xt, theta;  // pitch grid and values (rad); empty if not modelled
   bool parabola_free = false;
 };
 
@@ -332,9 +349,10 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   std::optional<double> e = opt.zero_difference;
   if (e) {
     // e refers to the raw offsets; the centred offsets are o_i − μ_i.
-    const Eigen::Index last = std::max_element(p.begin(), p.end(), [](long a, long b) {
-                                return std::abs(a) < std::abs(b);
-                              }) - p.begin();
+    const Eigen::Index last =
+        std::max_element(p.begin(), p.end(),
+                         [](long a, long b) { return std::abs(a) < std::abs(b); }) -
+        p.begin();
     const Eigen::Index other = last == 1 ? 2 : 1;
     const double sb = static_cast<double>(p[static_cast<std::size_t>(other)]);
     const double sc = static_cast<double>(p[static_cast<std::size_t>(last)]);
@@ -388,7 +406,8 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
   auto value = [&](int id) {
-    return D.pinned[static_cast<std::size_t>(id)] ? D.pin_value[static_cast<std::size_t>(id)] : v[id];
+    return D.pinned[static_cast<std::size_t>(id)] ? D.pin_value[static_cast<std::size_t>(id)]
+                                                  : v[id];
   };
   const long pmin = *std::min_element(p.begin(), p.end());
   Raw r;
@@ -420,7 +439,8 @@ void require_offsets(const ProbeData& d, std::initializer_list<long> want, const
   }
   if (!ok) {
     std::string s;
-    for (long w : want) s += (s.empty() ? "" : ", ") + fmt::format("{}", static_cast<double>(w) * h);
+    for (long w : want)
+      s += (s.empty() ? "" : ", ") + fmt::format("{}", static_cast<double>(w) * h);
     throw Error(fmt::format(
         "method {} needs probes at offsets {} mm (spacing equal to the step {} mm); use --method "
         "lsq for other layouts",
@@ -487,7 +507,8 @@ Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
   };
   // β = 2Y_1 − Y_2 = e − (D_0A − 2D_0B + D_0C) when the zero difference e is known.
   const double beta0 =
-      beta_known ? *zero_difference - (d.readings(0, 0) - 2 * d.readings(0, 1) + d.readings(0, 2)) : 0.0;
+      beta_known ? *zero_difference - (d.readings(0, 0) - 2 * d.readings(0, 1) + d.readings(0, 2))
+                 : 0.0;
   // Two passes, identical in exact arithmetic to the one-shot formula: C_K can grow like K²·β
   // (1e9 mm at a million stations), so the first fit is used to rerun the recurrence near its
   // final size and the second fit corrects the small remainder.
@@ -505,7 +526,8 @@ Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
   r.w = dA - r.g;  // eq. 13
   r.xt = d.x.head(n - 1);
   r.theta.resize(n - 1);
-  for (long K = 0; K + 1 < n; ++K) r.theta[K] = (dB[K] - r.w[K + 1] - r.g[K] + r.w[1]) / l;  // eq. 14
+  for (long K = 0; K + 1 < n; ++K)
+    r.theta[K] = (dB[K] - r.w[K + 1] - r.g[K] + r.w[1]) / l;  // eq. 14
   r.parabola_free = !zero_difference.has_value();
   return r;
 }
@@ -611,7 +633,9 @@ void uncertainties(const LsqState& st, const Raw& r, Eigen::VectorXd& uw, Eigen:
     Eigen::MatrixXd U(m, par ? 3 : 2), V = Eigen::MatrixXd::Zero(nv, par ? 3 : 2);
     U.leftCols(2) = B;
     for (Eigen::Index j = 0; j < m; ++j)
-      for (int k = 0; k < 2; ++k) V(ids[static_cast<std::size_t>(j)], k) = B(j, k) * free_row(ids[static_cast<std::size_t>(j)]);
+      for (int k = 0; k < 2; ++k)
+        V(ids[static_cast<std::size_t>(j)], k) =
+            B(j, k) * free_row(ids[static_cast<std::size_t>(j)]);
     if (par) {
       Eigen::VectorXd t2(m);
       for (Eigen::Index j = 0; j < m; ++j) t2[j] = std::pow((r.xw[j] - s.xc) / s.L, 2);
@@ -680,9 +704,14 @@ Result separate(const ProbeData& data, const Options& opt) {
 
   Raw raw;
   switch (opt.method) {
-    case Method::TwoPoint: raw = two_point(data); break;
-    case Method::ThreePoint: raw = three_point(data, opt.zero_difference); break;
-    case Method::Lsq: break;
+    case Method::TwoPoint:
+      raw = two_point(data);
+      break;
+    case Method::ThreePoint:
+      raw = three_point(data, opt.zero_difference);
+      break;
+    case Method::Lsq:
+      break;
   }
   // The least-squares solve gives the Lsq answer, and the covariance for every method: for the
   // seed's layouts the system is square, so A and B are its exact solution.
@@ -738,7 +767,8 @@ Result separate(const ProbeData& data, const Options& opt) {
       if (ut.size()) ut = (ut * s2).cwiseSqrt();
     }
   }
-  if (st.engine && st.dof > 0) res.residual_rms = std::sqrt(st.ssr / static_cast<double>(st.engine->rows()));
+  if (st.engine && st.dof > 0)
+    res.residual_rms = std::sqrt(st.ssr / static_cast<double>(st.engine->rows()));
 
   if (opt.filter_cutoff > 0) {
     raw.w = geometry::gaussian_filter(raw.w, h, opt.filter_cutoff);
@@ -783,9 +813,10 @@ std::string Result::summary() const {
     s += fmt::format("  pitch range:            {:.4f} urad\n",
                      (pitch->value.maxCoeff() - pitch->value.minCoeff()) * 1e6);
   if (workpiece.uncertainty.size())
-    s += fmt::format("  max standard uncertainty: workpiece {:.4f} um, guide {:.4f} um (sigma {:.4f} um{})\n",
-                     workpiece.uncertainty.maxCoeff() * 1e3, guide.uncertainty.maxCoeff() * 1e3,
-                     sigma.value_or(0) * 1e3, sigma_estimated ? ", estimated from residuals" : "");
+    s += fmt::format(
+        "  max standard uncertainty: workpiece {:.4f} um, guide {:.4f} um (sigma {:.4f} um{})\n",
+        workpiece.uncertainty.maxCoeff() * 1e3, guide.uncertainty.maxCoeff() * 1e3,
+        sigma.value_or(0) * 1e3, sigma_estimated ? ", estimated from residuals" : "");
   std::string u;
   for (const auto& m : unobservable) u += (u.empty() ? "" : ", ") + m;
   s += fmt::format("  unobservable: {}\n  gauge: {}\n", u, gauge);

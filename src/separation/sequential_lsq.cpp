@@ -17,7 +17,9 @@ void SequentialLsq::add_row(const std::vector<std::pair<int, double>>& coefs, do
   ++rows_;
 }
 
-void SequentialLsq::eliminate(const std::vector<int>& ids) { factor_block(ids, false); }
+void SequentialLsq::eliminate(const std::vector<int>& ids) {
+  factor_block(ids, false);
+}
 
 void SequentialLsq::finish() {
   std::vector<int> all = active_;
@@ -46,7 +48,8 @@ void SequentialLsq::factor_block(const std::vector<int>& elim, bool all) {
       if (std::find(globals_.begin(), globals_.end(), id) == globals_.end()) add_col(id);
   for (int id : globals_) add_col(id);
   const int ncols = static_cast<int>(cols.size());
-  for (int j = 0; j < ncols; ++j) col_of_[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = j;
+  for (int j = 0; j < ncols; ++j)
+    col_of_[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = j;
 
   const Eigen::Index prow = prior_.rows();
   const Eigen::Index nrows = prow + static_cast<Eigen::Index>(pending_.size());
@@ -91,8 +94,7 @@ void SequentialLsq::factor_block(const std::vector<int>& elim, bool all) {
       min_pivot_ = ratio;
       weakest_ = elim[static_cast<std::size_t>(l)];
     }
-    for (int j = 0; j <= ncols; ++j)
-      vals_.push_back(l < rank_rows && j >= l ? R(l, j) : 0.0);
+    for (int j = 0; j <= ncols; ++j) vals_.push_back(l < rank_rows && j >= l ? R(l, j) : 0.0);
   }
   unknowns_ += nelim;
   steps_.push_back(s);
@@ -104,7 +106,8 @@ void SequentialLsq::factor_block(const std::vector<int>& elim, bool all) {
   }
   // New carried information: rows nelim.. of R over the remaining columns.
   active_.assign(cols.begin() + nelim, cols.end() - static_cast<long>(globals_.size()));
-  const Eigen::Index keep_rows = std::max<Eigen::Index>(0, std::min<Eigen::Index>(nrows, ncols) - nelim);
+  const Eigen::Index keep_rows =
+      std::max<Eigen::Index>(0, std::min<Eigen::Index>(nrows, ncols) - nelim);
   const Eigen::Index keep_cols = ncols - nelim;
   prior_.resize(keep_rows, keep_cols + 1);
   for (Eigen::Index i = 0; i < keep_rows; ++i)
@@ -199,14 +202,16 @@ Eigen::VectorXd SequentialLsq::covariance_diagonal() const {
     // New window: eliminated ids followed by the old window (all of it: later steps may need any).
     std::vector<int> nids(ids, ids + e);
     for (int id : win_ids) nids.push_back(id);
-    Eigen::MatrixXd nwin(static_cast<Eigen::Index>(nids.size()), static_cast<Eigen::Index>(nids.size()));
+    Eigen::MatrixXd nwin(static_cast<Eigen::Index>(nids.size()),
+                         static_cast<Eigen::Index>(nids.size()));
     const Eigen::Index ow = static_cast<Eigen::Index>(win_ids.size());
     nwin.topLeftCorner(e, e) = Zee;
     if (ow > 0) {
       nwin.bottomRightCorner(ow, ow) = win;
       // Cross terms between eliminated ids and the whole old window: Z_e,old = -T Z_r,old.
       Eigen::MatrixXd Zr_old(nr, ow);
-      for (int a = 0; a < nr; ++a) Zr_old.row(a) = win.row(pos[static_cast<std::size_t>(ids[e + a])]);
+      for (int a = 0; a < nr; ++a)
+        Zr_old.row(a) = win.row(pos[static_cast<std::size_t>(ids[e + a])]);
       Eigen::MatrixXd Ze_old = -T * Zr_old;
       nwin.topRightCorner(e, ow) = Ze_old;
       nwin.bottomLeftCorner(ow, e) = Ze_old.transpose();
@@ -226,15 +231,19 @@ Eigen::VectorXd SequentialLsq::covariance_diagonal() const {
     for (int id : win_ids) pos[static_cast<std::size_t>(id)] = -1;
     std::vector<int> kept_idx;
     for (std::size_t i = 0; i < nids.size(); ++i)
-      if (std::find(keep.begin(), keep.end(), nids[i]) != keep.end()) kept_idx.push_back(static_cast<int>(i));
+      if (std::find(keep.begin(), keep.end(), nids[i]) != keep.end())
+        kept_idx.push_back(static_cast<int>(i));
     win_ids.clear();
-    win.resize(static_cast<Eigen::Index>(kept_idx.size()), static_cast<Eigen::Index>(kept_idx.size()));
+    win.resize(static_cast<Eigen::Index>(kept_idx.size()),
+               static_cast<Eigen::Index>(kept_idx.size()));
     for (std::size_t a = 0; a < kept_idx.size(); ++a) {
       win_ids.push_back(nids[static_cast<std::size_t>(kept_idx[a])]);
       for (std::size_t b = 0; b < kept_idx.size(); ++b)
-        win(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) = nwin(kept_idx[a], kept_idx[b]);
+        win(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) =
+            nwin(kept_idx[a], kept_idx[b]);
     }
-    for (std::size_t i = 0; i < win_ids.size(); ++i) pos[static_cast<std::size_t>(win_ids[i])] = static_cast<int>(i);
+    for (std::size_t i = 0; i < win_ids.size(); ++i)
+      pos[static_cast<std::size_t>(win_ids[i])] = static_cast<int>(i);
   }
   return diag;
 }

@@ -43,17 +43,17 @@ class SequentialLsq {
 
  private:
   struct Step {
-    int nelim = 0;        // eliminated ids are cols[0..nelim)
-    int ncols = 0;        // columns of the block (excluding rhs)
-    std::size_t id_at;    // offset into ids_
-    std::size_t val_at;   // offset into vals_: nelim rows of (ncols + 1) values (last = rhs)
+    int nelim = 0;       // eliminated ids are cols[0..nelim)
+    int ncols = 0;       // columns of the block (excluding rhs)
+    std::size_t id_at;   // offset into ids_
+    std::size_t val_at;  // offset into vals_: nelim rows of (ncols + 1) values (last = rhs)
   };
   void factor_block(const std::vector<int>& elim, bool all);
 
   int nvars_;
   std::vector<int> globals_;
-  std::vector<int> active_;         // open non-global ids carried in prior_
-  Eigen::MatrixXd prior_;           // rows x (active_ + globals_ + 1)
+  std::vector<int> active_;  // open non-global ids carried in prior_
+  Eigen::MatrixXd prior_;    // rows x (active_ + globals_ + 1)
   std::vector<std::pair<std::vector<std::pair<int, double>>, double>> pending_;
   std::vector<Step> steps_;
   std::vector<int> ids_;

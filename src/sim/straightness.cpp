@@ -18,9 +18,11 @@ void StraightnessOptions::validate() const {
   for (double s : offsets) {
     const double r = s / step;
     if (!std::isfinite(r) || std::abs(r - std::round(r)) > 1e-9 * std::max(1.0, std::abs(r)))
-      throw Error(fmt::format("probe offset {} mm is not a whole multiple of the step {} mm", s, step));
+      throw Error(
+          fmt::format("probe offset {} mm is not a whole multiple of the step {} mm", s, step));
   }
-  for (double v : {workpiece_amplitude, guide_amplitude, pitch_amplitude, offset_amplitude, noise, angle_noise})
+  for (double v : {workpiece_amplitude, guide_amplitude, pitch_amplitude, offset_amplitude, noise,
+                   angle_noise})
     if (!(v >= 0 && std::isfinite(v))) throw Error("amplitudes and noise must be >= 0");
 }
 
@@ -82,7 +84,8 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
     T.guide[q] = g_bow * (t * t - 1.0 / 3.0) + eval(g_waves, u);
     T.pitch[q] = t_drift * t + eval(t_waves, u);
   }
-  for (std::size_t i = 0; i < p.size(); ++i) T.probe_offsets.push_back(o.offset_amplitude * (2 * U(rng) - 1));
+  for (std::size_t i = 0; i < p.size(); ++i)
+    T.probe_offsets.push_back(o.offset_amplitude * (2 * U(rng) - 1));
   T.angle_offset = o.angle ? 20e-6 * (2 * U(rng) - 1) : 0.0;
 
   separation::ProbeData& d = c.data;
@@ -95,8 +98,9 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
     d.x[K] = o.x0 + static_cast<double>(K) * h;
     for (std::size_t i = 0; i < p.size(); ++i) {
       const double s = static_cast<double>(p[i]) * h;
-      d.readings(K, static_cast<Eigen::Index>(i)) = T.workpiece[qs + p[i]] + T.guide[qs] + s * T.pitch[qs] +
-                                                    T.probe_offsets[i] + o.noise * Nd(rng);
+      d.readings(K, static_cast<Eigen::Index>(i)) = T.workpiece[qs + p[i]] + T.guide[qs] +
+                                                    s * T.pitch[qs] + T.probe_offsets[i] +
+                                                    o.noise * Nd(rng);
     }
     if (o.angle) d.angle[K] = T.pitch[qs] + T.angle_offset + o.angle_noise * Nd(rng);
   }

@@ -42,7 +42,8 @@ TEST(Csv, RejectsNanAndInf) {
 }
 
 TEST(Csv, RejectsMissingExtraAndEmptyFields) {
-  EXPECT_NE(error_of("x,a,b\n0,1\n").find("f.csv:2:4: missing field for column 'b'"), std::string::npos);
+  EXPECT_NE(error_of("x,a,b\n0,1\n").find("f.csv:2:4: missing field for column 'b'"),
+            std::string::npos);
   EXPECT_NE(error_of("x,a\n0,1,2\n").find("f.csv:2:5: extra field"), std::string::npos);
   EXPECT_EQ(error_of("x,a\n0, \n"), "f.csv:2:3: empty field in column 'a'");
 }

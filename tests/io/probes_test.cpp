@@ -15,7 +15,7 @@ std::string read_error(const std::string& content, io::ProbeReadOptions o = {}) 
     io::read_probes(p, o);
   } catch (const Error& e) {
     std::string m = e.what();
-    const std::string dir = std::string(TRUEAXIS_TEST_TMP) + "/";
+    const std::string dir = test::temp_dir() + "/";
     for (auto at = m.find(dir); at != std::string::npos; at = m.find(dir)) m.erase(at, dir.size());
     return m;
   }
@@ -38,11 +38,13 @@ TEST(Probes, ReadsUnitsOffsetsAngleAndInvert) {
 }
 
 TEST(Probes, NonIncreasingX) {
-  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,1,2\n10,1,2\n"), "p.csv:4:1: x = 10 does not increase (previous 10)");
+  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,1,2\n10,1,2\n"),
+            "p.csv:4:1: x = 10 does not increase (previous 10)");
 }
 
 TEST(Probes, UnevenSpacing) {
-  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n25,1,2\n30,1,2\n").find("p.csv:4:1: uneven step"), std::string::npos);
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n25,1,2\n30,1,2\n").find("p.csv:4:1: uneven step"),
+            std::string::npos);
 }
 
 TEST(Probes, TooFewStations) {
@@ -52,36 +54,45 @@ TEST(Probes, TooFewStations) {
 TEST(Probes, OffsetsNotWholeSteps) {
   io::ProbeReadOptions o;
   o.offsets = {0, 15};
-  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o).find("not a whole multiple of the step 10 mm"),
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o)
+                .find("not a whole multiple of the step 10 mm"),
             std::string::npos);
 }
 
 TEST(Probes, OffsetCountAndDuplicates) {
   io::ProbeReadOptions o;
   o.offsets = {0, 10, 20};
-  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o).find("2 probe columns but 3 offsets"), std::string::npos);
+  EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o).find("2 probe columns but 3 offsets"),
+            std::string::npos);
   o.offsets = {0, 10, 10};
-  EXPECT_NE(read_error("x,a,b,c\n0,1,2,3\n10,1,2,3\n20,1,2,3\n", o).find("share the offset"), std::string::npos);
+  EXPECT_NE(read_error("x,a,b,c\n0,1,2,3\n10,1,2,3\n20,1,2,3\n", o).find("share the offset"),
+            std::string::npos);
 }
 
 TEST(Probes, MissingColumnsAndBadHeader) {
   io::ProbeReadOptions o;
   o.angle_column = "level";
-  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o), "p.csv:1:1: missing column 'level' (header has: x, a, b)");
-  EXPECT_NE(read_error("pos,a,b\n0,1,2\n").find("p.csv:1:1: first column must be 'x'"), std::string::npos);
-  EXPECT_NE(read_error("x,a\n0,1\n10,1\n20,1\n").find("need at least two probe columns"), std::string::npos);
+  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,1,2\n20,1,2\n", o),
+            "p.csv:1:1: missing column 'level' (header has: x, a, b)");
+  EXPECT_NE(read_error("pos,a,b\n0,1,2\n").find("p.csv:1:1: first column must be 'x'"),
+            std::string::npos);
+  EXPECT_NE(read_error("x,a\n0,1\n10,1\n20,1\n").find("need at least two probe columns"),
+            std::string::npos);
 }
 
 TEST(Probes, NanInData) {
-  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,NaN,2\n20,1,2\n"), "p.csv:3:4: NaN is not allowed (column 'a')");
+  EXPECT_EQ(read_error("x,a,b\n0,1,2\n10,NaN,2\n20,1,2\n"),
+            "p.csv:3:4: NaN is not allowed (column 'a')");
 }
 
 TEST(ResultJson, RoundTripAndBadInput) {
   separation::Result r;
   r.method = separation::Method::ThreePoint;
-  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::Vector3d(1e-3, -2e-3, 0.5e-3), Eigen::Vector3d(1e-4, 1e-4, 2e-4)};
+  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::Vector3d(1e-3, -2e-3, 0.5e-3),
+                 Eigen::Vector3d(1e-4, 1e-4, 2e-4)};
   r.guide = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::Vector3d(0, 1e-3, 0), {}};
-  r.pitch = separation::Profile{Eigen::VectorXd::LinSpaced(2, 0, 1), Eigen::Vector2d(1e-6, -1e-6), {}};
+  r.pitch =
+      separation::Profile{Eigen::VectorXd::LinSpaced(2, 0, 1), Eigen::Vector2d(1e-6, -1e-6), {}};
   r.unobservable = {"line", "parabola"};
   const std::string p = test::temp_file("r.json", "");
   io::write_result(p, r);
@@ -101,11 +112,14 @@ TEST(ResultJson, RoundTripAndBadInput) {
     }
     return std::string();
   };
-  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, 1], \n\"value\": [1, }").find("bad.json:2:"), std::string::npos);
-  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, 1], \"value\": [1]}, \"guide\": {\"x\": [0, 1], \"value\": [1, 2]}}")
+  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, 1], \n\"value\": [1, }").find("bad.json:2:"),
+            std::string::npos);
+  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, 1], \"value\": [1]}, \"guide\": {\"x\": [0, 1], "
+                "\"value\": [1, 2]}}")
                 .find("x has 2 values but value has 1"),
             std::string::npos);
   EXPECT_NE(err("{\"guide\": {}}").find("object 'workpiece' is missing"), std::string::npos);
-  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, \"a\"], \"value\": [1, 2]}}").find("'workpiece.x[1]' is not a number"),
+  EXPECT_NE(err("{\"workpiece\": {\"x\": [0, \"a\"], \"value\": [1, 2]}}")
+                .find("'workpiece.x[1]' is not a number"),
             std::string::npos);
 }

@@ -6,7 +6,8 @@ using namespace trueaxis;
 
 TEST(Report, EmbedsPlottingLibraryAndData) {
   separation::Result r;
-  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 20), Eigen::Vector3d(1e-3, -1e-3, 0), Eigen::Vector3d(1e-4, 1e-4, 1e-4)};
+  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 20), Eigen::Vector3d(1e-3, -1e-3, 0),
+                 Eigen::Vector3d(1e-4, 1e-4, 1e-4)};
   r.guide = {Eigen::VectorXd::LinSpaced(2, 0, 10), Eigen::Vector2d(0, 0), {}};
   r.unobservable = {"line"};
   r.gauge = "a <gauge> & more";
@@ -14,8 +15,8 @@ TEST(Report, EmbedsPlottingLibraryAndData) {
   EXPECT_NE(h.find("uPlot"), std::string::npos);
   EXPECT_EQ(h.find("<script src="), std::string::npos);  // nothing loaded from outside
   EXPECT_NE(h.find("a &lt;gauge&gt; &amp; more"), std::string::npos);
-  EXPECT_NE(h.find("[1,-1,0]"), std::string::npos);       // workpiece in µm
-  EXPECT_NE(h.find("[1.2,-0.8,0.2]"), std::string::npos); // +2u band
+  EXPECT_NE(h.find("[1,-1,0]"), std::string::npos);        // workpiece in µm
+  EXPECT_NE(h.find("[1.2,-0.8,0.2]"), std::string::npos);  // +2u band
 }
 
 TEST(Report, DecimatesLongSeriesKeepingExtremes) {

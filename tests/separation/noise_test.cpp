@@ -41,11 +41,15 @@ Stats run(Method m, std::vector<double> offsets, bool angle, bool given_sigma, i
     o.angle_sigma = so.angle_noise;
     const auto r = separation::separate(camp.data, o);
     EXPECT_EQ(r.workpiece.uncertainty.size(), r.workpiece.value.size());
-    const bool par = std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
-    Profile tw{r.workpiece.x, Eigen::VectorXd(r.workpiece.x.size()), {}}, tg{r.guide.x, Eigen::VectorXd(r.guide.x.size()), {}};
+    const bool par =
+        std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
+    Profile tw{r.workpiece.x, Eigen::VectorXd(r.workpiece.x.size()), {}},
+        tg{r.guide.x, Eigen::VectorXd(r.guide.x.size()), {}};
     const auto& T = camp.truth;
-    for (Eigen::Index i = 0; i < tw.x.size(); ++i) tw.value[i] = T.workpiece[std::lround((tw.x[i] - T.x[0]) / so.step)];
-    for (Eigen::Index i = 0; i < tg.x.size(); ++i) tg.value[i] = T.guide[std::lround((tg.x[i] - T.x[0]) / so.step)];
+    for (Eigen::Index i = 0; i < tw.x.size(); ++i)
+      tw.value[i] = T.workpiece[std::lround((tw.x[i] - T.x[0]) / so.step)];
+    for (Eigen::Index i = 0; i < tg.x.size(); ++i)
+      tg.value[i] = T.guide[std::lround((tg.x[i] - T.x[0]) / so.step)];
     separation::express_in_reference(tw, tg, nullptr, separation::Reference::LeastSquares, par);
     for (Eigen::Index i = 0; i < tw.x.size(); ++i) {
       const double uu = r.workpiece.uncertainty[i];
@@ -71,10 +75,11 @@ TEST(SeparationNoise, ErrorsAgreeWithStatedUncertainty) {
     std::vector<double> off;
     bool angle, given;
   };
-  for (const Case& c : {Case{"two-point", Method::TwoPoint, {0, 10}, false, true},
-                        Case{"three-point", Method::ThreePoint, {0, 10, 20}, false, true},
-                        Case{"lsq 3 probes + level", Method::Lsq, {0, 10, 20}, true, true},
-                        Case{"lsq 5 probes, sigma estimated", Method::Lsq, {0, 10, 20, 30, 40}, false, false}}) {
+  for (const Case& c :
+       {Case{"two-point", Method::TwoPoint, {0, 10}, false, true},
+        Case{"three-point", Method::ThreePoint, {0, 10, 20}, false, true},
+        Case{"lsq 3 probes + level", Method::Lsq, {0, 10, 20}, true, true},
+        Case{"lsq 5 probes, sigma estimated", Method::Lsq, {0, 10, 20, 30, 40}, false, false}}) {
     const Stats s = run(c.m, c.off, c.angle, c.given);
     EXPECT_GT(s.within2, 0.90) << c.name;
     EXPECT_LT(s.within2, 0.99) << c.name;

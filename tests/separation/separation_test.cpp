@@ -20,7 +20,9 @@ namespace {
 // Round-off tolerance for a profile of amplitude ~5 µm (5e-3 mm) recovered from n stations:
 // the separation integrates once (two-point) or twice (three-point), so rounding grows like
 // n^1.5 ulps of the readings. Measured: 2e-16 mm at 200 stations, 1.3e-9 mm at 1e6 (three-point).
-double round_off(long n) { return 1e-15 + 1e-17 * std::pow(static_cast<double>(n), 1.5); }
+double round_off(long n) {
+  return 1e-15 + 1e-17 * std::pow(static_cast<double>(n), 1.5);
+}
 
 #if defined(__SANITIZE_ADDRESS__)
 constexpr long kLongest = 100000;  // sanitizer builds are ~20x slower
@@ -40,13 +42,17 @@ Truth truth_for(const Result& r, const sim::StraightnessTruth& T, double h, bool
     for (Eigen::Index i = 0; i < x.size(); ++i) o[i] = v[std::lround((x[i] - T.x[0]) / h)];
     return o;
   };
-  Truth t{{r.workpiece.x, on(r.workpiece.x, T.workpiece), {}}, {r.guide.x, on(r.guide.x, T.guide), {}}, {}};
+  Truth t{{r.workpiece.x, on(r.workpiece.x, T.workpiece), {}},
+          {r.guide.x, on(r.guide.x, T.guide), {}},
+          {}};
   if (r.pitch) t.t = {r.pitch->x, on(r.pitch->x, T.pitch), {}};
   separation::express_in_reference(t.w, t.g, r.pitch ? &t.t : nullptr, ref, parabola_free);
   return t;
 }
 
-double maxdiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) { return (a - b).cwiseAbs().maxCoeff(); }
+double maxdiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return (a - b).cwiseAbs().maxCoeff();
+}
 
 sim::StraightnessOptions carriage(long n, std::vector<double> offsets, std::uint64_t seed) {
   sim::StraightnessOptions o;
@@ -72,8 +78,9 @@ TEST(Separation, NoiseFreeEveryMethodRecoversTruthToRoundOff) {
         std::vector<double> off;
         bool pitch;
       };
-      for (const Case& c : {Case{Method::TwoPoint, {0, 10}, false}, Case{Method::ThreePoint, {0, 10, 20}, true},
-                            Case{Method::Lsq, {0, 10, 20}, true}, Case{Method::Lsq, {0, 10, 20, 30, 40}, true}}) {
+      for (const Case& c :
+           {Case{Method::TwoPoint, {0, 10}, false}, Case{Method::ThreePoint, {0, 10, 20}, true},
+            Case{Method::Lsq, {0, 10, 20}, true}, Case{Method::Lsq, {0, 10, 20, 30, 40}, true}}) {
         auto so = carriage(n, c.off, seed);
         if (!c.pitch) so.pitch_amplitude = 0;
         const auto camp = sim::simulate_straightness(so);
@@ -83,10 +90,13 @@ TEST(Separation, NoiseFreeEveryMethodRecoversTruthToRoundOff) {
         const Result r = separation::separate(camp.data, o);
         const Truth t = truth_for(r, camp.truth, so.step, has(r.unobservable, "parabola"));
         const double tol = round_off(n);
-        EXPECT_LT(maxdiff(r.workpiece.value, t.w.value), tol) << to_string(c.m) << " n=" << n << " seed=" << seed;
-        EXPECT_LT(maxdiff(r.guide.value, t.g.value), tol) << to_string(c.m) << " n=" << n << " seed=" << seed;
+        EXPECT_LT(maxdiff(r.workpiece.value, t.w.value), tol)
+            << to_string(c.m) << " n=" << n << " seed=" << seed;
+        EXPECT_LT(maxdiff(r.guide.value, t.g.value), tol)
+            << to_string(c.m) << " n=" << n << " seed=" << seed;
         if (r.pitch) {
-          EXPECT_LT(maxdiff(r.pitch->value, t.t.value), tol / so.step) << to_string(c.m) << " n=" << n;
+          EXPECT_LT(maxdiff(r.pitch->value, t.t.value), tol / so.step)
+              << to_string(c.m) << " n=" << n;
         }
       }
     }
@@ -143,12 +153,14 @@ TEST(Separation, LsqEqualsSeedMethodsWhereTheyApply) {
   const Result c = separation::separate(camp.data, o);
   // B reports the workpiece at probe A's positions; C also at the two beyond. Compare on B's grid
   // after the same reference.
-  Profile cw{c.workpiece.x.head(b.workpiece.x.size()), c.workpiece.value.head(b.workpiece.x.size()), {}};
+  Profile cw{
+      c.workpiece.x.head(b.workpiece.x.size()), c.workpiece.value.head(b.workpiece.x.size()), {}};
   Profile cg = c.guide;
   separation::express_in_reference(cw, cg, nullptr, Reference::LeastSquares, false);
   EXPECT_LT(maxdiff(cw.value, b.workpiece.value), 1e-14);
   EXPECT_LT(maxdiff(c.guide.value, b.guide.value), 1e-14);
-  EXPECT_LT(maxdiff(c.pitch->value.head(b.pitch->value.size()).array() - c.pitch->value.head(b.pitch->value.size()).mean(),
+  EXPECT_LT(maxdiff(c.pitch->value.head(b.pitch->value.size()).array() -
+                        c.pitch->value.head(b.pitch->value.size()).mean(),
                     b.pitch->value.array() - b.pitch->value.mean()),
             1e-15);
 }
@@ -239,7 +251,8 @@ TEST(Separation, UnobservableLayoutsAreRefusedWithTheirModes) {
     separation::separate(camp.data, o);
     FAIL() << "chains not tied together must be refused";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("chain offsets (2 chains)"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("chain offsets (2 chains)"), std::string::npos)
+        << e.what();
   }
   const auto la = separation::analyze_layout({0, 2, 4}, false, false, 100);
   EXPECT_FALSE(la.observable);
@@ -303,6 +316,7 @@ TEST(Separation, MinZoneReferenceCentresTheZone) {
   o.compute_uncertainty = false;
   const Result r = separation::separate(camp.data, o);
   EXPECT_NEAR(r.workpiece.value.maxCoeff(), -r.workpiece.value.minCoeff(), 1e-15);
-  EXPECT_NEAR(r.workpiece.value.maxCoeff() - r.workpiece.value.minCoeff(), r.workpiece_straightness.min_zone, 1e-12);
+  EXPECT_NEAR(r.workpiece.value.maxCoeff() - r.workpiece.value.minCoeff(),
+              r.workpiece_straightness.min_zone, 1e-12);
   EXPECT_LE(r.workpiece_straightness.min_zone, r.workpiece_straightness.ls);
 }

@@ -22,7 +22,8 @@ TEST(SimStraightness, ReproducibleAndFollowsTheModel) {
     EXPECT_DOUBLE_EQ(T.x[q], a.data.x[K]);
     for (int i = 0; i < 3; ++i) {
       const double s = o.offsets[static_cast<std::size_t>(i)];
-      const double m = T.workpiece[q + std::lround(s / o.step)] + T.guide[q] + s * T.pitch[q] + T.probe_offsets[static_cast<std::size_t>(i)];
+      const double m = T.workpiece[q + std::lround(s / o.step)] + T.guide[q] + s * T.pitch[q] +
+                       T.probe_offsets[static_cast<std::size_t>(i)];
       EXPECT_NEAR(a.data.readings(K, i), m, 1e-18);
     }
     EXPECT_NEAR(a.data.angle[K], T.pitch[q] + T.angle_offset, 1e-20);

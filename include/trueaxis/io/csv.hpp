@@ -7,12 +7,11 @@
 // duplicated or empty column names.
 #pragma once
 
+#include <Eigen/Core>
 #include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace trueaxis::io {
 

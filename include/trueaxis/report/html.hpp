@@ -33,8 +33,8 @@ struct Plot {
 
 struct Section {
   std::string title;
-  std::string intro_html;                             // trusted HTML (escape user text!)
-  std::vector<std::vector<std::string>> table;        // first row = header; cells are escaped
+  std::string intro_html;                       // trusted HTML (escape user text!)
+  std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
   std::vector<Plot> plots;
 };
 

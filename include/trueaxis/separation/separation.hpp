@@ -40,11 +40,11 @@ Reference reference_from_string(const std::string& s);  // "ls" | "seed" | "min-
 
 // Probe readings. Units: mm and rad.
 struct ProbeData {
-  Eigen::VectorXd x;             // n station positions, strictly increasing with equal step h
-  Eigen::MatrixXd readings;      // n x N probe readings (mm), column i = probe i
-  std::vector<double> offsets;   // N probe offsets from probe A (mm); offsets[0] == 0; whole
-                                 // multiples of h; distinct
-  Eigen::VectorXd angle;         // empty, or n pitch readings (rad)
+  Eigen::VectorXd x;            // n station positions, strictly increasing with equal step h
+  Eigen::MatrixXd readings;     // n x N probe readings (mm), column i = probe i
+  std::vector<double> offsets;  // N probe offsets from probe A (mm); offsets[0] == 0; whole
+                                // multiples of h; distinct
+  Eigen::VectorXd angle;        // empty, or n pitch readings (rad)
 
   double step() const;
   // Throws Error with a plain message if the data break the preconditions above.
@@ -94,8 +94,8 @@ struct Result {
   std::string gauge;                      // how they were fixed
   std::optional<double> sigma;            // probe noise behind the uncertainties (mm)
   bool sigma_estimated = false;
-  long dof = 0;                           // redundancy: equations − free unknowns
-  double residual_rms = 0;                // RMS of weighted residuals (mm); 0 without redundancy
+  long dof = 0;             // redundancy: equations − free unknowns
+  double residual_rms = 0;  // RMS of weighted residuals (mm); 0 without redundancy
 
   // Human-readable multi-line summary (µm / µrad).
   std::string summary() const;
@@ -116,7 +116,7 @@ void express_in_reference(Profile& workpiece, Profile& guide, Profile* pitch, Re
 
 // What a probe layout can and cannot determine.
 struct LayoutAnalysis {
-  std::vector<long> steps;                // probe offsets in steps of h
+  std::vector<long> steps;  // probe offsets in steps of h
   bool pitch_modelled = false;
   long extra_null_modes = 0;              // beyond those fixed by the reference/gauge
   std::vector<std::string> unobservable;  // all undetermined modes, named

@@ -34,10 +34,10 @@ struct StraightnessOptions {
 
 struct StraightnessTruth {
   // On the workpiece grid: every position a probe visits, x_q = x0 + (q + min offset/h)·h.
-  Eigen::VectorXd x;         // mm
-  Eigen::VectorXd workpiece; // mm
-  Eigen::VectorXd guide;     // mm (the carriage functions evaluated at x)
-  Eigen::VectorXd pitch;     // rad
+  Eigen::VectorXd x;                  // mm
+  Eigen::VectorXd workpiece;          // mm
+  Eigen::VectorXd guide;              // mm (the carriage functions evaluated at x)
+  Eigen::VectorXd pitch;              // rad
   std::vector<double> probe_offsets;  // o_i, mm
   double angle_offset = 0;            // rad
   // Index of station K on this grid.
