@@ -194,10 +194,13 @@ Eigen::VectorXd SequentialLsq::covariance_diagonal() const {
         Zrr(a, b) = win(pa, pb);
       }
     const auto U = R11.triangularView<Eigen::Upper>();
-    Eigen::MatrixXd T = U.solve(R12);  // e x nr
-    Eigen::MatrixXd Rinv = U.solve(Eigen::MatrixXd::Identity(e, e));
-    Eigen::MatrixXd Zer = -T * Zrr;
-    Eigen::MatrixXd Zee = Rinv * Rinv.transpose() + T * Zrr * T.transpose();
+    const Eigen::MatrixXd Rinv = U.solve(Eigen::MatrixXd::Identity(e, e));
+    Eigen::MatrixXd Zee = Rinv * Rinv.transpose();
+    Eigen::MatrixXd T(e, nr);  // R11⁻¹ R12; empty for the last block (Eigen must not see 0 columns)
+    if (nr > 0) {
+      T = U.solve(R12);
+      Zee += T * Zrr * T.transpose();
+    }
     for (int l = 0; l < e; ++l) diag[ids[l]] = Zee(l, l);
     // New window: eliminated ids followed by the old window (all of it: later steps may need any).
     std::vector<int> nids(ids, ids + e);
@@ -216,7 +219,6 @@ Eigen::VectorXd SequentialLsq::covariance_diagonal() const {
       nwin.topRightCorner(e, ow) = Ze_old;
       nwin.bottomLeftCorner(ow, e) = Ze_old.transpose();
     }
-    (void)Zer;
     // Prune: keep only ids that earlier steps reference (their non-eliminated columns).
     // The next step (earlier in elimination order) references ids among its columns e..nc; we
     // keep any id that appears as a non-eliminated column of some earlier step. Cheap rule for
