@@ -14,26 +14,6 @@
 namespace trueaxis::cli {
 namespace {
 
-// The truth on a result's grids, in the result's reference.
-separation::Result truth_like(const separation::Result& r, const sim::StraightnessTruth& T,
-                              double h, bool parabola_free) {
-  auto on = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& v) {
-    Eigen::VectorXd out(x.size());
-    for (Eigen::Index i = 0; i < x.size(); ++i) out[i] = v[std::lround((x[i] - T.x[0]) / h)];
-    return out;
-  };
-  separation::Result t = r;
-  t.workpiece = {r.workpiece.x, on(r.workpiece.x, T.workpiece), {}};
-  t.guide = {r.guide.x, on(r.guide.x, T.guide), {}};
-  if (r.pitch) t.pitch = separation::Profile{r.pitch->x, on(r.pitch->x, T.pitch), {}};
-  separation::express_in_reference(t.workpiece, t.guide, t.pitch ? &*t.pitch : nullptr,
-                                   r.reference == separation::Reference::Seed
-                                       ? separation::Reference::LeastSquares
-                                       : r.reference,
-                                   parabola_free);
-  return t;
-}
-
 separation::ProbeData subset(const separation::ProbeData& d, int probes, bool angle) {
   separation::ProbeData s;
   s.x = d.x;
@@ -106,9 +86,7 @@ int run_demo(const DemoOptions& o) {
     opt.angle_sigma = so.angle_noise;
     const auto data = subset(camp.data, run.probes, run.angle);
     const auto r = separation::separate(data, opt);
-    const bool par =
-        std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
-    const auto t = truth_like(r, camp.truth, so.step, par);
+    const auto t = camp.truth.like(r);
     const std::string file = fmt::format("result-{}.json", separation::to_string(run.m));
     io::write_result((dir / file).string(), r);
     const double ew = (r.workpiece.value - t.workpiece.value).cwiseAbs().maxCoeff() * 1e3;

@@ -156,7 +156,7 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
         js_array(data, s2.y, idx);
         series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label), color,
                               s2.dashed ? ",dash:[6,4]" : "");
-        const int main_idx = si++;
+        ++si;
         if (s2.band.size() == s2.y.size()) {
           data += ',';
           js_array(data, s2.y, idx, +2.0, &s2.band);
@@ -168,7 +168,6 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
           bands += fmt::format("{{series:[{},{}],fill:'{}22'}},", si, si + 1, color);
           si += 2;
         }
-        (void)main_idx;
       }
       data += "]";
       series += "]";

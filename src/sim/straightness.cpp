@@ -68,6 +68,7 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
   StraightnessCampaign c;
   StraightnessTruth& T = c.truth;
   T.first_station_index = -pmin;
+  T.step = h;
   T.x.resize(Q);
   T.workpiece.resize(Q);
   T.guide.resize(Q);
@@ -105,6 +106,33 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
     if (o.angle) d.angle[K] = T.pitch[qs] + T.angle_offset + o.angle_noise * Nd(rng);
   }
   return c;
+}
+
+Eigen::VectorXd StraightnessTruth::sample(const Eigen::VectorXd& at,
+                                          const Eigen::VectorXd& values) const {
+  Eigen::VectorXd out(at.size());
+  for (Eigen::Index i = 0; i < at.size(); ++i) {
+    const double r = (at[i] - x[0]) / step;
+    const long q = std::lround(r);
+    if (q < 0 || q >= values.size() || std::abs(r - static_cast<double>(q)) > 1e-6)
+      throw Error(fmt::format("position {} mm is not on the truth grid", at[i]));
+    out[i] = values[q];
+  }
+  return out;
+}
+
+separation::Result StraightnessTruth::like(const separation::Result& r,
+                                           std::optional<bool> parabola_free) const {
+  const bool par = parabola_free.value_or(
+      std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end());
+  separation::Result t = r;
+  t.workpiece = {r.workpiece.x, sample(r.workpiece.x, workpiece), {}};
+  t.guide = {r.guide.x, sample(r.guide.x, guide), {}};
+  if (r.pitch) t.pitch = separation::Profile{r.pitch->x, sample(r.pitch->x, pitch), {}};
+  const auto ref = r.reference == separation::Reference::Seed ? separation::Reference::LeastSquares
+                                                              : r.reference;
+  separation::express_in_reference(t.workpiece, t.guide, t.pitch ? &*t.pitch : nullptr, ref, par);
+  return t;
 }
 
 }  // namespace trueaxis::sim

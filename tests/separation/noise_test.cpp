@@ -41,16 +41,8 @@ Stats run(Method m, std::vector<double> offsets, bool angle, bool given_sigma, i
     o.angle_sigma = so.angle_noise;
     const auto r = separation::separate(camp.data, o);
     EXPECT_EQ(r.workpiece.uncertainty.size(), r.workpiece.value.size());
-    const bool par =
-        std::find(r.unobservable.begin(), r.unobservable.end(), "parabola") != r.unobservable.end();
-    Profile tw{r.workpiece.x, Eigen::VectorXd(r.workpiece.x.size()), {}},
-        tg{r.guide.x, Eigen::VectorXd(r.guide.x.size()), {}};
-    const auto& T = camp.truth;
-    for (Eigen::Index i = 0; i < tw.x.size(); ++i)
-      tw.value[i] = T.workpiece[std::lround((tw.x[i] - T.x[0]) / so.step)];
-    for (Eigen::Index i = 0; i < tg.x.size(); ++i)
-      tg.value[i] = T.guide[std::lround((tg.x[i] - T.x[0]) / so.step)];
-    separation::express_in_reference(tw, tg, nullptr, separation::Reference::LeastSquares, par);
+    const separation::Result t = camp.truth.like(r);  // same grids, reference and gauge
+    const Profile& tw = t.workpiece;
     for (Eigen::Index i = 0; i < tw.x.size(); ++i) {
       const double uu = r.workpiece.uncertainty[i];
       if (!(uu > 0)) continue;  // pinned/degenerate points carry zero uncertainty

@@ -34,20 +34,11 @@ struct Truth {
   Profile w, g, t;
 };
 
-// The simulator's truth on the result's grids, in the same reference.
-Truth truth_for(const Result& r, const sim::StraightnessTruth& T, double h, bool parabola_free,
-                Reference ref = Reference::LeastSquares) {
-  auto on = [&](const Eigen::VectorXd& x, const Eigen::VectorXd& v) {
-    Eigen::VectorXd o(x.size());
-    for (Eigen::Index i = 0; i < x.size(); ++i) o[i] = v[std::lround((x[i] - T.x[0]) / h)];
-    return o;
-  };
-  Truth t{{r.workpiece.x, on(r.workpiece.x, T.workpiece), {}},
-          {r.guide.x, on(r.guide.x, T.guide), {}},
-          {}};
-  if (r.pitch) t.t = {r.pitch->x, on(r.pitch->x, T.pitch), {}};
-  separation::express_in_reference(t.w, t.g, r.pitch ? &t.t : nullptr, ref, parabola_free);
-  return t;
+// The simulator's truth on the result's grids, in the same reference, with the parabola
+// convention given explicitly (some tests compare deliberately against the wrong one).
+Truth truth_for(const Result& r, const sim::StraightnessTruth& T, bool parabola_free) {
+  const Result t = T.like(r, parabola_free);
+  return {t.workpiece, t.guide, t.pitch ? *t.pitch : Profile{}};
 }
 
 double maxdiff(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
@@ -88,7 +79,7 @@ TEST(Separation, NoiseFreeEveryMethodRecoversTruthToRoundOff) {
         o.method = c.m;
         o.compute_uncertainty = false;
         const Result r = separation::separate(camp.data, o);
-        const Truth t = truth_for(r, camp.truth, so.step, has(r.unobservable, "parabola"));
+        const Truth t = truth_for(r, camp.truth, has(r.unobservable, "parabola"));
         const double tol = round_off(n);
         EXPECT_LT(maxdiff(r.workpiece.value, t.w.value), tol)
             << to_string(c.m) << " n=" << n << " seed=" << seed;
@@ -112,7 +103,7 @@ TEST(Separation, AngleChannelRecoversCurvatureThreePointCannot) {
   const Result lsq = separation::separate(camp.data, o);
   EXPECT_FALSE(has(lsq.unobservable, "parabola"));
   // Truth without any parabola convention: only the LS lines removed.
-  const Truth t = truth_for(lsq, camp.truth, so.step, /*parabola_free=*/false);
+  const Truth t = truth_for(lsq, camp.truth, /*parabola_free=*/false);
   EXPECT_LT(maxdiff(lsq.workpiece.value, t.w.value), round_off(300));
   EXPECT_LT(maxdiff(lsq.guide.value, t.g.value), round_off(300));
 
@@ -122,7 +113,7 @@ TEST(Separation, AngleChannelRecoversCurvatureThreePointCannot) {
   o.method = Method::ThreePoint;
   const Result b = separation::separate(d3, o);
   EXPECT_TRUE(has(b.unobservable, "parabola"));
-  const Truth tb = truth_for(b, camp.truth, so.step, false);
+  const Truth tb = truth_for(b, camp.truth, false);
   EXPECT_GT(maxdiff(b.guide.value, tb.g.value), 1e-4);  // the simulated guide has a real bow
 }
 
@@ -137,7 +128,7 @@ TEST(Separation, KnownZeroDifferenceFixesTheParabola) {
     o.method = m;
     const Result r = separation::separate(camp.data, o);
     EXPECT_FALSE(has(r.unobservable, "parabola"));
-    const Truth t = truth_for(r, camp.truth, so.step, false);
+    const Truth t = truth_for(r, camp.truth, false);
     EXPECT_LT(maxdiff(r.workpiece.value, t.w.value), 1e-13) << to_string(m);
     EXPECT_LT(maxdiff(r.guide.value, t.g.value), 1e-13) << to_string(m);
   }
@@ -230,7 +221,7 @@ TEST(Separation, PitchingCarriageTwoPointIntegratesPitchThreePointRemovesIt) {
   const Result b = separation::separate(camp.data, o);
 
   // Two-point: its workpiece = truth + the integrated pitch term Σ s_B·θ (up to the LS line).
-  const Truth ta = truth_for(a, camp.truth, so.step, false);
+  const Truth ta = truth_for(a, camp.truth, false);
   Eigen::VectorXd integ = Eigen::VectorXd::Zero(a.workpiece.x.size());
   for (long K = 0; K + 1 < integ.size(); ++K)
     integ[K + 1] = integ[K] + so.offsets[1] * (camp.truth.pitch[K] - camp.truth.pitch[0]);
@@ -239,7 +230,7 @@ TEST(Separation, PitchingCarriageTwoPointIntegratesPitchThreePointRemovesIt) {
   EXPECT_LT(maxdiff(a.workpiece.value, expect.value), 1e-14);
   EXPECT_GT(maxdiff(a.workpiece.value, ta.w.value), 1e-4);  // the pitch error is visible (>0.1 µm)
 
-  const Truth tb = truth_for(b, camp.truth, so.step, true);
+  const Truth tb = truth_for(b, camp.truth, true);
   EXPECT_LT(maxdiff(b.workpiece.value, tb.w.value), 1e-14);  // three-point removes it
 }
 

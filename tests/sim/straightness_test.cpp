@@ -41,3 +41,30 @@ TEST(SimStraightness, RejectsBadOptions) {
   o.noise = -1;
   EXPECT_THROW(sim::simulate_straightness(o), Error);
 }
+
+TEST(SimStraightness, SampleAndLikeFollowTheGrid) {
+  sim::StraightnessOptions o;
+  o.stations = 20;
+  const auto c = sim::simulate_straightness(o);
+  const auto& T = c.truth;
+  Eigen::VectorXd at(2);
+  at << T.x[3], T.x[7];
+  const Eigen::VectorXd v = T.sample(at, T.guide);
+  EXPECT_EQ(v[0], T.guide[3]);
+  EXPECT_EQ(v[1], T.guide[7]);
+  at[1] = T.x[7] + 0.5 * o.step;  // between grid points
+  EXPECT_THROW(T.sample(at, T.guide), Error);
+  at[1] = T.x[T.x.size() - 1] + o.step;  // beyond the grid
+  EXPECT_THROW(T.sample(at, T.guide), Error);
+
+  // like(): the truth on a result's grids, in its reference (guide residual from its LS line).
+  separation::Result r;
+  r.workpiece = {T.x.head(10), Eigen::VectorXd::Zero(10), {}};
+  r.guide = {T.x.head(10), Eigen::VectorXd::Zero(10), {}};
+  const auto t = T.like(r);
+  const Eigen::VectorXd g = T.guide.head(10);
+  const Eigen::VectorXd xc = T.x.head(10).array() - T.x.head(10).mean();
+  const double slope = xc.dot(g) / xc.squaredNorm();
+  const Eigen::VectorXd expect = g.array() - g.mean() - slope * xc.array();
+  EXPECT_LT((t.guide.value - expect).cwiseAbs().maxCoeff(), 1e-17);
+}

@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "trueaxis/separation/separation.hpp"
@@ -43,6 +44,17 @@ struct StraightnessTruth {
   // Index of station K on this grid.
   long station_index(long K) const { return K + first_station_index; }
   long first_station_index = 0;
+  double step = 0;  // mm, spacing of the grid
+
+  // `values` (one of the truth arrays) sampled at positions `x` of this grid (mm). Throws Error if
+  // a position is not on the grid.
+  Eigen::VectorXd sample(const Eigen::VectorXd& x, const Eigen::VectorXd& values) const;
+  // The truth on a result's grids and in its reference (separation::express_in_reference), so it
+  // can be compared point by point. The parabola convention follows the result (its
+  // `unobservable` list names "parabola") unless `parabola_free` says otherwise. A result in the
+  // seed reference gets the LS reference.
+  separation::Result like(const separation::Result& result,
+                          std::optional<bool> parabola_free = std::nullopt) const;
 };
 
 struct StraightnessCampaign {
