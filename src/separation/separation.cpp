@@ -136,6 +136,14 @@ struct Design {
   int oa() const { return o(N); }
 };
 
+// Weights of the zero difference e = Σ z_i·o_i of a three-probe layout: z_A = 1 and z annihilates
+// constants and the offsets (for 0, l, 2l: z = 1, −2, 1).
+Eigen::Vector3d zero_difference_weights(const std::vector<long>& p) {
+  if (p.size() != 3) throw Error("a zero difference is defined for three-probe layouts only");
+  const double sb = static_cast<double>(p[1]), sc = static_cast<double>(p[2]);
+  return {1.0, -sc / (sc - sb), sb / (sc - sb)};
+}
+
 Design make_design(const std::vector<long>& p, long n, bool angle, std::optional<double> zero_diff,
                    double wa) {
   Design D;
@@ -181,12 +189,8 @@ Design make_design(const std::vector<long>& p, long n, bool angle, std::optional
     for (int i = 1; i < D.N && other < 0; ++i)
       if (i != last) other = i;
     if (zero_diff) {
-      if (D.N != 3) throw Error("a zero difference is defined for three-probe layouts only");
-      const double sb = static_cast<double>(p[static_cast<std::size_t>(other)]);
-      const double sc = static_cast<double>(p[static_cast<std::size_t>(last)]);
-      // z_A = 1 and z annihilates 1 and s: z_other = −s_last/(s_last − s_other).
-      const double z_other = -sc / (sc - sb);
-      pin(D.o(other), *zero_diff / z_other);
+      // With o_A and o_last pinned to 0, e = z_other·o_other.
+      pin(D.o(other), *zero_diff / zero_difference_weights(p)[other]);
     } else {
       pin(D.w(D.Q / 2), 0);
       D.parabola_free = true;
@@ -347,17 +351,8 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   const Eigen::RowVectorXd mu = data.readings.colwise().mean();
   const double mu_a = angle ? data.angle.mean() : 0.0;
   std::optional<double> e = opt.zero_difference;
-  if (e) {
-    // e refers to the raw offsets; the centred offsets are o_i − μ_i.
-    const Eigen::Index last =
-        std::max_element(p.begin(), p.end(),
-                         [](long a, long b) { return std::abs(a) < std::abs(b); }) -
-        p.begin();
-    const Eigen::Index other = last == 1 ? 2 : 1;
-    const double sb = static_cast<double>(p[static_cast<std::size_t>(other)]);
-    const double sc = static_cast<double>(p[static_cast<std::size_t>(last)]);
-    *e -= mu[0] + (-sc / (sc - sb)) * mu[other] + (sb / (sc - sb)) * mu[last];
-  }
+  // e refers to the raw offsets; the centred offsets are o_i − μ_i.
+  if (e && p.size() == 3) *e -= zero_difference_weights(p).dot(mu.transpose());
   st.D = make_design(p, n, angle, e, wa);
   st.h = h;
   const Design& D = st.D;
