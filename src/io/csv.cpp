@@ -9,6 +9,7 @@
 #include <memory>
 #include <sstream>
 
+#include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::io {
@@ -33,13 +34,93 @@ bool blank(std::string_view line) {
 CsvTable CsvTable::read(const std::string& path) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
+  // One read of the whole file (its size from fseek/ftell; falls back to chunks for pipes).
   std::string text;
+  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
+    const long size = std::ftell(f.get());
+    std::rewind(f.get());
+    if (size > 0) {
+      text.resize(static_cast<std::size_t>(size));
+      text.resize(std::fread(text.data(), 1, text.size(), f.get()));
+    }
+  }
   char buf[1 << 16];
   std::size_t got;
   while ((got = std::fread(buf, 1, sizeof buf, f.get())) > 0) text.append(buf, got);
   if (std::ferror(f.get())) throw Error(fmt::format("{}: read error", path));
   return parse(std::move(text), path);
 }
+
+namespace {
+
+// One contiguous range of whole lines, parsed independently. Errors are kept, not thrown, so the
+// earliest one in the file can be reported with its absolute line number.
+struct Chunk {
+  std::vector<double> values;  // row-major, ncol per row
+  std::size_t lines = 0;       // newlines seen (blank lines included)
+  std::size_t rows = 0;
+  bool failed = false;
+  std::size_t fail_line = 0;  // 0-based line within the chunk
+  std::size_t fail_col = 0;   // 1-based character column
+  std::string fail_what;
+};
+
+void parse_chunk(std::string_view text, const std::vector<std::string>& header, Chunk& out) {
+  const std::size_t ncol = header.size();
+  out.values.reserve(text.size() / (ncol * 8 + 1) * ncol + ncol);
+  std::size_t pos = 0;
+  auto fail = [&](std::size_t col, std::string what) {
+    out.failed = true;
+    out.fail_line = out.lines;
+    out.fail_col = col;
+    out.fail_what = std::move(what);
+  };
+  while (pos < text.size()) {
+    const std::size_t nl = text.find('\n', pos);
+    const std::size_t end = nl == std::string_view::npos ? text.size() : nl;
+    const std::string_view l = text.substr(pos, end - pos);
+    pos = nl == std::string_view::npos ? text.size() : nl + 1;
+    if (blank(l)) {
+      ++out.lines;
+      continue;
+    }
+    std::size_t f0 = 0;
+    for (std::size_t c = 0; c < ncol; ++c) {
+      if (f0 > l.size())
+        return fail(l.size() + 1,
+                    fmt::format("missing field for column '{}' ({} expected, {} found)", header[c],
+                                ncol, c));
+      std::size_t comma = l.find(',', f0);
+      if (comma == std::string_view::npos) comma = l.size();
+      const char* b = l.data() + f0;
+      const char* e = l.data() + comma;
+      while (b < e && is_space(*b)) ++b;
+      while (e > b && is_space(e[-1])) --e;
+      const std::size_t colno = static_cast<std::size_t>(b - l.data()) + 1;
+      if (b == e) return fail(f0 + 1, fmt::format("empty field in column '{}'", header[c]));
+      const char* num = *b == '+' ? b + 1 : b;  // from_chars rejects a leading '+'
+      double v = 0;
+      const auto r = std::from_chars(num, e, v);
+      if (r.ec == std::errc::result_out_of_range)
+        return fail(colno, fmt::format("number out of range in column '{}'", header[c]));
+      if (r.ec != std::errc() || r.ptr != e)
+        return fail(colno,
+                    fmt::format("'{}' is not a number (column '{}')",
+                                std::string_view(b, static_cast<std::size_t>(e - b)), header[c]));
+      if (!std::isfinite(v))
+        return fail(colno, fmt::format("{} is not allowed (column '{}')",
+                                       std::isnan(v) ? "NaN" : "Inf", header[c]));
+      out.values.push_back(v);
+      f0 = comma + 1;
+    }
+    if (f0 <= l.size())
+      return fail(f0 + 1, fmt::format("extra field: the header has {} columns", ncol));
+    ++out.rows;
+    ++out.lines;
+  }
+}
+
+}  // namespace
 
 CsvTable CsvTable::parse(std::string text, std::string path) {
   CsvTable t;
@@ -89,58 +170,45 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
     }
   }
   const std::size_t ncol = t.header_.size();
-  // Estimate rows from the byte count to avoid repeated reallocation.
-  const std::size_t guess = all.size() / std::max<std::size_t>(1, l.size() + 1) + 16;
-  std::vector<std::vector<double>> cols(ncol);
-  for (auto& c : cols) c.reserve(guess);
-  t.line_start_.reserve(guess);
-  t.line_no_.reserve(guess);
+  t.data_start_ = pos;
 
-  while (next_line(l, start)) {
-    if (blank(l)) continue;
-    std::size_t f0 = 0;
-    for (std::size_t c = 0; c < ncol; ++c) {
-      if (f0 > l.size())
-        throw Error(fmt::format("{}:{}:{}: missing field for column '{}' ({} expected, {} found)",
-                                t.path_, line, l.size() + 1, t.header_[c], ncol, c));
-      std::size_t comma = l.find(',', f0);
-      if (comma == std::string_view::npos) comma = l.size();
-      const char* b = l.data() + f0;
-      const char* e = l.data() + comma;
-      while (b < e && is_space(*b)) ++b;
-      while (e > b && is_space(e[-1])) --e;
-      const std::size_t colno = static_cast<std::size_t>(b - l.data()) + 1;
-      if (b == e)
-        throw Error(fmt::format("{}:{}:{}: empty field in column '{}'", t.path_, line, f0 + 1,
-                                t.header_[c]));
-      if (*b == '+') ++b;  // from_chars rejects a leading '+'
-      double v = 0;
-      const auto r = std::from_chars(b, e, v);
-      if (r.ec == std::errc::result_out_of_range) {
-        throw Error(fmt::format("{}:{}:{}: number out of range in column '{}'", t.path_, line,
-                                colno, t.header_[c]));
-      }
-      if (r.ec != std::errc() || r.ptr != e)
-        throw Error(fmt::format(
-            "{}:{}:{}: '{}' is not a number (column '{}')", t.path_, line, colno,
-            std::string_view(l.data() + colno - 1, e - (l.data() + colno - 1)), t.header_[c]));
-      if (!std::isfinite(v))
-        throw Error(fmt::format("{}:{}:{}: {} is not allowed (column '{}')", t.path_, line, colno,
-                                std::isnan(v) ? "NaN" : "Inf", t.header_[c]));
-      cols[c].push_back(v);
-      f0 = comma + 1;
-    }
-    if (f0 <= l.size())
-      throw Error(fmt::format("{}:{}:{}: extra field: the header has {} columns", t.path_, line,
-                              f0 + 1, ncol));
-    t.line_start_.push_back(start);
-    t.line_no_.push_back(line);
+  // Data rows: split at line boundaries into one chunk per worker, parse in parallel, then
+  // gather into columns. The result (and the first error reported) is that of a sequential parse.
+  const std::string_view data = all.substr(pos);
+  const int w = detail::workers_for(data.size() / 64);
+  std::vector<std::size_t> cut{0};
+  for (int k = 1; k < w; ++k) {
+    std::size_t c = data.size() * static_cast<std::size_t>(k) / static_cast<std::size_t>(w);
+    c = std::max(c, cut.back());
+    const std::size_t nl = data.find('\n', c);
+    cut.push_back(nl == std::string_view::npos ? data.size() : nl + 1);
   }
-  t.rows_ = t.line_no_.size();
-  t.columns_.resize(ncol);
-  for (std::size_t c = 0; c < ncol; ++c)
-    t.columns_[c] = Eigen::Map<const Eigen::VectorXd>(cols[c].data(),
-                                                      static_cast<Eigen::Index>(cols[c].size()));
+  cut.push_back(data.size());
+  std::vector<Chunk> chunks(static_cast<std::size_t>(w));
+  detail::parallel_ranges(static_cast<std::size_t>(w), w, [&](int, std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k)
+      parse_chunk(data.substr(cut[k], cut[k + 1] - cut[k]), t.header_, chunks[k]);
+  });
+  std::size_t first_line = line + 1, rows = 0;
+  std::vector<std::size_t> row0;
+  for (const Chunk& c : chunks) {
+    if (c.failed)
+      throw Error(
+          fmt::format("{}:{}:{}: {}", t.path_, first_line + c.fail_line, c.fail_col, c.fail_what));
+    row0.push_back(rows);
+    first_line += c.lines;
+    rows += c.rows;
+  }
+  t.rows_ = rows;
+  t.columns_.assign(ncol, Eigen::VectorXd(static_cast<Eigen::Index>(rows)));
+  detail::parallel_ranges(chunks.size(), w, [&](int, std::size_t b, std::size_t e) {
+    for (std::size_t k = b; k < e; ++k) {
+      const double* v = chunks[k].values.data();
+      for (std::size_t r = 0; r < chunks[k].rows; ++r)
+        for (std::size_t c = 0; c < ncol; ++c)
+          t.columns_[c][static_cast<Eigen::Index>(row0[k] + r)] = *v++;
+    }
+  });
   return t;
 }
 
@@ -162,9 +230,24 @@ int CsvTable::require(std::string_view name) const {
 }
 
 std::string CsvTable::where(long row, int col) const {
-  const std::size_t start = row < 0 ? header_start_ : line_start_.at(static_cast<std::size_t>(row));
-  const std::size_t lineno = row < 0 ? header_line_ : line_no_.at(static_cast<std::size_t>(row));
-  // Walk to the start of field `col`, skipping padding, to give the exact character column.
+  // Error path only: walk the text to the row's line (rows are the non-blank lines after the
+  // header), then to the start of field `col`, skipping padding, for the exact character column.
+  std::size_t start = header_start_, lineno = header_line_;
+  if (row >= 0) {
+    if (static_cast<std::size_t>(row) >= rows_) throw Error("CsvTable::where: row out of range");
+    std::size_t p = data_start_, n = header_line_;
+    long seen = -1;
+    while (p < text_.size()) {
+      const std::size_t nl = std::min(text_.find('\n', p), text_.size());
+      ++n;
+      if (!blank(std::string_view(text_).substr(p, nl - p)) && ++seen == row) {
+        start = p;
+        lineno = n;
+        break;
+      }
+      p = nl + 1;
+    }
+  }
   std::size_t p = start;
   for (int c = 0; c < col && p < text_.size() && text_[p] != '\n'; ++p)
     if (text_[p] == ',') ++c;
@@ -178,27 +261,16 @@ void write_csv(const std::string& path, const std::vector<std::string>& header,
   const Eigen::Index n = columns.empty() ? 0 : columns.front()->size();
   for (const auto* c : columns)
     if (c->size() != n) throw Error("write_csv: columns differ in length");
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!f) throw Error(fmt::format("{}: cannot open file for writing", path));
-  fmt::memory_buffer buf;
-  for (std::size_t c = 0; c < header.size(); ++c) {
-    if (c) buf.push_back(',');
-    fmt::format_to(std::back_inserter(buf), "{}", header[c]);
-  }
-  buf.push_back('\n');
-  for (Eigen::Index r = 0; r < n; ++r) {
-    for (std::size_t c = 0; c < columns.size(); ++c) {
-      if (c) buf.push_back(',');
-      fmt::format_to(std::back_inserter(buf), "{}", (*columns[c])[r]);
-    }
-    buf.push_back('\n');
-    if (buf.size() > (1u << 20)) {
-      std::fwrite(buf.data(), 1, buf.size(), f.get());
-      buf.clear();
-    }
-  }
-  if (std::fwrite(buf.data(), 1, buf.size(), f.get()) != buf.size() || std::fflush(f.get()) != 0)
-    throw Error(fmt::format("{}: write error", path));
+  detail::OutFile f(path);
+  std::string head;
+  for (std::size_t c = 0; c < header.size(); ++c) head += (c ? "," : "") + header[c];
+  f.write(head + "\n");
+  std::vector<const double*> ptrs;
+  for (const auto* c : columns) ptrs.push_back(c->data());
+  std::vector<std::string> pieces;
+  detail::format_rows(ptrs, static_cast<std::size_t>(n), pieces);
+  f.write(pieces);
+  f.close();
 }
 
 }  // namespace trueaxis::io

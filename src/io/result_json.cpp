@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/probes.hpp"
@@ -17,38 +18,45 @@ namespace {
 using separation::Profile;
 using separation::Result;
 
-// Arrays are written with fmt (shortest round-trip form): a million-point result is written in
-// a few tens of milliseconds, which a DOM-building JSON writer does not manage.
-void array(fmt::memory_buffer& b, const Eigen::VectorXd& v, double scale) {
-  b.push_back('[');
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    if (i) b.push_back(',');
-    fmt::format_to(std::back_inserter(b), "{}", v[i] * scale);
+// Arrays are written in the shortest round-trip form, formatted in parallel and streamed to the
+// file (see fast_text.hpp). x arrays shared by several profiles are formatted once.
+class JsonArrays {
+ public:
+  explicit JsonArrays(detail::OutFile& f) : f_(f) {}
+  void array(const Eigen::VectorXd& v, double scale, bool cache) {
+    f_.write("[");
+    const bool hit = cache && scale == 1.0 && cached_.size() == v.size() &&
+                     std::equal(v.begin(), v.end(), cached_.begin());
+    if (!hit) {
+      detail::format_numbers(v.data(), static_cast<std::size_t>(v.size()), scale, ',', pieces_);
+      if (cache) {
+        cached_ = v;
+        cached_pieces_ = pieces_;
+      }
+    }
+    f_.write(hit ? cached_pieces_ : pieces_);
+    f_.write("]");
   }
-  b.push_back(']');
-}
+  void profile(const char* name, const Profile& p, double scale) {
+    f_.write(fmt::format("  \"{}\": {{\n    \"x\": ", name));
+    array(p.x, 1.0, true);
+    f_.write(",\n    \"value\": ");
+    array(p.value, scale, false);
+    if (p.uncertainty.size()) {
+      f_.write(",\n    \"uncertainty\": ");
+      array(p.uncertainty, scale, false);
+    }
+    f_.write("\n  },\n");
+  }
 
-void profile(fmt::memory_buffer& b, const char* name, const Profile& p, double scale) {
-  fmt::format_to(std::back_inserter(b), "  \"{}\": {{\n    \"x\": ", name);
-  array(b, p.x, 1.0);
-  fmt::format_to(std::back_inserter(b), ",\n    \"value\": ");
-  array(b, p.value, scale);
-  if (p.uncertainty.size()) {
-    fmt::format_to(std::back_inserter(b), ",\n    \"uncertainty\": ");
-    array(b, p.uncertainty, scale);
-  }
-  fmt::format_to(std::back_inserter(b), "\n  }},\n");
-}
+ private:
+  detail::OutFile& f_;
+  std::vector<std::string> pieces_, cached_pieces_;
+  Eigen::VectorXd cached_;
+};
 
 std::string quoted(const std::string& s) {
   return nlohmann::json(s).dump();
-}
-
-void write_file(const std::string& path, const fmt::memory_buffer& b) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!f) throw Error(fmt::format("{}: cannot open file for writing", path));
-  if (std::fwrite(b.data(), 1, b.size(), f.get()) != b.size() || std::fflush(f.get()) != 0)
-    throw Error(fmt::format("{}: write error", path));
 }
 
 std::string line_col(const std::string& text, std::size_t byte) {
@@ -67,6 +75,7 @@ std::string line_col(const std::string& text, std::size_t byte) {
 }  // namespace
 
 void write_result(const std::string& path, const Result& r) {
+  detail::OutFile f(path);
   fmt::memory_buffer b;
   fmt::format_to(std::back_inserter(b),
                  "{{\n  \"method\": {},\n  \"reference\": {},\n  \"gauge\": {},\n",
@@ -78,9 +87,12 @@ void write_result(const std::string& path, const Result& r) {
   fmt::format_to(std::back_inserter(b),
                  "],\n  \"units\": {{\"x\": \"mm\", \"workpiece\": \"um\", "
                  "\"guide\": \"um\", \"pitch\": \"urad\"}},\n");
-  profile(b, "workpiece", r.workpiece, 1e3);
-  profile(b, "guide", r.guide, 1e3);
-  if (r.pitch) profile(b, "pitch", *r.pitch, 1e6);
+  f.write(std::string_view(b.data(), b.size()));
+  JsonArrays arrays(f);
+  arrays.profile("workpiece", r.workpiece, 1e3);
+  arrays.profile("guide", r.guide, 1e3);
+  if (r.pitch) arrays.profile("pitch", *r.pitch, 1e6);
+  b.clear();
   fmt::format_to(std::back_inserter(b),
                  "  \"straightness\": {{\"workpiece\": {{\"ls\": {}, \"min_zone\": {}}}, "
                  "\"guide\": {{\"ls\": {}, \"min_zone\": {}}}}},\n",
@@ -90,7 +102,8 @@ void write_result(const std::string& path, const Result& r) {
   fmt::format_to(std::back_inserter(b),
                  "  \"sigma_estimated\": {},\n  \"dof\": {},\n  \"residual_rms_um\": {}\n}}\n",
                  r.sigma_estimated, r.dof, r.residual_rms * 1e3);
-  write_file(path, b);
+  f.write(std::string_view(b.data(), b.size()));
+  f.close();
 }
 
 Result read_result(const std::string& path) {
@@ -207,21 +220,16 @@ void write_result_csv(const std::string& path, const Result& r) {
     }
   }
   // NaN marks "not defined here"; written as an empty field.
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!f) throw Error(fmt::format("{}: cannot open file for writing", path));
-  fmt::memory_buffer b;
-  for (std::size_t c = 0; c < header.size(); ++c)
-    fmt::format_to(std::back_inserter(b), "{}{}", c ? "," : "", header[c]);
-  b.push_back('\n');
-  for (Eigen::Index i = 0; i < m; ++i) {
-    for (std::size_t c = 0; c < cols.size(); ++c) {
-      if (c) b.push_back(',');
-      if (!std::isnan(cols[c][i])) fmt::format_to(std::back_inserter(b), "{}", cols[c][i]);
-    }
-    b.push_back('\n');
-  }
-  if (std::fwrite(b.data(), 1, b.size(), f.get()) != b.size())
-    throw Error(fmt::format("{}: write error", path));
+  detail::OutFile f(path);
+  std::string head;
+  for (std::size_t c = 0; c < header.size(); ++c) head += (c ? "," : "") + header[c];
+  f.write(head + "\n");
+  std::vector<const double*> ptrs;
+  for (const auto& c : cols) ptrs.push_back(c.data());
+  std::vector<std::string> pieces;
+  detail::format_rows(ptrs, static_cast<std::size_t>(m), pieces);
+  f.write(pieces);
+  f.close();
 }
 
 }  // namespace trueaxis::io

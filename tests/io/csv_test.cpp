@@ -1,6 +1,9 @@
 #include "trueaxis/io/csv.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+
+#include <cmath>
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
@@ -70,6 +73,60 @@ TEST(Csv, WriteReadRoundTripIsExact) {
   a << 0.1, 1.0 / 3.0, -2e-17;
   b << 1e300, 5, 6;
   const std::string p = trueaxis::test::temp_file("rt.csv", "");
+  trueaxis::io::write_csv(p, {"a", "b"}, {&a, &b});
+  const auto t = CsvTable::read(p);
+  EXPECT_EQ(t.column(0), a);
+  EXPECT_EQ(t.column(1), b);
+}
+
+// Large inputs are parsed in parallel chunks split at line boundaries. The result, and the line
+// numbers in errors, must be those of a sequential parse wherever the chunks happen to be cut.
+TEST(Csv, LargeFileParsedInChunksMatchesSequentialMeaning) {
+  constexpr int kRows = 300000;  // ~10 MB: several chunks on any multi-core machine
+  std::string text = "x,a,b\n";
+  std::vector<int> line_of_row;
+  int line = 1;
+  for (int i = 0; i < kRows; ++i) {
+    if (i % 1000 == 7) {  // blank lines scattered through every chunk
+      text += "\n  \n";
+      line += 2;
+    }
+    text += std::to_string(i) + "," + std::to_string(i * 0.5) + ", " + std::to_string(-i) + "\n";
+    line_of_row.push_back(++line);
+  }
+  const auto t = CsvTable::parse(text, "big.csv");
+  ASSERT_EQ(t.rows(), static_cast<std::size_t>(kRows));
+  for (int i : {0, 1, kRows / 3, kRows / 2, kRows - 1}) {
+    EXPECT_EQ(t.column(0)[i], i);
+    EXPECT_EQ(t.column(1)[i], i * 0.5);
+    EXPECT_EQ(t.column(2)[i], -i);
+  }
+  EXPECT_EQ(t.where(kRows - 1, 2), fmt::format("big.csv:{}:{}: ", line_of_row.back(),
+                                               std::to_string(kRows - 1).size() +
+                                                   std::to_string((kRows - 1) * 0.5).size() + 4));
+  // An error late in the file names its absolute line; with two errors the earlier one wins.
+  const int bad = kRows * 3 / 4;
+  std::string late = text;
+  const std::string row = "\n" + std::to_string(bad) + ",";
+  late.replace(late.find(row) + row.size(), 1, "q");
+  EXPECT_EQ(
+      error_of(late).rfind(
+          fmt::format("f.csv:{}:{}: 'q", line_of_row[bad], std::to_string(bad).size() + 2), 0),
+      0u);
+  std::string two = late;
+  const std::string early = "\n" + std::to_string(kRows / 10) + ",";
+  two.replace(two.find(early) + early.size(), 1, "z");
+  EXPECT_EQ(error_of(two).rfind(fmt::format("f.csv:{}:", line_of_row[kRows / 10]), 0), 0u);
+}
+
+TEST(Csv, LargeWriteReadRoundTripIsExact) {
+  constexpr int kRows = 200000;
+  Eigen::VectorXd a(kRows), b(kRows);
+  for (int i = 0; i < kRows; ++i) {
+    a[i] = i * 0.01;
+    b[i] = std::sin(i * 1e-3) * 1e-7 + 1.0 / (i + 3);
+  }
+  const std::string p = trueaxis::test::temp_file("big_rt.csv", "");
   trueaxis::io::write_csv(p, {"a", "b"}, {&a, &b});
   const auto t = CsvTable::read(p);
   EXPECT_EQ(t.column(0), a);

@@ -43,9 +43,8 @@ class CsvTable {
   std::string text_;
   std::vector<std::string> header_;
   std::vector<Eigen::VectorXd> columns_;
-  std::vector<std::size_t> line_start_;  // byte offset of each data row's line (row order)
-  std::vector<std::size_t> line_no_;     // 1-based line number of each data row
-  std::size_t header_start_ = 0, header_line_ = 1;
+  std::size_t header_start_ = 0, header_line_ = 1;  // byte offset and 1-based line of the header
+  std::size_t data_start_ = 0;                      // byte offset just after the header line
   std::size_t rows_ = 0;
 };
 

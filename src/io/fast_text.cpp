@@ -1,0 +1,119 @@
+#include "fast_text.hpp"
+
+#include <fmt/compile.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <exception>
+#include <thread>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::io::detail {
+
+int workers_for(std::size_t n) {
+  constexpr std::size_t kMinPerWorker = 1 << 16;
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const std::size_t by_size = std::max<std::size_t>(1, n / kMinPerWorker);
+  return static_cast<int>(std::min<std::size_t>({hw, by_size, 8}));
+}
+
+void parallel_ranges(std::size_t n, int workers,
+                     const std::function<void(int, std::size_t, std::size_t)>& fn) {
+  workers = std::max(1, workers);
+  std::vector<std::exception_ptr> errors(static_cast<std::size_t>(workers));
+  auto run = [&](int t) {
+    const std::size_t b = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(workers);
+    const std::size_t e = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(workers);
+    try {
+      fn(t, b, e);
+    } catch (...) {
+      errors[static_cast<std::size_t>(t)] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> threads;
+  threads.reserve(static_cast<std::size_t>(workers - 1));
+  for (int t = 0; t + 1 < workers; ++t) threads.emplace_back(run, t);
+  run(workers - 1);
+  for (auto& th : threads) th.join();
+  for (const auto& e : errors)
+    if (e) std::rethrow_exception(e);
+}
+
+char* write_number(char* p, double v) {
+  return fmt::format_to(p, FMT_COMPILE("{}"), v);
+}
+
+OutFile::OutFile(const std::string& path)
+    : path_(path), f_(std::fopen(path.c_str(), "wb"), &std::fclose) {
+  if (!f_) throw Error(fmt::format("{}: cannot open file for writing", path));
+}
+
+void OutFile::write(std::string_view s) {
+  if (!f_) throw Error(fmt::format("{}: file already closed", path_));
+  if (!s.empty() && std::fwrite(s.data(), 1, s.size(), f_.get()) != s.size())
+    throw Error(fmt::format("{}: write error", path_));
+}
+
+void format_numbers(const double* v, std::size_t n, double scale, char sep,
+                    std::vector<std::string>& pieces) {
+  constexpr std::size_t kMaxChars = 26;  // 24 for a double, one separator, one spare
+  const int w = workers_for(n);
+  pieces.resize(static_cast<std::size_t>(w));
+  parallel_ranges(n, w, [&](int t, std::size_t b, std::size_t e) {
+    std::string& s = pieces[static_cast<std::size_t>(t)];
+    s.resize((e - b) * kMaxChars);
+    char* p = s.data();
+    for (std::size_t i = b; i < e; ++i) {
+      if (i) *p++ = sep;
+      p = write_number(p, v[i] * scale);
+    }
+    s.resize(static_cast<std::size_t>(p - s.data()));
+  });
+}
+
+void format_rows(const std::vector<const double*>& columns, std::size_t n,
+                 std::vector<std::string>& pieces) {
+  const std::size_t per_row = columns.size() * 26 + 1;
+  const int w = workers_for(n * columns.size());
+  pieces.resize(static_cast<std::size_t>(w));
+  parallel_ranges(n, w, [&](int t, std::size_t b, std::size_t e) {
+    std::string& s = pieces[static_cast<std::size_t>(t)];
+    s.resize((e - b) * per_row);
+    char* p = s.data();
+    for (std::size_t i = b; i < e; ++i) {
+      for (std::size_t c = 0; c < columns.size(); ++c) {
+        if (c) *p++ = ',';
+        const double v = columns[c][i];
+        if (v == v) p = write_number(p, v);  // NaN: empty field
+      }
+      *p++ = '\n';
+    }
+    s.resize(static_cast<std::size_t>(p - s.data()));
+  });
+}
+
+void OutFile::numbers(const double* v, std::size_t n, double scale, char sep) {
+  format_numbers(v, n, scale, sep, pieces_);
+  write(pieces_);
+}
+
+void OutFile::write(const std::vector<std::string>& pieces) {
+  for (const auto& s : pieces) write(s);
+}
+
+void OutFile::close() {
+  if (!f_) return;
+  const bool ok = std::fflush(f_.get()) == 0;
+  const bool closed = std::fclose(f_.release()) == 0;
+  if (!ok || !closed) throw Error(fmt::format("{}: write error", path_));
+}
+
+OutFile::~OutFile() {
+  try {
+    close();
+  } catch (...) {
+  }
+}
+
+}  // namespace trueaxis::io::detail
