@@ -4,9 +4,11 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <memory>
 #include <numeric>
+#include <span>
 
 #include "sequential_lsq.hpp"
 #include "trueaxis/error.hpp"
@@ -205,29 +207,32 @@ Design make_design(const std::vector<long>& p, long n, bool angle, std::optional
 // Rows of station K: probes then angle. Coefficients on free ids; pinned values moved to rhs.
 template <class Emit>
 void station_rows(const Design& D, long K, const double* m, double angle_mm, Emit&& emit) {
-  std::vector<std::pair<int, double>> c;
+  // At most four unknowns per row (w, g, theta, offset); a fixed buffer, no allocation.
+  std::array<std::pair<int, double>, 4> buf;
+  std::size_t used = 0;
   auto add = [&](int id, double v, double& rhs) {
     if (D.pinned[static_cast<std::size_t>(id)])
       rhs -= v * D.pin_value[static_cast<std::size_t>(id)];
     else
-      c.emplace_back(id, v);
+      buf[used++] = {id, v};
   };
+  const auto c = [&] { return std::span<const std::pair<int, double>>(buf.data(), used); };
   for (int i = 0; i < D.N; ++i) {
-    c.clear();
+    used = 0;
     double rhs = m ? m[i] : 0.0;
     add(D.w(K + D.q[static_cast<std::size_t>(i)]), 1.0, rhs);
     add(D.g(K), 1.0, rhs);
     if (D.pitch && D.p[static_cast<std::size_t>(i)] != 0)
       add(D.t(K), static_cast<double>(D.p[static_cast<std::size_t>(i)]), rhs);
     add(D.o(i), 1.0, rhs);
-    emit(c, rhs);
+    emit(c(), rhs);
   }
   if (D.angle) {
-    c.clear();
+    used = 0;
     double rhs = D.wa * angle_mm;
     add(D.t(K), D.wa, rhs);
     add(D.oa(), D.wa, rhs);
-    emit(c, rhs);
+    emit(c(), rhs);
   }
 }
 
@@ -267,7 +272,8 @@ LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel
     if (!D.pinned[static_cast<std::size_t>(id)]) col[static_cast<std::size_t>(id)] = nf++;
   std::vector<std::vector<std::pair<int, double>>> rows;
   for (long K = 0; K < na; ++K)
-    station_rows(D, K, nullptr, 0.0, [&](const auto& c, double) { rows.push_back(c); });
+    station_rows(D, K, nullptr, 0.0,
+                 [&](const auto& c, double) { rows.emplace_back(c.begin(), c.end()); });
   Eigen::MatrixXd A = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(rows.size()), nf);
   for (std::size_t r = 0; r < rows.size(); ++r)
     for (const auto& [id, v] : rows[r])
@@ -364,8 +370,10 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   // conditioning puts into a single QR pass (~1e-3 relative at a million stations otherwise).
   std::vector<double> m(static_cast<std::size_t>(D.N));
   std::vector<int> elim;
+  st.engine = std::make_unique<detail::SequentialLsq>(D.nvars, globals);
   auto pass = [&](const Eigen::VectorXd& v) {
-    auto E = std::make_unique<detail::SequentialLsq>(D.nvars, globals);
+    detail::SequentialLsq* E = st.engine.get();
+    E->reset();
     for (long K = 0; K < n; ++K) {
       for (int i = 0; i < D.N; ++i) m[static_cast<std::size_t>(i)] = data.readings(K, i) - mu[i];
       station_rows(D, K, m.data(), angle ? (data.angle[K] - mu_a) * h : 0.0,
@@ -380,12 +388,11 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
       E->eliminate(elim);
     }
     E->finish();
-    return E;
   };
   Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
   double ssr0 = 0;
   for (int iter = 0; iter < 4; ++iter) {
-    st.engine = pass(v);
+    pass(v);
     if (iter == 0) {
       if (st.engine->min_pivot_ratio() < 1e-10) {
         const LayoutAnalysis a = analyze_layout(p, angle, opt.zero_difference.has_value(), n);

@@ -8,12 +8,37 @@
 namespace trueaxis::separation::detail {
 
 SequentialLsq::SequentialLsq(int nvars, std::vector<int> globals)
-    : nvars_(nvars), globals_(std::move(globals)), col_of_(static_cast<std::size_t>(nvars), -1) {
+    : nvars_(nvars),
+      globals_(std::move(globals)),
+      is_global_(static_cast<std::size_t>(nvars), 0),
+      col_of_(static_cast<std::size_t>(nvars), -1) {
+  for (int id : globals_) is_global_[static_cast<std::size_t>(id)] = 1;
   prior_.resize(0, static_cast<Eigen::Index>(globals_.size()) + 1);
 }
 
-void SequentialLsq::add_row(const std::vector<std::pair<int, double>>& coefs, double rhs) {
-  pending_.emplace_back(coefs, rhs);
+void SequentialLsq::reset() {
+  active_.clear();
+  prior_.resize(0, static_cast<Eigen::Index>(globals_.size()) + 1);
+  pend_ids_.clear();
+  pend_coef_.clear();
+  pend_rhs_.clear();
+  pend_start_.assign(1, 0);
+  steps_.clear();
+  ids_.clear();
+  vals_.clear();
+  ssr_ = 0;
+  rows_ = unknowns_ = 0;
+  min_pivot_ = 1;
+  weakest_ = -1;
+}
+
+void SequentialLsq::add_row(std::span<const std::pair<int, double>> coefs, double rhs) {
+  for (const auto& [id, c] : coefs) {
+    pend_ids_.push_back(id);
+    pend_coef_.push_back(c);
+  }
+  pend_start_.push_back(pend_ids_.size());
+  pend_rhs_.push_back(rhs);
   ++rows_;
 }
 
@@ -23,18 +48,18 @@ void SequentialLsq::eliminate(const std::vector<int>& ids) {
 
 void SequentialLsq::finish() {
   std::vector<int> all = active_;
-  for (const auto& [coefs, rhs] : pending_)
-    for (const auto& [id, c] : coefs)
-      if (std::find(all.begin(), all.end(), id) == all.end() &&
-          std::find(globals_.begin(), globals_.end(), id) == globals_.end())
-        all.push_back(id);
+  for (int id : pend_ids_)
+    if (!is_global_[static_cast<std::size_t>(id)] &&
+        std::find(all.begin(), all.end(), id) == all.end())
+      all.push_back(id);
   all.insert(all.end(), globals_.begin(), globals_.end());
   factor_block(all, true);
 }
 
 void SequentialLsq::factor_block(const std::vector<int>& elim, bool all) {
   // Column order: eliminated ids, then the other open ids, then globals (unless eliminated).
-  std::vector<int> cols = elim;
+  std::vector<int>& cols = cols_;
+  cols.assign(elim.begin(), elim.end());
   for (int id : cols) col_of_[static_cast<std::size_t>(id)] = 0;
   auto add_col = [&](int id) {
     if (col_of_[static_cast<std::size_t>(id)] < 0) {
@@ -43,43 +68,60 @@ void SequentialLsq::factor_block(const std::vector<int>& elim, bool all) {
     }
   };
   for (int id : active_) add_col(id);
-  for (const auto& [coefs, rhs] : pending_)
-    for (const auto& [id, c] : coefs)
-      if (std::find(globals_.begin(), globals_.end(), id) == globals_.end()) add_col(id);
+  for (int id : pend_ids_)
+    if (!is_global_[static_cast<std::size_t>(id)]) add_col(id);
   for (int id : globals_) add_col(id);
   const int ncols = static_cast<int>(cols.size());
   for (int j = 0; j < ncols; ++j)
     col_of_[static_cast<std::size_t>(cols[static_cast<std::size_t>(j)])] = j;
 
+  // The block [carried information; pending rows | rhs], column-major in reused storage.
   const Eigen::Index prow = prior_.rows();
-  const Eigen::Index nrows = prow + static_cast<Eigen::Index>(pending_.size());
-  block_.setZero(nrows, ncols + 1);
-  // Carried information: columns are active_ then globals_, then rhs.
+  const Eigen::Index npend = static_cast<Eigen::Index>(pend_rhs_.size());
+  const Eigen::Index nrows = prow + npend;
+  block_.assign(static_cast<std::size_t>(nrows * (ncols + 1)), 0.0);
+  Eigen::Map<Eigen::MatrixXd> B(block_.data(), nrows, ncols + 1);
   const int na = static_cast<int>(active_.size());
-  for (int j = 0; j < na; ++j)
-    block_.col(col_of_[static_cast<std::size_t>(active_[static_cast<std::size_t>(j)])]).head(prow) =
-        prior_.col(j);
-  for (std::size_t g = 0; g < globals_.size(); ++g)
-    block_.col(col_of_[static_cast<std::size_t>(globals_[g])]).head(prow) =
-        prior_.col(na + static_cast<Eigen::Index>(g));
-  block_.col(ncols).head(prow) = prior_.col(prior_.cols() - 1);
-  Eigen::Index r = prow;
-  for (const auto& [coefs, rhs] : pending_) {
-    for (const auto& [id, c] : coefs) block_(r, col_of_[static_cast<std::size_t>(id)]) += c;
-    block_(r, ncols) = rhs;
-    ++r;
+  if (prow > 0) {
+    for (int j = 0; j < na; ++j)
+      B.col(col_of_[static_cast<std::size_t>(active_[static_cast<std::size_t>(j)])]).head(prow) =
+          prior_.col(j);
+    for (std::size_t g = 0; g < globals_.size(); ++g)
+      B.col(col_of_[static_cast<std::size_t>(globals_[g])]).head(prow) =
+          prior_.col(na + static_cast<Eigen::Index>(g));
+    B.col(ncols).head(prow) = prior_.col(prior_.cols() - 1);
   }
-  pending_.clear();
+  for (Eigen::Index r = 0; r < npend; ++r) {
+    const std::size_t r0 = pend_start_[static_cast<std::size_t>(r)];
+    const std::size_t r1 = pend_start_[static_cast<std::size_t>(r) + 1];
+    for (std::size_t k = r0; k < r1; ++k)
+      B(prow + r, col_of_[static_cast<std::size_t>(pend_ids_[k])]) += pend_coef_[k];
+    B(prow + r, ncols) = pend_rhs_[static_cast<std::size_t>(r)];
+  }
+  pend_ids_.clear();
+  pend_coef_.clear();
+  pend_rhs_.clear();
+  pend_start_.assign(1, 0);
   for (int id : cols) col_of_[static_cast<std::size_t>(id)] = -1;
 
-  const double scale = std::max(1e-300, block_.leftCols(ncols).cwiseAbs().maxCoeff());
-  qr_.compute(block_);
-  const Eigen::MatrixXd& R = qr_.matrixQR();
-  const Eigen::Index rank_rows = std::min<Eigen::Index>(nrows, ncols + 1);
-  const int nelim = static_cast<int>(elim.size());
-
+  // Unblocked Householder QR of the coefficient columns, applied to the rhs as well. The blocks
+  // are small (~10 x 10), where Eigen's blocked HouseholderQR spends its time on set-up.
+  const double scale = std::max(1e-300, B.leftCols(ncols).cwiseAbs().maxCoeff());
+  const Eigen::Index nref = std::min<Eigen::Index>(nrows, ncols);
+  if (work_.size() < ncols + 1) work_.resize(ncols + 1);
+  for (Eigen::Index k = 0; k < nref; ++k) {
+    double tau = 0, beta = 0;
+    B.col(k).tail(nrows - k).makeHouseholderInPlace(tau, beta);
+    B(k, k) = beta;
+    if (nrows - k > 1)
+      B.bottomRightCorner(nrows - k, ncols - k)
+          .applyHouseholderOnTheLeft(B.col(k).tail(nrows - k - 1), tau, work_.data());
+  }
   // Residual: rhs part below the triangle.
-  if (nrows > ncols) ssr_ += R(ncols, ncols) * R(ncols, ncols);
+  if (nrows > ncols) ssr_ += B.col(ncols).tail(nrows - ncols).squaredNorm();
+  const auto& R = B;
+  const Eigen::Index rank_rows = nref;
+  const int nelim = static_cast<int>(elim.size());
 
   Step s;
   s.nelim = nelim;
@@ -104,14 +146,13 @@ void SequentialLsq::factor_block(const std::vector<int>& elim, bool all) {
     prior_.resize(0, 1);
     return;
   }
-  // New carried information: rows nelim.. of R over the remaining columns.
+  // New carried information: rows nelim.. of R over the remaining columns (and the rhs).
   active_.assign(cols.begin() + nelim, cols.end() - static_cast<long>(globals_.size()));
-  const Eigen::Index keep_rows =
-      std::max<Eigen::Index>(0, std::min<Eigen::Index>(nrows, ncols) - nelim);
+  const Eigen::Index keep_rows = std::max<Eigen::Index>(0, nref - nelim);
   const Eigen::Index keep_cols = ncols - nelim;
   prior_.resize(keep_rows, keep_cols + 1);
-  for (Eigen::Index i = 0; i < keep_rows; ++i)
-    for (Eigen::Index j = 0; j <= keep_cols; ++j) {
+  for (Eigen::Index j = 0; j <= keep_cols; ++j)
+    for (Eigen::Index i = 0; i < keep_rows; ++i) {
       const Eigen::Index jj = nelim + j;
       prior_(i, j) = (nelim + i <= jj) ? R(nelim + i, jj) : 0.0;
     }

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -20,8 +21,12 @@ class SequentialLsq {
  public:
   SequentialLsq(int nvars, std::vector<int> globals);
 
+  // Forgets every row and factor but keeps the storage, so a second pass over a system of the
+  // same shape (iterative refinement) allocates nothing.
+  void reset();
+
   // Adds one row sum_j coef_j * v[id_j] = rhs. Ids must be distinct within a row.
-  void add_row(const std::vector<std::pair<int, double>>& coefs, double rhs);
+  void add_row(std::span<const std::pair<int, double>> coefs, double rhs);
   // Eliminates `ids` (in this order) using the pending rows and the carried information.
   void eliminate(const std::vector<int>& ids);
   // Eliminates everything still open, globals last.
@@ -52,9 +57,13 @@ class SequentialLsq {
 
   int nvars_;
   std::vector<int> globals_;
-  std::vector<int> active_;  // open non-global ids carried in prior_
-  Eigen::MatrixXd prior_;    // rows x (active_ + globals_ + 1)
-  std::vector<std::pair<std::vector<std::pair<int, double>>, double>> pending_;
+  std::vector<char> is_global_;  // by id
+  std::vector<int> active_;      // open non-global ids carried in prior_
+  Eigen::MatrixXd prior_;        // rows x (active_ + globals_ + 1)
+  // Pending rows, flat: row r has entries [pend_start_[r], pend_start_[r + 1]).
+  std::vector<int> pend_ids_;
+  std::vector<double> pend_coef_, pend_rhs_;
+  std::vector<std::size_t> pend_start_{0};
   std::vector<Step> steps_;
   std::vector<int> ids_;
   std::vector<double> vals_;
@@ -63,8 +72,10 @@ class SequentialLsq {
   long rows_ = 0, unknowns_ = 0;
   double min_pivot_ = 1;
   int weakest_ = -1;
-  Eigen::MatrixXd block_;
-  Eigen::HouseholderQR<Eigen::MatrixXd> qr_;
+  // Scratch reused by every block (no allocation per station once warm).
+  std::vector<int> cols_;
+  std::vector<double> block_;
+  Eigen::VectorXd work_;
 };
 
 }  // namespace trueaxis::separation::detail
