@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
@@ -88,4 +89,22 @@ TEST(SeparationNoise, RedundancyLowersTheError) {
   EXPECT_LT(five.rms_err, three.rms_err);
   EXPECT_LT(level.mean_u, three.mean_u);
   EXPECT_LT(level.rms_err, three.rms_err);
+}
+
+// Stepping by less than the probe spacing: four probes 20, 10 and 20 mm apart, carriage steps of
+// 10 mm (each spacing a whole number of steps, no common factor). Every workpiece point is read
+// by four probes, so the error is lower than with three probes at one-step spacing, and the
+// stated uncertainty still describes it.
+TEST(SeparationNoise, StepSmallerThanSpacingIsRedundant) {
+  const Stats three = run(Method::Lsq, {0, 10, 20}, false, true);
+  const Stats fine = run(Method::Lsq, {0, 20, 30, 50}, false, true);
+  EXPECT_GT(fine.within2, 0.90);
+  EXPECT_LT(fine.within2, 0.99);
+  EXPECT_NEAR(fine.rms_z, 1.0, 0.2);
+  EXPECT_LT(fine.mean_u, three.mean_u);
+  EXPECT_LT(fine.rms_err, three.rms_err);
+  std::printf(
+      "3 probes at 0,10,20: RMS error %.3g um, mean u %.3g um; 4 probes at 0,20,30,50: "
+      "%.3g um, %.3g um\n",
+      three.rms_err * 1e3, three.mean_u * 1e3, fine.rms_err * 1e3, fine.mean_u * 1e3);
 }
