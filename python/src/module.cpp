@@ -153,4 +153,24 @@ an unobservable layout.)doc");
       },
       py::arg("x"), py::arg("values"),
       "Least-squares and minimum-zone straightness (µm) of a profile (x in mm, values in µm).");
+  m.def(
+      "analyze_layout",
+      [](const std::vector<long>& steps, bool angle, bool zero_difference, long stations) {
+        const auto a = separation::analyze_layout(steps, angle, zero_difference, stations);
+        py::dict d;
+        d["observable"] = a.observable;
+        d["unobservable"] = a.unobservable;
+        d["extra_null_modes"] = a.extra_null_modes;
+        d["pitch_modelled"] = a.pitch_modelled;
+        d["message"] = a.message;
+        return d;
+      },
+      py::arg("steps"), py::kw_only(), py::arg("angle") = false, py::arg("zero_difference") = false,
+      py::arg("stations") = 201,
+      R"doc(What a probe layout can determine, before measuring.
+
+steps: probe offsets in whole carriage steps (e.g. [0, 2, 3, 5]); angle: an angle channel is
+present; zero_difference: the probes' zero difference is known. Returns {'observable',
+'unobservable' (names of the undetermined modes), 'extra_null_modes', 'pitch_modelled',
+'message' (why, when not observable)}.)doc");
 }

@@ -7,7 +7,7 @@ Units follow trueaxis' files: positions in mm, deviations in µm, angles in µra
     >>> r = trueaxis.separate(sim["x"], sim["readings"], offsets=sim["offsets"], method="three-point")
     >>> r["workpiece"]["value"]  # µm, residuals from the least-squares line
 """
-from ._trueaxis import Error, separate, simulate_straightness, straightness
+from ._trueaxis import Error, analyze_layout, separate, simulate_straightness, straightness
 
-__all__ = ["Error", "separate", "simulate_straightness", "straightness"]
+__all__ = ["Error", "analyze_layout", "separate", "simulate_straightness", "straightness"]
 __version__ = "0.1.0"

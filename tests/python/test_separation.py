@@ -38,3 +38,15 @@ def test_errors_are_trueaxis_errors():
         trueaxis.separate(np.arange(60) * 10.0, np.random.default_rng(1).normal(size=(60, 3)), offsets=[0, 20, 40])
     with pytest.raises(ValueError):
         trueaxis.separate(x, np.zeros((5, 2)), method="four-point")
+
+
+def test_analyze_layout_names_what_a_layout_cannot_see():
+    ok = trueaxis.analyze_layout([0, 2, 3, 5])
+    assert ok["observable"] and ok["extra_null_modes"] == 0
+    assert "line" in ok["unobservable"] and "parabola" in ok["unobservable"]
+    chains = trueaxis.analyze_layout([0, 2, 4])
+    assert not chains["observable"]
+    assert "chain offsets (2 chains)" in chains["unobservable"]
+    assert "no common factor" in chains["message"]
+    # A level removes the parabola from the undetermined modes.
+    assert "parabola" not in trueaxis.analyze_layout([0, 1, 2], angle=True)["unobservable"]
