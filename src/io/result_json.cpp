@@ -10,6 +10,7 @@
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/json.hpp"
 #include "trueaxis/io/probes.hpp"
 
 namespace trueaxis::io {
@@ -59,19 +60,6 @@ std::string quoted(const std::string& s) {
   return nlohmann::json(s).dump();
 }
 
-std::string line_col(const std::string& text, std::size_t byte) {
-  std::size_t line = 1, col = 1;
-  for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
-    if (text[i] == '\n') {
-      ++line;
-      col = 1;
-    } else {
-      ++col;
-    }
-  }
-  return fmt::format("{}:{}", line, col);
-}
-
 }  // namespace
 
 void write_result(const std::string& path, const Result& r) {
@@ -107,82 +95,76 @@ void write_result(const std::string& path, const Result& r) {
 }
 
 Result read_result(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open file for reading", path));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
-  nlohmann::json j;
-  try {
-    j = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw Error(fmt::format("{}:{}: invalid JSON: {}", path,
-                            line_col(text, e.byte ? e.byte - 1 : 0), e.what()));
-  }
-  auto fail = [&](const std::string& what) { return Error(fmt::format("{}: {}", path, what)); };
-  if (!j.is_object()) throw fail("expected a JSON object at the top level");
-  auto vec = [&](const nlohmann::json& o, const std::string& obj, const char* key, double scale,
-                 bool required) {
+  const JsonFile doc = JsonFile::read(path);
+  using P = JsonFile::pointer;
+  const auto& j = doc.object(P());
+  auto vec = [&](const P& at, double scale, bool required) {
     Eigen::VectorXd v;
-    if (!o.contains(key)) {
-      if (required) throw fail(fmt::format("'{}.{}' is missing", obj, key));
+    if (!doc.has(at)) {
+      if (required) doc.array(at);  // throws "missing", located at the parent
       return v;
     }
-    const auto& a = o[key];
-    if (!a.is_array()) throw fail(fmt::format("'{}.{}' must be an array of numbers", obj, key));
+    const auto& a = doc.array(at);
     v.resize(static_cast<Eigen::Index>(a.size()));
-    for (std::size_t i = 0; i < a.size(); ++i) {
-      if (!a[i].is_number()) throw fail(fmt::format("'{}.{}[{}]' is not a number", obj, key, i));
-      const double x = a[i].get<double>();
-      if (!std::isfinite(x)) throw fail(fmt::format("'{}.{}[{}]' is not finite", obj, key, i));
-      v[static_cast<Eigen::Index>(i)] = x * scale;
-    }
+    for (std::size_t i = 0; i < a.size(); ++i)
+      v[static_cast<Eigen::Index>(i)] = doc.number(at / i) * scale;
     return v;
   };
   auto prof = [&](const char* name, double scale) {
-    if (!j.contains(name) || !j[name].is_object())
-      throw fail(fmt::format("object '{}' is missing", name));
-    const auto& o = j[name];
-    Profile p{vec(o, name, "x", 1.0, true), vec(o, name, "value", scale, true),
-              vec(o, name, "uncertainty", scale, false)};
+    const P o = P() / name;
+    doc.object(o);
+    Profile p{vec(o / "x", 1.0, true), vec(o / "value", scale, true),
+              vec(o / "uncertainty", scale, false)};
     if (p.x.size() != p.value.size())
-      throw fail(
-          fmt::format("'{}': x has {} values but value has {}", name, p.x.size(), p.value.size()));
+      doc.fail(o / "value", fmt::format("'{}': x has {} values but value has {}", name, p.x.size(),
+                                        p.value.size()));
     if (p.uncertainty.size() && p.uncertainty.size() != p.x.size())
-      throw fail(fmt::format("'{}': uncertainty has {} values for {} points", name,
-                             p.uncertainty.size(), p.x.size()));
-    if (p.x.size() < 2) throw fail(fmt::format("'{}': needs at least two points", name));
+      doc.fail(o / "uncertainty", fmt::format("'{}': uncertainty has {} values for {} points", name,
+                                              p.uncertainty.size(), p.x.size()));
+    if (p.x.size() < 2) doc.fail(o / "x", fmt::format("'{}': needs at least two points", name));
     return p;
   };
   Result r;
   try {
     r.method = separation::method_from_string(j.value("method", "lsq"));
+  } catch (const Error& e) {
+    doc.fail(P("/method"), e.what());
+  } catch (const nlohmann::json::exception&) {
+    doc.fail(P("/method"), "'method' must be a string");
+  }
+  try {
     r.reference = separation::reference_from_string(j.value("reference", "ls"));
   } catch (const Error& e) {
-    throw fail(e.what());
+    doc.fail(P("/reference"), e.what());
+  } catch (const nlohmann::json::exception&) {
+    doc.fail(P("/reference"), "'reference' must be a string");
   }
-  r.gauge = j.value("gauge", "");
-  if (j.contains("unobservable") && j["unobservable"].is_array())
-    for (const auto& u : j["unobservable"])
-      if (u.is_string()) r.unobservable.push_back(u.get<std::string>());
+  if (doc.has(P("/gauge"))) r.gauge = doc.string(P("/gauge"));
+  if (doc.has(P("/unobservable"))) {
+    const auto& u = doc.array(P("/unobservable"));
+    for (std::size_t i = 0; i < u.size(); ++i)
+      r.unobservable.push_back(doc.string(P("/unobservable") / i));
+  }
   r.workpiece = prof("workpiece", 1e-3);
   r.guide = prof("guide", 1e-3);
   if (j.contains("pitch") && !j["pitch"].is_null()) r.pitch = prof("pitch", 1e-6);
-  if (j.contains("straightness")) {
-    const auto& s = j["straightness"];
+  if (doc.has(P("/straightness"))) {
+    for (const char* a : {"workpiece", "guide"})
+      for (const char* b : {"ls", "min_zone"}) doc.number(P("/straightness") / a / b);
     auto get = [&](const char* a, const char* b) {
-      if (!s.contains(a) || !s[a].contains(b) || !s[a][b].is_number())
-        throw fail(fmt::format("'straightness.{}.{}' must be a number", a, b));
-      return s[a][b].get<double>() * 1e-3;
+      return doc.number(P("/straightness") / a / b) * 1e-3;
     };
     r.workpiece_straightness = {get("workpiece", "ls"), get("workpiece", "min_zone")};
     r.guide_straightness = {get("guide", "ls"), get("guide", "min_zone")};
   }
-  if (j.contains("sigma_um") && j["sigma_um"].is_number())
-    r.sigma = j["sigma_um"].get<double>() * 1e-3;
-  r.sigma_estimated = j.value("sigma_estimated", false);
-  r.dof = j.value("dof", 0L);
-  r.residual_rms = j.value("residual_rms_um", 0.0) * 1e-3;
+  if (doc.has(P("/sigma_um"))) r.sigma = doc.number(P("/sigma_um")) * 1e-3;
+  if (doc.has(P("/sigma_estimated"))) {
+    if (!j["sigma_estimated"].is_boolean())
+      doc.fail(P("/sigma_estimated"), "'sigma_estimated' must be true or false");
+    r.sigma_estimated = j["sigma_estimated"].get<bool>();
+  }
+  if (doc.has(P("/dof"))) r.dof = static_cast<long>(doc.number(P("/dof")));
+  if (doc.has(P("/residual_rms_um"))) r.residual_rms = doc.number(P("/residual_rms_um")) * 1e-3;
   return r;
 }
 

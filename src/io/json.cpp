@@ -1,0 +1,231 @@
+#include "trueaxis/io/json.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iterator>
+#include <memory>
+#include <vector>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::io {
+namespace {
+
+std::string line_col(std::string_view text, std::size_t byte) {
+  std::size_t line = 1, col = 1;
+  for (std::size_t i = 0; i < byte && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      col = 1;
+    } else {
+      ++col;
+    }
+  }
+  return fmt::format("{}:{}", line, col);
+}
+
+// A char iterator that publishes how far the parser has read.
+struct CountingIterator {
+  using iterator_category = std::forward_iterator_tag;
+  using value_type = char;
+  using difference_type = std::ptrdiff_t;
+  using pointer = const char*;
+  using reference = const char&;
+  const char* p = nullptr;
+  const char** cursor = nullptr;
+  reference operator*() const { return *p; }
+  CountingIterator& operator++() {
+    *cursor = ++p;
+    return *this;
+  }
+  CountingIterator operator++(int) {
+    CountingIterator t = *this;
+    ++*this;
+    return t;
+  }
+  bool operator==(const CountingIterator& o) const { return p == o.p; }
+  bool operator!=(const CountingIterator& o) const { return p != o.p; }
+};
+
+// SAX pass that tracks the JSON pointer of every value and stops at the target (or remembers the
+// deepest existing parent of the target).
+class Locator : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  Locator(const char* begin, const char** cursor, std::vector<std::string> target)
+      : begin_(begin), cursor_(cursor), target_(std::move(target)) {}
+
+  std::ptrdiff_t found = -1;  // byte offset of the best match
+  std::size_t found_depth = 0;
+
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override {
+    if (!value(true)) return false;
+    stack_.push_back({false, 0, {}});
+    return true;
+  }
+  bool key(string_t& k) override {
+    stack_.back().key = k;
+    prev_ = *cursor_;
+    return true;
+  }
+  bool end_object() override { return end(); }
+  bool start_array(std::size_t) override {
+    if (!value(true)) return false;
+    stack_.push_back({true, 0, {}});
+    return true;
+  }
+  bool end_array() override { return end(); }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+    return false;
+  }
+
+ private:
+  struct Frame {
+    bool array;
+    std::size_t index;
+    std::string key;
+  };
+  bool end() {
+    stack_.pop_back();
+    advance_index();
+    prev_ = *cursor_;
+    return true;
+  }
+  void advance_index() {
+    if (!stack_.empty() && stack_.back().array) ++stack_.back().index;
+  }
+  // A value starts: its token begins at the first character after the previous event that is
+  // not white space or a separator.
+  bool value(bool container = false) {
+    const char* s = prev_ ? prev_ : begin_;
+    while (*s == ' ' || *s == '\t' || *s == '\r' || *s == '\n' || *s == ',' || *s == ':') ++s;
+    // Does the current path match a prefix of the target?
+    std::size_t depth = 0;
+    bool match = true;
+    for (const Frame& f : stack_) {
+      if (depth >= target_.size()) {
+        match = false;
+        break;
+      }
+      const std::string seg = f.array ? std::to_string(f.index) : f.key;
+      if (seg != target_[depth]) {
+        match = false;
+        break;
+      }
+      ++depth;
+    }
+    if (match && (found < 0 || depth > found_depth)) {
+      found = s - begin_;
+      found_depth = depth;
+    }
+    if (match && depth == target_.size()) return false;  // exact hit: stop
+    if (!container) advance_index();  // a container's index advances when it ends
+    prev_ = *cursor_;
+    return true;
+  }
+
+  const char* begin_;
+  const char** cursor_;
+  const char* prev_ = nullptr;
+  std::vector<std::string> target_;
+  std::vector<Frame> stack_;
+};
+
+}  // namespace
+
+JsonFile JsonFile::read(const std::string& path) {
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
+  if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
+  std::string text;
+  char buf[1 << 16];
+  std::size_t got;
+  while ((got = std::fread(buf, 1, sizeof buf, f.get())) > 0) text.append(buf, got);
+  if (std::ferror(f.get())) throw Error(fmt::format("{}: read error", path));
+  return parse(std::move(text), path);
+}
+
+JsonFile JsonFile::parse(std::string text, std::string path) {
+  JsonFile j;
+  j.path_ = std::move(path);
+  j.text_ = std::move(text);
+  try {
+    j.root_ = nlohmann::json::parse(j.text_);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw Error(fmt::format("{}:{}: invalid JSON: {}", j.path_,
+                            line_col(j.text_, e.byte ? e.byte - 1 : 0), e.what()));
+  }
+  return j;
+}
+
+std::string JsonFile::where(const pointer& p) const {
+  std::vector<std::string> target;
+  for (pointer q = p; !q.empty(); q = q.parent_pointer()) target.insert(target.begin(), q.back());
+  const char* cursor = text_.data();
+  Locator loc(text_.data(), &cursor, target);
+  CountingIterator first{text_.data(), &cursor};
+  CountingIterator last{text_.data() + text_.size(), &cursor};
+  nlohmann::json::sax_parse(first, last, &loc);
+  if (loc.found < 0) return path_ + ": ";
+  return fmt::format("{}:{}: ", path_, line_col(text_, static_cast<std::size_t>(loc.found)));
+}
+
+void JsonFile::fail(const pointer& p, const std::string& what) const {
+  throw Error(where(p) + what);
+}
+
+double JsonFile::number(const pointer& p) const {
+  if (!root_.contains(p)) fail(p, fmt::format("'{}' is missing", dotted(p)));
+  const json& v = root_.at(p);
+  if (!v.is_number()) fail(p, fmt::format("'{}' must be a number", dotted(p)));
+  const double x = v.get<double>();
+  if (!std::isfinite(x)) fail(p, fmt::format("'{}' is not finite", dotted(p)));
+  return x;
+}
+
+std::string JsonFile::string(const pointer& p) const {
+  if (!root_.contains(p)) fail(p, fmt::format("'{}' is missing", dotted(p)));
+  const json& v = root_.at(p);
+  if (!v.is_string()) fail(p, fmt::format("'{}' must be a string", dotted(p)));
+  return v.get<std::string>();
+}
+
+const nlohmann::json& JsonFile::array(const pointer& p) const {
+  if (!root_.contains(p)) fail(p, fmt::format("'{}' is missing", dotted(p)));
+  const json& v = root_.at(p);
+  if (!v.is_array()) fail(p, fmt::format("'{}' must be an array", dotted(p)));
+  return v;
+}
+
+const nlohmann::json& JsonFile::object(const pointer& p) const {
+  if (!root_.contains(p))
+    fail(p, fmt::format("'{}' is missing", p.empty() ? "(top level)" : dotted(p)));
+  const json& v = root_.at(p);
+  if (!v.is_object())
+    fail(p, fmt::format("'{}' must be an object", p.empty() ? "(top level)" : dotted(p)));
+  return v;
+}
+
+std::string dotted(const JsonFile::pointer& p) {
+  std::vector<std::string> segs;
+  for (JsonFile::pointer q = p; !q.empty(); q = q.parent_pointer())
+    segs.insert(segs.begin(), q.back());
+  std::string s;
+  for (const auto& seg : segs) {
+    const bool index = !seg.empty() && seg.find_first_not_of("0123456789") == std::string::npos;
+    if (index)
+      s += "[" + seg + "]";
+    else
+      s += (s.empty() ? "" : ".") + seg;
+  }
+  return s;
+}
+
+}  // namespace trueaxis::io

@@ -1,0 +1,45 @@
+#include "trueaxis/io/json.hpp"
+
+#include <gtest/gtest.h>
+
+#include "trueaxis/error.hpp"
+
+using trueaxis::Error;
+using trueaxis::io::JsonFile;
+using P = JsonFile::pointer;
+
+TEST(JsonFile, LocatesValuesAfterNestedContainers) {
+  // Index counting must survive nested arrays/objects before the target.
+  const auto j = JsonFile::parse(
+      "{\"lines\": [\n  {\"h\": [1, [2, 3], {\"a\": 4}], \"n\": \"a\"},\n  {\"h\": [5, true, "
+      "null, -6.5e1]}\n]}",
+      "l.json");
+  EXPECT_EQ(j.where(P("/lines/0/h/2/a")), "l.json:2:27: ");
+  EXPECT_EQ(j.where(P("/lines/0/n")), "l.json:2:37: ");
+  EXPECT_EQ(j.where(P("/lines/1/h/3")), "l.json:3:25: ");
+  EXPECT_EQ(j.where(P("/lines/1")), "l.json:3:3: ");
+  // A missing value is located at its deepest existing parent.
+  EXPECT_EQ(j.where(P("/lines/1/spacing")), "l.json:3:3: ");
+  EXPECT_EQ(j.number(P("/lines/1/h/3")), -65);
+}
+
+TEST(JsonFile, TypedAccessErrorsNameThePathAndPosition) {
+  const auto j = JsonFile::parse("{\"a\": {\"b\": \"x\", \"c\": [1, 2]}}", "t.json");
+  auto err = [&](auto fn) {
+    try {
+      fn();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(err([&] { j.number(P("/a/b")); }), "t.json:1:13: 'a.b' must be a number");
+  EXPECT_EQ(err([&] { j.string(P("/a/c/1")); }), "t.json:1:27: 'a.c[1]' must be a string");
+  EXPECT_EQ(err([&] { j.array(P("/a/d")); }), "t.json:1:7: 'a.d' is missing");
+  EXPECT_EQ(err([&] { j.object(P("/a/c")); }), "t.json:1:23: 'a.c' must be an object");
+  EXPECT_EQ(err([] {
+              JsonFile::parse("{\n\"a\": [1,, 2]}", "s.json");
+            }).rfind("s.json:2:9: invalid JSON", 0),
+            0u);
+  EXPECT_THROW(JsonFile::read("/nonexistent.json"), Error);
+}
