@@ -13,7 +13,7 @@ if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
   command -v npm >/dev/null || node_pkgs+=" npm"
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
     g++ cmake ninja-build git $node_pkgs \
-    libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev \
+    libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev libglpk-dev \
     libgtest-dev libgmock-dev libbenchmark-dev \
     pybind11-dev python3-dev python3-numpy python3-pytest \
     chromium gawk clang-format >/dev/null
