@@ -11,9 +11,11 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/surface.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
+#include "trueaxis/surface/surface.hpp"
 
 using namespace trueaxis;
 
@@ -70,6 +72,29 @@ int cmd_simulate_straightness(SimArgs a) {
   if (!a.quiet)
     fmt::print("simulated {} stations, {} probes{}: wrote {} and {}\n", a.o.stations,
                a.o.offsets.size(), a.o.angle ? " + angle channel" : "", a.output, a.truth);
+  return 0;
+}
+
+struct SurfaceArgs {
+  std::string lines, moody, method, output;
+  bool quiet = false;
+};
+
+int cmd_surface(const SurfaceArgs& a) {
+  surface::Result r;
+  if (!a.moody.empty()) {
+    if (!a.method.empty() && a.method != "classic" && a.method != "lsq")
+      throw Error(
+          fmt::format("--moody takes --method classic (default) or lsq, not '{}'", a.method));
+    r = surface::moody(io::read_moody(a.moody), a.method == "lsq");
+  } else {
+    if (a.method == "classic") throw Error("--method classic needs --moody DIR");
+    surface::Options o;
+    o.method = a.method == "seed" ? surface::Method::Seed : surface::Method::Lsq;
+    r = surface::build(io::read_lines(a.lines), o);
+  }
+  io::write_surface(a.output, r);
+  if (!a.quiet) fmt::print("{}wrote {}\n", r.summary(), a.output);
   return 0;
 }
 
@@ -139,6 +164,31 @@ int main(int argc, char** argv) {
   sep->add_option("--csv", sa.csv, "also write the profiles as CSV");
   sep->add_flag("--quiet,-q", sa.quiet, "print nothing on success");
 
+  // surface ----------------------------------------------------------------------------------
+  SurfaceArgs sf;
+  auto* surf = app.add_subcommand(
+      "surface",
+      "Assemble an error surface (flatness map) from straightness lines that cross each other.\n\n"
+      "Each line's heights are known only up to an offset and a tilt; the lines are fitted "
+      "together where they cross.\nExamples:\n  trueaxis surface --lines lines.json --method lsq "
+      "-o surface.json\n  trueaxis surface --moody plate/ -o surface.json   (Union Jack, Moody "
+      "1955)");
+  auto* sf_in = surf->add_option("--lines", sf.lines,
+                                 "lines.json: lines with start, direction, spacing and heights "
+                                 "(um), slopes (urad) or 'from' a separate result")
+                    ->check(CLI::ExistingFile);
+  surf->add_option("--moody", sf.moody,
+                   "directory with Moody's eight line files (arc-seconds) and Config.txt")
+      ->check(CLI::ExistingDirectory)
+      ->excludes(sf_in);
+  surf->add_option("--method", sf.method,
+                   "with --lines: lsq (default; all lines jointly, closure at every crossing) or "
+                   "seed (x lines hung on two boundary y lines); with --moody: classic (default, "
+                   "Moody's worksheet) or lsq")
+      ->check(CLI::IsMember({"lsq", "seed", "classic"}));
+  surf->add_option("--output,-o", sf.output, "surface JSON to write")->required();
+  surf->add_flag("--quiet,-q", sf.quiet, "print nothing on success");
+
   // simulate ---------------------------------------------------------------------------------
   auto* simc = app.add_subcommand(
       "simulate", "Generate data from a virtual machine (with the truth, to check methods)");
@@ -194,9 +244,16 @@ int main(int argc, char** argv) {
   demo->add_flag("--quiet,-q", da.quiet, "print only errors");
 
   CLI11_PARSE(app, argc, argv);
+  if (surf->parsed() && sf.lines.empty() && sf.moody.empty()) {
+    std::fprintf(stderr,
+                 "trueaxis surface: give --lines FILE or --moody DIR\nRun with --help for more "
+                 "information.\n");
+    return 2;
+  }
   try {
     if (sep->parsed()) return cmd_separate(sa);
     if (simst->parsed()) return cmd_simulate_straightness(ma);
+    if (surf->parsed()) return cmd_surface(sf);
     if (rep->parsed()) return cmd_report(rin, rout, rquiet);
     if (demo->parsed()) return cli::run_demo(da);
   } catch (const Error& e) {

@@ -2,6 +2,7 @@
 # End-to-end tests of the trueaxis command line: files, exit codes, one-line errors.
 set -u
 T=${TRUEAXIS:?set TRUEAXIS to the trueaxis binary}
+DATA=$(cd "$(dirname "$0")/../data" && pwd)
 dir=${1:-$(mktemp -d)}
 rm -rf "$dir"; mkdir -p "$dir"; cd "$dir" || exit 1
 fails=0; passes=0
@@ -35,6 +36,26 @@ expect_ok "$T" separate --input p3.csv --method lsq --reference min-zone --sigma
 grep -q '"uncertainty"' r-mz.json && ok || bad "uncertainty written with --sigma"
 expect_ok "$T" report r-lsq.json -o rep.html
 grep -q "uPlot" rep.html && ok || bad "report embeds uPlot"
+
+# Surfaces: Moody's Union Jack, and a line network with one line taken from a separate result.
+expect_ok "$T" surface --moody "$DATA/moody" -o moody.json
+grep -q '"method": "moody"' moody.json && grep -q '"min_zone"' moody.json && ok || bad "moody surface.json"
+expect_ok "$T" surface --moody "$DATA/moody" --method lsq -o moody-lsq.json
+cat > lines.json <<'JSON'
+{"lines": [
+  {"name": "A", "start": [0, 0], "direction": [0, 1], "from": "r-two.json"},
+  {"name": "B", "start": [0, 0], "direction": [1, 0], "spacing": 10, "heights": [0, 1, 2]},
+  {"name": "C", "start": [0, 100], "direction": [1, 0], "spacing": 10, "slopes": [100, -100]},
+  {"name": "D", "start": [20, 0], "direction": [0, 1], "spacing": 50, "heights": [0, 1, 2]}
+]}
+JSON
+expect_ok "$T" surface --lines lines.json -o net.json
+grep -q '"twist"' net.json && ok || bad "axis-parallel network reports the twist unobservable"
+sed 's/"heights": \[0, 1, 2\]}$/"heights": [0, "q", 2]}/' lines.json > badlines.json
+expect_err "badlines.json:5:" "$T" surface --lines badlines.json -o o.json
+sed 's/"direction": \[0, 1\], "spacing": 50/"direction": [1, 1], "spacing": 50/' lines.json > diag.json
+expect_err "neither along x nor along y" "$T" surface --lines diag.json --method seed -o o.json
+expect_err "classic needs --moody" "$T" surface --lines lines.json --method classic -o o.json
 
 # Bad inputs: each a clear one-line error naming the file (and line:column where it applies).
 printf 'x,a,b\n0,1,2\n10,1,2\n10,1,2\n' > nonincr.csv

@@ -1,0 +1,202 @@
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/json.hpp"
+#include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/surface.hpp"
+
+namespace trueaxis::io {
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(fmt::format("{}: cannot open file for reading", path));
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string_view trim(std::string_view s, std::size_t& lead) {
+  lead = 0;
+  while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1), ++lead;
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r'))
+    s.remove_suffix(1);
+  return s;
+}
+
+double parse_number(std::string_view s, const std::string& path, std::size_t line,
+                    std::size_t col) {
+  double v = 0;
+  const char* b = s.data() + (!s.empty() && s[0] == '+' ? 1 : 0);
+  const auto r = std::from_chars(b, s.data() + s.size(), v);
+  if (r.ec != std::errc() || r.ptr != s.data() + s.size())
+    throw Error(fmt::format("{}:{}:{}: '{}' is not a number", path, line, col, s));
+  if (!std::isfinite(v))
+    throw Error(
+        fmt::format("{}:{}:{}: {} is not allowed", path, line, col, std::isnan(v) ? "NaN" : "Inf"));
+  return v;
+}
+
+}  // namespace
+
+surface::MoodyData read_moody(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir))
+    throw Error(fmt::format("{}: not a directory (Moody's files expected)", dir));
+  surface::MoodyData d;
+  for (const char* name : surface::kMoodyLines) {
+    const std::string path = (fs::path(dir) / (std::string(name) + ".txt")).string();
+    const std::string text = slurp(path);
+    std::vector<double> v;
+    std::size_t line = 0, pos = 0;
+    while (pos < text.size()) {
+      const std::size_t nl = std::min(text.find('\n', pos), text.size());
+      ++line;
+      std::size_t lead = 0;
+      const std::string_view l = trim(std::string_view(text).substr(pos, nl - pos), lead);
+      pos = nl + 1;
+      if (l.empty() || l[0] == '#') continue;
+      v.push_back(parse_number(l, path, line, lead + 1));
+    }
+    if (v.size() < 2)
+      throw Error(fmt::format("{}: needs at least 2 readings, found {}", path, v.size()));
+    d.readings[name] = Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
+  }
+  const std::string cpath = (fs::path(dir) / "Config.txt").string();
+  const std::string text = slurp(cpath);
+  std::size_t line = 0, pos = 0;
+  while (pos < text.size()) {
+    const std::size_t nl = std::min(text.find('\n', pos), text.size());
+    ++line;
+    std::size_t lead = 0;
+    const std::string_view l = trim(std::string_view(text).substr(pos, nl - pos), lead);
+    pos = nl + 1;
+    if (l.empty() || l[0] == '#') continue;
+    if ((l[0] != 'I' && l[0] != 'M') || l.size() < 3 || (l[1] != ' ' && l[1] != '\t'))
+      throw Error(fmt::format("{}:{}:{}: expected 'I <inches>' or 'M <mm>' (the foot spacing)",
+                              cpath, line, lead + 1));
+    std::size_t lead2 = 0;
+    const std::string_view num = trim(l.substr(2), lead2);
+    const double s = parse_number(num, cpath, line, lead + 3 + lead2);
+    if (!(s > 0))
+      throw Error(fmt::format("{}:{}:{}: the foot spacing must be positive", cpath, line,
+                              lead + 3 + lead2));
+    d.foot_spacing = l[0] == 'I' ? s * 25.4 : s;
+    return d;  // only the first spacing counts (as in Moody-Method)
+  }
+  throw Error(fmt::format("{}: no foot spacing found (a line 'I <inches>' or 'M <mm>')", cpath));
+}
+
+std::vector<surface::Line> read_lines(const std::string& path) {
+  namespace fs = std::filesystem;
+  const JsonFile doc = JsonFile::read(path);
+  using P = JsonFile::pointer;
+  const auto& arr = doc.array(P("/lines"));
+  std::vector<surface::Line> out;
+  auto vec2 = [&](const P& p) {
+    const auto& a = doc.array(p);
+    if (a.size() != 2) doc.fail(p, fmt::format("'{}' must have 2 numbers [x, y]", dotted(p)));
+    return Eigen::Vector2d(doc.number(p / 0), doc.number(p / 1));
+  };
+  for (std::size_t i = 0; i < arr.size(); ++i) {
+    const P at = P("/lines") / i;
+    doc.object(at);
+    surface::Line l;
+    l.name = doc.string(at / "name");
+    l.start = vec2(at / "start");
+    l.direction = vec2(at / "direction");
+    if (l.direction.norm() == 0) doc.fail(at / "direction", "direction must not be zero");
+    const int kinds = doc.has(at / "heights") + doc.has(at / "slopes") + doc.has(at / "from");
+    if (kinds != 1)
+      doc.fail(at,
+               fmt::format("line '{}': give exactly one of 'heights', 'slopes' or 'from'", l.name));
+    auto values = [&](const P& p, double scale) {
+      const auto& a = doc.array(p);
+      Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
+      for (std::size_t k = 0; k < a.size(); ++k)
+        v[static_cast<Eigen::Index>(k)] = doc.number(p / k) * scale;
+      return v;
+    };
+    if (doc.has(at / "from")) {
+      std::string from = doc.string(at / "from");
+      if (fs::path(from).is_relative()) from = (fs::path(path).parent_path() / from).string();
+      const separation::Result r = read_result(from);
+      std::string curve = doc.has(at / "curve") ? doc.string(at / "curve") : "guide";
+      if (curve != "guide" && curve != "workpiece")
+        doc.fail(at / "curve", "'curve' must be \"guide\" or \"workpiece\"");
+      const separation::Profile& p = curve == "guide" ? r.guide : r.workpiece;
+      l.heights = p.value;
+      l.spacing = (p.x[p.x.size() - 1] - p.x[0]) / static_cast<double>(p.x.size() - 1);
+      if (doc.has(at / "spacing") &&
+          std::abs(doc.number(at / "spacing") - l.spacing) > 1e-9 * l.spacing)
+        doc.fail(at / "spacing",
+                 fmt::format("spacing {} mm does not match the result's station step {} mm",
+                             doc.number(at / "spacing"), l.spacing));
+    } else {
+      l.spacing = doc.number(at / "spacing");
+      if (!(l.spacing > 0)) doc.fail(at / "spacing", "spacing must be positive");
+      if (doc.has(at / "heights")) {
+        l.heights = values(at / "heights", 1e-3);
+      } else {
+        l.heights = surface::heights_from_slopes(values(at / "slopes", 1e-6), l.spacing);
+      }
+      if (l.heights.size() < 2)
+        doc.fail(at, fmt::format("line '{}': needs at least 2 stations", l.name));
+    }
+    out.push_back(std::move(l));
+  }
+  return out;
+}
+
+void write_surface(const std::string& path, const surface::Result& r) {
+  nlohmann::ordered_json j;
+  j["method"] = r.method;
+  j["units"] = {{"x", "mm"}, {"y", "mm"}, {"height", "um"}};
+  j["reference"] = r.reference;
+  j["lines"] = r.lines;
+  auto& pts = j["points"] = nlohmann::ordered_json::array();
+  for (const auto& p : r.points)
+    pts.push_back({{"line", r.lines[static_cast<std::size_t>(p.line)]},
+                   {"station", p.station},
+                   {"x", p.xy.x()},
+                   {"y", p.xy.y()},
+                   {"height", p.height * 1e3}});
+  if (r.grid) {
+    auto& g = j["grid"];
+    g["x"] = std::vector<double>(r.grid->x.begin(), r.grid->x.end());
+    g["y"] = std::vector<double>(r.grid->y.begin(), r.grid->y.end());
+    auto& rows = g["height"] = nlohmann::ordered_json::array();
+    for (Eigen::Index a = 0; a < r.grid->height.rows(); ++a) {
+      std::vector<double> row;
+      for (Eigen::Index b = 0; b < r.grid->height.cols(); ++b)
+        row.push_back(r.grid->height(a, b) * 1e3);
+      rows.push_back(row);
+    }
+  } else {
+    j["grid"] = nullptr;
+  }
+  j["flatness"] = {{"ls", r.flatness_ls * 1e3}, {"min_zone", r.flatness_min_zone * 1e3}};
+  j["closure"] = {{"rms", r.closure_rms * 1e3}, {"max", r.closure_max * 1e3}};
+  auto& cs = j["crossings"] = nlohmann::ordered_json::array();
+  for (const auto& c : r.crossings)
+    cs.push_back(
+        {{"lines",
+          {r.lines[static_cast<std::size_t>(c.a)], r.lines[static_cast<std::size_t>(c.b)]}},
+         {"x", c.xy.x()},
+         {"y", c.xy.y()},
+         {"residual", c.residual * 1e3}});
+  j["unobservable"] = r.unobservable;
+  j["gauge"] = r.gauge;
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw Error(fmt::format("{}: cannot open file for writing", path));
+  out << j.dump(1) << '\n';
+  if (!out) throw Error(fmt::format("{}: write error", path));
+}
+
+}  // namespace trueaxis::io

@@ -1,0 +1,469 @@
+#include "trueaxis/surface/surface.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <set>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/geometry/flatness.hpp"
+
+namespace trueaxis::surface {
+namespace {
+
+constexpr double kArcsec = 3.14159265358979323846 / 648000.0;  // rad
+
+void validate(std::vector<Line>& lines) {
+  if (lines.size() < 2)
+    throw Error(fmt::format("surface: need at least 2 lines, got {}", lines.size()));
+  std::set<std::string> names;
+  for (Line& l : lines) {
+    if (l.name.empty()) throw Error("surface: a line has no name");
+    if (!names.insert(l.name).second)
+      throw Error(fmt::format("surface: duplicated line name '{}'", l.name));
+    if (!l.start.allFinite()) throw Error(fmt::format("line '{}': start must be finite", l.name));
+    const double d = l.direction.norm();
+    if (!std::isfinite(d) || d <= 0)
+      throw Error(fmt::format("line '{}': direction must be a non-zero vector", l.name));
+    l.direction /= d;
+    if (!std::isfinite(l.spacing) || l.spacing <= 0)
+      throw Error(fmt::format("line '{}': spacing must be positive, got {}", l.name, l.spacing));
+    if (l.heights.size() < 2)
+      throw Error(
+          fmt::format("line '{}': needs at least 2 stations, got {}", l.name, l.heights.size()));
+    if (!l.heights.allFinite())
+      throw Error(fmt::format("line '{}': heights must be finite", l.name));
+  }
+}
+
+// Height on line l at distance t (mm) from its start, linear between stations.
+double height_at(const Line& l, const Eigen::VectorXd& h, double t) {
+  const double s = t / l.spacing;
+  const long n = h.size();
+  long k = std::clamp(static_cast<long>(std::floor(s)), 0L, n - 2);
+  const double f = s - static_cast<double>(k);
+  return h[k] * (1 - f) + h[k + 1] * f;
+}
+
+std::vector<Crossing> find_crossings(const std::vector<Line>& lines, double tol) {
+  std::vector<Crossing> out;
+  for (int i = 0; i < static_cast<int>(lines.size()); ++i)
+    for (int j = i + 1; j < static_cast<int>(lines.size()); ++j) {
+      const Line &a = lines[static_cast<std::size_t>(i)], &b = lines[static_cast<std::size_t>(j)];
+      Eigen::Matrix2d M;
+      M << a.direction, -b.direction;
+      if (std::abs(M.determinant()) < 1e-12) continue;  // parallel
+      const Eigen::Vector2d t = M.fullPivLu().solve(b.start - a.start);
+      if (t[0] < -tol || t[0] > a.length() + tol || t[1] < -tol || t[1] > b.length() + tol)
+        continue;
+      Crossing c;
+      c.a = i;
+      c.b = j;
+      c.ta = std::clamp(t[0], 0.0, a.length());
+      c.tb = std::clamp(t[1], 0.0, b.length());
+      c.xy = a.start + a.direction * c.ta;
+      out.push_back(c);
+    }
+  return out;
+}
+
+void require_connected(const std::vector<Line>& lines, const std::vector<Crossing>& cs) {
+  std::vector<int> parent(lines.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  auto find = [&](int x) {
+    while (parent[static_cast<std::size_t>(x)] != x) x = parent[static_cast<std::size_t>(x)];
+    return x;
+  };
+  for (const Crossing& c : cs) parent[static_cast<std::size_t>(find(c.a))] = find(c.b);
+  std::vector<std::string> apart;
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    if (find(static_cast<int>(i)) != find(0)) apart.push_back(lines[i].name);
+  if (!apart.empty()) {
+    std::string s;
+    for (const auto& n : apart) s += (s.empty() ? "'" : ", '") + n + "'";
+    throw Error(fmt::format(
+        "surface: lines {} do not cross the network of line '{}' (lines must cross, within {} "
+        "mm, inside both lines' extents)",
+        s, lines[0].name, 1e-6));
+  }
+}
+
+// Fits columns `basis` to z by least squares and returns the coefficients.
+Eigen::VectorXd lsq_fit(const Eigen::MatrixXd& basis, const Eigen::VectorXd& z) {
+  return basis.colPivHouseholderQr().solve(z);
+}
+
+void finish(Result& r, const std::vector<Line>& lines, const std::vector<Eigen::VectorXd>& h,
+            bool subtract_plane) {
+  r.lines.clear();
+  for (const Line& l : lines) r.lines.push_back(l.name);
+  r.points.clear();
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    for (long k = 0; k < h[i].size(); ++k)
+      r.points.push_back({static_cast<int>(i), k, lines[i].station(k), h[i][k]});
+  const long m = static_cast<long>(r.points.size());
+  Eigen::VectorXd x(m), y(m), z(m);
+  for (long i = 0; i < m; ++i) {
+    x[i] = r.points[static_cast<std::size_t>(i)].xy.x();
+    y[i] = r.points[static_cast<std::size_t>(i)].xy.y();
+    z[i] = r.points[static_cast<std::size_t>(i)].height;
+  }
+  const geometry::HeightPlane ls = geometry::ls_plane(x, y, z);
+  if (subtract_plane) {
+    for (auto& p : r.points) p.height -= ls(p.xy.x(), p.xy.y());
+    r.reference = "least-squares plane of all points";
+  }
+  r.flatness_ls = ls.width;
+  r.flatness_min_zone = geometry::min_zone_plane(x, y, z).width;
+  // Closure after assembly (the plane does not change differences at a crossing).
+  double s2 = 0;
+  r.closure_max = 0;
+  for (Crossing& c : r.crossings) {
+    const auto ia = static_cast<std::size_t>(c.a), ib = static_cast<std::size_t>(c.b);
+    c.residual = height_at(lines[ia], h[ia], c.ta) - height_at(lines[ib], h[ib], c.tb);
+    s2 += c.residual * c.residual;
+    r.closure_max = std::max(r.closure_max, std::abs(c.residual));
+  }
+  r.closure_rms = r.crossings.empty() ? 0 : std::sqrt(s2 / static_cast<double>(r.crossings.size()));
+  // Grid when the points cover a full lattice (coincident points averaged).
+  auto key = [](double v) { return std::llround(v * 1e6); };  // nm
+  std::map<long long, double> xs, ys;
+  for (const auto& p : r.points) {
+    xs[key(p.xy.x())] = p.xy.x();
+    ys[key(p.xy.y())] = p.xy.y();
+  }
+  if (xs.size() >= 2 && ys.size() >= 2 && xs.size() * ys.size() <= r.points.size()) {
+    std::map<long long, int> ix, iy;
+    Grid g;
+    g.x.resize(static_cast<Eigen::Index>(xs.size()));
+    g.y.resize(static_cast<Eigen::Index>(ys.size()));
+    int k = 0;
+    for (const auto& [kk, v] : xs) g.x[ix[kk] = k++] = v;
+    k = 0;
+    for (const auto& [kk, v] : ys) g.y[iy[kk] = k++] = v;
+    Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(g.y.size(), g.x.size());
+    Eigen::MatrixXi cnt = Eigen::MatrixXi::Zero(g.y.size(), g.x.size());
+    for (const auto& p : r.points) {
+      const int a = iy[key(p.xy.y())], b = ix[key(p.xy.x())];
+      sum(a, b) += p.height;
+      ++cnt(a, b);
+    }
+    if ((cnt.array() > 0).all()) g.height = sum.array() / cnt.cast<double>().array(), r.grid = g;
+  }
+}
+
+Result build_lsq(const std::vector<Line>& lines, const Options& o) {
+  Result r;
+  r.method = "lsq";
+  r.crossings = find_crossings(lines, o.crossing_tolerance);
+  require_connected(lines, r.crossings);
+  const int L = static_cast<int>(lines.size());
+  const int C = static_cast<int>(r.crossings.size());
+  // Unknowns: offset a_i and tilt b_i (per mm) of every line; one row per crossing.
+  // Lengths are scaled to O(1) for the rank decision.
+  double scale = 1;
+  for (const Line& l : lines) scale = std::max(scale, l.length());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(C, 2 * L);
+  Eigen::VectorXd d(C);
+  for (int k = 0; k < C; ++k) {
+    const Crossing& c = r.crossings[static_cast<std::size_t>(k)];
+    const Line &a = lines[static_cast<std::size_t>(c.a)], &b = lines[static_cast<std::size_t>(c.b)];
+    M(k, 2 * c.a) += 1;
+    M(k, 2 * c.a + 1) += c.ta / scale;
+    M(k, 2 * c.b) -= 1;
+    M(k, 2 * c.b + 1) -= c.tb / scale;
+    d[k] = -(height_at(a, a.heights, c.ta) - height_at(b, b.heights, c.tb));
+  }
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
+  cod.setThreshold(1e-10);
+  cod.compute(M);
+  const long nullity = 2L * L - cod.rank();
+  // Directions present (up to sign): with only two, the quadratic (n1·p)(n2·p) is linear along
+  // every line and therefore invisible (the twist).
+  std::vector<Eigen::Vector2d> dirs;
+  for (const Line& l : lines) {
+    bool seen = false;
+    for (const auto& u : dirs)
+      seen = seen || std::abs(u.x() * l.direction.y() - u.y() * l.direction.x()) < 1e-9;
+    if (!seen) dirs.push_back(l.direction);
+  }
+  const bool twist_free = nullity == 4 && dirs.size() == 2;
+  if (nullity != 3 && !twist_free)
+    throw Error(fmt::format(
+        "surface: the line network leaves {} mode(s) undetermined beyond the reference plane{}; "
+        "add lines that cross the others in new directions (e.g. a diagonal)",
+        nullity - 3, dirs.size() == 2 ? " and twist" : ""));
+  const Eigen::VectorXd p = cod.solve(d);
+  std::vector<Eigen::VectorXd> h(lines.size());
+  for (int i = 0; i < L; ++i) {
+    const Line& l = lines[static_cast<std::size_t>(i)];
+    h[static_cast<std::size_t>(i)] = l.heights;
+    for (long k = 0; k < l.heights.size(); ++k)
+      h[static_cast<std::size_t>(i)][k] +=
+          p[2 * i] + p[2 * i + 1] * static_cast<double>(k) * l.spacing / scale;
+  }
+  r.unobservable = {"plane"};
+  r.gauge = "heights are residuals from the least-squares plane of all points";
+  if (twist_free) {
+    // Remove the twist component (LS fit of 1, x, y, q over all points, q the invisible quadratic).
+    const Eigen::Vector2d n1(-dirs[0].y(), dirs[0].x()), n2(-dirs[1].y(), dirs[1].x());
+    long m = 0;
+    for (const auto& v : h) m += v.size();
+    Eigen::MatrixXd B(m, 4);
+    Eigen::VectorXd z(m);
+    long row = 0;
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      for (long k = 0; k < h[i].size(); ++k, ++row) {
+        const Eigen::Vector2d q = lines[i].station(k) / scale;
+        B.row(row) << 1, q.x(), q.y(), n1.dot(q) * n2.dot(q);
+        z[row] = h[i][k];
+      }
+    const double c3 = lsq_fit(B, z)[3];
+    for (std::size_t i = 0; i < lines.size(); ++i)
+      for (long k = 0; k < h[i].size(); ++k) {
+        const Eigen::Vector2d q = lines[i].station(k) / scale;
+        h[i][k] -= c3 * n1.dot(q) * n2.dot(q);
+      }
+    r.unobservable.push_back("twist");
+    r.gauge +=
+        "; twist (unobservable: every line is parallel to one of two directions) fixed by taking "
+        "the surface to have no twist component in the least-squares sense";
+  }
+  finish(r, lines, h, true);
+  return r;
+}
+
+bool parallel(const Eigen::Vector2d& u, const Eigen::Vector2d& axis) {
+  return std::abs(u.x() * axis.y() - u.y() * axis.x()) < 1e-9;
+}
+
+Result build_seed(const std::vector<Line>& lines, const Options& o) {
+  Result r;
+  r.method = "seed";
+  std::vector<int> xl, yl;
+  for (int i = 0; i < static_cast<int>(lines.size()); ++i) {
+    const Line& l = lines[static_cast<std::size_t>(i)];
+    if (parallel(l.direction, Eigen::Vector2d::UnitX()))
+      xl.push_back(i);
+    else if (parallel(l.direction, Eigen::Vector2d::UnitY()))
+      yl.push_back(i);
+    else
+      throw Error(fmt::format(
+          "seed method: line '{}' is neither along x nor along y; use --method lsq", l.name));
+  }
+  if (xl.empty() || yl.size() != 2)
+    throw Error(fmt::format(
+        "seed method: needs a family of x lines and exactly two boundary y lines (got {} x lines "
+        "and {} y lines); use --method lsq for other layouts",
+        xl.size(), yl.size()));
+  auto xrange = [&](int i) {
+    const Line& l = lines[static_cast<std::size_t>(i)];
+    const double x0 = l.start.x(), x1 = l.station(l.heights.size() - 1).x();
+    return std::pair{std::min(x0, x1), std::max(x0, x1)};
+  };
+  const auto [xmin, xmax] = xrange(xl[0]);
+  const double tol = std::max(o.crossing_tolerance, 1e-9 * (xmax - xmin));
+  for (int i : xl) {
+    const auto [a, b] = xrange(i);
+    if (std::abs(a - xmin) > tol || std::abs(b - xmax) > tol)
+      throw Error(fmt::format(
+          "seed method: x line '{}' spans x = {}..{} mm but the family spans {}..{} mm (every x "
+          "line must end on the two boundary lines)",
+          lines[static_cast<std::size_t>(i)].name, a, b, xmin, xmax));
+  }
+  int left = -1, right = -1;
+  for (int j : yl) {
+    const double x = lines[static_cast<std::size_t>(j)].start.x();
+    if (std::abs(x - xmin) <= tol) left = j;
+    if (std::abs(x - xmax) <= tol) right = j;
+  }
+  if (left < 0 || right < 0 || left == right)
+    throw Error(fmt::format(
+        "seed method: the two y lines must lie at the x family's end coordinates x = {} and {} mm",
+        xmin, xmax));
+  r.crossings = find_crossings(lines, tol);
+  require_connected(lines, r.crossings);
+  // Hang every x line on the boundary curves (their own heights, i.e. their own references).
+  std::vector<Eigen::VectorXd> h(lines.size());
+  for (std::size_t i = 0; i < lines.size(); ++i) h[i] = lines[i].heights;
+  auto boundary_at = [&](int j, double y) {
+    const Line& b = lines[static_cast<std::size_t>(j)];
+    const double t = (y - b.start.y()) / b.direction.y();
+    if (t < -tol || t > b.length() + tol)
+      throw Error(
+          fmt::format("seed method: boundary line '{}' does not reach y = {} mm", b.name, y));
+    return height_at(b, b.heights, std::clamp(t, 0.0, b.length()));
+  };
+  for (int i : xl) {
+    const Line& l = lines[static_cast<std::size_t>(i)];
+    const long n = l.heights.size();
+    const Eigen::Vector2d p0 = l.start, p1 = l.station(n - 1);
+    const double z0 = boundary_at(std::abs(p0.x() - xmin) <= tol ? left : right, p0.y());
+    const double z1 = boundary_at(std::abs(p1.x() - xmin) <= tol ? left : right, p1.y());
+    const double a = z0 - l.heights[0];
+    const double b = (z1 - l.heights[n - 1] - a) / static_cast<double>(n - 1);
+    for (long k = 0; k < n; ++k)
+      h[static_cast<std::size_t>(i)][k] = l.heights[k] + a + b * static_cast<double>(k);
+  }
+  r.unobservable = {"plane", "twist"};
+  r.gauge =
+      "seed construction: x lines hung on the two boundary y lines, whose own reference lines fix "
+      "the twist; heights are residuals from the least-squares plane of all points";
+  finish(r, lines, h, true);
+  return r;
+}
+
+}  // namespace
+
+Eigen::VectorXd heights_from_slopes(const Eigen::VectorXd& slopes, double spacing) {
+  Eigen::VectorXd h(slopes.size() + 1);
+  h[0] = 0;
+  for (Eigen::Index i = 0; i < slopes.size(); ++i) h[i + 1] = h[i] + slopes[i] * spacing;
+  return h;
+}
+
+Result build(std::vector<Line> lines, const Options& o) {
+  if (!(o.crossing_tolerance >= 0)) throw Error("surface: crossing_tolerance must be >= 0");
+  validate(lines);
+  return o.method == Method::Seed ? build_seed(lines, o) : build_lsq(lines, o);
+}
+
+Result moody(const MoodyData& data, bool least_squares) {
+  const double d = data.foot_spacing;
+  if (!(d > 0) || !std::isfinite(d)) throw Error("Moody: foot spacing must be positive");
+  std::map<std::string, Eigen::VectorXd> r;
+  for (const char* name : kMoodyLines) {
+    const auto it = data.readings.find(name);
+    if (it == data.readings.end()) throw Error(fmt::format("Moody: line '{}' is missing", name));
+    if (it->second.size() < 2)
+      throw Error(fmt::format("Moody: line '{}' needs at least 2 readings", name));
+    if (!it->second.allFinite())
+      throw Error(fmt::format("Moody: line '{}' has non-finite readings", name));
+    r[name] = it->second;
+  }
+  auto n = [&](const char* name) { return static_cast<long>(r[name].size()); };
+  const long nw = n("NE_NW"), nh = n("NE_SE");
+  auto require_eq = [&](const char* a, long want, const char* why) {
+    if (n(a) != want)
+      throw Error(fmt::format("Moody: '{}' has {} readings but {} has {}", a, n(a), why, want));
+  };
+  require_eq("SE_SW", nw, "NE_NW (the opposite edge)");
+  require_eq("E_W", nw, "NE_NW (the parallel edge)");
+  require_eq("NW_SW", nh, "NE_SE (the opposite edge)");
+  require_eq("N_S", nh, "NE_SE (the parallel edge)");
+  require_eq("NE_SW", n("NW_SE"), "NW_SE (the other diagonal)");
+  if (nw % 2 || nh % 2 || n("NW_SE") % 2)
+    throw Error(
+        "Moody: every line needs an even number of readings (the centre lines and "
+        "diagonals cross at middle stations)");
+  // Geometry in station units of the edges; the diagonals' stations are evenly spaced between
+  // corners.
+  const Eigen::Vector2d NW(0, static_cast<double>(nh)),
+      NE(static_cast<double>(nw), static_cast<double>(nh)), SE(static_cast<double>(nw), 0),
+      SW(0, 0);
+  const std::map<std::string, std::pair<Eigen::Vector2d, Eigen::Vector2d>> ends{
+      {"NW_SE", {NW, SE}},
+      {"NE_SW", {NE, SW}},
+      {"NE_NW", {NE, NW}},
+      {"SE_SW", {SE, SW}},
+      {"E_W", {(NE + SE) / 2, (NW + SW) / 2}},
+      {"NE_SE", {NE, SE}},
+      {"NW_SW", {NW, SW}},
+      {"N_S", {(NW + NE) / 2, (SW + SE) / 2}}};
+  // Worksheet steps 1-2: S_j = sum_{i<=j} (r_i - r_1), in arc-second x station units.
+  std::map<std::string, Eigen::VectorXd> S;
+  for (const auto& [name, v] : r) {
+    Eigen::VectorXd s(v.size() + 1);
+    s[0] = 0;
+    for (Eigen::Index j = 0; j < v.size(); ++j) s[j + 1] = s[j] + (v[j] - v[0]);
+    S[name] = s;
+  }
+  auto mid = [](const Eigen::VectorXd& v) {
+    const long m = v.size() - 1;  // n
+    return m % 2 == 0 ? v[m / 2] : 0.5 * (v[m / 2] + v[m / 2 + 1]);
+  };
+  std::vector<Line> lines;
+  for (const char* name : kMoodyLines) {
+    Line l;
+    l.name = name;
+    const auto& [a, b] = ends.at(name);
+    l.start = a * d;
+    l.direction = (b - a).normalized();
+    l.spacing = (b - a).norm() * d / static_cast<double>(r[name].size());
+    lines.push_back(l);
+  }
+  if (least_squares) {
+    for (Line& l : lines) l.heights = S[l.name] * (kArcsec * d);
+    Result res = build(lines, Options{});
+    res.method = "moody-lsq";
+    return res;
+  }
+  std::map<std::string, Eigen::VectorXd> H;
+  // Step 3: diagonals, zero at the middle, equal ends.
+  for (const char* name : {"NW_SE", "NE_SW"}) {
+    const Eigen::VectorXd& s = S[name];
+    const double m = static_cast<double>(s.size() - 1), sn = s[s.size() - 1];
+    Eigen::VectorXd h(s.size());
+    for (Eigen::Index j = 0; j < s.size(); ++j)
+      h[j] = s[j] - (sn / m) * static_cast<double>(j) + (sn / 2 - mid(s));
+    H[name] = h;
+  }
+  // Step 4-5: hang a line linearly between two heights.
+  auto hang = [&](const char* name, double c0, double cend) {
+    const Eigen::VectorXd& s = S[name];
+    const double m = static_cast<double>(s.size() - 1), cn = cend - s[s.size() - 1];
+    Eigen::VectorXd h(s.size());
+    for (Eigen::Index j = 0; j < s.size(); ++j)
+      h[j] = s[j] + c0 + (cn - c0) * static_cast<double>(j) / m;
+    H[name] = h;
+  };
+  const double cNE = H["NE_SW"][0], cSW = H["NE_SW"][H["NE_SW"].size() - 1];
+  const double cNW = H["NW_SE"][0], cSE = H["NW_SE"][H["NW_SE"].size() - 1];
+  hang("NE_NW", cNE, cNW);
+  hang("NE_SE", cNE, cSE);
+  hang("SE_SW", cSE, cSW);
+  hang("NW_SW", cNW, cSW);
+  hang("E_W", mid(H["NE_SE"]), mid(H["NW_SW"]));
+  hang("N_S", mid(H["NE_NW"]), mid(H["SE_SW"]));
+  std::vector<std::string> closure;
+  for (const char* name : {"E_W", "N_S"}) {
+    const double c = mid(H[name]);
+    closure.push_back(fmt::format("{} {:.3f} arc-second x foot", name, c));
+    H[name].array() -= c;
+  }
+  // Step 6: lowest point zero, to length.
+  double lo = 1e300;
+  for (const auto& [name, h] : H) lo = std::min(lo, h.minCoeff());
+  std::vector<Eigen::VectorXd> hs;
+  for (Line& l : lines) {
+    l.heights = (H[l.name].array() - lo) * (kArcsec * d);
+    hs.push_back(l.heights);
+  }
+  Result res;
+  res.method = "moody";
+  res.crossings = find_crossings(lines, 1e-6 * d);
+  finish(res, lines, hs, false);
+  res.reference = "Moody's worksheet: the lowest point is zero";
+  res.unobservable = {"plane"};
+  res.gauge = fmt::format(
+      "Moody 1955: diagonals zero at the centre with equal ends; perimeter hung on the diagonal "
+      "corners; centre lines hung on the edge midpoints, then shifted by their closure ({})",
+      fmt::join(closure, ", "));
+  return res;
+}
+
+std::string Result::summary() const {
+  std::string s = fmt::format("surface ({}): {} lines, {} points, {} crossings\n", method,
+                              lines.size(), points.size(), crossings.size());
+  s += fmt::format("  flatness: {:.4f} um (LS plane), {:.4f} um (min-zone)\n", flatness_ls * 1e3,
+                   flatness_min_zone * 1e3);
+  s += fmt::format("  closure at crossings: RMS {:.4f} um, max {:.4f} um\n", closure_rms * 1e3,
+                   closure_max * 1e3);
+  s += fmt::format("  unobservable: {}\n  gauge: {}\n", fmt::join(unobservable, ", "), gauge);
+  return s;
+}
+
+}  // namespace trueaxis::surface

@@ -1,0 +1,274 @@
+// Error surfaces from line networks: Moody's published tables, and noise-free networks on a known
+// surface (spec 02, issue 3).
+#include "trueaxis/surface/surface.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/surface.hpp"
+
+using namespace trueaxis;
+using surface::Line;
+using surface::Method;
+
+namespace {
+
+const std::string kMoody = TRUEAXIS_TEST_DATA "/moody";
+// Moody's reference program worked in single precision with pi ~ 3.141592: agreement to
+// +-0.01 in his units (tens of microinches) is the published precision.
+constexpr double kMoodyTol = 0.01;
+constexpr double kRoundOff = 1e-12;  // mm, for noise-free networks of ~1 m
+
+struct Published {
+  double x, y, h;
+};
+std::map<std::string, std::vector<Published>> read_gnuplot() {
+  std::ifstream in(kMoody + "/gnuplot.dat");
+  std::map<std::string, std::vector<Published>> out;
+  std::string line, current;
+  while (std::getline(in, line)) {
+    if (line.rfind("# ", 0) == 0 && line.size() > 6 && line.substr(line.size() - 4) == ".txt") {
+      current = line.substr(2, line.size() - 6);
+      continue;
+    }
+    std::istringstream ss(line);
+    Published p;
+    if (!current.empty() && (ss >> p.x >> p.y >> p.h)) out[current].push_back(p);
+  }
+  return out;
+}
+
+// A smooth "true" plate: heights in mm over x, y in mm.
+double truth(double x, double y) {
+  return 1e-3 * (2 * std::sin(x / 180) + 1.5 * std::cos(y / 130 + 0.4) +
+                 0.8 * std::sin((x + y) / 95) + 3e-6 * x * y);
+}
+
+// Samples a line on the true surface and adds an arbitrary offset and tilt (what a straightness
+// measurement cannot fix).
+Line sample(const std::string& name, Eigen::Vector2d start, Eigen::Vector2d end, long n,
+            std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  Line l;
+  l.name = name;
+  l.start = start;
+  l.direction = (end - start).normalized();
+  l.spacing = (end - start).norm() / static_cast<double>(n - 1);
+  l.heights.resize(n);
+  const double a = 5e-3 * u(rng), b = 1e-5 * u(rng);
+  for (long k = 0; k < n; ++k) {
+    const Eigen::Vector2d p = l.station(k);
+    l.heights[k] = truth(p.x(), p.y()) + a + b * static_cast<double>(k);
+  }
+  return l;
+}
+
+// Max |result − truth| after removing the LS fit of `modes` (1, x, y and optionally x·y).
+double error_after(const surface::Result& r, bool remove_twist) {
+  const long m = static_cast<long>(r.points.size());
+  Eigen::MatrixXd B(m, remove_twist ? 4 : 3);
+  Eigen::VectorXd e(m);
+  for (long i = 0; i < m; ++i) {
+    const auto& p = r.points[static_cast<std::size_t>(i)];
+    const double x = p.xy.x() / 1000, y = p.xy.y() / 1000;
+    B(i, 0) = 1;
+    B(i, 1) = x;
+    B(i, 2) = y;
+    if (remove_twist) B(i, 3) = x * y;
+    e[i] = p.height - truth(p.xy.x(), p.xy.y());
+  }
+  const Eigen::VectorXd c = B.colPivHouseholderQr().solve(e);
+  return (e - B * c).cwiseAbs().maxCoeff();
+}
+
+std::vector<Line> grid_lines(bool diagonal, std::mt19937& rng) {
+  // x lines every 100 mm in y over 0..800 x 0..600 (stations every 50 mm), the two boundary
+  // y lines and one inner y line (stations every 100 mm), and a 45-degree diagonal whose
+  // stations fall on the x lines' stations (crossings between stations would be interpolated).
+  std::vector<Line> lines;
+  for (int j = 0; j <= 6; ++j)
+    lines.push_back(sample(fmt::format("x{}", j), {0, 100.0 * j}, {800, 100.0 * j}, 17, rng));
+  lines.push_back(sample("left", {0, 0}, {0, 600}, 7, rng));
+  lines.push_back(sample("mid", {400, 0}, {400, 600}, 7, rng));
+  lines.push_back(sample("right", {800, 0}, {800, 600}, 7, rng));
+  if (diagonal) lines.push_back(sample("diag", {0, 0}, {600, 600}, 13, rng));
+  return lines;
+}
+
+}  // namespace
+
+TEST(MoodySurface, ReproducesThePublishedTables) {
+  const surface::MoodyData d = io::read_moody(kMoody);
+  EXPECT_DOUBLE_EQ(d.foot_spacing, 4 * 25.4);
+  const auto r = surface::moody(d);
+  const auto pub = read_gnuplot();
+  ASSERT_EQ(pub.size(), 8u);
+  std::size_t compared = 0;
+  double worst = 0;
+  for (const auto& p : r.points) {
+    const std::string& name = r.lines[static_cast<std::size_t>(p.line)];
+    const auto& rows = pub.at(name);
+    ASSERT_LT(static_cast<std::size_t>(p.station), rows.size()) << name;
+    const Published& want = rows[static_cast<std::size_t>(p.station)];
+    // Coordinates in station units, heights in tens of microinches.
+    EXPECT_NEAR(p.xy.x() / d.foot_spacing, want.x, 1e-9) << name << " " << p.station;
+    EXPECT_NEAR(p.xy.y() / d.foot_spacing, want.y, 1e-9) << name << " " << p.station;
+    const double h = p.height / 25.4 * 1e5;
+    worst = std::max(worst, std::abs(h - want.h));
+    EXPECT_NEAR(h, want.h, kMoodyTol) << name << " station " << p.station;
+    ++compared;
+  }
+  std::size_t published = 0;
+  for (const auto& [n, rows] : pub) published += rows.size();
+  EXPECT_EQ(compared, published);
+  std::printf("Moody: %zu heights, worst difference %.4f (tens of microinches)\n", compared, worst);
+}
+
+TEST(MoodySurface, LeastSquaresReportsClosureAndAgreesWithTheWorksheet) {
+  const auto d = io::read_moody(kMoody);
+  const auto classic = surface::moody(d);
+  const auto lsq = surface::moody(d, true);
+  EXPECT_EQ(lsq.method, "moody-lsq");
+  EXPECT_EQ(lsq.crossings.size(), classic.crossings.size());
+  // With a diagonal the twist is observable: only the plane is free.
+  EXPECT_EQ(lsq.unobservable, std::vector<std::string>{"plane"});
+  EXPECT_GT(lsq.closure_rms, 0);
+  // Least squares spreads the closure that the worksheet puts at the centre-line ends, so its
+  // largest crossing residual is smaller.
+  EXPECT_LT(lsq.closure_max, classic.closure_max);
+  // The two surfaces differ by about the closure, not more (compare about their LS planes).
+  EXPECT_NEAR(lsq.flatness_ls, classic.flatness_ls, 3 * classic.closure_max);
+  std::printf("Moody closure: worksheet max %.4f um; least squares RMS %.4f um, max %.4f um\n",
+              classic.closure_max * 1e3, lsq.closure_rms * 1e3, lsq.closure_max * 1e3);
+}
+
+TEST(Surface, LsqWithADiagonalRecoversTheSurfaceIncludingTwist) {
+  for (int seed = 1; seed <= 3; ++seed) {
+    std::mt19937 rng(seed);
+    const auto r = surface::build(grid_lines(true, rng));
+    EXPECT_EQ(r.unobservable, std::vector<std::string>{"plane"});
+    EXPECT_LT(error_after(r, false), kRoundOff) << seed;
+    EXPECT_LT(r.closure_max, kRoundOff);
+  }
+}
+
+TEST(Surface, AxisParallelNetworkLeavesTheTwistFreeAndSaysSo) {
+  std::mt19937 rng(4);
+  const auto r = surface::build(grid_lines(false, rng));
+  EXPECT_EQ(r.unobservable, (std::vector<std::string>{"plane", "twist"}));
+  EXPECT_NE(r.gauge.find("twist"), std::string::npos);
+  EXPECT_LT(error_after(r, true), kRoundOff);
+  EXPECT_GT(error_after(r, false), 1e-4);  // the true surface has a twist the network cannot see
+  ASSERT_TRUE(r.grid);
+  EXPECT_EQ(r.grid->x.size(), 17);
+}
+
+TEST(Surface, SeedConstructionMatchesTheTruthUpToPlaneAndTwist) {
+  std::mt19937 rng(5);
+  auto lines = grid_lines(false, rng);
+  lines.erase(lines.begin() + 8);  // the seed's layout: x family + two boundaries, no inner line
+  ASSERT_EQ(lines[7].name, "left");
+  ASSERT_EQ(lines[8].name, "right");
+  surface::Options o;
+  o.method = Method::Seed;
+  const auto r = surface::build(lines, o);
+  EXPECT_LT(error_after(r, true), kRoundOff);
+  EXPECT_LT(r.closure_max, kRoundOff);
+  // Same data by least squares: the same surface up to the twist gauge.
+  const auto l = surface::build(lines);
+  EXPECT_LT(error_after(l, true), kRoundOff);
+}
+
+TEST(Surface, BadNetworksAreRefused) {
+  std::mt19937 rng(6);
+  auto lines = grid_lines(true, rng);
+  auto far = sample("far", {2000, 0}, {2000, 600}, 5, rng);
+  lines.push_back(far);
+  try {
+    surface::build(lines);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("'far' do not cross"), std::string::npos) << e.what();
+  }
+  lines.pop_back();
+  lines[0].spacing = 0;
+  EXPECT_THROW(surface::build(lines), Error);
+  lines = grid_lines(true, rng);
+  lines[1].heights[3] = std::nan("");
+  EXPECT_THROW(surface::build(lines), Error);
+  lines = grid_lines(true, rng);
+  lines[2].name = lines[1].name;
+  EXPECT_THROW(surface::build(lines), Error);
+  surface::Options seed;
+  seed.method = Method::Seed;
+  try {
+    surface::build(grid_lines(true, rng), seed);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("neither along x nor along y"), std::string::npos);
+  }
+}
+
+TEST(SurfaceIo, MoodyAndLinesReadersNameFileLineColumn) {
+  const std::string dir = test::temp_dir() + "/moody";
+  std::filesystem::create_directories(dir);
+  for (const char* n : surface::kMoodyLines) {
+    std::ifstream src(kMoody + "/" + n + ".txt");
+    std::ofstream(dir + "/" + n + ".txt") << src.rdbuf();
+  }
+  std::ofstream(dir + "/Config.txt") << "# spacing\nX 4\n";
+  auto err = [](auto fn) {
+    try {
+      fn();
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(err([&] { io::read_moody(dir); }),
+            dir + "/Config.txt:2:1: expected 'I <inches>' or 'M <mm>' (the foot spacing)");
+  std::ofstream(dir + "/Config.txt") << "M 66\n";
+  EXPECT_DOUBLE_EQ(io::read_moody(dir).foot_spacing, 66);
+  std::ofstream(dir + "/E_W.txt") << "11.7\n# note\n  nan\n";
+  EXPECT_EQ(err([&] { io::read_moody(dir); }), dir + "/E_W.txt:3:3: NaN is not allowed");
+  std::ofstream(dir + "/E_W.txt") << "11.7\n12.4\n";
+  std::filesystem::remove(dir + "/N_S.txt");
+  EXPECT_NE(err([&] { io::read_moody(dir); }).find("N_S.txt: cannot open"), std::string::npos);
+  EXPECT_NE(err([&] { io::read_moody(dir + "/nope"); }).find("not a directory"), std::string::npos);
+
+  const std::string lp = test::temp_file(
+      "lines.json",
+      "{\"lines\": [\n {\"name\": \"a\", \"start\": [0, 0], \"direction\": [1, 0], \"spacing\": "
+      "10, "
+      "\"heights\": [0, 1, 2]},\n {\"name\": \"b\", \"start\": [0, 0], \"direction\": [0, 1], "
+      "\"spacing\": 10, \"slopes\": [1, \"x\"]}\n]}");
+  EXPECT_EQ(err([&] { io::read_lines(lp); }), lp + ":3:83: 'lines[1].slopes[1]' must be a number");
+  const std::string lp2 = test::temp_file(
+      "lines2.json",
+      "{\"lines\": [{\"name\": \"a\", \"start\": [0, 0], \"direction\": [1, 0], \"spacing\": 10, "
+      "\"heights\": [0, 1], \"slopes\": [1]}]}");
+  EXPECT_NE(err([&] { io::read_lines(lp2); }).find("exactly one of"), std::string::npos);
+}
+
+TEST(SurfaceIo, LinesFromSlopesAndSeparationResults) {
+  const std::string lp = test::temp_file(
+      "ok.json",
+      "{\"lines\": [{\"name\": \"a\", \"start\": [0, 0], \"direction\": [2, 0], \"spacing\": 10, "
+      "\"slopes\": [100, -50]}]}");
+  const auto lines = io::read_lines(lp);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_DOUBLE_EQ(lines[0].direction.x(), 2);  // normalised by build()
+  ASSERT_EQ(lines[0].heights.size(), 3);
+  EXPECT_NEAR(lines[0].heights[1], 100e-6 * 10, 1e-18);  // 100 urad over 10 mm = 1 um
+  EXPECT_NEAR(lines[0].heights[2], 50e-6 * 10, 1e-18);
+}
