@@ -5,9 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <memory>
-#include <sstream>
 
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
@@ -32,23 +30,7 @@ bool blank(std::string_view line) {
 }  // namespace
 
 CsvTable CsvTable::read(const std::string& path) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
-  // One read of the whole file (its size from fseek/ftell; falls back to chunks for pipes).
-  std::string text;
-  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
-    const long size = std::ftell(f.get());
-    std::rewind(f.get());
-    if (size > 0) {
-      text.resize(static_cast<std::size_t>(size));
-      text.resize(std::fread(text.data(), 1, text.size(), f.get()));
-    }
-  }
-  char buf[1 << 16];
-  std::size_t got;
-  while ((got = std::fread(buf, 1, sizeof buf, f.get())) > 0) text.append(buf, got);
-  if (std::ferror(f.get())) throw Error(fmt::format("{}: read error", path));
-  return parse(std::move(text), path);
+  return parse(detail::read_text(path), path);
 }
 
 namespace {

@@ -16,6 +16,9 @@
 
 namespace trueaxis::io::detail {
 
+// The whole file at `path` in one read. Throws Error naming the path when it cannot be read.
+std::string read_text(const std::string& path);
+
 // Number of worker threads for `n` items of work (1 for small jobs).
 int workers_for(std::size_t n);
 

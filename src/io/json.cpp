@@ -5,9 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <iterator>
-#include <memory>
 #include <vector>
 
+#include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::io {
@@ -142,14 +142,7 @@ class Locator : public nlohmann::json_sax<nlohmann::json> {
 }  // namespace
 
 JsonFile JsonFile::read(const std::string& path) {
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
-  std::string text;
-  char buf[1 << 16];
-  std::size_t got;
-  while ((got = std::fread(buf, 1, sizeof buf, f.get())) > 0) text.append(buf, got);
-  if (std::ferror(f.get())) throw Error(fmt::format("{}: read error", path));
-  return parse(std::move(text), path);
+  return parse(detail::read_text(path), path);
 }
 
 JsonFile JsonFile::parse(std::string text, std::string path) {

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 
+#include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/io/probes.hpp"
@@ -13,14 +13,6 @@
 
 namespace trueaxis::io {
 namespace {
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(fmt::format("{}: cannot open file for reading", path));
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string_view trim(std::string_view s, std::size_t& lead) {
   lead = 0;
@@ -52,7 +44,7 @@ surface::MoodyData read_moody(const std::string& dir) {
   surface::MoodyData d;
   for (const char* name : surface::kMoodyLines) {
     const std::string path = (fs::path(dir) / (std::string(name) + ".txt")).string();
-    const std::string text = slurp(path);
+    const std::string text = detail::read_text(path);
     std::vector<double> v;
     std::size_t line = 0, pos = 0;
     while (pos < text.size()) {
@@ -69,7 +61,7 @@ surface::MoodyData read_moody(const std::string& dir) {
     d.readings[name] = Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
   }
   const std::string cpath = (fs::path(dir) / "Config.txt").string();
-  const std::string text = slurp(cpath);
+  const std::string text = detail::read_text(cpath);
   std::size_t line = 0, pos = 0;
   while (pos < text.size()) {
     const std::size_t nl = std::min(text.find('\n', pos), text.size());
