@@ -149,8 +149,6 @@ Result read_result(const std::string& path) {
   r.guide = prof("guide", 1e-3);
   if (j.contains("pitch") && !j["pitch"].is_null()) r.pitch = prof("pitch", 1e-6);
   if (doc.has(P("/straightness"))) {
-    for (const char* a : {"workpiece", "guide"})
-      for (const char* b : {"ls", "min_zone"}) doc.number(P("/straightness") / a / b);
     auto get = [&](const char* a, const char* b) {
       return doc.number(P("/straightness") / a / b) * 1e-3;
     };

@@ -35,6 +35,22 @@ double parse_number(std::string_view s, const std::string& path, std::size_t lin
   return v;
 }
 
+// Calls fn(line number, column of the first character, trimmed text) for every line that is not
+// blank and not a '#' comment; stops early when fn returns false.
+template <class Fn>
+void for_each_content_line(const std::string& text, Fn&& fn) {
+  std::size_t line = 0, pos = 0;
+  while (pos < text.size()) {
+    const std::size_t nl = std::min(text.find('\n', pos), text.size());
+    ++line;
+    std::size_t lead = 0;
+    const std::string_view l = trim(std::string_view(text).substr(pos, nl - pos), lead);
+    pos = nl + 1;
+    if (l.empty() || l[0] == '#') continue;
+    if (!fn(line, lead + 1, l)) return;
+  }
+}
+
 }  // namespace
 
 surface::MoodyData read_moody(const std::string& dir) {
@@ -44,45 +60,36 @@ surface::MoodyData read_moody(const std::string& dir) {
   surface::MoodyData d;
   for (const char* name : surface::kMoodyLines) {
     const std::string path = (fs::path(dir) / (std::string(name) + ".txt")).string();
-    const std::string text = detail::read_text(path);
     std::vector<double> v;
-    std::size_t line = 0, pos = 0;
-    while (pos < text.size()) {
-      const std::size_t nl = std::min(text.find('\n', pos), text.size());
-      ++line;
-      std::size_t lead = 0;
-      const std::string_view l = trim(std::string_view(text).substr(pos, nl - pos), lead);
-      pos = nl + 1;
-      if (l.empty() || l[0] == '#') continue;
-      v.push_back(parse_number(l, path, line, lead + 1));
-    }
+    for_each_content_line(detail::read_text(path),
+                          [&](std::size_t line, std::size_t col, std::string_view l) {
+                            v.push_back(parse_number(l, path, line, col));
+                            return true;
+                          });
     if (v.size() < 2)
       throw Error(fmt::format("{}: needs at least 2 readings, found {}", path, v.size()));
     d.readings[name] = Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
   }
   const std::string cpath = (fs::path(dir) / "Config.txt").string();
-  const std::string text = detail::read_text(cpath);
-  std::size_t line = 0, pos = 0;
-  while (pos < text.size()) {
-    const std::size_t nl = std::min(text.find('\n', pos), text.size());
-    ++line;
-    std::size_t lead = 0;
-    const std::string_view l = trim(std::string_view(text).substr(pos, nl - pos), lead);
-    pos = nl + 1;
-    if (l.empty() || l[0] == '#') continue;
-    if ((l[0] != 'I' && l[0] != 'M') || l.size() < 3 || (l[1] != ' ' && l[1] != '\t'))
-      throw Error(fmt::format("{}:{}:{}: expected 'I <inches>' or 'M <mm>' (the foot spacing)",
-                              cpath, line, lead + 1));
-    std::size_t lead2 = 0;
-    const std::string_view num = trim(l.substr(2), lead2);
-    const double s = parse_number(num, cpath, line, lead + 3 + lead2);
-    if (!(s > 0))
-      throw Error(fmt::format("{}:{}:{}: the foot spacing must be positive", cpath, line,
-                              lead + 3 + lead2));
-    d.foot_spacing = l[0] == 'I' ? s * 25.4 : s;
-    return d;  // only the first spacing counts (as in Moody-Method)
-  }
-  throw Error(fmt::format("{}: no foot spacing found (a line 'I <inches>' or 'M <mm>')", cpath));
+  bool found = false;  // only the first spacing counts (as in Moody-Method)
+  for_each_content_line(
+      detail::read_text(cpath), [&](std::size_t line, std::size_t col, std::string_view l) {
+        if ((l[0] != 'I' && l[0] != 'M') || l.size() < 3 || (l[1] != ' ' && l[1] != '\t'))
+          throw Error(fmt::format("{}:{}:{}: expected 'I <inches>' or 'M <mm>' (the foot spacing)",
+                                  cpath, line, col));
+        std::size_t lead2 = 0;
+        const std::string_view num = trim(l.substr(2), lead2);
+        const double s = parse_number(num, cpath, line, col + 2 + lead2);
+        if (!(s > 0))
+          throw Error(fmt::format("{}:{}:{}: the foot spacing must be positive", cpath, line,
+                                  col + 2 + lead2));
+        d.foot_spacing = l[0] == 'I' ? s * 25.4 : s;
+        found = true;
+        return false;
+      });
+  if (!found)
+    throw Error(fmt::format("{}: no foot spacing found (a line 'I <inches>' or 'M <mm>')", cpath));
+  return d;
 }
 
 std::vector<surface::Line> read_lines(const std::string& path) {

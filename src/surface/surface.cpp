@@ -70,7 +70,8 @@ std::vector<Crossing> find_crossings(const std::vector<Line>& lines, double tol)
   return out;
 }
 
-void require_connected(const std::vector<Line>& lines, const std::vector<Crossing>& cs) {
+void require_connected(const std::vector<Line>& lines, const std::vector<Crossing>& cs,
+                       double tol) {
   std::vector<int> parent(lines.size());
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int x) {
@@ -87,7 +88,7 @@ void require_connected(const std::vector<Line>& lines, const std::vector<Crossin
     throw Error(fmt::format(
         "surface: lines {} do not cross the network of line '{}' (lines must cross, within {} "
         "mm, inside both lines' extents)",
-        s, lines[0].name, 1e-6));
+        s, lines[0].name, tol));
   }
 }
 
@@ -159,7 +160,7 @@ Result build_lsq(const std::vector<Line>& lines, const Options& o) {
   Result r;
   r.method = "lsq";
   r.crossings = find_crossings(lines, o.crossing_tolerance);
-  require_connected(lines, r.crossings);
+  require_connected(lines, r.crossings, o.crossing_tolerance);
   const int L = static_cast<int>(lines.size());
   const int C = static_cast<int>(r.crossings.size());
   // Unknowns: offset a_i and tilt b_i (per mm) of every line; one row per crossing.
@@ -285,7 +286,7 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
         "seed method: the two y lines must lie at the x family's end coordinates x = {} and {} mm",
         xmin, xmax));
   r.crossings = find_crossings(lines, tol);
-  require_connected(lines, r.crossings);
+  require_connected(lines, r.crossings, tol);
   // Hang every x line on the boundary curves (their own heights, i.e. their own references).
   std::vector<Eigen::VectorXd> h(lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) h[i] = lines[i].heights;

@@ -237,7 +237,13 @@ TEST(SurfaceIo, MoodyAndLinesReadersNameFileLineColumn) {
   };
   EXPECT_EQ(err([&] { io::read_moody(dir); }),
             dir + "/Config.txt:2:1: expected 'I <inches>' or 'M <mm>' (the foot spacing)");
-  std::ofstream(dir + "/Config.txt") << "M 66\n";
+  std::ofstream(dir + "/Config.txt") << "# only comments\n\n";
+  EXPECT_NE(err([&] { io::read_moody(dir); }).find("Config.txt: no foot spacing found"),
+            std::string::npos);
+  std::ofstream(dir + "/Config.txt") << "I -4\n";
+  EXPECT_EQ(err([&] { io::read_moody(dir); }),
+            dir + "/Config.txt:1:3: the foot spacing must be positive");
+  std::ofstream(dir + "/Config.txt") << "M 66\nI 4\n";  // the first spacing counts
   EXPECT_DOUBLE_EQ(io::read_moody(dir).foot_spacing, 66);
   std::ofstream(dir + "/E_W.txt") << "11.7\n# note\n  nan\n";
   EXPECT_EQ(err([&] { io::read_moody(dir); }), dir + "/E_W.txt:3:3: NaN is not allowed");
