@@ -1,7 +1,13 @@
 // trueaxis CLI — shared declarations between the command files.
 #pragma once
 
+#include <functional>
 #include <string>
+#include <vector>
+
+namespace CLI {
+class App;
+}
 
 namespace trueaxis::cli {
 
@@ -11,6 +17,15 @@ struct DemoOptions {
   long stations = 400;
   bool quiet = false;
 };
+
+// A registered subcommand and what to run when it was chosen.
+struct Command {
+  CLI::App* app;
+  std::function<int()> run;
+};
+
+// 'simulate machine', 'simulate line' (under `simulate`) and 'machine error' (under `app`).
+std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate);
 
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);

@@ -222,6 +222,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   simst->add_flag("--quiet,-q", ma.quiet, "print nothing on success");
 
+  const std::vector<cli::Command> machine_cmds = cli::add_machine_commands(app, *simc);
+
   // report -----------------------------------------------------------------------------------
   std::string rin, rout = "report.html";
   bool rquiet = false;
@@ -253,6 +255,8 @@ int main(int argc, char** argv) {
   try {
     if (sep->parsed()) return cmd_separate(sa);
     if (simst->parsed()) return cmd_simulate_straightness(ma);
+    for (const auto& c : machine_cmds)
+      if (c.app->parsed()) return c.run();
     if (surf->parsed()) return cmd_surface(sf);
     if (rep->parsed()) return cmd_report(rin, rout, rquiet);
     if (demo->parsed()) return cli::run_demo(da);

@@ -64,8 +64,16 @@ char* write_number(char* p, double v) {
   return fmt::format_to(p, FMT_COMPILE("{}"), v);
 }
 
+namespace {
+int flush_only(std::FILE* f) {
+  return std::fflush(f);
+}
+}  // namespace
+
 OutFile::OutFile(const std::string& path)
-    : path_(path), f_(std::fopen(path.c_str(), "wb"), &std::fclose) {
+    : path_(path == "-" ? "standard output" : path),
+      f_(path == "-" ? stdout : std::fopen(path.c_str(), "wb"),
+         path == "-" ? &flush_only : &std::fclose) {
   if (!f_) throw Error(fmt::format("{}: cannot open file for writing", path));
 }
 
@@ -125,7 +133,8 @@ void OutFile::write(const std::vector<std::string>& pieces) {
 void OutFile::close() {
   if (!f_) return;
   const bool ok = std::fflush(f_.get()) == 0;
-  const bool closed = std::fclose(f_.release()) == 0;
+  auto* deleter = f_.get_deleter();
+  const bool closed = deleter(f_.release()) == 0;
   if (!ok || !closed) throw Error(fmt::format("{}: write error", path_));
 }
 

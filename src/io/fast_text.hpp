@@ -42,7 +42,8 @@ void format_numbers(const double* v, std::size_t n, double scale, char sep,
 void format_rows(const std::vector<const double*>& columns, std::size_t n,
                  std::vector<std::string>& pieces);
 
-// A file opened for writing that reports failures as trueaxis::Error naming the path.
+// A file opened for writing that reports failures as trueaxis::Error naming the path. The path
+// "-" is standard output (flushed, not closed, by close()).
 class OutFile {
  public:
   explicit OutFile(const std::string& path);

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "trueaxis/error.hpp"
+#include "waves.hpp"
 
 namespace trueaxis::sim {
 
@@ -42,27 +43,11 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
   const double xs = o.x0 + static_cast<double>(pmin) * h;  // first position
 
   // Smooth parts as sums of sinusoids with random wavelength/phase.
-  struct Wave {
-    double a, k, ph;
-  };
-  auto waves = [&](int count, double amp, double lmin, double lmax) {
-    std::vector<Wave> w;
-    for (int i = 0; i < count; ++i) {
-      const double lambda = L * (lmin + (lmax - lmin) * U(rng));
-      w.push_back({amp * (0.3 + 0.7 * U(rng)) / std::sqrt(static_cast<double>(count)),
-                   2 * M_PI / lambda, 2 * M_PI * U(rng)});
-    }
-    return w;
-  };
-  auto eval = [](const std::vector<Wave>& ws, double u) {
-    double s = 0;
-    for (const auto& w : ws) s += w.a * std::sin(w.k * u + w.ph);
-    return s;
-  };
-  const auto w_waves = waves(4, o.workpiece_amplitude, 0.08, 1.2);
-  const auto g_waves = waves(2, 0.5 * o.guide_amplitude, 0.2, 1.5);
+  using detail::eval_waves;
+  const auto w_waves = detail::random_waves(rng, 4, o.workpiece_amplitude, L, 0.08, 1.2);
+  const auto g_waves = detail::random_waves(rng, 2, 0.5 * o.guide_amplitude, L, 0.2, 1.5);
   const double g_bow = o.guide_amplitude * (U(rng) < 0.5 ? -1 : 1) * (0.5 + 0.5 * U(rng));
-  const auto t_waves = waves(2, o.pitch_amplitude, 0.15, 1.0);
+  const auto t_waves = detail::random_waves(rng, 2, o.pitch_amplitude, L, 0.15, 1.0);
   const double t_drift = o.pitch_amplitude * (2 * U(rng) - 1);
 
   StraightnessCampaign c;
@@ -81,9 +66,9 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
     const double t = 2 * u / std::max(L, 1e-12) - 1;  // -1..1
     walk += tex * Nd(rng);
     T.x[q] = x;
-    T.workpiece[q] = eval(w_waves, u) + walk;
-    T.guide[q] = g_bow * (t * t - 1.0 / 3.0) + eval(g_waves, u);
-    T.pitch[q] = t_drift * t + eval(t_waves, u);
+    T.workpiece[q] = eval_waves(w_waves, u) + walk;
+    T.guide[q] = g_bow * (t * t - 1.0 / 3.0) + eval_waves(g_waves, u);
+    T.pitch[q] = t_drift * t + eval_waves(t_waves, u);
   }
   for (std::size_t i = 0; i < p.size(); ++i)
     T.probe_offsets.push_back(o.offset_amplitude * (2 * U(rng) - 1));

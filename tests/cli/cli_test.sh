@@ -57,6 +57,23 @@ sed 's/"direction": \[0, 1\], "spacing": 50/"direction": [1, 1], "spacing": 50/'
 expect_err "neither along x nor along y" "$T" surface --lines diag.json --method seed -o o.json
 expect_err "classic needs --moody" "$T" surface --lines lines.json --method classic -o o.json
 
+# The virtual machine: a random machine, its true errors at given points, a probe run on it.
+expect_ok "$T" simulate machine --seed 3 --chain FXYZ -o machine.json
+grep -q '"EC0Y"' machine.json && grep -q '"chain": "FXYZ"' machine.json && ok || bad "machine.json"
+printf 'x,y,z\n0,0,0\n400,300,250\n' > pts.csv
+expect_ok "$T" machine error machine.json pts.csv
+head -1 out.txt | grep -qx "x,y,z,ex,ey,ez" && [ "$(wc -l <out.txt)" -eq 3 ] && ok || bad "machine error to stdout"
+expect_ok "$T" machine error machine.json pts.csv -o errs.csv
+[ "$(wc -l <errs.csv)" -eq 3 ] && [ ! -s out.txt ] && ok || bad "machine error -o writes the file, not stdout"
+printf 'x,y,z\n0,0,0\n400,300,999\n' > far.csv
+expect_err "far.csv:3:9: z = 999 mm is outside the machine's range" "$T" machine error machine.json far.csv
+printf '{"ranges": {"x": [0, 8], "y": [0, 6], "z": [0, 5]},\n "errors": {"EXQ": 1}}' > badm.json
+expect_err "badm.json:2:20: unknown error 'EXQ'" "$T" machine error badm.json pts.csv
+expect_ok "$T" simulate line --machine machine.json --start 0,300,250 --step 20 --offsets 0,20,40 --angle -o run.csv --truth run-truth.csv
+[ "$(wc -l <run.csv)" -eq 42 ] && head -1 run.csv | grep -qx "x,a,b,c,angle" && ok || bad "simulate line fills the x range (41 stops, 0..800 mm)"
+expect_ok "$T" separate --input run.csv --offsets 0,20,40 --angle angle -o run.json
+expect_err "leaves the machine's range" "$T" simulate line --machine machine.json --start 700,0,0 --stations 20 -o o.csv --truth t.csv
+
 # Bad inputs: each a clear one-line error naming the file (and line:column where it applies).
 printf 'x,a,b\n0,1,2\n10,1,2\n10,1,2\n' > nonincr.csv
 expect_err "nonincr.csv:4:1: x = 10 does not increase" "$T" separate --input nonincr.csv --method two-point --output o.json

@@ -50,7 +50,7 @@ class CsvTable {
 
 // Writes a CSV with a header row. All columns must have the same length. Numbers are written
 // with the shortest representation that reads back exactly. Throws Error if the file cannot be
-// written.
+// written. The path "-" writes to standard output.
 void write_csv(const std::string& path, const std::vector<std::string>& header,
                const std::vector<const Eigen::VectorXd*>& columns);
 

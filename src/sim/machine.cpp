@@ -1,0 +1,354 @@
+#include "trueaxis/sim/machine.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+#include <thread>
+
+#include "trueaxis/error.hpp"
+#include "waves.hpp"
+
+namespace trueaxis::sim {
+namespace {
+
+constexpr const char* kAxes = "XYZ";
+constexpr const char* kComponents = "XYZABC";
+
+bool finite(double v) {
+  return std::isfinite(v);
+}
+
+Eigen::Matrix3d rotation(const Eigen::Vector3d& v) {
+  const double a = v.norm();
+  if (a == 0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(a, v / a).toRotationMatrix();
+}
+
+// Polynomial coefficients (in v = u / 1000) of Σ_k a_k ξ^k with ξ = (u − mid) / half.
+std::vector<double> centred_to_metres(const std::vector<double>& a, double mid, double half) {
+  // ξ = α v + β with α = 1000 / half, β = −mid / half. Expand by repeated multiplication.
+  const double alpha = 1000.0 / half, beta = -mid / half;
+  std::vector<double> out(a.size(), 0.0), power{1.0};  // power = coefficients of ξ^k in v
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    for (std::size_t j = 0; j < power.size(); ++j) out[j] += a[k] * power[j];
+    std::vector<double> next(power.size() + 1, 0.0);
+    for (std::size_t j = 0; j < power.size(); ++j) {
+      next[j] += beta * power[j];
+      next[j + 1] += alpha * power[j];
+    }
+    power = std::move(next);
+  }
+  return out;
+}
+
+}  // namespace
+
+double ErrorFunction::operator()(double u) const {
+  double v = 0;
+  const double m = u * 1e-3;
+  for (auto it = polynomial.rbegin(); it != polynomial.rend(); ++it) v = v * m + *it;
+  for (const Sine& s : sines) v += s.amplitude * std::sin(2 * M_PI * u / s.period + s.phase);
+  if (!table_u.empty()) {
+    const auto hi = std::upper_bound(table_u.begin(), table_u.end(), u);
+    std::size_t j = static_cast<std::size_t>(hi - table_u.begin());
+    j = std::clamp<std::size_t>(j, 1, table_u.size() - 1);
+    const double t = (u - table_u[j - 1]) / (table_u[j] - table_u[j - 1]);
+    v += table_value[j - 1] + t * (table_value[j] - table_value[j - 1]);
+  }
+  return v;
+}
+
+void ErrorFunction::validate(const std::string& what, double lo, double hi) const {
+  for (double c : polynomial)
+    if (!finite(c)) throw Error(what + ": polynomial coefficients must be finite");
+  for (const Sine& s : sines) {
+    if (!finite(s.amplitude) || !finite(s.phase))
+      throw Error(what + ": sine amplitude and phase must be finite");
+    if (!(s.period > 0 && finite(s.period)))
+      throw Error(fmt::format("{}: sine period must be positive (got {})", what, s.period));
+  }
+  if (table_u.size() != table_value.size())
+    throw Error(fmt::format("{}: table has {} positions but {} values", what, table_u.size(),
+                            table_value.size()));
+  if (table_u.empty()) return;
+  if (table_u.size() < 2) throw Error(what + ": a table needs at least two nodes");
+  for (std::size_t i = 0; i < table_u.size(); ++i) {
+    if (!finite(table_u[i]) || !finite(table_value[i]))
+      throw Error(fmt::format("{}: table entry {} is not finite", what, i));
+    if (i > 0 && !(table_u[i] > table_u[i - 1]))
+      throw Error(fmt::format("{}: table positions must increase strictly ({} after {})", what,
+                              table_u[i], table_u[i - 1]));
+  }
+  if (table_u.front() > lo || table_u.back() < hi)
+    throw Error(fmt::format("{}: table covers [{}, {}] mm but the axis range is [{}, {}] mm", what,
+                            table_u.front(), table_u.back(), lo, hi));
+}
+
+std::string error_name(int axis, Component c) {
+  return fmt::format("E{}{}", kComponents[static_cast<int>(c)], kAxes[axis]);
+}
+
+std::array<int, 3> Machine::order() const {
+  std::array<int, 3> o{};
+  int n = 0;
+  for (char ch : chain) {
+    if (ch == 'F') continue;
+    const char* p = std::strchr(kAxes, ch);
+    if (p == nullptr || *p == 0 || n == 3) throw Error(fmt::format("bad chain '{}'", chain));
+    o[static_cast<std::size_t>(n++)] = static_cast<int>(p - kAxes);
+  }
+  return o;
+}
+
+void Machine::validate() const {
+  const auto bad_chain = [&] {
+    throw Error(fmt::format(
+        "chain '{}' must list X, Y, Z once each and the frame F once, workpiece to tool (e.g. "
+        "FYXZ for a bridge CMM, FXYZ or XFYZ for machine tools)",
+        chain));
+  };
+  if (chain.size() != 4 || std::count(chain.begin(), chain.end(), 'F') != 1) bad_chain();
+  for (char a : {'X', 'Y', 'Z'})
+    if (std::count(chain.begin(), chain.end(), a) != 1) bad_chain();
+  for (int k = 0; k < 3; ++k) {
+    const auto& r = range[static_cast<std::size_t>(k)];
+    if (!finite(r[0]) || !finite(r[1]) || !(r[1] > r[0]))
+      throw Error(fmt::format("range of {} must be [min, max] with min < max (got [{}, {}])",
+                              kAxes[k], r[0], r[1]));
+    for (int c = 0; c < 6; ++c)
+      errors[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)].validate(
+          error_name(k, static_cast<Component>(c)), r[0], r[1]);
+  }
+  if (!offset.allFinite()) throw Error("the stylus/tool offset must be finite");
+  for (double s : {squareness_c0y, squareness_b0z, squareness_a0z})
+    if (!finite(s) || std::abs(s) > 0.1) throw Error("squareness errors must be finite and small");
+}
+
+bool Machine::contains(const Eigen::Vector3d& c, double tol) const {
+  for (int k = 0; k < 3; ++k)
+    if (!(c[k] >= range[static_cast<std::size_t>(k)][0] - tol &&
+          c[k] <= range[static_cast<std::size_t>(k)][1] + tol))
+      return false;
+  return true;
+}
+
+Eigen::Isometry3d Machine::pose(const Eigen::Vector3d& c) const {
+  const Eigen::Vector3d d[3] = {
+      Eigen::Vector3d::UnitX(),
+      Eigen::AngleAxisd(squareness_c0y, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d::UnitY(),
+      Eigen::AngleAxisd(squareness_a0z, Eigen::Vector3d::UnitX()) *
+          (Eigen::AngleAxisd(squareness_b0z, Eigen::Vector3d::UnitY()) * Eigen::Vector3d::UnitZ())};
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  for (int k : order()) {
+    const auto& e = errors[static_cast<std::size_t>(k)];
+    const double u = c[k];
+    Eigen::Isometry3d A = Eigen::Isometry3d::Identity();
+    A.linear() = rotation({e[3](u), e[4](u), e[5](u)});
+    A.translation() = u * d[k] + Eigen::Vector3d(e[0](u), e[1](u), e[2](u));
+    T = T * A;
+  }
+  return T;
+}
+
+Eigen::Matrix3Xd Machine::errors_at(const Eigen::Matrix3Xd& commands) const {
+  Eigen::Matrix3Xd out(3, commands.cols());
+  const Eigen::Index n = commands.cols();
+  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  const Eigen::Index workers = std::min<Eigen::Index>(hw, std::max<Eigen::Index>(1, n / 4096));
+  auto run = [&](Eigen::Index b, Eigen::Index e) {
+    for (Eigen::Index i = b; i < e; ++i) out.col(i) = error(commands.col(i));
+  };
+  std::vector<std::thread> pool;
+  for (Eigen::Index w = 0; w + 1 < workers; ++w)
+    pool.emplace_back(run, n * w / workers, n * (w + 1) / workers);
+  run(n * (workers - 1) / workers, n);
+  for (auto& t : pool) t.join();
+  return out;
+}
+
+std::string Machine::summary() const {
+  std::string s = fmt::format("{} (chain {}, ranges x [{}, {}], y [{}, {}], z [{}, {}] mm)\n",
+                              name.empty() ? "machine" : name, chain, range[0][0], range[0][1],
+                              range[1][0], range[1][1], range[2][0], range[2][1]);
+  s += "  span over the axis range   positioning  straightness (2)     roll/pitch/yaw (3)\n";
+  for (int k = 0; k < 3; ++k) {
+    const auto& r = range[static_cast<std::size_t>(k)];
+    double span[6];
+    for (int c = 0; c < 6; ++c) {
+      const auto& f = errors[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)];
+      double lo = 0, hi = 0;
+      for (int i = 0; i <= 200; ++i) {
+        const double v = f(r[0] + (r[1] - r[0]) * i / 200.0);
+        lo = i == 0 ? v : std::min(lo, v);
+        hi = i == 0 ? v : std::max(hi, v);
+      }
+      span[c] = (hi - lo) * (c < 3 ? 1e3 : 1e6);
+    }
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    s += fmt::format(
+        "  {} axis                    {:6.2f} um    {:5.2f} {:5.2f} um        "
+        "{:5.1f} {:5.1f} {:5.1f} urad\n",
+        kAxes[k], span[k], span[std::min(a, b)], span[std::max(a, b)], span[3], span[4], span[5]);
+  }
+  s += fmt::format("  squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad\n",
+                   squareness_c0y * 1e6, squareness_b0z * 1e6, squareness_a0z * 1e6);
+  return s;
+}
+
+void MachineOptions::validate() const {
+  Machine m;
+  m.chain = chain;
+  m.range = range;
+  m.offset = offset;
+  m.validate();
+  for (double v : {straightness, angular, positioning, squareness, lead_amplitude})
+    if (!(v >= 0 && finite(v))) throw Error("error magnitudes must be >= 0 and finite");
+  if (!(lead > 0 && finite(lead))) throw Error("the lead-screw period must be positive");
+}
+
+Machine random_machine(const MachineOptions& o) {
+  o.validate();
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::normal_distribution<double> N(0.0, 1.0);
+  const auto sign = [&] { return U(rng) < 0.5 ? -1.0 : 1.0; };
+  Machine m;
+  m.name = fmt::format("random {} machine, seed {}", o.chain, o.seed);
+  m.chain = o.chain;
+  m.range = o.range;
+  m.offset = o.offset;
+  for (int k = 0; k < 3; ++k) {
+    const double lo = o.range[static_cast<std::size_t>(k)][0];
+    const double hi = o.range[static_cast<std::size_t>(k)][1];
+    const double mid = 0.5 * (lo + hi), half = 0.5 * (hi - lo), L = hi - lo;
+    auto& e = m.errors[static_cast<std::size_t>(k)];
+    // Positioning: a scale error from the axis' start (the home switch) and a small bow.
+    {
+      const double slope = o.positioning * N(rng);
+      const double bow = 0.2 * o.positioning * half * N(rng);
+      // slope·(u − lo) + bow·(ξ² − 1) with ξ = (u − mid)/half: zero at both ends for the bow.
+      auto& f = e[static_cast<std::size_t>(k)];  // E_kk
+      f.polynomial = centred_to_metres({slope * (mid - lo) - bow, slope * half, bow}, mid, half);
+      if (o.lead_amplitude > 0)
+        f.sines.push_back({o.lead_amplitude * (0.5 + 0.5 * U(rng)), o.lead, 2 * M_PI * U(rng)});
+    }
+    // Straightness across the axis: PV about `straightness` over 500 mm, growing like L^1.5
+    // for longer axes (bow + cubic + one long wave).
+    for (int c = 1; c <= 2; ++c) {
+      const double s = o.straightness * std::pow(L / 500.0, 1.5);
+      const double bow = 0.5 * s * sign() * (0.4 + 0.6 * U(rng));
+      const double cubic = 0.2 * s * N(rng);
+      const int comp = (k + c) % 3;  // the two directions across axis k
+      auto& f = e[static_cast<std::size_t>(comp)];
+      f.polynomial = centred_to_metres({-bow / 3, 0, bow, cubic}, mid, half);
+      f.sines.push_back(
+          {0.15 * s * (0.5 + 0.5 * U(rng)), L * (0.3 + 0.7 * U(rng)), 2 * M_PI * U(rng)});
+    }
+    // Angular: drift, bow and one wave, about `angular`.
+    for (int c = 3; c < 6; ++c) {
+      auto& f = e[static_cast<std::size_t>(c)];
+      const double a = o.angular;
+      f.polynomial = centred_to_metres({0, 0.6 * a * N(rng), 0.4 * a * N(rng)}, mid, half);
+      f.sines.push_back(
+          {0.3 * a * (0.5 + 0.5 * U(rng)), L * (0.25 + 0.75 * U(rng)), 2 * M_PI * U(rng)});
+    }
+  }
+  m.squareness_c0y = o.squareness * N(rng);
+  m.squareness_b0z = o.squareness * N(rng);
+  m.squareness_a0z = o.squareness * N(rng);
+  m.validate();
+  return m;
+}
+
+void ProbeRunOptions::validate() const {
+  if (stations < 3) throw Error(fmt::format("stations must be at least 3 (got {})", stations));
+  if (!(step > 0 && finite(step))) throw Error("step must be positive");
+  if (!start.allFinite()) throw Error("start must be finite");
+  if (!(direction.allFinite() && direction.norm() > 0))
+    throw Error("direction must be a non-zero vector");
+  if (!(sensing.allFinite() && sensing.norm() > 0))
+    throw Error("sensing direction must be a non-zero vector");
+  if (std::abs(direction.normalized().dot(sensing.normalized())) > 1e-9)
+    throw Error("the sensing direction must be perpendicular to the direction of motion");
+  StraightnessOptions so;  // the probe layout rules are the straightness simulator's
+  so.stations = stations;
+  so.step = step;
+  so.offsets = offsets;
+  so.noise = noise;
+  so.angle_noise = angle_noise;
+  so.workpiece_amplitude = profile_amplitude;
+  so.offset_amplitude = offset_amplitude;
+  so.validate();
+}
+
+StraightnessCampaign simulate_probe_run(const Machine& m, const ProbeRunOptions& o) {
+  m.validate();
+  o.validate();
+  const Eigen::Vector3d d = o.direction.normalized(), n = o.sensing.normalized();
+  const double h = o.step;
+  const long stations = o.stations;
+  for (long K : {0L, stations - 1}) {
+    const Eigen::Vector3d c = o.start + static_cast<double>(K) * h * d;
+    if (!m.contains(c))
+      throw Error(fmt::format("the run leaves the machine's range: stop {} at ({}, {}, {}) mm", K,
+                              c.x(), c.y(), c.z()));
+  }
+  std::mt19937_64 rng(o.seed);
+  std::uniform_real_distribution<double> U(0.0, 1.0);
+  std::normal_distribution<double> Nd(0.0, 1.0);
+  std::vector<long> p;
+  for (double s : o.offsets) p.push_back(std::lround(s / h));
+  const long pmin = std::min(0L, *std::min_element(p.begin(), p.end()));
+  const long pmax = std::max(0L, *std::max_element(p.begin(), p.end()));
+  const long Q = stations + (pmax - pmin);
+  const double L = static_cast<double>(Q - 1) * h;
+  const double x0 = o.start.dot(d);
+  const double xs = x0 + static_cast<double>(pmin) * h;
+
+  const auto waves = detail::random_waves(rng, 4, o.profile_amplitude, L, 0.08, 1.2);
+  StraightnessCampaign camp;
+  StraightnessTruth& T = camp.truth;
+  T.first_station_index = -pmin;
+  T.step = h;
+  T.x.resize(Q);
+  T.workpiece.resize(Q);
+  T.guide.setConstant(Q, std::numeric_limits<double>::quiet_NaN());
+  T.pitch.setConstant(Q, std::numeric_limits<double>::quiet_NaN());
+  for (long q = 0; q < Q; ++q) {
+    T.x[q] = xs + static_cast<double>(q) * h;
+    T.workpiece[q] = detail::eval_waves(waves, T.x[q] - xs);
+  }
+  for (std::size_t i = 0; i < p.size(); ++i)
+    T.probe_offsets.push_back(o.offset_amplitude * (2 * U(rng) - 1));
+  T.angle_offset = o.angle ? 20e-6 * (2 * U(rng) - 1) : 0.0;
+
+  separation::ProbeData& data = camp.data;
+  data.offsets = o.offsets;
+  data.x.resize(stations);
+  data.readings.resize(stations, static_cast<Eigen::Index>(p.size()));
+  if (o.angle) data.angle.resize(stations);
+  for (long K = 0; K < stations; ++K) {
+    const long qs = K - pmin;
+    const Eigen::Vector3d c = o.start + static_cast<double>(K) * h * d;
+    const Eigen::Isometry3d P = m.pose(c);
+    const Eigen::Vector3d nominal = c + m.offset;
+    data.x[K] = x0 + static_cast<double>(K) * h;
+    T.guide[qs] = n.dot(P * m.offset - nominal);
+    T.pitch[qs] = n.dot(P.linear() * d);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double s = static_cast<double>(p[i]) * h;
+      // The probe's own actual tip, not the linearised g + s·θ: the readings are the simulator's.
+      const double e = n.dot(P * (m.offset + s * d) - (nominal + s * d));
+      data.readings(K, static_cast<Eigen::Index>(i)) =
+          T.workpiece[qs + p[i]] + e + T.probe_offsets[i] + o.noise * Nd(rng);
+    }
+    if (o.angle) data.angle[K] = T.pitch[qs] + T.angle_offset + o.angle_noise * Nd(rng);
+  }
+  return camp;
+}
+
+}  // namespace trueaxis::sim
