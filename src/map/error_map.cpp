@@ -162,8 +162,14 @@ Eigen::Vector3d Interpolator::eval(const Eigen::Vector3d& p) const {
   double t[3];
   for (int a = 0; a < 3; ++a) {
     const Axis& ax = axis_[static_cast<std::size_t>(a)];
-    c[a] = ax.cell(p[a]);
-    t[a] = (p[a] - ax.x[c[a]]) / (ax.x[c[a] + 1] - ax.x[c[a]]);
+    if (ax.uniform) {  // direct lookup: no search, no division
+      const double s = (p[a] - ax.x0) * ax.inv_h;
+      c[a] = std::min(static_cast<Eigen::Index>(s), ax.n - 2);
+      t[a] = s - static_cast<double>(c[a]);
+    } else {
+      c[a] = ax.cell(p[a]);
+      t[a] = (p[a] - ax.x[c[a]]) / (ax.x[c[a] + 1] - ax.x[c[a]]);
+    }
   }
   if (options_.interpolation == Interpolation::Linear) {
     const double* b = E + 3 * (c[0] + nx * c[1] + nxy * c[2]);
@@ -210,24 +216,26 @@ namespace {
       a[2][0], a[2][a[2].size() - 1]));
 }
 
-// Runs fn(i) over the columns in parallel, after checking (in the same pass) that column i lies
-// in the grid unless clamping was asked for. The lowest refused column is reported, and no
-// column is changed in place before the check of its own range (results of other ranges may be).
+// Runs fn(i) over the columns in parallel, checking first (in the same pass) that column i lies
+// in the grid unless clamping was asked for. The lowest refused column is reported; columns
+// before it (and in other ranges) may already have been processed in place.
 template <class Fn>
 void for_columns(const ErrorMap& map, const Eigen::Ref<const Eigen::Matrix3Xd>& p,
                  const EvalOptions& o, Fn&& fn) {
   const Eigen::Index n = p.cols();
   const int workers = io::detail::workers_for(static_cast<std::size_t>(n) * 8);
   std::vector<Eigen::Index> first_out(static_cast<std::size_t>(workers), -1);
+  const bool refuse_outside = o.outside == Outside::Refuse;
   io::detail::parallel_ranges(
       static_cast<std::size_t>(n), workers, [&](int t, std::size_t b, std::size_t e) {
-        if (o.outside == Outside::Refuse)
-          for (std::size_t i = b; i < e; ++i)
-            if (!map.contains(p.col(static_cast<Eigen::Index>(i)), o.tolerance)) {
-              first_out[static_cast<std::size_t>(t)] = static_cast<Eigen::Index>(i);
-              return;
-            }
-        for (std::size_t i = b; i < e; ++i) fn(static_cast<Eigen::Index>(i));
+        for (std::size_t i = b; i < e; ++i) {
+          const auto col = static_cast<Eigen::Index>(i);
+          if (refuse_outside && !map.contains(p.col(col), o.tolerance)) {
+            first_out[static_cast<std::size_t>(t)] = col;
+            return;
+          }
+          fn(col);
+        }
       });
   for (Eigen::Index i : first_out)
     if (i >= 0) refuse(map, p, i);

@@ -351,4 +351,27 @@ StraightnessCampaign simulate_probe_run(const Machine& m, const ProbeRunOptions&
   return camp;
 }
 
+Eigen::VectorXd simulate_laser_run(const Machine& m, const Eigen::Vector3d& start,
+                                   const Eigen::Vector3d& direction, long stations, double step,
+                                   double noise, std::uint64_t seed) {
+  if (stations < 2) throw Error("a laser run needs at least two stops");
+  if (!(step > 0) || !(direction.norm() > 0) || !(noise >= 0))
+    throw Error("a laser run needs a positive step, a direction and a noise >= 0");
+  const Eigen::Vector3d d = direction.normalized();
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> Nd(0.0, 1.0);
+  Eigen::VectorXd r(stations);
+  double e0 = 0;
+  for (long i = 0; i < stations; ++i) {
+    const Eigen::Vector3d c = start + static_cast<double>(i) * step * d;
+    if (!m.contains(c, 1e-6))
+      throw Error(fmt::format("the laser run leaves the machine's range at ({}, {}, {}) mm", c.x(),
+                              c.y(), c.z()));
+    const double e = d.dot(m.error(c));
+    if (i == 0) e0 = e;
+    r[i] = e - e0 + noise * Nd(rng);
+  }
+  return r;
+}
+
 }  // namespace trueaxis::sim

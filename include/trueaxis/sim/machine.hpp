@@ -151,4 +151,12 @@ struct ProbeRunOptions {
 // and the carriage's g and θ at the stations (NaN at grid points that are not stations).
 StraightnessCampaign simulate_probe_run(const Machine& machine, const ProbeRunOptions& options);
 
+// A virtual laser-interferometer run: the tool (retroreflector) stops at c_m = start + m·step·d,
+// m = 0..stations−1, and the interferometer, zeroed at the first stop, reads the displacement
+// error along the beam d: r_m = d·(error(c_m) − error(c_0)) + noise (mm). The run must stay in
+// the machine's range.
+Eigen::VectorXd simulate_laser_run(const Machine& machine, const Eigen::Vector3d& start,
+                                   const Eigen::Vector3d& direction, long stations, double step,
+                                   double noise, std::uint64_t seed);
+
 }  // namespace trueaxis::sim

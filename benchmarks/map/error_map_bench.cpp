@@ -1,0 +1,86 @@
+// Error-map hot paths at 10^7 points, with a same-run baseline: a plain copy of the same points
+// (see BENCHMARKS.md).
+#include <benchmark/benchmark.h>
+
+#include <cstring>
+#include <random>
+
+#include "trueaxis/map/error_map.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+constexpr Eigen::Index kPoints = 10'000'000;
+
+const map::ErrorMap& grid() {
+  static const map::ErrorMap m = map::sample(
+      {Eigen::VectorXd::LinSpaced(17, 0, 800), Eigen::VectorXd::LinSpaced(13, 0, 600),
+       Eigen::VectorXd::LinSpaced(11, 0, 500)},
+      [](const Eigen::Vector3d& p) {
+        return Eigen::Vector3d(1e-2 * std::sin(p.x() / 300), 1e-2 * std::cos(p.y() / 250),
+                               1e-2 * std::sin(p.z() / 200 + p.x() / 500));
+      });
+  return m;
+}
+
+const Eigen::Matrix3Xd& points() {
+  static const Eigen::Matrix3Xd p = [] {
+    std::mt19937_64 rng(1);
+    std::uniform_real_distribution<double> U(0.0, 1.0);
+    Eigen::Matrix3Xd q(3, kPoints);
+    for (Eigen::Index i = 0; i < kPoints; ++i) q.col(i) << 800 * U(rng), 600 * U(rng), 500 * U(rng);
+    return q;
+  }();
+  return p;
+}
+
+// Baseline: copying the 240 MB of points once (what any batch pass must at least read and write).
+void BM_Memcpy(benchmark::State& st) {
+  const auto& p = points();
+  Eigen::Matrix3Xd out(3, p.cols());
+  for (auto _ : st) {
+    std::memcpy(out.data(), p.data(), sizeof(double) * static_cast<std::size_t>(p.size()));
+    benchmark::ClobberMemory();
+  }
+  st.SetItemsProcessed(st.iterations() * p.cols());
+  st.SetBytesProcessed(st.iterations() * p.size() * 8);
+}
+
+void BM_Compensate(benchmark::State& st, map::Interpolation how, int iterations) {
+  const auto& m = grid();
+  const auto& p = points();
+  Eigen::Matrix3Xd out(3, p.cols());
+  map::CompensateOptions o;
+  o.eval.interpolation = how;
+  o.iterations = iterations;
+  for (auto _ : st) {
+    std::memcpy(out.data(), p.data(), sizeof(double) * static_cast<std::size_t>(p.size()));
+    map::compensate(m, out, o);
+    benchmark::ClobberMemory();
+  }
+  st.SetItemsProcessed(st.iterations() * p.cols());
+}
+
+void BM_Correct(benchmark::State& st) {
+  const auto& m = grid();
+  const auto& p = points();
+  Eigen::Matrix3Xd out(3, p.cols());
+  for (auto _ : st) {
+    std::memcpy(out.data(), p.data(), sizeof(double) * static_cast<std::size_t>(p.size()));
+    map::correct(m, out);
+    benchmark::ClobberMemory();
+  }
+  st.SetItemsProcessed(st.iterations() * p.cols());
+}
+
+}  // namespace
+
+BENCHMARK(BM_Memcpy)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Correct)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_Compensate, linear_2iter, map::Interpolation::Linear, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_Compensate, cubic_2iter, map::Interpolation::Cubic, 2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();

@@ -1,0 +1,123 @@
+#include "trueaxis/surface/space.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::surface {
+namespace {
+
+constexpr double kRoundOff = 1e-10;  // mm: hundreds of separations, surfaces and solves chained
+
+sim::Machine small_machine(std::uint64_t seed = 3) {
+  sim::MachineOptions o;
+  o.range = {{{0, 400}, {0, 300}, {0, 200}}};
+  o.seed = seed;
+  return sim::random_machine(o);
+}
+
+bool names(const SpaceResult& r, const std::string& what) {
+  return std::any_of(r.unobservable.begin(), r.unobservable.end(),
+                     [&](const std::string& s) { return s.find(what) != std::string::npos; });
+}
+
+TEST(Space, NoiseFreeCampaignRecoversTheMachineUpToItsRigidBodyMotion) {
+  for (std::uint64_t seed : {3, 4}) {
+    const sim::Machine m = small_machine(seed);
+    SpacePlan p;
+    p.spacing = 50;
+    const SpaceResult r = measure_space(m, p);
+    EXPECT_EQ(r.map.size(0), 9);
+    EXPECT_EQ(r.map.size(2), 5);
+    EXPECT_LT(r.truth_max, kRoundOff) << r.summary();
+    EXPECT_GT(r.map.error.colwise().norm().maxCoeff(), 2e-3);  // the machine has µm errors
+    EXPECT_FALSE(names(r, "twist"));
+    EXPECT_FALSE(names(r, "squareness"));
+    EXPECT_TRUE(names(r, "rigid-body"));
+  }
+}
+
+TEST(Space, WithoutDiagonalsTwistAndSquarenessAreUnobservableAndSaidSo) {
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.diagonals = false;
+  const SpaceResult r = measure_space(m, p);
+  EXPECT_TRUE(names(r, "twist of every level"));
+  EXPECT_TRUE(names(r, "squareness"));
+  // The machine's squareness (~20 µrad over 300 mm) is missing from the map: µm, not round-off.
+  EXPECT_GT(r.truth_max, 1e-3);
+}
+
+TEST(Space, TwoPointProbesCarryThePitchIntoTheMap) {
+  // The seed's two-point method assumes no pitch; ~10 µrad pitch integrates to µm along a line.
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.probes = ProbeMethod::TwoPoint;
+  const SpaceResult r = measure_space(m, p);
+  EXPECT_GT(r.truth_rms, 0.1e-3);
+}
+
+TEST(Space, NoisyMapAgreesWithItsUncertaintyAndCompensationReachesThePredictedLevel) {
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.probe_noise = 0.05e-3;
+  p.laser_noise = 0.05e-3;
+  p.monte_carlo = 20;
+  p.seed = 7;
+  const SpaceResult r = measure_space(m, p);
+  ASSERT_EQ(r.map.uncertainty.cols(), r.map.nodes());
+  // The estimate against the truth in units of the stated uncertainty.
+  map::ErrorMap truth =
+      map::sample(r.map.axes, [&](const Eigen::Vector3d& q) { return m.error(q); });
+  remove_rigid_motion(truth);
+  const Eigen::ArrayXXd z =
+      (r.map.error - truth.error).array() / r.map.uncertainty.array().max(1e-12);
+  const double within2 = (z.abs() <= 2).cast<double>().mean();
+  const double z_rms = std::sqrt(z.square().mean());
+  EXPECT_GT(within2, 0.80);
+  EXPECT_GT(z_rms, 0.5);  // 20 repetitions: the uncertainty itself is known to about ±16 %,
+  EXPECT_LT(z_rms, 1.6);  // and the nodes of one campaign are strongly correlated
+
+  const Verification v = verify_compensation(m, r.map, 1000, 11);
+  EXPECT_GT(v.before_rms, 2e-3);
+  EXPECT_GT(v.improvement(), 5.0);
+  EXPECT_GT(v.after_rms, 0.5 * v.predicted_rms);
+  EXPECT_LT(v.after_rms, 1.5 * v.predicted_rms);
+  EXPECT_GT(v.uncertainty_rms, 0);
+  EXPECT_GT(v.interpolation_rms, 0);
+}
+
+TEST(Space, RemovingTheRigidMotionLeavesTheRestAlone) {
+  const sim::Machine m = small_machine();
+  map::ErrorMap a =
+      map::sample({Eigen::VectorXd::LinSpaced(5, 0, 400), Eigen::VectorXd::LinSpaced(4, 0, 300),
+                   Eigen::VectorXd::LinSpaced(3, 0, 200)},
+                  [&](const Eigen::Vector3d& q) { return m.error(q); });
+  map::ErrorMap b = a;
+  const Eigen::Vector3d t(3e-3, -2e-3, 1e-3), w(20e-6, -10e-6, 30e-6);
+  for (Eigen::Index i = 0; i < b.nodes(); ++i) b.error.col(i) += t + w.cross(b.node(i));
+  remove_rigid_motion(a);
+  remove_rigid_motion(b);
+  EXPECT_LT((a.error - b.error).cwiseAbs().maxCoeff(), 1e-15);
+  remove_rigid_motion(a);  // idempotent
+  EXPECT_LT((a.error - b.error).cwiseAbs().maxCoeff(), 1e-15);
+}
+
+TEST(Space, PlansAreValidated) {
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.spacing = 0;
+  EXPECT_THROW(measure_space(m, p), Error);
+  p = {};
+  p.monte_carlo = 1;
+  EXPECT_THROW(measure_space(m, p), Error);
+  p = {};
+  p.probe_noise = -1;
+  EXPECT_THROW(measure_space(m, p), Error);
+  EXPECT_THROW(verify_compensation(m, measure_space(m, {}).map, 3), Error);
+}
+
+}  // namespace
+}  // namespace trueaxis::surface
