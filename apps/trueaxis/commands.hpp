@@ -26,6 +26,8 @@ struct Command {
 
 // 'simulate machine', 'simulate line' (under `simulate`) and 'machine error' (under `app`).
 std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate);
+// 'space', 'compensate', 'export linuxcnc', 'export csv'.
+std::vector<Command> add_space_commands(CLI::App& app);
 
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);

@@ -222,7 +222,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   simst->add_flag("--quiet,-q", ma.quiet, "print nothing on success");
 
-  const std::vector<cli::Command> machine_cmds = cli::add_machine_commands(app, *simc);
+  std::vector<cli::Command> machine_cmds = cli::add_machine_commands(app, *simc);
+  for (auto& c : cli::add_space_commands(app)) machine_cmds.push_back(std::move(c));
 
   // report -----------------------------------------------------------------------------------
   std::string rin, rout = "report.html";

@@ -74,6 +74,26 @@ expect_ok "$T" simulate line --machine machine.json --start 0,300,250 --step 20 
 expect_ok "$T" separate --input run.csv --offsets 0,20,40 --angle angle -o run.json
 expect_err "leaves the machine's range" "$T" simulate line --machine machine.json --start 700,0,0 --stations 20 -o o.csv --truth t.csv
 
+# Error space, compensation and controller export on the virtual machine.
+"$T" simulate machine --seed 5 --x 0,300 --y 0,200 --z 0,150 -q -o small.json
+echo '{"spacing": 50, "probe_noise_um": 0.02, "laser_noise_um": 0.02, "monte_carlo": 4}' > plan.json
+expect_ok "$T" space --machine small.json --plan plan.json -o space.json --csv space.csv
+grep -q "improvement x" out.txt && grep -q '"verification"' space.json && grep -q '"uz"' space.json && ok || bad "space summary and space.json"
+printf 'x,y,z\n10,20,30\n300,200,150\n' > cmds.csv
+expect_ok "$T" compensate --space space.json -i cmds.csv -o corrected.csv
+[ "$(wc -l <corrected.csv)" -eq 3 ] && head -1 corrected.csv | grep -qx "x,y,z" && ok || bad "corrected.csv"
+expect_ok "$T" compensate --space space.json -i cmds.csv -o - --interpolation cubic
+[ "$(wc -l <out.txt)" -eq 3 ] && ok || bad "compensate to stdout prints only the CSV"
+printf 'x,y,z\n10,20,30\n10,20,999\n' > outside.csv
+expect_err "outside.csv: point 1 (10, 20, 999) mm is outside the map's grid" "$T" compensate --space space.json -i outside.csv -o o.csv
+expect_ok "$T" compensate --space space.json -i outside.csv -o o.csv --clamp
+expect_ok "$T" export linuxcnc --space space.json --axis y --type 0 -o y.comp
+[ "$(wc -l <y.comp)" -eq 5 ] && awk 'NF != 3 { exit 1 } NR > 1 && $1 <= prev { exit 1 } { prev = $1 }' y.comp && ok || bad "y.comp: triplets, increasing"
+expect_ok "$T" export csv --space space.json -o table.csv
+echo '{"spacing": 50, "noise": 1}' > badplan.json
+expect_err "badplan.json:1:26: unknown key 'noise'" "$T" space --machine small.json --plan badplan.json -o o.json
+expect_err "'grid' is missing" "$T" compensate --space machine.json -i cmds.csv -o o.csv
+
 # Bad inputs: each a clear one-line error naming the file (and line:column where it applies).
 printf 'x,a,b\n0,1,2\n10,1,2\n10,1,2\n' > nonincr.csv
 expect_err "nonincr.csv:4:1: x = 10 does not increase" "$T" separate --input nonincr.csv --method two-point --output o.json

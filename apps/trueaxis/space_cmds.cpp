@@ -1,0 +1,202 @@
+// trueaxis CLI — error space and compensation: 'space', 'compensate', 'export linuxcnc|csv'.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <memory>
+
+#include "commands.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/space.hpp"
+#include "trueaxis/map/error_map.hpp"
+#include "trueaxis/surface/space.hpp"
+
+namespace trueaxis::cli {
+namespace {
+
+struct SpaceArgs {
+  std::string machine, plan, output, csv;
+  long verify = 1000;
+  bool quiet = false;
+};
+
+int run_space(const SpaceArgs& a) {
+  const sim::Machine m = io::read_machine(a.machine);
+  const surface::SpacePlan plan = a.plan.empty() ? surface::SpacePlan{} : io::read_plan(a.plan);
+  const auto t0 = std::chrono::steady_clock::now();
+  if (!a.quiet) {
+    const auto axes = surface::space_axes(m, plan);
+    fmt::print("measuring the error space on a {} x {} x {} grid{}...\n", axes[0].size(),
+               axes[1].size(), axes[2].size(),
+               plan.monte_carlo >= 2
+                   ? fmt::format(" ({} repetitions for the uncertainty)", plan.monte_carlo)
+                   : "");
+    std::fflush(stdout);
+  }
+  const surface::SpaceResult s = surface::measure_space(m, plan);
+  std::optional<surface::Verification> v;
+  if (a.verify > 0) v = surface::verify_compensation(m, s.map, a.verify, plan.seed);
+  io::write_space(a.output, s, plan, v);
+  if (!a.csv.empty()) io::write_map_csv(a.csv, s.map);
+  if (!a.quiet) {
+    fmt::print("{}", s.summary());
+    if (v)
+      fmt::print(
+          "  compensation check at {} random points (rigid-body part removed):\n"
+          "    before: RMS {:.3f} um, max {:.3f} um\n    after:  RMS {:.3f} um, max {:.3f} um "
+          "(improvement x{:.1f})\n    expected after: RMS {:.3f} um = interpolation {:.3f} (+) "
+          "map uncertainty {:.3f}\n",
+          v->points, v->before_rms * 1e3, v->before_max * 1e3, v->after_rms * 1e3,
+          v->after_max * 1e3, v->improvement(), v->predicted_rms * 1e3, v->interpolation_rms * 1e3,
+          v->uncertainty_rms * 1e3);
+    fmt::print("wrote {}{} in {:.1f} s\n", a.output, a.csv.empty() ? "" : " and " + a.csv,
+               std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  }
+  return 0;
+}
+
+struct CompensateArgs {
+  std::string space, input, output, interpolation = "linear";
+  int iterations = 2;
+  bool clamp = false, quiet = false;
+};
+
+int run_compensate(const CompensateArgs& a) {
+  const map::ErrorMap m = io::read_error_map(a.space);
+  Eigen::Matrix3Xd p = io::read_points(a.input);
+  map::CompensateOptions o;
+  o.eval.interpolation = map::interpolation_from_string(a.interpolation);
+  o.eval.outside = a.clamp ? map::Outside::Clamp : map::Outside::Refuse;
+  o.iterations = a.iterations;
+  try {
+    map::compensate(m, p, o);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", a.input, e.what()));
+  }
+  const Eigen::VectorXd x = p.row(0).transpose(), y = p.row(1).transpose(),
+                        z = p.row(2).transpose();
+  io::write_csv(a.output, {"x", "y", "z"}, {&x, &y, &z});
+  if (!a.quiet && a.output != "-")
+    fmt::print("compensated {} commands ({} interpolation, {} iterations): wrote {}\n", p.cols(),
+               a.interpolation, a.iterations, a.output);
+  return 0;
+}
+
+struct ExportArgs {
+  std::string space, output, axis = "x";
+  std::vector<double> at;
+  int type = 1;
+  bool quiet = false;
+};
+
+int run_export_linuxcnc(const ExportArgs& a) {
+  const map::ErrorMap m = io::read_error_map(a.space);
+  const int axis = a.axis == "x" ? 0 : a.axis == "y" ? 1 : 2;
+  Eigen::Vector3d at;
+  for (int k = 0; k < 3; ++k) {
+    const auto& x = m.axes[static_cast<std::size_t>(k)];
+    at[k] = 0.5 * (x[0] + x[x.size() - 1]);  // default: the line through the grid's centre
+  }
+  if (!a.at.empty()) {
+    if (a.at.size() != 3) throw Error("--at needs x,y,z (the axis' own coordinate is ignored)");
+    at = {a.at[0], a.at[1], a.at[2]};
+  }
+  const int n = io::write_linuxcnc(a.output, m, axis, at, a.type);
+  if (!a.quiet)
+    fmt::print(
+        "wrote {} ({} points, type {}: {}). In the INI file: [JOINT_n] COMP_FILE = {} and "
+        "COMP_FILE_TYPE = {}\n",
+        a.output, n, a.type, a.type == 0 ? "actual positions" : "trims", a.output, a.type);
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> add_space_commands(CLI::App& app) {
+  std::vector<Command> out;
+  auto sa = std::make_shared<SpaceArgs>();
+  auto* c = app.add_subcommand(
+      "space",
+      "Measure the error space of a (virtual) machine: straightness runs with displacement "
+      "probes -> separated lines -> surfaces on stacked planes, laser positioning runs to stack "
+      "them, face diagonals for squareness. Writes the error-vector grid with its uncertainty "
+      "and checks compensation at random points.\nExample: trueaxis space --machine "
+      "machine.json --plan plan.json -o space.json");
+  c->add_option("--machine", sa->machine, "machine JSON ('trueaxis simulate machine')")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--plan", sa->plan,
+                "plan JSON: spacing (mm), probes, probe_noise_um, laser_noise_um, profile_um, "
+                "diagonals, monte_carlo, seed (default: 50 mm grid over the whole range, "
+                "noise-free)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--output,-o", sa->output, "space JSON to write")->required();
+  c->add_option("--csv", sa->csv, "also write the grid as a CSV table");
+  c->add_option("--verify", sa->verify,
+                "random points for the compensation check on the machine (0: none)")
+      ->capture_default_str();
+  c->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
+  out.push_back({c, [sa] { return run_space(*sa); }});
+
+  auto ca = std::make_shared<CompensateArgs>();
+  c = app.add_subcommand(
+      "compensate",
+      "Correct commanded positions with an error space so the machine lands where wanted: "
+      "c' = c - e(c'), iterated.\ncommands.csv: header row with columns x,y,z (mm); the output "
+      "has the corrected x,y,z.\nExample: trueaxis compensate --space space.json --input "
+      "commands.csv --output corrected.csv");
+  c->add_option("--space", ca->space, "space JSON ('trueaxis space')")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--input,-i", ca->input, "commands CSV (x,y,z in mm)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--output,-o", ca->output, "corrected CSV to write ('-': standard output)")
+      ->required();
+  c->add_option("--interpolation", ca->interpolation, "linear (trilinear) or cubic")
+      ->check(CLI::IsMember({"linear", "cubic"}))
+      ->capture_default_str();
+  c->add_option("--iterations", ca->iterations, "fixed-point iterations (1 or more)")
+      ->capture_default_str();
+  c->add_flag("--clamp", ca->clamp,
+              "hold the edge value for commands outside the grid (default: refuse them)");
+  c->add_flag("--quiet,-q", ca->quiet, "print nothing on success");
+  out.push_back({c, [ca] { return run_compensate(*ca); }});
+
+  auto* ex = app.add_subcommand("export", "Export an error space for a controller");
+  ex->require_subcommand(1);
+  auto ea = std::make_shared<ExportArgs>();
+  c = ex->add_subcommand(
+      "linuxcnc",
+      "LinuxCNC per-joint compensation file: lines 'nominal forward reverse' along one axis.\n"
+      "Example: trueaxis export linuxcnc --space space.json --axis x --output x.comp");
+  c->add_option("--space", ea->space, "space JSON")->required()->check(CLI::ExistingFile);
+  c->add_option("--axis", ea->axis, "the joint's axis")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  c->add_option("--at", ea->at,
+                "the line's other coordinates x,y,z in mm (default: the grid's centre)")
+      ->delimiter(',');
+  c->add_option("--type", ea->type,
+                "COMP_FILE_TYPE: 0 = actual positions, 1 = trims (nominal - actual)")
+      ->check(CLI::IsMember({0, 1}))
+      ->capture_default_str();
+  c->add_option("--output,-o", ea->output, "compensation file to write")->required();
+  c->add_flag("--quiet,-q", ea->quiet, "print nothing on success");
+  out.push_back({c, [ea] { return run_export_linuxcnc(*ea); }});
+
+  auto csv_space = std::make_shared<std::string>(), csv_out = std::make_shared<std::string>();
+  c = ex->add_subcommand("csv",
+                         "Generic error-map table: x,y,z (mm), ex,ey,ez and uncertainties (um)");
+  c->add_option("--space", *csv_space, "space JSON")->required()->check(CLI::ExistingFile);
+  c->add_option("--output,-o", *csv_out, "CSV to write")->required();
+  out.push_back({c, [csv_space, csv_out] {
+                   io::write_map_csv(*csv_out, io::read_error_map(*csv_space));
+                   return 0;
+                 }});
+  return out;
+}
+
+}  // namespace trueaxis::cli

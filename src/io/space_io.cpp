@@ -1,0 +1,220 @@
+#include <fmt/format.h>
+
+#include <fstream>
+
+#include "fast_text.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/json.hpp"
+#include "trueaxis/io/space.hpp"
+
+namespace trueaxis::io {
+namespace {
+
+using ptr = JsonFile::pointer;
+using ojson = nlohmann::ordered_json;
+
+ojson scaled(const Eigen::Ref<const Eigen::RowVectorXd>& v, double scale) {
+  ojson a = ojson::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(v[i] * scale);
+  return a;
+}
+
+Eigen::VectorXd numbers(const JsonFile& f, const ptr& p, double scale) {
+  const auto& a = f.array(p);
+  Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
+  for (std::size_t i = 0; i < a.size(); ++i)
+    v[static_cast<Eigen::Index>(i)] = f.number(p / i) * scale;
+  return v;
+}
+
+void write_json(const std::string& path, const ojson& j) {
+  std::ofstream out(path);
+  if (!out) throw Error(fmt::format("{}: cannot open for writing", path));
+  out << j.dump(1) << '\n';
+  if (!out) throw Error(fmt::format("{}: write failed", path));
+}
+
+}  // namespace
+
+surface::SpacePlan read_plan(const std::string& path) {
+  const JsonFile f = JsonFile::read(path);
+  const auto& o = f.object(ptr());
+  surface::SpacePlan p;
+  for (const auto& [key, value] : o.items()) {
+    const ptr k = ptr() / key;
+    if (key == "spacing") {
+      p.spacing = f.number(k);
+    } else if (key == "probes") {
+      const std::string s = f.string(k);
+      if (s == "three-point")
+        p.probes = surface::ProbeMethod::ThreePoint;
+      else if (s == "two-point")
+        p.probes = surface::ProbeMethod::TwoPoint;
+      else
+        f.fail(k, fmt::format("probes must be \"three-point\" or \"two-point\", not \"{}\"", s));
+    } else if (key == "probe_noise_um") {
+      p.probe_noise = f.number(k) * 1e-3;
+    } else if (key == "laser_noise_um") {
+      p.laser_noise = f.number(k) * 1e-3;
+    } else if (key == "profile_um") {
+      p.profile_amplitude = f.number(k) * 1e-3;
+    } else if (key == "diagonals") {
+      if (!value.is_boolean()) f.fail(k, "'diagonals' must be true or false");
+      p.diagonals = value.get<bool>();
+    } else if (key == "monte_carlo" || key == "seed") {
+      const double v = f.number(k);
+      if (v < 0 || v != std::floor(v) || v > 1e9)
+        f.fail(k, fmt::format("'{}' must be a whole number >= 0", key));
+      if (key == "seed")
+        p.seed = static_cast<std::uint64_t>(v);
+      else
+        p.monte_carlo = static_cast<int>(v);
+    } else {
+      f.fail(k, fmt::format("unknown key '{}' (spacing, probes, probe_noise_um, laser_noise_um, "
+                            "profile_um, diagonals, monte_carlo, seed)",
+                            key));
+    }
+  }
+  try {
+    p.validate();
+  } catch (const Error& e) {
+    f.fail(ptr(), e.what());
+  }
+  return p;
+}
+
+void write_space(const std::string& path, const surface::SpaceResult& s,
+                 const surface::SpacePlan& plan, const std::optional<surface::Verification>& v) {
+  const map::ErrorMap& m = s.map;
+  m.validate();
+  ojson j;
+  j["frame"] =
+      "machine coordinates (mm); error = actual - nominal tool point (um), at the nodes of the "
+      "grid";
+  j["reference"] = "least-squares rigid-body motion removed";
+  j["unobservable"] = s.unobservable;
+  j["gauge"] = s.gauge;
+  j["plan"] = {
+      {"spacing", plan.spacing},
+      {"probes", plan.probes == surface::ProbeMethod::TwoPoint ? "two-point" : "three-point"},
+      {"probe_noise_um", plan.probe_noise * 1e3},
+      {"laser_noise_um", plan.laser_noise * 1e3},
+      {"profile_um", plan.profile_amplitude * 1e3},
+      {"diagonals", plan.diagonals},
+      {"monte_carlo", plan.monte_carlo},
+      {"seed", plan.seed}};
+  j["campaign"] = {{"straightness_runs", s.straightness_runs}, {"laser_runs", s.laser_runs}};
+  auto& g = j["grid"];
+  const char* names[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a)
+    g[names[a]] = scaled(m.axes[static_cast<std::size_t>(a)].transpose(), 1.0);
+  g["layout"] = "node n = i + nx*(j + ny*k) for x[i], y[j], z[k]";
+  const char* en[3] = {"ex", "ey", "ez"};
+  const char* un[3] = {"ux", "uy", "uz"};
+  for (int c = 0; c < 3; ++c) g[en[c]] = scaled(m.error.row(c), 1e3);
+  if (m.uncertainty.size() != 0)
+    for (int c = 0; c < 3; ++c) g[un[c]] = scaled(m.uncertainty.row(c), 1e3);
+  auto& sf = j["surfaces"] = ojson::array();
+  for (const auto& l : s.surfaces)
+    sf.push_back({{"component", std::string("e") + "xyz"[l.component]},
+                  {"level", l.level},
+                  {"closure_rms", l.closure_rms * 1e3},
+                  {"flatness_ls", l.flatness_ls * 1e3}});
+  j["truth"] = {{"rms", s.truth_rms * 1e3}, {"max", s.truth_max * 1e3}};
+  if (v)
+    j["verification"] = {{"points", v->points},
+                         {"before_rms", v->before_rms * 1e3},
+                         {"before_max", v->before_max * 1e3},
+                         {"after_rms", v->after_rms * 1e3},
+                         {"after_max", v->after_max * 1e3},
+                         {"improvement", v->improvement()},
+                         {"interpolation_rms", v->interpolation_rms * 1e3},
+                         {"uncertainty_rms", v->uncertainty_rms * 1e3},
+                         {"predicted_rms", v->predicted_rms * 1e3}};
+  write_json(path, j);
+}
+
+map::ErrorMap read_error_map(const std::string& path) {
+  const JsonFile f = JsonFile::read(path);
+  f.object(ptr());
+  const ptr g("/grid");
+  f.object(g);
+  map::ErrorMap m;
+  const char* names[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a) {
+    auto& x = m.axes[static_cast<std::size_t>(a)];
+    x = numbers(f, g / names[a], 1.0);
+    if (x.size() < 2)
+      f.fail(g / names[a], fmt::format("the grid needs at least two {} nodes", names[a]));
+    for (Eigen::Index i = 1; i < x.size(); ++i)
+      if (!(x[i] > x[i - 1]))
+        f.fail(g / names[a] / static_cast<std::size_t>(i),
+               fmt::format("grid {} nodes must increase strictly", names[a]));
+  }
+  const char* en[3] = {"ex", "ey", "ez"};
+  const char* un[3] = {"ux", "uy", "uz"};
+  m.error.resize(3, m.nodes());
+  const bool has_u = f.has(g / "ux");
+  if (has_u) m.uncertainty.resize(3, m.nodes());
+  for (int c = 0; c < 3; ++c) {
+    const Eigen::VectorXd e = numbers(f, g / en[c], 1e-3);
+    if (e.size() != m.nodes())
+      f.fail(g / en[c], fmt::format("'{}' has {} values for {} grid nodes", dotted(g / en[c]),
+                                    e.size(), m.nodes()));
+    m.error.row(c) = e.transpose();
+    if (has_u) {
+      const Eigen::VectorXd u = numbers(f, g / un[c], 1e-3);
+      if (u.size() != m.nodes())
+        f.fail(g / un[c], fmt::format("'{}' has {} values for {} grid nodes", dotted(g / un[c]),
+                                      u.size(), m.nodes()));
+      m.uncertainty.row(c) = u.transpose();
+    }
+  }
+  return m;
+}
+
+void write_map_csv(const std::string& path, const map::ErrorMap& m) {
+  m.validate();
+  std::vector<Eigen::VectorXd> cols(m.uncertainty.size() != 0 ? 9 : 6, Eigen::VectorXd(m.nodes()));
+  for (Eigen::Index n = 0; n < m.nodes(); ++n) {
+    const Eigen::Vector3d p = m.node(n);
+    for (int a = 0; a < 3; ++a) {
+      cols[static_cast<std::size_t>(a)][n] = p[a];
+      cols[static_cast<std::size_t>(3 + a)][n] = m.error(a, n) * 1e3;
+      if (cols.size() == 9) cols[static_cast<std::size_t>(6 + a)][n] = m.uncertainty(a, n) * 1e3;
+    }
+  }
+  std::vector<std::string> header{"x", "y", "z", "ex_um", "ey_um", "ez_um"};
+  if (cols.size() == 9) header.insert(header.end(), {"ux_um", "uy_um", "uz_um"});
+  std::vector<const Eigen::VectorXd*> ptrs;
+  for (const auto& c : cols) ptrs.push_back(&c);
+  write_csv(path, header, ptrs);
+}
+
+int write_linuxcnc(const std::string& path, const map::ErrorMap& m, int axis,
+                   const Eigen::Vector3d& at, int type) {
+  if (axis < 0 || axis > 2) throw Error("the axis must be x, y or z");
+  if (type != 0 && type != 1) throw Error("the LinuxCNC compensation type must be 0 or 1");
+  const Eigen::VectorXd& nodes = m.axes[static_cast<std::size_t>(axis)];
+  if (nodes.size() > 256)
+    throw Error(
+        fmt::format("LinuxCNC accepts at most 256 compensation points; the map has {} "
+                    "nodes along the axis",
+                    nodes.size()));
+  const map::Interpolator f(m);
+  std::string text;
+  for (Eigen::Index i = 0; i < nodes.size(); ++i) {
+    Eigen::Vector3d p = at;
+    p[axis] = nodes[i];
+    const double e = f(p)[axis];  // refuses an `at` outside the grid
+    const double value = type == 0 ? nodes[i] + e : -e;
+    text += fmt::format("{:.6f} {:.6f} {:.6f}\n", nodes[i], value, value);
+  }
+  detail::OutFile out(path);
+  out.write(text);
+  out.close();
+  return static_cast<int>(nodes.size());
+}
+
+}  // namespace trueaxis::io
