@@ -19,11 +19,9 @@ constexpr const char* kAxis = "xyz";
 std::uint64_t run_seed(std::uint64_t seed, std::uint64_t counter) {
   std::seed_seq s{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),
                   static_cast<std::uint32_t>(counter), static_cast<std::uint32_t>(counter >> 32)};
-  std::uint64_t out[1];
   std::uint32_t w[2];
   s.generate(w, w + 2);
-  out[0] = (static_cast<std::uint64_t>(w[0]) << 32) | w[1];
-  return out[0];
+  return (static_cast<std::uint64_t>(w[0]) << 32) | w[1];
 }
 
 // Least-squares rigid-body motion t + ω × (p − centre) fitted to vectors v at points p, removed
@@ -163,8 +161,7 @@ struct Campaign {
     }
     const Result s = build(lines, {});
     surfaces.push_back({c, axes[c][k], s.closure_rms, s.flatness_ls});
-    if (!s.unobservable.empty() &&
-        std::find(s.unobservable.begin(), s.unobservable.end(), "twist") != s.unobservable.end() &&
+    if (std::find(s.unobservable.begin(), s.unobservable.end(), "twist") != s.unobservable.end() &&
         std::find(unobservable.begin(), unobservable.end(), "twist of every level") ==
             unobservable.end())
       unobservable.push_back("twist of every level");
