@@ -5,6 +5,8 @@
 #include <fstream>
 #include <string>
 
+#include "trueaxis/error.hpp"
+
 namespace trueaxis::test {
 
 // A directory of the running test's own (ctest runs tests in parallel processes).
@@ -14,6 +16,17 @@ inline std::string temp_dir() {
       std::string(TRUEAXIS_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
   std::filesystem::create_directories(d);
   return d;
+}
+
+// The message of the trueaxis::Error that `f` throws, or "(no error)".
+template <class Fn>
+std::string error_of(Fn&& f) {
+  try {
+    f();
+  } catch (const trueaxis::Error& e) {
+    return e.what();
+  }
+  return "(no error)";
 }
 
 inline std::string temp_file(const std::string& name, const std::string& content) {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <iterator>
 #include <vector>
 
@@ -204,6 +205,21 @@ const nlohmann::json& JsonFile::object(const pointer& p) const {
   if (!v.is_object())
     fail(p, fmt::format("'{}' must be an object", p.empty() ? "(top level)" : dotted(p)));
   return v;
+}
+
+Eigen::VectorXd JsonFile::numbers(const pointer& p, double scale) const {
+  const json& a = array(p);
+  Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
+  for (std::size_t i = 0; i < a.size(); ++i)
+    v[static_cast<Eigen::Index>(i)] = number(p / i) * scale;
+  return v;
+}
+
+void write_json(const std::string& path, const nlohmann::ordered_json& j) {
+  std::ofstream out(path, std::ios::binary);
+  if (!out) throw Error(fmt::format("{}: cannot open file for writing", path));
+  out << j.dump(1) << '\n';
+  if (!out) throw Error(fmt::format("{}: write error", path));
 }
 
 std::string dotted(const JsonFile::pointer& p) {

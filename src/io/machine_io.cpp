@@ -1,6 +1,5 @@
 #include <fmt/format.h>
 
-#include <fstream>
 #include <map>
 
 #include "trueaxis/error.hpp"
@@ -22,11 +21,8 @@ double scale_of(int c) {
 }
 
 std::vector<double> numbers(const JsonFile& f, const ptr& p, double scale) {
-  const auto& a = f.array(p);
-  std::vector<double> v;
-  v.reserve(a.size());
-  for (std::size_t i = 0; i < a.size(); ++i) v.push_back(f.number(p / i) * scale);
-  return v;
+  const Eigen::VectorXd v = f.numbers(p, scale);
+  return {v.data(), v.data() + v.size()};
 }
 
 sim::ErrorFunction read_function(const JsonFile& f, const ptr& p, double scale) {
@@ -180,10 +176,7 @@ void write_machine(const std::string& path, const sim::Machine& m) {
   e["EC0Y"] = m.squareness_c0y / kUrad;
   e["EB0Z"] = m.squareness_b0z / kUrad;
   e["EA0Z"] = m.squareness_a0z / kUrad;
-  std::ofstream out(path);
-  if (!out) throw Error(fmt::format("{}: cannot open for writing", path));
-  out << j.dump(1) << '\n';
-  if (!out) throw Error(fmt::format("{}: write failed", path));
+  write_json(path, j);
 }
 
 Eigen::Matrix3Xd read_points(const std::string& path, const sim::Machine* machine) {

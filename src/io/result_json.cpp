@@ -104,11 +104,7 @@ Result read_result(const std::string& path) {
       if (required) doc.array(at);  // throws "missing", located at the parent
       return v;
     }
-    const auto& a = doc.array(at);
-    v.resize(static_cast<Eigen::Index>(a.size()));
-    for (std::size_t i = 0; i < a.size(); ++i)
-      v[static_cast<Eigen::Index>(i)] = doc.number(at / i) * scale;
-    return v;
+    return doc.numbers(at, scale);
   };
   auto prof = [&](const char* name, double scale) {
     const P o = P() / name;

@@ -1,7 +1,5 @@
 #include <fmt/format.h>
 
-#include <fstream>
-
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
@@ -18,21 +16,6 @@ ojson scaled(const Eigen::Ref<const Eigen::RowVectorXd>& v, double scale) {
   ojson a = ojson::array();
   for (Eigen::Index i = 0; i < v.size(); ++i) a.push_back(v[i] * scale);
   return a;
-}
-
-Eigen::VectorXd numbers(const JsonFile& f, const ptr& p, double scale) {
-  const auto& a = f.array(p);
-  Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
-  for (std::size_t i = 0; i < a.size(); ++i)
-    v[static_cast<Eigen::Index>(i)] = f.number(p / i) * scale;
-  return v;
-}
-
-void write_json(const std::string& path, const ojson& j) {
-  std::ofstream out(path);
-  if (!out) throw Error(fmt::format("{}: cannot open for writing", path));
-  out << j.dump(1) << '\n';
-  if (!out) throw Error(fmt::format("{}: write failed", path));
 }
 
 }  // namespace
@@ -144,7 +127,7 @@ map::ErrorMap read_error_map(const std::string& path) {
   const char* names[3] = {"x", "y", "z"};
   for (int a = 0; a < 3; ++a) {
     auto& x = m.axes[static_cast<std::size_t>(a)];
-    x = numbers(f, g / names[a], 1.0);
+    x = f.numbers(g / names[a]);
     if (x.size() < 2)
       f.fail(g / names[a], fmt::format("the grid needs at least two {} nodes", names[a]));
     for (Eigen::Index i = 1; i < x.size(); ++i)
@@ -158,13 +141,13 @@ map::ErrorMap read_error_map(const std::string& path) {
   const bool has_u = f.has(g / "ux");
   if (has_u) m.uncertainty.resize(3, m.nodes());
   for (int c = 0; c < 3; ++c) {
-    const Eigen::VectorXd e = numbers(f, g / en[c], 1e-3);
+    const Eigen::VectorXd e = f.numbers(g / en[c], 1e-3);
     if (e.size() != m.nodes())
       f.fail(g / en[c], fmt::format("'{}' has {} values for {} grid nodes", dotted(g / en[c]),
                                     e.size(), m.nodes()));
     m.error.row(c) = e.transpose();
     if (has_u) {
-      const Eigen::VectorXd u = numbers(f, g / un[c], 1e-3);
+      const Eigen::VectorXd u = f.numbers(g / un[c], 1e-3);
       if (u.size() != m.nodes())
         f.fail(g / un[c], fmt::format("'{}' has {} values for {} grid nodes", dotted(g / un[c]),
                                       u.size(), m.nodes()));

@@ -3,7 +3,6 @@
 #include <charconv>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
@@ -115,13 +114,6 @@ std::vector<surface::Line> read_lines(const std::string& path) {
     if (kinds != 1)
       doc.fail(at,
                fmt::format("line '{}': give exactly one of 'heights', 'slopes' or 'from'", l.name));
-    auto values = [&](const P& p, double scale) {
-      const auto& a = doc.array(p);
-      Eigen::VectorXd v(static_cast<Eigen::Index>(a.size()));
-      for (std::size_t k = 0; k < a.size(); ++k)
-        v[static_cast<Eigen::Index>(k)] = doc.number(p / k) * scale;
-      return v;
-    };
     if (doc.has(at / "from")) {
       std::string from = doc.string(at / "from");
       if (fs::path(from).is_relative()) from = (fs::path(path).parent_path() / from).string();
@@ -141,9 +133,9 @@ std::vector<surface::Line> read_lines(const std::string& path) {
       l.spacing = doc.number(at / "spacing");
       if (!(l.spacing > 0)) doc.fail(at / "spacing", "spacing must be positive");
       if (doc.has(at / "heights")) {
-        l.heights = values(at / "heights", 1e-3);
+        l.heights = doc.numbers(at / "heights", 1e-3);
       } else {
-        l.heights = surface::heights_from_slopes(values(at / "slopes", 1e-6), l.spacing);
+        l.heights = surface::heights_from_slopes(doc.numbers(at / "slopes", 1e-6), l.spacing);
       }
       if (l.heights.size() < 2)
         doc.fail(at, fmt::format("line '{}': needs at least 2 stations", l.name));
@@ -192,10 +184,7 @@ void write_surface(const std::string& path, const surface::Result& r) {
          {"residual", c.residual * 1e3}});
   j["unobservable"] = r.unobservable;
   j["gauge"] = r.gauge;
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error(fmt::format("{}: cannot open file for writing", path));
-  out << j.dump(1) << '\n';
-  if (!out) throw Error(fmt::format("{}: write error", path));
+  write_json(path, j);
 }
 
 }  // namespace trueaxis::io

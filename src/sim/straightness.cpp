@@ -6,8 +6,8 @@
 #include <cmath>
 #include <random>
 
+#include "common.hpp"
 #include "trueaxis/error.hpp"
-#include "waves.hpp"
 
 namespace trueaxis::sim {
 
@@ -33,13 +33,11 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
   std::uniform_real_distribution<double> U(0.0, 1.0);
   std::normal_distribution<double> Nd(0.0, 1.0);
   const double h = o.step;
-  std::vector<long> p;
-  for (double s : o.offsets) p.push_back(std::lround(s / h));
-  const long pmin = std::min(0L, *std::min_element(p.begin(), p.end()));
-  const long pmax = std::max(0L, *std::max_element(p.begin(), p.end()));
   const long n = o.stations;
-  const long Q = n + (pmax - pmin);
-  const double L = static_cast<double>(Q - 1) * h;
+  const detail::ProbeGrid grid(o.offsets, h, n);
+  const std::vector<long>& p = grid.steps;
+  const long pmin = grid.pmin, Q = grid.points;
+  const double L = grid.length;
   const double xs = o.x0 + static_cast<double>(pmin) * h;  // first position
 
   // Smooth parts as sums of sinusoids with random wavelength/phase.
@@ -70,15 +68,8 @@ StraightnessCampaign simulate_straightness(const StraightnessOptions& o) {
     T.guide[q] = g_bow * (t * t - 1.0 / 3.0) + eval_waves(g_waves, u);
     T.pitch[q] = t_drift * t + eval_waves(t_waves, u);
   }
-  for (std::size_t i = 0; i < p.size(); ++i)
-    T.probe_offsets.push_back(o.offset_amplitude * (2 * U(rng) - 1));
-  T.angle_offset = o.angle ? 20e-6 * (2 * U(rng) - 1) : 0.0;
-
   separation::ProbeData& d = c.data;
-  d.offsets = o.offsets;
-  d.x.resize(n);
-  d.readings.resize(n, static_cast<Eigen::Index>(p.size()));
-  if (o.angle) d.angle.resize(n);
+  detail::start_probe_data(rng, o.offsets, n, o.offset_amplitude, o.angle, T, d);
   for (long K = 0; K < n; ++K) {
     const long qs = K - pmin;
     d.x[K] = o.x0 + static_cast<double>(K) * h;

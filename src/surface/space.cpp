@@ -46,16 +46,24 @@ void remove_rigid(const Eigen::Matrix3Xd& p, Eigen::Matrix3Xd& v) {
 struct Campaign {
   const sim::Machine& m;
   const SpacePlan& plan;
-  std::array<Eigen::VectorXd, 3> axes;
-  std::array<Eigen::Index, 3> n{};
-  std::array<double, 3> h{};
+  const std::array<Eigen::VectorXd, 3>& axes;
+  std::array<Eigen::Index, 3> n{};  // nodes per axis
+  std::array<double, 3> h{};        // grid step per axis (mm)
   std::uint64_t seed;
-  std::uint64_t counter = 0;
-  double probe_noise, laser_noise;
+  std::uint64_t counter = 0;  // runs so far: each run's seed is derived from it
   // Outputs.
   std::vector<LevelSurface> surfaces;
   long straightness_runs = 0, laser_runs = 0;
   std::vector<std::string> unobservable;
+
+  Campaign(const sim::Machine& machine, const SpacePlan& p,
+           const std::array<Eigen::VectorXd, 3>& grid, std::uint64_t s)
+      : m(machine), plan(p), axes(grid), seed(s) {
+    for (std::size_t k = 0; k < 3; ++k) {
+      n[k] = axes[k].size();
+      h[k] = (axes[k][n[k] - 1] - axes[k][0]) / static_cast<double>(n[k] - 1);
+    }
+  }
 
   Eigen::Index node(Eigen::Index i, Eigen::Index j, Eigen::Index k) const {
     return i + n[0] * (j + n[1] * k);
@@ -76,7 +84,7 @@ struct Campaign {
     o.sensing = Eigen::Vector3d::Unit(c);
     o.stations = stations;
     o.step = step;
-    o.noise = probe_noise;
+    o.noise = plan.probe_noise;
     o.profile_amplitude = plan.profile_amplitude;
     o.seed = run_seed(seed, counter++);
     separation::Options so;
@@ -104,7 +112,7 @@ struct Campaign {
   Eigen::VectorXd laser(const Eigen::Vector3d& start, const Eigen::Vector3d& dir, long stations,
                         double step) {
     ++laser_runs;
-    return sim::simulate_laser_run(m, start, dir, stations, step, laser_noise,
+    return sim::simulate_laser_run(m, start, dir, stations, step, plan.laser_noise,
                                    run_seed(seed, counter++));
   }
 
@@ -316,21 +324,9 @@ void remove_rigid_motion(map::ErrorMap& map) {
 SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan) {
   machine.validate();
   const auto axes = space_axes(machine, plan);
-  auto campaign = [&](std::uint64_t seed) {
-    Campaign c{machine,          plan, axes, {}, {}, seed, 0, plan.probe_noise,
-               plan.laser_noise, {},   0,    0,  {}};
-    for (int k = 0; k < 3; ++k) {
-      c.n[static_cast<std::size_t>(k)] = axes[static_cast<std::size_t>(k)].size();
-      c.h[static_cast<std::size_t>(k)] =
-          (axes[static_cast<std::size_t>(k)][c.n[static_cast<std::size_t>(k)] - 1] -
-           axes[static_cast<std::size_t>(k)][0]) /
-          static_cast<double>(c.n[static_cast<std::size_t>(k)] - 1);
-    }
-    return c;
-  };
   SpaceResult out;
   out.map.axes = axes;
-  Campaign c0 = campaign(plan.seed);
+  Campaign c0(machine, plan, axes, plan.seed);
   out.map.error = c0.run();
   remove_rigid_motion(out.map);
   out.surfaces = c0.surfaces;
@@ -351,7 +347,8 @@ SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan) {
     for (int r = 0; r < plan.monte_carlo; ++r) {
       map::ErrorMap rep;
       rep.axes = axes;
-      Campaign c = campaign(run_seed(plan.seed, 1'000'000 + static_cast<std::uint64_t>(r)));
+      Campaign c(machine, plan, axes,
+                 run_seed(plan.seed, 1'000'000 + static_cast<std::uint64_t>(r)));
       rep.error = c.run();
       remove_rigid_motion(rep);
       const Eigen::Matrix3Xd d = rep.error - mean;

@@ -55,6 +55,8 @@ sed 's/"heights": \[0, 1, 2\]}$/"heights": [0, "q", 2]}/' lines.json > badlines.
 expect_err "badlines.json:5:" "$T" surface --lines badlines.json -o o.json
 sed 's/"direction": \[0, 1\], "spacing": 50/"direction": [1, 1], "spacing": 50/' lines.json > diag.json
 expect_err "neither along x nor along y" "$T" surface --lines diag.json --method seed -o o.json
+sed 's/"from": "r-two.json"}/"from": "r-two.json", "spacing": 7}/' lines.json > spacing.json
+expect_err "spacing.json:2:88: spacing 7 mm does not match the result's station step 10 mm" "$T" surface --lines spacing.json -o o.json
 expect_err "classic needs --moody" "$T" surface --lines lines.json --method classic -o o.json
 
 # The virtual machine: a random machine, its true errors at given points, a probe run on it.

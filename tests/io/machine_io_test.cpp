@@ -10,17 +10,9 @@
 namespace trueaxis::io {
 namespace {
 
+using test::error_of;
 using test::temp_dir;
 using test::temp_file;
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 TEST(MachineIo, RoundTripKeepsEveryError) {
   sim::MachineOptions o;

@@ -11,17 +11,9 @@
 namespace trueaxis::io {
 namespace {
 
+using test::error_of;
 using test::temp_dir;
 using test::temp_file;
-
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "(no error)";
-}
 
 map::ErrorMap field_map(Eigen::Index nx = 9) {
   map::ErrorMap m =

@@ -227,30 +227,24 @@ TEST(SurfaceIo, MoodyAndLinesReadersNameFileLineColumn) {
     std::ofstream(dir + "/" + n + ".txt") << src.rdbuf();
   }
   std::ofstream(dir + "/Config.txt") << "# spacing\nX 4\n";
-  auto err = [](auto fn) {
-    try {
-      fn();
-    } catch (const Error& e) {
-      return std::string(e.what());
-    }
-    return std::string("no error");
-  };
-  EXPECT_EQ(err([&] { io::read_moody(dir); }),
+  using test::error_of;
+  EXPECT_EQ(error_of([&] { io::read_moody(dir); }),
             dir + "/Config.txt:2:1: expected 'I <inches>' or 'M <mm>' (the foot spacing)");
   std::ofstream(dir + "/Config.txt") << "# only comments\n\n";
-  EXPECT_NE(err([&] { io::read_moody(dir); }).find("Config.txt: no foot spacing found"),
+  EXPECT_NE(error_of([&] { io::read_moody(dir); }).find("Config.txt: no foot spacing found"),
             std::string::npos);
   std::ofstream(dir + "/Config.txt") << "I -4\n";
-  EXPECT_EQ(err([&] { io::read_moody(dir); }),
+  EXPECT_EQ(error_of([&] { io::read_moody(dir); }),
             dir + "/Config.txt:1:3: the foot spacing must be positive");
   std::ofstream(dir + "/Config.txt") << "M 66\nI 4\n";  // the first spacing counts
   EXPECT_DOUBLE_EQ(io::read_moody(dir).foot_spacing, 66);
   std::ofstream(dir + "/E_W.txt") << "11.7\n# note\n  nan\n";
-  EXPECT_EQ(err([&] { io::read_moody(dir); }), dir + "/E_W.txt:3:3: NaN is not allowed");
+  EXPECT_EQ(error_of([&] { io::read_moody(dir); }), dir + "/E_W.txt:3:3: NaN is not allowed");
   std::ofstream(dir + "/E_W.txt") << "11.7\n12.4\n";
   std::filesystem::remove(dir + "/N_S.txt");
-  EXPECT_NE(err([&] { io::read_moody(dir); }).find("N_S.txt: cannot open"), std::string::npos);
-  EXPECT_NE(err([&] { io::read_moody(dir + "/nope"); }).find("not a directory"), std::string::npos);
+  EXPECT_NE(error_of([&] { io::read_moody(dir); }).find("N_S.txt: cannot open"), std::string::npos);
+  EXPECT_NE(error_of([&] { io::read_moody(dir + "/nope"); }).find("not a directory"),
+            std::string::npos);
 
   const std::string lp = test::temp_file(
       "lines.json",
@@ -258,12 +252,13 @@ TEST(SurfaceIo, MoodyAndLinesReadersNameFileLineColumn) {
       "10, "
       "\"heights\": [0, 1, 2]},\n {\"name\": \"b\", \"start\": [0, 0], \"direction\": [0, 1], "
       "\"spacing\": 10, \"slopes\": [1, \"x\"]}\n]}");
-  EXPECT_EQ(err([&] { io::read_lines(lp); }), lp + ":3:83: 'lines[1].slopes[1]' must be a number");
+  EXPECT_EQ(error_of([&] { io::read_lines(lp); }),
+            lp + ":3:83: 'lines[1].slopes[1]' must be a number");
   const std::string lp2 = test::temp_file(
       "lines2.json",
       "{\"lines\": [{\"name\": \"a\", \"start\": [0, 0], \"direction\": [1, 0], \"spacing\": 10, "
       "\"heights\": [0, 1], \"slopes\": [1]}]}");
-  EXPECT_NE(err([&] { io::read_lines(lp2); }).find("exactly one of"), std::string::npos);
+  EXPECT_NE(error_of([&] { io::read_lines(lp2); }).find("exactly one of"), std::string::npos);
 }
 
 TEST(SurfaceIo, LinesFromSlopesAndSeparationResults) {

@@ -6,6 +6,7 @@
 // pass over the text (error path only, so the common path pays nothing).
 #pragma once
 
+#include <Eigen/Core>
 #include <nlohmann/json.hpp>
 #include <string>
 
@@ -37,12 +38,18 @@ class JsonFile {
   std::string string(const pointer& p) const;
   const json& array(const pointer& p) const;
   const json& object(const pointer& p) const;
+  // The array of numbers at `p`, each times `scale`; every element checked like number().
+  Eigen::VectorXd numbers(const pointer& p, double scale = 1.0) const;
   bool has(const pointer& p) const { return root_.contains(p); }
 
  private:
   std::string path_, text_;
   json root_;
 };
+
+// Writes `j` (indented by one space, newline-terminated) to `path`. Throws Error naming the path
+// if it cannot be written.
+void write_json(const std::string& path, const nlohmann::ordered_json& j);
 
 // "/a/b/3" -> "a.b[3]", the way users read paths in messages.
 std::string dotted(const JsonFile::pointer& p);
