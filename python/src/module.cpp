@@ -4,6 +4,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "bindings.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/straightness.hpp"
 #include "trueaxis/separation/separation.hpp"
@@ -173,4 +174,5 @@ steps: probe offsets in whole carriage steps (e.g. [0, 2, 3, 5]); angle: an angl
 present; zero_difference: the probes' zero difference is known. Returns {'observable',
 'unobservable' (names of the undetermined modes), 'extra_null_modes', 'pitch_modelled',
 'message' (why, when not observable)}.)doc");
+  trueaxis::python::bind_space(m);
 }

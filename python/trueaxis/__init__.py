@@ -2,12 +2,44 @@
 
 Units follow trueaxis' files: positions in mm, deviations in µm, angles in µrad.
 
+Straightness separation (spec 01):
+
     >>> import trueaxis
     >>> sim = trueaxis.simulate_straightness(stations=200, offsets=[0, 10, 20])
     >>> r = trueaxis.separate(sim["x"], sim["readings"], offsets=sim["offsets"], method="three-point")
     >>> r["workpiece"]["value"]  # µm, residuals from the least-squares line
-"""
-from ._trueaxis import Error, analyze_layout, separate, simulate_straightness, straightness
 
-__all__ = ["Error", "analyze_layout", "separate", "simulate_straightness", "straightness"]
+Error space and compensation of a virtual machine (specs 02 and 06):
+
+    >>> m = trueaxis.Machine.random(seed=3)
+    >>> s = trueaxis.measure_space(m, spacing=100, probe_noise=0.05, verify=1000)
+    >>> s["map"].compensate([[400.0, 300.0, 250.0]])  # commands (mm) that hit the wanted points
+"""
+from ._trueaxis import (
+    Error,
+    ErrorMap,
+    Machine,
+    analyze_layout,
+    measure_space,
+    moody,
+    separate,
+    simulate_straightness,
+    straightness,
+    surface,
+    verify_compensation,
+)
+
+__all__ = [
+    "Error",
+    "ErrorMap",
+    "Machine",
+    "analyze_layout",
+    "measure_space",
+    "moody",
+    "separate",
+    "simulate_straightness",
+    "straightness",
+    "surface",
+    "verify_compensation",
+]
 __version__ = "0.1.0"

@@ -1,0 +1,12 @@
+// Python bindings, shared declarations. Units follow trueaxis' files: positions in mm,
+// deviations in µm, angles in µrad. Every trueaxis::Error becomes trueaxis.Error (module.cpp).
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace trueaxis::python {
+
+// The virtual machine, error surfaces, error spaces and error maps (space.cpp).
+void bind_space(pybind11::module_& m);
+
+}  // namespace trueaxis::python
