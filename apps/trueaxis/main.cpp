@@ -13,6 +13,7 @@
 #include "trueaxis/io/probes.hpp"
 #include "trueaxis/io/surface.hpp"
 #include "trueaxis/report/html.hpp"
+#include "trueaxis/report/surface.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
 #include "trueaxis/surface/surface.hpp"
@@ -76,7 +77,7 @@ int cmd_simulate_straightness(SimArgs a) {
 }
 
 struct SurfaceArgs {
-  std::string lines, moody, method, output;
+  std::string lines, moody, method, output, report;
   bool quiet = false;
 };
 
@@ -94,7 +95,17 @@ int cmd_surface(const SurfaceArgs& a) {
     r = surface::build(io::read_lines(a.lines), o);
   }
   io::write_surface(a.output, r);
-  if (!a.quiet) fmt::print("{}wrote {}\n", r.summary(), a.output);
+  if (!a.report.empty())
+    report::write(
+        a.report,
+        report::render(
+            "trueaxis surface report",
+            {report::surface_section(
+                std::filesystem::path(a.moody.empty() ? a.lines : a.moody).filename().string(),
+                r)}));
+  if (!a.quiet)
+    fmt::print("{}wrote {}{}\n", r.summary(), a.output,
+               a.report.empty() ? "" : fmt::format(" and {}", a.report));
   return 0;
 }
 
@@ -187,6 +198,8 @@ int main(int argc, char** argv) {
                    "Moody's worksheet) or lsq")
       ->check(CLI::IsMember({"lsq", "seed", "classic"}));
   surf->add_option("--output,-o", sf.output, "surface JSON to write")->required();
+  surf->add_option("--report", sf.report,
+                   "also write an HTML report (heat map of the heights, closure at the crossings)");
   surf->add_flag("--quiet,-q", sf.quiet, "print nothing on success");
 
   // simulate ---------------------------------------------------------------------------------
@@ -243,6 +256,11 @@ int main(int argc, char** argv) {
   demo->add_option("--output,-o", da.output, "HTML report to write")->capture_default_str();
   demo->add_option("--seed", da.seed, "random seed of the virtual machine")->capture_default_str();
   demo->add_option("--stations", da.stations, "stations of the straightness campaign")
+      ->capture_default_str();
+  demo->add_option("--spacing", da.spacing, "grid step of the error space (mm)")
+      ->capture_default_str();
+  demo->add_option("--repetitions", da.repetitions,
+                   "Monte Carlo repetitions for the error space's uncertainty (0: none)")
       ->capture_default_str();
   demo->add_flag("--quiet,-q", da.quiet, "print only errors");
 

@@ -11,13 +11,14 @@
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/space.hpp"
 #include "trueaxis/map/error_map.hpp"
+#include "trueaxis/report/surface.hpp"
 #include "trueaxis/surface/space.hpp"
 
 namespace trueaxis::cli {
 namespace {
 
 struct SpaceArgs {
-  std::string machine, plan, output, csv;
+  std::string machine, plan, output, csv, report;
   long verify = 1000;
   bool quiet = false;
 };
@@ -40,6 +41,10 @@ int run_space(const SpaceArgs& a) {
   if (a.verify > 0) v = surface::verify_compensation(m, s.map, a.verify, plan.seed);
   io::write_space(a.output, s, plan, v);
   if (!a.csv.empty()) io::write_map_csv(a.csv, s.map);
+  if (!a.report.empty())
+    report::write(a.report,
+                  report::render("trueaxis error space report",
+                                 {report::space_section(a.output, s, v ? &*v : nullptr)}));
   if (!a.quiet) {
     fmt::print("{}", s.summary());
     if (v)
@@ -51,7 +56,8 @@ int run_space(const SpaceArgs& a) {
           v->points, v->before_rms * 1e3, v->before_max * 1e3, v->after_rms * 1e3,
           v->after_max * 1e3, v->improvement(), v->predicted_rms * 1e3, v->interpolation_rms * 1e3,
           v->uncertainty_rms * 1e3);
-    fmt::print("wrote {}{} in {:.1f} s\n", a.output, a.csv.empty() ? "" : " and " + a.csv,
+    fmt::print("wrote {}{}{} in {:.1f} s\n", a.output, a.csv.empty() ? "" : ", " + a.csv,
+               a.report.empty() ? "" : ", " + a.report,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
   return 0;
@@ -134,6 +140,9 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       ->check(CLI::ExistingFile);
   c->add_option("--output,-o", sa->output, "space JSON to write")->required();
   c->add_option("--csv", sa->csv, "also write the grid as a CSV table");
+  c->add_option("--report", sa->report,
+                "also write an HTML report (distorted planes, level surfaces, uncertainty, "
+                "before/after compensation)");
   c->add_option("--verify", sa->verify,
                 "random points for the compensation check on the machine (0: none)")
       ->capture_default_str();

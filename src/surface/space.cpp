@@ -414,6 +414,9 @@ Verification verify_compensation(const sim::Machine& machine, const map::ErrorMa
   Eigen::Matrix3Xd cp = c;
   map::compensate(space, cp, options);
   const Eigen::Matrix3Xd after = residual(cp);
+  v.commands = c;
+  v.before = before;
+  v.after = after;
   v.before_rms = rms(before);
   v.before_max = before.colwise().norm().maxCoeff();
   v.after_rms = rms(after);

@@ -40,7 +40,8 @@ grep -q "uPlot" rep.html && ok || bad "report embeds uPlot"
 # Surfaces: Moody's Union Jack, and a line network with one line taken from a separate result.
 expect_ok "$T" surface --moody "$DATA/moody" -o moody.json
 grep -q '"method": "moody"' moody.json && grep -q '"min_zone"' moody.json && ok || bad "moody surface.json"
-expect_ok "$T" surface --moody "$DATA/moody" --method lsq -o moody-lsq.json
+expect_ok "$T" surface --moody "$DATA/moody" --method lsq -o moody-lsq.json --report moody.html
+[ "$(grep -o '<svg class="ta-fig"' moody.html | wc -l)" -eq 2 ] && grep -q "closure at every crossing" moody.html && ok || bad "surface --report: heights and closure figures"
 cat > lines.json <<'JSON'
 {"lines": [
   {"name": "A", "start": [0, 0], "direction": [0, 1], "from": "r-two.json"},
@@ -79,7 +80,8 @@ expect_err "leaves the machine's range" "$T" simulate line --machine machine.jso
 # Error space, compensation and controller export on the virtual machine.
 "$T" simulate machine --seed 5 --x 0,300 --y 0,200 --z 0,150 -q -o small.json
 echo '{"spacing": 50, "probe_noise_um": 0.02, "laser_noise_um": 0.02, "monte_carlo": 4}' > plan.json
-expect_ok "$T" space --machine small.json --plan plan.json -o space.json --csv space.csv
+expect_ok "$T" space --machine small.json --plan plan.json -o space.json --csv space.csv --report space.html
+grep -q "XY plane at z" space.html && grep -q "before and after compensation" space.html && grep -q "space.html" out.txt && ok || bad "space --report: planes and compensation curves"
 grep -q "improvement x" out.txt && grep -q '"verification"' space.json && grep -q '"uz"' space.json && ok || bad "space summary and space.json"
 printf 'x,y,z\n10,20,30\n300,200,150\n' > cmds.csv
 expect_ok "$T" compensate --space space.json -i cmds.csv -o corrected.csv

@@ -30,15 +30,24 @@ def dump_dom(html, tmp_path):
 
 def test_demo_report_renders_every_plot(tmp_path):
     report = tmp_path / "demo" / "index.html"
-    subprocess.run([TRUEAXIS, "demo", "-o", str(report), "--stations", "200", "-q"], check=True)
+    subprocess.run([TRUEAXIS, "demo", "-o", str(report), "--stations", "200", "--spacing", "100",
+                    "--repetitions", "3", "-q"], check=True)
     dom = dump_dom(report, tmp_path)
     total = re.search(r'data-plots-total="(\d+)"', dom)
     rendered = re.search(r'data-plots-rendered="(\d+)"', dom)
     assert total and rendered, "report script did not run"
-    assert int(total.group(1)) >= 8
+    assert int(total.group(1)) >= 9  # 8 straightness plots + the compensation curves
     assert rendered.group(1) == total.group(1)
     assert 'data-script-errors="' not in dom, "script errors in the report"
     assert dom.count("<canvas") >= int(total.group(1))
+    # The SVG figures: Moody's plate and its closure (classic and least squares), the space's
+    # level surfaces, uncertainty and three distorted planes. Each must be in the rendered DOM
+    # with a non-empty size.
+    figures = re.search(r'data-figures-total="(\d+)"', dom)
+    assert figures and int(figures.group(1)) >= 4 + 3 + 3
+    assert dom.count('<svg class="ta-fig"') == int(figures.group(1))
+    for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt"):
+        assert (report.parent / name).stat().st_size > 0, name
 
 
 def test_report_command_renders(tmp_path):

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,35 @@ struct Plot {
   std::string y_label;  // with unit
   Eigen::VectorXd x;    // shared by all series
   std::vector<Series> series;
+  bool log_y = false;  // logarithmic y axis (values must be positive)
+};
+
+// A colour map of values over the plane, drawn as static SVG at true aspect ratio (hover shows
+// the numbers). Either or both of: grid cells (value(iy, ix) at (grid_x[ix], grid_y[iy]); each
+// cell reaches half-way to its neighbours) and points (dots, optionally joined by `lines`, each
+// a list of point indices: the measured lines of a surface).
+struct HeatMap {
+  std::string title;
+  std::string x_label, y_label, value_label;  // with units
+  Eigen::VectorXd grid_x, grid_y;
+  Eigen::MatrixXd grid_value;
+  Eigen::VectorXd px, py, pvalue;
+  std::vector<std::vector<Eigen::Index>> lines;
+  bool symmetric = true;          // diverging colours symmetric about 0; false: sequential min..max
+  double vmin = NAN, vmax = NAN;  // colour scale limits (NaN: from the data), e.g. to share one
+  int width = 520;                // px
+};
+
+// A distorted grid: the nodes (u[i], v[j]) of a plane of the machine, moved by their magnified
+// in-plane errors (du, dv at (j, i)), with the out-of-plane error as the node colour. The
+// nominal grid is drawn in grey underneath.
+struct DistortedGrid {
+  std::string title;
+  std::string u_label, v_label, normal_label;  // axis names with units; colour quantity
+  Eigen::VectorXd u, v;                        // mm
+  Eigen::MatrixXd du, dv, normal;              // µm, rows = v, columns = u
+  double magnification = 0;                    // 0: automatic (largest error → 40 % of a step)
+  int width = 520;                             // px
 };
 
 struct Section {
@@ -36,9 +66,18 @@ struct Section {
   std::string intro_html;                       // trusted HTML (escape user text!)
   std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
   std::vector<Plot> plots;
+  std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit
+  std::vector<DistortedGrid> grids;  // drawn after the heat maps
 };
 
 std::string escape(const std::string& text);
+
+// The SVG figures alone (an <svg> element each), for embedding elsewhere.
+std::string svg(const HeatMap& h);
+std::string svg(const DistortedGrid& g);
+// The largest "nice" magnification (1, 2 or 5 × 10^k) that draws an error of `max_error_um` as at
+// most `fraction` of `step_mm`.
+double nice_magnification(double max_error_um, double step_mm, double fraction = 0.4);
 
 // Renders a complete HTML document.
 std::string render(const std::string& title, const std::vector<Section>& sections,

@@ -81,6 +81,8 @@ struct Verification {
   // Prediction of after_rms: the interpolation error (the truth sampled on the same grid, no
   // noise) combined with the map's interpolated uncertainty, sqrt(interp² + u²).
   double interpolation_rms = 0, uncertainty_rms = 0, predicted_rms = 0;
+  // Per point: the wanted positions and the residual error vectors before and after (3 × points).
+  Eigen::Matrix3Xd commands, before, after;
   double improvement() const { return after_rms > 0 ? before_rms / after_rms : 0; }
 };
 Verification verify_compensation(const sim::Machine& machine, const map::ErrorMap& space,

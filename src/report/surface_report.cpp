@@ -1,0 +1,214 @@
+// Report sections for error surfaces and error spaces.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "trueaxis/report/surface.hpp"
+
+namespace trueaxis::report {
+namespace {
+
+std::string joined(const std::vector<std::string>& v, const char* empty = "nothing") {
+  std::string s;
+  for (const auto& x : v) s += (s.empty() ? "" : ", ") + x;
+  return s.empty() ? empty : s;
+}
+
+std::string um(double mm) {
+  return fmt::format("{:.3f}", mm * 1e3);
+}
+
+}  // namespace
+
+Section surface_section(const std::string& title, const surface::Result& r,
+                        const std::string& intro_html) {
+  Section s;
+  s.title = title;
+  s.intro_html = intro_html +
+                 fmt::format("<p>Heights in µm, {}. Not determined by the lines: {}; {}.</p>",
+                             escape(r.reference), escape(joined(r.unobservable)), escape(r.gauge));
+  s.table = {{"quantity", "value"},
+             {"method", r.method},
+             {"lines / stations", fmt::format("{} / {}", r.lines.size(), r.points.size())},
+             {"flatness, least squares (µm)", um(r.flatness_ls)},
+             {"flatness, minimum zone (µm)", um(r.flatness_min_zone)}};
+  if (!r.crossings.empty()) {
+    s.table.push_back({"crossings", fmt::format("{}", r.crossings.size())});
+    s.table.push_back(
+        {"closure RMS / max (µm)", fmt::format("{} / {}", um(r.closure_rms), um(r.closure_max))});
+  }
+  HeatMap h;
+  h.title = "heights at every station (lines in grey)";
+  h.width = 620;
+  h.x_label = "x (mm)";
+  h.y_label = "y (mm)";
+  h.value_label = "height (µm)";
+  const auto n = static_cast<Eigen::Index>(r.points.size());
+  h.px.resize(n);
+  h.py.resize(n);
+  h.pvalue.resize(n);
+  h.lines.resize(r.lines.size());
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const auto& p = r.points[static_cast<std::size_t>(k)];
+    h.px[k] = p.xy.x();
+    h.py[k] = p.xy.y();
+    h.pvalue[k] = p.height * 1e3;
+    h.lines[static_cast<std::size_t>(p.line)].push_back(k);
+  }
+  h.symmetric = h.pvalue.size() && h.pvalue.minCoeff() < 0;  // e.g. Moody's: lowest point 0
+  if (r.grid) {
+    h.title = "heights (cells: the lattice of stations)";
+    h.grid_x = r.grid->x;
+    h.grid_y = r.grid->y;
+    h.grid_value = r.grid->height * 1e3;
+  }
+  s.heat_maps.push_back(std::move(h));
+  if (!r.crossings.empty() && r.closure_max > 0) {
+    HeatMap c;
+    c.title = "closure at every crossing (height on one line − on the other)";
+    c.x_label = "x (mm)";
+    c.y_label = "y (mm)";
+    c.value_label = "closure (µm)";
+    const auto m = static_cast<Eigen::Index>(r.crossings.size());
+    c.px.resize(m);
+    c.py.resize(m);
+    c.pvalue.resize(m);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const auto& x = r.crossings[static_cast<std::size_t>(k)];
+      c.px[k] = x.xy.x();
+      c.py[k] = x.xy.y();
+      c.pvalue[k] = x.residual * 1e3;
+    }
+    s.heat_maps.push_back(std::move(c));
+  }
+  return s;
+}
+
+Section space_section(const std::string& title, const surface::SpaceResult& sp,
+                      const surface::Verification* v) {
+  const map::ErrorMap& m = sp.map;
+  const Eigen::Index nx = m.size(0), ny = m.size(1), nz = m.size(2);
+  Section s;
+  s.title = title;
+  s.intro_html = fmt::format(
+      "<p>Error vectors e = actual − nominal (µm) on a {} × {} × {} grid, from {} straightness "
+      "runs and {} laser runs. Not determined by the campaign: {}; {}.</p>",
+      nx, ny, nz, sp.straightness_runs, sp.laser_runs, escape(joined(sp.unobservable)),
+      escape(sp.gauge));
+  s.table = {{"quantity", "value (µm)"},
+             {"error space RMS / max |e|",
+              fmt::format("{} / {}", um(std::sqrt(m.error.colwise().squaredNorm().mean())),
+                          um(m.error.colwise().norm().maxCoeff()))},
+             {"map − truth at the nodes, RMS / max",
+              fmt::format("{} / {}", um(sp.truth_rms), um(sp.truth_max))}};
+  if (m.uncertainty.cols())
+    s.table.push_back({"standard uncertainty, RMS over nodes",
+                       um(std::sqrt(m.uncertainty.colwise().squaredNorm().mean()))});
+  if (v) {
+    s.table.push_back(
+        {fmt::format("positioning error at {} random points, before: RMS / max", v->points),
+         fmt::format("{} / {}", um(v->before_rms), um(v->before_max))});
+    s.table.push_back({"after compensation: RMS / max",
+                       fmt::format("{} / {}", um(v->after_rms), um(v->after_max))});
+    s.table.push_back({"expected after: sqrt(interpolation² + uncertainty²)",
+                       fmt::format("{} = {} ⊕ {}", um(v->predicted_rms), um(v->interpolation_rms),
+                                   um(v->uncertainty_rms))});
+    s.table.push_back(
+        {"improvement (RMS before / after)", fmt::format("×{:.1f}", v->improvement())});
+  }
+
+  // Distorted grids of three planes through the volume.
+  auto plane = [&](int a, int b, int c, Eigen::Index at, const char* name) {
+    DistortedGrid g;
+    const char* axis = "xyz";
+    g.title = fmt::format("{} plane at {} = {:g} mm", name, axis[c],
+                          m.axes[static_cast<std::size_t>(c)][at]);
+    g.u_label = fmt::format("{} (mm)", axis[a]);
+    g.v_label = fmt::format("{} (mm)", axis[b]);
+    g.normal_label = fmt::format("e{} (µm)", axis[c]);
+    g.u = m.axes[static_cast<std::size_t>(a)];
+    g.v = m.axes[static_cast<std::size_t>(b)];
+    g.du.resize(g.v.size(), g.u.size());
+    g.dv.resizeLike(g.du);
+    g.normal.resizeLike(g.du);
+    for (Eigen::Index j = 0; j < g.v.size(); ++j)
+      for (Eigen::Index i = 0; i < g.u.size(); ++i) {
+        Eigen::Index idx[3];
+        idx[a] = i;
+        idx[b] = j;
+        idx[c] = at;
+        const Eigen::Vector3d e = m.error.col(m.index(idx[0], idx[1], idx[2])) * 1e3;
+        g.du(j, i) = e[a];
+        g.dv(j, i) = e[b];
+        g.normal(j, i) = e[c];
+      }
+    s.grids.push_back(std::move(g));
+  };
+  plane(0, 1, 2, nz - 1, "XY");
+  plane(0, 2, 1, ny / 2, "XZ");
+  plane(1, 2, 0, nx / 2, "YZ");
+
+  // The ez surfaces of up to six z levels, on one colour scale.
+  const double lim = m.error.row(2).cwiseAbs().maxCoeff() * 1e3;
+  const Eigen::Index shown = std::min<Eigen::Index>(nz, 6);
+  for (Eigen::Index q = 0; q < shown; ++q) {
+    const Eigen::Index k = shown > 1 ? q * (nz - 1) / (shown - 1) : 0;
+    HeatMap h;
+    h.title = fmt::format("ez surface at z = {:g} mm", m.axes[2][k]);
+    h.x_label = "x (mm)";
+    h.y_label = "y (mm)";
+    h.value_label = "ez (µm)";
+    h.grid_x = m.axes[0];
+    h.grid_y = m.axes[1];
+    h.grid_value.resize(ny, nx);
+    for (Eigen::Index j = 0; j < ny; ++j)
+      for (Eigen::Index i = 0; i < nx; ++i) h.grid_value(j, i) = m.error(2, m.index(i, j, k)) * 1e3;
+    h.vmin = -lim;
+    h.vmax = lim;
+    h.width = 340;
+    s.heat_maps.push_back(std::move(h));
+  }
+  if (m.uncertainty.cols()) {
+    HeatMap h;
+    h.title = fmt::format("standard uncertainty |u| at z = {:g} mm", m.axes[2][nz - 1]);
+    h.x_label = "x (mm)";
+    h.y_label = "y (mm)";
+    h.value_label = "|u| (µm)";
+    h.symmetric = false;
+    h.grid_x = m.axes[0];
+    h.grid_y = m.axes[1];
+    h.grid_value.resize(ny, nx);
+    for (Eigen::Index j = 0; j < ny; ++j)
+      for (Eigen::Index i = 0; i < nx; ++i)
+        h.grid_value(j, i) = m.uncertainty.col(m.index(i, j, nz - 1)).norm() * 1e3;
+    h.width = 340;
+    s.heat_maps.push_back(std::move(h));
+  }
+
+  if (v && v->before.cols() > 0) {
+    Plot p;
+    p.title = "positioning error |e| at the random points, sorted: before and after compensation";
+    p.x_label = "fraction of points (%)";
+    p.y_label = "|e| (µm)";
+    const Eigen::Index n = v->before.cols();
+    p.x = Eigen::VectorXd::LinSpaced(n, 100.0 / static_cast<double>(n), 100.0);
+    auto sorted = [](const Eigen::Matrix3Xd& r) {
+      Eigen::VectorXd y = r.colwise().norm().transpose() * 1e3;
+      std::sort(y.data(), y.data() + y.size());
+      return y;
+    };
+    p.series.push_back({"before", sorted(v->before), {}, "#d62728", false});
+    p.series.push_back({"after", sorted(v->after), {}, "#1f77b4", false});
+    p.series.push_back({"expected RMS after",
+                        Eigen::VectorXd::Constant(n, v->predicted_rms * 1e3),
+                        {},
+                        "#2ca02c",
+                        true});
+    p.log_y = true;
+    s.plots.push_back(std::move(p));
+  }
+  return s;
+}
+
+}  // namespace trueaxis::report

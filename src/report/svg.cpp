@@ -1,0 +1,276 @@
+// Static SVG figures of the report: heat maps and distorted grids. Drawn at true aspect ratio in
+// data units (mm), y up; every coloured element carries a <title> with its numbers (hover).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/report/html.hpp"
+
+namespace trueaxis::report {
+namespace {
+
+using Rgb = std::array<double, 3>;
+
+// ColorBrewer RdBu (reversed: blue low, red high) and viridis, linearly interpolated.
+constexpr Rgb kDiverging[] = {{33, 102, 172},  {103, 169, 207}, {209, 229, 240}, {247, 247, 247},
+                              {253, 219, 199}, {239, 138, 98},  {178, 24, 43}};
+constexpr Rgb kSequential[] = {
+    {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
+
+template <std::size_t N>
+std::string ramp(const Rgb (&stops)[N], double t) {
+  t = std::clamp(std::isfinite(t) ? t : 0.5, 0.0, 1.0) * static_cast<double>(N - 1);
+  const std::size_t i = std::min(static_cast<std::size_t>(t), N - 2);
+  const double f = t - static_cast<double>(i);
+  auto c = [&](int k) {
+    const auto ku = static_cast<std::size_t>(k);
+    return static_cast<int>(std::lround(stops[i][ku] + f * (stops[i + 1][ku] - stops[i][ku])));
+  };
+  return fmt::format("#{:02x}{:02x}{:02x}", c(0), c(1), c(2));
+}
+
+// A colour scale: symmetric about zero (diverging) or min..max (sequential).
+struct Scale {
+  double lo = 0, hi = 1;
+  bool diverging = true;
+  Scale(double vmin, double vmax, bool symmetric) : diverging(symmetric) {
+    if (!std::isfinite(vmin) || !std::isfinite(vmax)) vmin = vmax = 0;
+    if (symmetric) {
+      const double a = std::max(std::abs(vmin), std::abs(vmax));
+      lo = -a;
+      hi = a;
+    } else {
+      lo = vmin;
+      hi = vmax;
+    }
+    if (!(hi > lo)) {
+      lo -= 1;
+      hi += 1;
+    }
+  }
+  std::string operator()(double v) const {
+    const double t = (v - lo) / (hi - lo);
+    return diverging ? ramp(kDiverging, t) : ramp(kSequential, t);
+  }
+};
+
+// "Nice" tick values covering [lo, hi].
+std::vector<double> ticks(double lo, double hi, int target = 5) {
+  std::vector<double> out;
+  const double span = hi - lo;
+  if (!(span > 0)) return {lo};
+  const double raw = span / target, p = std::pow(10.0, std::floor(std::log10(raw)));
+  const double r = raw / p, step = (r < 1.5 ? 1 : r < 3.5 ? 2 : r < 7.5 ? 5 : 10) * p;
+  for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * span; t += step)
+    out.push_back(std::abs(t) < 1e-12 * span ? 0.0 : t);
+  return out;
+}
+
+// Plot area in pixels for data extent [x0, x1] × [y0, y1], equal scale on both axes.
+struct Frame {
+  double x0, x1, y0, y1;
+  double left = 62, top = 10, pw = 0, ph = 0, bar = 0;
+  Frame(double ax0, double ax1, double ay0, double ay1, int width, double bar_space)
+      : x0(ax0), x1(ax1), y0(ay0), y1(ay1), bar(bar_space) {
+    if (!(x1 > x0)) x1 = x0 + 1;
+    if (!(y1 > y0)) y1 = y0 + 1;
+    pw = std::max(120.0, width - left - bar - 10);
+    ph = pw * (y1 - y0) / (x1 - x0);
+    if (ph > 420) {
+      ph = 420;
+      pw = ph * (x1 - x0) / (y1 - y0);
+    }
+    ph = std::max(ph, 60.0);
+  }
+  double X(double x) const { return left + (x - x0) / (x1 - x0) * pw; }
+  double Y(double y) const { return top + (y1 - y) / (y1 - y0) * ph; }
+  double width() const { return left + pw + bar + 10; }
+  double height() const { return top + ph + 42; }
+};
+
+std::string open_svg(const Frame& f, const std::string& label) {
+  return fmt::format(
+      "<svg class=\"ta-fig\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" "
+      "height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" role=\"img\" aria-label=\"{}\" "
+      "font-family=\"system-ui,sans-serif\" font-size=\"11\">",
+      f.width(), f.height(), f.width(), f.height(), escape(label));
+}
+
+std::string axes(const Frame& f, const std::string& xl, const std::string& yl) {
+  std::string s = fmt::format(
+      "<rect x=\"{:.1f}\" y=\"{:.1f}\" width=\"{:.1f}\" height=\"{:.1f}\" fill=\"none\" "
+      "stroke=\"#999\"/>",
+      f.left, f.top, f.pw, f.ph);
+  for (double t : ticks(f.x0, f.x1))
+    s += fmt::format(
+        "<line x1=\"{0:.1f}\" x2=\"{0:.1f}\" y1=\"{1:.1f}\" y2=\"{2:.1f}\" stroke=\"#999\"/>"
+        "<text x=\"{0:.1f}\" y=\"{3:.1f}\" text-anchor=\"middle\">{4:g}</text>",
+        f.X(t), f.top + f.ph, f.top + f.ph + 4, f.top + f.ph + 15, t);
+  for (double t : ticks(f.y0, f.y1, std::max(2, static_cast<int>(f.ph / 60))))
+    s += fmt::format(
+        "<line x1=\"{0:.1f}\" x2=\"{1:.1f}\" y1=\"{2:.1f}\" y2=\"{2:.1f}\" stroke=\"#999\"/>"
+        "<text x=\"{3:.1f}\" y=\"{4:.1f}\" text-anchor=\"end\">{5:g}</text>",
+        f.left - 4, f.left, f.Y(t), f.left - 6, f.Y(t) + 4, t);
+  s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"middle\">{}</text>",
+                   f.left + f.pw / 2, f.top + f.ph + 32, escape(xl));
+  s += fmt::format(
+      "<text transform=\"translate(14 {:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
+      f.top + f.ph / 2, escape(yl));
+  return s;
+}
+
+// A vertical colour bar right of the plot area: 40 bands, end labels, zero if inside.
+std::string colour_bar(const Frame& f, const Scale& sc, const std::string& label) {
+  const double x = f.left + f.pw + 16, w = 12, n = 40;
+  std::string s;
+  for (int i = 0; i < n; ++i) {
+    const double v = sc.hi - (sc.hi - sc.lo) * (i + 0.5) / n;
+    s += fmt::format("<rect x=\"{:.1f}\" y=\"{:.2f}\" width=\"{}\" height=\"{:.2f}\" fill=\"{}\"/>",
+                     x, f.top + f.ph * i / n, w, f.ph / n + 0.3, sc(v));
+  }
+  auto tick = [&](double v) {
+    const double y = f.top + (sc.hi - v) / (sc.hi - sc.lo) * f.ph;
+    return fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\">{:.3g}</text>", x + w + 3, y + 4, v);
+  };
+  s += tick(sc.hi) + tick(sc.lo);
+  if (sc.lo < 0 && sc.hi > 0) s += tick(0.0);
+  s += fmt::format(
+      "<text transform=\"translate({:.1f} {:.1f}) rotate(-90)\" text-anchor=\"middle\">{}</text>",
+      x + w + 52, f.top + f.ph / 2, escape(label));
+  return s;
+}
+
+// Cell bounds of node i: half-way to the neighbours, the outer nodes' own coordinates at the edge.
+std::pair<double, double> cell(const Eigen::VectorXd& x, Eigen::Index i) {
+  const Eigen::Index n = x.size();
+  return {i > 0 ? 0.5 * (x[i - 1] + x[i]) : x[0], i + 1 < n ? 0.5 * (x[i] + x[i + 1]) : x[n - 1]};
+}
+
+}  // namespace
+
+double nice_magnification(double max_error_um, double step_mm, double fraction) {
+  if (!(max_error_um > 0) || !(step_mm > 0)) return 1;
+  const double m = fraction * step_mm / (max_error_um * 1e-3);
+  const double p = std::pow(10.0, std::floor(std::log10(m)));
+  const double r = m / p;
+  return (r >= 5 ? 5 : r >= 2 ? 2 : 1) * p;
+}
+
+std::string svg(const HeatMap& h) {
+  const bool grid = h.grid_value.size() > 0;
+  if (grid && (h.grid_value.rows() != h.grid_y.size() || h.grid_value.cols() != h.grid_x.size()))
+    throw Error(fmt::format("heat map '{}': grid values must be len(y) x len(x)", h.title));
+  if (h.px.size() != h.py.size() || h.px.size() != h.pvalue.size())
+    throw Error(fmt::format("heat map '{}': point arrays differ in length", h.title));
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  double vmin = INFINITY, vmax = -INFINITY;
+  auto take = [&](double x, double y, double v) {
+    x0 = std::min(x0, x);
+    x1 = std::max(x1, x);
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y);
+    if (std::isfinite(v)) {
+      vmin = std::min(vmin, v);
+      vmax = std::max(vmax, v);
+    }
+  };
+  if (grid)
+    for (Eigen::Index j = 0; j < h.grid_y.size(); ++j)
+      for (Eigen::Index i = 0; i < h.grid_x.size(); ++i)
+        take(h.grid_x[i], h.grid_y[j], h.grid_value(j, i));
+  for (Eigen::Index k = 0; k < h.px.size(); ++k) take(h.px[k], h.py[k], h.pvalue[k]);
+  if (!std::isfinite(x0)) throw Error(fmt::format("heat map '{}': no data", h.title));
+  // Dots at the border need room: pad by 3 % of the larger extent.
+  const double pad = h.px.size() ? 0.03 * std::max(x1 - x0, y1 - y0) : 0.0;
+  const Frame f(x0 - pad, x1 + pad, y0 - pad, y1 + pad, h.width, 110);
+  const Scale sc(std::isfinite(h.vmin) ? h.vmin : vmin, std::isfinite(h.vmax) ? h.vmax : vmax,
+                 h.symmetric);
+  std::string s = open_svg(f, h.title);
+  if (grid)
+    for (Eigen::Index j = 0; j < h.grid_y.size(); ++j)
+      for (Eigen::Index i = 0; i < h.grid_x.size(); ++i) {
+        const auto [xa, xb] = cell(h.grid_x, i);
+        const auto [ya, yb] = cell(h.grid_y, j);
+        const double v = h.grid_value(j, i);
+        s += fmt::format(
+            "<rect x=\"{:.2f}\" y=\"{:.2f}\" width=\"{:.2f}\" height=\"{:.2f}\" fill=\"{}\">"
+            "<title>{:g}, {:g}: {:.4g}</title></rect>",
+            f.X(xa), f.Y(yb), f.X(xb) - f.X(xa) + 0.3, f.Y(ya) - f.Y(yb) + 0.3,
+            std::isfinite(v) ? sc(v) : "#ddd", h.grid_x[i], h.grid_y[j], v);
+      }
+  for (const auto& line : h.lines) {
+    std::string pts;
+    for (Eigen::Index k : line)
+      if (k >= 0 && k < h.px.size())
+        pts += fmt::format("{:.2f},{:.2f} ", f.X(h.px[k]), f.Y(h.py[k]));
+    s += "<polyline fill=\"none\" stroke=\"#888\" stroke-width=\"1\" points=\"" + pts + "\"/>";
+  }
+  for (Eigen::Index k = 0; k < h.px.size(); ++k)
+    s += fmt::format(
+        "<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"4.5\" fill=\"{}\" stroke=\"#333\" "
+        "stroke-width=\"0.6\"><title>{:g}, {:g}: {:.4g}</title></circle>",
+        f.X(h.px[k]), f.Y(h.py[k]), sc(h.pvalue[k]), h.px[k], h.py[k], h.pvalue[k]);
+  s += axes(f, h.x_label, h.y_label) + colour_bar(f, sc, h.value_label) + "</svg>";
+  return s;
+}
+
+std::string svg(const DistortedGrid& g) {
+  const Eigen::Index nu = g.u.size(), nv = g.v.size();
+  if (nu < 2 || nv < 2) throw Error(fmt::format("grid '{}': needs >= 2 nodes per axis", g.title));
+  for (const Eigen::MatrixXd* m : {&g.du, &g.dv, &g.normal})
+    if (m->rows() != nv || m->cols() != nu)
+      throw Error(fmt::format("grid '{}': values must be len(v) x len(u)", g.title));
+  double step = INFINITY;
+  for (const Eigen::VectorXd* a : {&g.u, &g.v})
+    for (Eigen::Index i = 1; i < a->size(); ++i) step = std::min(step, (*a)[i] - (*a)[i - 1]);
+  const double inplane = std::sqrt((g.du.array().square() + g.dv.array().square()).maxCoeff());
+  const double mag = g.magnification > 0 ? g.magnification : nice_magnification(inplane, step);
+  const double pad = 0.5 * step;
+  const Frame f(g.u[0] - pad, g.u[nu - 1] + pad, g.v[0] - pad, g.v[nv - 1] + pad, g.width, 110);
+  const Scale sc(g.normal.minCoeff(), g.normal.maxCoeff(), true);
+  std::string s = open_svg(f, g.title);
+  for (Eigen::Index i = 0; i < nu; ++i)
+    s += fmt::format(
+        "<line x1=\"{0:.2f}\" x2=\"{0:.2f}\" y1=\"{1:.2f}\" y2=\"{2:.2f}\" stroke=\"#ccc\"/>",
+        f.X(g.u[i]), f.Y(g.v[0]), f.Y(g.v[nv - 1]));
+  for (Eigen::Index j = 0; j < nv; ++j)
+    s += fmt::format(
+        "<line x1=\"{0:.2f}\" x2=\"{1:.2f}\" y1=\"{2:.2f}\" y2=\"{2:.2f}\" stroke=\"#ccc\"/>",
+        f.X(g.u[0]), f.X(g.u[nu - 1]), f.Y(g.v[j]));
+  auto at = [&](Eigen::Index j, Eigen::Index i) {
+    return fmt::format("{:.2f},{:.2f} ", f.X(g.u[i] + mag * g.du(j, i) * 1e-3),
+                       f.Y(g.v[j] + mag * g.dv(j, i) * 1e-3));
+  };
+  for (Eigen::Index j = 0; j < nv; ++j) {
+    std::string pts;
+    for (Eigen::Index i = 0; i < nu; ++i) pts += at(j, i);
+    s += "<polyline fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"1.3\" points=\"" + pts + "\"/>";
+  }
+  for (Eigen::Index i = 0; i < nu; ++i) {
+    std::string pts;
+    for (Eigen::Index j = 0; j < nv; ++j) pts += at(j, i);
+    s += "<polyline fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"1.3\" points=\"" + pts + "\"/>";
+  }
+  for (Eigen::Index j = 0; j < nv; ++j)
+    for (Eigen::Index i = 0; i < nu; ++i) {
+      const std::string p = at(j, i);
+      const auto comma = p.find(',');
+      s += fmt::format(
+          "<circle cx=\"{}\" cy=\"{}\" r=\"3.5\" fill=\"{}\" stroke=\"#333\" "
+          "stroke-width=\"0.5\"><title>{:g}, {:g} mm: in-plane {:.3f}, {:.3f} µm; {} "
+          "{:.3f}</title></circle>",
+          p.substr(0, comma), p.substr(comma + 1, p.size() - comma - 2), sc(g.normal(j, i)), g.u[i],
+          g.v[j], g.du(j, i), g.dv(j, i), escape(g.normal_label), g.normal(j, i));
+    }
+  s += axes(f, g.u_label, g.v_label) + colour_bar(f, sc, g.normal_label);
+  s += fmt::format(
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\" fill=\"#1f77b4\">in-plane errors "
+      "×{:g}</text>",
+      f.left + f.pw, f.top + f.ph + 32, mag);
+  return s + "</svg>";
+}
+
+}  // namespace trueaxis::report

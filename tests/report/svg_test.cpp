@@ -1,0 +1,133 @@
+// SVG figures (heat maps, distorted grids) and the surface/space report sections.
+#include <gtest/gtest.h>
+
+#include <regex>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/report/html.hpp"
+#include "trueaxis/report/surface.hpp"
+#include "trueaxis/sim/machine.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+std::size_t count(const std::string& s, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = s.find(what); p != std::string::npos; p = s.find(what, p + 1)) ++n;
+  return n;
+}
+
+// The fill colour of the element whose tooltip is `title`.
+std::string fill_of(const std::string& svg, const std::string& title) {
+  const auto t = svg.find("<title>" + title + "</title>");
+  if (t == std::string::npos) return "";
+  const auto f = svg.rfind("fill=\"", t);
+  return svg.substr(f + 6, 7);
+}
+
+}  // namespace
+
+TEST(Svg, NiceMagnificationIsOneTwoOrFiveTimesAPowerOfTen) {
+  // 10 µm drawn as at most 40 % of 50 mm: 20 mm / 0.01 mm = 2000.
+  EXPECT_DOUBLE_EQ(report::nice_magnification(10, 50), 2000);
+  EXPECT_DOUBLE_EQ(report::nice_magnification(13, 50), 1000);  // 1538 → 1000
+  EXPECT_DOUBLE_EQ(report::nice_magnification(3, 50), 5000);   // 6667 → 5000
+  EXPECT_DOUBLE_EQ(report::nice_magnification(0, 50), 1);
+}
+
+TEST(Svg, HeatMapDrawsEveryCellAndPointWithItsValue) {
+  report::HeatMap h;
+  h.title = "t <1>";
+  h.grid_x = Eigen::Vector3d(0, 10, 20);
+  h.grid_y = Eigen::Vector2d(0, 5);
+  h.grid_value.resize(2, 3);
+  h.grid_value << -2, 0, 1, 2, 0.5, -1;
+  h.px = Eigen::Vector2d(3, 4);
+  h.py = Eigen::Vector2d(1, 2);
+  h.pvalue = Eigen::Vector2d(0.25, -0.25);
+  h.lines = {{0, 1}};
+  const std::string s = report::svg(h);
+  EXPECT_EQ(count(s, "<svg"), 1u);
+  EXPECT_EQ(count(s, "<title>"), 6u + 2u);
+  EXPECT_EQ(count(s, "<polyline"), 1u);
+  EXPECT_NE(s.find("aria-label=\"t &lt;1&gt;\""), std::string::npos);
+  // Diverging scale symmetric about 0: the extremes take the end colours, zero the middle.
+  EXPECT_EQ(fill_of(s, "0, 5: 2"), "#b2182b");
+  EXPECT_EQ(fill_of(s, "0, 0: -2"), "#2166ac");
+  EXPECT_EQ(fill_of(s, "10, 0: 0"), "#f7f7f7");
+  // A shared scale set by the caller.
+  h.vmin = -4;
+  h.vmax = 4;
+  EXPECT_NE(fill_of(report::svg(h), "0, 5: 2"), "#b2182b");
+  // Sequential scale: min → viridis' dark end, max → yellow.
+  h.symmetric = false;
+  h.vmin = h.vmax = NAN;
+  const std::string q = report::svg(h);
+  EXPECT_EQ(fill_of(q, "0, 0: -2"), "#440154");
+  EXPECT_EQ(fill_of(q, "0, 5: 2"), "#fde725");
+}
+
+TEST(Svg, RefusesInconsistentShapes) {
+  report::HeatMap h;
+  h.grid_x = Eigen::Vector3d(0, 1, 2);
+  h.grid_y = Eigen::Vector2d(0, 1);
+  h.grid_value = Eigen::MatrixXd::Zero(3, 2);
+  EXPECT_NE(test::error_of([&] { report::svg(h); }).find("len(y) x len(x)"), std::string::npos);
+  EXPECT_NE(test::error_of([] { report::svg(report::HeatMap{}); }).find("no data"),
+            std::string::npos);
+  report::DistortedGrid g;
+  g.u = Eigen::Vector2d(0, 1);
+  g.v = Eigen::Vector2d(0, 1);
+  g.du = g.dv = Eigen::MatrixXd::Zero(2, 2);
+  g.normal = Eigen::MatrixXd::Zero(2, 3);
+  EXPECT_NE(test::error_of([&] { report::svg(g); }).find("len(v) x len(u)"), std::string::npos);
+}
+
+TEST(Svg, DistortedGridMovesNodesByTheMagnifiedError) {
+  report::DistortedGrid g;
+  g.u = Eigen::Vector3d(0, 50, 100);
+  g.v = Eigen::Vector2d(0, 50);
+  g.du = Eigen::MatrixXd::Zero(2, 3);
+  g.dv = Eigen::MatrixXd::Zero(2, 3);
+  g.normal = Eigen::MatrixXd::Zero(2, 3);
+  g.du(1, 2) = 10;  // µm → ×2000 = 20 mm, 40 % of the 50 mm step
+  const std::string s = report::svg(g);
+  EXPECT_NE(s.find("×2000"), std::string::npos);
+  EXPECT_EQ(count(s, "<circle"), 6u);
+  EXPECT_EQ(count(s, "<polyline"), 2u + 3u);
+  // Node (100, 50) sits 20 mm right of node (100, 0) in x: compare their pixel positions with
+  // the pixel scale from nodes (0, 0) and (50, 0).
+  std::regex circle("<circle cx=\"([0-9.]+)\" cy=\"([0-9.]+)\"");
+  std::vector<double> cx;
+  for (auto it = std::sregex_iterator(s.begin(), s.end(), circle); it != std::sregex_iterator();
+       ++it)
+    cx.push_back(std::stod((*it)[1]));
+  ASSERT_EQ(cx.size(), 6u);  // row-major: (0,0) (50,0) (100,0) (0,50) (50,50) (100,50)
+  const double px_per_mm = (cx[1] - cx[0]) / 50;
+  EXPECT_NEAR((cx[5] - cx[2]) / px_per_mm, 20, 0.05);
+}
+
+TEST(Svg, SpaceSectionShowsPlanesLevelsAndTheCompensationCheck) {
+  sim::MachineOptions mo;
+  mo.range = {{{0, 300}, {0, 200}, {0, 150}}};
+  const auto m = sim::random_machine(mo);
+  surface::SpacePlan plan;
+  plan.probe_noise = 0.05e-3;
+  plan.monte_carlo = 3;
+  const auto space = surface::measure_space(m, plan);
+  const auto v = surface::verify_compensation(m, space.map, 100);
+  ASSERT_EQ(v.before.cols(), 100);
+  const auto s = report::space_section("space", space, &v);
+  EXPECT_EQ(s.grids.size(), 3u);           // XY, XZ, YZ
+  EXPECT_EQ(s.heat_maps.size(), 4u + 1u);  // 4 z levels and the uncertainty
+  ASSERT_EQ(s.plots.size(), 1u);
+  EXPECT_EQ(s.plots[0].series.size(), 3u);  // before, after, expected
+  EXPECT_TRUE(s.plots[0].log_y);
+  const Eigen::VectorXd& after = s.plots[0].series[1].y;
+  EXPECT_NEAR(after[after.size() - 1], v.after_max * 1e3, 1e-9);  // sorted: the max is last
+  const std::string html = report::render("t", {s});
+  EXPECT_EQ(count(html, "<svg class=\"ta-fig\""), 8u);
+  EXPECT_NE(html.find("var TA_FIGURES=8;"), std::string::npos);
+}
