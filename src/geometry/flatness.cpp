@@ -72,40 +72,72 @@ HeightPlane min_zone_plane(const Eigen::VectorXd& x, const Eigen::VectorXd& y,
   const double rs = std::max(1e-300, r.cwiseAbs().maxCoeff());
   r /= rs;  // O(1) numbers for the simplex
 
+  // Constraint generation: the LP over a working set of points is a relaxation of the full one
+  // (its optimum h_S <= h*). Start with the points farthest above and below the LS plane; solve;
+  // add the points the plane violates most; repeat (the dual simplex restarts from the previous
+  // basis). When no point lies outside ±h_S the plane is optimal for all points. A measured
+  // surface has few points near its extremes, so a handful of rounds touch a few hundred points
+  // instead of loading all 2n constraints.
   std::unique_ptr<glp_prob, void (*)(glp_prob*)> lp(glp_create_prob(), &glp_delete_prob);
   glp_set_obj_dir(lp.get(), GLP_MIN);
   glp_add_cols(lp.get(), 4);  // da, db, dc, h
   for (int j = 1; j <= 3; ++j) glp_set_col_bnds(lp.get(), j, GLP_FR, 0, 0);
   glp_set_col_bnds(lp.get(), 4, GLP_LO, 0, 0);
   glp_set_obj_coef(lp.get(), 4, 1.0);
-  glp_add_rows(lp.get(), static_cast<int>(2 * n));
-  std::vector<int> ia{0}, ja{0};
-  std::vector<double> ar{0};
-  for (long i = 0; i < n; ++i) {
-    // Row 2i+1: da + db u + dc v + h >= r_i ; row 2i+2: da + db u + dc v - h <= r_i.
-    const int r1 = static_cast<int>(2 * i + 1), r2 = r1 + 1;
+  std::vector<char> in(static_cast<std::size_t>(n), 0);
+  auto add = [&](long i) {
+    if (in[static_cast<std::size_t>(i)]) return false;
+    in[static_cast<std::size_t>(i)] = 1;
+    // Rows: da + db u + dc v + h >= r_i and da + db u + dc v - h <= r_i.
+    const int r1 = glp_add_rows(lp.get(), 2), r2 = r1 + 1;
     glp_set_row_bnds(lp.get(), r1, GLP_LO, r[i], 0);
     glp_set_row_bnds(lp.get(), r2, GLP_UP, 0, r[i]);
-    const double c[4] = {1, u[i], v[i], 1};
-    for (int j = 0; j < 4; ++j) {
-      ia.push_back(r1);
-      ja.push_back(j + 1);
-      ar.push_back(c[j]);
-      ia.push_back(r2);
-      ja.push_back(j + 1);
-      ar.push_back(j == 3 ? -1.0 : c[j]);
-    }
-  }
-  glp_load_matrix(lp.get(), static_cast<int>(ia.size() - 1), ia.data(), ja.data(), ar.data());
+    const int ind[5] = {0, 1, 2, 3, 4};
+    const double up[5] = {0, 1, u[i], v[i], 1}, lo[5] = {0, 1, u[i], v[i], -1};
+    glp_set_mat_row(lp.get(), r1, 4, ind, up);
+    glp_set_mat_row(lp.get(), r2, 4, ind, lo);
+    return true;
+  };
+  // The `batch` most positive and most negative entries of d among all points.
+  const long batch = std::min<long>(n, 32);
+  std::vector<long> order(static_cast<std::size_t>(n));
+  auto extremes = [&](const Eigen::VectorXd& d, auto&& take) {
+    for (long i = 0; i < n; ++i) order[static_cast<std::size_t>(i)] = i;
+    std::nth_element(order.begin(), order.begin() + (batch - 1), order.end(),
+                     [&](long a, long b) { return d[a] > d[b]; });
+    for (long k = 0; k < batch; ++k) take(order[static_cast<std::size_t>(k)]);
+    std::nth_element(order.begin(), order.begin() + (batch - 1), order.end(),
+                     [&](long a, long b) { return d[a] < d[b]; });
+    for (long k = 0; k < batch; ++k) take(order[static_cast<std::size_t>(k)]);
+  };
+  extremes(r, add);
   glp_smcp parm;
   glp_init_smcp(&parm);
   parm.msg_lev = GLP_MSG_OFF;
   parm.meth = GLP_DUALP;
-  const int rc = glp_simplex(lp.get(), &parm);
-  if (rc != 0 || glp_get_status(lp.get()) != GLP_OPT)
-    throw Error(fmt::format("minimum-zone flatness: the LP solver failed (code {})", rc));
-  const double da = glp_get_col_prim(lp.get(), 1) * rs, db = glp_get_col_prim(lp.get(), 2) * rs,
-               dc = glp_get_col_prim(lp.get(), 3) * rs;
+  constexpr double kTol = 1e-12;  // on the O(1) scaled residuals
+  double da = 0, db = 0, dc = 0;
+  for (;;) {
+    const int rc = glp_simplex(lp.get(), &parm);
+    if (rc != 0 || glp_get_status(lp.get()) != GLP_OPT)
+      throw Error(fmt::format("minimum-zone flatness: the LP solver failed (code {})", rc));
+    da = glp_get_col_prim(lp.get(), 1);
+    db = glp_get_col_prim(lp.get(), 2);
+    dc = glp_get_col_prim(lp.get(), 3);
+    const double h = glp_get_col_prim(lp.get(), 4);
+    // Signed violation: how far each point lies outside the zone ±h (≤ 0 inside).
+    const Eigen::VectorXd d = r.array() - (da + db * u.array() + dc * v.array());
+    const Eigen::VectorXd out = d.cwiseAbs().array() - h;
+    if (out.maxCoeff() <= kTol) break;
+    bool added = false;
+    extremes(d, [&](long i) {
+      if (out[i] > kTol) added |= add(i);
+    });
+    if (!added) break;  // every violator is in the LP already: within the solver's tolerance
+  }
+  da *= rs;
+  db *= rs;
+  dc *= rs;
   return finish(f, a0 + da, b0 + db, c0 + dc, x, y, z);
 }
 

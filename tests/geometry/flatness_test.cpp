@@ -88,6 +88,33 @@ TEST(Flatness, MinZoneEqualsBruteForceOnRandomSets) {
   }
 }
 
+TEST(Flatness, MinZoneOfALargeSetWhoseBoundingPointsLookInnocent) {
+  // Four corners in a twist pattern, +h at (0, 0) and (L, W), −h at (L, 0) and (0, W), bound the
+  // zone at exactly 2h: no plane has a twist, so the four deviations average h in magnitude. Then
+  // 2000 points strictly inside, +0.98h left of x = L/2 and −0.98h right of it, tilt the
+  // least-squares plane by −3·0.98h/L, so two of the four corners lie only 0.47h from it, far
+  // less than hundreds of inside points: the solver's first working set (the extremes about the
+  // LS plane) misses them, and only checking every point brings them in. A common tilt is added.
+  const double h = 1e-3, L = 600, W = 400;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> ux(0, L), uy(0, W);
+  const int n = 2004;
+  Eigen::VectorXd x(n), y(n), z(n);
+  x.head(4) << 0, L, L, 0;
+  y.head(4) << 0, W, 0, W;
+  z.head(4) << h, h, -h, -h;
+  for (int i = 4; i < n; ++i) {
+    x[i] = ux(rng);
+    y[i] = uy(rng);
+    z[i] = x[i] < L / 2 ? 0.98 * h : -0.98 * h;
+  }
+  z += 3e-5 * x - 1e-5 * y;
+  const auto mz = min_zone_plane(x, y, z);
+  EXPECT_NEAR(mz.width, 2 * h, 1e-15 * L);
+  EXPECT_NEAR(mz.b, 3e-5, 1e-15);
+  EXPECT_NEAR(mz.c, -1e-5, 1e-15);
+}
+
 TEST(Flatness, DegenerateSetsAreRefused) {
   Eigen::VectorXd x(4), y(4), z(4);
   x << 0, 1, 2, 3;
