@@ -135,7 +135,7 @@ int run_demo(const DemoOptions& o) {
       "<p>J. C. Moody's 1955 Union Jack: eight autocollimator lines over a granite plate, one "
       "reading per 4-inch foot. The classic worksheet reproduces his published heights (the "
       "test suite checks every one of them). Try <code>trueaxis surface --moody moody "
-      "--method lsq -o s.json</code> in the report's directory.</p>"));
+      "--method lsq -o s.json --report s.html</code> in the report's directory.</p>"));
   sections.push_back(report::surface_section(
       "The same lines, least squares", moody_lsq,
       "<p>All eight lines adjusted jointly: every crossing should agree, and the closure at the "
@@ -180,7 +180,7 @@ int run_demo(const DemoOptions& o) {
           "face diagonals fix the squareness. The map is then used to compensate 1000 random "
           "commands. Files: <code>machine.json</code>, <code>space.json</code>, "
           "<code>x.comp</code> (LinuxCNC). Try <code>trueaxis space --machine machine.json -o "
-          "s.json</code>.</p><pre>{}</pre>",
+          "s.json --report s.html</code>.</p><pre>{}</pre>",
           report::escape(machine.chain), plan.probe_noise * 1e3,
           report::escape(machine.summary())) +
       sections.back().intro_html;

@@ -1,0 +1,100 @@
+// trueaxis::guideway — five motion errors of a guideway from laser spots on quadrant detectors
+// (spec 03, seed 002).
+//
+// Carriage frame (mm): z along the travel, x horizontal, y vertical. At carriage position s the
+// carriage makes a small error motion: translation (δx, δy, δz) of the frame origin and rotation
+// (εx, εy, εz) = (pitch, yaw, roll). Laser beams fixed to the bed run parallel to z. A position
+// detector (QPD) at carriage point (x_i, y_i, z_i) sees its spot move by the negative of its own
+// transverse motion:
+//
+//     dx_i = −(δx + εy·z_i − εz·y_i),      dy_i = −(δy + εz·x_i − εx·z_i).
+//
+// An angle detector (a QPD behind a lens of focal length f) reads f·(εy, −εx), independent of
+// translation. δz is invisible. The five unknowns, in this order everywhere:
+//
+//     q = (horizontal δx [mm], vertical δy [mm], pitch εx [rad], yaw εy [rad], roll εz [rad]).
+//
+// Observability: roll needs detectors at different transverse positions; pitch and yaw need
+// position detectors at different axial positions z_i, or an angle detector. What a layout
+// cannot see is found from the null space of its design matrix and dropped in the order yaw,
+// pitch, roll, vertical, horizontal (so a coplanar layout loses pitch and yaw and keeps the
+// straightness of its detectors' cross-section); it is never reported as a number.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string>
+#include <vector>
+
+namespace trueaxis::guideway {
+
+inline constexpr int kErrors = 5;
+// Names used in files and reports, in the order of q.
+inline constexpr const char* kErrorNames[kErrors] = {"horizontal", "vertical", "pitch", "yaw",
+                                                     "roll"};
+
+enum class Kind { Position, Angle };
+
+struct Detector {
+  std::string name;
+  Kind kind = Kind::Position;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // mm, carriage frame (position detectors)
+  double focal_length = 0;                             // mm, > 0 (angle detectors)
+};
+
+struct Layout {
+  std::vector<Detector> detectors;
+  // Throws Error: no detectors, empty or duplicated names, non-finite positions, angle detectors
+  // without a positive focal length, or position detectors that all lie on one line (the
+  // seed's triangle abc is degenerate; with two or fewer position detectors, at least one angle
+  // detector must complete the layout).
+  void validate() const;
+  // The design matrix A (2m × 5): readings (dx_1, dy_1, dx_2, dy_2, ...; mm) = A·q.
+  Eigen::MatrixXd design() const;
+};
+
+struct LayoutAnalysis {
+  std::array<bool, kErrors> observable{};
+  // Singular values and condition number of the design with the angle columns scaled by the
+  // layout's size (so mm and rad columns compare), over all five unknowns (condition infinite
+  // when rank-deficient) and over the observable ones (what the solve uses).
+  Eigen::VectorXd singular_values;
+  double condition_number = 0, observable_condition_number = 0;
+  std::string message;  // what is unobservable and why; empty if all five are observable
+};
+
+LayoutAnalysis analyze_layout(const Layout& layout);
+
+struct Options {
+  // Standard deviation of one spot reading (mm). 0: estimated from the residuals when the layout
+  // has redundant readings, otherwise no uncertainty.
+  double sigma = 0;
+  // Refuse layouts whose observable part has a larger condition number.
+  double max_condition = 1e8;
+};
+
+struct Result {
+  Eigen::VectorXd s;                           // mm, carriage positions
+  std::array<Eigen::VectorXd, kErrors> value;  // mm or rad per position; empty if unobservable
+  std::array<double, kErrors> uncertainty{};   // standard uncertainty per position (mm or rad)
+  Eigen::VectorXd residual;                    // mm, RMS of the readings' residuals per position
+  LayoutAnalysis layout;
+  double sigma = 0;  // mm, the reading noise used (given or estimated; 0 if none)
+  bool sigma_estimated = false;
+  // Horizontal and vertical straightness against their least-squares lines over s (mm), when
+  // observable and at least two positions.
+  Eigen::VectorXd horizontal_straightness, vertical_straightness;
+  // Peak-to-valley and RMS per error (of the straightness for δx, δy; of the raw values for the
+  // angles), 0 if unobservable.
+  std::array<double, kErrors> pv{}, rms{};
+  std::string summary() const;  // µm, µrad
+};
+
+// Solves every position: `spots` is positions × 2m (columns dx_1, dy_1, dx_2, dy_2, ... in the
+// order of the layout's detectors; mm). The least-squares operator is factored once and applied
+// to all positions. Throws Error for bad shapes, non-finite readings, an invalid layout, or one
+// whose observable part is worse conditioned than `options.max_condition`.
+Result solve(const Layout& layout, const Eigen::VectorXd& s, const Eigen::MatrixXd& spots,
+             const Options& options = {});
+
+}  // namespace trueaxis::guideway

@@ -1,0 +1,275 @@
+#include "trueaxis/guideway/guideway.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+#include <set>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::guideway {
+namespace {
+
+std::vector<int> indices(const std::array<bool, kErrors>& keep) {
+  std::vector<int> v;
+  for (int j = 0; j < kErrors; ++j)
+    if (keep[static_cast<std::size_t>(j)]) v.push_back(j);
+  return v;
+}
+
+Eigen::MatrixXd columns(const Eigen::MatrixXd& a, const std::vector<int>& cols) {
+  Eigen::MatrixXd out(a.rows(), static_cast<Eigen::Index>(cols.size()));
+  for (std::size_t k = 0; k < cols.size(); ++k)
+    out.col(static_cast<Eigen::Index>(k)) = a.col(cols[k]);
+  return out;
+}
+
+// Columns scaled to unit norm (zero columns stay zero), so mm and rad unknowns compare.
+Eigen::MatrixXd normalised(Eigen::MatrixXd a) {
+  for (Eigen::Index j = 0; j < a.cols(); ++j) {
+    const double n = a.col(j).norm();
+    if (n > 0) a.col(j) /= n;
+  }
+  return a;
+}
+
+Eigen::VectorXd singular_values(const Eigen::MatrixXd& a) {
+  if (a.cols() == 0) return {};
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(a).singularValues();
+}
+
+constexpr double kRankTol = 1e-10;
+
+int rank(const Eigen::MatrixXd& a) {
+  const Eigen::VectorXd sv = singular_values(a);
+  if (sv.size() == 0 || sv[0] == 0) return 0;
+  int r = 0;
+  for (Eigen::Index i = 0; i < sv.size(); ++i) r += sv[i] > kRankTol * sv[0];
+  return r;
+}
+
+double condition(const Eigen::VectorXd& sv) {
+  if (sv.size() == 0 || !(sv[sv.size() - 1] > kRankTol * sv[0]))
+    return std::numeric_limits<double>::infinity();
+  return sv[0] / sv[sv.size() - 1];
+}
+
+std::string names_of(const std::vector<int>& idx) {
+  std::string s;
+  for (int j : idx) s += (s.empty() ? "" : ", ") + std::string(kErrorNames[j]);
+  return s;
+}
+
+Eigen::VectorXd detrend(const Eigen::VectorXd& s, const Eigen::VectorXd& v) {
+  Eigen::MatrixXd a(s.size(), 2);
+  a.col(0).setOnes();
+  a.col(1) = s.array() - s.mean();
+  const Eigen::Vector2d c = a.colPivHouseholderQr().solve(v);
+  return v - a * c;
+}
+
+}  // namespace
+
+void Layout::validate() const {
+  if (detectors.empty()) throw Error("layout: no detectors");
+  std::set<std::string> seen;
+  std::vector<Eigen::Vector3d> pos;
+  std::vector<std::string> pos_names;
+  bool angle = false;
+  for (const auto& d : detectors) {
+    if (d.name.empty()) throw Error("layout: a detector has no name");
+    if (!seen.insert(d.name).second)
+      throw Error(fmt::format("layout: detector name '{}' is used twice", d.name));
+    if (d.kind == Kind::Angle) {
+      if (!(d.focal_length > 0) || !std::isfinite(d.focal_length))
+        throw Error(
+            fmt::format("layout: angle detector '{}' needs a positive focal length (mm)", d.name));
+      angle = true;
+    } else {
+      if (!d.position.allFinite())
+        throw Error(fmt::format("layout: detector '{}' has a non-finite position", d.name));
+      pos.push_back(d.position);
+      pos_names.push_back(d.name);
+    }
+  }
+  std::string list;
+  for (const auto& n : pos_names) list += (list.empty() ? "" : ", ") + n;
+  if (pos.size() >= 2) {
+    Eigen::MatrixXd diff(3, static_cast<Eigen::Index>(pos.size() - 1));
+    double scale = 0;
+    for (std::size_t i = 1; i < pos.size(); ++i) {
+      diff.col(static_cast<Eigen::Index>(i - 1)) = pos[i] - pos[0];
+      scale = std::max(scale, (pos[i] - pos[0]).norm());
+    }
+    const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(diff).singularValues();
+    const bool collinear = scale == 0 || sv.size() < 2 || sv[1] <= 1e-9 * sv[0];
+    if (collinear && pos.size() >= 3)
+      throw Error(fmt::format(
+          "layout: the position detectors {} lie on one line; they must span a triangle (the "
+          "seed's a, b, c) for roll and the two straightness errors to be separable",
+          list));
+    if (scale == 0)
+      throw Error(fmt::format("layout: the position detectors {} are at the same point", list));
+  }
+  if (pos.size() < 3 && !angle)
+    throw Error(fmt::format(
+        "layout: {} position detector(s) ({}) and no angle detector cannot give five errors; use "
+        "three non-collinear position detectors, or add an angle detector",
+        pos.size(), list.empty() ? "none" : list));
+}
+
+Eigen::MatrixXd Layout::design() const {
+  Eigen::MatrixXd a = Eigen::MatrixXd::Zero(2 * static_cast<Eigen::Index>(detectors.size()), 5);
+  for (std::size_t i = 0; i < detectors.size(); ++i) {
+    const auto& d = detectors[i];
+    const auto r = 2 * static_cast<Eigen::Index>(i);
+    if (d.kind == Kind::Angle) {
+      a(r, 3) = d.focal_length;       // dx = f·εy
+      a(r + 1, 2) = -d.focal_length;  // dy = −f·εx
+    } else {
+      const double x = d.position.x(), y = d.position.y(), z = d.position.z();
+      a.row(r) << -1, 0, 0, -z, y;      // dx = −(δx + εy·z − εz·y)
+      a.row(r + 1) << 0, -1, z, 0, -x;  // dy = −(δy + εz·x − εx·z)
+    }
+  }
+  return a;
+}
+
+LayoutAnalysis analyze_layout(const Layout& layout) {
+  layout.validate();
+  const Eigen::MatrixXd a = layout.design();
+  LayoutAnalysis r;
+  r.observable.fill(true);
+  // Drop unknowns that do not raise the rank, angles first, until the rest is of full rank.
+  const int order[kErrors] = {3, 2, 4, 1, 0};
+  for (;;) {
+    const auto keep = indices(r.observable);
+    const int rk = rank(normalised(columns(a, keep)));
+    if (rk == static_cast<int>(keep.size())) break;
+    bool dropped = false;
+    for (int j : order) {
+      if (!r.observable[static_cast<std::size_t>(j)]) continue;
+      auto trial = r.observable;
+      trial[static_cast<std::size_t>(j)] = false;
+      if (rank(normalised(columns(a, indices(trial)))) == rk) {
+        r.observable = trial;
+        dropped = true;
+        break;
+      }
+    }
+    if (!dropped) break;  // cannot happen: some column is always dependent when rank < size
+  }
+  r.singular_values = singular_values(normalised(a));
+  r.condition_number = condition(r.singular_values);
+  r.observable_condition_number =
+      condition(singular_values(normalised(columns(a, indices(r.observable)))));
+  std::vector<int> lost;
+  for (int j = 0; j < kErrors; ++j)
+    if (!r.observable[static_cast<std::size_t>(j)]) lost.push_back(j);
+  if (!lost.empty()) {
+    std::string sv;
+    for (Eigen::Index i = 0; i < r.singular_values.size(); ++i)
+      sv += fmt::format("{}{:.3g}", i ? ", " : "", r.singular_values[i]);
+    r.message =
+        fmt::format("unobservable with this layout: {} (singular values {})", names_of(lost), sv);
+    bool angle = false;
+    double zmin = INFINITY, zmax = -INFINITY;
+    for (const auto& d : layout.detectors) {
+      if (d.kind == Kind::Angle)
+        angle = true;
+      else {
+        zmin = std::min(zmin, d.position.z());
+        zmax = std::max(zmax, d.position.z());
+      }
+    }
+    if (!angle && zmax - zmin <= 1e-9 * std::max(1.0, std::abs(zmax)) &&
+        (!r.observable[2] || !r.observable[3]))
+      r.message += fmt::format(
+          ". All position detectors are at z = {:g} mm and there is no angle detector: pitch and "
+          "yaw need detectors at different axial positions or an angle channel. The straightness "
+          "values are those of the detectors' cross-section z = {:g} mm",
+          zmin, zmin);
+  }
+  return r;
+}
+
+Result solve(const Layout& layout, const Eigen::VectorXd& s, const Eigen::MatrixXd& spots,
+             const Options& options) {
+  Result r;
+  r.layout = analyze_layout(layout);
+  const auto m = static_cast<Eigen::Index>(layout.detectors.size());
+  if (spots.cols() != 2 * m)
+    throw Error(fmt::format("guideway: {} reading columns for {} detectors (need dx and dy each)",
+                            spots.cols(), m));
+  if (spots.rows() != s.size())
+    throw Error(
+        fmt::format("guideway: {} rows of readings for {} positions", spots.rows(), s.size()));
+  if (!s.allFinite() || !spots.allFinite())
+    throw Error("guideway: positions and readings must be finite");
+  if (!(options.sigma >= 0)) throw Error("guideway: sigma must be >= 0");
+  const auto keep = indices(r.layout.observable);
+  if (keep.empty()) throw Error("guideway: the layout observes none of the five errors");
+  if (!(r.layout.observable_condition_number <= options.max_condition))
+    throw Error(fmt::format(
+        "guideway: the layout is too badly conditioned (condition number {:.3g} > {:.3g}); move "
+        "the detectors further apart",
+        r.layout.observable_condition_number, options.max_condition));
+
+  // Factor once: P = A_S⁺ (k × 2m), then every position is one small matrix-vector product.
+  const Eigen::MatrixXd a = columns(layout.design(), keep);
+  const auto k = static_cast<Eigen::Index>(keep.size());
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
+  const Eigen::MatrixXd p = qr.solve(Eigen::MatrixXd::Identity(2 * m, 2 * m));
+  const Eigen::MatrixXd q = spots * p.transpose();  // positions × k
+  const Eigen::MatrixXd res = spots - q * a.transpose();
+  r.s = s;
+  r.residual = (res.rowwise().squaredNorm() / static_cast<double>(2 * m)).cwiseSqrt();
+  const Eigen::Index dof = 2 * m - k;
+  r.sigma = options.sigma;
+  if (r.sigma == 0 && dof > 0 && s.size() > 0) {
+    r.sigma = std::sqrt(res.squaredNorm() / static_cast<double>(s.size() * dof));
+    r.sigma_estimated = true;
+  }
+  const Eigen::MatrixXd cov = p * p.transpose();  // (AᵀA)⁻¹ for unit reading noise
+  for (Eigen::Index c = 0; c < k; ++c) {
+    const auto j = static_cast<std::size_t>(keep[static_cast<std::size_t>(c)]);
+    r.value[j] = q.col(c);
+    r.uncertainty[j] = r.sigma * std::sqrt(cov(c, c));
+  }
+  for (std::size_t j = 0; j < kErrors; ++j) {
+    if (r.value[j].size() == 0) continue;
+    Eigen::VectorXd v = r.value[j];
+    if (j < 2 && s.size() >= 2) {
+      v = detrend(s, v);
+      (j == 0 ? r.horizontal_straightness : r.vertical_straightness) = v;
+    }
+    if (v.size()) {
+      r.pv[j] = v.maxCoeff() - v.minCoeff();
+      r.rms[j] = std::sqrt(v.squaredNorm() / static_cast<double>(v.size()));
+    }
+  }
+  return r;
+}
+
+std::string Result::summary() const {
+  std::string out =
+      fmt::format("guideway: {} positions, condition number {:.3g} (observable part)\n", s.size(),
+                  layout.observable_condition_number);
+  for (std::size_t j = 0; j < kErrors; ++j) {
+    const bool angle = j >= 2;
+    if (value[j].size() == 0) {
+      out += fmt::format("  {:<10} not observable\n", kErrorNames[j]);
+      continue;
+    }
+    const double sc = angle ? 1e6 : 1e3;
+    out += fmt::format("  {:<10} PV {:8.3f} {}  RMS {:8.3f}{}\n", kErrorNames[j], pv[j] * sc,
+                       angle ? "urad" : "um  ", rms[j] * sc,
+                       sigma > 0 ? fmt::format("  u {:.3f}", uncertainty[j] * sc) : "");
+  }
+  if (!layout.message.empty()) out += "  " + layout.message + "\n";
+  return out;
+}
+
+}  // namespace trueaxis::guideway
