@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <set>
@@ -71,6 +72,55 @@ Eigen::VectorXd detrend(const Eigen::VectorXd& s, const Eigen::VectorXd& v) {
 }
 
 }  // namespace
+
+void Qpd::validate() const {
+  if (table_signal.size() != table_displacement.size())
+    throw Error("qpd: the calibration table's signal and displacement lists differ in length");
+  if (table_signal.size() == 1) throw Error("qpd: the calibration table needs at least 2 points");
+  for (Eigen::Index i = 1; i < table_signal.size(); ++i)
+    if (!(table_signal[i] > table_signal[i - 1]) ||
+        !(table_displacement[i] > table_displacement[i - 1]))
+      throw Error(fmt::format(
+          "qpd: the calibration table must increase strictly in signal and displacement (entry "
+          "{})",
+          i + 1));
+  if (table_signal.size() &&
+      (!(table_signal.cwiseAbs().maxCoeff() < 1) || !table_displacement.allFinite()))
+    throw Error("qpd: calibration signals must lie within (-1, 1) and displacements be finite");
+  if (table_signal.size() == 0 && (!(gain > 0) || !std::isfinite(gain)))
+    throw Error("qpd: give a positive gain (um per unit signal) or a calibration table");
+  if (!(min_sum >= 0) || !(max_signal > 0 && max_signal <= 1))
+    throw Error("qpd: min_sum must be >= 0 and max_signal in (0, 1]");
+}
+
+double Qpd::displacement(double signal) const {
+  if (table_signal.size() >= 2) {
+    const Eigen::Index n = table_signal.size();
+    if (!(signal >= table_signal[0] && signal <= table_signal[n - 1]))
+      throw Error(fmt::format("signal {:.4f} is outside the calibration table [{:.4f}, {:.4f}]",
+                              signal, table_signal[0], table_signal[n - 1]));
+    const auto* first = table_signal.data();
+    Eigen::Index i = std::upper_bound(first, first + n, signal) - first - 1;
+    i = std::clamp<Eigen::Index>(i, 0, n - 2);
+    const double t = (signal - table_signal[i]) / (table_signal[i + 1] - table_signal[i]);
+    return table_displacement[i] + t * (table_displacement[i + 1] - table_displacement[i]);
+  }
+  if (!(std::abs(signal) <= max_signal))
+    throw Error(
+        fmt::format("signal {:.4f} is outside the linear range (|s| <= {:g})", signal, max_signal));
+  return gain * signal;
+}
+
+Eigen::Vector2d Qpd::spot(double i1, double i2, double i3, double i4) const {
+  const double sum = i1 + i2 + i3 + i4;
+  if (!std::isfinite(sum) || !(sum > min_sum) || !(sum > 0))
+    throw Error(fmt::format("spot lost: sum signal {:g} <= {:g}", sum, min_sum));
+  return {displacement(((i1 + i4) - (i2 + i3)) / sum), displacement(((i1 + i2) - (i3 + i4)) / sum)};
+}
+
+double gaussian_signal(double x, double w) {
+  return std::erf(std::sqrt(2.0) * x / w);
+}
 
 void Layout::validate() const {
   if (detectors.empty()) throw Error("layout: no detectors");

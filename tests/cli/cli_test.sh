@@ -118,5 +118,20 @@ printf '{"workpiece": {"x": [0,1], "value": [1,' > broken.json
 expect_err "broken.json:1:" "$T" report broken.json -o x.html
 expect_err "" "$T" separate --input does-not-exist.csv --output o.json
 
+# Guideway: a pure horizontal shift of 1 um reads dx = -1 on every detector.
+cat > gw.json <<'J'
+{"detectors": [{"name": "a", "kind": "position", "position": [-60, 0, 0]},
+               {"name": "b", "kind": "position", "position": [60, 0, 150]},
+               {"name": "c", "kind": "position", "position": [0, 80, 300]}]}
+J
+printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy\n0,-1,0,-1,0,-1,0\n10,-1,0,-1,0,-1,0\n' > gw.csv
+expect_ok "$T" guideway --layout gw.json --input gw.csv --output gw-result.json
+grep -q '"horizontal": \[' gw-result.json && grep -q '"pitch": true' gw-result.json && grep -q "roll" out.txt && ok || bad "guideway result"
+sed 's/150\]/0]/; s/300\]/0]/' gw.json > gw-flat.json
+expect_ok "$T" guideway --layout gw-flat.json --input gw.csv --output gw-flat-result.json
+grep -q "pitch, yaw" err.txt && grep -q '"pitch": null' gw-flat-result.json && ok || bad "coplanar layout: pitch and yaw unobservable"
+printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy,d_dx\n0,-1,0,-1,0,-1,0,0\n' > gw-bad.csv
+expect_err "gw-bad.csv:1:33: column 'd_dx' names no detector" "$T" guideway --layout gw.json --input gw-bad.csv --output o.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

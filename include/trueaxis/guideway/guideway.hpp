@@ -53,6 +53,32 @@ struct Layout {
   Eigen::MatrixXd design() const;
 };
 
+// Quadrant-detector signal conversion. Photocurrents I1..I4 of the quadrants counter-clockwise
+// from (+x, +y) give the normalised differences
+//
+//     sx = ((I1 + I4) − (I2 + I3)) / ΣI,      sy = ((I1 + I2) − (I3 + I4)) / ΣI,
+//
+// converted to a spot displacement by a linear gain (valid near the centre) or by a calibration
+// table (the response of a Gaussian spot follows an error function and flattens off-centre).
+struct Qpd {
+  double gain = 0;                     // mm per unit signal (used when there is no table)
+  Eigen::VectorXd table_signal;        // strictly increasing, within (−1, 1)
+  Eigen::VectorXd table_displacement;  // mm at those signals, strictly increasing
+  double min_sum = 0;                  // ΣI below this: spot lost (current units)
+  double max_signal = 0.9;             // |s| above this: outside the linear range (gain only)
+  bool empty() const { return gain == 0 && table_signal.size() == 0; }
+  void validate() const;  // throws Error
+  // The displacement (mm) for one normalised signal; throws Error (with the reason) outside the
+  // table or beyond max_signal.
+  double displacement(double signal) const;
+  // (dx, dy) in mm from the four currents; throws Error for a lost spot or an out-of-range one.
+  Eigen::Vector2d spot(double i1, double i2, double i3, double i4) const;
+};
+
+// The normalised difference sx of a Gaussian spot (1/e² intensity radius w, mm) centred at x (mm)
+// on an infinite quadrant detector with no gap: erf(√2·x / w).
+double gaussian_signal(double x, double w);
+
 struct LayoutAnalysis {
   std::array<bool, kErrors> observable{};
   // Singular values and condition number of the design with the angle columns scaled by the
