@@ -51,8 +51,9 @@ int rank(const Eigen::MatrixXd& a) {
   return r;
 }
 
-double condition(const Eigen::VectorXd& sv) {
-  if (sv.size() == 0 || !(sv[sv.size() - 1] > kRankTol * sv[0]))
+// Infinite when rank-deficient, including fewer readings than unknowns (`cols`).
+double condition(const Eigen::VectorXd& sv, Eigen::Index cols) {
+  if (sv.size() < cols || sv.size() == 0 || !(sv[sv.size() - 1] > kRankTol * sv[0]))
     return std::numeric_limits<double>::infinity();
   return sv[0] / sv[sv.size() - 1];
 }
@@ -212,9 +213,10 @@ LayoutAnalysis analyze_layout(const Layout& layout) {
     if (!dropped) break;  // cannot happen: some column is always dependent when rank < size
   }
   r.singular_values = singular_values(normalised(a));
-  r.condition_number = condition(r.singular_values);
-  r.observable_condition_number =
-      condition(singular_values(normalised(columns(a, indices(r.observable)))));
+  r.condition_number = condition(r.singular_values, kErrors);
+  const auto keep = indices(r.observable);
+  r.observable_condition_number = condition(singular_values(normalised(columns(a, keep))),
+                                            static_cast<Eigen::Index>(keep.size()));
   std::vector<int> lost;
   for (int j = 0; j < kErrors; ++j)
     if (!r.observable[static_cast<std::size_t>(j)]) lost.push_back(j);

@@ -125,6 +125,17 @@ TEST(Guideway, AnAngleChannelMakesACoplanarLayoutSeePitchAndYaw) {
   }
 }
 
+TEST(Guideway, OnePositionDetectorAndALensSeeOnlyWhatFourReadingsCan) {
+  // Four readings for five unknowns: the full design is rank-deficient however it is placed.
+  Layout l;
+  l.detectors = {{"a", Kind::Position, {10, 20, 0}, 0}, {"f", Kind::Angle, {}, 100}};
+  const auto r = guideway::analyze_layout(l);
+  EXPECT_FALSE(std::isfinite(r.condition_number));
+  EXPECT_FALSE(r.observable[4]);  // roll needs two transverse positions
+  EXPECT_TRUE(r.observable[0] && r.observable[1] && r.observable[2] && r.observable[3]);
+  EXPECT_TRUE(std::isfinite(r.observable_condition_number));
+}
+
 TEST(Guideway, NoisyErrorsAgreeWithTheirPropagatedUncertainty) {
   const Layout l = triangle(0, 200, 400);
   const double sigma = 0.5e-3;  // mm per spot reading
