@@ -31,8 +31,8 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate);
 // 'space', 'compensate', 'export linuxcnc', 'export csv'.
 std::vector<Command> add_space_commands(CLI::App& app);
 
-// 'guideway'.
-std::vector<Command> add_guideway_commands(CLI::App& app);
+// 'guideway' and 'simulate guideway5d' (under `simulate`).
+std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate);
 
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);

@@ -2,13 +2,17 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/guideway/guideway.hpp"
+#include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/guideway.hpp"
+#include "trueaxis/io/machine.hpp"
+#include "trueaxis/sim/guideway.hpp"
 
 namespace trueaxis::cli {
 namespace {
@@ -35,9 +39,113 @@ int run_guideway(const GuidewayArgs& a) {
   return 0;
 }
 
+struct SimArgs {
+  std::string machine, layout, output = "spots.csv", truth = "truth.csv", axis = "x";
+  sim::GuidewayOptions o;
+  double noise_um = 0, pointing_um = 0, angle_urad = 0, quant_um = 0;
+  std::uint64_t machine_seed = 1;
+  bool quiet = false;
+};
+
+int run_simulate(const SimArgs& a) {
+  const sim::Machine m = a.machine.empty() ? sim::random_machine([&] {
+    sim::MachineOptions mo;
+    mo.seed = a.machine_seed;
+    return mo;
+  }())
+                                           : io::read_machine(a.machine);
+  const io::GuidewayLayout g = io::read_layout(a.layout);
+  sim::GuidewayOptions o = a.o;
+  o.axis = a.axis == "x" ? 0 : a.axis == "y" ? 1 : 2;
+  o.noise = a.noise_um * 1e-3;
+  o.pointing_noise = a.pointing_um * 1e-3;
+  o.angle_noise = a.angle_urad * 1e-6;
+  o.quantisation = a.quant_um * 1e-3;
+  const auto c = sim::simulate_guideway(m, g.layout, o);
+  std::vector<std::string> header{"s"};
+  std::vector<Eigen::VectorXd> cols{c.s};
+  for (std::size_t i = 0; i < g.layout.detectors.size(); ++i) {
+    const std::string& n = g.layout.detectors[i].name;
+    const auto k = static_cast<Eigen::Index>(i);
+    if (o.currents) {
+      for (int q = 0; q < 4; ++q) {
+        header.push_back(fmt::format("{}_i{}", n, q + 1));
+        cols.push_back(c.currents.col(4 * k + q));
+      }
+    } else {
+      header.push_back(n + "_dx");
+      cols.push_back(c.spots.col(2 * k) * 1e3);
+      header.push_back(n + "_dy");
+      cols.push_back(c.spots.col(2 * k + 1) * 1e3);
+    }
+  }
+  std::vector<const Eigen::VectorXd*> ptrs;
+  for (const auto& v : cols) ptrs.push_back(&v);
+  io::write_csv(a.output, header, ptrs);
+  const Eigen::VectorXd t[5] = {c.truth[0] * 1e3, c.truth[1] * 1e3, c.truth[2] * 1e6,
+                                c.truth[3] * 1e6, c.truth[4] * 1e6};
+  io::write_csv(a.truth,
+                {"s", "horizontal_um", "vertical_um", "pitch_urad", "yaw_urad", "roll_urad"},
+                {&c.s, &t[0], &t[1], &t[2], &t[3], &t[4]});
+  if (!a.quiet) {
+    fmt::print("simulated {} positions along {} of {} with {} detectors{}: wrote {} and {}\n",
+               o.positions, a.axis, m.name, g.layout.detectors.size(),
+               o.exact ? " (exact geometry)" : "", a.output, a.truth);
+    if (o.currents)
+      fmt::print(
+          "quadrant currents of a Gaussian spot (1/e2 radius {} mm): near the centre the layout "
+          "needs \"qpd\": {{\"gain_um\": {:.6g}}}; farther out, a calibration table\n",
+          o.spot_radius, o.spot_radius * std::sqrt(M_PI) / (2 * std::sqrt(2.0)) * 1e3);
+  }
+  return 0;
+}
+
 }  // namespace
 
-std::vector<Command> add_guideway_commands(CLI::App& app) {
+std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
+  auto sa = std::make_shared<SimArgs>();
+  auto* sc = simulate.add_subcommand(
+      "guideway5d",
+      "A virtual guideway carriage: one axis of a virtual machine carries the layout's "
+      "detectors through laser beams fixed to the bed. Writes the spots CSV that 'trueaxis "
+      "guideway' reads and the truth (the axis' own straightness, pitch, yaw and roll).\n"
+      "Example: trueaxis simulate guideway5d --layout layout.json --axis x --noise 0.2 -o "
+      "spots.csv --truth truth.csv");
+  sc->add_option("--layout", sa->layout, "layout JSON (detectors on the carriage)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  sc->add_option("--machine", sa->machine,
+                 "machine JSON (default: a random machine from --machine-seed)")
+      ->check(CLI::ExistingFile);
+  sc->add_option("--machine-seed", sa->machine_seed, "seed of the random machine")
+      ->capture_default_str();
+  sc->add_option("--axis", sa->axis, "the machine axis the carriage rides")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  sc->add_option("--positions", sa->o.positions, "positions over the axis range")
+      ->capture_default_str();
+  sc->add_option("--noise", sa->noise_um, "spot reading noise, um")->capture_default_str();
+  sc->add_option("--pointing-noise", sa->pointing_um, "beam pointing jitter, um")
+      ->capture_default_str();
+  sc->add_option("--angle-noise", sa->angle_urad, "angle detector noise, urad")
+      ->capture_default_str();
+  sc->add_option("--quantisation", sa->quant_um, "reading resolution, um (0: none)")
+      ->capture_default_str();
+  sc->add_flag("--exact", sa->o.exact,
+               "exact spot geometry (rotated detector planes) instead of the small-angle model");
+  sc->add_flag("--currents", sa->o.currents,
+               "write quadrant currents <name>_i1..i4 of a Gaussian spot instead of dx, dy");
+  sc->add_option("--spot-radius", sa->o.spot_radius, "Gaussian spot 1/e2 radius, mm")
+      ->capture_default_str();
+  sc->add_option("--current-noise", sa->o.current_noise, "relative noise of each current")
+      ->capture_default_str();
+  sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
+  sc->add_option("--output,-o", sa->output, "spots CSV to write")->capture_default_str();
+  sc->add_option("--truth", sa->truth,
+                 "truth CSV (s, horizontal_um, vertical_um, pitch_urad, yaw_urad, roll_urad)")
+      ->capture_default_str();
+  sc->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
+
   auto a = std::make_shared<GuidewayArgs>();
   auto* c = app.add_subcommand(
       "guideway",
@@ -62,7 +170,7 @@ std::vector<Command> add_guideway_commands(CLI::App& app) {
   c->add_flag("--skip-bad", a->skip_bad,
               "drop positions with a lost or out-of-range spot instead of failing");
   c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
-  return {{c, [a] { return run_guideway(*a); }}};
+  return {{c, [a] { return run_guideway(*a); }}, {sc, [sa] { return run_simulate(*sa); }}};
 }
 
 }  // namespace trueaxis::cli

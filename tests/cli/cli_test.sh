@@ -132,6 +132,19 @@ expect_ok "$T" guideway --layout gw-flat.json --input gw.csv --output gw-flat-re
 grep -q "pitch, yaw" err.txt && grep -q '"pitch": null' gw-flat-result.json && ok || bad "coplanar layout: pitch and yaw unobservable"
 printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy,d_dx\n0,-1,0,-1,0,-1,0,0\n' > gw-bad.csv
 expect_err "gw-bad.csv:1:33: column 'd_dx' names no detector" "$T" guideway --layout gw.json --input gw-bad.csv --output o.json
+expect_ok "$T" simulate guideway5d --layout gw.json --axis y --positions 50 --noise 0.05 -o gw-sim.csv --truth gw-truth.csv
+head -1 gw-sim.csv | grep -qx "s,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy" && head -1 gw-truth.csv | grep -qx "s,horizontal_um,vertical_um,pitch_urad,yaw_urad,roll_urad" && ok || bad "simulate guideway5d headers"
+expect_ok "$T" guideway --layout gw.json --input gw-sim.csv --output gw-sim.json --sigma 0.05
+# Quadrant currents: the layout needs the QPD's gain (printed by the simulator).
+expect_ok "$T" simulate guideway5d --layout gw.json --currents --spot-radius 2 --positions 20 -o gw-cur.csv --truth gw-cur-truth.csv
+gain=$(grep -o '"gain_um": [0-9.]*' out.txt | grep -o '[0-9.]*$')
+sed "s/^{\"detectors\"/{\"qpd\": {\"gain_um\": $gain, \"min_sum\": 0.5},\n \"detectors\"/" gw.json > gw-qpd.json
+expect_ok "$T" guideway --layout gw-qpd.json --input gw-cur.csv --output gw-cur.json
+head -1 gw-cur.csv | grep -q "a_i1,a_i2,a_i3,a_i4" && grep -q '"roll": \[' gw-cur.json && ok || bad "guideway from quadrant currents"
+awk -F, 'NR==3{$2=0.1;$3=0.1;$4=0.1;$5=0.1} {print}' OFS=, gw-cur.csv > gw-lost.csv
+expect_err "gw-lost.csv:3:.*detector 'a' at s = .* spot lost" "$T" guideway --layout gw-qpd.json --input gw-lost.csv --output o.json
+expect_ok "$T" guideway --layout gw-qpd.json --input gw-lost.csv --output o.json --skip-bad
+grep -q "skipped: " err.txt && grep -q "(1 positions skipped)" out.txt && ok || bad "--skip-bad drops the lost sample"
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]
