@@ -8,5 +8,7 @@ namespace trueaxis::python {
 
 // The virtual machine, error surfaces, error spaces and error maps (space.cpp).
 void bind_space(pybind11::module_& m);
+// The five guideway errors and the virtual carriage (guideway.cpp).
+void bind_guideway(pybind11::module_& m);
 
 }  // namespace trueaxis::python

@@ -175,4 +175,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
 'unobservable' (names of the undetermined modes), 'extra_null_modes', 'pitch_modelled',
 'message' (why, when not observable)}.)doc");
   trueaxis::python::bind_space(m);
+  trueaxis::python::bind_guideway(m);
 }
