@@ -12,13 +12,14 @@
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/machine.hpp"
+#include "trueaxis/report/guideway.hpp"
 #include "trueaxis/sim/guideway.hpp"
 
 namespace trueaxis::cli {
 namespace {
 
 struct GuidewayArgs {
-  std::string layout, input, output;
+  std::string layout, input, output, report;
   double sigma = 0;
   bool skip_bad = false, quiet = false;
 };
@@ -31,6 +32,9 @@ int run_guideway(const GuidewayArgs& a) {
   o.sigma = a.sigma * 1e-3;
   const guideway::Result r = guideway::solve(g.layout, sp.s, sp.spots, o);
   io::write_guideway_result(a.output, r);
+  if (!a.report.empty())
+    report::write(a.report, report::render("trueaxis guideway report",
+                                           {report::guideway_section(a.input, r)}));
   if (!r.layout.message.empty())
     std::fprintf(stderr, "trueaxis guideway: %s\n", r.layout.message.c_str());
   if (!a.quiet)
@@ -62,26 +66,20 @@ int run_simulate(const SimArgs& a) {
   o.angle_noise = a.angle_urad * 1e-6;
   o.quantisation = a.quant_um * 1e-3;
   const auto c = sim::simulate_guideway(m, g.layout, o);
-  std::vector<std::string> header{"s"};
-  std::vector<Eigen::VectorXd> cols{c.s};
-  for (std::size_t i = 0; i < g.layout.detectors.size(); ++i) {
-    const std::string& n = g.layout.detectors[i].name;
-    const auto k = static_cast<Eigen::Index>(i);
-    if (o.currents) {
+  if (o.currents) {
+    std::vector<std::string> header{"s"};
+    std::vector<Eigen::VectorXd> cols;
+    for (std::size_t i = 0; i < g.layout.detectors.size(); ++i)
       for (int q = 0; q < 4; ++q) {
-        header.push_back(fmt::format("{}_i{}", n, q + 1));
-        cols.push_back(c.currents.col(4 * k + q));
+        header.push_back(fmt::format("{}_i{}", g.layout.detectors[i].name, q + 1));
+        cols.push_back(c.currents.col(4 * static_cast<Eigen::Index>(i) + q));
       }
-    } else {
-      header.push_back(n + "_dx");
-      cols.push_back(c.spots.col(2 * k) * 1e3);
-      header.push_back(n + "_dy");
-      cols.push_back(c.spots.col(2 * k + 1) * 1e3);
-    }
+    std::vector<const Eigen::VectorXd*> ptrs{&c.s};
+    for (const auto& v : cols) ptrs.push_back(&v);
+    io::write_csv(a.output, header, ptrs);
+  } else {
+    io::write_spots(a.output, g.layout, c.s, c.spots);
   }
-  std::vector<const Eigen::VectorXd*> ptrs;
-  for (const auto& v : cols) ptrs.push_back(&v);
-  io::write_csv(a.output, header, ptrs);
   const Eigen::VectorXd t[5] = {c.truth[0] * 1e3, c.truth[1] * 1e3, c.truth[2] * 1e6,
                                 c.truth[3] * 1e6, c.truth[4] * 1e6};
   io::write_csv(a.truth,
@@ -167,6 +165,7 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--sigma", a->sigma,
                 "standard deviation of one spot reading (um) for the uncertainties (default: "
                 "estimated from the residuals when the layout is redundant)");
+  c->add_option("--report", a->report, "also write an HTML report (one plot per error)");
   c->add_flag("--skip-bad", a->skip_bad,
               "drop positions with a lost or out-of-range spot instead of failing");
   c->add_flag("--quiet,-q", a->quiet, "print nothing on success");

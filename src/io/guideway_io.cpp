@@ -234,4 +234,39 @@ void write_guideway_result(const std::string& path, const guideway::Result& r) {
   write_json(path, j);
 }
 
+void write_layout(const std::string& path, const guideway::Layout& layout) {
+  ojson dets = ojson::array();
+  for (const auto& d : layout.detectors) {
+    ojson o;
+    o["name"] = d.name;
+    if (d.kind == guideway::Kind::Angle) {
+      o["kind"] = "angle";
+      o["focal_length"] = d.focal_length;
+    } else {
+      o["kind"] = "position";
+      o["position"] = {d.position.x(), d.position.y(), d.position.z()};
+    }
+    dets.push_back(o);
+  }
+  write_json(path, ojson{{"detectors", dets}});
+}
+
+void write_spots(const std::string& path, const guideway::Layout& layout, const Eigen::VectorXd& s,
+                 const Eigen::MatrixXd& spots) {
+  if (spots.cols() != 2 * static_cast<Eigen::Index>(layout.detectors.size()) ||
+      spots.rows() != s.size())
+    throw Error(fmt::format("{}: spots must be positions x 2 per detector", path));
+  std::vector<std::string> header{"s"};
+  std::vector<Eigen::VectorXd> cols;
+  for (std::size_t i = 0; i < layout.detectors.size(); ++i) {
+    header.push_back(layout.detectors[i].name + "_dx");
+    header.push_back(layout.detectors[i].name + "_dy");
+    cols.push_back(spots.col(2 * static_cast<Eigen::Index>(i)) * 1e3);
+    cols.push_back(spots.col(2 * static_cast<Eigen::Index>(i) + 1) * 1e3);
+  }
+  std::vector<const Eigen::VectorXd*> ptrs{&s};
+  for (const auto& c : cols) ptrs.push_back(&c);
+  write_csv(path, header, ptrs);
+}
+
 }  // namespace trueaxis::io

@@ -134,7 +134,8 @@ printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy,d_dx\n0,-1,0,-1,0,-1,0,0\n' > gw-bad.csv
 expect_err "gw-bad.csv:1:33: column 'd_dx' names no detector" "$T" guideway --layout gw.json --input gw-bad.csv --output o.json
 expect_ok "$T" simulate guideway5d --layout gw.json --axis y --positions 50 --noise 0.05 -o gw-sim.csv --truth gw-truth.csv
 head -1 gw-sim.csv | grep -qx "s,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy" && head -1 gw-truth.csv | grep -qx "s,horizontal_um,vertical_um,pitch_urad,yaw_urad,roll_urad" && ok || bad "simulate guideway5d headers"
-expect_ok "$T" guideway --layout gw.json --input gw-sim.csv --output gw-sim.json --sigma 0.05
+expect_ok "$T" guideway --layout gw.json --input gw-sim.csv --output gw-sim.json --sigma 0.05 --report gw.html
+grep -q "roll (εz)" gw.html && grep -q "uPlot" gw.html && ok || bad "guideway --report"
 # Quadrant currents: the layout needs the QPD's gain (printed by the simulator).
 expect_ok "$T" simulate guideway5d --layout gw.json --currents --spot-radius 2 --positions 20 -o gw-cur.csv --truth gw-cur-truth.csv
 gain=$(grep -o '"gain_um": [0-9.]*' out.txt | grep -o '[0-9.]*$')

@@ -36,7 +36,8 @@ def test_demo_report_renders_every_plot(tmp_path):
     total = re.search(r'data-plots-total="(\d+)"', dom)
     rendered = re.search(r'data-plots-rendered="(\d+)"', dom)
     assert total and rendered, "report script did not run"
-    assert int(total.group(1)) >= 9  # 8 straightness plots + the compensation curves
+    # 8 straightness plots, the compensation curves and the five guideway errors.
+    assert int(total.group(1)) >= 14
     assert rendered.group(1) == total.group(1)
     assert 'data-script-errors="' not in dom, "script errors in the report"
     assert dom.count("<canvas") >= int(total.group(1))
@@ -46,7 +47,8 @@ def test_demo_report_renders_every_plot(tmp_path):
     figures = re.search(r'data-figures-total="(\d+)"', dom)
     assert figures and int(figures.group(1)) >= 4 + 3 + 3
     assert dom.count('<svg class="ta-fig"') == int(figures.group(1))
-    for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt"):
+    for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt",
+                 "layout.json", "spots.csv"):
         assert (report.parent / name).stat().st_size > 0, name
 
 

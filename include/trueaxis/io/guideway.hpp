@@ -47,4 +47,9 @@ Spots read_spots(const std::string& path, const GuidewayLayout& layout, bool ski
 
 void write_guideway_result(const std::string& path, const guideway::Result& result);
 
+// layout.json (detectors only) and spots.csv with displacements (s mm, dx/dy µm).
+void write_layout(const std::string& path, const guideway::Layout& layout);
+void write_spots(const std::string& path, const guideway::Layout& layout, const Eigen::VectorXd& s,
+                 const Eigen::MatrixXd& spots);
+
 }  // namespace trueaxis::io
