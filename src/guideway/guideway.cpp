@@ -64,12 +64,20 @@ std::string names_of(const std::vector<int>& idx) {
   return s;
 }
 
+// v minus its least-squares line over s (closed form, no temporaries: these are 10⁶ long).
 Eigen::VectorXd detrend(const Eigen::VectorXd& s, const Eigen::VectorXd& v) {
-  Eigen::MatrixXd a(s.size(), 2);
-  a.col(0).setOnes();
-  a.col(1) = s.array() - s.mean();
-  const Eigen::Vector2d c = a.colPivHouseholderQr().solve(v);
-  return v - a * c;
+  const Eigen::Index n = s.size();
+  const double sm = s.mean(), vm = v.mean();
+  double sxx = 0, sxv = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double ds = s[i] - sm;
+    sxx += ds * ds;
+    sxv += ds * (v[i] - vm);
+  }
+  const double slope = sxx > 0 ? sxv / sxx : 0.0;
+  Eigen::VectorXd out(n);
+  for (Eigen::Index i = 0; i < n; ++i) out[i] = v[i] - vm - slope * (s[i] - sm);
+  return out;
 }
 
 }  // namespace
@@ -274,29 +282,50 @@ Result solve(const Layout& layout, const Eigen::VectorXd& s, const Eigen::Matrix
   const auto k = static_cast<Eigen::Index>(keep.size());
   const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(a);
   const Eigen::MatrixXd p = qr.solve(Eigen::MatrixXd::Identity(2 * m, 2 * m));
-  const Eigen::MatrixXd q = spots * p.transpose();  // positions × k
-  const Eigen::MatrixXd res = spots - q * a.transpose();
+  // Blocks of positions small enough to stay in cache: one pass over the readings computes the
+  // errors, the residuals and their sum of squares.
+  const Eigen::Index n = s.size();
   r.s = s;
-  r.residual = (res.rowwise().squaredNorm() / static_cast<double>(2 * m)).cwiseSqrt();
+  for (Eigen::Index c = 0; c < k; ++c)
+    r.value[static_cast<std::size_t>(keep[static_cast<std::size_t>(c)])].resize(n);
+  r.residual.resize(n);
+  double ss_res = 0;
+  constexpr Eigen::Index kBlock = 2048;
+  Eigen::MatrixXd qb(kBlock, k), rb(kBlock, 2 * m);
+  for (Eigen::Index b = 0; b < n; b += kBlock) {
+    const Eigen::Index nb = std::min(kBlock, n - b);
+    auto q = qb.topRows(nb);
+    auto res = rb.topRows(nb);
+    q.noalias() = spots.middleRows(b, nb) * p.transpose();
+    res = spots.middleRows(b, nb);
+    res.noalias() -= q * a.transpose();
+    r.residual.segment(b, nb) =
+        (res.rowwise().squaredNorm() / static_cast<double>(2 * m)).cwiseSqrt();
+    ss_res += res.squaredNorm();
+    for (Eigen::Index c = 0; c < k; ++c)
+      r.value[static_cast<std::size_t>(keep[static_cast<std::size_t>(c)])].segment(b, nb) =
+          q.col(c);
+  }
   const Eigen::Index dof = 2 * m - k;
   r.sigma = options.sigma;
   if (r.sigma == 0 && dof > 0 && s.size() > 0) {
-    r.sigma = std::sqrt(res.squaredNorm() / static_cast<double>(s.size() * dof));
+    r.sigma = std::sqrt(ss_res / static_cast<double>(n * dof));
     r.sigma_estimated = true;
   }
   const Eigen::MatrixXd cov = p * p.transpose();  // (AᵀA)⁻¹ for unit reading noise
   for (Eigen::Index c = 0; c < k; ++c) {
     const auto j = static_cast<std::size_t>(keep[static_cast<std::size_t>(c)]);
-    r.value[j] = q.col(c);
     r.uncertainty[j] = r.sigma * std::sqrt(cov(c, c));
   }
   for (std::size_t j = 0; j < kErrors; ++j) {
     if (r.value[j].size() == 0) continue;
-    Eigen::VectorXd v = r.value[j];
+    const Eigen::VectorXd* vp = &r.value[j];
     if (j < 2 && s.size() >= 2) {
-      v = detrend(s, v);
-      (j == 0 ? r.horizontal_straightness : r.vertical_straightness) = v;
+      auto& st = j == 0 ? r.horizontal_straightness : r.vertical_straightness;
+      st = detrend(s, r.value[j]);
+      vp = &st;
     }
+    const Eigen::VectorXd& v = *vp;
     if (v.size()) {
       r.pv[j] = v.maxCoeff() - v.minCoeff();
       r.rms[j] = std::sqrt(v.squaredNorm() / static_cast<double>(v.size()));
