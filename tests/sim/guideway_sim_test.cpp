@@ -115,6 +115,22 @@ TEST(GuidewaySim, NoisyReadingsGiveErrorsWithinTheirUncertainty) {
   }
 }
 
+TEST(GuidewaySim, QuantisedReadingsAreWholeMultiplesOfTheResolution) {
+  const auto mc = machine(4);
+  const auto l = layout3d();
+  sim::GuidewayOptions o;
+  o.quantisation = 0.05e-3;  // 50 nm
+  const auto q = sim::simulate_guideway(mc, l, o);
+  o.quantisation = 0;
+  const auto raw = sim::simulate_guideway(mc, l, o);
+  const Eigen::ArrayXXd steps = q.spots.array() / 0.05e-3;
+  EXPECT_LT((steps - steps.round()).abs().maxCoeff(), 1e-6);
+  EXPECT_LE((q.spots - raw.spots).cwiseAbs().maxCoeff(), 0.025e-3 * (1 + 1e-9));
+  // Rounding acts like uniform noise of q/√12 per reading: the estimated sigma shows it.
+  const auto r = guideway::solve(l, q.s, q.spots);
+  EXPECT_NEAR(r.sigma, 0.05e-3 / std::sqrt(12.0), 0.4 * 0.05e-3 / std::sqrt(12.0));
+}
+
 TEST(GuidewaySim, QuadrantCurrentsOfAGaussianSpotConvertBack) {
   const auto mc = machine(2);
   const auto l = layout3d();
