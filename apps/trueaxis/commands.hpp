@@ -34,6 +34,9 @@ std::vector<Command> add_space_commands(CLI::App& app);
 // 'guideway' and 'simulate guideway5d' (under `simulate`).
 std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate);
 
+// 'fit line|plane|circle|sphere|cylinder|cone'.
+std::vector<Command> add_fit_commands(CLI::App& app);
+
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);
 

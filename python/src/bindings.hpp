@@ -10,5 +10,7 @@ namespace trueaxis::python {
 void bind_space(pybind11::module_& m);
 // The five guideway errors and the virtual carriage (guideway.cpp).
 void bind_guideway(pybind11::module_& m);
+// Least-squares fits of geometric elements (fit.cpp).
+void bind_fit(pybind11::module_& m);
 
 }  // namespace trueaxis::python

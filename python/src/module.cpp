@@ -176,4 +176,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
 'message' (why, when not observable)}.)doc");
   trueaxis::python::bind_space(m);
   trueaxis::python::bind_guideway(m);
+  trueaxis::python::bind_fit(m);
 }

@@ -147,5 +147,16 @@ expect_err "gw-lost.csv:3:.*detector 'a' at s = .* spot lost" "$T" guideway --la
 expect_ok "$T" guideway --layout gw-qpd.json --input gw-lost.csv --output o.json --skip-bad
 grep -q "skipped: " err.txt && grep -q "(1 positions skipped)" out.txt && ok || bad "--skip-bad drops the lost sample"
 
+# Geometric fits: NIST's .ds format and CSV.
+expect_ok "$T" fit cylinder --input "$DATA/nist-l2/Cylinder/cyl1.ds" --output cyl.json
+grep -q '"direction"' cyl.json && grep -q '"diameter": 57.2892295075' cyl.json && ok || bad "fit cylinder on NIST cyl1"
+printf 'x,y,z\n1,0,0\n0,1,0\n-1,0,0\n0,-1,0\n0,0,1\n' > ball.csv
+expect_ok "$T" fit sphere -i ball.csv -o ball.json
+grep -q '"diameter": 2' ball.json && ok || bad "fit sphere from CSV"
+printf '3\n0 0 0\n1 1 1\n2 2 2\n' > line.ds
+expect_err "plane fit: the points are collinear" "$T" fit plane -i line.ds -o o.json
+printf '2\n0 0 0\n1 1 one\n' > bad.ds
+expect_err "bad.ds:3:5: expected a number" "$T" fit line -i bad.ds -o o.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

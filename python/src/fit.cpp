@@ -1,0 +1,55 @@
+// Python bindings for the least-squares fits of geometric elements (spec 04).
+#include "trueaxis/geometry/fit.hpp"
+
+#include <fmt/format.h>
+#include <pybind11/eigen.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+
+#include "bindings.hpp"
+#include "trueaxis/error.hpp"
+
+namespace py = pybind11;
+
+namespace trueaxis::python {
+
+void bind_fit(py::module_& m) {
+  m.def(
+      "fit",
+      [](const std::string& element,
+         const py::array_t<double, py::array::c_style | py::array::forcecast>& points) {
+        if (points.ndim() != 2 || points.shape(1) != 3)
+          throw Error("points must have shape (n, 3) (mm)");
+        const Eigen::Matrix3Xd p =
+            Eigen::Map<const Eigen::Matrix3Xd>(points.data(), 3, points.shape(0));
+        const auto e = geometry::element_from_string(element);
+        geometry::Fit f;
+        {
+          py::gil_scoped_release release;
+          f = geometry::fit(e, p);
+        }
+        py::dict d;
+        d["element"] = element;
+        d["point"] = Eigen::Vector3d(f.point);
+        d["direction"] = Eigen::Vector3d(f.direction);
+        if (f.diameter > 0) d["diameter"] = f.diameter;
+        if (e == geometry::Element::Cone) {
+          d["distance"] = f.distance;
+          d["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
+        }
+        d["residuals"] = f.residuals;
+        d["rms"] = f.rms;
+        d["max"] = f.max;
+        return d;
+      },
+      py::arg("element"), py::arg("points"),
+      R"doc(Least-squares fit of 'line', 'plane', 'circle', 'sphere', 'cylinder' or 'cone' to points
+of shape (n, 3) (mm), as NIST reports it: 'point' (centre, or a point on the line, plane or
+axis), 'direction' (unit: line or axis direction, or normal), 'diameter' (circle, sphere,
+cylinder), 'distance' and 'apex_angle_deg' (cone), 'residuals' (signed orthogonal distances),
+'rms', 'max'. Raises trueaxis.Error for degenerate sets.)doc");
+}
+
+}  // namespace trueaxis::python

@@ -1,0 +1,387 @@
+#include "trueaxis/geometry/fit.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <limits>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::geometry {
+namespace {
+
+constexpr double kDegenerate = 1e-9;  // relative singular value below which a set is degenerate
+
+struct Pca {
+  Eigen::Vector3d centroid;
+  Eigen::Matrix3d axes;    // columns: principal directions, largest spread first
+  Eigen::Vector3d spread;  // singular values of the centred points
+};
+
+Pca pca(const Eigen::Matrix3Xd& p) {
+  Pca r;
+  r.centroid = p.rowwise().mean();
+  const Eigen::Matrix3Xd c = p.colwise() - r.centroid;
+  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(c, Eigen::ComputeFullU);
+  r.axes = svd.matrixU();
+  r.spread = svd.singularValues();
+  return r;
+}
+
+// An orthonormal, right-handed basis whose third column is `w` (unit).
+Eigen::Matrix3d basis(const Eigen::Vector3d& w) {
+  const Eigen::Vector3d helper =
+      std::abs(w.x()) < 0.6 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d u = helper.cross(w).normalized();
+  Eigen::Matrix3d b;
+  b.col(0) = u;
+  b.col(1) = w.cross(u);
+  b.col(2) = w;
+  return b;
+}
+
+void check(Element e, const Eigen::Matrix3Xd& p, const Pca& s) {
+  if (!p.allFinite()) throw Error(fmt::format("{} fit: coordinates must be finite", to_string(e)));
+  const long need[] = {2, 3, 3, 4, 5, 6};
+  const long n = p.cols();
+  if (n < need[static_cast<int>(e)])
+    throw Error(fmt::format("{} fit: need at least {} points, got {}", to_string(e),
+                            need[static_cast<int>(e)], n));
+  if (!(s.spread[0] > 0))
+    throw Error(fmt::format("{} fit: all {} points coincide", to_string(e), n));
+  if (e != Element::Line && !(s.spread[1] > kDegenerate * s.spread[0]))
+    throw Error(fmt::format("{} fit: the points are collinear: no {} is defined", to_string(e),
+                            to_string(e)));
+  if (e == Element::Sphere && !(s.spread[2] > kDegenerate * s.spread[0]))
+    throw Error("sphere fit: the points are coplanar: the sphere is not defined");
+}
+
+// Levenberg–Marquardt on a state re-parametrised at every step: `eval(state, r, J)` fills the
+// residuals (and the Jacobian with respect to a local correction dx, if J is not null);
+// `update(state, dx)` returns the corrected state. Stops when a step no longer lowers the cost
+// beyond round-off. Returns the number of accepted steps.
+template <class State, class Eval, class Update>
+int refine(State& st, Eval&& eval, Update&& update) {
+  Eigen::VectorXd r, rt;
+  Eigen::MatrixXd J;
+  eval(st, r, &J);
+  double cost = r.squaredNorm(), lambda = 0;
+  int accepted = 0;
+  for (int it = 0; it < 500; ++it) {
+    const Eigen::Index k = J.cols();
+    Eigen::MatrixXd A(J.rows() + k, k);
+    Eigen::VectorXd b = Eigen::VectorXd::Zero(J.rows() + k);
+    A.topRows(J.rows()) = J;
+    A.bottomRows(k).setZero();
+    if (lambda > 0)
+      for (Eigen::Index j = 0; j < k; ++j)
+        A(J.rows() + j, j) = std::sqrt(lambda) * std::max(J.col(j).norm(), 1e-300);
+    b.head(J.rows()) = -r;
+    const Eigen::VectorXd dx = A.colPivHouseholderQr().solve(b);
+    State trial = update(st, dx);
+    eval(trial, rt, nullptr);
+    const double ct = rt.squaredNorm();
+    if (std::isfinite(ct) && ct <= cost) {
+      const bool done = cost - ct <= 1e-15 * cost + 1e-300;
+      st = trial;
+      cost = ct;
+      ++accepted;
+      lambda = lambda > 1e-12 ? lambda / 10 : 0;
+      eval(st, r, &J);
+      if (done) break;
+    } else {
+      lambda = lambda > 0 ? lambda * 10 : 1e-8;
+      if (lambda > 1e12) break;  // no descent left: at the minimum to round-off
+    }
+  }
+  return accepted;
+}
+
+// ---- circle in a plane (2-D) ------------------------------------------------------------------
+
+struct Circle2 {
+  Eigen::Vector2d c;
+  double r;
+};
+
+Circle2 circle2_algebraic(const Eigen::Matrix2Xd& q) {
+  const Eigen::Index n = q.cols();
+  Eigen::MatrixXd A(n, 3);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    A.row(i) << 2 * q(0, i), 2 * q(1, i), 1;
+    b[i] = q.col(i).squaredNorm();
+  }
+  const Eigen::Vector3d s = A.colPivHouseholderQr().solve(b);
+  return {s.head<2>(), std::sqrt(std::max(0.0, s[2] + s.head<2>().squaredNorm()))};
+}
+
+Circle2 circle2_fit(const Eigen::Matrix2Xd& q, int* iterations) {
+  Circle2 c = circle2_algebraic(q);
+  auto eval = [&](const Circle2& s, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+    r.resize(q.cols());
+    if (J) J->resize(q.cols(), 3);
+    for (Eigen::Index i = 0; i < q.cols(); ++i) {
+      const Eigen::Vector2d d = q.col(i) - s.c;
+      const double rho = d.norm();
+      r[i] = rho - s.r;
+      if (J) J->row(i) << -d.x() / rho, -d.y() / rho, -1;
+    }
+  };
+  auto update = [](const Circle2& s, const Eigen::VectorXd& dx) {
+    return Circle2{s.c + dx.head<2>(), s.r + dx[2]};
+  };
+  const int it = refine(c, eval, update);
+  if (iterations) *iterations = it;
+  return c;
+}
+
+// ---- sphere -----------------------------------------------------------------------------------
+
+struct SphereState {
+  Eigen::Vector3d c;
+  double r;
+};
+
+// ---- cylinder and cone: an axis through x0 along unit a ---------------------------------------
+
+struct AxisState {
+  Eigen::Vector3d x0 = Eigen::Vector3d::Zero(), a = Eigen::Vector3d::UnitZ();
+  double r = 0;    // radius at x0 (cylinder: everywhere)
+  double psi = 0;  // cone: half apex angle (signed: > 0 opens towards +a)
+};
+
+// Local coordinates of the points in the frame with origin x0 and z along a.
+Eigen::Matrix3Xd local(const Eigen::Matrix3Xd& p, const AxisState& s, Eigen::Matrix3d& R) {
+  R = basis(s.a);
+  return R.transpose() * (p.colwise() - s.x0);
+}
+
+AxisState move_axis(const AxisState& s, const Eigen::VectorXd& dx) {
+  const Eigen::Matrix3d R = basis(s.a);
+  AxisState t = s;
+  t.x0 = s.x0 + R * Eigen::Vector3d(dx[0], dx[1], 0);
+  t.a = (R * Eigen::Vector3d(dx[2], dx[3], 1)).normalized();
+  t.r = s.r + dx[4];
+  if (dx.size() > 5) t.psi = s.psi + dx[5];
+  return t;
+}
+
+void cylinder_eval(const Eigen::Matrix3Xd& p, const AxisState& s, Eigen::VectorXd& r,
+                   Eigen::MatrixXd* J) {
+  Eigen::Matrix3d R;
+  const Eigen::Matrix3Xd q = local(p, s, R);
+  r.resize(p.cols());
+  if (J) J->resize(p.cols(), 5);
+  for (Eigen::Index i = 0; i < p.cols(); ++i) {
+    const double x = q(0, i), y = q(1, i), z = q(2, i), rho = std::hypot(x, y);
+    r[i] = rho - s.r;
+    if (J) J->row(i) << -x / rho, -y / rho, -x * z / rho, -y * z / rho, -1;
+  }
+}
+
+void cone_eval(const Eigen::Matrix3Xd& p, const AxisState& s, Eigen::VectorXd& r,
+               Eigen::MatrixXd* J) {
+  Eigen::Matrix3d R;
+  const Eigen::Matrix3Xd q = local(p, s, R);
+  const double C = std::cos(s.psi), S = std::sin(s.psi), T = std::tan(s.psi);
+  r.resize(p.cols());
+  if (J) J->resize(p.cols(), 6);
+  for (Eigen::Index i = 0; i < p.cols(); ++i) {
+    const double x = q(0, i), y = q(1, i), z = q(2, i), rho = std::hypot(x, y);
+    const double g = rho - s.r - z * T;  // radial gap at the point's axial position
+    r[i] = g * C;
+    if (J)
+      J->row(i) << -C * x / rho, -C * y / rho, C * (-x * z / rho - T * x),
+          C * (-y * z / rho - T * y), -C, -z / C - g * S;
+  }
+}
+
+// Start values for an axis along w: the algebraic circle of the points projected on the plane
+// normal to w (cylinder), or the algebraic cone x² + y² = 2cx·x + 2cy·y + k0 + k1·z + k2·z².
+bool axis_start(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid,
+                const Eigen::Vector3d& w, bool cone, AxisState& s) {
+  const Eigen::Matrix3d R = basis(w);
+  const Eigen::Matrix3Xd q = R.transpose() * (p.colwise() - centroid);
+  s.a = w;
+  if (!cone) {
+    const Circle2 c = circle2_algebraic(q.topRows<2>());
+    if (!(c.r > 0) || !std::isfinite(c.r)) return false;
+    s.x0 = centroid + R * Eigen::Vector3d(c.c.x(), c.c.y(), 0);
+    s.r = c.r;
+    return true;
+  }
+  const Eigen::Index n = q.cols();
+  Eigen::MatrixXd A(n, 5);
+  Eigen::VectorXd b(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    A.row(i) << 2 * q(0, i), 2 * q(1, i), 1, q(2, i), q(2, i) * q(2, i);
+    b[i] = q.col(i).head<2>().squaredNorm();
+  }
+  const Eigen::VectorXd k = A.colPivHouseholderQr().solve(b);
+  const double r0sq = k[2] + k[0] * k[0] + k[1] * k[1];
+  if (!(r0sq > 0) || !std::isfinite(r0sq)) return false;
+  s.x0 = centroid + R * Eigen::Vector3d(k[0], k[1], 0);
+  s.r = std::sqrt(r0sq);
+  s.psi = std::atan(k[3] / (2 * s.r));
+  return std::isfinite(s.psi);
+}
+
+}  // namespace
+
+const char* to_string(Element e) {
+  switch (e) {
+    case Element::Line:
+      return "line";
+    case Element::Plane:
+      return "plane";
+    case Element::Circle:
+      return "circle";
+    case Element::Sphere:
+      return "sphere";
+    case Element::Cylinder:
+      return "cylinder";
+    case Element::Cone:
+      return "cone";
+  }
+  return "?";
+}
+
+Element element_from_string(const std::string& s) {
+  for (Element e : {Element::Line, Element::Plane, Element::Circle, Element::Sphere,
+                    Element::Cylinder, Element::Cone})
+    if (s == to_string(e)) return e;
+  throw Error(fmt::format("unknown element '{}' (line, plane, circle, sphere, cylinder, cone)", s));
+}
+
+Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& p) {
+  const Eigen::Matrix3Xd d = p.colwise() - f.point;
+  switch (f.element) {
+    case Element::Line:
+      return (d - f.direction * (f.direction.transpose() * d)).colwise().norm().transpose();
+    case Element::Plane:
+      return (f.direction.transpose() * d).transpose();
+    case Element::Circle: {
+      // In-plane radial distance of the projected points (NIST's convention for circles).
+      const Eigen::Matrix3Xd inplane = d - f.direction * (f.direction.transpose() * d);
+      return (inplane.colwise().norm().array() - f.diameter / 2).matrix().transpose();
+    }
+    case Element::Sphere:
+      return (d.colwise().norm().array() - f.diameter / 2).matrix().transpose();
+    case Element::Cylinder: {
+      const Eigen::Matrix3Xd radial = d - f.direction * (f.direction.transpose() * d);
+      return (radial.colwise().norm().array() - f.diameter / 2).matrix().transpose();
+    }
+    case Element::Cone: {
+      const double psi = f.apex_angle / 2, C = std::cos(psi), T = std::tan(psi);
+      const Eigen::RowVectorXd z = f.direction.transpose() * d;
+      const Eigen::Matrix3Xd radial = d - f.direction * z;
+      const double r0 = f.distance / C;  // radius at `point`
+      return ((radial.colwise().norm().array() - r0 - z.array() * T) * C).matrix().transpose();
+    }
+  }
+  return {};
+}
+
+Fit fit(Element element, const Eigen::Matrix3Xd& p) {
+  const Pca s = pca(p);
+  check(element, p, s);
+  Fit f;
+  f.element = element;
+  switch (element) {
+    case Element::Line:
+      f.point = s.centroid;
+      f.direction = s.axes.col(0);
+      break;
+    case Element::Plane:
+      f.point = s.centroid;
+      f.direction = s.axes.col(2);
+      break;
+    case Element::Circle: {
+      const Eigen::Matrix3d R = basis(s.axes.col(2));
+      const Eigen::Matrix2Xd q = (R.transpose() * (p.colwise() - s.centroid)).topRows<2>();
+      const Circle2 c = circle2_fit(q, &f.iterations);
+      f.point = s.centroid + R * Eigen::Vector3d(c.c.x(), c.c.y(), 0);
+      f.direction = s.axes.col(2);
+      f.diameter = 2 * c.r;
+      break;
+    }
+    case Element::Sphere: {
+      const Eigen::Index n = p.cols();
+      Eigen::MatrixXd A(n, 4);
+      Eigen::VectorXd b(n);
+      const Eigen::Matrix3Xd q = p.colwise() - s.centroid;  // centred for conditioning
+      for (Eigen::Index i = 0; i < n; ++i) {
+        A.row(i) << 2 * q(0, i), 2 * q(1, i), 2 * q(2, i), 1;
+        b[i] = q.col(i).squaredNorm();
+      }
+      const Eigen::Vector4d a = A.colPivHouseholderQr().solve(b);
+      SphereState st{a.head<3>(), std::sqrt(std::max(0.0, a[3] + a.head<3>().squaredNorm()))};
+      auto eval = [&](const SphereState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+        r.resize(n);
+        if (J) J->resize(n, 4);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          const Eigen::Vector3d d = q.col(i) - x.c;
+          const double rho = d.norm();
+          r[i] = rho - x.r;
+          if (J) J->row(i) << -d.x() / rho, -d.y() / rho, -d.z() / rho, -1;
+        }
+      };
+      auto update = [](const SphereState& x, const Eigen::VectorXd& dx) {
+        return SphereState{x.c + dx.head<3>(), x.r + dx[3]};
+      };
+      f.iterations = refine(st, eval, update);
+      f.point = s.centroid + st.c;
+      f.diameter = 2 * std::abs(st.r);
+      break;
+    }
+    case Element::Cylinder:
+    case Element::Cone: {
+      const bool cone = element == Element::Cone;
+      double best = std::numeric_limits<double>::infinity();
+      AxisState found;
+      for (int k = 0; k < 3; ++k) {
+        AxisState st;
+        if (!axis_start(p, s.centroid, s.axes.col(k), cone, st)) continue;
+        auto eval = [&](const AxisState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+          cone ? cone_eval(p, x, r, J) : cylinder_eval(p, x, r, J);
+        };
+        const int it = refine(st, eval, move_axis);
+        Eigen::VectorXd r;
+        eval(st, r, nullptr);
+        const double cost = r.squaredNorm();
+        if (std::isfinite(cost) && cost < best) {
+          best = cost;
+          found = st;
+          f.iterations = it;
+        }
+      }
+      if (!std::isfinite(best))
+        throw Error(fmt::format("{} fit: no start value converged (are the points on a {}?)",
+                                to_string(element), to_string(element)));
+      // Report the axis point nearest the centroid; a cone opens towards +direction.
+      const double t = (s.centroid - found.x0).dot(found.a);
+      f.point = found.x0 + t * found.a;
+      f.direction = found.a;
+      if (!cone) {
+        f.diameter = 2 * std::abs(found.r);
+      } else {
+        double psi = found.psi, radius = found.r + t * std::tan(found.psi);
+        if (psi < 0) {
+          psi = -psi;
+          f.direction = -f.direction;
+        }
+        f.apex_angle = 2 * psi;
+        f.distance = radius * std::cos(psi);
+      }
+      break;
+    }
+  }
+  f.residuals = distances(f, p);
+  f.rms = std::sqrt(f.residuals.squaredNorm() / static_cast<double>(p.cols()));
+  f.max = f.residuals.cwiseAbs().maxCoeff();
+  return f;
+}
+
+}  // namespace trueaxis::geometry

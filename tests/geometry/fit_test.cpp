@@ -1,0 +1,184 @@
+// Least-squares fits against NIST's reference pairs (ASME B89.4.10; tests/data/nist-l2), compared
+// as NIST says: sizes relative, directions up to sign (a cone's is signed), positions by distance
+// to the reference element.
+#include "trueaxis/geometry/fit.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/points.hpp"
+
+using namespace trueaxis;
+using geometry::Element;
+
+namespace {
+
+const std::string kNist = std::string(TRUEAXIS_TEST_DATA) + "/nist-l2";
+constexpr double kSizeRel = 1e-9;  // NIST: sizes to ~1e-9 relative
+constexpr double kAngle = 1e-9;    // rad, directions
+constexpr double kPos = 1e-9;      // relative to the coordinates' magnitude (≤ 1000 mm)
+
+std::vector<double> read_fit(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::vector<double> v;
+  double x;
+  while (in >> x) v.push_back(x);
+  return v;
+}
+
+double angle_up_to_sign(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::min((a - b).norm(), (a + b).norm());
+}
+
+double distance_to_line(const Eigen::Vector3d& q, const Eigen::Vector3d& p,
+                        const Eigen::Vector3d& d) {
+  const Eigen::Vector3d v = q - p;
+  return (v - d * d.dot(v)).norm();
+}
+
+struct Case {
+  std::string dir;
+  Element element;
+};
+
+}  // namespace
+
+class NistReference : public testing::TestWithParam<Case> {};
+
+TEST_P(NistReference, EverySetMatchesItsReferenceFit) {
+  const Case c = GetParam();
+  int compared = 0;
+  double worst_size = 0, worst_dir = 0, worst_pos = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kNist + "/" + c.dir)) {
+    if (entry.path().extension() != ".ds") continue;
+    auto fit_path = entry.path();
+    fit_path.replace_extension(".fit");
+    if (!std::filesystem::exists(fit_path)) continue;
+    const std::string name = entry.path().filename().string();
+    const Eigen::Matrix3Xd p = io::read_ds(entry.path().string());
+    const auto ref = read_fit(fit_path);
+    const geometry::Fit f = geometry::fit(c.element, p);
+    const double scale = std::max(1.0, p.cwiseAbs().maxCoeff());
+    const Eigen::Vector3d rp(ref[0], ref[1], ref[2]);
+    auto size_rel = [&](double ours, double theirs) {
+      const double e = std::abs(ours - theirs) / std::abs(theirs);
+      worst_size = std::max(worst_size, e);
+      EXPECT_LT(e, kSizeRel) << name << ": " << ours << " vs " << theirs;
+    };
+    auto pos = [&](double d) {
+      worst_pos = std::max(worst_pos, d / scale);
+      EXPECT_LT(d, kPos * scale) << name;
+    };
+    auto dir = [&](double e) {
+      worst_dir = std::max(worst_dir, e);
+      EXPECT_LT(e, kAngle) << name;
+    };
+    switch (c.element) {
+      case Element::Plane: {
+        const Eigen::Vector3d n(ref[3], ref[4], ref[5]);
+        dir(angle_up_to_sign(f.direction, n.normalized()));
+        pos(std::abs(f.direction.dot(rp - f.point)));
+        break;
+      }
+      case Element::Circle:
+        dir(angle_up_to_sign(f.direction, Eigen::Vector3d(ref[3], ref[4], ref[5]).normalized()));
+        pos((f.point - rp).norm());
+        size_rel(f.diameter, ref[6]);
+        break;
+      case Element::Sphere:
+        pos((f.point - rp).norm());
+        size_rel(f.diameter, ref[3]);
+        break;
+      case Element::Cylinder:
+        dir(angle_up_to_sign(f.direction, Eigen::Vector3d(ref[3], ref[4], ref[5]).normalized()));
+        pos(distance_to_line(rp, f.point, f.direction));
+        size_rel(f.diameter, ref[6]);
+        break;
+      case Element::Cone: {
+        // Signed direction (towards increasing radius); the size at NIST's axis point.
+        dir((f.direction - Eigen::Vector3d(ref[3], ref[4], ref[5]).normalized()).norm());
+        pos(distance_to_line(rp, f.point, f.direction));
+        const double psi = f.apex_angle / 2;
+        const double t = f.direction.dot(rp - f.point);
+        size_rel((f.distance / std::cos(psi) + t * std::tan(psi)) * std::cos(psi), ref[6]);
+        size_rel(f.apex_angle * 180 / M_PI, ref[7]);
+        break;
+      }
+      default:
+        FAIL();
+    }
+    ++compared;
+  }
+  EXPECT_EQ(compared, 15) << c.dir;
+  std::printf("%s: %d sets, worst size %.2g rel, direction %.2g rad, position %.2g rel\n",
+              c.dir.c_str(), compared, worst_size, worst_dir, worst_pos);
+}
+
+INSTANTIATE_TEST_SUITE_P(Fits, NistReference,
+                         testing::Values(Case{"Plane", Element::Plane},
+                                         Case{"Circle2d", Element::Circle},
+                                         Case{"Sphere", Element::Sphere},
+                                         Case{"Cylinder", Element::Cylinder},
+                                         Case{"Cone", Element::Cone}),
+                         [](const testing::TestParamInfo<Case>& i) { return i.param.dir; });
+
+TEST(Fit, LineThroughExactPointsAndResidualsAreOrthogonalDistances) {
+  Eigen::Matrix3Xd p(3, 5);
+  const Eigen::Vector3d a(1, 2, 3), d = Eigen::Vector3d(1, -2, 0.5).normalized();
+  for (int i = 0; i < 5; ++i) p.col(i) = a + d * (10.0 * i - 7);
+  const auto f = geometry::fit(Element::Line, p);
+  EXPECT_LT(angle_up_to_sign(f.direction, d), 1e-14);
+  EXPECT_LT(distance_to_line(a, f.point, f.direction), 1e-12);
+  EXPECT_LT(f.max, 1e-12);
+  p(2, 4) += 0.3;  // one point off the line: its residual is (nearly) its distance
+  const auto g = geometry::fit(Element::Line, p);
+  EXPECT_GT(g.max, 0.1);
+  EXPECT_NEAR(g.rms, std::sqrt(g.residuals.squaredNorm() / 5), 1e-15);
+}
+
+TEST(Fit, DegenerateSetsAreRefused) {
+  auto err = [](Element e, const Eigen::Matrix3Xd& p) {
+    return test::error_of([&] { geometry::fit(e, p); });
+  };
+  Eigen::Matrix3Xd line(3, 6);
+  for (int i = 0; i < 6; ++i) line.col(i) = Eigen::Vector3d(i, 2.0 * i, -1.0 * i);
+  EXPECT_NE(err(Element::Plane, line).find("collinear"), std::string::npos);
+  EXPECT_NE(err(Element::Cylinder, line).find("collinear"), std::string::npos);
+  Eigen::Matrix3Xd flat(3, 8);
+  for (int i = 0; i < 8; ++i) flat.col(i) = Eigen::Vector3d(std::cos(i), std::sin(i), 5);
+  EXPECT_NE(err(Element::Sphere, flat).find("coplanar"), std::string::npos);
+  EXPECT_NE(err(Element::Sphere, flat.leftCols(3)).find("need at least 4 points, got 3"),
+            std::string::npos);
+  const Eigen::Matrix3Xd same = Eigen::Vector3d(1, 2, 3).replicate(1, 5);
+  EXPECT_NE(err(Element::Line, same).find("all 5 points coincide"), std::string::npos);
+  Eigen::Matrix3Xd nan = flat;
+  nan(0, 2) = NAN;
+  EXPECT_NE(err(Element::Circle, nan).find("finite"), std::string::npos);
+  EXPECT_NE(test::error_of([] { geometry::element_from_string("torus"); }).find("unknown element"),
+            std::string::npos);
+}
+
+TEST(PointSets, DsReaderNamesFileLineAndColumn) {
+  auto err = [](const std::string& text) {
+    const std::string p = test::temp_file("p.ds", text);
+    return test::error_of([&] { io::read_ds(p); });
+  };
+  const Eigen::Matrix3Xd p = io::read_ds(test::temp_file("p.ds", "2\r\n1\t2\t3\r\n4 5 6\r\n"));
+  EXPECT_EQ(p.cols(), 2);
+  EXPECT_EQ(p(2, 1), 6);
+  EXPECT_NE(err("3\n1 2 3\n4 5 6\n").find("p.ds:1:1: the file declares 3 points but has 2"),
+            std::string::npos);
+  EXPECT_NE(err("2\n1 2 3\n4 x 6\n").find("p.ds:3:3: expected a number"), std::string::npos);
+  EXPECT_NE(err("1\n1 2\n").find("p.ds:2:1: expected 3 coordinates"), std::string::npos);
+  EXPECT_NE(err("1.5\n1 2 3\n").find("number of points"), std::string::npos);
+  EXPECT_NE(err("").find("empty file"), std::string::npos);
+  const Eigen::Matrix3Xd q = io::read_point_set(test::temp_file("p.csv", "x,y,z\n1,2,3\n"));
+  EXPECT_EQ(q.cols(), 1);
+}

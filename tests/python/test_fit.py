@@ -1,0 +1,37 @@
+"""Python binding of the geometric fits against NIST's reference pairs."""
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import trueaxis
+
+NIST = Path(__file__).resolve().parent.parent / "data" / "nist-l2"
+
+
+def read_ds(path):
+    lines = path.read_text().split()
+    n = int(lines[0])
+    return np.array(lines[1:], dtype=float).reshape(n, 3)
+
+
+@pytest.mark.parametrize("name", ["sph1", "sph11", "sph21"])
+def test_sphere_matches_nist(name):
+    ref = np.array((NIST / "Sphere" / f"{name}.fit").read_text().split(), dtype=float)
+    f = trueaxis.fit("sphere", read_ds(NIST / "Sphere" / f"{name}.ds"))
+    np.testing.assert_allclose(f["point"], ref[:3], rtol=0, atol=1e-9 * 1000)
+    assert f["diameter"] == pytest.approx(ref[3], rel=1e-9)
+    assert f["rms"] == pytest.approx(np.sqrt(np.mean(f["residuals"] ** 2)), rel=1e-12)
+
+
+def test_cylinder_axis_up_to_sign_and_errors():
+    ref = np.array((NIST / "Cylinder" / "cyl1.fit").read_text().split(), dtype=float)
+    f = trueaxis.fit("cylinder", read_ds(NIST / "Cylinder" / "cyl1.ds"))
+    assert min(np.linalg.norm(f["direction"] - ref[3:6]), np.linalg.norm(f["direction"] + ref[3:6])) < 1e-9
+    assert f["diameter"] == pytest.approx(ref[6], rel=1e-9)
+    with pytest.raises(trueaxis.Error, match="collinear"):
+        trueaxis.fit("plane", np.outer(np.arange(5.0), [1, 2, 3]))
+    with pytest.raises(trueaxis.Error, match="unknown element 'torus'"):
+        trueaxis.fit("torus", np.zeros((5, 3)))
+    with pytest.raises(trueaxis.Error, match=r"shape \(n, 3\)"):
+        trueaxis.fit("sphere", np.zeros((5, 2)))
