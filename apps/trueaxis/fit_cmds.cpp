@@ -14,20 +14,22 @@ namespace {
 
 struct FitArgs {
   std::string input, output;
-  bool quiet = false;
+  bool zone = false, quiet = false;
 };
 
 int run_fit(geometry::Element e, const FitArgs& a) {
   const Eigen::Matrix3Xd p = io::read_point_set(a.input);
-  const geometry::Fit f = geometry::fit(e, p);
+  const geometry::Fit f = a.zone ? geometry::fit_min_zone(e, p) : geometry::fit(e, p);
   io::write_fit(a.output, f);
   if (!a.quiet) {
     std::string size;
     if (f.diameter > 0) size = fmt::format(", diameter {:.9g} mm", f.diameter);
     if (e == geometry::Element::Cone)
       size = fmt::format(", apex angle {:.9g} deg", f.apex_angle * 180 / M_PI);
-    fmt::print("{} fit to {} points{}: residual RMS {:.3g} mm, max {:.3g} mm -> {}\n",
-               geometry::to_string(e), p.cols(), size, f.rms, f.max, a.output);
+    if (a.zone) size += fmt::format(", minimum zone {:.6g} mm", f.zone);
+    fmt::print("{} {}fit to {} points{}: residual RMS {:.3g} mm, max {:.3g} mm -> {}\n",
+               geometry::to_string(e), a.zone ? "minimum-zone " : "", p.cols(), size, f.rms, f.max,
+               a.output);
   }
   return 0;
 }
@@ -58,6 +60,11 @@ std::vector<Command> add_fit_commands(CLI::App& app) {
         ->required()
         ->check(CLI::ExistingFile);
     c->add_option("--output,-o", a->output, "fit JSON to write")->required();
+    if (e == geometry::Element::Line || e == geometry::Element::Plane ||
+        e == geometry::Element::Circle)
+      c->add_flag("--zone", a->zone,
+                  "minimum-zone (Chebyshev) fit instead of least squares: the middle of the "
+                  "thinnest zone holding all points; fit.json gets its width as \"zone\"");
     c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
     out.push_back({c, [e, a] { return run_fit(e, *a); }});
   }

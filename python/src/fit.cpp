@@ -19,7 +19,7 @@ void bind_fit(py::module_& m) {
   m.def(
       "fit",
       [](const std::string& element,
-         const py::array_t<double, py::array::c_style | py::array::forcecast>& points) {
+         const py::array_t<double, py::array::c_style | py::array::forcecast>& points, bool zone) {
         if (points.ndim() != 2 || points.shape(1) != 3)
           throw Error("points must have shape (n, 3) (mm)");
         const Eigen::Matrix3Xd p =
@@ -28,7 +28,7 @@ void bind_fit(py::module_& m) {
         geometry::Fit f;
         {
           py::gil_scoped_release release;
-          f = geometry::fit(e, p);
+          f = zone ? geometry::fit_min_zone(e, p) : geometry::fit(e, p);
         }
         py::dict d;
         d["element"] = element;
@@ -39,17 +39,19 @@ void bind_fit(py::module_& m) {
           d["distance"] = f.distance;
           d["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
         }
+        if (zone) d["zone"] = f.zone;
         d["residuals"] = f.residuals;
         d["rms"] = f.rms;
         d["max"] = f.max;
         return d;
       },
-      py::arg("element"), py::arg("points"),
+      py::arg("element"), py::arg("points"), py::kw_only(), py::arg("zone") = false,
       R"doc(Least-squares fit of 'line', 'plane', 'circle', 'sphere', 'cylinder' or 'cone' to points
 of shape (n, 3) (mm), as NIST reports it: 'point' (centre, or a point on the line, plane or
 axis), 'direction' (unit: line or axis direction, or normal), 'diameter' (circle, sphere,
 cylinder), 'distance' and 'apex_angle_deg' (cone), 'residuals' (signed orthogonal distances),
-'rms', 'max'. Raises trueaxis.Error for degenerate sets.)doc");
+'rms', 'max'. zone=True (line, plane, circle): the minimum-zone (Chebyshev) fit instead, with
+its width as 'zone'. Raises trueaxis.Error for degenerate sets.)doc");
 }
 
 }  // namespace trueaxis::python

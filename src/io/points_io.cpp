@@ -85,6 +85,7 @@ void write_fit(const std::string& path, const geometry::Fit& f) {
     j["distance"] = f.distance;
     j["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
   }
+  if (f.zone > 0) j["zone"] = f.zone;
   j["rms"] = f.rms;
   j["max"] = f.max;
   j["iterations"] = f.iterations;

@@ -153,6 +153,9 @@ grep -q '"direction"' cyl.json && grep -q '"diameter": 57.2892295075' cyl.json &
 printf 'x,y,z\n1,0,0\n0,1,0\n-1,0,0\n0,-1,0\n0,0,1\n' > ball.csv
 expect_ok "$T" fit sphere -i ball.csv -o ball.json
 grep -q '"diameter": 2' ball.json && ok || bad "fit sphere from CSV"
+expect_ok "$T" fit plane --zone -i "$DATA/nist-l2/Plane/pla1.ds" -o pla.json
+grep -q '"zone"' pla.json && grep -q "minimum zone" out.txt && ok || bad "fit plane --zone"
+expect_err "" "$T" fit sphere --zone -i ball.csv -o o.json
 printf '3\n0 0 0\n1 1 1\n2 2 2\n' > line.ds
 expect_err "plane fit: the points are collinear" "$T" fit plane -i line.ds -o o.json
 printf '2\n0 0 0\n1 1 one\n' > bad.ds

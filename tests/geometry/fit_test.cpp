@@ -182,3 +182,67 @@ TEST(PointSets, DsReaderNamesFileLineAndColumn) {
   const Eigen::Matrix3Xd q = io::read_point_set(test::temp_file("p.csv", "x,y,z\n1,2,3\n"));
   EXPECT_EQ(q.cols(), 1);
 }
+
+namespace {
+
+// An orthonormal frame tilted arbitrarily in space, with origin far from zero.
+Eigen::Isometry3d tilted() {
+  Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
+  t.linear() = (Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, -0.5).normalized()) *
+                Eigen::AngleAxisd(-1.1, Eigen::Vector3d::UnitZ()))
+                   .toRotationMatrix();
+  t.translation() = Eigen::Vector3d(420, -130, 615);
+  return t;
+}
+
+}  // namespace
+
+// Points alternating ±h about a known element give a zone of exactly 2h about that element:
+// no other element of the family can bring every +h point in and every −h point out at once.
+TEST(MinZone, PlaneOfACheckerboardIsTwiceTheAmplitude) {
+  const double h = 2e-3;
+  const auto t = tilted();
+  Eigen::Matrix3Xd p(3, 48);
+  for (int i = 0, k = 0; i < 8; ++i)
+    for (int j = 0; j < 6; ++j, ++k)
+      p.col(k) = t * Eigen::Vector3d(i * 40.0, j * 30.0, (i + j) % 2 ? h : -h);
+  const auto f = geometry::fit_min_zone(Element::Plane, p);
+  EXPECT_NEAR(f.zone, 2 * h, 1e-12);
+  EXPECT_LT(angle_up_to_sign(f.direction, t.linear().col(2)), 1e-12);
+  EXPECT_NEAR(f.residuals.maxCoeff() - f.residuals.minCoeff(), f.zone, 1e-15);
+  EXPECT_LE(f.zone, geometry::fit(Element::Plane, p).residuals.maxCoeff() -
+                        geometry::fit(Element::Plane, p).residuals.minCoeff() + 1e-12);
+}
+
+TEST(MinZone, LineOfAlternatingPointsIsTwiceTheAmplitude) {
+  const double h = 5e-3;
+  const auto t = tilted();
+  Eigen::Matrix3Xd p(3, 21);
+  for (int i = 0; i < 21; ++i) p.col(i) = t * Eigen::Vector3d(i * 10.0, i % 2 ? h : -h, 0);
+  const auto f = geometry::fit_min_zone(Element::Line, p);
+  EXPECT_NEAR(f.zone, 2 * h, 1e-12);
+  EXPECT_LT(angle_up_to_sign(f.direction, t.linear().col(0)), 1e-12);
+  EXPECT_LT(distance_to_line(t * Eigen::Vector3d(55, 0, 0), f.point, f.direction), 1e-12);
+}
+
+TEST(MinZone, CircleOfAlternatingRadiiIsTwiceTheAmplitude) {
+  const double h = 3e-3, r = 40;
+  const auto t = tilted();
+  Eigen::Matrix3Xd p(3, 36);
+  for (int k = 0; k < 36; ++k) {
+    const double a = 2 * M_PI * k / 36 + 0.1, rr = r + (k % 2 ? h : -h);
+    p.col(k) = t * Eigen::Vector3d(rr * std::cos(a), rr * std::sin(a), 0);
+  }
+  // Shift the LS start away from the answer: drop a few inner points on one side.
+  const Eigen::Matrix3Xd q = p.rightCols(33);
+  const auto ls = geometry::fit(Element::Circle, q);
+  EXPECT_GT(ls.residuals.maxCoeff() - ls.residuals.minCoeff(), 2 * h * 1.01);  // LS is not MZ
+  const auto f = geometry::fit_min_zone(Element::Circle, q);
+  EXPECT_NEAR(f.zone, 2 * h, 1e-10);
+  EXPECT_NEAR(f.diameter, 2 * r, 1e-10);
+  EXPECT_LT((f.point - t.translation()).norm(), 1e-9);
+  EXPECT_NE(test::error_of([&] {
+              geometry::fit_min_zone(Element::Sphere, q);
+            }).find("available for line, plane and circle"),
+            std::string::npos);
+}

@@ -35,3 +35,14 @@ def test_cylinder_axis_up_to_sign_and_errors():
         trueaxis.fit("torus", np.zeros((5, 3)))
     with pytest.raises(trueaxis.Error, match=r"shape \(n, 3\)"):
         trueaxis.fit("sphere", np.zeros((5, 2)))
+
+
+def test_min_zone_plane_of_alternating_points():
+    h = 2e-3
+    x, y = np.meshgrid(np.arange(8) * 40.0, np.arange(6) * 30.0)
+    z = np.where((np.arange(8)[None, :] + np.arange(6)[:, None]) % 2 == 1, h, -h) + 1e-4 * x
+    f = trueaxis.fit("plane", np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1), zone=True)
+    # Perpendicular to the tilted plane: 2h·cos(atan(1e-4)).
+    assert f["zone"] == pytest.approx(2 * h / np.sqrt(1 + 1e-8), abs=1e-14)
+    with pytest.raises(trueaxis.Error, match="available for line, plane and circle"):
+        trueaxis.fit("sphere", np.random.default_rng(1).normal(size=(10, 3)), zone=True)

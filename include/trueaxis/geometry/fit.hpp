@@ -36,12 +36,24 @@ struct Fit {
   Eigen::VectorXd residuals;  // signed orthogonal distances (mm), one per point
   double rms = 0, max = 0;    // of |residuals|
   int iterations = 0;         // Gauss–Newton steps (0 for closed-form fits)
+  double zone = 0;            // minimum-zone fits: the width of the zone (mm), else 0
 };
 
 // Least-squares fit of `element` to the points (3 × n, mm). Preconditions (else Error): finite
 // coordinates; at least 2 distinct points (line), 3 non-collinear (plane, circle), 4
 // non-coplanar (sphere), 5 (cylinder), 6 (cone).
 Fit fit(Element element, const Eigen::Matrix3Xd& points);
+
+// Minimum-zone (Chebyshev) fits: the element in the middle of the thinnest zone that contains
+// all points, and that zone's width (Fit::zone).
+//  - line: two parallel lines in the points' least-squares plane (2-D straightness; exact, by
+//    rotating calipers on the convex hull);
+//  - plane: two parallel planes (exact LP on heights in the plane's own frame, re-solved in the
+//    frame of the new normal until it stops moving, so the width is perpendicular);
+//  - circle: two concentric circles in the least-squares plane (LP on the linearised radial
+//    distances, re-linearised at the new centre until it stops moving; from the LS centre).
+// Residuals are distances to the middle element, so max − min of them equals the zone.
+Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& points);
 
 // Orthogonal distances (signed: outside positive) from points to a fitted element.
 Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& points);

@@ -20,7 +20,8 @@ Eigen::Matrix3Xd read_point_set(const std::string& path);
 // fit.json: {"element", "points": n, "center" (circle, sphere) or "point" ([x, y, z] mm),
 // "normal" (plane, circle) or "direction" (line, cylinder, cone; unit), "diameter" (circle,
 // sphere, cylinder; mm), "distance" (cone: from "point" to the surface, mm), "apex_angle_deg"
-// (cone), "rms", "max" (residuals, mm), "iterations"}.
+// (cone), "zone" (minimum-zone fits: the zone's width, mm), "rms", "max" (residuals, mm),
+// "iterations"}.
 void write_fit(const std::string& path, const geometry::Fit& fit);
 
 }  // namespace trueaxis::io
