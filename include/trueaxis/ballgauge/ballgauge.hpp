@@ -1,0 +1,96 @@
+// trueaxis::ballgauge — a CMM's error-vector map from 3-D ball gauges (spec 04, seed 004: Oya,
+// Hokari, Tamura 1988).
+//
+// A gauge carries balls whose centres U_i are known in the gauge frame P1-UVW: origin at ball 0,
+// U towards ball 1, W normal to the plane of balls 0, 1, 2 (any frame given in gauge.json is
+// brought to this one). Each placement probes some of the balls; a least-squares sphere fit of
+// the probed stylus-tip centres gives the measured centre x_i (machine frame, mm). The error
+// vector at a ball is Δ_i = x_i − X_i (measured − true, mm); correction is X = x − Δ(x).
+//
+// The first placement fixes the frame by the paper's 3-2-1 alignment (eqs. 11–12): X_0 = x_0,
+// and the rotation C (gauge → machine) is chosen so that Δy_1 = Δz_1 = 0 and Δz_2 = 0. Every
+// later placement is stitched (eqs. 13–14): its balls whose measured centres lie within the match
+// tolerance of already-mapped measured centres take those points' error vectors, so their true
+// positions X_i = x_i − Δ_i are known; the placement's rotation and translation follow by
+// closed-form least squares (Kabsch, SVD) over at least three non-collinear shared balls, and
+// the error vectors of its other balls follow.
+//
+// Uncertainty: each centre's standard uncertainty comes from its sphere fit (residual-based).
+// Every error vector is kept as a first-order linear function of all measured centres (numerical
+// derivatives of each placement's result, chained through the tied points), so the correlations
+// that the 3-2-1 frame and each stitch create are carried, and the uncertainty grows with the
+// number of stitches, as the paper notes.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "trueaxis/map/error_map.hpp"
+
+namespace trueaxis::ballgauge {
+
+struct Gauge {
+  double ball_diameter = 0;            // mm
+  std::vector<Eigen::Vector3d> balls;  // centres in the gauge frame (mm)
+  // Throws Error: fewer than 3 balls, non-finite values, balls 0, 1, 2 collinear or coincident.
+  void validate() const;
+  // The centres in the paper's frame P1-UVW.
+  std::vector<Eigen::Vector3d> canonical() const;
+};
+
+enum class Alignment { ThreeTwoOne, Stitch };
+
+struct BallPoints {
+  int index = 0;            // ball index in the gauge
+  Eigen::Matrix3Xd points;  // probed stylus-tip centres (mm, machine frame)
+};
+
+struct Placement {
+  std::string name;
+  Alignment alignment = Alignment::Stitch;
+  double tip_radius = 0;  // mm
+  std::vector<BallPoints> balls;
+};
+
+struct Options {
+  double match_tolerance =
+      1.0;              // mm: a ball is shared when its centre is this close to a mapped one
+  long min_points = 5;  // probed points per ball (a sphere needs 4; 5 leaves a residual)
+};
+
+struct MapPoint {
+  std::string placement;
+  int ball = 0;
+  Eigen::Vector3d measured = Eigen::Vector3d::Zero();     // x (mm)
+  Eigen::Vector3d nominal = Eigen::Vector3d::Zero();      // X = true position (mm)
+  Eigen::Vector3d error = Eigen::Vector3d::Zero();        // Δ = x − X (mm)
+  Eigen::Vector3d uncertainty = Eigen::Vector3d::Zero();  // standard uncertainty of Δ (mm)
+};
+
+struct PlacementReport {
+  std::string name;
+  Alignment alignment = Alignment::Stitch;
+  int balls = 0, shared = 0;
+  double registration_rms = 0;    // mm, shared balls after the fit (stitch)
+  double diameter_error_max = 0;  // mm, |fitted diameter − (ball + 2·tip)|, worst ball
+};
+
+struct Result {
+  std::vector<MapPoint> points;  // every mapped ball, first placement first
+  std::vector<PlacementReport> placements;
+  // The map as a grid, when the nominal positions form a full lattice (coordinates clustered
+  // within the match tolerance): node coordinates are the clusters' means.
+  std::optional<map::ErrorMap> grid;
+  std::string summary() const;  // µm
+};
+
+// Throws Error (naming the placement and ball): unknown ball index, a ball measured twice in a
+// placement, too few points on a ball, a first placement that is not 3-2-1 or lacks balls 0, 1,
+// 2, a 3-2-1 placement after the first, or a stitch with fewer than three non-collinear shared
+// balls.
+Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements,
+                 const Options& options = {});
+
+}  // namespace trueaxis::ballgauge

@@ -1,0 +1,47 @@
+// trueaxis::sim — a ball gauge probed on the virtual CMM (spec 04 on spec 06's machine).
+//
+// Each placement sets the gauge at a pose (rotation, translation: X_i = R·U_i + t, mm). Every
+// ball is probed at `points_per_ball` directions spread over its upper hemisphere (the pole, then
+// rings); the stylus-tip centre must reach P = X_i + (ball radius + tip radius)·d, so the
+// machine is commanded to c with actual(c) = P (solved by fixed-point iteration, |∇e| ≪ 1), and
+// the CMM reports its nominal tip position c + offset, plus probing noise.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "trueaxis/ballgauge/ballgauge.hpp"
+#include "trueaxis/sim/machine.hpp"
+
+namespace trueaxis::sim {
+
+struct GaugePose {
+  std::string name;
+  ballgauge::Alignment alignment = ballgauge::Alignment::Stitch;
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // gauge frame → machine frame
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();   // mm
+  std::vector<int> balls;                                  // probed balls (empty: all)
+};
+
+struct BallGaugeOptions {
+  int points_per_ball = 10;
+  double tip_radius = 1.5;  // mm
+  double noise = 0;         // mm, per coordinate of every probed point
+  std::uint64_t seed = 1;
+  void validate() const;  // throws Error
+};
+
+struct BallGaugeCampaign {
+  std::vector<ballgauge::Placement> placements;
+  // Per placement, per probed ball (same order): the true centre X (mm).
+  std::vector<std::vector<Eigen::Vector3d>> true_centres;
+};
+
+// `gauge.balls` are used as given (gauge frame); poses map them into the machine.
+BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
+                                     const std::vector<GaugePose>& poses,
+                                     const BallGaugeOptions& options);
+
+}  // namespace trueaxis::sim

@@ -1,0 +1,383 @@
+#include "trueaxis/ballgauge/ballgauge.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+#include <set>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/geometry/fit.hpp"
+
+namespace trueaxis::ballgauge {
+namespace {
+
+struct Centre {
+  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // fitted centre (mm)
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();  // its standard uncertainty (mm)
+  double diameter = 0;                          // fitted diameter of the tip-centre sphere
+};
+
+// Sphere fit of probed tip centres, with the centre's uncertainty from the residuals:
+// cov = s²·(JᵀJ)⁻¹, s² = Σr² / (n − 4).
+Centre fit_ball(const Eigen::Matrix3Xd& p) {
+  const geometry::Fit f = geometry::fit(geometry::Element::Sphere, p);
+  Centre c;
+  c.x = f.point;
+  c.diameter = f.diameter;
+  const Eigen::Index n = p.cols();
+  if (n > 4) {
+    Eigen::MatrixXd J(n, 4);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Vector3d d = (p.col(i) - f.point).normalized();
+      J.row(i) << -d.x(), -d.y(), -d.z(), -1;
+    }
+    const double s2 = f.residuals.squaredNorm() / static_cast<double>(n - 4);
+    const Eigen::Matrix4d cov = s2 * (J.transpose() * J).inverse();
+    c.u = cov.diagonal().head<3>().cwiseMax(0).cwiseSqrt();
+  }
+  return c;
+}
+
+// The paper's 3-2-1 rotation (eqs. 11–12): columns c1, c2, c3 = gauge U, V, W in the machine
+// frame, from the measured centres of balls 0, 1, 2 and their gauge coordinates (a, 0, 0) and
+// (b, c, 0), such that ball 1 has no y, z error and ball 2 no z error relative to ball 0.
+Eigen::Matrix3d rotation_321(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
+                             const Eigen::Vector3d& x2, double a, double b, double c) {
+  const double l2 = (x1.y() - x0.y()) / a, l3 = (x1.z() - x0.z()) / a;
+  const double s1 = 1 - l2 * l2 - l3 * l3;
+  if (!(s1 > 0)) throw Error("3-2-1 alignment: ball 1 is not along x from ball 0");
+  const double l1 = (x1.x() >= x0.x() ? 1.0 : -1.0) * std::sqrt(s1);
+  const double m3 = (x2.z() - x0.z() - b * l3) / c;
+  // m1·l1 + m2·l2 = −m3·l3 and m1² + m2² = 1 − m3²: a line meets a circle.
+  const double k = -m3 * l3, q = l1 * l1 + l2 * l2, disc = (1 - m3 * m3) - k * k / q;
+  if (!(disc >= 0)) throw Error("3-2-1 alignment: balls 0, 1, 2 do not fit the gauge geometry");
+  const Eigen::Vector2d base = k / q * Eigen::Vector2d(l1, l2);
+  const Eigen::Vector2d perp = std::sqrt(disc / q) * Eigen::Vector2d(-l2, l1);
+  // The root whose V axis points from ball 0's U line towards ball 2 (as measured).
+  const Eigen::Vector3d c1(l1, l2, l3);
+  const Eigen::Vector3d towards = x2 - x0 - b * c1;
+  Eigen::Vector3d c2(base.x() + perp.x(), base.y() + perp.y(), m3);
+  const Eigen::Vector3d alt(base.x() - perp.x(), base.y() - perp.y(), m3);
+  if (alt.dot(towards) > c2.dot(towards)) c2 = alt;
+  Eigen::Matrix3d C;
+  C.col(0) = c1;
+  C.col(1) = c2;
+  C.col(2) = c1.cross(c2);
+  return C;
+}
+
+// Closed-form least-squares rigid registration X ≈ R·U + t (Kabsch, via SVD).
+void kabsch(const std::vector<Eigen::Vector3d>& U, const std::vector<Eigen::Vector3d>& X,
+            Eigen::Matrix3d& R, Eigen::Vector3d& t) {
+  Eigen::Vector3d mu = Eigen::Vector3d::Zero(), mx = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < U.size(); ++i) {
+    mu += U[i];
+    mx += X[i];
+  }
+  mu /= static_cast<double>(U.size());
+  mx /= static_cast<double>(U.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < U.size(); ++i) H += (U[i] - mu) * (X[i] - mx).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  R = svd.matrixV() * D * svd.matrixU().transpose();
+  t = mx - R * mu;
+}
+
+// Jacobian of f at `in` by central differences (f is smooth: rotations and fits of centres).
+Eigen::MatrixXd jacobian(const std::function<Eigen::VectorXd(const Eigen::VectorXd&)>& f,
+                         const Eigen::VectorXd& in) {
+  const Eigen::Index m = f(in).size();
+  Eigen::MatrixXd J(m, in.size());
+  Eigen::VectorXd x = in;
+  for (Eigen::Index k = 0; k < in.size(); ++k) {
+    const double h = 1e-6 * std::max(1.0, std::abs(in[k]));
+    x[k] = in[k] + h;
+    const Eigen::VectorXd fp = f(x);
+    x[k] = in[k] - h;
+    const Eigen::VectorXd fm = f(x);
+    x[k] = in[k];
+    J.col(k) = (fp - fm) / (2 * h);
+  }
+  return J;
+}
+
+// Clusters of coordinate values (sorted) within `tol`; returns cluster means and, per value, its
+// cluster index.
+std::vector<double> clusters(const std::vector<double>& v, double tol, std::vector<int>& which) {
+  std::vector<std::size_t> order(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  std::vector<double> means;
+  std::vector<int> count;
+  which.assign(v.size(), -1);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const double x = v[order[k]];
+    if (means.empty() || x - v[order[k - 1]] > tol) {
+      means.push_back(0);
+      count.push_back(0);
+    }
+    means.back() += x;
+    ++count.back();
+    which[order[k]] = static_cast<int>(means.size() - 1);
+  }
+  for (std::size_t c = 0; c < means.size(); ++c) means[c] /= count[c];
+  return means;
+}
+
+std::optional<map::ErrorMap> as_grid(const std::vector<MapPoint>& pts, double tol) {
+  std::vector<int> w[3];
+  std::vector<double> axes[3];
+  for (int a = 0; a < 3; ++a) {
+    std::vector<double> v;
+    for (const auto& p : pts) v.push_back(p.nominal[a]);
+    axes[a] = clusters(v, tol, w[a]);
+    if (axes[a].size() < 2) return std::nullopt;
+  }
+  map::ErrorMap m;
+  for (int a = 0; a < 3; ++a)
+    m.axes[static_cast<std::size_t>(a)] = Eigen::Map<const Eigen::VectorXd>(
+        axes[a].data(), static_cast<Eigen::Index>(axes[a].size()));
+  if (m.nodes() != static_cast<Eigen::Index>(pts.size())) return std::nullopt;
+  m.error = Eigen::Matrix3Xd::Constant(3, m.nodes(), NAN);
+  m.uncertainty.resize(3, m.nodes());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Index n = m.index(w[0][i], w[1][i], w[2][i]);
+    if (!std::isnan(m.error(0, n))) return std::nullopt;  // two points on one node
+    m.error.col(n) = pts[i].error;
+    m.uncertainty.col(n) = pts[i].uncertainty;
+  }
+  return m;
+}
+
+}  // namespace
+
+void Gauge::validate() const {
+  if (!(ball_diameter > 0) || !std::isfinite(ball_diameter))
+    throw Error("gauge: ball_diameter must be a positive number of mm");
+  if (balls.size() < 3)
+    throw Error(fmt::format("gauge: needs at least 3 balls, has {}", balls.size()));
+  for (std::size_t i = 0; i < balls.size(); ++i)
+    if (!balls[i].allFinite())
+      throw Error(fmt::format("gauge: ball {} has a non-finite centre", i));
+  const Eigen::Vector3d a = balls[1] - balls[0], b = balls[2] - balls[0];
+  if (!(a.norm() > 0) || !(a.cross(b).norm() > 1e-9 * a.norm() * std::max(1.0, b.norm())))
+    throw Error("gauge: balls 0, 1 and 2 must span a plane (they define the gauge frame)");
+}
+
+std::vector<Eigen::Vector3d> Gauge::canonical() const {
+  validate();
+  const Eigen::Vector3d u = (balls[1] - balls[0]).normalized();
+  const Eigen::Vector3d w = u.cross(balls[2] - balls[0]).normalized();
+  Eigen::Matrix3d F;
+  F.col(0) = u;
+  F.col(1) = w.cross(u);
+  F.col(2) = w;
+  std::vector<Eigen::Vector3d> out;
+  for (const auto& b : balls) out.push_back(F.transpose() * (b - balls[0]));
+  return out;
+}
+
+Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, const Options& o) {
+  const std::vector<Eigen::Vector3d> U = gauge.canonical();
+  if (placements.empty()) throw Error("ball gauge: no placements");
+  Result res;
+  // Uncertainty with correlations: every mapped error vector is kept as a linear function of all
+  // measured centres so far (sens[i]: 3 × inputs, mm per mm); the centres' own uncertainties
+  // (u_all) are independent. Tied points carry their dependence on earlier placements.
+  Eigen::VectorXd u_all(0);
+  std::vector<Eigen::MatrixXd> sens;
+  for (std::size_t pi = 0; pi < placements.size(); ++pi) {
+    const Placement& pl = placements[pi];
+    const std::string pname = pl.name.empty() ? fmt::format("placement {}", pi) : pl.name;
+    if (pi == 0 && pl.alignment != Alignment::ThreeTwoOne)
+      throw Error(fmt::format("{}: the first placement must use the 3-2-1 alignment", pname));
+    if (pi > 0 && pl.alignment == Alignment::ThreeTwoOne)
+      throw Error(
+          fmt::format("{}: only the first placement may use the 3-2-1 alignment; later "
+                      "ones are stitched to the map",
+                      pname));
+    // Measured centres of this placement's balls.
+    std::vector<int> idx;
+    std::vector<Centre> cen;
+    std::set<int> seen;
+    PlacementReport rep;
+    rep.name = pname;
+    rep.alignment = pl.alignment;
+    for (const auto& b : pl.balls) {
+      if (b.index < 0 || b.index >= static_cast<int>(U.size()))
+        throw Error(fmt::format("{}: ball index {} is not in the gauge (0..{})", pname, b.index,
+                                U.size() - 1));
+      if (!seen.insert(b.index).second)
+        throw Error(fmt::format("{}: ball {} is measured twice", pname, b.index));
+      if (b.points.cols() < o.min_points)
+        throw Error(fmt::format("{}: ball {} has {} probed points; at least {} are needed", pname,
+                                b.index, b.points.cols(), o.min_points));
+      Centre c;
+      try {
+        c = fit_ball(b.points);
+      } catch (const Error& e) {
+        throw Error(fmt::format("{}: ball {}: {}", pname, b.index, e.what()));
+      }
+      rep.diameter_error_max = std::max(
+          rep.diameter_error_max, std::abs(c.diameter - (gauge.ball_diameter + 2 * pl.tip_radius)));
+      idx.push_back(b.index);
+      cen.push_back(c);
+    }
+    rep.balls = static_cast<int>(idx.size());
+    const std::size_t nb = idx.size();
+    const Eigen::Index K0 = u_all.size(), own = 3 * static_cast<Eigen::Index>(nb);
+    Eigen::VectorXd in(own);
+    u_all.conservativeResize(K0 + own);
+    for (std::size_t k = 0; k < nb; ++k) {
+      in.segment<3>(3 * static_cast<Eigen::Index>(k)) = cen[k].x;
+      u_all.segment<3>(K0 + 3 * static_cast<Eigen::Index>(k)) = cen[k].u;
+    }
+    std::vector<int> tied_points;  // map index of each tied input, in input order
+    std::function<Eigen::VectorXd(const Eigen::VectorXd&)> errors;
+    std::vector<bool> shared(nb, false);
+    if (pl.alignment == Alignment::ThreeTwoOne) {
+      int k0 = -1, k1 = -1, k2 = -1;
+      for (std::size_t k = 0; k < nb; ++k) {
+        if (idx[k] == 0) k0 = static_cast<int>(k);
+        if (idx[k] == 1) k1 = static_cast<int>(k);
+        if (idx[k] == 2) k2 = static_cast<int>(k);
+      }
+      if (k0 < 0 || k1 < 0 || k2 < 0)
+        throw Error(fmt::format("{}: the 3-2-1 alignment needs balls 0, 1 and 2 measured", pname));
+      errors = [&, k0, k1, k2](const Eigen::VectorXd& x) {
+        auto at = [&](int k) { return Eigen::Vector3d(x.segment<3>(3 * k)); };
+        const Eigen::Matrix3d C =
+            rotation_321(at(k0), at(k1), at(k2), U[1].x(), U[2].x(), U[2].y());
+        Eigen::VectorXd d(3 * static_cast<Eigen::Index>(nb));
+        for (std::size_t k = 0; k < nb; ++k)
+          d.segment<3>(3 * static_cast<Eigen::Index>(k)) =
+              at(static_cast<int>(k)) - at(k0) - C * U[static_cast<std::size_t>(idx[k])];
+        return d;
+      };
+    } else {
+      // Tie to mapped points: the nearest mapped measured centre within the tolerance.
+      std::vector<int> tie(nb, -1);
+      for (std::size_t k = 0; k < nb; ++k) {
+        double best = o.match_tolerance;
+        for (std::size_t m = 0; m < res.points.size(); ++m) {
+          const double d = (res.points[m].measured - cen[k].x).norm();
+          if (d <= best) {
+            best = d;
+            tie[k] = static_cast<int>(m);
+          }
+        }
+        shared[k] = tie[k] >= 0;
+      }
+      std::vector<std::size_t> ks;
+      for (std::size_t k = 0; k < nb; ++k)
+        if (shared[k]) ks.push_back(k);
+      rep.shared = static_cast<int>(ks.size());
+      bool spread = ks.size() >= 3;
+      if (spread) {
+        Eigen::Matrix3Xd S(3, static_cast<Eigen::Index>(ks.size()));
+        for (std::size_t j = 0; j < ks.size(); ++j)
+          S.col(static_cast<Eigen::Index>(j)) = U[static_cast<std::size_t>(idx[ks[j]])];
+        const Eigen::Matrix3Xd c = S.colwise() - S.rowwise().mean();
+        const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3Xd>(c).singularValues();
+        spread = sv[1] > 1e-6 * sv[0];
+      }
+      if (!spread)
+        throw Error(fmt::format(
+            "{}: {} of its balls lie within {} mm of mapped points; stitching needs at least "
+            "three that are not collinear (move the gauge so it overlaps the map, or raise "
+            "--match-tolerance)",
+            pname, ks.size(), o.match_tolerance));
+      // Inputs: this placement's centres, then the tied points' error vectors.
+      const Eigen::Index base = in.size();
+      in.conservativeResize(base + 3 * static_cast<Eigen::Index>(ks.size()));
+      for (std::size_t j = 0; j < ks.size(); ++j) {
+        const auto& mp = res.points[static_cast<std::size_t>(tie[ks[j]])];
+        in.segment<3>(base + 3 * static_cast<Eigen::Index>(j)) = mp.error;
+        tied_points.push_back(tie[ks[j]]);
+      }
+      errors = [&, ks, base](const Eigen::VectorXd& x) {
+        std::vector<Eigen::Vector3d> us, xs;
+        for (std::size_t j = 0; j < ks.size(); ++j) {
+          us.push_back(U[static_cast<std::size_t>(idx[ks[j]])]);
+          xs.push_back(x.segment<3>(3 * static_cast<Eigen::Index>(ks[j])) -
+                       x.segment<3>(base + 3 * static_cast<Eigen::Index>(j)));
+        }
+        Eigen::Matrix3d R;
+        Eigen::Vector3d t;
+        kabsch(us, xs, R, t);
+        Eigen::VectorXd d(3 * static_cast<Eigen::Index>(nb));
+        for (std::size_t k = 0; k < nb; ++k)
+          d.segment<3>(3 * static_cast<Eigen::Index>(k)) =
+              x.segment<3>(3 * static_cast<Eigen::Index>(k)) -
+              (R * U[static_cast<std::size_t>(idx[k])] + t);
+        return d;
+      };
+      // Registration residual over the shared balls.
+      const Eigen::VectorXd d = errors(in);
+      double ss = 0;
+      for (std::size_t j = 0; j < ks.size(); ++j)
+        ss += (d.segment<3>(3 * static_cast<Eigen::Index>(ks[j])) -
+               in.segment<3>(base + 3 * static_cast<Eigen::Index>(j)))
+                  .squaredNorm();
+      rep.registration_rms = std::sqrt(ss / static_cast<double>(ks.size()));
+    }
+    const Eigen::VectorXd d = errors(in);
+    const Eigen::MatrixXd L = jacobian(errors, in);
+    const Eigen::Index K1 = u_all.size();
+    for (std::size_t k = 0; k < nb; ++k) {
+      if (shared[k]) continue;  // already in the map (it tied this placement)
+      const auto row = 3 * static_cast<Eigen::Index>(k);
+      Eigen::MatrixXd G = Eigen::MatrixXd::Zero(3, K1);
+      G.middleCols(K0, own) = L.block(row, 0, 3, own);
+      for (std::size_t j = 0; j < tied_points.size(); ++j) {
+        const Eigen::MatrixXd& S = sens[static_cast<std::size_t>(tied_points[j])];
+        G.leftCols(S.cols()) += L.block(row, own + 3 * static_cast<Eigen::Index>(j), 3, 3) * S;
+      }
+      const Eigen::Vector3d u = (G * u_all.asDiagonal()).rowwise().squaredNorm().cwiseSqrt();
+      MapPoint mp;
+      mp.placement = pname;
+      mp.ball = idx[k];
+      mp.measured = cen[k].x;
+      mp.error = d.segment<3>(3 * static_cast<Eigen::Index>(k));
+      mp.nominal = mp.measured - mp.error;
+      mp.uncertainty = u;
+      res.points.push_back(mp);
+      sens.push_back(std::move(G));
+    }
+    res.placements.push_back(rep);
+  }
+  res.grid = as_grid(res.points, o.match_tolerance);
+  return res;
+}
+
+std::string Result::summary() const {
+  double emax = 0, umax = 0;
+  for (const auto& p : points) {
+    emax = std::max(emax, p.error.norm());
+    umax = std::max(umax, p.uncertainty.maxCoeff());
+  }
+  std::string s = fmt::format(
+      "ball gauge: {} placements, {} mapped points{}; largest |error| {:.3f} um, largest "
+      "uncertainty {:.3f} um\n",
+      placements.size(), points.size(),
+      grid ? fmt::format(" on a {} x {} x {} grid", grid->size(0), grid->size(1), grid->size(2))
+           : "",
+      emax * 1e3, umax * 1e3);
+  for (const auto& r : placements)
+    s += fmt::format("  {:<14} {:<6} {} balls{}, sphere diameter error max {:.3f} um\n", r.name,
+                     r.alignment == Alignment::ThreeTwoOne ? "3-2-1" : "stitch", r.balls,
+                     r.alignment == Alignment::Stitch
+                         ? fmt::format(" ({} shared, registration RMS {:.3f} um)", r.shared,
+                                       r.registration_rms * 1e3)
+                         : "",
+                     r.diameter_error_max * 1e3);
+  return s;
+}
+
+}  // namespace trueaxis::ballgauge

@@ -1,0 +1,85 @@
+#include "trueaxis/sim/ballgauge.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <random>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::sim {
+namespace {
+
+// Probing directions over the upper hemisphere: the pole, then rings at 40° and 75° from it.
+std::vector<Eigen::Vector3d> directions(int n) {
+  std::vector<Eigen::Vector3d> d{Eigen::Vector3d::UnitZ()};
+  const int rest = n - 1, ring1 = rest / 2, ring2 = rest - ring1;
+  for (int ring = 0; ring < 2; ++ring) {
+    const int m = ring == 0 ? ring1 : ring2;
+    const double polar = (ring == 0 ? 40.0 : 75.0) * M_PI / 180;
+    for (int k = 0; k < m; ++k) {
+      const double az = 2 * M_PI * (k + 0.5 * ring) / m;
+      d.emplace_back(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
+                     std::cos(polar));
+    }
+  }
+  return d;
+}
+
+}  // namespace
+
+void BallGaugeOptions::validate() const {
+  if (points_per_ball < 5) throw Error("ball gauge simulation: at least 5 points per ball");
+  if (!(tip_radius >= 0) || !(noise >= 0))
+    throw Error("ball gauge simulation: tip radius and noise must be >= 0");
+}
+
+BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
+                                     const std::vector<GaugePose>& poses,
+                                     const BallGaugeOptions& o) {
+  o.validate();
+  gauge.validate();
+  const auto dirs = directions(o.points_per_ball);
+  const double reach = gauge.ball_diameter / 2 + o.tip_radius;
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> N(0.0, 1.0);
+  BallGaugeCampaign c;
+  for (const auto& pose : poses) {
+    ballgauge::Placement pl;
+    pl.name = pose.name;
+    pl.alignment = pose.alignment;
+    pl.tip_radius = o.tip_radius;
+    std::vector<int> balls = pose.balls;
+    if (balls.empty())
+      for (int i = 0; i < static_cast<int>(gauge.balls.size()); ++i) balls.push_back(i);
+    std::vector<Eigen::Vector3d> truth;
+    for (int b : balls) {
+      if (b < 0 || b >= static_cast<int>(gauge.balls.size()))
+        throw Error(fmt::format("ball gauge simulation: no ball {}", b));
+      const Eigen::Vector3d X =
+          pose.rotation * gauge.balls[static_cast<std::size_t>(b)] + pose.translation;
+      ballgauge::BallPoints bp;
+      bp.index = b;
+      bp.points.resize(3, static_cast<Eigen::Index>(dirs.size()));
+      for (std::size_t k = 0; k < dirs.size(); ++k) {
+        const Eigen::Vector3d P = X + reach * dirs[k];
+        Eigen::Vector3d cmd = P - machine.offset;
+        for (int it = 0; it < 6; ++it) cmd = P - machine.offset - machine.error(cmd);
+        if (!machine.contains(cmd, 1.0))
+          throw Error(
+              fmt::format("ball gauge simulation: {} ball {} is outside the machine's "
+                          "range",
+                          pose.name, b));
+        bp.points.col(static_cast<Eigen::Index>(k)) =
+            cmd + machine.offset + o.noise * Eigen::Vector3d(N(rng), N(rng), N(rng));
+      }
+      pl.balls.push_back(std::move(bp));
+      truth.push_back(X);
+    }
+    c.placements.push_back(std::move(pl));
+    c.true_centres.push_back(std::move(truth));
+  }
+  return c;
+}
+
+}  // namespace trueaxis::sim

@@ -1,0 +1,157 @@
+// Ball-gauge calibration (spec 04) on the virtual CMM: the paper's 3-2-1 alignment, stitching
+// through several placements, and refusals.
+#include "trueaxis/ballgauge/ballgauge.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <map>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/sim/ballgauge.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+// A 5 × 4 × 2 ball frame at 80 mm pitch; balls 0, 1, 2 at (0,0,0), (80,0,0), (0,80,0).
+ballgauge::Gauge frame_gauge() {
+  ballgauge::Gauge g;
+  g.ball_diameter = 25;
+  g.balls = {{0, 0, 0}, {80, 0, 0}, {0, 80, 0}};
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 5; ++i) {
+        const Eigen::Vector3d b(80.0 * i, 80.0 * j, 80.0 * k);
+        if ((b - g.balls[0]).norm() > 0 && (b - g.balls[1]).norm() > 0 &&
+            (b - g.balls[2]).norm() > 0)
+          g.balls.push_back(b);
+      }
+  return g;
+}
+
+// The paper's layout: four z sections from three placements, each shifted up by one pitch.
+std::vector<sim::GaugePose> poses() {
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(0.004, Eigen::Vector3d(0.2, -0.1, 1).normalized()).toRotationMatrix();
+  std::vector<sim::GaugePose> p;
+  for (int k = 0; k < 3; ++k) {
+    sim::GaugePose q;
+    q.name = fmt::format("z{}", k);
+    q.alignment = k == 0 ? ballgauge::Alignment::ThreeTwoOne : ballgauge::Alignment::Stitch;
+    q.rotation = R;
+    q.translation = Eigen::Vector3d(150, 120, 60) + R * Eigen::Vector3d(0, 0, 80.0 * k);
+    p.push_back(q);
+  }
+  return p;
+}
+
+sim::Machine cmm() {
+  sim::MachineOptions o;
+  o.seed = 5;
+  return sim::random_machine(o);
+}
+
+}  // namespace
+
+TEST(BallGauge, NoiseFreeStitchedMapEqualsTheTruthUpToTheAlignmentFrame) {
+  const auto g = frame_gauge();
+  const auto c = sim::simulate_ballgauge(cmm(), g, poses(), {});
+  const auto r = ballgauge::calibrate(g, c.placements);
+  ASSERT_EQ(r.points.size(), 80u);  // 5 × 4 × 4, as in the paper
+  ASSERT_TRUE(r.grid.has_value());
+  EXPECT_EQ(r.grid->size(0), 5);
+  EXPECT_EQ(r.grid->size(2), 4);
+  EXPECT_EQ(r.placements[1].shared, 20);
+  EXPECT_LT(r.placements[2].registration_rms, 1e-12);
+  // The 3-2-1 conditions hold exactly.
+  EXPECT_LT(r.points[0].error.norm(), 1e-15);
+  // Truth: the true centres. The map's nominal positions (x − Δ) are those centres in the frame
+  // the 3-2-1 alignment chooses, so one exact rigid motion (Eigen's Umeyama, independent of the
+  // library's Kabsch) must carry the truth onto them to round-off.
+  std::map<std::pair<std::string, int>, Eigen::Vector3d> truth;
+  for (std::size_t p = 0; p < c.placements.size(); ++p)
+    for (std::size_t b = 0; b < c.placements[p].balls.size(); ++b)
+      truth[{c.placements[p].name, c.placements[p].balls[b].index}] = c.true_centres[p][b];
+  const auto n = static_cast<Eigen::Index>(r.points.size());
+  Eigen::Matrix3Xd X(3, n), Xmap(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& mp = r.points[static_cast<std::size_t>(i)];
+    X.col(i) = truth.at({mp.placement, mp.ball});
+    Xmap.col(i) = mp.nominal;
+  }
+  const Eigen::Matrix4d T = Eigen::umeyama(X, Xmap, false);
+  const Eigen::Matrix3Xd moved = (T.topLeftCorner<3, 3>() * X).colwise() + T.topRightCorner<3, 1>();
+  EXPECT_LT((moved - Xmap).cwiseAbs().maxCoeff(), 1e-11);  // mm
+  EXPECT_GT((X - Xmap).cwiseAbs().maxCoeff(), 1e-4);       // the frames really differ
+}
+
+TEST(BallGauge, ProbingNoisePropagatesToTheStatedUncertainty) {
+  // The map from noisy probing against the noise-free map of the same placements: the deviation
+  // of every component, over all points and several seeds, against its stated uncertainty. The
+  // uncertainty must grow with the stitches.
+  const auto g = frame_gauge();
+  const auto m = cmm();
+  const auto exact = ballgauge::calibrate(g, sim::simulate_ballgauge(m, g, poses(), {}).placements);
+  std::vector<double> z;
+  double u_first = 0, u_last = 0;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    sim::BallGaugeOptions o;
+    o.noise = 0.5e-3;
+    o.seed = seed;
+    const auto r = ballgauge::calibrate(g, sim::simulate_ballgauge(m, g, poses(), o).placements);
+    ASSERT_EQ(r.points.size(), exact.points.size());
+    for (std::size_t i = 0; i < r.points.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        if (r.points[i].uncertainty[k] > 0)
+          z.push_back((r.points[i].error[k] - exact.points[i].error[k]) /
+                      r.points[i].uncertainty[k]);
+    u_first += r.points[5].uncertainty.norm();
+    u_last += r.points.back().uncertainty.norm();
+  }
+  double ss = 0, inside = 0;
+  for (double v : z) {
+    ss += v * v;
+    inside += std::abs(v) <= 2;
+  }
+  const double rms = std::sqrt(ss / static_cast<double>(z.size()));
+  EXPECT_GT(rms, 0.6);
+  EXPECT_LT(rms, 1.4);
+  EXPECT_GT(inside / static_cast<double>(z.size()), 0.85);
+  EXPECT_GT(u_last, u_first);  // two stitches away from the 3-2-1 placement
+  std::printf("ball gauge noise: RMS z %.2f, within 2u %.3f, u first %.3f um, last %.3f um\n", rms,
+              inside / static_cast<double>(z.size()), u_first / 6 * 1e3, u_last / 6 * 1e3);
+}
+
+TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
+  const auto g = frame_gauge();
+  auto c = sim::simulate_ballgauge(cmm(), g, poses(), {});
+  auto err = [&](const std::vector<ballgauge::Placement>& p) {
+    return test::error_of([&] { ballgauge::calibrate(g, p); });
+  };
+  auto p = c.placements;
+  p[1].balls[3].index = 99;
+  EXPECT_NE(err(p).find("z1: ball index 99 is not in the gauge"), std::string::npos) << err(p);
+  p = c.placements;
+  p[0].balls[4].points.conservativeResize(3, 3);
+  EXPECT_NE(err(p).find("z0: ball 4 has 3 probed points; at least 5"), std::string::npos);
+  p = c.placements;
+  p[0].alignment = ballgauge::Alignment::Stitch;
+  EXPECT_NE(err(p).find("first placement must use the 3-2-1"), std::string::npos);
+  p = c.placements;
+  std::swap(p[1], p[2]);  // z2 does not overlap z0
+  EXPECT_NE(err(p).find("z2: 0 of its balls lie within 1 mm of mapped points"), std::string::npos)
+      << err(p);
+  p = c.placements;
+  p[0].balls.erase(p[0].balls.begin() + 1);  // ball 1 missing from the 3-2-1 placement
+  EXPECT_NE(err(p).find("needs balls 0, 1 and 2"), std::string::npos);
+  p = c.placements;
+  p[2].balls.push_back(p[2].balls[0]);
+  EXPECT_NE(err(p).find("is measured twice"), std::string::npos);
+  ballgauge::Gauge bad = g;
+  bad.balls[2] = {160, 0, 0};
+  EXPECT_NE(test::error_of([&] { bad.validate(); }).find("must span a plane"), std::string::npos);
+}
