@@ -37,6 +37,9 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate);
 // 'fit line|plane|circle|sphere|cylinder|cone'.
 std::vector<Command> add_fit_commands(CLI::App& app);
 
+// 'ballgauge', 'correct' and 'simulate ballgauge' (under `simulate`).
+std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate);
+
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);
 

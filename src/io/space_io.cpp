@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include "fast_text.hpp"
+#include "grid_json.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
@@ -19,6 +20,22 @@ ojson scaled(const Eigen::Ref<const Eigen::RowVectorXd>& v, double scale) {
 }
 
 }  // namespace
+
+namespace detail {
+ojson grid_json(const map::ErrorMap& m) {
+  ojson g;
+  const char* names[3] = {"x", "y", "z"};
+  for (int a = 0; a < 3; ++a)
+    g[names[a]] = scaled(m.axes[static_cast<std::size_t>(a)].transpose(), 1.0);
+  g["layout"] = "node n = i + nx*(j + ny*k) for x[i], y[j], z[k]";
+  const char* en[3] = {"ex", "ey", "ez"};
+  const char* un[3] = {"ux", "uy", "uz"};
+  for (int c = 0; c < 3; ++c) g[en[c]] = scaled(m.error.row(c), 1e3);
+  if (m.uncertainty.size() != 0)
+    for (int c = 0; c < 3; ++c) g[un[c]] = scaled(m.uncertainty.row(c), 1e3);
+  return g;
+}
+}  // namespace detail
 
 surface::SpacePlan read_plan(const std::string& path) {
   const JsonFile f = JsonFile::read(path);
@@ -88,16 +105,7 @@ void write_space(const std::string& path, const surface::SpaceResult& s,
       {"monte_carlo", plan.monte_carlo},
       {"seed", plan.seed}};
   j["campaign"] = {{"straightness_runs", s.straightness_runs}, {"laser_runs", s.laser_runs}};
-  auto& g = j["grid"];
-  const char* names[3] = {"x", "y", "z"};
-  for (int a = 0; a < 3; ++a)
-    g[names[a]] = scaled(m.axes[static_cast<std::size_t>(a)].transpose(), 1.0);
-  g["layout"] = "node n = i + nx*(j + ny*k) for x[i], y[j], z[k]";
-  const char* en[3] = {"ex", "ey", "ez"};
-  const char* un[3] = {"ux", "uy", "uz"};
-  for (int c = 0; c < 3; ++c) g[en[c]] = scaled(m.error.row(c), 1e3);
-  if (m.uncertainty.size() != 0)
-    for (int c = 0; c < 3; ++c) g[un[c]] = scaled(m.uncertainty.row(c), 1e3);
+  j["grid"] = detail::grid_json(m);
   auto& sf = j["surfaces"] = ojson::array();
   for (const auto& l : s.surfaces)
     sf.push_back({{"component", std::string("e") + "xyz"[l.component]},

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -27,6 +28,39 @@ std::vector<Eigen::Vector3d> directions(int n) {
 }
 
 }  // namespace
+
+ballgauge::Gauge frame_gauge(int nx, int ny, int nz, double pitch, double ball_diameter) {
+  if (nx < 2 || ny < 2 || nz < 1 || !(pitch > 0))
+    throw Error("frame gauge: needs at least 2 x 2 x 1 balls and a positive pitch");
+  ballgauge::Gauge g;
+  g.ball_diameter = ball_diameter;
+  g.balls = {{0, 0, 0}, {pitch, 0, 0}, {0, pitch, 0}};
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        if (k == 0 && ((j == 0 && i <= 1) || (i == 0 && j == 1))) continue;  // balls 0, 1, 2
+        g.balls.emplace_back(pitch * i, pitch * j, pitch * k);
+      }
+  return g;
+}
+
+std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections,
+                                     const Eigen::Vector3d& origin,
+                                     const Eigen::Matrix3d& rotation) {
+  double height = 0;
+  for (const auto& b : gauge.balls) height = std::max(height, b.z());
+  if (!(height > 0)) throw Error("stacked placements need a gauge with more than one layer");
+  std::vector<GaugePose> p;
+  for (int k = 0; k < sections; ++k) {
+    GaugePose q;
+    q.name = fmt::format("section {}", k + 1);
+    q.alignment = k == 0 ? ballgauge::Alignment::ThreeTwoOne : ballgauge::Alignment::Stitch;
+    q.rotation = rotation;
+    q.translation = origin + rotation * Eigen::Vector3d(0, 0, height * k);
+    p.push_back(q);
+  }
+  return p;
+}
 
 void BallGaugeOptions::validate() const {
   if (points_per_ball < 5) throw Error("ball gauge simulation: at least 5 points per ball");

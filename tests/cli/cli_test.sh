@@ -161,5 +161,16 @@ expect_err "plane fit: the points are collinear" "$T" fit plane -i line.ds -o o.
 printf '2\n0 0 0\n1 1 one\n' > bad.ds
 expect_err "bad.ds:3:5: expected a number" "$T" fit line -i bad.ds -o o.json
 
+# Ball gauge: simulate, map, correct.
+expect_ok "$T" simulate ballgauge --noise 0.3 --gauge bg-gauge.json --measurements bg-meas.json --truth bg-truth.csv
+expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-meas.json --output bg-map.json
+grep -q "80 mapped points on a 5 x 4 x 4 grid" out.txt && grep -q '"grid"' bg-map.json && ok || bad "ballgauge map"
+printf 'x,y,z\n300,250,150\n' > bg-pts.csv
+expect_ok "$T" correct --map bg-map.json --input bg-pts.csv --output bg-corr.csv
+printf 'x,y,z\n300,250,150\n900,250,150\n' > bg-out.csv
+expect_err "bg-out.csv: point 1 (900, 250, 150) mm is outside" "$T" correct --map bg-map.json --input bg-out.csv --output o.csv
+sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
+expect_err "bg-bad.json: section 1: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -39,6 +39,17 @@ struct BallGaugeCampaign {
   std::vector<std::vector<Eigen::Vector3d>> true_centres;
 };
 
+// A 3-D ball frame like the paper's: nx × ny × nz balls at `pitch` (mm); balls 0, 1, 2 at
+// (0,0,0), (pitch,0,0), (0,pitch,0), the rest in row order.
+ballgauge::Gauge frame_gauge(int nx = 5, int ny = 4, int nz = 2, double pitch = 80,
+                             double ball_diameter = 25);
+// `sections` placements of that frame stacked along z by (nz − 1)·pitch, each sharing a layer of
+// balls with the one below; the first uses the 3-2-1 alignment. `origin` is ball 0's true
+// position in the first placement; `rotation` the gauge's (small) misalignment.
+std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections,
+                                     const Eigen::Vector3d& origin,
+                                     const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity());
+
 // `gauge.balls` are used as given (gauge frame); poses map them into the machine.
 BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
                                      const std::vector<GaugePose>& poses,

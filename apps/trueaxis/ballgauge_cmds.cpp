@@ -1,0 +1,204 @@
+// trueaxis CLI — CMM error map from ball gauges: 'ballgauge', 'correct', 'simulate ballgauge'.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <Eigen/Geometry>
+#include <memory>
+
+#include "commands.hpp"
+#include "trueaxis/ballgauge/ballgauge.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/space.hpp"
+#include "trueaxis/map/error_map.hpp"
+#include "trueaxis/sim/ballgauge.hpp"
+
+namespace trueaxis::cli {
+namespace {
+
+struct CalArgs {
+  std::string gauge, measurements, output;
+  ballgauge::Options o;
+  bool quiet = false;
+};
+
+int run_calibrate(const CalArgs& a) {
+  const auto g = io::read_gauge(a.gauge);
+  const auto p = io::read_measurements(a.measurements);
+  ballgauge::Result r;
+  try {
+    r = ballgauge::calibrate(g, p, a.o);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", a.measurements, e.what()));
+  }
+  io::write_ballgauge_map(a.output, r);
+  if (!a.quiet) fmt::print("{}wrote {}\n", r.summary(), a.output);
+  if (!r.grid)
+    std::fprintf(stderr,
+                 "trueaxis ballgauge: the mapped points do not form a full lattice; map.json has "
+                 "the points but no grid, so 'trueaxis correct' cannot use it\n");
+  return 0;
+}
+
+struct CorrectArgs {
+  std::string map, input, output;
+  bool clamp = false, quiet = false;
+};
+
+int run_correct(const CorrectArgs& a) {
+  const map::ErrorMap m = io::read_error_map(a.map);
+  Eigen::Matrix3Xd p = io::read_points(a.input);
+  map::EvalOptions o;
+  o.outside = a.clamp ? map::Outside::Clamp : map::Outside::Refuse;
+  try {
+    map::correct(m, p, o);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", a.input, e.what()));
+  }
+  const Eigen::VectorXd x = p.row(0).transpose(), y = p.row(1).transpose(),
+                        z = p.row(2).transpose();
+  io::write_csv(a.output, {"x", "y", "z"}, {&x, &y, &z});
+  if (!a.quiet && a.output != "-")
+    fmt::print("corrected {} points (X = x - error(x), trilinear): wrote {}\n", p.cols(), a.output);
+  return 0;
+}
+
+struct SimArgs {
+  std::string machine, gauge = "gauge.json", measurements = "measurements.json",
+                       truth = "truth.csv";
+  std::uint64_t machine_seed = 1;
+  int sections = 3;
+  std::vector<double> origin{150, 120, 60};
+  double misalignment_urad = 4000, noise_um = 0;
+  sim::BallGaugeOptions o;
+  bool quiet = false;
+};
+
+int run_simulate(const SimArgs& a) {
+  const sim::Machine m = a.machine.empty() ? sim::random_machine([&] {
+    sim::MachineOptions mo;
+    mo.seed = a.machine_seed;
+    return mo;
+  }())
+                                           : io::read_machine(a.machine);
+  if (a.origin.size() != 3) throw Error("--origin needs x,y,z (mm)");
+  const auto g = sim::frame_gauge();
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(a.misalignment_urad * 1e-6, Eigen::Vector3d(0.2, -0.1, 1).normalized())
+          .toRotationMatrix();
+  const auto poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
+  sim::BallGaugeOptions o = a.o;
+  o.noise = a.noise_um * 1e-3;
+  const auto c = sim::simulate_ballgauge(m, g, poses, o);
+  io::write_gauge(a.gauge, g);
+  io::write_measurements(a.measurements, c.placements);
+  // Truth: every probed ball's true centre and the machine's error there.
+  Eigen::VectorXd pl, ball, X, Y, Z, ex, ey, ez;
+  std::vector<double> cols[8];
+  for (std::size_t p = 0; p < c.placements.size(); ++p)
+    for (std::size_t b = 0; b < c.placements[p].balls.size(); ++b) {
+      const Eigen::Vector3d t = c.true_centres[p][b];
+      const Eigen::Vector3d e = m.error(t - m.offset) * 1e3;
+      const double v[8] = {static_cast<double>(p),
+                           static_cast<double>(c.placements[p].balls[b].index),
+                           t.x(),
+                           t.y(),
+                           t.z(),
+                           e.x(),
+                           e.y(),
+                           e.z()};
+      for (int k = 0; k < 8; ++k) cols[k].push_back(v[k]);
+    }
+  std::vector<Eigen::VectorXd> vc;
+  for (auto& v : cols)
+    vc.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
+  io::write_csv(a.truth, {"placement", "ball", "x", "y", "z", "ex_um", "ey_um", "ez_um"},
+                {&vc[0], &vc[1], &vc[2], &vc[3], &vc[4], &vc[5], &vc[6], &vc[7]});
+  if (!a.quiet)
+    fmt::print(
+        "simulated {} placements of a {}-ball frame gauge ({} points per ball, noise {} "
+        "um): wrote {}, {} and {}\n",
+        c.placements.size(), g.balls.size(), o.points_per_ball, a.noise_um, a.gauge, a.measurements,
+        a.truth);
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
+  std::vector<Command> out;
+  auto ca = std::make_shared<CalArgs>();
+  auto* c = app.add_subcommand(
+      "ballgauge",
+      "CMM error-vector map from ball-gauge placements (Oya et al. 1988): ball centres by sphere "
+      "fit, the first placement aligned 3-2-1, later ones stitched to the map by least squares "
+      "over shared balls.\nExample: trueaxis ballgauge --gauge gauge.json --measurements "
+      "measurements.json --output map.json");
+  c->add_option("--gauge", ca->gauge, "gauge JSON (ball_diameter, ball centres in the gauge frame)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--measurements", ca->measurements,
+                "measurements JSON (placements: alignment, tip_radius, probed points per ball)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--output,-o", ca->output, "map JSON to write")->required();
+  c->add_option("--match-tolerance", ca->o.match_tolerance,
+                "mm: a ball is shared with the map when its centre is this close to a mapped one")
+      ->capture_default_str();
+  c->add_option("--min-points", ca->o.min_points, "fewest probed points accepted per ball")
+      ->capture_default_str();
+  c->add_flag("--quiet,-q", ca->quiet, "print nothing on success");
+  out.push_back({c, [ca] { return run_calibrate(*ca); }});
+
+  auto cr = std::make_shared<CorrectArgs>();
+  c = app.add_subcommand(
+      "correct",
+      "Correct measured points with an error map: X = x - error(x), trilinear.\npoints.csv: "
+      "columns x,y,z (mm).\nExample: trueaxis correct --map map.json --input points.csv --output "
+      "corrected.csv");
+  c->add_option("--map", cr->map, "map JSON with a grid ('trueaxis ballgauge' or 'space')")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--input,-i", cr->input, "points CSV (x,y,z in mm)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--output,-o", cr->output, "corrected CSV ('-': standard output)")->required();
+  c->add_flag("--clamp", cr->clamp,
+              "hold the edge value for points outside the grid (default: refuse them)");
+  c->add_flag("--quiet,-q", cr->quiet, "print nothing on success");
+  out.push_back({c, [cr] { return run_correct(*cr); }});
+
+  auto sa = std::make_shared<SimArgs>();
+  c = simulate.add_subcommand(
+      "ballgauge",
+      "A ball gauge probed on a virtual CMM: a 5 x 4 x 2 frame at 80 mm pitch, stacked in "
+      "sections (the paper's layout), each ball probed at points spread over its upper "
+      "hemisphere.\nExample: trueaxis simulate ballgauge --machine machine.json --noise 0.5");
+  c->add_option("--machine", sa->machine,
+                "machine JSON (default: a random one from --machine-seed)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--machine-seed", sa->machine_seed, "seed of the random machine")
+      ->capture_default_str();
+  c->add_option("--sections", sa->sections, "placements stacked in z")->capture_default_str();
+  c->add_option("--origin", sa->origin, "true position of ball 0 in the first placement x,y,z (mm)")
+      ->delimiter(',')
+      ->capture_default_str();
+  c->add_option("--misalignment", sa->misalignment_urad, "gauge rotation against the axes, urad")
+      ->capture_default_str();
+  c->add_option("--points", sa->o.points_per_ball, "probed points per ball")->capture_default_str();
+  c->add_option("--tip-radius", sa->o.tip_radius, "stylus tip radius, mm")->capture_default_str();
+  c->add_option("--noise", sa->noise_um, "probing noise per coordinate, um")->capture_default_str();
+  c->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
+  c->add_option("--gauge", sa->gauge, "gauge JSON to write")->capture_default_str();
+  c->add_option("--measurements", sa->measurements, "measurements JSON to write")
+      ->capture_default_str();
+  c->add_option("--truth", sa->truth, "truth CSV to write (true centres, machine error)")
+      ->capture_default_str();
+  c->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
+  out.push_back({c, [sa] { return run_simulate(*sa); }});
+  return out;
+}
+
+}  // namespace trueaxis::cli

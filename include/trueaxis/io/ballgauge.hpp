@@ -1,0 +1,30 @@
+// trueaxis::io — ball-gauge files (spec 04).
+//
+// gauge.json: {"ball_diameter": mm, "balls": [[u, v, w], ...]} (gauge frame, mm; balls 0, 1, 2
+//   define the frame).
+// measurements.json: {"placements": [{"name": str, "alignment": "321" | "stitch",
+//   "tip_radius": mm, "balls": [{"index": i, "points": [[x, y, z], ...]}, ...]}, ...]}
+//   (probed stylus-tip centres, mm, machine frame; index into gauge.json, 0-based).
+// map.json: {"points": [{"placement", "ball", "nominal": [mm], "measured": [mm], "error": [µm],
+//   "uncertainty": [µm]}], "placements": [...], "grid": {...} (as in space.json, when the points
+//   form a lattice)}. `trueaxis correct` reads its grid.
+// Errors name file:line:col.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "trueaxis/ballgauge/ballgauge.hpp"
+
+namespace trueaxis::io {
+
+ballgauge::Gauge read_gauge(const std::string& path);
+void write_gauge(const std::string& path, const ballgauge::Gauge& gauge);
+
+std::vector<ballgauge::Placement> read_measurements(const std::string& path);
+void write_measurements(const std::string& path,
+                        const std::vector<ballgauge::Placement>& placements);
+
+void write_ballgauge_map(const std::string& path, const ballgauge::Result& result);
+
+}  // namespace trueaxis::io

@@ -1,0 +1,59 @@
+// Ball-gauge files: round trips and located errors for bad input.
+#include <gtest/gtest.h>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/sim/ballgauge.hpp"
+
+using namespace trueaxis;
+
+TEST(BallGaugeIo, RoundTripsGaugeAndMeasurements) {
+  const auto g = sim::frame_gauge(3, 2, 2, 80, 20);
+  const std::string gp = test::temp_file("gauge.json", "");
+  io::write_gauge(gp, g);
+  const auto back = io::read_gauge(gp);
+  ASSERT_EQ(back.balls.size(), g.balls.size());
+  EXPECT_EQ(back.balls[5], g.balls[5]);
+  EXPECT_EQ(back.ball_diameter, 20);
+  sim::MachineOptions mo;
+  const auto c = sim::simulate_ballgauge(sim::random_machine(mo), g,
+                                         sim::stacked_poses(g, 2, {200, 150, 60}), {});
+  const std::string mp = test::temp_file("m.json", "");
+  io::write_measurements(mp, c.placements);
+  const auto p = io::read_measurements(mp);
+  ASSERT_EQ(p.size(), 2u);
+  EXPECT_EQ(p[1].alignment, ballgauge::Alignment::Stitch);
+  EXPECT_EQ(p[0].balls[3].points, c.placements[0].balls[3].points);  // shortest round trip
+}
+
+TEST(BallGaugeIo, BadFilesNameFileLineAndColumn) {
+  auto gerr = [](const std::string& t) {
+    const std::string p = test::temp_file("gauge.json", t);
+    return test::error_of([&] { io::read_gauge(p); });
+  };
+  auto merr = [](const std::string& t) {
+    const std::string p = test::temp_file("m.json", t);
+    return test::error_of([&] { io::read_measurements(p); });
+  };
+  EXPECT_NE(gerr(R"({"ball_diameter": 25, "balls": [[0,0,0],[80,0],[0,80,0]]})")
+                .find("gauge.json:1:41: 'balls[1]' needs [x, y, z]"),
+            std::string::npos)
+      << gerr(R"({"ball_diameter": 25, "balls": [[0,0,0],[80,0],[0,80,0]]})");
+  EXPECT_NE(gerr(R"({"ball_diameter": 25, "balls": [[0,0,0],[80,0,0],[160,0,0]]})")
+                .find("must span a plane"),
+            std::string::npos);
+  EXPECT_NE(gerr(R"({"balls": []})").find("'ball_diameter' is missing"), std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"alignment": "3-2-1", "balls": []}]})")
+                .find("m.json:1:31: alignment must be \"321\" or \"stitch\""),
+            std::string::npos)
+      << merr(R"({"placements": [{"alignment": "3-2-1", "balls": []}]})");
+  EXPECT_NE(merr(R"({"placements": [{"balls": [{"points": [[1,2,3]]}]}]})")
+                .find("ball without an 'index'"),
+            std::string::npos);
+  EXPECT_NE(
+      merr(R"({"placements": [{"balls": [{"index": 1.5, "points": []}]}]})").find("whole number"),
+      std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"probe": 1}]})").find("unknown key 'probe'"),
+            std::string::npos);
+}
