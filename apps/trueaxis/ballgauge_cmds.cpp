@@ -69,6 +69,7 @@ struct SimArgs {
   std::string machine, gauge = "gauge.json", measurements = "measurements.json",
                        truth = "truth.csv";
   std::uint64_t machine_seed = 1;
+  std::string alignment = "321";
   int sections = 3;
   std::vector<double> origin{150, 120, 60};
   double misalignment_urad = 4000, noise_um = 0;
@@ -88,7 +89,8 @@ int run_simulate(const SimArgs& a) {
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(a.misalignment_urad * 1e-6, Eigen::Vector3d(0.2, -0.1, 1).normalized())
           .toRotationMatrix();
-  const auto poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
+  auto poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
+  if (a.alignment == "ls") poses.front().alignment = ballgauge::Alignment::LeastSquares;
   sim::BallGaugeOptions o = a.o;
   o.noise = a.noise_um * 1e-3;
   const auto c = sim::simulate_ballgauge(m, g, poses, o);
@@ -182,6 +184,11 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--machine-seed", sa->machine_seed, "seed of the random machine")
       ->capture_default_str();
   c->add_option("--sections", sa->sections, "placements stacked in z")->capture_default_str();
+  c->add_option("--alignment", sa->alignment,
+                "the first placement's alignment: 321 (the paper's, balls 0, 1, 2) or ls (least "
+                "squares over all its balls)")
+      ->check(CLI::IsMember({"321", "ls"}))
+      ->capture_default_str();
   c->add_option("--origin", sa->origin, "true position of ball 0 in the first placement x,y,z (mm)")
       ->delimiter(',')
       ->capture_default_str();

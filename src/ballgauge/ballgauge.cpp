@@ -195,12 +195,13 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
   for (std::size_t pi = 0; pi < placements.size(); ++pi) {
     const Placement& pl = placements[pi];
     const std::string pname = pl.name.empty() ? fmt::format("placement {}", pi) : pl.name;
-    if (pi == 0 && pl.alignment != Alignment::ThreeTwoOne)
-      throw Error(fmt::format("{}: the first placement must use the 3-2-1 alignment", pname));
-    if (pi > 0 && pl.alignment == Alignment::ThreeTwoOne)
+    if (pi == 0 && pl.alignment == Alignment::Stitch)
+      throw Error(fmt::format(
+          "{}: the first placement must define the frame (\"321\" or \"ls\" alignment)", pname));
+    if (pi > 0 && pl.alignment != Alignment::Stitch)
       throw Error(
-          fmt::format("{}: only the first placement may use the 3-2-1 alignment; later "
-                      "ones are stitched to the map",
+          fmt::format("{}: only the first placement may define the frame (3-2-1 or least "
+                      "squares); later ones are stitched to the map",
                       pname));
     // Measured centres of this placement's balls.
     std::vector<int> idx;
@@ -241,7 +242,25 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
     std::vector<int> tied_points;  // map index of each tied input, in input order
     std::function<Eigen::VectorXd(const Eigen::VectorXd&)> errors;
     std::vector<bool> shared(nb, false);
-    if (pl.alignment == Alignment::ThreeTwoOne) {
+    if (pl.alignment == Alignment::LeastSquares) {
+      if (nb < 3) throw Error(fmt::format("{}: the least-squares alignment needs 3 balls", pname));
+      // The frame in which the gauge's measured centres have no rigid-body error: X = R·U + t
+      // fitted to all centres (Kabsch), so Σ Δ = 0 and no rotation remains in the LS sense.
+      errors = [&](const Eigen::VectorXd& x) {
+        std::vector<Eigen::Vector3d> us, xs;
+        for (std::size_t k = 0; k < nb; ++k) {
+          us.push_back(U[static_cast<std::size_t>(idx[k])]);
+          xs.push_back(x.segment<3>(3 * static_cast<Eigen::Index>(k)));
+        }
+        Eigen::Matrix3d R;
+        Eigen::Vector3d t;
+        kabsch(us, xs, R, t);
+        Eigen::VectorXd d(3 * static_cast<Eigen::Index>(nb));
+        for (std::size_t k = 0; k < nb; ++k)
+          d.segment<3>(3 * static_cast<Eigen::Index>(k)) = xs[k] - (R * us[k] + t);
+        return d;
+      };
+    } else if (pl.alignment == Alignment::ThreeTwoOne) {
       int k0 = -1, k1 = -1, k2 = -1;
       for (std::size_t k = 0; k < nb; ++k) {
         if (idx[k] == 0) k0 = static_cast<int>(k);
@@ -371,7 +390,10 @@ std::string Result::summary() const {
       emax * 1e3, umax * 1e3);
   for (const auto& r : placements)
     s += fmt::format("  {:<14} {:<6} {} balls{}, sphere diameter error max {:.3f} um\n", r.name,
-                     r.alignment == Alignment::ThreeTwoOne ? "3-2-1" : "stitch", r.balls,
+                     r.alignment == Alignment::ThreeTwoOne    ? "3-2-1"
+                     : r.alignment == Alignment::LeastSquares ? "LS"
+                                                              : "stitch",
+                     r.balls,
                      r.alignment == Alignment::Stitch
                          ? fmt::format(" ({} shared, registration RMS {:.3f} um)", r.shared,
                                        r.registration_rms * 1e3)

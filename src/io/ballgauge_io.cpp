@@ -19,6 +19,12 @@ Eigen::Vector3d triple(const JsonFile& f, const ptr& p) {
   return v;
 }
 
+const char* alignment_name(ballgauge::Alignment a) {
+  return a == ballgauge::Alignment::ThreeTwoOne    ? "321"
+         : a == ballgauge::Alignment::LeastSquares ? "ls"
+                                                   : "stitch";
+}
+
 ojson vec(const Eigen::Vector3d& v, double scale = 1.0) {
   return {v.x() * scale, v.y() * scale, v.z() * scale};
 }
@@ -71,10 +77,12 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path) {
         const std::string a = f.string(k);
         if (a == "321")
           P.alignment = ballgauge::Alignment::ThreeTwoOne;
+        else if (a == "ls")
+          P.alignment = ballgauge::Alignment::LeastSquares;
         else if (a == "stitch")
           P.alignment = ballgauge::Alignment::Stitch;
         else
-          f.fail(k, fmt::format("alignment must be \"321\" or \"stitch\", not \"{}\"", a));
+          f.fail(k, fmt::format("alignment must be \"321\", \"ls\" or \"stitch\", not \"{}\"", a));
       } else if (key == "tip_radius") {
         P.tip_radius = f.number(k);
         if (P.tip_radius < 0) f.fail(k, "tip_radius must be >= 0 (mm)");
@@ -122,11 +130,10 @@ void write_measurements(const std::string& path, const std::vector<ballgauge::Pl
       for (Eigen::Index q = 0; q < b.points.cols(); ++q) pts.push_back(vec(b.points.col(q)));
       balls.push_back({{"index", b.index}, {"points", pts}});
     }
-    arr.push_back(
-        {{"name", p.name},
-         {"alignment", p.alignment == ballgauge::Alignment::ThreeTwoOne ? "321" : "stitch"},
-         {"tip_radius", p.tip_radius},
-         {"balls", balls}});
+    arr.push_back({{"name", p.name},
+                   {"alignment", alignment_name(p.alignment)},
+                   {"tip_radius", p.tip_radius},
+                   {"balls", balls}});
   }
   write_json(path, ojson{{"placements", arr}});
 }
@@ -142,13 +149,12 @@ void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
                    {"uncertainty", vec(p.uncertainty, 1e3)}});
   ojson pl = ojson::array();
   for (const auto& p : r.placements)
-    pl.push_back(
-        {{"name", p.name},
-         {"alignment", p.alignment == ballgauge::Alignment::ThreeTwoOne ? "321" : "stitch"},
-         {"balls", p.balls},
-         {"shared", p.shared},
-         {"registration_rms_um", p.registration_rms * 1e3},
-         {"diameter_error_max_um", p.diameter_error_max * 1e3}});
+    pl.push_back({{"name", p.name},
+                  {"alignment", alignment_name(p.alignment)},
+                  {"balls", p.balls},
+                  {"shared", p.shared},
+                  {"registration_rms_um", p.registration_rms * 1e3},
+                  {"diameter_error_max_um", p.diameter_error_max * 1e3}});
   ojson j;
   j["frame"] =
       "machine coordinates (mm); error = measured - true ball centre (um); correct with X = x - "

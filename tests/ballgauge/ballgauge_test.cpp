@@ -126,6 +126,45 @@ TEST(BallGauge, ProbingNoisePropagatesToTheStatedUncertainty) {
               inside / static_cast<double>(z.size()), u_first / 6 * 1e3, u_last / 6 * 1e3);
 }
 
+TEST(BallGauge, LeastSquaresAlignmentHasNoRigidErrorAndSmallerUncertainty) {
+  const auto g = frame_gauge();
+  const auto m = cmm();
+  auto ps = poses();
+  ps[0].alignment = ballgauge::Alignment::LeastSquares;
+  sim::BallGaugeOptions o;
+  o.noise = 0.5e-3;
+  const auto ls = ballgauge::calibrate(g, sim::simulate_ballgauge(m, g, ps, o).placements);
+  const auto t321 = ballgauge::calibrate(g, sim::simulate_ballgauge(m, g, poses(), o).placements);
+  // The first placement's errors have no translation left (their mean is zero) ...
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i = 0; i < 40; ++i) mean += ls.points[static_cast<std::size_t>(i)].error;
+  EXPECT_LT((mean / 40).norm(), 1e-12);
+  // ... and the uncertainty of the whole map is far smaller than with three balls' lever arms.
+  double u_ls = 0, u_321 = 0;
+  for (std::size_t i = 0; i < ls.points.size(); ++i) {
+    u_ls = std::max(u_ls, ls.points[i].uncertainty.maxCoeff());
+    u_321 = std::max(u_321, t321.points[i].uncertainty.maxCoeff());
+  }
+  EXPECT_LT(u_ls, 0.5 * u_321);
+  std::printf("largest uncertainty: LS alignment %.3f um, 3-2-1 %.3f um\n", u_ls * 1e3,
+              u_321 * 1e3);
+  // Noise-free, the LS-aligned map is the truth up to one rigid motion, as for 3-2-1.
+  o.noise = 0;
+  const auto exact = ballgauge::calibrate(g, sim::simulate_ballgauge(m, g, ps, o).placements);
+  const auto c = sim::simulate_ballgauge(m, g, ps, o);
+  Eigen::Matrix3Xd X(3, 80), Xmap(3, 80);
+  for (int i = 0; i < 80; ++i) {
+    const auto& mp = exact.points[static_cast<std::size_t>(i)];
+    const std::size_t pl = static_cast<std::size_t>(mp.placement.back() - '0');
+    for (std::size_t b = 0; b < c.placements[pl].balls.size(); ++b)
+      if (c.placements[pl].balls[b].index == mp.ball) X.col(i) = c.true_centres[pl][b];
+    Xmap.col(i) = mp.nominal;
+  }
+  const Eigen::Matrix4d T = Eigen::umeyama(X, Xmap, false);
+  const Eigen::Matrix3Xd moved = (T.topLeftCorner<3, 3>() * X).colwise() + T.topRightCorner<3, 1>();
+  EXPECT_LT((moved - Xmap).cwiseAbs().maxCoeff(), 1e-11);
+}
+
 TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   const auto g = frame_gauge();
   auto c = sim::simulate_ballgauge(cmm(), g, poses(), {});
@@ -140,7 +179,10 @@ TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   EXPECT_NE(err(p).find("z0: ball 4 has 3 probed points; at least 5"), std::string::npos);
   p = c.placements;
   p[0].alignment = ballgauge::Alignment::Stitch;
-  EXPECT_NE(err(p).find("first placement must use the 3-2-1"), std::string::npos);
+  EXPECT_NE(err(p).find("first placement must define the frame"), std::string::npos);
+  p = c.placements;
+  p[1].alignment = ballgauge::Alignment::LeastSquares;
+  EXPECT_NE(err(p).find("z1: only the first placement may define the frame"), std::string::npos);
   p = c.placements;
   std::swap(p[1], p[2]);  // z2 does not overlap z0
   EXPECT_NE(err(p).find("z2: 0 of its balls lie within 1 mm of mapped points"), std::string::npos)

@@ -169,6 +169,10 @@ printf 'x,y,z\n300,250,150\n' > bg-pts.csv
 expect_ok "$T" correct --map bg-map.json --input bg-pts.csv --output bg-corr.csv
 printf 'x,y,z\n300,250,150\n900,250,150\n' > bg-out.csv
 expect_err "bg-out.csv: point 1 (900, 250, 150) mm is outside" "$T" correct --map bg-map.json --input bg-out.csv --output o.csv
+expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv
+grep -q '"alignment": "ls"' bg-ls.json && ok || bad "simulate ballgauge --alignment ls"
+expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output bg-ls-map.json
+grep -q "section 1      LS" out.txt && ok || bad "ballgauge with the least-squares alignment"
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json: section 1: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 

@@ -45,7 +45,7 @@ TEST(BallGaugeIo, BadFilesNameFileLineAndColumn) {
             std::string::npos);
   EXPECT_NE(gerr(R"({"balls": []})").find("'ball_diameter' is missing"), std::string::npos);
   EXPECT_NE(merr(R"({"placements": [{"alignment": "3-2-1", "balls": []}]})")
-                .find("m.json:1:31: alignment must be \"321\" or \"stitch\""),
+                .find("m.json:1:31: alignment must be \"321\", \"ls\" or \"stitch\""),
             std::string::npos)
       << merr(R"({"placements": [{"alignment": "3-2-1", "balls": []}]})");
   EXPECT_NE(merr(R"({"placements": [{"balls": [{"points": [[1,2,3]]}]}]})")

@@ -8,7 +8,9 @@
 // vector at a ball is Δ_i = x_i − X_i (measured − true, mm); correction is X = x − Δ(x).
 //
 // The first placement fixes the frame by the paper's 3-2-1 alignment (eqs. 11–12): X_0 = x_0,
-// and the rotation C (gauge → machine) is chosen so that Δy_1 = Δz_1 = 0 and Δz_2 = 0. Every
+// and the rotation C (gauge → machine) is chosen so that Δy_1 = Δz_1 = 0 and Δz_2 = 0; or by a
+// least-squares alignment: the rigid fit of the gauge to all its measured centres, so that the
+// placement's errors have no rigid-body part (smaller lever arms, smaller uncertainty). Every
 // later placement is stitched (eqs. 13–14): its balls whose measured centres lie within the match
 // tolerance of already-mapped measured centres take those points' error vectors, so their true
 // positions X_i = x_i − Δ_i are known; the placement's rotation and translation follow by
@@ -40,7 +42,9 @@ struct Gauge {
   std::vector<Eigen::Vector3d> canonical() const;
 };
 
-enum class Alignment { ThreeTwoOne, Stitch };
+// How a placement is placed in the map's frame: the paper's 3-2-1 alignment or a least-squares
+// one (first placement only), or stitched to the map (every later placement).
+enum class Alignment { ThreeTwoOne, LeastSquares, Stitch };
 
 struct BallPoints {
   int index = 0;            // ball index in the gauge
@@ -87,9 +91,9 @@ struct Result {
 };
 
 // Throws Error (naming the placement and ball): unknown ball index, a ball measured twice in a
-// placement, too few points on a ball, a first placement that is not 3-2-1 or lacks balls 0, 1,
-// 2, a 3-2-1 placement after the first, or a stitch with fewer than three non-collinear shared
-// balls.
+// placement, too few points on a ball, a first placement that is a stitch, a 3-2-1 placement
+// without balls 0, 1, 2, an aligned placement after the first, or a stitch with fewer than
+// three non-collinear shared balls.
 Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements,
                  const Options& options = {});
 

@@ -2,7 +2,7 @@
 //
 // gauge.json: {"ball_diameter": mm, "balls": [[u, v, w], ...]} (gauge frame, mm; balls 0, 1, 2
 //   define the frame).
-// measurements.json: {"placements": [{"name": str, "alignment": "321" | "stitch",
+// measurements.json: {"placements": [{"name": str, "alignment": "321" | "ls" | "stitch",
 //   "tip_radius": mm, "balls": [{"index": i, "points": [[x, y, z], ...]}, ...]}, ...]}
 //   (probed stylus-tip centres, mm, machine frame; index into gauge.json, 0-based).
 // map.json: {"points": [{"placement", "ball", "nominal": [mm], "measured": [mm], "error": [µm],
