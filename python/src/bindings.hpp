@@ -12,5 +12,7 @@ void bind_space(pybind11::module_& m);
 void bind_guideway(pybind11::module_& m);
 // Least-squares fits of geometric elements (fit.cpp).
 void bind_fit(pybind11::module_& m);
+// The ball-gauge error map (ballgauge.cpp).
+void bind_ballgauge(pybind11::module_& m);
 
 }  // namespace trueaxis::python

@@ -177,4 +177,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
   trueaxis::python::bind_space(m);
   trueaxis::python::bind_guideway(m);
   trueaxis::python::bind_fit(m);
+  trueaxis::python::bind_ballgauge(m);
 }
