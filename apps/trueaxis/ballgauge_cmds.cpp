@@ -26,7 +26,7 @@ struct CalArgs {
 
 int run_calibrate(const CalArgs& a) {
   const auto g = io::read_gauge(a.gauge);
-  const auto p = io::read_measurements(a.measurements);
+  const auto p = io::read_measurements(a.measurements, &g);
   ballgauge::Result r;
   try {
     r = ballgauge::calibrate(g, p, a.o);
@@ -57,18 +57,15 @@ int run_correct(const CorrectArgs& a) {
   } catch (const Error& e) {
     throw Error(fmt::format("{}: {}", a.input, e.what()));
   }
-  const Eigen::VectorXd x = p.row(0).transpose(), y = p.row(1).transpose(),
-                        z = p.row(2).transpose();
-  io::write_csv(a.output, {"x", "y", "z"}, {&x, &y, &z});
+  io::write_points(a.output, p);
   if (!a.quiet && a.output != "-")
     fmt::print("corrected {} points (X = x - error(x), trilinear): wrote {}\n", p.cols(), a.output);
   return 0;
 }
 
 struct SimArgs {
-  std::string machine, gauge = "gauge.json", measurements = "measurements.json",
-                       truth = "truth.csv";
-  std::uint64_t machine_seed = 1;
+  MachineSource machine;
+  std::string gauge = "gauge.json", measurements = "measurements.json", truth = "truth.csv";
   std::string alignment = "321";
   int sections = 3;
   std::vector<double> origin{150, 120, 60};
@@ -78,12 +75,7 @@ struct SimArgs {
 };
 
 int run_simulate(const SimArgs& a) {
-  const sim::Machine m = a.machine.empty() ? sim::random_machine([&] {
-    sim::MachineOptions mo;
-    mo.seed = a.machine_seed;
-    return mo;
-  }())
-                                           : io::read_machine(a.machine);
+  const sim::Machine m = a.machine.load();
   if (a.origin.size() != 3) throw Error("--origin needs x,y,z (mm)");
   const auto g = sim::frame_gauge();
   const Eigen::Matrix3d R =
@@ -178,11 +170,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       "A ball gauge probed on a virtual CMM: a 5 x 4 x 2 frame at 80 mm pitch, stacked in "
       "sections (the paper's layout), each ball probed at points spread over its upper "
       "hemisphere.\nExample: trueaxis simulate ballgauge --machine machine.json --noise 0.5");
-  c->add_option("--machine", sa->machine,
-                "machine JSON (default: a random one from --machine-seed)")
-      ->check(CLI::ExistingFile);
-  c->add_option("--machine-seed", sa->machine_seed, "seed of the random machine")
-      ->capture_default_str();
+  sa->machine.add_options(c);
   c->add_option("--sections", sa->sections, "placements stacked in z")->capture_default_str();
   c->add_option("--alignment", sa->alignment,
                 "the first placement's alignment: 321 (the paper's, balls 0, 1, 2) or ls (least "

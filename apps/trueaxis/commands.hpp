@@ -1,6 +1,7 @@
 // trueaxis CLI — shared declarations between the command files.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -9,7 +10,19 @@ namespace CLI {
 class App;
 }
 
+namespace trueaxis::sim {
+struct Machine;
+}
+
 namespace trueaxis::cli {
+
+// The virtual machine of a simulation: --machine FILE, or a random one from --machine-seed.
+struct MachineSource {
+  std::string path;
+  std::uint64_t seed = 1;
+  void add_options(CLI::App* command);
+  sim::Machine load() const;
+};
 
 struct DemoOptions {
   std::string output = "demo-report/index.html";

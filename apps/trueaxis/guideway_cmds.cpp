@@ -44,20 +44,15 @@ int run_guideway(const GuidewayArgs& a) {
 }
 
 struct SimArgs {
-  std::string machine, layout, output = "spots.csv", truth = "truth.csv", axis = "x";
+  MachineSource machine;
+  std::string layout, output = "spots.csv", truth = "truth.csv", axis = "x";
   sim::GuidewayOptions o;
   double noise_um = 0, pointing_um = 0, angle_urad = 0, quant_um = 0;
-  std::uint64_t machine_seed = 1;
   bool quiet = false;
 };
 
 int run_simulate(const SimArgs& a) {
-  const sim::Machine m = a.machine.empty() ? sim::random_machine([&] {
-    sim::MachineOptions mo;
-    mo.seed = a.machine_seed;
-    return mo;
-  }())
-                                           : io::read_machine(a.machine);
+  const sim::Machine m = a.machine.load();
   const io::GuidewayLayout g = io::read_layout(a.layout);
   sim::GuidewayOptions o = a.o;
   o.axis = a.axis == "x" ? 0 : a.axis == "y" ? 1 : 2;
@@ -112,11 +107,7 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
   sc->add_option("--layout", sa->layout, "layout JSON (detectors on the carriage)")
       ->required()
       ->check(CLI::ExistingFile);
-  sc->add_option("--machine", sa->machine,
-                 "machine JSON (default: a random machine from --machine-seed)")
-      ->check(CLI::ExistingFile);
-  sc->add_option("--machine-seed", sa->machine_seed, "seed of the random machine")
-      ->capture_default_str();
+  sa->machine.add_options(sc);
   sc->add_option("--axis", sa->axis, "the machine axis the carriage rides")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();

@@ -13,6 +13,20 @@
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::cli {
+
+void MachineSource::add_options(CLI::App* c) {
+  c->add_option("--machine", path, "machine JSON (default: a random machine from --machine-seed)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--machine-seed", seed, "seed of the random machine")->capture_default_str();
+}
+
+sim::Machine MachineSource::load() const {
+  if (!path.empty()) return io::read_machine(path);
+  sim::MachineOptions o;
+  o.seed = seed;
+  return sim::random_machine(o);
+}
+
 namespace {
 
 Eigen::Vector3d vec3(const std::vector<double>& v, const char* what) {

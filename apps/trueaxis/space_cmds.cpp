@@ -81,9 +81,7 @@ int run_compensate(const CompensateArgs& a) {
   } catch (const Error& e) {
     throw Error(fmt::format("{}: {}", a.input, e.what()));
   }
-  const Eigen::VectorXd x = p.row(0).transpose(), y = p.row(1).transpose(),
-                        z = p.row(2).transpose();
-  io::write_csv(a.output, {"x", "y", "z"}, {&x, &y, &z});
+  io::write_points(a.output, p);
   if (!a.quiet && a.output != "-")
     fmt::print("compensated {} commands ({} interpolation, {} iterations): wrote {}\n", p.cols(),
                a.interpolation, a.iterations, a.output);

@@ -20,7 +20,7 @@ void bind_ballgauge(py::module_& m) {
       [](const std::string& gauge, const std::string& measurements, double match_tolerance,
          long min_points) {
         const auto g = io::read_gauge(gauge);
-        const auto p = io::read_measurements(measurements);
+        const auto p = io::read_measurements(measurements, &g);
         ballgauge::Options o;
         o.match_tolerance = match_tolerance;
         o.min_points = min_points;

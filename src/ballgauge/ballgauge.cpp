@@ -6,7 +6,6 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
-#include <map>
 #include <set>
 
 #include "trueaxis/error.hpp"
@@ -239,7 +238,9 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
       in.segment<3>(3 * static_cast<Eigen::Index>(k)) = cen[k].x;
       u_all.segment<3>(K0 + 3 * static_cast<Eigen::Index>(k)) = cen[k].u;
     }
-    std::vector<int> tied_points;  // map index of each tied input, in input order
+    std::vector<int> tied_points;         // map index of each tied input, in input order
+    std::vector<std::size_t> tied_balls;  // this placement's balls that tie it (stitch)
+    Eigen::Index tied_inputs = 0;         // where their map errors start in `in`
     std::function<Eigen::VectorXd(const Eigen::VectorXd&)> errors;
     std::vector<bool> shared(nb, false);
     if (pl.alignment == Alignment::LeastSquares) {
@@ -337,16 +338,19 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
               (R * U[static_cast<std::size_t>(idx[k])] + t);
         return d;
       };
-      // Registration residual over the shared balls.
-      const Eigen::VectorXd d = errors(in);
-      double ss = 0;
-      for (std::size_t j = 0; j < ks.size(); ++j)
-        ss += (d.segment<3>(3 * static_cast<Eigen::Index>(ks[j])) -
-               in.segment<3>(base + 3 * static_cast<Eigen::Index>(j)))
-                  .squaredNorm();
-      rep.registration_rms = std::sqrt(ss / static_cast<double>(ks.size()));
+      tied_inputs = base;
+      tied_balls = ks;
     }
     const Eigen::VectorXd d = errors(in);
+    if (!tied_balls.empty()) {
+      // Registration residual: the tied balls' new errors against the map's.
+      double ss = 0;
+      for (std::size_t j = 0; j < tied_balls.size(); ++j)
+        ss += (d.segment<3>(3 * static_cast<Eigen::Index>(tied_balls[j])) -
+               in.segment<3>(tied_inputs + 3 * static_cast<Eigen::Index>(j)))
+                  .squaredNorm();
+      rep.registration_rms = std::sqrt(ss / static_cast<double>(tied_balls.size()));
+    }
     const Eigen::MatrixXd L = jacobian(errors, in);
     const Eigen::Index K1 = u_all.size();
     for (std::size_t k = 0; k < nb; ++k) {

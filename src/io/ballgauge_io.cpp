@@ -57,7 +57,8 @@ void write_gauge(const std::string& path, const ballgauge::Gauge& g) {
   write_json(path, ojson{{"ball_diameter", g.ball_diameter}, {"balls", balls}});
 }
 
-std::vector<ballgauge::Placement> read_measurements(const std::string& path) {
+std::vector<ballgauge::Placement> read_measurements(const std::string& path,
+                                                    const ballgauge::Gauge* gauge) {
   const JsonFile f = JsonFile::read(path);
   for (const auto& [key, value] : f.object(ptr()).items())
     if (key != "placements") f.fail(ptr() / key, fmt::format("unknown key '{}' (placements)", key));
@@ -99,6 +100,13 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path) {
                 f.fail(bp / bk, "index must be a whole number >= 0 (a ball of gauge.json)");
               B.index = static_cast<int>(v);
               has_index = true;
+              if (gauge && B.index >= static_cast<int>(gauge->balls.size()))
+                f.fail(bp / bk, fmt::format("ball index {} is not in the gauge (0..{})", B.index,
+                                            gauge->balls.size() - 1));
+              for (const auto& other : P.balls)
+                if (gauge && other.index == B.index)
+                  f.fail(bp / bk,
+                         fmt::format("ball {} is measured twice in this placement", B.index));
             } else if (bk == "points") {
               const auto& pts = f.array(bp / bk);
               B.points.resize(3, static_cast<Eigen::Index>(pts.size()));

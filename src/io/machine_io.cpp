@@ -199,4 +199,10 @@ Eigen::Matrix3Xd read_points(const std::string& path, const sim::Machine* machin
   return p;
 }
 
+void write_points(const std::string& path, const Eigen::Matrix3Xd& p) {
+  const Eigen::VectorXd x = p.row(0).transpose(), y = p.row(1).transpose(),
+                        z = p.row(2).transpose();
+  write_csv(path, {"x", "y", "z"}, {&x, &y, &z});
+}
+
 }  // namespace trueaxis::io

@@ -19,6 +19,17 @@ std::string um(double mm) {
   return fmt::format("{:.3f}", mm * 1e3);
 }
 
+// A heat map over the x-y plane (mm).
+HeatMap xy_map(std::string title, std::string value_label, int width) {
+  HeatMap h;
+  h.title = std::move(title);
+  h.x_label = "x (mm)";
+  h.y_label = "y (mm)";
+  h.value_label = std::move(value_label);
+  h.width = width;
+  return h;
+}
+
 }  // namespace
 
 Section surface_section(const std::string& title, const surface::Result& r,
@@ -38,12 +49,7 @@ Section surface_section(const std::string& title, const surface::Result& r,
     s.table.push_back(
         {"closure RMS / max (µm)", fmt::format("{} / {}", um(r.closure_rms), um(r.closure_max))});
   }
-  HeatMap h;
-  h.title = "heights at every station (lines in grey)";
-  h.width = 620;
-  h.x_label = "x (mm)";
-  h.y_label = "y (mm)";
-  h.value_label = "height (µm)";
+  HeatMap h = xy_map("heights at every station (lines in grey)", "height (µm)", 620);
   const auto n = static_cast<Eigen::Index>(r.points.size());
   h.px.resize(n);
   h.py.resize(n);
@@ -65,11 +71,8 @@ Section surface_section(const std::string& title, const surface::Result& r,
   }
   s.heat_maps.push_back(std::move(h));
   if (!r.crossings.empty() && r.closure_max > 0) {
-    HeatMap c;
-    c.title = "closure at every crossing (height on one line − on the other)";
-    c.x_label = "x (mm)";
-    c.y_label = "y (mm)";
-    c.value_label = "closure (µm)";
+    HeatMap c = xy_map("closure at every crossing (height on one line − on the other)",
+                       "closure (µm)", 520);
     const auto m = static_cast<Eigen::Index>(r.crossings.size());
     c.px.resize(m);
     c.py.resize(m);
@@ -154,11 +157,7 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
   const Eigen::Index shown = std::min<Eigen::Index>(nz, 6);
   for (Eigen::Index q = 0; q < shown; ++q) {
     const Eigen::Index k = shown > 1 ? q * (nz - 1) / (shown - 1) : 0;
-    HeatMap h;
-    h.title = fmt::format("ez surface at z = {:g} mm", m.axes[2][k]);
-    h.x_label = "x (mm)";
-    h.y_label = "y (mm)";
-    h.value_label = "ez (µm)";
+    HeatMap h = xy_map(fmt::format("ez surface at z = {:g} mm", m.axes[2][k]), "ez (µm)", 340);
     h.grid_x = m.axes[0];
     h.grid_y = m.axes[1];
     h.grid_value.resize(ny, nx);
@@ -166,15 +165,11 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
       for (Eigen::Index i = 0; i < nx; ++i) h.grid_value(j, i) = m.error(2, m.index(i, j, k)) * 1e3;
     h.vmin = -lim;
     h.vmax = lim;
-    h.width = 340;
     s.heat_maps.push_back(std::move(h));
   }
   if (m.uncertainty.cols()) {
-    HeatMap h;
-    h.title = fmt::format("standard uncertainty |u| at z = {:g} mm", m.axes[2][nz - 1]);
-    h.x_label = "x (mm)";
-    h.y_label = "y (mm)";
-    h.value_label = "|u| (µm)";
+    HeatMap h = xy_map(fmt::format("standard uncertainty |u| at z = {:g} mm", m.axes[2][nz - 1]),
+                       "|u| (µm)", 340);
     h.symmetric = false;
     h.grid_x = m.axes[0];
     h.grid_y = m.axes[1];
@@ -182,7 +177,6 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
     for (Eigen::Index j = 0; j < ny; ++j)
       for (Eigen::Index i = 0; i < nx; ++i)
         h.grid_value(j, i) = m.uncertainty.col(m.index(i, j, nz - 1)).norm() * 1e3;
-    h.width = 340;
     s.heat_maps.push_back(std::move(h));
   }
 

@@ -2,6 +2,7 @@
 // the probe grid and sensor offsets of a displacement-probe campaign.
 #pragma once
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -10,6 +11,14 @@
 #include "trueaxis/sim/straightness.hpp"
 
 namespace trueaxis::sim::detail {
+
+// The exact rotation whose rotation vector is v (axis v/|v|, angle |v|; rad). No small-angle
+// linearisation.
+inline Eigen::Matrix3d rotation(const Eigen::Vector3d& v) {
+  const double a = v.norm();
+  if (a == 0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(a, v / a).toRotationMatrix();
+}
 
 struct Wave {
   double amplitude, k, phase;  // a·sin(k·u + phase)

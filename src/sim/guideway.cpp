@@ -6,19 +6,10 @@
 #include <cmath>
 #include <random>
 
+#include "common.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::sim {
-namespace {
-
-Eigen::Matrix3d exact_rotation(const Eigen::Vector3d& v) {
-  const double a = v.norm();
-  if (a == 0) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(a, v / a).toRotationMatrix();
-}
-
-}  // namespace
-
 void GuidewayOptions::validate() const {
   if (axis < 0 || axis > 2) throw Error("guideway simulation: axis must be 0, 1 or 2 (X, Y, Z)");
   if (positions < 2) throw Error("guideway simulation: need at least 2 positions");
@@ -74,7 +65,7 @@ GuidewayCampaign simulate_guideway(const Machine& machine, const guideway::Layou
     c.truth[2][k] = e.x();
     c.truth[3][k] = e.y();
     c.truth[4][k] = e.z();
-    const Eigen::Matrix3d R = exact_rotation(e);
+    const Eigen::Matrix3d R = detail::rotation(e);
     for (Eigen::Index i = 0; i < m; ++i) {
       const auto& det = layout.detectors[static_cast<std::size_t>(i)];
       Eigen::Vector2d r;

@@ -22,12 +22,6 @@ bool finite(double v) {
   return std::isfinite(v);
 }
 
-Eigen::Matrix3d rotation(const Eigen::Vector3d& v) {
-  const double a = v.norm();
-  if (a == 0) return Eigen::Matrix3d::Identity();
-  return Eigen::AngleAxisd(a, v / a).toRotationMatrix();
-}
-
 // Polynomial coefficients (in v = u / 1000) of Σ_k a_k ξ^k with ξ = (u − mid) / half.
 std::vector<double> centred_to_metres(const std::vector<double>& a, double mid, double half) {
   // ξ = α v + β with α = 1000 / half, β = −mid / half. Expand by repeated multiplication.
@@ -147,7 +141,7 @@ Eigen::Isometry3d Machine::pose(const Eigen::Vector3d& c) const {
     const auto& e = errors[static_cast<std::size_t>(k)];
     const double u = c[k];
     Eigen::Isometry3d A = Eigen::Isometry3d::Identity();
-    A.linear() = rotation({e[3](u), e[4](u), e[5](u)});
+    A.linear() = detail::rotation({e[3](u), e[4](u), e[5](u)});
     A.translation() = u * d[k] + Eigen::Vector3d(e[0](u), e[1](u), e[2](u));
     T = T * A;
   }

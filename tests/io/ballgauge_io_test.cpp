@@ -56,4 +56,18 @@ TEST(BallGaugeIo, BadFilesNameFileLineAndColumn) {
       std::string::npos);
   EXPECT_NE(merr(R"({"placements": [{"probe": 1}]})").find("unknown key 'probe'"),
             std::string::npos);
+  // Against the gauge: an index it does not have, a ball measured twice.
+  const auto g = sim::frame_gauge(3, 2, 2, 80, 20);  // 12 balls
+  auto gmerr = [&](const std::string& t) {
+    const std::string p = test::temp_file("m.json", t);
+    return test::error_of([&] { io::read_measurements(p, &g); });
+  };
+  EXPECT_NE(gmerr(R"({"placements": [{"balls": [{"index": 12, "points": []}]}]})")
+                .find("m.json:1:38: ball index 12 is not in the gauge (0..11)"),
+            std::string::npos)
+      << gmerr(R"({"placements": [{"balls": [{"index": 12, "points": []}]}]})");
+  EXPECT_NE(gmerr(R"({"placements": [{"balls": [{"index": 3}, {"index": 3}]}]})")
+                .find("m.json:1:52: ball 3 is measured twice"),
+            std::string::npos)
+      << gmerr(R"({"placements": [{"balls": [{"index": 3}, {"index": 3}]}]})");
 }

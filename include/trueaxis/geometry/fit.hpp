@@ -55,7 +55,8 @@ Fit fit(Element element, const Eigen::Matrix3Xd& points);
 // Residuals are distances to the middle element, so max − min of them equals the zone.
 Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& points);
 
-// Orthogonal distances (signed: outside positive) from points to a fitted element.
+// Orthogonal distances from points to a fitted element: signed (outside positive; along the
+// normal for a plane) except for a line, where they are unsigned.
 Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& points);
 
 }  // namespace trueaxis::geometry

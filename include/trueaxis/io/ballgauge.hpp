@@ -21,7 +21,10 @@ namespace trueaxis::io {
 ballgauge::Gauge read_gauge(const std::string& path);
 void write_gauge(const std::string& path, const ballgauge::Gauge& gauge);
 
-std::vector<ballgauge::Placement> read_measurements(const std::string& path);
+// With `gauge`, ball indices outside it and balls measured twice in one placement are refused
+// here, at their file:line:col (calibrate() refuses them too, without a location).
+std::vector<ballgauge::Placement> read_measurements(const std::string& path,
+                                                    const ballgauge::Gauge* gauge = nullptr);
 void write_measurements(const std::string& path,
                         const std::vector<ballgauge::Placement>& placements);
 

@@ -26,5 +26,7 @@ void write_machine(const std::string& path, const sim::Machine& machine);
 // A CSV with columns x, y, z (mm; other columns ignored) as a 3 × n matrix. Errors name
 // file:line:col. If `machine` is given, points outside its ranges are refused the same way.
 Eigen::Matrix3Xd read_points(const std::string& path, const sim::Machine* machine = nullptr);
+// The CSV read_points reads: header x,y,z, one point (mm) per row; "-" writes to stdout.
+void write_points(const std::string& path, const Eigen::Matrix3Xd& points);
 
 }  // namespace trueaxis::io
