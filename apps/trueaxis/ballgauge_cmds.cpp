@@ -3,24 +3,31 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
+#include <limits>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "trueaxis/ballgauge/ballgauge.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/ballgauge/parametric.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/ballgauge.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/space.hpp"
 #include "trueaxis/map/error_map.hpp"
+#include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
 
 namespace trueaxis::cli {
 namespace {
 
 struct CalArgs {
-  std::string gauge, measurements, output;
+  std::string gauge, measurements, output, parametric, report;
   ballgauge::Options o;
+  ballgauge::ParametricOptions po;
+  std::vector<double> stylus;
   bool quiet = false;
 };
 
@@ -35,6 +42,26 @@ int run_calibrate(const CalArgs& a) {
   }
   io::write_ballgauge_map(a.output, r);
   if (!a.quiet) fmt::print("{}wrote {}\n", r.summary(), a.output);
+  std::optional<ballgauge::ParametricResult> pr;
+  if (!a.parametric.empty()) {
+    ballgauge::ParametricOptions po = a.po;
+    if (a.stylus.size() != 3) throw Error("--stylus-offset needs x,y,z (mm)");
+    po.offset = Eigen::Vector3d(a.stylus[0], a.stylus[1], a.stylus[2]);
+    try {
+      pr = ballgauge::identify(g, p, po);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", a.measurements, e.what()));
+    }
+    io::write_parametric(a.parametric, *pr);
+    if (!a.quiet) fmt::print("{}wrote {}\n", pr->summary(), a.parametric);
+  }
+  if (!a.report.empty()) {
+    report::write(
+        a.report,
+        report::render("trueaxis ball-gauge map",
+                       {report::ballgauge_section("Error-vector map", r, pr ? &*pr : nullptr)}));
+    if (!a.quiet) fmt::print("wrote {}\n", a.report);
+  }
   if (!r.grid)
     std::fprintf(stderr,
                  "trueaxis ballgauge: the mapped points do not form a full lattice; map.json has "
@@ -63,11 +90,53 @@ int run_correct(const CorrectArgs& a) {
   return 0;
 }
 
+struct VerifyArgs {
+  std::string map, model, input, output, report;
+  ballgauge::LengthOptions o;
+  bool clamp = false, quiet = false;
+};
+
+int run_verify(const VerifyArgs& a) {
+  if (a.map.empty() && a.model.empty())
+    throw Error("verify-lengths needs --map (grid correction) or --model (parametric), or both");
+  const auto lengths = io::read_lengths(a.input);
+  std::vector<ballgauge::Correction> corrections;
+  std::optional<map::ErrorMap> grid;
+  if (!a.map.empty()) {
+    grid = io::read_error_map(a.map);
+    map::EvalOptions eo;
+    eo.outside = a.clamp ? map::Outside::Clamp : map::Outside::Refuse;
+    corrections.push_back(ballgauge::grid_correction(*grid, eo));
+  }
+  if (!a.model.empty())
+    corrections.push_back(ballgauge::parametric_correction(io::read_parametric(a.model)));
+  std::vector<ballgauge::LengthVerification> results;
+  for (const auto& c : corrections) {
+    try {
+      results.push_back(ballgauge::verify_lengths(lengths, c, a.o));
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {} correction: {}", a.input, c.name, e.what()));
+    }
+  }
+  io::write_length_verification(a.output, results);
+  if (!a.quiet) {
+    for (const auto& r : results) fmt::print("{}", r.summary());
+    fmt::print("wrote {}\n", a.output);
+  }
+  if (!a.report.empty()) {
+    report::write(a.report, report::render("trueaxis length verification",
+                                           {report::lengths_section("Gauge blocks", results)}));
+    if (!a.quiet) fmt::print("wrote {}\n", a.report);
+  }
+  return 0;
+}
+
 struct SimArgs {
   MachineSource machine;
   std::string gauge = "gauge.json", measurements = "measurements.json", truth = "truth.csv";
-  std::string alignment = "321";
-  int sections = 3;
+  std::string alignment = "321", lengths;
+  int sections = 3, repeats = 3;
+  double length_noise_um = -1;
   std::vector<double> origin{150, 120, 60};
   double misalignment_urad = 4000, noise_um = 0;
   sim::BallGaugeOptions o;
@@ -110,6 +179,26 @@ int run_simulate(const SimArgs& a) {
     vc.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
   io::write_csv(a.truth, {"placement", "ball", "x", "y", "z", "ex_um", "ey_um", "ez_um"},
                 {&vc[0], &vc[1], &vc[2], &vc[3], &vc[4], &vc[5], &vc[6], &vc[7]});
+  if (!a.lengths.empty()) {
+    // Gauge blocks in the box of the mapped ball centres (ISO 10360-2 style, held out).
+    sim::GaugeBlockOptions go;
+    go.lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+    go.hi = -go.lo;
+    for (const auto& pl : c.true_centres)
+      for (const auto& t : pl) {
+        go.lo = go.lo.cwiseMin(t);
+        go.hi = go.hi.cwiseMax(t);
+      }
+    go.repeats = a.repeats;
+    go.tip_radius = o.tip_radius;
+    go.noise = (a.length_noise_um >= 0 ? a.length_noise_um : a.noise_um) * 1e-3;
+    go.seed = o.seed + 1000;
+    const auto gb = sim::simulate_gauge_blocks(m, go);
+    io::write_lengths(a.lengths, gb.lengths);
+    if (!a.quiet)
+      fmt::print("simulated {} gauge-block measurements in 7 positions: wrote {}\n",
+                 gb.lengths.size(), a.lengths);
+  }
   if (!a.quiet)
     fmt::print(
         "simulated {} placements of a {}-ball frame gauge ({} points per ball, noise {} "
@@ -143,6 +232,20 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       ->capture_default_str();
   c->add_option("--min-points", ca->o.min_points, "fewest probed points accepted per ball")
       ->capture_default_str();
+  c->add_option("--report", ca->report, "HTML report to write (error-vector field)");
+  auto* par = c->add_option("--parametric", ca->parametric,
+                            "also identify the 21 rigid-body errors (polynomials per axis) and "
+                            "write them as a machine JSON with their covariance");
+  c->add_option("--stylus-offset", ca->stylus,
+                "stylus tip offset from the ram's reference point x,y,z (mm), as in machine.json")
+      ->delimiter(',')
+      ->expected(3)
+      ->needs(par);
+  par->needs("--stylus-offset");
+  c->add_option("--degree", ca->po.degree, "polynomial degree of each error function")
+      ->capture_default_str();
+  c->add_option("--chain", ca->po.chain, "kinematic chain, workpiece to tool (FYXZ: bridge CMM)")
+      ->capture_default_str();
   c->add_flag("--quiet,-q", ca->quiet, "print nothing on success");
   out.push_back({c, [ca] { return run_calibrate(*ca); }});
 
@@ -163,6 +266,30 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
               "hold the edge value for points outside the grid (default: refuse them)");
   c->add_flag("--quiet,-q", cr->quiet, "print nothing on success");
   out.push_back({c, [cr] { return run_correct(*cr); }});
+
+  auto va = std::make_shared<VerifyArgs>();
+  c = app.add_subcommand(
+      "verify-lengths",
+      "Gauge-block check of a correction (ISO 10360-2 style, the paper's figure 10): length "
+      "errors before and after correction, range and RMS, and the level the repeatability "
+      "predicts.\nlengths.csv: columns x1,y1,z1,x2,y2,z2 (measured end points, mm), nominal "
+      "(mm).\nExample: trueaxis verify-lengths --map map.json --input lengths.csv --output "
+      "verify.json --report verify.html");
+  c->add_option("--map", va->map, "map JSON with a grid ('trueaxis ballgauge')")
+      ->check(CLI::ExistingFile);
+  c->add_option("--model", va->model,
+                "parametric model JSON ('trueaxis ballgauge --parametric'); with --map, both "
+                "are compared")
+      ->check(CLI::ExistingFile);
+  c->add_option("--input,-i", va->input, "lengths CSV")->required()->check(CLI::ExistingFile);
+  c->add_option("--output,-o", va->output, "verification JSON to write")->required();
+  c->add_option("--report", va->report, "HTML report to write (figure-10 scatter)");
+  c->add_option("--repeat-tolerance", va->o.repeat_tolerance,
+                "mm: rows with the same nominal and both ends this close are repeats")
+      ->capture_default_str();
+  c->add_flag("--clamp", va->clamp, "hold the grid's edge value outside it (default: refuse)");
+  c->add_flag("--quiet,-q", va->quiet, "print nothing on success");
+  out.push_back({c, [va] { return run_verify(*va); }});
 
   auto sa = std::make_shared<SimArgs>();
   c = simulate.add_subcommand(
@@ -191,6 +318,12 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       ->capture_default_str();
   c->add_option("--truth", sa->truth, "truth CSV to write (true centres, machine error)")
       ->capture_default_str();
+  c->add_option("--lengths", sa->lengths,
+                "also write gauge-block measurements (7 positions in the mapped box) to this CSV");
+  c->add_option("--repeats", sa->repeats, "repeats of every gauge-block length")
+      ->capture_default_str();
+  c->add_option("--length-noise", sa->length_noise_um,
+                "probing noise of the gauge-block measurements, um (default: --noise)");
   c->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
   out.push_back({c, [sa] { return run_simulate(*sa); }});
   return out;

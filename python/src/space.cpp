@@ -283,8 +283,8 @@ ranges: [[xmin, xmax], [ymin, ymax], [zmin, zmax]] mm (default 800 x 600 x 500 f
 stylus/tool offset [x, y, z] mm (default [0, 0, -100]); straightness: µm over 500 mm; angular:
 µrad; positioning: µm per m; squareness: µrad (standard deviation); lead_amplitude: µm of a lead
 screw term of period `lead` mm.)doc")
-      .def_static("load", &io::read_machine, py::arg("path"),
-                  "Reads a machine.json (errors name file:line:col).")
+      .def_static("load", static_cast<sim::Machine (*)(const std::string&)>(&io::read_machine),
+                  py::arg("path"), "Reads a machine.json (errors name file:line:col).")
       .def(
           "save",
           [](const sim::Machine& mc, const std::string& path) { io::write_machine(path, mc); },

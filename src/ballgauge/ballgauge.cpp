@@ -8,17 +8,12 @@
 #include <functional>
 #include <set>
 
+#include "common.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/fit.hpp"
 
 namespace trueaxis::ballgauge {
-namespace {
-
-struct Centre {
-  Eigen::Vector3d x = Eigen::Vector3d::Zero();  // fitted centre (mm)
-  Eigen::Vector3d u = Eigen::Vector3d::Zero();  // its standard uncertainty (mm)
-  double diameter = 0;                          // fitted diameter of the tip-centre sphere
-};
+namespace detail {
 
 // Sphere fit of probed tip centres, with the centre's uncertainty from the residuals:
 // cov = s²·(JᵀJ)⁻¹, s² = Σr² / (n − 4).
@@ -40,6 +35,33 @@ Centre fit_ball(const Eigen::Matrix3Xd& p) {
   }
   return c;
 }
+
+// Closed-form least-squares rigid registration X ≈ R·U + t (Kabsch, via SVD).
+void kabsch(const std::vector<Eigen::Vector3d>& U, const std::vector<Eigen::Vector3d>& X,
+            Eigen::Matrix3d& R, Eigen::Vector3d& t) {
+  Eigen::Vector3d mu = Eigen::Vector3d::Zero(), mx = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < U.size(); ++i) {
+    mu += U[i];
+    mx += X[i];
+  }
+  mu /= static_cast<double>(U.size());
+  mx /= static_cast<double>(U.size());
+  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
+  for (std::size_t i = 0; i < U.size(); ++i) H += (U[i] - mu) * (X[i] - mx).transpose();
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+  R = svd.matrixV() * D * svd.matrixU().transpose();
+  t = mx - R * mu;
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::Centre;
+using detail::fit_ball;
+using detail::kabsch;
 
 // The paper's 3-2-1 rotation (eqs. 11–12): columns c1, c2, c3 = gauge U, V, W in the machine
 // frame, from the measured centres of balls 0, 1, 2 and their gauge coordinates (a, 0, 0) and
@@ -67,25 +89,6 @@ Eigen::Matrix3d rotation_321(const Eigen::Vector3d& x0, const Eigen::Vector3d& x
   C.col(1) = c2;
   C.col(2) = c1.cross(c2);
   return C;
-}
-
-// Closed-form least-squares rigid registration X ≈ R·U + t (Kabsch, via SVD).
-void kabsch(const std::vector<Eigen::Vector3d>& U, const std::vector<Eigen::Vector3d>& X,
-            Eigen::Matrix3d& R, Eigen::Vector3d& t) {
-  Eigen::Vector3d mu = Eigen::Vector3d::Zero(), mx = Eigen::Vector3d::Zero();
-  for (std::size_t i = 0; i < U.size(); ++i) {
-    mu += U[i];
-    mx += X[i];
-  }
-  mu /= static_cast<double>(U.size());
-  mx /= static_cast<double>(U.size());
-  Eigen::Matrix3d H = Eigen::Matrix3d::Zero();
-  for (std::size_t i = 0; i < U.size(); ++i) H += (U[i] - mu) * (X[i] - mx).transpose();
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-  D(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
-  R = svd.matrixV() * D * svd.matrixU().transpose();
-  t = mx - R * mu;
 }
 
 // Jacobian of f at `in` by central differences (f is smooth: rotations and fits of centres).

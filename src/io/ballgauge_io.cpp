@@ -5,7 +5,9 @@
 #include "grid_json.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
+#include "trueaxis/io/machine.hpp"
 
 namespace trueaxis::io {
 namespace {
@@ -171,6 +173,147 @@ void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
   j["placements"] = pl;
   if (r.grid) j["grid"] = detail::grid_json(*r.grid);
   write_json(path, j);
+}
+
+std::vector<ballgauge::LengthMeasurement> read_lengths(const std::string& path) {
+  const CsvTable t = CsvTable::read(path);
+  const char* names[7] = {"x1", "y1", "z1", "x2", "y2", "z2", "nominal"};
+  int c[7];
+  for (int k = 0; k < 7; ++k) c[k] = t.require(names[k]);
+  if (t.rows() == 0) throw Error(fmt::format("{}: no lengths", path));
+  std::vector<ballgauge::LengthMeasurement> out(t.rows());
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    auto& m = out[i];
+    for (int k = 0; k < 3; ++k) {
+      m.a[k] = t.column(c[k])[r];
+      m.b[k] = t.column(c[k + 3])[r];
+    }
+    m.nominal = t.column(c[6])[r];
+    if (!(m.nominal > 0))
+      throw Error(fmt::format("{}nominal length {} mm: must be > 0", t.where(r, c[6]), m.nominal));
+    if (!((m.b - m.a).norm() > 0))
+      throw Error(fmt::format("{}the two end points coincide", t.where(r, c[3])));
+  }
+  return out;
+}
+
+void write_lengths(const std::string& path,
+                   const std::vector<ballgauge::LengthMeasurement>& lengths) {
+  const auto n = static_cast<Eigen::Index>(lengths.size());
+  std::vector<Eigen::VectorXd> cols(7, Eigen::VectorXd(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& m = lengths[static_cast<std::size_t>(i)];
+    for (int k = 0; k < 3; ++k) {
+      cols[static_cast<std::size_t>(k)][i] = m.a[k];
+      cols[static_cast<std::size_t>(k + 3)][i] = m.b[k];
+    }
+    cols[6][i] = m.nominal;
+  }
+  write_csv(path, {"x1", "y1", "z1", "x2", "y2", "z2", "nominal"},
+            {&cols[0], &cols[1], &cols[2], &cols[3], &cols[4], &cols[5], &cols[6]});
+}
+
+void write_length_verification(const std::string& path,
+                               const std::vector<ballgauge::LengthVerification>& results) {
+  auto stats = [](const ballgauge::LengthStats& s) {
+    return ojson{{"min", s.min * 1e3},
+                 {"max", s.max * 1e3},
+                 {"range", s.range() * 1e3},
+                 {"mean", s.mean * 1e3},
+                 {"rms", s.rms * 1e3}};
+  };
+  auto num = [](double v) { return std::isfinite(v) ? ojson(v * 1e3) : ojson(nullptr); };
+  ojson out = ojson::array();
+  for (const auto& v : results) {
+    ojson rows = ojson::array();
+    for (const auto& r : v.rows)
+      rows.push_back({{"nominal", r.nominal},
+                      {"position", r.position},
+                      {"before", r.before * 1e3},
+                      {"after", r.after * 1e3},
+                      {"uncertainty", r.uncertainty * 1e3}});
+    out.push_back({{"correction", v.correction},
+                   {"positions", v.positions},
+                   {"before", stats(v.before)},
+                   {"after", stats(v.after)},
+                   {"repeatability", num(v.repeatability)},
+                   {"correction_uncertainty_rms", num(v.correction_u_rms)},
+                   {"expected_after_rms", num(v.predicted_after)},
+                   {"lengths", rows}});
+  }
+  write_json(path, ojson{{"units", "nominal in mm; length errors (measured - nominal) in um"},
+                         {"results", out}});
+}
+
+void write_parametric(const std::string& path, const ballgauge::ParametricResult& r) {
+  ojson j = machine_json(r.model);
+  ojson cov = ojson::array();
+  for (Eigen::Index i = 0; i < r.covariance.rows(); ++i) {
+    ojson row = ojson::array();
+    for (Eigen::Index k = 0; k < r.covariance.cols(); ++k) row.push_back(r.covariance(i, k));
+    cov.push_back(row);
+  }
+  ojson par = ojson::array();
+  for (double v : r.parameters) par.push_back(v);
+  ojson unobs = ojson::array();
+  for (const auto& u : r.unobservable) unobs.push_back(u);
+  j["identification"] = {
+      {"method", "ball gauge, rigid-body model, linearised least squares"},
+      {"degree", r.degree},
+      {"centre", vec(r.centre)},
+      {"half_span", vec(r.half_span)},
+      {"parameters_units",
+       "Chebyshev coefficients per error function (mm or rad), then EC0Y, EB0Z, EA0Z (rad)"},
+      {"parameters", par},
+      {"covariance", cov},
+      {"residual_rms_um", r.residual_rms * 1e3},
+      {"sigma_um", r.sigma * 1e3},
+      {"balls", r.balls},
+      {"placements", r.placements},
+      {"unknowns", r.unknowns},
+      {"rank", r.rank},
+      {"iterations", r.iterations},
+      {"unobservable", unobs}};
+  write_json(path, j);
+}
+
+ballgauge::ParametricResult read_parametric(const std::string& path) {
+  const JsonFile f = JsonFile::read(path);
+  ballgauge::ParametricResult r;
+  const ptr id("/identification");
+  if (!f.has(id))
+    f.fail(ptr(),
+           "not a parametric model: no 'identification' (write one with 'trueaxis ballgauge "
+           "--parametric')");
+  r.model = read_machine(f);
+  f.object(id);
+  const double degree = f.number(id / "degree");
+  if (!(degree >= 1 && degree <= 8) || degree != std::floor(degree))
+    f.fail(id / "degree", "degree must be a whole number 1..8");
+  r.degree = static_cast<int>(degree);
+  r.centre = triple(f, id / "centre");
+  r.half_span = triple(f, id / "half_span");
+  if (!(r.half_span.minCoeff() > 0)) f.fail(id / "half_span", "half spans must be > 0 mm");
+  r.parameters = f.numbers(id / "parameters");
+  const Eigen::Index P = 18 * (r.degree + 1) + 3;
+  if (r.parameters.size() != P)
+    f.fail(id / "parameters",
+           fmt::format("{} parameters; degree {} needs {}", r.parameters.size(), r.degree, P));
+  const auto& cov = f.array(id / "covariance");
+  if (static_cast<Eigen::Index>(cov.size()) != P)
+    f.fail(id / "covariance", fmt::format("covariance needs {} rows", P));
+  r.covariance.resize(P, P);
+  for (Eigen::Index i = 0; i < P; ++i) {
+    const Eigen::VectorXd row = f.numbers(id / "covariance" / static_cast<std::size_t>(i));
+    if (row.size() != P)
+      f.fail(id / "covariance" / static_cast<std::size_t>(i),
+             fmt::format("covariance row needs {} numbers", P));
+    r.covariance.row(i) = row.transpose();
+  }
+  if (f.has(id / "residual_rms_um")) r.residual_rms = f.number(id / "residual_rms_um") * 1e-3;
+  if (f.has(id / "sigma_um")) r.sigma = f.number(id / "sigma_um") * 1e-3;
+  return r;
 }
 
 }  // namespace trueaxis::io

@@ -82,7 +82,10 @@ nlohmann::ordered_json write_function(const sim::ErrorFunction& fn, double scale
 }  // namespace
 
 sim::Machine read_machine(const std::string& path) {
-  const JsonFile f = JsonFile::read(path);
+  return read_machine(JsonFile::read(path));
+}
+
+sim::Machine read_machine(const JsonFile& f) {
   const ptr root;
   f.object(root);
   sim::Machine m;
@@ -153,6 +156,10 @@ sim::Machine read_machine(const std::string& path) {
 }
 
 void write_machine(const std::string& path, const sim::Machine& m) {
+  write_json(path, machine_json(m));
+}
+
+nlohmann::ordered_json machine_json(const sim::Machine& m) {
   m.validate();
   nlohmann::ordered_json j;
   j["name"] = m.name;
@@ -176,7 +183,7 @@ void write_machine(const std::string& path, const sim::Machine& m) {
   e["EC0Y"] = m.squareness_c0y / kUrad;
   e["EB0Z"] = m.squareness_b0z / kUrad;
   e["EA0Z"] = m.squareness_a0z / kUrad;
-  write_json(path, j);
+  return j;
 }
 
 Eigen::Matrix3Xd read_points(const std::string& path, const sim::Machine* machine) {

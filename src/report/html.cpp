@@ -157,8 +157,14 @@ svg.ta-fig{max-width:100%;height:auto}
         const std::string color = s2.color.empty() ? kPalette[col++ % 6] : s2.color;
         data += ',';
         js_array(data, s2.y, idx);
-        series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label), color,
-                              s2.dashed ? ",dash:[6,4]" : "");
+        if (s2.points)
+          series += fmt::format(
+              ",{{label:{},stroke:'{}',fill:'{}',width:1,paths:function(){{return null;}},"
+              "points:{{show:true,size:7,width:1,stroke:'{}',fill:'{}88'}}}}",
+              js_string(s2.label), color, color, color, color);
+        else
+          series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label), color,
+                                s2.dashed ? ",dash:[6,4]" : "");
         ++si;
         if (s2.band.size() == s2.y.size()) {
           data += ',';

@@ -122,35 +122,12 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
   }
 
   // Distorted grids of three planes through the volume.
-  auto plane = [&](int a, int b, int c, Eigen::Index at, const char* name) {
-    DistortedGrid g;
-    const char* axis = "xyz";
-    g.title = fmt::format("{} plane at {} = {:g} mm", name, axis[c],
-                          m.axes[static_cast<std::size_t>(c)][at]);
-    g.u_label = fmt::format("{} (mm)", axis[a]);
-    g.v_label = fmt::format("{} (mm)", axis[b]);
-    g.normal_label = fmt::format("e{} (µm)", axis[c]);
-    g.u = m.axes[static_cast<std::size_t>(a)];
-    g.v = m.axes[static_cast<std::size_t>(b)];
-    g.du.resize(g.v.size(), g.u.size());
-    g.dv.resizeLike(g.du);
-    g.normal.resizeLike(g.du);
-    for (Eigen::Index j = 0; j < g.v.size(); ++j)
-      for (Eigen::Index i = 0; i < g.u.size(); ++i) {
-        Eigen::Index idx[3];
-        idx[a] = i;
-        idx[b] = j;
-        idx[c] = at;
-        const Eigen::Vector3d e = m.error.col(m.index(idx[0], idx[1], idx[2])) * 1e3;
-        g.du(j, i) = e[a];
-        g.dv(j, i) = e[b];
-        g.normal(j, i) = e[c];
-      }
-    s.grids.push_back(std::move(g));
+  auto plane = [&](int a, int b, Eigen::Index at, const char* name) {
+    s.grids.push_back(distorted_plane(m, a, b, at, name));
   };
-  plane(0, 1, 2, nz - 1, "XY");
-  plane(0, 2, 1, ny / 2, "XZ");
-  plane(1, 2, 0, nx / 2, "YZ");
+  plane(0, 1, nz - 1, "XY plane");
+  plane(0, 2, ny / 2, "XZ plane");
+  plane(1, 2, nx / 2, "YZ plane");
 
   // The ez surfaces of up to six z levels, on one colour scale.
   const double lim = m.error.row(2).cwiseAbs().maxCoeff() * 1e3;

@@ -273,4 +273,36 @@ std::string svg(const DistortedGrid& g) {
   return s + "</svg>";
 }
 
+DistortedGrid distorted_plane(const map::ErrorMap& m, int a, int b, Eigen::Index at,
+                              const std::string& name, double magnification) {
+  if (a < 0 || a > 2 || b < 0 || b > 2 || a == b) throw Error("distorted plane: bad axes");
+  const int c = 3 - a - b;
+  if (at < 0 || at >= m.size(c)) throw Error("distorted plane: node index outside the grid");
+  DistortedGrid g;
+  const char* axis = "xyz";
+  g.title =
+      fmt::format("{} at {} = {:g} mm", name, axis[c], m.axes[static_cast<std::size_t>(c)][at]);
+  g.u_label = fmt::format("{} (mm)", axis[a]);
+  g.v_label = fmt::format("{} (mm)", axis[b]);
+  g.normal_label = fmt::format("e{} (µm)", axis[c]);
+  g.magnification = magnification;
+  g.u = m.axes[static_cast<std::size_t>(a)];
+  g.v = m.axes[static_cast<std::size_t>(b)];
+  g.du.resize(g.v.size(), g.u.size());
+  g.dv.resizeLike(g.du);
+  g.normal.resizeLike(g.du);
+  for (Eigen::Index j = 0; j < g.v.size(); ++j)
+    for (Eigen::Index i = 0; i < g.u.size(); ++i) {
+      Eigen::Index idx[3];
+      idx[a] = i;
+      idx[b] = j;
+      idx[c] = at;
+      const Eigen::Vector3d e = m.error.col(m.index(idx[0], idx[1], idx[2])) * 1e3;
+      g.du(j, i) = e[a];
+      g.dv(j, i) = e[b];
+      g.normal(j, i) = e[c];
+    }
+  return g;
+}
+
 }  // namespace trueaxis::report

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "trueaxis/error.hpp"
@@ -25,6 +26,16 @@ std::vector<Eigen::Vector3d> directions(int n) {
     }
   }
   return d;
+}
+
+// The command whose actual tool point is P (fixed point: |∇e| ≪ 1), refused outside the range.
+Eigen::Vector3d command_to_reach(const Machine& machine, const Eigen::Vector3d& P,
+                                 const std::string& what) {
+  Eigen::Vector3d cmd = P - machine.offset;
+  for (int it = 0; it < 6; ++it) cmd = P - machine.offset - machine.error(cmd);
+  if (!machine.contains(cmd, 1.0))
+    throw Error(fmt::format("{} is outside the machine's range", what));
+  return cmd;
 }
 
 }  // namespace
@@ -97,13 +108,8 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
       bp.points.resize(3, static_cast<Eigen::Index>(dirs.size()));
       for (std::size_t k = 0; k < dirs.size(); ++k) {
         const Eigen::Vector3d P = X + reach * dirs[k];
-        Eigen::Vector3d cmd = P - machine.offset;
-        for (int it = 0; it < 6; ++it) cmd = P - machine.offset - machine.error(cmd);
-        if (!machine.contains(cmd, 1.0))
-          throw Error(
-              fmt::format("ball gauge simulation: {} ball {} is outside the machine's "
-                          "range",
-                          pose.name, b));
+        const Eigen::Vector3d cmd = command_to_reach(
+            machine, P, fmt::format("ball gauge simulation: {} ball {}", pose.name, b));
         bp.points.col(static_cast<Eigen::Index>(k)) =
             cmd + machine.offset + o.noise * Eigen::Vector3d(N(rng), N(rng), N(rng));
       }
@@ -113,6 +119,70 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
     c.placements.push_back(std::move(pl));
     c.true_centres.push_back(std::move(truth));
   }
+  return c;
+}
+
+void GaugeBlockOptions::validate() const {
+  if (!lo.allFinite() || !hi.allFinite() || !((hi - lo).minCoeff() > 0))
+    throw Error("gauge block simulation: the box needs lo < hi in x, y and z");
+  if (repeats < 1) throw Error("gauge block simulation: at least one repeat");
+  if (!(margin >= 0) || !(tip_radius >= 0) || !(noise >= 0))
+    throw Error("gauge block simulation: margin, tip radius and noise must be >= 0");
+  for (double L : lengths)
+    if (!(L > 0) || !std::isfinite(L))
+      throw Error("gauge block simulation: lengths must be positive numbers of mm");
+}
+
+GaugeBlockCampaign simulate_gauge_blocks(const Machine& machine, const GaugeBlockOptions& o) {
+  o.validate();
+  const Eigen::Vector3d centre = (o.lo + o.hi) / 2, half = (o.hi - o.lo) / 2;
+  struct Position {
+    std::string name;
+    Eigen::Vector3d d;
+  };
+  std::vector<Position> positions{{"x", Eigen::Vector3d::UnitX()},
+                                  {"y", Eigen::Vector3d::UnitY()},
+                                  {"z", Eigen::Vector3d::UnitZ()}};
+  for (int s = 0; s < 4; ++s) {
+    const double sx = (s & 1) ? -1 : 1, sy = (s & 2) ? -1 : 1;
+    positions.push_back({fmt::format("{}x{}y+z", sx > 0 ? '+' : '-', sy > 0 ? '+' : '-'),
+                         Eigen::Vector3d(sx * half.x(), sy * half.y(), half.z()).normalized()});
+  }
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> N(0.0, 1.0);
+  GaugeBlockCampaign c;
+  for (const auto& pos : positions) {
+    // Room along d through the centre, keeping the margin to every face it approaches.
+    double room = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(pos.d[k]) > 1e-12)
+        room = std::min(room, 2 * (half[k] - o.margin) / std::abs(pos.d[k]));
+    std::vector<double> lengths = o.lengths;
+    if (lengths.empty())
+      for (double f : {0.3, 0.45, 0.6, 0.75, 0.9}) lengths.push_back(std::floor(f * room));
+    for (double L : lengths) {
+      if (!(L <= room) || !(L > 0)) continue;
+      const Eigen::Vector3d A = centre - L / 2 * pos.d, B = centre + L / 2 * pos.d;
+      for (int rep = 0; rep < o.repeats; ++rep) {
+        auto probe = [&](const Eigen::Vector3d& tip, const Eigen::Vector3d& back) {
+          const Eigen::Vector3d cmd = command_to_reach(
+              machine, tip, fmt::format("gauge block simulation: {} mm along {}", L, pos.name));
+          return Eigen::Vector3d(cmd + machine.offset +
+                                 o.noise * Eigen::Vector3d(N(rng), N(rng), N(rng)) + back);
+        };
+        ballgauge::LengthMeasurement m;
+        m.nominal = L;
+        m.a = probe(A - o.tip_radius * pos.d, o.tip_radius * pos.d);
+        m.b = probe(B + o.tip_radius * pos.d, -o.tip_radius * pos.d);
+        c.lengths.push_back(m);
+        c.position.push_back(pos.name);
+        c.true_a.push_back(A);
+        c.true_b.push_back(B);
+      }
+    }
+  }
+  if (c.lengths.empty())
+    throw Error("gauge block simulation: no length fits the box (with its margin)");
   return c;
 }
 

@@ -161,9 +161,10 @@ Eigen::Matrix3Xd Machine::errors_at(const Eigen::Matrix3Xd& commands) const {
 }
 
 std::string Machine::summary() const {
-  std::string s = fmt::format("{} (chain {}, ranges x [{}, {}], y [{}, {}], z [{}, {}] mm)\n",
-                              name.empty() ? "machine" : name, chain, range[0][0], range[0][1],
-                              range[1][0], range[1][1], range[2][0], range[2][1]);
+  std::string s =
+      fmt::format("{} (chain {}, ranges x [{:g}, {:g}], y [{:g}, {:g}], z [{:g}, {:g}] mm)\n",
+                  name.empty() ? "machine" : name, chain, range[0][0], range[0][1], range[1][0],
+                  range[1][1], range[2][0], range[2][1]);
   s += "  span over the axis range   positioning  straightness (2)     roll/pitch/yaw (3)\n";
   for (int k = 0; k < 3; ++k) {
     const auto& r = range[static_cast<std::size_t>(k)];

@@ -176,5 +176,24 @@ grep -q "section 1      LS" out.txt && ok || bad "ballgauge with the least-squar
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json:[0-9]*:[0-9]*: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 
+# Gauge-block verification, grid and parametric (spec 04, must-show 3 and 4).
+expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv --lengths bg-lengths.csv
+grep -q "105 gauge-block measurements" out.txt && head -1 bg-lengths.csv | grep -qx "x1,y1,z1,x2,y2,z2,nominal" && ok || bad "simulate ballgauge --lengths"
+expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output bg-ls-map.json --parametric bg-model.json --stylus-offset 0,0,-100 --report bg-map.html
+grep -q "parametric model (FYXZ chain, polynomials of degree 3)" out.txt && grep -q '"identification"' bg-model.json && grep -q "<svg" bg-map.html && ok || bad "ballgauge --parametric --report"
+expect_err "stylus-offset" "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output o.json --parametric o2.json
+printf 'x,y,z\n300,250,300\n' > bg-cmd.csv
+expect_ok "$T" machine error bg-model.json bg-cmd.csv -o bg-model-err.csv
+[ "$(wc -l <bg-model-err.csv)" -eq 2 ] && ok || bad "the parametric model is a machine.json"
+expect_ok "$T" verify-lengths --map bg-ls-map.json --model bg-model.json -i bg-lengths.csv -o bg-verify.json --report bg-verify.html
+grep -q "length verification, grid correction: 105 lengths in 35 positions" out.txt && grep -q "parametric correction" out.txt && grep -q '"expected_after_rms"' bg-verify.json && grep -q "figure 10" bg-verify.html && ok || bad "verify-lengths"
+expect_err "needs --map" "$T" verify-lengths -i bg-lengths.csv -o o.json
+printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,300,200,200,100\n200,200,200,300,200,200,0\n' > bg-badlen.csv
+expect_err "bg-badlen.csv:3:[0-9]*: nominal length 0 mm: must be > 0" "$T" verify-lengths --map bg-ls-map.json -i bg-badlen.csv -o o.json
+printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,900,200,200,700\n' > bg-outlen.csv
+expect_err "bg-outlen.csv: grid correction: length 0: point 1 (900, 200, 200) mm is outside" "$T" verify-lengths --map bg-ls-map.json -i bg-outlen.csv -o o.json
+expect_err "bg-outlen.csv: parametric correction: length 0: point 1 (900.000, 200.000, 200.000) is outside the identified span" "$T" verify-lengths --model bg-model.json -i bg-outlen.csv -o o.json
+expect_err "bg-ls-map.json:[0-9]*:[0-9]*: not a parametric model" "$T" verify-lengths --model bg-ls-map.json -i bg-lengths.csv -o o.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -8,6 +8,13 @@
 // map.json: {"points": [{"placement", "ball", "nominal": [mm], "measured": [mm], "error": [µm],
 //   "uncertainty": [µm]}], "placements": [...], "grid": {...} (as in space.json, when the points
 //   form a lattice)}. `trueaxis correct` reads its grid.
+// lengths.csv: columns x1,y1,z1,x2,y2,z2 (measured end points, mm) and nominal (mm); other
+//   columns are ignored. One calibrated length per row (gauge-block verification).
+// verify.json: per correction (grid, parametric), every length's errors before and after (µm),
+//   their statistics, the repeatability and the expected level after correction.
+// model.json (parametric model): a machine.json (io/machine.hpp: usable by every machine command)
+//   plus "identification": degree, basis centre and half span (mm), the Chebyshev parameters
+//   (mm, rad), their covariance, residual and sigma (µm).
 // Errors name file:line:col.
 #pragma once
 
@@ -15,6 +22,8 @@
 #include <vector>
 
 #include "trueaxis/ballgauge/ballgauge.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/ballgauge/parametric.hpp"
 
 namespace trueaxis::io {
 
@@ -29,5 +38,15 @@ void write_measurements(const std::string& path,
                         const std::vector<ballgauge::Placement>& placements);
 
 void write_ballgauge_map(const std::string& path, const ballgauge::Result& result);
+
+// Refuses non-positive nominals and coincident end points at their file:line:col.
+std::vector<ballgauge::LengthMeasurement> read_lengths(const std::string& path);
+void write_lengths(const std::string& path,
+                   const std::vector<ballgauge::LengthMeasurement>& lengths);
+void write_length_verification(const std::string& path,
+                               const std::vector<ballgauge::LengthVerification>& results);
+
+void write_parametric(const std::string& path, const ballgauge::ParametricResult& result);
+ballgauge::ParametricResult read_parametric(const std::string& path);
 
 }  // namespace trueaxis::io

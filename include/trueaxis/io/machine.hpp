@@ -14,14 +14,20 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 #include <string>
 
+#include "trueaxis/io/json.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::io {
 
 sim::Machine read_machine(const std::string& path);
 void write_machine(const std::string& path, const sim::Machine& machine);
+// The same from / to a parsed document (other top-level keys are ignored on reading, so a file
+// may carry more, e.g. a parametric model's identification).
+sim::Machine read_machine(const JsonFile& file);
+nlohmann::ordered_json machine_json(const sim::Machine& machine);
 
 // A CSV with columns x, y, z (mm; other columns ignored) as a 3 × n matrix. Errors name
 // file:line:col. If `machine` is given, points outside its ranges are refused the same way.

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "trueaxis/map/error_map.hpp"
 #include "trueaxis/separation/separation.hpp"
 
 namespace trueaxis::report {
@@ -22,6 +23,7 @@ struct Series {
   Eigen::VectorXd band;  // optional: half-width of a shaded band around y (same unit)
   std::string color;     // CSS colour; empty: automatic
   bool dashed = false;
+  bool points = false;  // markers only, no line (a scatter plot; x need not be distinct)
 };
 
 struct Plot {
@@ -71,6 +73,12 @@ struct Section {
 };
 
 std::string escape(const std::string& text);
+
+// The plane of an error map spanned by axes a and b (0..2 = x, y, z) at node `at` of the third
+// axis: in-plane errors as the node displacements, the third component as colour (µm). `name`
+// starts the title, e.g. "XY plane".
+DistortedGrid distorted_plane(const map::ErrorMap& map, int a, int b, Eigen::Index at,
+                              const std::string& name, double magnification = 0);
 
 // The SVG figures alone (an <svg> element each), for embedding elsewhere.
 std::string svg(const HeatMap& h);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "trueaxis/ballgauge/ballgauge.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::sim {
@@ -54,5 +55,32 @@ std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections
 BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
                                      const std::vector<GaugePose>& poses,
                                      const BallGaugeOptions& options);
+
+// Gauge blocks (or any calibrated lengths) measured on the virtual CMM, ISO 10360-2 style: seven
+// positions through the centre of the box [lo, hi] (true positions, mm) — along x, y, z and the
+// box's four space diagonals — each length measured `repeats` times. A block from A to B = A +
+// L·d is probed once on each end face: the stylus tip centre must reach A − r·d (and B + r·d),
+// the machine is commanded there as in simulate_ballgauge, and the CMM reports its nominal tip
+// position plus probing noise, then adds back the tip radius along d: a = reading + r·d.
+struct GaugeBlockOptions {
+  Eigen::Vector3d lo = Eigen::Vector3d::Zero(), hi = Eigen::Vector3d::Zero();  // mm
+  // Lengths (mm); those that do not fit a position (with `margin` to the box) are left out there.
+  // Empty: five per position, 30 … 90 % of the room along it (whole mm).
+  std::vector<double> lengths;
+  int repeats = 3;
+  double margin = 5;        // mm from the box faces
+  double tip_radius = 1.5;  // mm
+  double noise = 0;         // mm, per coordinate of every probed point
+  std::uint64_t seed = 1;
+  void validate() const;  // throws Error
+};
+
+struct GaugeBlockCampaign {
+  std::vector<ballgauge::LengthMeasurement> lengths;
+  std::vector<std::string> position;            // per length: "x", "y", "z", "+x+y+z", ...
+  std::vector<Eigen::Vector3d> true_a, true_b;  // per length: true end points (mm)
+};
+
+GaugeBlockCampaign simulate_gauge_blocks(const Machine& machine, const GaugeBlockOptions& options);
 
 }  // namespace trueaxis::sim

@@ -1,0 +1,83 @@
+// trueaxis::ballgauge — gauge-block verification of a corrected CMM (spec 04; ISO 10360-2 style,
+// the paper's figure 10).
+//
+// Each measurement holds the two end points of a calibrated length as the CMM measured them (mm,
+// machine frame, probe radius already compensated) and the length's calibrated value. The length
+// error is |b − a| − nominal before correction and |X_b − X_a| − nominal after it, where X = x −
+// Δ(x) is the corrected point (a grid map) or the identified parametric model's correction.
+//
+// What the "after" errors should be: the repeatability of the measurement itself (estimated from
+// the repeats: rows with the same nominal length whose end points agree within
+// `repeat_tolerance` belong to one position) and the correction's own uncertainty for that
+// length. For a grid map, the length's uncertainty is d·(Δ(b) − Δ(a)) with the node
+// uncertainties interpolated as variances and the two ends taken as independent (neighbouring
+// nodes of a stitched map are positively correlated, so this leans high); a parametric model
+// gives it exactly from its parameter covariance. predicted_after = sqrt(s_r² + mean u²). The
+// grid's interpolation error between nodes is not in it (it is the part a simulation shows).
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "trueaxis/map/error_map.hpp"
+
+namespace trueaxis::ballgauge {
+
+struct LengthMeasurement {
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();  // measured end point (mm, machine frame)
+  Eigen::Vector3d b = Eigen::Vector3d::Zero();  // measured end point (mm, machine frame)
+  double nominal = 0;                           // calibrated length (mm), > 0
+};
+
+// A correction of measured points: `apply` maps measured x (3 × n, mm) to corrected X in place;
+// `length_uncertainty(a, b)` is the standard uncertainty (mm) the correction adds to the length
+// between measured points a and b (may be empty: taken as 0).
+struct Correction {
+  std::string name;  // e.g. "grid", "parametric"
+  std::function<void(Eigen::Ref<Eigen::Matrix3Xd>)> apply;
+  std::function<double(const Eigen::Vector3d&, const Eigen::Vector3d&)> length_uncertainty;
+};
+
+// The grid map's correction (trilinear unless `options` says cubic). Points outside the grid are
+// refused unless options.outside is Clamp.
+Correction grid_correction(const map::ErrorMap& map, const map::EvalOptions& options = {});
+
+struct LengthOptions {
+  double repeat_tolerance = 1.0;  // mm: rows are repeats when both ends agree this closely
+  void validate() const;          // throws Error
+};
+
+struct LengthRow {
+  double nominal = 0;        // mm
+  double before = 0;         // length error before correction (mm)
+  double after = 0;          // after correction (mm)
+  double uncertainty = 0;    // the correction's standard uncertainty for this length (mm)
+  int position = 0;          // repeat group (0-based, in order of first appearance)
+  Eigen::Vector3d direction  // unit vector from a to b (measured)
+      = Eigen::Vector3d::UnitX();
+};
+
+struct LengthStats {
+  double min = 0, max = 0, mean = 0, rms = 0;  // mm
+  double range() const { return max - min; }
+};
+
+struct LengthVerification {
+  std::string correction;  // Correction::name
+  std::vector<LengthRow> rows;
+  LengthStats before, after;
+  int positions = 0;            // repeat groups
+  double repeatability = 0;     // mm: pooled standard deviation of repeats (NaN: no repeats)
+  double correction_u_rms = 0;  // mm: RMS over rows of the correction's length uncertainty
+  double predicted_after = 0;   // mm: sqrt(repeatability² + correction_u_rms²) (NaN: no repeats)
+  std::string summary() const;  // µm
+};
+
+// Throws Error: no measurements, a non-positive or non-finite nominal, non-finite or coincident
+// end points, or (from the correction) points outside its domain; messages name the row (0-based).
+LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
+                                  const Correction& correction, const LengthOptions& options = {});
+
+}  // namespace trueaxis::ballgauge

@@ -1,0 +1,77 @@
+// trueaxis::ballgauge — the 21 rigid-body errors of a CMM identified from ball-gauge data (spec 04,
+// beyond the paper; the model is spec 06's, see sim/machine.hpp).
+//
+// Every error function of axis k (E_Xk … E_Ck) is a polynomial of degree `degree` in the axis
+// coordinate, (u/1 m)^q for q = 0..degree, plus the three squareness errors. A ball measured at
+// reading x (machine frame, mm; its command is c = x − offset) whose true centre is X = R_p·U_i +
+// t_p (placement p's unknown pose, gauge coordinates U_i) obeys
+//
+//     x = X − e(c),   e(c) = actual(c) − nominal(c)   (spec 06, exact rotations),
+//
+// so the unknowns are the polynomial coefficients and six pose parameters per placement. The
+// equations are linearised about zero errors (first order, as spec 06 says identification fits:
+// the design columns are central differences of the exact model) and solved by Gauss–Newton on
+// the exact model until the step vanishes, with a rank-revealing SVD of the column-scaled design:
+// the data cannot tell a rigid motion of the whole map, nor an error function that does not move
+// this stylus tip (e.g. E_CZ, roll about the ram, when the stylus hangs straight down), and those
+// directions take the minimum-norm value. Placements need no overlap and no alignment type: each
+// one's pose is estimated with the errors.
+//
+// Each axis must be sampled at more than `degree` distinct positions; otherwise a polynomial could
+// wiggle unseen between them, and identify() refuses. The identified machine's range is the span
+// of the measured commands: the model is not extrapolated.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "trueaxis/ballgauge/ballgauge.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/sim/machine.hpp"
+
+namespace trueaxis::ballgauge {
+
+struct ParametricOptions {
+  std::string chain = "FYXZ";                        // kinematic chain (sim/machine.hpp)
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // stylus offset of the measurements (mm)
+  int degree = 3;                 // polynomial degree of every error function, 1..8
+  double position_tolerance = 1;  // mm: axis positions closer than this count as one
+  long min_points = 5;            // probed points per ball
+  int max_iterations = 10;        // Gauss–Newton
+  void validate() const;          // throws Error
+};
+
+struct ParametricResult {
+  sim::Machine model;  // identified errors (polynomials); range = the measured span per axis
+  // The parameters: per axis k, per component j (X, Y, Z, A, B, C), the coefficients of the
+  // Chebyshev polynomials T_q(s), q = 0..degree, s = (u_k − centre_k)/half_span_k ∈ [−1, 1] over
+  // the measured span (index (k·6 + j)·(degree+1) + q; mm or rad), then E_C0Y, E_B0Z, E_A0Z (rad).
+  // The model's polynomials are the same functions in powers of u/1 m (sim::ErrorFunction).
+  Eigen::VectorXd parameters;
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();     // mm, per axis
+  Eigen::Vector3d half_span = Eigen::Vector3d::Ones();  // mm, per axis
+  Eigen::MatrixXd covariance;  // of `parameters` (pseudo-inverse on the unobservable part)
+  double residual_rms = 0;     // mm, ball centre components after the fit
+  double sigma = 0;            // mm, estimated standard deviation of a centre component
+  int balls = 0, placements = 0, unknowns = 0, rank = 0, iterations = 0;
+  std::vector<std::string> unobservable;  // error functions with no effect on these data
+  int degree = 3;
+  std::string summary() const;  // µm, µrad
+
+  // The error e(c) = actual − nominal (mm) at commands c (3 × n) and its first-order design
+  // matrix d e / d parameters (3 × parameters.size()) at one command.
+  Eigen::MatrixXd design(const Eigen::Vector3d& command) const;
+};
+
+// Throws Error: invalid options, fewer than 3 balls in a placement, too few points on a ball,
+// unknown ball indices, an axis sampled at too few positions for the degree.
+ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& placements,
+                          const ParametricOptions& options = {});
+
+// Correction X = x + e(x − offset) by the identified model, refusing points whose command lies
+// outside the identified span (tolerance 1e-6 mm); its length uncertainty comes from the
+// parameter covariance (correlations included).
+Correction parametric_correction(const ParametricResult& result);
+
+}  // namespace trueaxis::ballgauge

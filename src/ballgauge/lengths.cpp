@@ -1,0 +1,146 @@
+#include "trueaxis/ballgauge/lengths.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <limits>
+#include <memory>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::ballgauge {
+namespace {
+
+LengthStats stats(const std::vector<LengthRow>& rows, double LengthRow::*field) {
+  LengthStats s;
+  s.min = std::numeric_limits<double>::infinity();
+  s.max = -s.min;
+  double sum = 0, sq = 0;
+  for (const auto& r : rows) {
+    const double v = r.*field;
+    s.min = std::min(s.min, v);
+    s.max = std::max(s.max, v);
+    sum += v;
+    sq += v * v;
+  }
+  const double n = static_cast<double>(rows.size());
+  s.mean = sum / n;
+  s.rms = std::sqrt(sq / n);
+  return s;
+}
+
+}  // namespace
+
+Correction grid_correction(const map::ErrorMap& map, const map::EvalOptions& options) {
+  map.validate();
+  Correction c;
+  c.name = "grid";
+  c.apply = [map, options](Eigen::Ref<Eigen::Matrix3Xd> p) { map::correct(map, p, options); };
+  if (map.uncertainty.cols() == map.nodes()) {
+    // The node uncertainties interpolated as variances (linear: they stay non-negative).
+    auto var = std::make_shared<map::ErrorMap>();
+    var->axes = map.axes;
+    var->error = map.uncertainty.array().square();
+    c.length_uncertainty = [var](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      map::EvalOptions lin;
+      lin.outside = map::Outside::Clamp;
+      const map::Interpolator u2(*var, lin);
+      const Eigen::Vector3d d = (b - a).normalized();
+      return std::sqrt(std::max(0.0, d.cwiseAbs2().dot(u2(a) + u2(b))));
+    };
+  }
+  return c;
+}
+
+void LengthOptions::validate() const {
+  if (!(repeat_tolerance >= 0) || !std::isfinite(repeat_tolerance))
+    throw Error("length verification: the repeat tolerance must be a finite number >= 0 mm");
+}
+
+LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
+                                  const Correction& corr, const LengthOptions& o) {
+  o.validate();
+  if (lengths.empty()) throw Error("length verification: no measurements");
+  if (!corr.apply) throw Error("length verification: the correction has no function");
+  LengthVerification v;
+  v.correction = corr.name;
+  std::vector<const LengthMeasurement*> first;  // first row of each repeat group
+  Eigen::Matrix3Xd ends(3, 2);
+  for (std::size_t i = 0; i < lengths.size(); ++i) {
+    const LengthMeasurement& m = lengths[i];
+    if (!(m.nominal > 0) || !std::isfinite(m.nominal))
+      throw Error(fmt::format("length {}: the nominal length must be a positive number of mm", i));
+    if (!m.a.allFinite() || !m.b.allFinite())
+      throw Error(fmt::format("length {}: non-finite end point", i));
+    if (!((m.b - m.a).norm() > 0))
+      throw Error(fmt::format("length {}: the two end points coincide", i));
+    LengthRow r;
+    r.nominal = m.nominal;
+    r.direction = (m.b - m.a).normalized();
+    r.before = (m.b - m.a).norm() - m.nominal;
+    ends.col(0) = m.a;
+    ends.col(1) = m.b;
+    try {
+      corr.apply(ends);
+    } catch (const Error& e) {
+      throw Error(fmt::format("length {}: {}", i, e.what()));
+    }
+    r.after = (ends.col(1) - ends.col(0)).norm() - m.nominal;
+    r.uncertainty = corr.length_uncertainty ? corr.length_uncertainty(m.a, m.b) : 0.0;
+    r.position = -1;
+    for (std::size_t g = 0; g < first.size() && r.position < 0; ++g)
+      if (first[g]->nominal == m.nominal && (first[g]->a - m.a).norm() <= o.repeat_tolerance &&
+          (first[g]->b - m.b).norm() <= o.repeat_tolerance)
+        r.position = static_cast<int>(g);
+    if (r.position < 0) {
+      r.position = static_cast<int>(first.size());
+      first.push_back(&m);
+    }
+    v.rows.push_back(r);
+  }
+  v.positions = static_cast<int>(first.size());
+  v.before = stats(v.rows, &LengthRow::before);
+  v.after = stats(v.rows, &LengthRow::after);
+  // Pooled repeatability of the measured lengths (before correction: the correction is a smooth
+  // function and does not change the spread of repeats beyond second order).
+  std::vector<double> sum(first.size(), 0.0);
+  std::vector<int> count(first.size(), 0);
+  for (const auto& r : v.rows) {
+    sum[static_cast<std::size_t>(r.position)] += r.before;
+    ++count[static_cast<std::size_t>(r.position)];
+  }
+  double ss = 0, u2 = 0;
+  long dof = 0;
+  for (const auto& r : v.rows) {
+    const auto g = static_cast<std::size_t>(r.position);
+    ss += std::pow(r.before - sum[g] / count[g], 2);
+    u2 += r.uncertainty * r.uncertainty;
+  }
+  for (int c : count) dof += c - 1;
+  v.repeatability = dof > 0 ? std::sqrt(ss / static_cast<double>(dof)) : NAN;
+  v.correction_u_rms = std::sqrt(u2 / static_cast<double>(v.rows.size()));
+  v.predicted_after = std::hypot(v.repeatability, v.correction_u_rms);
+  return v;
+}
+
+std::string LengthVerification::summary() const {
+  std::string s = fmt::format(
+      "length verification, {} correction: {} lengths in {} positions\n"
+      "  before: {:+.2f} ... {:+.2f} um (range {:.2f}), mean {:+.2f}, RMS {:.2f} um\n"
+      "  after:  {:+.2f} ... {:+.2f} um (range {:.2f}), mean {:+.2f}, RMS {:.2f} um\n",
+      correction, rows.size(), positions, before.min * 1e3, before.max * 1e3, before.range() * 1e3,
+      before.mean * 1e3, before.rms * 1e3, after.min * 1e3, after.max * 1e3, after.range() * 1e3,
+      after.mean * 1e3, after.rms * 1e3);
+  if (std::isnan(repeatability))
+    s += fmt::format(
+        "  no repeated positions: the repeatability is unknown; the correction's u is {:.2f} um "
+        "RMS\n",
+        correction_u_rms * 1e3);
+  else
+    s += fmt::format(
+        "  expected after: {:.2f} um RMS (repeatability {:.2f} um, correction u {:.2f} um)\n",
+        predicted_after * 1e3, repeatability * 1e3, correction_u_rms * 1e3);
+  return s;
+}
+
+}  // namespace trueaxis::ballgauge

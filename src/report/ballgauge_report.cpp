@@ -1,0 +1,121 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include "trueaxis/report/ballgauge.hpp"
+
+namespace trueaxis::report {
+namespace {
+
+std::string um(double mm) {
+  return fmt::format("{:.2f}", mm * 1e3);
+}
+
+std::string alignment(ballgauge::Alignment a) {
+  return a == ballgauge::Alignment::ThreeTwoOne    ? "3-2-1"
+         : a == ballgauge::Alignment::LeastSquares ? "least squares"
+                                                   : "stitched";
+}
+
+}  // namespace
+
+Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
+                          const ballgauge::ParametricResult* pr) {
+  Section s;
+  s.title = title;
+  double emax = 0, umax = 0;
+  for (const auto& p : r.points) {
+    emax = std::max(emax, p.error.norm());
+    umax = std::max(umax, p.uncertainty.maxCoeff());
+  }
+  s.intro_html = fmt::format(
+      "<p>Error vectors Δ = measured − true ball centre at {} mapped points from {} "
+      "placements; largest |Δ| {} µm, largest standard uncertainty {} µm (it grows with every "
+      "stitch). Measured points are corrected by X = x − Δ(x), trilinear.</p>",
+      r.points.size(), r.placements.size(), um(emax), um(umax));
+  s.table = {{"placement", "alignment", "balls", "shared", "registration RMS (µm)",
+              "sphere diameter error max (µm)"}};
+  for (const auto& p : r.placements)
+    s.table.push_back({p.name, alignment(p.alignment), std::to_string(p.balls),
+                       std::to_string(p.shared), um(p.registration_rms), um(p.diameter_error_max)});
+  if (pr) {
+    s.table.push_back({"parametric model", fmt::format("degree {}", pr->degree),
+                       std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),
+                       um(pr->residual_rms), "σ " + um(pr->sigma)});
+  }
+  if (r.grid) {
+    const map::ErrorMap& m = *r.grid;
+    double step = std::numeric_limits<double>::infinity();
+    for (int a = 0; a < 2; ++a)
+      for (Eigen::Index i = 0; i + 1 < m.size(a); ++i)
+        step = std::min(step, m.axes[static_cast<std::size_t>(a)][i + 1] -
+                                  m.axes[static_cast<std::size_t>(a)][i]);
+    const double inplane = m.error.topRows(2).colwise().norm().maxCoeff() * 1e3;
+    const double mag = nice_magnification(std::max(inplane, 1e-6), step);
+    for (Eigen::Index k = m.size(2) - 1; k >= 0; --k)
+      s.grids.push_back(distorted_plane(m, 0, 1, k, "error vectors", mag));
+  }
+  return s;
+}
+
+Section lengths_section(const std::string& title,
+                        const std::vector<ballgauge::LengthVerification>& results) {
+  Section s;
+  s.title = title;
+  if (results.empty()) return s;
+  const auto& first = results.front();
+  s.intro_html = fmt::format(
+      "<p>{} calibrated lengths in {} positions (repeats: same nominal, same end points). "
+      "Length error = measured − nominal, before and after correction, against the nominal "
+      "length (the paper's figure 10). Expected after correction: the repeatability of the "
+      "measurement and the correction's own uncertainty, added in quadrature.</p>",
+      first.rows.size(), first.positions);
+  s.table = {
+      {"", "min (µm)", "max (µm)", "range (µm)", "mean (µm)", "RMS (µm)", "expected RMS (µm)"}};
+  auto row = [&](const std::string& name, const ballgauge::LengthStats& st,
+                 const std::string& expected) {
+    s.table.push_back(
+        {name, um(st.min), um(st.max), um(st.range()), um(st.mean), um(st.rms), expected});
+  };
+  row("before correction", first.before, "");
+  for (const auto& v : results)
+    row("after, " + v.correction, v.after,
+        std::isnan(v.predicted_after)
+            ? "no repeats"
+            : fmt::format("{} (repeatability {} ⊕ u {})", um(v.predicted_after),
+                          um(v.repeatability), um(v.correction_u_rms)));
+  // Scatter: rows sorted by nominal length (uPlot wants x ascending; equal x are fine).
+  std::vector<std::size_t> order(first.rows.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return first.rows[a].nominal < first.rows[b].nominal;
+  });
+  Plot p;
+  p.title = "Length error against nominal length (figure 10)";
+  p.x_label = "nominal length (mm)";
+  p.y_label = "length error (µm)";
+  const auto n = static_cast<Eigen::Index>(order.size());
+  p.x.resize(n);
+  Series before{"before correction", Eigen::VectorXd(n), {}, "#d62728", false, true};
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& r = first.rows[order[static_cast<std::size_t>(i)]];
+    p.x[i] = r.nominal;
+    before.y[i] = r.before * 1e3;
+  }
+  p.series.push_back(before);
+  const char* colours[] = {"#1f77b4", "#2ca02c", "#9467bd"};
+  for (std::size_t c = 0; c < results.size(); ++c) {
+    Series after{
+        "after, " + results[c].correction, Eigen::VectorXd(n), {}, colours[c % 3], false, true};
+    for (Eigen::Index i = 0; i < n; ++i)
+      after.y[i] = results[c].rows[order[static_cast<std::size_t>(i)]].after * 1e3;
+    p.series.push_back(after);
+  }
+  s.plots.push_back(std::move(p));
+  return s;
+}
+
+}  // namespace trueaxis::report
