@@ -112,7 +112,20 @@ Eigen::Index Interpolator::Axis::cell(double v) const {
   if (uniform) {
     i = static_cast<Eigen::Index>((v - x0) * inv_h);
   } else {
-    i = static_cast<Eigen::Index>(std::upper_bound(x, x + n, v) - x) - 1;
+    // Guess from the mean spacing (right, or one off, on the near-uniform axes of measured grids
+    // such as a ball-gauge map's cluster means); otherwise search.
+    i = std::clamp<Eigen::Index>(static_cast<Eigen::Index>((v - x0) * inv_h), 0, n - 2);
+    if (v < x[i]) {
+      if (i > 0 && v >= x[i - 1])
+        --i;
+      else
+        i = static_cast<Eigen::Index>(std::upper_bound(x, x + n, v) - x) - 1;
+    } else if (v >= x[i + 1] && i < n - 2) {
+      if (v < x[i + 2])
+        ++i;
+      else
+        i = static_cast<Eigen::Index>(std::upper_bound(x, x + n, v) - x) - 1;
+    }
   }
   return std::clamp<Eigen::Index>(i, 0, n - 2);
 }
@@ -226,17 +239,17 @@ void for_columns(const ErrorMap& map, const Eigen::Ref<const Eigen::Matrix3Xd>& 
   const int workers = io::detail::workers_for(static_cast<std::size_t>(n) * 8);
   std::vector<Eigen::Index> first_out(static_cast<std::size_t>(workers), -1);
   const bool refuse_outside = o.outside == Outside::Refuse;
-  io::detail::parallel_ranges(
-      static_cast<std::size_t>(n), workers, [&](int t, std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i) {
-          const auto col = static_cast<Eigen::Index>(i);
-          if (refuse_outside && !map.contains(p.col(col), o.tolerance)) {
-            first_out[static_cast<std::size_t>(t)] = col;
-            return;
-          }
-          fn(col);
-        }
-      });
+  io::detail::parallel_ranges(static_cast<std::size_t>(n), workers,
+                              [&](int t, std::size_t b, std::size_t e) {
+                                for (std::size_t i = b; i < e; ++i) {
+                                  const auto col = static_cast<Eigen::Index>(i);
+                                  if (refuse_outside && !map.contains(p.col(col), o.tolerance)) {
+                                    first_out[static_cast<std::size_t>(t)] = col;
+                                    return;
+                                  }
+                                  fn(col);
+                                }
+                              });
   for (Eigen::Index i : first_out)
     if (i >= 0) refuse(map, p, i);
 }

@@ -42,7 +42,7 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
     s.table.push_back({p.name, alignment(p.alignment), std::to_string(p.balls),
                        std::to_string(p.shared), um(p.registration_rms), um(p.diameter_error_max)});
   if (pr) {
-    s.table.push_back({"parametric model", fmt::format("degree {}", pr->degree),
+    s.table.push_back({"parametric model (residual RMS, σ)", fmt::format("degree {}", pr->degree),
                        std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),
                        um(pr->residual_rms), "σ " + um(pr->sigma)});
   }

@@ -61,6 +61,44 @@ TEST(ErrorMap, TrilinearReproducesTrilinearFunctionsOnAnyGrid) {
   }
 }
 
+TEST(ErrorMap, UnevenAxesFindTheRightCell) {
+  // A field that is not trilinear, so a wrong cell shows; the reference finds the cell by a
+  // plain scan and interpolates by hand. Axes: uneven, and nearly uniform like a measured grid.
+  auto wavy = [](const Eigen::Vector3d& p) {
+    return Eigen::Vector3d(std::sin(p.x() / 37), std::cos(p.y() / 23), std::sin(p.z() / 41 + 1));
+  };
+  std::array<Eigen::VectorXd, 3> near = uniform_axes();
+  for (auto& a : near)
+    for (Eigen::Index i = 1; i + 1 < a.size(); ++i) a[i] += 0.3 * std::sin(3.0 * i);
+  for (const auto& axes : {uneven_axes(), near}) {
+    const ErrorMap m = sample(axes, wavy);
+    const Eigen::Matrix3Xd p = random_points(m, 2000, 4);
+    const Eigen::Matrix3Xd e = evaluate(m, p);
+    for (Eigen::Index i = 0; i < p.cols(); ++i) {
+      Eigen::Index c[3];
+      double t[3];
+      for (int a = 0; a < 3; ++a) {
+        const auto& x = m.axes[static_cast<std::size_t>(a)];
+        c[a] = 0;
+        while (c[a] + 2 < x.size() && p(a, i) >= x[c[a] + 1]) ++c[a];
+        t[a] = (p(a, i) - x[c[a]]) / (x[c[a] + 1] - x[c[a]]);
+      }
+      Eigen::Vector3d ref = Eigen::Vector3d::Zero();
+      for (int corner = 0; corner < 8; ++corner) {
+        double w = 1;
+        Eigen::Index n[3];
+        for (int a = 0; a < 3; ++a) {
+          const int up = (corner >> a) & 1;
+          w *= up ? t[a] : 1 - t[a];
+          n[a] = c[a] + up;
+        }
+        ref += w * m.error.col(m.index(n[0], n[1], n[2]));
+      }
+      EXPECT_LT((e.col(i) - ref).norm(), kRoundOff);
+    }
+  }
+}
+
 TEST(ErrorMap, CubicReproducesQuadraticsAndBeatsLinearOnSmoothFields) {
   for (const auto& axes : {uniform_axes(), uneven_axes()}) {
     const ErrorMap m = sample(axes, quadratic);
