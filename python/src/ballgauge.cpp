@@ -6,9 +6,15 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+#include <variant>
+
 #include "bindings.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/ballgauge/parametric.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/space.hpp"
 
 namespace py = pybind11;
 
@@ -63,6 +69,130 @@ gauge, measurements: paths of gauge.json and measurements.json. Returns {'nomina
 (mm), 'error' (measured − true), 'uncertainty' (µm): arrays (points, 3); 'placement', 'ball';
 'map': an ErrorMap when the points form a lattice (use map.correct(points) for X = x − Δ(x)),
 else None; 'summary'}.)doc");
+
+  m.def(
+      "identify",
+      [](const std::string& gauge, const std::string& measurements,
+         const std::vector<double>& stylus_offset, int degree, const std::string& chain,
+         const std::string& output) {
+        if (stylus_offset.size() != 3) throw Error("stylus_offset needs [x, y, z] (mm)");
+        const auto g = io::read_gauge(gauge);
+        const auto p = io::read_measurements(measurements, &g);
+        ballgauge::ParametricOptions o;
+        o.offset = Eigen::Vector3d(stylus_offset[0], stylus_offset[1], stylus_offset[2]);
+        o.degree = degree;
+        o.chain = chain;
+        ballgauge::ParametricResult r;
+        try {
+          py::gil_scoped_release release;
+          r = ballgauge::identify(g, p, o);
+        } catch (const Error& e) {
+          throw Error(fmt::format("{}: {}", measurements, e.what()));
+        }
+        if (!output.empty()) io::write_parametric(output, r);
+        py::dict d;
+        d["machine"] = r.model;
+        d["residual_rms"] = r.residual_rms * 1e3;
+        d["sigma"] = r.sigma * 1e3;
+        d["rank"] = r.rank;
+        d["unknowns"] = r.unknowns;
+        d["unobservable"] = r.unobservable;
+        d["summary"] = r.summary();
+        return d;
+      },
+      py::arg("gauge"), py::arg("measurements"), py::kw_only(), py::arg("stylus_offset"),
+      py::arg("degree") = 3, py::arg("chain") = "FYXZ", py::arg("output") = "",
+      R"doc(The 21 rigid-body errors of the CMM from the ball-gauge data (spec 04, parametric model).
+
+stylus_offset: the stylus tip's offset [x, y, z] (mm) from the ram, as in machine.json. Every
+error function is a polynomial of `degree` in its axis coordinate. Returns {'machine': the
+identified trueaxis.Machine (its range is the measured span), 'residual_rms', 'sigma' (µm),
+'rank', 'unknowns', 'unobservable' (error names the data cannot see), 'summary'}. With
+output='model.json' the model and its covariance are written for verify_lengths(model=...).)doc");
+
+  m.def(
+      "verify_lengths",
+      [](const std::variant<std::string, Eigen::MatrixXd>& lengths,
+         const std::optional<std::variant<std::string, map::ErrorMap>>& map,
+         const std::optional<std::string>& model, double repeat_tolerance, bool clamp) {
+        std::vector<ballgauge::LengthMeasurement> L;
+        if (const auto* path = std::get_if<std::string>(&lengths)) {
+          L = io::read_lengths(*path);
+        } else {
+          const auto& a = std::get<Eigen::MatrixXd>(lengths);
+          if (a.cols() != 7)
+            throw Error(
+                fmt::format("lengths: shape ({}, {}); expected (n, 7): x1, y1, z1, x2, "
+                            "y2, z2, nominal (mm)",
+                            a.rows(), a.cols()));
+          for (Eigen::Index i = 0; i < a.rows(); ++i)
+            L.push_back(
+                {a.row(i).segment<3>(0).transpose(), a.row(i).segment<3>(3).transpose(), a(i, 6)});
+        }
+        if (!map && !model) throw Error("verify_lengths needs map= or model= (or both)");
+        std::optional<map::ErrorMap> grid;
+        std::vector<ballgauge::Correction> corr;
+        if (map) {
+          if (const auto* path = std::get_if<std::string>(&*map))
+            grid = io::read_error_map(*path);
+          else
+            grid = std::get<map::ErrorMap>(*map);
+          map::EvalOptions eo;
+          eo.outside = clamp ? map::Outside::Clamp : map::Outside::Refuse;
+          corr.push_back(ballgauge::grid_correction(*grid, eo));
+        }
+        if (model) corr.push_back(ballgauge::parametric_correction(io::read_parametric(*model)));
+        ballgauge::LengthOptions o;
+        o.repeat_tolerance = repeat_tolerance;
+        py::list out;
+        for (const auto& c : corr) {
+          const auto v = ballgauge::verify_lengths(L, c, o);
+          const auto n = static_cast<Eigen::Index>(v.rows.size());
+          Eigen::VectorXd nominal(n), before(n), after(n), u(n);
+          Eigen::VectorXi position(n);
+          for (Eigen::Index i = 0; i < n; ++i) {
+            const auto& r = v.rows[static_cast<std::size_t>(i)];
+            nominal[i] = r.nominal;
+            before[i] = r.before * 1e3;
+            after[i] = r.after * 1e3;
+            u[i] = r.uncertainty * 1e3;
+            position[i] = r.position;
+          }
+          auto stats = [](const ballgauge::LengthStats& st) {
+            py::dict d;
+            d["min"] = st.min * 1e3;
+            d["max"] = st.max * 1e3;
+            d["range"] = st.range() * 1e3;
+            d["mean"] = st.mean * 1e3;
+            d["rms"] = st.rms * 1e3;
+            return d;
+          };
+          py::dict d;
+          d["correction"] = v.correction;
+          d["nominal"] = nominal;
+          d["before"] = before;
+          d["after"] = after;
+          d["uncertainty"] = u;
+          d["position"] = position;
+          d["before_stats"] = stats(v.before);
+          d["after_stats"] = stats(v.after);
+          d["repeatability"] = v.repeatability * 1e3;
+          d["expected_after"] = v.predicted_after * 1e3;
+          d["summary"] = v.summary();
+          out.append(d);
+        }
+        return out;
+      },
+      py::arg("lengths"), py::kw_only(), py::arg("map") = py::none(), py::arg("model") = py::none(),
+      py::arg("repeat_tolerance") = 1.0, py::arg("clamp") = false,
+      R"doc(Gauge-block verification of a correction (spec 04, the paper's figure 10).
+
+lengths: a lengths.csv path, or an array (n, 7) of x1, y1, z1, x2, y2, z2, nominal (mm).
+map: an ErrorMap or a map.json path (grid correction); model: a model.json path (parametric);
+either or both. Returns one dict per correction: 'correction', 'nominal' (mm), 'before',
+'after', 'uncertainty' (µm per length), 'position' (repeat group), 'before_stats' and
+'after_stats' (min, max, range, mean, rms in µm), 'repeatability' and 'expected_after' (µm;
+NaN without repeats), 'summary'.)doc");
 }
 
 }  // namespace trueaxis::python

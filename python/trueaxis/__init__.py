@@ -21,6 +21,7 @@ from ._trueaxis import (
     Machine,
     analyze_layout,
     ballgauge,
+    identify,
     fit,
     guideway,
     measure_space,
@@ -31,6 +32,7 @@ from ._trueaxis import (
     straightness,
     surface,
     verify_compensation,
+    verify_lengths,
 )
 
 __all__ = [
@@ -39,6 +41,7 @@ __all__ = [
     "Machine",
     "analyze_layout",
     "ballgauge",
+    "identify",
     "fit",
     "guideway",
     "measure_space",
@@ -49,5 +52,6 @@ __all__ = [
     "straightness",
     "surface",
     "verify_compensation",
+    "verify_lengths",
 ]
 __version__ = "0.1.0"

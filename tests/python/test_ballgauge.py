@@ -27,3 +27,40 @@ def test_ballgauge_map_and_correction(tmp_path):
     np.testing.assert_allclose(em.correct(x, clamp=True), r["nominal"][10], atol=2e-5)
     with pytest.raises(trueaxis.Error, match="meas.json"):
         trueaxis.ballgauge(g, m, min_points=50)
+
+
+def test_gauge_blocks_grid_and_parametric(tmp_path):
+    g, m, t, lengths, model = (str(tmp_path / n) for n in (
+        "gauge.json", "meas.json", "truth.csv", "lengths.csv", "model.json"))
+    subprocess.run([TRUEAXIS, "simulate", "ballgauge", "--alignment", "ls", "--noise", "0.2",
+                    "--gauge", g, "--measurements", m, "--truth", t, "--lengths", lengths, "-q"],
+                   check=True)
+    em = trueaxis.ballgauge(g, m)["map"]
+    p = trueaxis.identify(g, m, stylus_offset=[0, 0, -100], output=model)
+    assert "ECZ" in p["unobservable"] and p["rank"] < p["unknowns"]
+    assert 0.05 < p["sigma"] < 0.3  # centre noise from 0.2 µm probing
+    assert isinstance(p["machine"], trueaxis.Machine)
+    grid, par = trueaxis.verify_lengths(lengths, map=em, model=model)
+    assert grid["correction"] == "grid" and par["correction"] == "parametric"
+    # Independent numpy check of the numbers: before = |b − a| − nominal; after with the grid =
+    # the same for the corrected end points.
+    a = np.loadtxt(lengths, delimiter=",", skiprows=1)
+    before = (np.linalg.norm(a[:, 3:6] - a[:, 0:3], axis=1) - a[:, 6]) * 1e3
+    np.testing.assert_allclose(grid["before"], before, atol=1e-9)
+    ca, cb = em.correct(a[:, 0:3]), em.correct(a[:, 3:6])
+    after = (np.linalg.norm(cb - ca, axis=1) - a[:, 6]) * 1e3
+    np.testing.assert_allclose(grid["after"], after, atol=1e-9)
+    for r in (grid, par):
+        assert r["after_stats"]["rms"] < 0.5 * r["before_stats"]["rms"]
+        assert 0.5 < r["after_stats"]["rms"] / np.hypot(r["expected_after"], 0.25) < 1.5
+    # The same lengths as an array; refusals.
+    again = trueaxis.verify_lengths(a, map=em)[0]
+    np.testing.assert_array_equal(again["after"], grid["after"])
+    with pytest.raises(trueaxis.Error, match=r"shape \(105, 6\)"):
+        trueaxis.verify_lengths(a[:, :6], map=em)
+    with pytest.raises(trueaxis.Error, match="needs map= or model="):
+        trueaxis.verify_lengths(a)
+    with pytest.raises(trueaxis.Error, match="not a parametric model"):
+        trueaxis.verify_lengths(a, model=g)
+    with pytest.raises(trueaxis.Error, match="degree"):
+        trueaxis.identify(g, m, stylus_offset=[0, 0, -100], degree=9)
