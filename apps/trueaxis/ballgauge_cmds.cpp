@@ -3,7 +3,6 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
-#include <limits>
 #include <memory>
 #include <optional>
 
@@ -182,13 +181,7 @@ int run_simulate(const SimArgs& a) {
   if (!a.lengths.empty()) {
     // Gauge blocks in the box of the mapped ball centres (ISO 10360-2 style, held out).
     sim::GaugeBlockOptions go;
-    go.lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-    go.hi = -go.lo;
-    for (const auto& pl : c.true_centres)
-      for (const auto& t : pl) {
-        go.lo = go.lo.cwiseMin(t);
-        go.hi = go.hi.cwiseMax(t);
-      }
+    c.bounds(go.lo, go.hi);
     go.repeats = a.repeats;
     go.tip_radius = o.tip_radius;
     go.noise = (a.length_noise_um >= 0 ? a.length_noise_um : a.noise_um) * 1e-3;

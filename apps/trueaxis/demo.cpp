@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 
 #include "commands.hpp"
 #include "moody_data.hpp"
@@ -259,13 +258,7 @@ int run_demo(const DemoOptions& o) {
   po.offset = machine.offset;
   const auto model = ballgauge::identify(bgauge, balls.placements, po);
   sim::GaugeBlockOptions gbo;
-  gbo.lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  gbo.hi = -gbo.lo;
-  for (const auto& pl : balls.true_centres)
-    for (const auto& t : pl) {
-      gbo.lo = gbo.lo.cwiseMin(t);
-      gbo.hi = gbo.hi.cwiseMax(t);
-    }
+  balls.bounds(gbo.lo, gbo.hi);
   gbo.noise = 0.5e-3;
   gbo.seed = o.seed + 1000;
   const auto gblocks = sim::simulate_gauge_blocks(machine, gbo);

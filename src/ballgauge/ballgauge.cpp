@@ -55,11 +55,35 @@ void kabsch(const std::vector<Eigen::Vector3d>& U, const std::vector<Eigen::Vect
   t = mx - R * mu;
 }
 
+// Clusters of coordinate values (sorted) within `tol`; returns cluster means and, per value, its
+// cluster index.
+std::vector<double> clusters(const std::vector<double>& v, double tol, std::vector<int>& which) {
+  std::vector<std::size_t> order(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) order[i] = i;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
+  std::vector<double> means;
+  std::vector<int> count;
+  which.assign(v.size(), -1);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const double x = v[order[k]];
+    if (means.empty() || x - v[order[k - 1]] > tol) {
+      means.push_back(0);
+      count.push_back(0);
+    }
+    means.back() += x;
+    ++count.back();
+    which[order[k]] = static_cast<int>(means.size() - 1);
+  }
+  for (std::size_t c = 0; c < means.size(); ++c) means[c] /= count[c];
+  return means;
+}
+
 }  // namespace detail
 
 namespace {
 
 using detail::Centre;
+using detail::clusters;
 using detail::fit_ball;
 using detail::kabsch;
 
@@ -107,29 +131,6 @@ Eigen::MatrixXd jacobian(const std::function<Eigen::VectorXd(const Eigen::Vector
     J.col(k) = (fp - fm) / (2 * h);
   }
   return J;
-}
-
-// Clusters of coordinate values (sorted) within `tol`; returns cluster means and, per value, its
-// cluster index.
-std::vector<double> clusters(const std::vector<double>& v, double tol, std::vector<int>& which) {
-  std::vector<std::size_t> order(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) order[i] = i;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return v[a] < v[b]; });
-  std::vector<double> means;
-  std::vector<int> count;
-  which.assign(v.size(), -1);
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const double x = v[order[k]];
-    if (means.empty() || x - v[order[k - 1]] > tol) {
-      means.push_back(0);
-      count.push_back(0);
-    }
-    means.back() += x;
-    ++count.back();
-    which[order[k]] = static_cast<int>(means.size() - 1);
-  }
-  for (std::size_t c = 0; c < means.size(); ++c) means[c] /= count[c];
-  return means;
 }
 
 std::optional<map::ErrorMap> as_grid(const std::vector<MapPoint>& pts, double tol) {

@@ -20,4 +20,8 @@ Centre fit_ball(const Eigen::Matrix3Xd& points);
 void kabsch(const std::vector<Eigen::Vector3d>& U, const std::vector<Eigen::Vector3d>& X,
             Eigen::Matrix3d& R, Eigen::Vector3d& t);
 
+// Clusters of coordinate values within `tol` of their sorted neighbour: the clusters' means
+// (ascending) and, per value, its cluster index in `which`.
+std::vector<double> clusters(const std::vector<double>& v, double tol, std::vector<int>& which);
+
 }  // namespace trueaxis::ballgauge::detail

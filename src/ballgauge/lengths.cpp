@@ -41,10 +41,10 @@ Correction grid_correction(const map::ErrorMap& map, const map::EvalOptions& opt
     auto var = std::make_shared<map::ErrorMap>();
     var->axes = map.axes;
     var->error = map.uncertainty.array().square();
-    c.length_uncertainty = [var](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-      map::EvalOptions lin;
-      lin.outside = map::Outside::Clamp;
-      const map::Interpolator u2(*var, lin);
+    map::EvalOptions lin;
+    lin.outside = map::Outside::Clamp;
+    const map::Interpolator u2(*var, lin);  // points into *var, which the lambda keeps alive
+    c.length_uncertainty = [var, u2](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
       const Eigen::Vector3d d = (b - a).normalized();
       return std::sqrt(std::max(0.0, d.cwiseAbs2().dot(u2(a) + u2(b))));
     };
@@ -76,7 +76,6 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
       throw Error(fmt::format("length {}: the two end points coincide", i));
     LengthRow r;
     r.nominal = m.nominal;
-    r.direction = (m.b - m.a).normalized();
     r.before = (m.b - m.a).norm() - m.nominal;
     ends.col(0) = m.a;
     ends.col(1) = m.b;

@@ -112,14 +112,6 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return s;
 }
 
-int distinct(std::vector<double> v, double tol) {
-  std::sort(v.begin(), v.end());
-  int n = 0;
-  for (std::size_t i = 0; i < v.size(); ++i)
-    if (i == 0 || v[i] - v[i - 1] > tol) ++n;
-  return n;
-}
-
 }  // namespace
 
 void ParametricOptions::validate() const {
@@ -178,7 +170,9 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
   for (int k = 0; k < 3; ++k) {
     std::vector<double> v;
     for (Eigen::Index i = 0; i < n; ++i) v.push_back(commands(k, i));
-    const int d = distinct(v, o.position_tolerance);
+    std::vector<int> which_cluster;
+    const auto d =
+        static_cast<int>(detail::clusters(v, o.position_tolerance, which_cluster).size());
     if (d <= o.degree)
       throw Error(fmt::format(
           "parametric model: axis {} is measured at only {} distinct positions; degree {} "

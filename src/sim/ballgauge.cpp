@@ -122,6 +122,16 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
   return c;
 }
 
+void BallGaugeCampaign::bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const {
+  lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  hi = -lo;
+  for (const auto& placement : true_centres)
+    for (const auto& t : placement) {
+      lo = lo.cwiseMin(t);
+      hi = hi.cwiseMax(t);
+    }
+}
+
 void GaugeBlockOptions::validate() const {
   if (!lo.allFinite() || !hi.allFinite() || !((hi - lo).minCoeff() > 0))
     throw Error("gauge block simulation: the box needs lo < hi in x, y and z");

@@ -8,10 +8,13 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/json.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
 
@@ -241,6 +244,26 @@ TEST(Parametric, TheModelFileRoundTripsAndIsAMachineFile) {
   }
   const sim::Machine plain = io::read_machine(path);  // usable by every machine command
   EXPECT_EQ(plain.chain, "FYXZ");
+  // A damaged identification is refused at its file:line:col.
+  auto damaged = [&](const std::string& name, auto&& change) {
+    std::ifstream in(path);
+    nlohmann::ordered_json j = nlohmann::ordered_json::parse(in);
+    change(j["identification"]);
+    const std::string p = temp_dir() + "/" + name;
+    io::write_json(p, j);
+    return error_of([&] { io::read_parametric(p); });
+  };
+  auto located = [](const std::string& e, const std::string& file, const std::string& what) {
+    return e.rfind(temp_dir() + "/" + file + ":", 0) == 0 && e.find(what) != std::string::npos;
+  };
+  EXPECT_TRUE(located(damaged("d1.json", [](auto& id) { id["degree"] = 2.5; }), "d1.json",
+                      "degree must be a whole number 1..8"));
+  EXPECT_TRUE(located(damaged("d2.json", [](auto& id) { id["parameters"].erase(0); }), "d2.json",
+                      "74 parameters; degree 3 needs 75"));
+  EXPECT_TRUE(located(damaged("d3.json", [](auto& id) { id["covariance"][5].erase(0); }), "d3.json",
+                      "covariance row needs 75 numbers"));
+  EXPECT_TRUE(located(damaged("d4.json", [](auto& id) { id["half_span"][1] = 0; }), "d4.json",
+                      "half spans must be > 0 mm"));
   // A machine file without the identification is not a model.
   const std::string mp = temp_dir() + "/plain.json";
   io::write_machine(mp, m);

@@ -50,13 +50,11 @@ struct LengthOptions {
 };
 
 struct LengthRow {
-  double nominal = 0;        // mm
-  double before = 0;         // length error before correction (mm)
-  double after = 0;          // after correction (mm)
-  double uncertainty = 0;    // the correction's standard uncertainty for this length (mm)
-  int position = 0;          // repeat group (0-based, in order of first appearance)
-  Eigen::Vector3d direction  // unit vector from a to b (measured)
-      = Eigen::Vector3d::UnitX();
+  double nominal = 0;      // mm
+  double before = 0;       // length error before correction (mm)
+  double after = 0;        // after correction (mm)
+  double uncertainty = 0;  // the correction's standard uncertainty for this length (mm)
+  int position = 0;        // repeat group (0-based, in order of first appearance)
 };
 
 struct LengthStats {

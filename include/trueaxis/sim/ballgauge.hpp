@@ -38,6 +38,8 @@ struct BallGaugeCampaign {
   std::vector<ballgauge::Placement> placements;
   // Per placement, per probed ball (same order): the true centre X (mm).
   std::vector<std::vector<Eigen::Vector3d>> true_centres;
+  // The box of all true centres (mm): where the map lies, e.g. for GaugeBlockOptions::lo, hi.
+  void bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const;
 };
 
 // A 3-D ball frame like the paper's: nx × ny × nz balls at `pitch` (mm); balls 0, 1, 2 at
