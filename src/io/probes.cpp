@@ -17,8 +17,41 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   int angle_col = -1;
   if (opt.angle_column) angle_col = t.require(*opt.angle_column);
   std::vector<int> probe_cols;
-  for (int c = 1; c < static_cast<int>(t.cols()); ++c)
-    if (c != angle_col) probe_cols.push_back(c);
+  if (!opt.probe_columns.empty()) {
+    // Named probes: exactly these columns, in this order; any other column is left alone.
+    for (const std::string& name : opt.probe_columns) {
+      const int c = t.require(name);
+      if (c == 0 || c == angle_col)
+        throw Error(fmt::format("{}column '{}' cannot be a probe (it is the {})", t.where(-1, c),
+                                name, c == 0 ? "station position" : "angle channel"));
+      for (int q : probe_cols)
+        if (q == c) throw Error(fmt::format("--probes names column '{}' twice", name));
+      probe_cols.push_back(c);
+    }
+  } else {
+    for (int c = 1; c < static_cast<int>(t.cols()); ++c) {
+      if (c == angle_col) continue;
+      // A column that reads as an angle channel is never taken for a probe silently: an angle
+      // in µrad read as a displacement in µm would wreck the separation with no sign of it.
+      const std::string& name = t.header()[static_cast<std::size_t>(c)];
+      const bool looks_angle = name == "angle" || name == "pitch" ||
+                               name.find("_urad") != std::string::npos ||
+                               name.find("angle") != std::string::npos;
+      if (looks_angle)
+        throw Error(fmt::format(
+            "{}column '{}' looks like an angle channel, not a probe: give --angle {} to use it "
+            "(urad), or --probes to list the probe columns",
+            t.where(-1, c), name, name));
+      probe_cols.push_back(c);
+    }
+    if (!opt.offsets.empty() && probe_cols.size() > opt.offsets.size())
+      throw Error(fmt::format(
+          "{}unexpected column '{}': {} offsets were given for {} data columns; name the probe "
+          "columns with --probes, or an angle channel with --angle",
+          t.where(-1, probe_cols[opt.offsets.size()]),
+          t.header()[static_cast<std::size_t>(probe_cols[opt.offsets.size()])], opt.offsets.size(),
+          probe_cols.size()));
+  }
   if (probe_cols.size() < 2)
     throw Error(fmt::format("{}need at least two probe columns after 'x', found {}", t.where(-1, 0),
                             probe_cols.size()));

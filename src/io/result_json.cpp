@@ -66,12 +66,17 @@ void write_result(const std::string& path, const Result& r) {
   detail::OutFile f(path);
   fmt::memory_buffer b;
   fmt::format_to(std::back_inserter(b),
-                 "{{\n  \"method\": {},\n  \"reference\": {},\n  \"gauge\": {},\n",
+                 "{{\n  \"kind\": \"separation\",\n  \"method\": {},\n  \"reference\": {},\n  "
+                 "\"gauge\": {},\n",
                  quoted(separation::to_string(r.method)),
                  quoted(separation::to_string(r.reference)), quoted(r.gauge));
   fmt::format_to(std::back_inserter(b), "  \"unobservable\": [");
   for (std::size_t i = 0; i < r.unobservable.size(); ++i)
     fmt::format_to(std::back_inserter(b), "{}{}", i ? ", " : "", quoted(r.unobservable[i]));
+  fmt::format_to(std::back_inserter(b), "],\n  \"warnings\": [");
+  const std::vector<std::string> warnings = r.warnings();
+  for (std::size_t i = 0; i < warnings.size(); ++i)
+    fmt::format_to(std::back_inserter(b), "{}{}", i ? ", " : "", quoted(warnings[i]));
   fmt::format_to(std::back_inserter(b),
                  "],\n  \"units\": {{\"x\": \"mm\", \"workpiece\": \"um\", "
                  "\"guide\": \"um\", \"pitch\": \"urad\"}},\n");
@@ -87,6 +92,8 @@ void write_result(const std::string& path, const Result& r) {
                  r.workpiece_straightness.ls * 1e3, r.workpiece_straightness.min_zone * 1e3,
                  r.guide_straightness.ls * 1e3, r.guide_straightness.min_zone * 1e3);
   if (r.sigma) fmt::format_to(std::back_inserter(b), "  \"sigma_um\": {},\n", *r.sigma * 1e3);
+  if (r.noise_gain && std::isfinite(*r.noise_gain))
+    fmt::format_to(std::back_inserter(b), "  \"noise_gain\": {},\n", *r.noise_gain);
   fmt::format_to(std::back_inserter(b),
                  "  \"sigma_estimated\": {},\n  \"dof\": {},\n  \"residual_rms_um\": {}\n}}\n",
                  r.sigma_estimated, r.dof, r.residual_rms * 1e3);
@@ -157,6 +164,7 @@ Result read_result(const std::string& path) {
       doc.fail(P("/sigma_estimated"), "'sigma_estimated' must be true or false");
     r.sigma_estimated = j["sigma_estimated"].get<bool>();
   }
+  if (doc.has(P("/noise_gain"))) r.noise_gain = doc.number(P("/noise_gain"));
   if (doc.has(P("/dof"))) r.dof = static_cast<long>(doc.number(P("/dof")));
   if (doc.has(P("/residual_rms_um"))) r.residual_rms = doc.number(P("/residual_rms_um")) * 1e-3;
   return r;

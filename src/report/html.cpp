@@ -114,6 +114,7 @@ table{border-collapse:collapse;margin:8px 0} td,th{border:1px solid #ccc;padding
 th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
 .plot{margin:16px 0} .plot h3{font-size:1em;margin:4px 0}
 .note{color:#666;font-size:.9em}
+.warn{background:#fff4e5;border-left:4px solid #e08a00;padding:6px 10px;margin:8px 0}
 .figs{display:flex;flex-wrap:wrap;gap:16px;align-items:flex-start;margin:12px 0}
 .figs figure{margin:0} .figs figcaption{font-weight:600;font-size:.95em;margin:4px 0}
 svg.ta-fig{max-width:100%;height:auto}
@@ -129,7 +130,10 @@ svg.ta-fig{max-width:100%;height:auto}
   std::string script = "var TA_PLOTS=[];\n";
   int pid = 0, figures = 0;
   for (const auto& s : sections) {
-    h += "<h2>" + escape(s.title) + "</h2>\n" + s.intro_html + "\n";
+    h += "<h2>" + escape(s.title) + "</h2>\n";
+    for (const auto& w : s.warnings)
+      h += "<p class=\"warn\"><b>Warning:</b> " + escape(w) + "</p>\n";
+    h += s.intro_html + "\n";
     if (!s.table.empty()) {
       h += "<table>";
       for (std::size_t r = 0; r < s.table.size(); ++r) {
@@ -236,6 +240,7 @@ Section separation_section(const std::string& title, const separation::Result& r
   s.title = title;
   std::string unobs;
   for (const auto& u : r.unobservable) unobs += (unobs.empty() ? "" : ", ") + u;
+  s.warnings = r.warnings();
   s.intro_html = fmt::format(
       "<p>Method <b>{}</b>, reference <b>{}</b>. {}.<br>Not determined by the data: {}.</p>",
       escape(separation::to_string(r.method)), escape(separation::to_string(r.reference)),

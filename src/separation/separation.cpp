@@ -719,11 +719,11 @@ Result separate(const ProbeData& data, const Options& opt) {
   // seed's layouts the system is square, so A and B are its exact solution.
   // Without redundancy (A, B) the noise level cannot be estimated, so their uncertainty needs a
   // given sigma.
-  const bool want_unc = opt.compute_uncertainty && opt.filter_cutoff == 0 &&
-                        opt.reference != Reference::Seed &&
-                        (opt.method == Method::Lsq || opt.sigma.has_value());
+  const bool unc_possible =
+      opt.compute_uncertainty && opt.filter_cutoff == 0 && opt.reference != Reference::Seed;
+  const bool want_unc = unc_possible && (opt.method == Method::Lsq || opt.sigma.has_value());
   LsqState st;
-  if (opt.method == Method::Lsq || want_unc) {
+  if (opt.method == Method::Lsq || unc_possible) {
     Raw lsq = solve_lsq(data, opt, st);
     if (opt.method == Method::Lsq) raw = std::move(lsq);
   }
@@ -749,24 +749,30 @@ Result separate(const ProbeData& data, const Options& opt) {
   }
 
   Eigen::VectorXd uw, ug, ut;
-  if (want_unc && st.engine) {
+  if (unc_possible && st.engine) {
     double s2 = 0;
-    if (opt.sigma) {
+    if (want_unc && opt.sigma) {
       s2 = (*opt.sigma) * (*opt.sigma);
       res.sigma = opt.sigma;
-    } else if (st.dof > 0) {
+    } else if (want_unc && st.dof > 0) {
       // Every row (probe, or angle scaled by its weight) carries the probe noise, so the
       // residual variance estimates the probe variance directly.
       s2 = st.ssr / static_cast<double>(st.dof);
       res.sigma = std::sqrt(s2);
       res.sigma_estimated = true;
     }
+    st.zdiag = st.engine->covariance_diagonal();
+    uncertainties(st, raw, uw, ug, ut);
     if (res.sigma) {
-      st.zdiag = st.engine->covariance_diagonal();
-      uncertainties(st, raw, uw, ug, ut);
       uw = (uw * s2).cwiseSqrt();
       ug = (ug * s2).cwiseSqrt();
       if (ut.size()) ut = (ut * s2).cwiseSqrt();
+    } else {
+      // No noise level: state no uncertainty, only how strongly the layout amplifies noise.
+      res.noise_gain = std::sqrt(std::max(uw.maxCoeff(), ug.maxCoeff()));
+      uw.resize(0);
+      ug.resize(0);
+      ut.resize(0);
     }
   }
   if (st.engine && st.dof > 0)
@@ -802,6 +808,34 @@ void express_in_reference(Profile& workpiece, Profile& guide, Profile* pitch, Re
   workpiece.value = r.w;
   guide.value = r.g;
   if (pitch) pitch->value = r.theta;
+}
+
+std::vector<std::string> Result::warnings() const {
+  std::vector<std::string> w;
+  const auto check = [&](const char* what, const Profile& p, const Straightness& st) {
+    if (p.uncertainty.size() == 0 || !p.uncertainty.allFinite()) return;
+    const double expanded = 2 * p.uncertainty.maxCoeff();
+    if (!(expanded > st.ls)) return;
+    w.push_back(fmt::format(
+        "the {} straightness {:.3g} um is smaller than its own expanded uncertainty (k = 2, up "
+        "to {:.3g} um): this probe layout cannot resolve it. Use more probes, an angle channel "
+        "(--angle), a known zero difference, or --method lsq with redundant probes",
+        what, st.ls * 1e3, expanded * 1e3));
+  };
+  check("workpiece", workpiece, workpiece_straightness);
+  check("guide", guide, guide_straightness);
+  if (workpiece.uncertainty.size() == 0 && noise_gain && std::isfinite(*noise_gain) &&
+      *noise_gain > 0) {
+    const double st = std::min(workpiece_straightness.ls, guide_straightness.ls);
+    w.push_back(fmt::format(
+        "no uncertainty is stated: without redundant readings the probe noise cannot be "
+        "estimated. This layout multiplies probe noise by up to {:.3g} along the profiles, so "
+        "probe noise above {:.2g} um (standard deviation) would hide a straightness of {:.3g} um. "
+        "Give --sigma UM (the probes' noise) for uncertainties, or use more probes or an angle "
+        "channel",
+        *noise_gain, st / (2 * *noise_gain) * 1e3, st * 1e3));
+  }
+  return w;
 }
 
 std::string Result::summary() const {

@@ -123,3 +123,30 @@ TEST(ResultJson, RoundTripAndBadInput) {
             bad + ":2:12: 'workpiece.x[1]' must be a number");
   EXPECT_EQ(err("{\"method\": \"five-point\", \"workpiece\": {}}").rfind(bad + ":1:12: ", 0), 0u);
 }
+
+// An angle column (µrad) read as a fourth probe (µm) turned a 2.6 µm straightness into 237 µm:
+// columns are taken as probes only when that is unambiguous.
+TEST(Probes, AngleColumnIsNeverASilentProbe) {
+  const char* with_angle = "x,a,b,c,angle\n0,1,2,3,10\n10,1,2,3,11\n20,1,2,3,12\n30,1,2,3,13\n";
+  EXPECT_EQ(read_error(with_angle),
+            "p.csv:1:9: column 'angle' looks like an angle channel, not a probe: give --angle "
+            "angle to use it (urad), or --probes to list the probe columns");
+  io::ProbeReadOptions o;
+  o.offsets = {0, 10, 20};
+  EXPECT_EQ(read_error(std::string(kGood), o),
+            "p.csv:1:9: unexpected column 'ang': 3 offsets were given for 4 data columns; name "
+            "the probe columns with --probes, or an angle channel with --angle");
+  // Named probes: exactly those, in that order; other columns are left alone.
+  io::ProbeReadOptions named;
+  named.probe_columns = {"c", "a"};
+  const auto d = io::read_probes(test::temp_file("n.csv", with_angle), named);
+  ASSERT_EQ(d.readings.cols(), 2);
+  EXPECT_DOUBLE_EQ(d.readings(0, 0), 3e-3);
+  EXPECT_DOUBLE_EQ(d.readings(0, 1), 1e-3);
+  EXPECT_EQ(d.angle.size(), 0);
+  named.probe_columns = {"a", "x"};
+  EXPECT_EQ(read_error(with_angle, named),
+            "p.csv:1:1: column 'x' cannot be a probe (it is the station position)");
+  named.probe_columns = {"a", "zz"};
+  EXPECT_NE(read_error(with_angle, named).find("zz"), std::string::npos);
+}

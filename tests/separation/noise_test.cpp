@@ -108,3 +108,43 @@ TEST(SeparationNoise, StepSmallerThanSpacingIsRedundant) {
       "%.3g um, %.3g um\n",
       three.rms_err * 1e3, three.mean_u * 1e3, fine.rms_err * 1e3, fine.mean_u * 1e3);
 }
+
+// The README's own three-point run (500 stations, 0.05 um noise) gives a 35 um "straightness"
+// against a true 6.3 um: the result must say that it cannot resolve that, in words, and must not
+// warn for a layout that resolves its profile.
+TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
+  sim::StraightnessOptions so;
+  so.stations = 500;
+  so.step = 10;
+  so.offsets = {0, 10, 20};
+  so.noise = 0.05e-3;
+  const auto camp = sim::simulate_straightness(so);
+  Options o;
+  o.method = Method::ThreePoint;
+  separation::Result r = separation::separate(camp.data, o);
+  ASSERT_TRUE(r.noise_gain.has_value());  // no sigma and no redundancy: no uncertainty stated
+  EXPECT_EQ(r.workpiece.uncertainty.size(), 0);
+  ASSERT_EQ(r.warnings().size(), 1u);
+  EXPECT_NE(r.warnings()[0].find("no uncertainty is stated"), std::string::npos);
+  // Its gain is what a given sigma produces: u = gain * sigma.
+  o.sigma = 0.05e-3;
+  r = separation::separate(camp.data, o);
+  ASSERT_GT(r.workpiece.uncertainty.size(), 0);
+  EXPECT_FALSE(r.noise_gain.has_value());
+  const auto w = r.warnings();
+  ASSERT_GE(w.size(), 1u);
+  EXPECT_NE(w[0].find("cannot resolve it"), std::string::npos) << w[0];
+  EXPECT_GT(2 * r.workpiece.uncertainty.maxCoeff(), r.workpiece_straightness.ls);
+
+  // Five probes and an angle channel on the same surface resolve it: no warning.
+  so.offsets = {0, 10, 30, 60, 100};
+  so.angle = true;
+  so.angle_noise = 0.2e-6;
+  const auto good = sim::simulate_straightness(so);
+  Options lo;
+  lo.method = Method::Lsq;
+  lo.sigma = 0.05e-3;
+  lo.angle_sigma = 0.2e-6;
+  const separation::Result rg = separation::separate(good.data, lo);
+  EXPECT_TRUE(rg.warnings().empty()) << rg.warnings()[0];
+}

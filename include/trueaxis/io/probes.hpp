@@ -21,6 +21,10 @@ struct ProbeReadOptions {
   std::vector<double> offsets;
   // Name of the angle column (µrad), if any. It is not counted as a probe.
   std::optional<std::string> angle_column;
+  // Names of the probe columns, in the order of the offsets. Empty: every column after `x` but
+  // the angle column; then a column whose name reads as an angle (`angle`, `pitch`, `*_urad`) is
+  // refused rather than taken for a probe, and so is a column beyond the given offsets.
+  std::vector<std::string> probe_columns;
   // Negate probe readings (probes that read the gap).
   bool invert = false;
   // Fewest stations accepted.

@@ -66,6 +66,7 @@ struct DistortedGrid {
 struct Section {
   std::string title;
   std::string intro_html;                       // trusted HTML (escape user text!)
+  std::vector<std::string> warnings;            // plain text, shown prominently before the intro
   std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
   std::vector<Plot> plots;
   std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit

@@ -96,9 +96,18 @@ struct Result {
   bool sigma_estimated = false;
   long dof = 0;             // redundancy: equations − free unknowns
   double residual_rms = 0;  // RMS of weighted residuals (mm); 0 without redundancy
+  // When no noise level is known (no sigma given, no redundancy): the largest standard
+  // uncertainty of a profile per unit of probe noise (dimensionless), i.e. how strongly the
+  // layout amplifies noise. Absent when uncertainties were computed or not computable.
+  std::optional<double> noise_gain;
 
   // Human-readable multi-line summary (µm / µrad).
   std::string summary() const;
+  // Plain-language warnings about what the result cannot support, one sentence each: a
+  // straightness smaller than the expanded uncertainty (k = 2) of the profile it describes (the
+  // layout cannot resolve it); no stated uncertainty, with the layout's noise gain. Empty when
+  // the result is sound.
+  std::vector<std::string> warnings() const;
 };
 
 // Separates workpiece, guide and (where modelled) pitch. Throws Error on invalid input or an
