@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Fresh Debian machine -> dependencies, build, install trueaxis (CLI + Python module for
-# /usr/bin/python3), then run 'trueaxis demo'. Run from the repository root, as root (or with sudo).
+# /usr/bin/python3), then run 'trueaxis demo'. Run from the repository root as root; as another
+# user it asks sudo for the system steps.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo

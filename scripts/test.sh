@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Runs every test (GoogleTest + CLI end-to-end + pytest with the browser check) via ctest.
+# Runs every test (GoogleTest, the CLI end to end, the README examples, pytest with the browser
+# check) via ctest.
 # Expects scripts/setup.sh to have run (it builds ./build).
 set -euo pipefail
 cd "$(dirname "$0")/.."

@@ -132,7 +132,8 @@ int run_verify(const VerifyArgs& a) {
 
 struct SimArgs {
   MachineSource machine;
-  std::string gauge = "gauge.json", measurements = "measurements.json", truth = "truth.csv";
+  std::string gauge = "gauge.json", measurements = "measurements.json",
+              truth = "ballgauge-truth.csv";
   std::string alignment = "321", lengths;
   int sections = 3, repeats = 3;
   double length_noise_um = -1;

@@ -39,6 +39,10 @@ struct Command {
   std::function<int()> run;
 };
 
+// The default truth file of a simulation: the output's name with "-truth.csv" (probes.csv ->
+// probes-truth.csv), so that simulations never overwrite each other's truth.
+std::string truth_beside(const std::string& output);
+
 // 'simulate machine', 'simulate line' (under `simulate`) and 'machine error' (under `app`).
 std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate);
 // 'space', 'compensate', 'export linuxcnc', 'export csv'.

@@ -45,7 +45,7 @@ int run_guideway(const GuidewayArgs& a) {
 
 struct SimArgs {
   MachineSource machine;
-  std::string layout, output = "spots.csv", truth = "truth.csv", axis = "x";
+  std::string layout, output = "spots.csv", truth, axis = "x";  // truth: beside the output
   sim::GuidewayOptions o;
   double noise_um = 0, pointing_um = 0, angle_urad = 0, quant_um = 0;
   bool quiet = false;
@@ -75,15 +75,15 @@ int run_simulate(const SimArgs& a) {
   } else {
     io::write_spots(a.output, g.layout, c.s, c.spots);
   }
+  const std::string truth = a.truth.empty() ? truth_beside(a.output) : a.truth;
   const Eigen::VectorXd t[5] = {c.truth[0] * 1e3, c.truth[1] * 1e3, c.truth[2] * 1e6,
                                 c.truth[3] * 1e6, c.truth[4] * 1e6};
-  io::write_csv(a.truth,
-                {"s", "horizontal_um", "vertical_um", "pitch_urad", "yaw_urad", "roll_urad"},
+  io::write_csv(truth, {"s", "horizontal_um", "vertical_um", "pitch_urad", "yaw_urad", "roll_urad"},
                 {&c.s, &t[0], &t[1], &t[2], &t[3], &t[4]});
   if (!a.quiet) {
     fmt::print("simulated {} positions along {} of {} with {} detectors{}: wrote {} and {}\n",
                o.positions, a.axis, m.name, g.layout.detectors.size(),
-               o.exact ? " (exact geometry)" : "", a.output, a.truth);
+               o.exact ? " (exact geometry)" : "", a.output, truth);
     if (o.currents)
       fmt::print(
           "quadrant currents of a Gaussian spot (1/e2 radius {} mm): near the centre the layout "
@@ -103,7 +103,7 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
       "detectors through laser beams fixed to the bed. Writes the spots CSV that 'trueaxis "
       "guideway' reads and the truth (the axis' own straightness, pitch, yaw and roll).\n"
       "Example: trueaxis simulate guideway5d --layout layout.json --axis x --noise 0.2 -o "
-      "spots.csv --truth truth.csv");
+      "spots.csv --truth spots-truth.csv");
   sc->add_option("--layout", sa->layout, "layout JSON (detectors on the carriage)")
       ->required()
       ->check(CLI::ExistingFile);
@@ -131,8 +131,8 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
   sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
   sc->add_option("--output,-o", sa->output, "spots CSV to write")->capture_default_str();
   sc->add_option("--truth", sa->truth,
-                 "truth CSV (s, horizontal_um, vertical_um, pitch_urad, yaw_urad, roll_urad)")
-      ->capture_default_str();
+                 "truth CSV (s, horizontal_um, vertical_um, pitch_urad, yaw_urad, roll_urad); "
+                 "default: the output's name with -truth");
   sc->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
 
   auto a = std::make_shared<GuidewayArgs>();

@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <filesystem>
 #include <memory>
 
 #include "commands.hpp"
@@ -13,6 +14,11 @@
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::cli {
+
+std::string truth_beside(const std::string& output) {
+  const std::filesystem::path p(output);
+  return (p.parent_path() / (p.stem().string() + "-truth.csv")).string();
+}
 
 void MachineSource::add_options(CLI::App* c) {
   c->add_option("--machine", path, "machine JSON (default: a random machine from --machine-seed)")
@@ -62,7 +68,7 @@ int run_simulate_machine(SimMachineArgs a) {
 }
 
 struct SimLineArgs {
-  std::string machine, output = "probes.csv", truth = "truth.csv";
+  std::string machine, output = "line.csv", truth;  // truth: beside the output
   sim::ProbeRunOptions o;
   std::vector<double> start, direction{1, 0, 0}, sensing{0, 0, 1};
   std::optional<long> stations;
@@ -96,6 +102,7 @@ int run_simulate_line(SimLineArgs a) {
   a.o.noise = a.noise_um * 1e-3;
   a.o.profile_amplitude = a.profile_um * 1e-3;
   a.o.angle_noise = a.angle_noise_urad * 1e-6;
+  if (a.truth.empty()) a.truth = truth_beside(a.output);
   const auto run = sim::simulate_probe_run(m, a.o);
   io::write_probes(a.output, run.data);
   const auto& T = run.truth;
@@ -200,8 +207,7 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--output,-o", sl->output, "probes CSV to write")->capture_default_str();
   c->add_option("--truth", sl->truth,
                 "truth CSV (x, workpiece_um = straightedge, guide_um = machine error along the "
-                "sensing direction, pitch_urad)")
-      ->capture_default_str();
+                "sensing direction, pitch_urad); default: the output's name with -truth");
   c->add_flag("--quiet,-q", sl->quiet, "print nothing on success");
   out.push_back({c, [sl] { return run_simulate_line(*sl); }});
 

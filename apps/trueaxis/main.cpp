@@ -6,8 +6,10 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 
 #include "commands.hpp"
+#include "moody_data.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/probes.hpp"
@@ -25,6 +27,7 @@ namespace {
 struct SeparateArgs {
   std::string input, output, csv, method = "lsq", reference = "ls";
   std::vector<double> offsets;
+  std::vector<std::string> probes;
   std::string angle;
   std::optional<double> zero_difference, sigma;
   double angle_sigma = 1.0, filter_cutoff = 0;
@@ -34,6 +37,7 @@ struct SeparateArgs {
 int cmd_separate(const SeparateArgs& a) {
   io::ProbeReadOptions ro;
   ro.offsets = a.offsets;
+  ro.probe_columns = a.probes;
   if (!a.angle.empty()) ro.angle_column = a.angle;
   ro.invert = a.invert;
   const separation::ProbeData data = io::read_probes(a.input, ro);
@@ -49,13 +53,14 @@ int cmd_separate(const SeparateArgs& a) {
   if (!a.csv.empty()) io::write_result_csv(a.csv, r);
   if (!a.quiet)
     fmt::print("{}wrote {}{}\n", r.summary(), a.output, a.csv.empty() ? "" : " and " + a.csv);
+  for (const auto& w : r.warnings()) fmt::print(stderr, "trueaxis: warning: {}\n", w);
   return 0;
 }
 
 struct SimArgs {
   sim::StraightnessOptions o;
   double noise_um = 0, pitch_urad = 5, workpiece_um = 5, guide_um = 3, angle_noise_urad = 0;
-  std::string output = "probes.csv", truth = "truth.csv";
+  std::string output = "probes.csv", truth;  // truth: beside the output
   bool quiet = false;
 };
 
@@ -65,6 +70,7 @@ int cmd_simulate_straightness(SimArgs a) {
   a.o.workpiece_amplitude = a.workpiece_um * 1e-3;
   a.o.guide_amplitude = a.guide_um * 1e-3;
   a.o.angle_noise = a.angle_noise_urad * 1e-6;
+  if (a.truth.empty()) a.truth = cli::truth_beside(a.output);
   const auto c = sim::simulate_straightness(a.o);
   io::write_probes(a.output, c.data);
   const Eigen::VectorXd w = c.truth.workpiece * 1e3, g = c.truth.guide * 1e3,
@@ -119,6 +125,37 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
   return 0;
 }
 
+// Writes the README's example inputs and Moody's plate (as plate/) into `dir`, which must exist.
+// Existing files are left alone unless `force`: the command refuses before writing anything.
+int cmd_examples(const std::string& dir, bool force, bool quiet) {
+  namespace fs = std::filesystem;
+  const fs::path root(dir);
+  if (!fs::is_directory(root))
+    throw Error(fmt::format("{}: no such directory (create it first)", dir));
+  std::vector<std::pair<fs::path, std::string_view>> files;
+  for (const auto& [name, text] : cli::example_files()) files.emplace_back(root / name, text);
+  for (const auto& [name, text] : cli::moody_files())
+    files.emplace_back(root / "plate" / std::string(name), text);
+  if (!force)
+    for (const auto& [path, text] : files)
+      if (fs::exists(path))
+        throw Error(fmt::format("{}: exists; nothing was written (use --force to overwrite)",
+                                path.string()));
+  fs::create_directories(root / "plate");
+  for (const auto& [path, text] : files) {
+    std::ofstream f(path, std::ios::binary);
+    f.write(text.data(), static_cast<std::streamsize>(text.size()));
+    f.close();
+    if (!f) throw Error(fmt::format("{}: cannot write", path.string()));
+  }
+  if (!quiet)
+    fmt::print(
+        "wrote the example inputs in {}: lines.json, plan.json, points.csv, commands.csv, "
+        "layout.json, cylinder.csv and plate/ (Moody's 1955 surface plate)\n",
+        dir);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -150,6 +187,10 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sep->add_option("--offsets", sa.offsets,
                   "probe offsets from the first probe, mm (default 0,h,2h,...)")
+      ->delimiter(',');
+  sep->add_option("--probes", sa.probes,
+                  "names of the probe columns, in the order of --offsets (default: every column "
+                  "after x except the angle column)")
       ->delimiter(',');
   sep->add_option("--angle", sa.angle,
                   "name of a pitch column (urad) from an autocollimator or level (lsq)");
@@ -209,7 +250,8 @@ int main(int argc, char** argv) {
   SimArgs ma;
   auto* simst = simc->add_subcommand(
       "straightness",
-      "A seeded virtual carriage with probes over a workpiece: writes probes.csv and truth.csv");
+      "A seeded virtual carriage with probes over a workpiece: writes probes.csv and "
+      "probes-truth.csv");
   simst->add_option("--stations", ma.o.stations, "number of stops")->capture_default_str();
   simst->add_option("--step", ma.o.step, "distance between stops, mm")->capture_default_str();
   simst->add_option("--offsets", ma.o.offsets, "probe offsets from the first probe, mm")
@@ -229,10 +271,9 @@ int main(int argc, char** argv) {
   simst->add_option("--seed", ma.o.seed, "random seed (same seed, same data)")
       ->capture_default_str();
   simst->add_option("--output,-o", ma.output, "probes CSV to write")->capture_default_str();
-  simst
-      ->add_option("--truth", ma.truth,
-                   "truth CSV to write (x, workpiece_um, guide_um, pitch_urad)")
-      ->capture_default_str();
+  simst->add_option("--truth", ma.truth,
+                    "truth CSV to write (x, workpiece_um, guide_um, pitch_urad); default: the "
+                    "output's name with -truth");
   simst->add_flag("--quiet,-q", ma.quiet, "print nothing on success");
 
   std::vector<cli::Command> machine_cmds = cli::add_machine_commands(app, *simc);
@@ -267,7 +308,48 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   demo->add_flag("--quiet,-q", da.quiet, "print only errors");
 
-  CLI11_PARSE(app, argc, argv);
+  // examples ---------------------------------------------------------------------------------
+  std::string ex_dir = ".";
+  bool ex_force = false, ex_quiet = false;
+  auto* examples = app.add_subcommand(
+      "examples",
+      "Write the example inputs that the README's examples use (lines.json, plan.json, "
+      "points.csv, commands.csv, layout.json, cylinder.csv and Moody's plate in plate/)");
+  examples->add_option("--output,-o", ex_dir, "directory to write them in")->capture_default_str();
+  examples->add_flag("--force", ex_force, "overwrite files that exist");
+  examples->add_flag("--quiet,-q", ex_quiet, "print nothing on success");
+
+  // help -------------------------------------------------------------------------------------
+  std::vector<std::string> help_topic;
+  auto* help = app.add_subcommand("help",
+                                  "Show the help of trueaxis or of one command "
+                                  "(trueaxis help separate, trueaxis help simulate line)");
+  help->add_option("command", help_topic, "the command (and sub-command) to explain");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version exit 0; every command-line mistake exits 2, whatever CLI11's own code.
+    const int rc = app.exit(e);
+    return rc == 0 ? 0 : 2;
+  }
+  if (help->parsed()) {
+    const CLI::App* topic = &app;
+    for (const std::string& word : help_topic) {
+      const CLI::App* next = nullptr;
+      for (const CLI::App* sub : topic->get_subcommands([](const CLI::App*) { return true; }))
+        if (sub->get_name() == word) next = sub;
+      if (next == nullptr) {
+        std::fprintf(stderr, "trueaxis help: no command '%s'%s; run 'trueaxis help' for the list\n",
+                     word.c_str(),
+                     topic == &app ? "" : (" under '" + topic->get_name() + "'").c_str());
+        return 2;
+      }
+      topic = next;
+    }
+    std::fputs(topic->help().c_str(), stdout);
+    return 0;
+  }
   if (surf->parsed() && sf.lines.empty() && sf.moody.empty()) {
     std::fprintf(stderr,
                  "trueaxis surface: give --lines FILE or --moody DIR\nRun with --help for more "
@@ -282,6 +364,7 @@ int main(int argc, char** argv) {
     if (surf->parsed()) return cmd_surface(sf);
     if (rep->parsed()) return cmd_report(rin, rout, rquiet);
     if (demo->parsed()) return cli::run_demo(da);
+    if (examples->parsed()) return cmd_examples(ex_dir, ex_force, ex_quiet);
   } catch (const Error& e) {
     std::fprintf(stderr, "trueaxis: error: %s\n", e.what());
     return 1;

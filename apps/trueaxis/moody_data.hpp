@@ -9,4 +9,6 @@
 namespace trueaxis::cli {
 // (file name, contents) pairs.
 const std::vector<std::pair<std::string_view, std::string_view>>& moody_files();
+// The README's example inputs (examples/): (file name, contents) pairs.
+const std::vector<std::pair<std::string_view, std::string_view>>& example_files();
 }  // namespace trueaxis::cli

@@ -195,5 +195,44 @@ expect_err "bg-outlen.csv: grid correction: length 0: point 1 (900, 200, 200) mm
 expect_err "bg-outlen.csv: parametric correction: length 0: point 1 (900.000, 200.000, 200.000) is outside the identified span" "$T" verify-lengths --model bg-model.json -i bg-outlen.csv -o o.json
 expect_err "bg-ls-map.json:[0-9]*:[0-9]*: not a parametric model" "$T" verify-lengths --model bg-ls-map.json -i bg-lengths.csv -o o.json
 
+# One grammar: every command-line mistake exits 2 (CLI11's own codes are 105, 106, 109...).
+expect_code() { local want=$1; shift; "$@" >out.txt 2>err.txt; local rc=$?; [ "$rc" -eq "$want" ] && ok || bad "$* exited $rc, want $want"; }
+expect_code 2 "$T" bogus
+expect_code 2 "$T" separate
+expect_code 2 "$T" separate --input p3.csv --output o.json --method nine-point
+expect_code 2 "$T" separate --input p3.csv --output o.json --no-such-flag
+expect_code 2 "$T" separate --input does-not-exist.csv --output o.json
+expect_code 2 "$T" fit sphere --input p3.csv --output o.json --stations x
+expect_code 2 "$T" simulate
+expect_code 0 "$T" help
+grep -q "separate" out.txt && ok || bad "trueaxis help lists the commands"
+expect_code 0 "$T" help simulate line
+grep -q -- "--start" out.txt && ok || bad "trueaxis help simulate line"
+expect_code 2 "$T" help nosuchcommand
+grep -q "no command 'nosuchcommand'" err.txt && ok || bad "help on an unknown command says so"
+
+# separate: an angle column is never a silent fourth probe; named columns work; warnings in words.
+expect_ok "$T" simulate straightness --stations 200 --angle --seed 4 -o pa.csv --truth pa-truth.csv
+expect_err "pa.csv:1:9: column 'angle' looks like an angle channel" "$T" separate --input pa.csv --output o.json
+expect_err "pa.csv:1:7: unexpected column 'c'" "$T" separate --input pa.csv --output o.json --offsets 0,10 --angle angle
+expect_ok "$T" separate --input pa.csv --output pa.json --angle angle --sigma 0.05
+expect_ok "$T" separate --input pa.csv --output pa3.json --probes a,b,c --method three-point
+expect_ok "$T" simulate straightness --stations 500 --offsets 0,10,20 --noise 0.05 -o rd.csv --truth rd-truth.csv
+expect_ok "$T" separate --input rd.csv --method lsq --sigma 0.05 --output rd.json
+grep -q "cannot resolve it" err.txt && grep -q "cannot resolve it" rd.json && ok || bad "separate warns when u exceeds the straightness"
+expect_ok "$T" report rd.json -o rd.html
+grep -q 'class="warn"' rd.html && ok || bad "the report shows the warning"
+
+# Simulations with their default names never overwrite each other's files.
+mkdir -p defaults && (cd defaults &&
+  "$T" simulate straightness -q && "$T" simulate machine --seed 2 -o m.json -q &&
+  "$T" simulate line --machine m.json --start 0,300,250 -q &&
+  "$T" simulate guideway5d --machine m.json --layout ../gw.json -q &&
+  "$T" simulate ballgauge -q) >out.txt 2>err.txt || bad "default simulations: $(cat err.txt)"
+for f in probes.csv probes-truth.csv line.csv line-truth.csv spots.csv spots-truth.csv gauge.json measurements.json ballgauge-truth.csv; do
+  [ -s "defaults/$f" ] && ok || bad "default simulation output $f missing"
+done
+head -1 defaults/probes-truth.csv | grep -qx "x,workpiece_um,guide_um,pitch_urad" && head -1 defaults/spots-truth.csv | grep -q "^s,horizontal_um" && ok || bad "each simulation keeps its own truth"
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]
