@@ -15,7 +15,8 @@
 namespace trueaxis::geometry {
 namespace {
 
-constexpr double kDegenerate = 1e-9;  // relative singular value below which a set is degenerate
+constexpr double kDegenerate = 1e-9;    // relative singular value below which a set is degenerate
+constexpr double kMaxCoordinate = 1e9;  // mm: 1000 km, beyond any machine
 
 struct Pca {
   Eigen::Vector3d centroid;
@@ -45,8 +46,19 @@ Eigen::Matrix3d basis(const Eigen::Vector3d& w) {
   return b;
 }
 
-void check(Element e, const Eigen::Matrix3Xd& p, const Pca& s) {
+// Before anything touches the points: a count, and coordinates a machine can have.
+void check_points(Element e, const Eigen::Matrix3Xd& p) {
+  if (p.cols() == 0) throw Error(fmt::format("{} fit: no points", to_string(e)));
   if (!p.allFinite()) throw Error(fmt::format("{} fit: coordinates must be finite", to_string(e)));
+  const double biggest = p.cwiseAbs().maxCoeff();
+  if (biggest > kMaxCoordinate)
+    throw Error(
+        fmt::format("{} fit: a coordinate of {:g} mm is beyond any machine (at most "
+                    "{:g} mm)",
+                    to_string(e), biggest, kMaxCoordinate));
+}
+
+void check(Element e, const Eigen::Matrix3Xd& p, const Pca& s) {
   const long need[] = {2, 3, 3, 4, 5, 6};
   const long n = p.cols();
   if (n < need[static_cast<int>(e)])
@@ -289,6 +301,7 @@ Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& p) {
 }
 
 Fit fit(Element element, const Eigen::Matrix3Xd& p) {
+  check_points(element, p);
   const Pca s = pca(p);
   check(element, p, s);
   Fit f;
@@ -442,6 +455,7 @@ Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& p) {
   if (element != Element::Line && element != Element::Plane && element != Element::Circle)
     throw Error(fmt::format("minimum-zone fits are available for line, plane and circle, not {}",
                             to_string(element)));
+  check_points(element, p);
   const Pca s = pca(p);
   check(element, p, s);
   Fit f;

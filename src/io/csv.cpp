@@ -86,9 +86,11 @@ void parse_chunk(std::string_view text, const std::vector<std::string>& header, 
       if (r.ec == std::errc::result_out_of_range)
         return fail(colno, fmt::format("number out of range in column '{}'", header[c]));
       if (r.ec != std::errc() || r.ptr != e)
-        return fail(colno,
-                    fmt::format("'{}' is not a number (column '{}')",
-                                std::string_view(b, static_cast<std::size_t>(e - b)), header[c]));
+        return fail(
+            colno,
+            fmt::format("'{}' is not a number (column '{}')",
+                        detail::quote_cut(std::string_view(b, static_cast<std::size_t>(e - b))),
+                        header[c]));
       if (!std::isfinite(v))
         return fail(colno, fmt::format("{} is not allowed (column '{}')",
                                        std::isnan(v) ? "NaN" : "Inf", header[c]));
@@ -108,6 +110,7 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
   CsvTable t;
   t.path_ = std::move(path);
   t.text_ = std::move(text);
+  detail::normalize_text(t.text_);
   const std::string_view all(t.text_);
   std::size_t pos = 0, line = 0;
   auto next_line = [&](std::string_view& out, std::size_t& start) {
@@ -130,6 +133,9 @@ CsvTable CsvTable::parse(std::string text, std::string path) {
     break;
   }
   if (!have_header) throw Error(fmt::format("{}:1:1: empty file: expected a header row", t.path_));
+  if (l.find(',') == std::string_view::npos && l.find('\t') != std::string_view::npos)
+    throw Error(fmt::format("{}:{}:1: the file is tab-separated: use commas between columns",
+                            t.path_, line));
   t.header_start_ = start;
   t.header_line_ = line;
   {

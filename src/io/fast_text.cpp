@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <exception>
+#include <filesystem>
 #include <thread>
 
 #include "trueaxis/error.hpp"
@@ -12,23 +13,63 @@
 namespace trueaxis::io::detail {
 
 std::string read_text(const std::string& path) {
+  // Only regular files: a directory, a device (/dev/zero) or a pipe would either fail obscurely
+  // or grow memory without limit.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw Error(fmt::format("{}: no such file", path));
+  if (!std::filesystem::is_regular_file(status))
+    throw Error(fmt::format(
+        "{}: not a regular file ({})", path,
+        std::filesystem::is_directory(status) ? "a directory" : "a device, pipe or socket"));
+  const auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxInputBytes)
+    throw Error(fmt::format(
+        "{}: {:.1f} GB is more than trueaxis reads in one file ({} GB); "
+        "split it",
+        path, static_cast<double>(size) / 1e9, static_cast<double>(kMaxInputBytes) / 1e9));
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
-  // One read of the whole file (its size from fseek/ftell; chunks after that, e.g. for pipes).
   std::string text;
-  if (std::fseek(f.get(), 0, SEEK_END) == 0) {
-    const long size = std::ftell(f.get());
-    std::rewind(f.get());
-    if (size > 0) {
-      text.resize(static_cast<std::size_t>(size));
-      text.resize(std::fread(text.data(), 1, text.size(), f.get()));
-    }
+  if (!ec && size > 0) {
+    text.resize(static_cast<std::size_t>(size));
+    text.resize(std::fread(text.data(), 1, text.size(), f.get()));
   }
   char buf[1 << 16];
   std::size_t got;
-  while ((got = std::fread(buf, 1, sizeof buf, f.get())) > 0) text.append(buf, got);
+  while (text.size() <= kMaxInputBytes && (got = std::fread(buf, 1, sizeof buf, f.get())) > 0)
+    text.append(buf, got);
   if (std::ferror(f.get())) throw Error(fmt::format("{}: read error", path));
+  if (text.size() > kMaxInputBytes)
+    throw Error(fmt::format("{}: more than trueaxis reads in one file ({} GB); split it", path,
+                            static_cast<double>(kMaxInputBytes) / 1e9));
+  normalize_text(text);
   return text;
+}
+
+void normalize_text(std::string& text) {
+  // A UTF-8 byte-order mark (spreadsheets write one) is not part of the first column's name.
+  if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
+  // Windows (CRLF) and old Mac (CR) line ends become LF, so that lines and columns count right.
+  const std::size_t first = text.find('\r');
+  if (first == std::string::npos) return;
+  std::size_t out = first;
+  for (std::size_t i = first; i < text.size(); ++i) {
+    if (text[i] == '\r') {
+      text[out++] = '\n';
+      if (i + 1 < text.size() && text[i + 1] == '\n') ++i;
+    } else {
+      text[out++] = text[i];
+    }
+  }
+  text.resize(out);
+}
+
+std::string quote_cut(std::string_view s, std::size_t max) {
+  const std::size_t nl = s.find('\n');
+  if (nl != std::string_view::npos) s = s.substr(0, nl);
+  if (s.size() <= max) return std::string(s);
+  return std::string(s.substr(0, max)) + "...";
 }
 
 int workers_for(std::size_t n) {

@@ -16,8 +16,20 @@
 
 namespace trueaxis::io::detail {
 
-// The whole file at `path` in one read. Throws Error naming the path when it cannot be read.
+// The most a reader takes from one file (bytes): far above any real input (a million-station
+// probe file is ~80 MB), far below what would exhaust memory while parsing.
+constexpr std::size_t kMaxInputBytes = std::size_t{1} << 30;
+
+// The whole file at `path` in one read, with normalize_text applied. Throws Error naming the
+// path when it is not a regular file, is larger than kMaxInputBytes, or cannot be read.
 std::string read_text(const std::string& path);
+
+// Drops a UTF-8 byte-order mark and turns CRLF and lone CR line ends into LF, in place.
+void normalize_text(std::string& text);
+
+// `s` cut to its first line and at most `max` characters ("..." marks a cut), for quoting input
+// in an error message.
+std::string quote_cut(std::string_view s, std::size_t max = 40);
 
 // Number of worker threads for `n` items of work (1 for small jobs).
 int workers_for(std::size_t n);

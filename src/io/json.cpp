@@ -140,23 +140,96 @@ class Locator : public nlohmann::json_sax<nlohmann::json> {
   std::vector<Frame> stack_;
 };
 
-}  // namespace
+// Where a SAX parse stops with an error (nlohmann's DOM parser reports a number too large for a
+// double, '1e309', without a position).
+struct ErrorPosition : nlohmann::json_sax<nlohmann::json> {
+  std::size_t byte = 0;
+  std::string token;
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return true; }
+  bool key(string_t&) override { return true; }
+  bool end_object() override { return true; }
+  bool start_array(std::size_t) override { return true; }
+  bool end_array() override { return true; }
+  bool parse_error(std::size_t position, const std::string& last_token,
+                   const nlohmann::detail::exception&) override {
+    byte = position;
+    token = last_token;
+    return false;
+  }
+};
 
-JsonFile JsonFile::read(const std::string& path) {
-  return parse(detail::read_text(path), path);
+// nlohmann's message with the input it quotes ("last read: '...'") cut to a few dozen
+// characters: a malformed file must not be echoed whole.
+std::string short_message(const std::string& what) {
+  const std::string key = "last read: '";
+  const std::size_t at = what.find(key);
+  if (at == std::string::npos) return detail::quote_cut(what, 200);
+  const std::size_t from = at + key.size();
+  const std::size_t to = what.rfind('\'');
+  const std::string quoted =
+      to != std::string::npos && to > from ? what.substr(from, to - from) : what.substr(from);
+  return what.substr(0, from) + detail::quote_cut(quoted) + "'" +
+         (to != std::string::npos && to > from ? what.substr(to + 1) : "");
 }
+
+}  // namespace
 
 JsonFile JsonFile::parse(std::string text, std::string path) {
   JsonFile j;
   j.path_ = std::move(path);
   j.text_ = std::move(text);
+  detail::normalize_text(j.text_);
+  // Nesting deeper than any trueaxis file needs is refused before parsing (a file nested a
+  // million levels deep would otherwise take the parser's time and memory).
+  {
+    std::size_t depth = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < j.text_.size(); ++i) {
+      const char c = j.text_[i];
+      if (in_string) {
+        if (c == '\\')
+          ++i;
+        else if (c == '"')
+          in_string = false;
+      } else if (c == '"') {
+        in_string = true;
+      } else if (c == '[' || c == '{') {
+        if (++depth > kMaxJsonDepth)
+          throw Error(fmt::format("{}:{}: nested more than {} levels deep", j.path_,
+                                  line_col(j.text_, i), kMaxJsonDepth));
+      } else if ((c == ']' || c == '}') && depth > 0) {
+        --depth;
+      }
+    }
+  }
   try {
     j.root_ = nlohmann::json::parse(j.text_);
   } catch (const nlohmann::json::parse_error& e) {
     throw Error(fmt::format("{}:{}: invalid JSON: {}", j.path_,
-                            line_col(j.text_, e.byte ? e.byte - 1 : 0), e.what()));
+                            line_col(j.text_, e.byte ? e.byte - 1 : 0), short_message(e.what())));
+  } catch (const nlohmann::json::exception& e) {
+    // A number beyond the range of a double ('1e309'): find it with a SAX pass.
+    ErrorPosition pos;
+    nlohmann::json::sax_parse(j.text_, &pos);
+    const std::size_t at = pos.byte >= pos.token.size() ? pos.byte - pos.token.size() : 0;
+    if (e.id == 406)
+      throw Error(fmt::format("{}:{}: the number '{}' is out of range", j.path_,
+                              line_col(j.text_, at), detail::quote_cut(pos.token)));
+    throw Error(fmt::format("{}:{}: invalid JSON: {}", j.path_, line_col(j.text_, at),
+                            short_message(e.what())));
   }
   return j;
+}
+
+JsonFile JsonFile::read(const std::string& path) {
+  return parse(detail::read_text(path), path);
 }
 
 std::string JsonFile::where(const pointer& p) const {
@@ -181,6 +254,14 @@ double JsonFile::number(const pointer& p) const {
   if (!v.is_number()) fail(p, fmt::format("'{}' must be a number", dotted(p)));
   const double x = v.get<double>();
   if (!std::isfinite(x)) fail(p, fmt::format("'{}' is not finite", dotted(p)));
+  // No length (mm, µm), angle (µrad) or count in a trueaxis file comes near these bounds; a value
+  // beyond them is a typo or corruption, and would turn into inf or NaN downstream.
+  if (std::abs(x) > kMaxJsonMagnitude)
+    fail(p, fmt::format("'{}' = {:g} is out of range (its size must be below {:g})", dotted(p), x,
+                        kMaxJsonMagnitude));
+  if (std::fpclassify(x) == FP_SUBNORMAL)
+    fail(p, fmt::format("'{}' = {:g} is too small to mean anything (write 0 if it is zero)",
+                        dotted(p), x));
   return x;
 }
 

@@ -44,6 +44,11 @@ Eigen::Matrix3Xd read_ds(const std::string& path) {
       if (nums.size() != 1 || nums[0] < 0 || nums[0] != std::floor(nums[0]))
         throw Error(
             fmt::format("{}:{}:1: the first line must be the number of points", path, line));
+      if (nums[0] == 0)
+        throw Error(fmt::format("{}:{}:1: no points (the file declares 0)", path, line));
+      if (nums[0] > 1e8)
+        throw Error(
+            fmt::format("{}:{}:1: {:g} points declared: at most 100000000", path, line, nums[0]));
       declared = static_cast<long>(nums[0]);
       continue;
     }
@@ -70,6 +75,7 @@ Eigen::Matrix3Xd read_point_set(const std::string& path) {
 void write_fit(const std::string& path, const geometry::Fit& f) {
   using geometry::Element;
   nlohmann::ordered_json j;
+  j["kind"] = "fit";
   j["element"] = geometry::to_string(f.element);
   j["points"] = f.residuals.size();
   const bool centre = f.element == Element::Circle || f.element == Element::Sphere;

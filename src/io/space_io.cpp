@@ -37,6 +37,10 @@ ojson grid_json(const map::ErrorMap& m) {
 }
 }  // namespace detail
 
+namespace {
+constexpr int kMaxMonteCarlo = 1000;
+}  // namespace
+
 surface::SpacePlan read_plan(const std::string& path) {
   const JsonFile f = JsonFile::read(path);
   const auto& o = f.object(ptr());
@@ -45,6 +49,10 @@ surface::SpacePlan read_plan(const std::string& path) {
     const ptr k = ptr() / key;
     if (key == "spacing") {
       p.spacing = f.number(k);
+      // A campaign runs lines along every grid line: below a millimetre the grid has hundreds of
+      // millions of nodes on any real machine, which no campaign measures.
+      if (!(p.spacing >= 1 && p.spacing <= 1e5))
+        f.fail(k, fmt::format("spacing {:g} mm: must be between 1 and 100000 mm", p.spacing));
     } else if (key == "probes") {
       const std::string s = f.string(k);
       if (s == "three-point")
@@ -53,19 +61,24 @@ surface::SpacePlan read_plan(const std::string& path) {
         p.probes = surface::ProbeMethod::TwoPoint;
       else
         f.fail(k, fmt::format("probes must be \"three-point\" or \"two-point\", not \"{}\"", s));
-    } else if (key == "probe_noise_um") {
-      p.probe_noise = f.number(k) * 1e-3;
-    } else if (key == "laser_noise_um") {
-      p.laser_noise = f.number(k) * 1e-3;
-    } else if (key == "profile_um") {
-      p.profile_amplitude = f.number(k) * 1e-3;
+    } else if (key == "probe_noise_um" || key == "laser_noise_um" || key == "profile_um") {
+      const double v = f.number(k);
+      if (!(v >= 0 && v <= 1000))
+        f.fail(k, fmt::format("{} {:g} um: must be between 0 and 1000 um", key, v));
+      (key == "probe_noise_um"   ? p.probe_noise
+       : key == "laser_noise_um" ? p.laser_noise
+                                 : p.profile_amplitude) = v * 1e-3;
     } else if (key == "diagonals") {
       if (!value.is_boolean()) f.fail(k, "'diagonals' must be true or false");
       p.diagonals = value.get<bool>();
     } else if (key == "monte_carlo" || key == "seed") {
       const double v = f.number(k);
-      if (v < 0 || v != std::floor(v) || v > 1e9)
-        f.fail(k, fmt::format("'{}' must be a whole number >= 0", key));
+      if (v < 0 || v != std::floor(v))
+        f.fail(k, fmt::format("'{}' must be a whole number >= 0, not {:g}", key, v));
+      if (key == "monte_carlo" && v > kMaxMonteCarlo)
+        f.fail(k, fmt::format("monte_carlo {:g}: at most {} repetitions (each one is a whole "
+                              "campaign; 20 to 100 give the uncertainty to 10-15 %)",
+                              v, kMaxMonteCarlo));
       if (key == "seed")
         p.seed = static_cast<std::uint64_t>(v);
       else
@@ -79,7 +92,11 @@ surface::SpacePlan read_plan(const std::string& path) {
   try {
     p.validate();
   } catch (const Error& e) {
-    f.fail(ptr(), e.what());
+    // Point at the key the complaint is about, when it names one.
+    const std::string what = e.what();
+    for (const auto& [key, value] : o.items())
+      if (what.find(key) != std::string::npos) f.fail(ptr() / key, what);
+    f.fail(ptr(), what);
   }
   return p;
 }

@@ -27,7 +27,8 @@ double parse_number(std::string_view s, const std::string& path, std::size_t lin
   const char* b = s.data() + (!s.empty() && s[0] == '+' ? 1 : 0);
   const auto r = std::from_chars(b, s.data() + s.size(), v);
   if (r.ec != std::errc() || r.ptr != s.data() + s.size())
-    throw Error(fmt::format("{}:{}:{}: '{}' is not a number", path, line, col, s));
+    throw Error(
+        fmt::format("{}:{}:{}: '{}' is not a number", path, line, col, detail::quote_cut(s)));
   if (!std::isfinite(v))
     throw Error(
         fmt::format("{}:{}:{}: {} is not allowed", path, line, col, std::isnan(v) ? "NaN" : "Inf"));
@@ -117,7 +118,13 @@ std::vector<surface::Line> read_lines(const std::string& path) {
     if (doc.has(at / "from")) {
       std::string from = doc.string(at / "from");
       if (fs::path(from).is_relative()) from = (fs::path(path).parent_path() / from).string();
-      const separation::Result r = read_result(from);
+      separation::Result r;
+      try {
+        r = read_result(from);
+      } catch (const Error& e) {
+        // Say which line of lines.json asked for the file, then what is wrong with it.
+        doc.fail(at / "from", fmt::format("line '{}': {}", l.name, e.what()));
+      }
       std::string curve = doc.has(at / "curve") ? doc.string(at / "curve") : "guide";
       if (curve != "guide" && curve != "workpiece")
         doc.fail(at / "curve", "'curve' must be \"guide\" or \"workpiece\"");

@@ -234,5 +234,20 @@ for f in probes.csv probes-truth.csv line.csv line-truth.csv spots.csv spots-tru
 done
 head -1 defaults/probes-truth.csv | grep -qx "x,workpiece_um,guide_um,pitch_urad" && head -1 defaults/spots-truth.csv | grep -q "^s,horizontal_um" && ok || bad "each simulation keeps its own truth"
 
+# Robustness (fuzzing findings): located errors with exit 1, never exit 3 or a quoted file.
+printf '{"lines": [\n  {"name": "A", "start": [0, 1e309], "direction": [1, 0], "spacing": 10, "heights": [0, 1, 2]}]}\n' > big.json
+expect_code 1 "$T" surface --lines big.json -o o.json
+grep -q "big.json:2:30: the number '1e309' is out of range" err.txt && ok || bad "1e309 located: $(cat err.txt)"
+for from in /dev/zero . missing.json; do
+  printf '{"lines": [{"name": "A", "start": [0, 0], "direction": [1, 0], "from": "%s"}]}\n' "$from" > from.json
+  expect_code 1 "$T" surface --lines from.json -o o.json
+  grep -q "from.json:1:[0-9]*: line 'A': " err.txt && [ "$(wc -l <err.txt)" -eq 1 ] && ok || bad "from $from: $(head -c 300 err.txt)"
+done
+printf 'x,a,b,c\r0,1,2,3\r10,1,2,3\r20,1,2,3\r30,1,2,q\r' > cr.csv
+expect_err "cr.csv:5:8: 'q' is not a number" "$T" separate --input cr.csv --output o.json
+printf '{"chain": "FYXZ", "ranges": {"x": [0, 800], "y": [0, 600], "z": [0, 1e300]}}' > absurd.json
+expect_code 1 "$T" machine error absurd.json bg-cmd.csv
+grep -q "absurd.json:1:[0-9]*: 'ranges.z\[1\]' = 1e+300 is out of range" err.txt && ok || bad "1e300 in machine.json: $(cat err.txt)"
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -183,6 +183,29 @@ TEST(PointSets, DsReaderNamesFileLineAndColumn) {
   EXPECT_EQ(q.cols(), 1);
 }
 
+// Found by fuzzing: a .ds file declaring 0 (or -0) points crashed every fit (the PCA of no
+// points); a coordinate of 1e308 was reported as "the points are collinear".
+TEST(PointSets, NoPointsAndAbsurdCoordinatesAreRefusedByName) {
+  auto err = [](const std::string& text) {
+    const std::string p = test::temp_file("p.ds", text);
+    return test::error_of([&] { io::read_ds(p); });
+  };
+  EXPECT_NE(err("0\n").find("p.ds:1:1: no points (the file declares 0)"), std::string::npos);
+  EXPECT_NE(err("-0\n").find("p.ds:1:1: no points"), std::string::npos);
+  EXPECT_NE(err("1e300\n").find("points declared: at most"), std::string::npos);
+  for (const Element e : {Element::Line, Element::Sphere, Element::Cone}) {
+    EXPECT_EQ(test::error_of([&] { geometry::fit(e, Eigen::Matrix3Xd(3, 0)); }),
+              std::string(geometry::to_string(e)) + " fit: no points");
+    Eigen::Matrix3Xd far = Eigen::Matrix3Xd::Random(3, 10);
+    far(1, 4) = 1e308;
+    EXPECT_NE(
+        test::error_of([&] { geometry::fit(e, far); }).find("1e+308 mm is beyond any machine"),
+        std::string::npos);
+  }
+  EXPECT_EQ(test::error_of([] { geometry::fit_min_zone(Element::Plane, Eigen::Matrix3Xd(3, 0)); }),
+            "plane fit: no points");
+}
+
 namespace {
 
 // An orthonormal frame tilted arbitrarily in space, with origin far from zero.

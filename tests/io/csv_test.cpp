@@ -132,3 +132,34 @@ TEST(Csv, LargeWriteReadRoundTripIsExact) {
   EXPECT_EQ(t.column(0), a);
   EXPECT_EQ(t.column(1), b);
 }
+
+// Found by fuzzing: CR-only files were read as one giant line (and the error quoted the whole
+// file), a UTF-8 byte-order mark made 'x' a missing column, tab-separated files were reported
+// as a missing column, and an error quoted a 4 MB token.
+TEST(Csv, LineEndsByteOrderMarkTabsAndLongTokens) {
+  for (const char* text :
+       {"x,a\r\n0,1\r\n10,2\r\n", "x,a\r0,1\r10,2\r", "\xEF\xBB\xBFx,a\n0,1\n10,2\n"}) {
+    const auto t = CsvTable::parse(text, "f.csv");
+    ASSERT_EQ(t.rows(), 2u) << text;
+    EXPECT_EQ(t.header()[0], "x");
+    EXPECT_EQ(t.column(1)[1], 2);
+  }
+  EXPECT_EQ(error_of("x,a\r0,1\r10,q\r"), "f.csv:3:4: 'q' is not a number (column 'a')");
+  EXPECT_EQ(error_of("x\ta\n0\t1\n"),
+            "f.csv:1:1: the file is tab-separated: use commas between columns");
+  const std::string huge = "x,a\n0," + std::string(4 << 20, 'q') + "\n";
+  const std::string m = error_of(huge);
+  EXPECT_LT(m.size(), 120u) << m.substr(0, 200);
+  EXPECT_NE(m.find("f.csv:2:3: 'qqqq"), std::string::npos) << m.substr(0, 200);
+}
+
+// Found by fuzzing: a directory or /dev/zero given as a file (memory grew without limit).
+TEST(Csv, OnlyRegularFilesAreRead) {
+  EXPECT_EQ(trueaxis::test::error_of([] { CsvTable::read("/dev/zero"); }),
+            "/dev/zero: not a regular file (a device, pipe or socket)");
+  const std::string dir = trueaxis::test::temp_dir();
+  EXPECT_EQ(trueaxis::test::error_of([&] { CsvTable::read(dir); }),
+            dir + ": not a regular file (a directory)");
+  EXPECT_EQ(trueaxis::test::error_of([&] { CsvTable::read(dir + "/none.csv"); }),
+            dir + "/none.csv: no such file");
+}

@@ -45,8 +45,18 @@ TEST(SpaceIo, PlansAreReadInTheirUnitsAndBadOnesNameTheSpot) {
            {"{\"spacing\": 50,\n \"noise\": 1}", "p.json:2:11: unknown key 'noise'"},
            {"{\"probes\": \"five-point\"}", "p.json:1:12: probes must be"},
            {"{\"monte_carlo\": 1.5}", "p.json:1:17: 'monte_carlo' must be a whole number"},
-           {"{\"monte_carlo\": 1}", "p.json:1:1: monte_carlo must be 0"},
-           {"{\"spacing\": -5}", "p.json:1:1: the grid spacing must be positive"},
+           {"{\"monte_carlo\": 1}", "p.json:1:17: monte_carlo must be 0"},
+           {"{\"spacing\": -5}", "p.json:1:13: spacing -5 mm: must be between 1 and 100000"},
+           // Found by fuzzing: a grid of 1e-9 mm ran out of memory, 1e309 overflowed the
+           // parser, 1e9 repetitions ran for ever, a subnormal spacing read as "too few stations".
+           {"{\"spacing\": 1e-9}", "p.json:1:13: spacing 1e-09 mm: must be between 1 and"},
+           {"{\"spacing\": 50,\n \"seed\": 1e309}",
+            "p.json:2:10: the number '1e309' is out of range"},
+           {"{\"monte_carlo\": 1e9}", "p.json:1:17: monte_carlo 1e+09: at most 1000"},
+           {"{\"spacing\": 1e-320}", "p.json:1:13: 'spacing' = 9.99989e-321 is too small"},
+           {"{\"spacing\": 1e300}", "p.json:1:13: 'spacing' = 1e+300 is out of range"},
+           {"{\"probe_noise_um\": -1}", "p.json:1:20: probe_noise_um -1 um: must be between 0"},
+           {std::string(100, '[') + std::string(100, ']'), "p.json:1:65: nested more than 64"},
            {"{\"diagonals\": 1}", "p.json:1:15: 'diagonals' must be true or false"},
        }) {
     const std::string msg = error_of([&] { read_plan(temp_file("p.json", c.text)); });

@@ -12,6 +12,11 @@
 
 namespace trueaxis::io {
 
+// Limits of what a JSON reader accepts: nesting depth, and the size of a number (subnormal
+// numbers, below 2.2e-308, are refused too).
+constexpr std::size_t kMaxJsonDepth = 64;
+constexpr double kMaxJsonMagnitude = 1e12;
+
 class JsonFile {
  public:
   using json = nlohmann::json;
