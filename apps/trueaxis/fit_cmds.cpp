@@ -23,14 +23,20 @@ int run_fit(geometry::Element e, const FitArgs& a) {
   io::write_fit(a.output, f);
   if (!a.quiet) {
     std::string size;
-    if (f.diameter > 0) size = fmt::format(", diameter {:.9g} mm", f.diameter);
+    const bool u = f.has_uncertainty;
+    if (f.diameter > 0)
+      size = u ? fmt::format(", diameter {:.9g} mm (u = {:.2g} mm)", f.diameter, f.u_diameter)
+               : fmt::format(", diameter {:.9g} mm", f.diameter);
     if (e == geometry::Element::Cone)
-      size = fmt::format(", apex angle {:.9g} deg", f.apex_angle * 180 / M_PI);
+      size = u ? fmt::format(", apex angle {:.9g} deg (u = {:.2g} deg)", f.apex_angle * 180 / M_PI,
+                             f.u_apex_angle * 180 / M_PI)
+               : fmt::format(", apex angle {:.9g} deg", f.apex_angle * 180 / M_PI);
     if (a.zone) size += fmt::format(", minimum zone {:.6g} mm", f.zone);
     fmt::print("{} {}fit to {} points{}: residual RMS {:.3g} mm, max {:.3g} mm -> {}\n",
                geometry::to_string(e), a.zone ? "minimum-zone " : "", p.cols(), size, f.rms, f.max,
                a.output);
   }
+  for (const auto& w : f.warnings) fmt::print(stderr, "trueaxis: warning: {}\n", w);
   return 0;
 }
 

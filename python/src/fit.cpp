@@ -41,6 +41,19 @@ void bind_fit(py::module_& m) {
         }
         if (zone) d["zone"] = f.zone;
         d["residuals"] = f.residuals;
+        if (f.has_uncertainty) {
+          py::dict u;
+          u["point"] = Eigen::Vector3d(f.u_point);
+          u["direction"] = Eigen::Vector3d(f.u_direction);
+          if (f.diameter > 0) u["diameter"] = f.u_diameter;
+          if (f.element == geometry::Element::Cone) {
+            u["distance"] = f.u_distance;
+            u["apex_angle_deg"] = f.u_apex_angle * 180 / M_PI;
+          }
+          d["uncertainty"] = u;
+        }
+        d["condition_number"] = f.condition_number;
+        d["warnings"] = f.warnings;
         d["rms"] = f.rms;
         d["max"] = f.max;
         return d;

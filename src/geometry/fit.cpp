@@ -17,6 +17,11 @@ namespace {
 
 constexpr double kDegenerate = 1e-9;    // relative singular value below which a set is degenerate
 constexpr double kMaxCoordinate = 1e9;  // mm: 1000 km, beyond any machine
+// A size whose standard uncertainty exceeds this fraction of it is refused, above the second
+// one it is reported with a warning.
+constexpr double kSizeNotDetermined = 0.25;
+constexpr double kSizePoorlyDetermined = 0.01;
+constexpr double kIllConditioned = 1e10;
 
 struct Pca {
   Eigen::Vector3d centroid;
@@ -78,7 +83,7 @@ void check(Element e, const Eigen::Matrix3Xd& p, const Pca& s) {
 // `update(state, dx)` returns the corrected state. Stops when a step no longer lowers the cost
 // beyond round-off. Returns the number of accepted steps.
 template <class State, class Eval, class Update>
-int refine(State& st, Eval&& eval, Update&& update) {
+int refine(State& st, Eval&& eval, Update&& update, double step_tol = 1e-12) {
   Eigen::VectorXd r, rt;
   Eigen::MatrixXd J;
   eval(st, r, &J);
@@ -99,7 +104,11 @@ int refine(State& st, Eval&& eval, Update&& update) {
     eval(trial, rt, nullptr);
     const double ct = rt.squaredNorm();
     if (std::isfinite(ct) && ct <= cost) {
-      const bool done = cost - ct <= 1e-15 * cost + 1e-300;
+      // Stop only where the cost no longer falls AND the step itself is at round-off: on a flat
+      // valley (a cone's apex against its angle) the cost can stall while the parameters still
+      // move.
+      const double step = dx.template lpNorm<Eigen::Infinity>();
+      const bool done = ct == cost || (cost - ct <= 1e-15 * cost + 1e-300 && step <= step_tol);
       st = trial;
       cost = ct;
       ++accepted;
@@ -300,21 +309,147 @@ Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& p) {
   return {};
 }
 
+namespace {
+
+// The reported quantities as one vector: point (3), direction (3), diameter, distance, apex.
+using Reported = Eigen::Matrix<double, 9, 1>;
+
+Reported reported(const Eigen::Vector3d& point, const Eigen::Vector3d& direction,
+                  double diameter = 0, double distance = 0, double apex = 0) {
+  Reported v;
+  v << point, direction, diameter, distance, apex;
+  return v;
+}
+
+// The least-squares problem at the solution (residuals r, Jacobian J with respect to a local
+// correction dx) and the map dx -> reported quantities: standard uncertainties
+// u = sqrt(diag(G C Gᵀ)) with C = s²(JᵀJ)⁻¹, s² = |r|²/(m − k), G by central differences;
+// and the condition number of J with unit columns.
+template <class Report>
+void propagate(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, Report&& report, Fit& f) {
+  const Eigen::Index m = J.rows(), k = J.cols();
+  Eigen::VectorXd scale = J.colwise().norm().transpose();
+  for (Eigen::Index j = 0; j < k; ++j)
+    if (!(scale[j] > 0)) scale[j] = 1;
+  const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeThinV);
+  const Eigen::VectorXd& sv = svd.singularValues();
+  f.condition_number = sv[k - 1] > 0 ? sv[0] / sv[k - 1] : std::numeric_limits<double>::infinity();
+  f.dof = m - k;
+  if (m <= k || !(sv[k - 1] > 0)) return;
+  const double s2 = r.squaredNorm() / static_cast<double>(m - k);
+  const Eigen::MatrixXd W =
+      scale.cwiseInverse().asDiagonal() * svd.matrixV() * sv.cwiseInverse().asDiagonal();
+  const Eigen::MatrixXd C = s2 * W * W.transpose();
+  Eigen::Matrix<double, 9, Eigen::Dynamic> G(9, k);
+  for (Eigen::Index j = 0; j < k; ++j) {
+    const double h = 1e-6 * std::max(1.0, std::sqrt(C(j, j)) * 1e3);
+    Eigen::VectorXd dx = Eigen::VectorXd::Zero(k);
+    dx[j] = h;
+    const Reported plus = report(dx);
+    dx[j] = -h;
+    G.col(j) = (plus - report(dx)) / (2 * h);
+  }
+  const Reported u = (G * C * G.transpose()).diagonal().cwiseMax(0).cwiseSqrt();
+  if (!u.allFinite()) return;
+  f.u_point = u.head<3>();
+  f.u_direction = u.segment<3>(3);
+  f.u_diameter = u[6];
+  f.u_distance = u[7];
+  f.u_apex_angle = u[8];
+  f.has_uncertainty = true;
+}
+
+// A plane through c with normal R.col(2), perturbed by dx = (tilt a, tilt b, offset d): its
+// normal and the foot of c on it.
+void perturbed_plane(const Eigen::Vector3d& c, const Eigen::Matrix3d& R, const double* dx,
+                     Eigen::Vector3d& point, Eigen::Vector3d& normal) {
+  normal = (R * Eigen::Vector3d(-dx[0], -dx[1], 1)).normalized();
+  point = c + (R.col(2) * dx[2]).dot(normal) * normal;
+}
+
+// Plane residuals (heights in the frame R about c) and Jacobian for dx = (a, b, d).
+void plane_problem(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& c, const Eigen::Matrix3d& R,
+                   Eigen::VectorXd& r, Eigen::MatrixXd& J) {
+  const Eigen::Matrix3Xd q = R.transpose() * (p.colwise() - c);
+  r = q.row(2).transpose();
+  J.resize(p.cols(), 3);
+  J.col(0) = -q.row(0).transpose();
+  J.col(1) = -q.row(1).transpose();
+  J.col(2).setConstant(-1);
+}
+
+// Refuses a size the points cannot determine; warns when it is poorly determined.
+void judge_size(Fit& f, const char* what, double size) {
+  if (!f.has_uncertainty || !(size > 0)) return;
+  const double rel = f.u_diameter / size;
+  const char* e = to_string(f.element);
+  if (rel > kSizeNotDetermined)
+    throw Error(fmt::format(
+        "{} fit: the {} is not determined by these points ({:.4g} mm with a standard "
+        "uncertainty of {:.2g} mm): they cover too little of a {} for their scatter; fit a "
+        "simpler element (a plane or a line) or measure more of the surface",
+        e, what, size, f.u_diameter, e));
+  if (rel > kSizePoorlyDetermined)
+    f.warnings.push_back(fmt::format(
+        "the {} is poorly determined: {:.4g} mm with a standard uncertainty of {:.2g} mm "
+        "({:.1f} %); the points cover little of the {}",
+        what, size, f.u_diameter, 100 * rel, e));
+}
+
+}  // namespace
+
 Fit fit(Element element, const Eigen::Matrix3Xd& p) {
   check_points(element, p);
   const Pca s = pca(p);
   check(element, p, s);
   Fit f;
   f.element = element;
+  const double extent = std::max(1.0, (p.colwise() - s.centroid).colwise().norm().maxCoeff());
+  const double step_tol = 1e-13 * extent;
   switch (element) {
-    case Element::Line:
+    case Element::Line: {
       f.point = s.centroid;
       f.direction = s.axes.col(0);
+      // Perpendicular offsets (2 per point) against dx = (x0, y0, a, b) in the line's frame.
+      const Eigen::Matrix3d R = basis(f.direction);
+      const Eigen::Matrix3Xd q = R.transpose() * (p.colwise() - s.centroid);
+      const Eigen::Index n = p.cols();
+      Eigen::VectorXd r(2 * n);
+      Eigen::MatrixXd J = Eigen::MatrixXd::Zero(2 * n, 4);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        r[2 * i] = q(0, i);
+        r[2 * i + 1] = q(1, i);
+        J(2 * i, 0) = J(2 * i + 1, 1) = -1;
+        J(2 * i, 2) = J(2 * i + 1, 3) = -q(2, i);
+      }
+      propagate(
+          J, r,
+          [&](const Eigen::VectorXd& dx) {
+            const Eigen::Vector3d d = (R * Eigen::Vector3d(dx[2], dx[3], 1)).normalized();
+            const Eigen::Vector3d x0 = s.centroid + R * Eigen::Vector3d(dx[0], dx[1], 0);
+            return reported(x0 + (s.centroid - x0).dot(d) * d, d);
+          },
+          f);
       break;
-    case Element::Plane:
+    }
+    case Element::Plane: {
       f.point = s.centroid;
       f.direction = s.axes.col(2);
+      const Eigen::Matrix3d R = basis(f.direction);
+      Eigen::VectorXd r;
+      Eigen::MatrixXd J;
+      plane_problem(p, s.centroid, R, r, J);
+      propagate(
+          J, r,
+          [&](const Eigen::VectorXd& dx) {
+            Eigen::Vector3d point, normal;
+            perturbed_plane(s.centroid, R, dx.data(), point, normal);
+            return reported(point, normal);
+          },
+          f);
       break;
+    }
     case Element::Circle: {
       const Eigen::Matrix3d R = basis(s.axes.col(2));
       const Eigen::Matrix2Xd q = (R.transpose() * (p.colwise() - s.centroid)).topRows<2>();
@@ -322,6 +457,30 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       f.point = s.centroid + R * Eigen::Vector3d(c.c.x(), c.c.y(), 0);
       f.direction = s.axes.col(2);
       f.diameter = 2 * c.r;
+      // The plane (a, b, d) and the circle in it (cx, cy, r), as one block-diagonal problem.
+      const Eigen::Index n = p.cols();
+      Eigen::VectorXd rp, r(2 * n);
+      Eigen::MatrixXd Jp, J = Eigen::MatrixXd::Zero(2 * n, 6);
+      plane_problem(p, s.centroid, R, rp, Jp);
+      r.head(n) = rp;
+      J.topLeftCorner(n, 3) = Jp;
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const Eigen::Vector2d d = q.col(i) - c.c;
+        const double rho = d.norm();
+        r[n + i] = rho - c.r;
+        J.row(n + i).tail<3>() << -d.x() / rho, -d.y() / rho, -1;
+      }
+      propagate(
+          J, r,
+          [&](const Eigen::VectorXd& dx) {
+            Eigen::Vector3d point, normal;
+            perturbed_plane(s.centroid, R, dx.data(), point, normal);
+            const Eigen::Vector3d centre =
+                s.centroid + R * Eigen::Vector3d(c.c.x() + dx[3], c.c.y() + dx[4], dx[2]);
+            return reported(centre, normal, 2 * (c.r + dx[5]));
+          },
+          f);
+      judge_size(f, "diameter", f.diameter);
       break;
     }
     case Element::Sphere: {
@@ -348,9 +507,20 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       auto update = [](const SphereState& x, const Eigen::VectorXd& dx) {
         return SphereState{x.c + dx.head<3>(), x.r + dx[3]};
       };
-      f.iterations = refine(st, eval, update);
+      f.iterations = refine(st, eval, update, step_tol);
       f.point = s.centroid + st.c;
       f.diameter = 2 * std::abs(st.r);
+      Eigen::VectorXd r;
+      Eigen::MatrixXd J;
+      eval(st, r, &J);
+      propagate(
+          J, r,
+          [&](const Eigen::VectorXd& dx) {
+            const SphereState t = update(st, dx);
+            return reported(s.centroid + t.c, Eigen::Vector3d::Zero(), 2 * std::abs(t.r));
+          },
+          f);
+      judge_size(f, "diameter", f.diameter);
       break;
     }
     case Element::Cylinder:
@@ -358,13 +528,13 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       const bool cone = element == Element::Cone;
       double best = std::numeric_limits<double>::infinity();
       AxisState found;
+      auto eval = [&](const AxisState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
+        cone ? cone_eval(p, x, r, J) : cylinder_eval(p, x, r, J);
+      };
       for (int k = 0; k < 3; ++k) {
         AxisState st;
         if (!axis_start(p, s.centroid, s.axes.col(k), cone, st)) continue;
-        auto eval = [&](const AxisState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
-          cone ? cone_eval(p, x, r, J) : cylinder_eval(p, x, r, J);
-        };
-        const int it = refine(st, eval, move_axis);
+        const int it = refine(st, eval, move_axis, step_tol);
         Eigen::VectorXd r;
         eval(st, r, nullptr);
         const double cost = r.squaredNorm();
@@ -378,23 +548,39 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
         throw Error(fmt::format("{} fit: no start value converged (are the points on a {}?)",
                                 to_string(element), to_string(element)));
       // Report the axis point nearest the centroid; a cone opens towards +direction.
-      const double t = (s.centroid - found.x0).dot(found.a);
-      f.point = found.x0 + t * found.a;
-      f.direction = found.a;
-      if (!cone) {
-        f.diameter = 2 * std::abs(found.r);
-      } else {
-        double psi = found.psi, radius = found.r + t * std::tan(found.psi);
-        if (psi < 0) {
-          psi = -psi;
-          f.direction = -f.direction;
-        }
-        f.apex_angle = 2 * psi;
-        f.distance = radius * std::cos(psi);
-      }
+      const double sign = found.psi < 0 ? -1 : 1;
+      auto report = [&](const AxisState& x) {
+        const double t = (s.centroid - x.x0).dot(x.a);
+        const Eigen::Vector3d point = x.x0 + t * x.a;
+        if (!cone) return reported(point, x.a, 2 * std::abs(x.r));
+        const double psi = sign * x.psi, radius = x.r + t * std::tan(x.psi);
+        return reported(point, sign * x.a, 0, radius * std::cos(psi), 2 * psi);
+      };
+      const Reported v = report(found);
+      f.point = v.head<3>();
+      f.direction = v.segment<3>(3);
+      f.diameter = v[6];
+      f.distance = v[7];
+      f.apex_angle = v[8];
+      Eigen::VectorXd r;
+      Eigen::MatrixXd J;
+      eval(found, r, &J);
+      propagate(
+          J, r, [&](const Eigen::VectorXd& dx) { return report(move_axis(found, dx)); }, f);
+      if (!cone) judge_size(f, "diameter", f.diameter);
+      if (cone && f.has_uncertainty && f.u_apex_angle > f.apex_angle)
+        f.warnings.push_back(fmt::format(
+            "the apex angle {:.3g} deg is smaller than its standard uncertainty ({:.2g} deg): "
+            "these points do not tell this cone from a cylinder",
+            f.apex_angle * 180 / M_PI, f.u_apex_angle * 180 / M_PI));
       break;
     }
   }
+  if (f.condition_number > kIllConditioned)
+    f.warnings.push_back(fmt::format(
+        "the fit is numerically ill-conditioned (condition number {:.2g}): the points barely "
+        "determine some of the {}'s parameters",
+        f.condition_number, to_string(element)));
   f.residuals = distances(f, p);
   f.rms = std::sqrt(f.residuals.squaredNorm() / static_cast<double>(p.cols()));
   f.max = f.residuals.cwiseAbs().maxCoeff();

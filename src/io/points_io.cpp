@@ -92,6 +92,27 @@ void write_fit(const std::string& path, const geometry::Fit& f) {
     j["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
   }
   if (f.zone > 0) j["zone"] = f.zone;
+  if (f.has_uncertainty) {
+    // Standard uncertainties (k = 1) of the values above, same units.
+    nlohmann::ordered_json u;
+    const bool centre_u = f.element == Element::Circle || f.element == Element::Sphere;
+    u[centre_u ? "center" : "point"] = {f.u_point.x(), f.u_point.y(), f.u_point.z()};
+    if (f.element != Element::Sphere) {
+      const bool normal = f.element == Element::Plane || f.element == Element::Circle;
+      u[normal ? "normal" : "direction"] = {f.u_direction.x(), f.u_direction.y(),
+                                            f.u_direction.z()};
+    }
+    if (f.diameter > 0) u["diameter"] = f.u_diameter;
+    if (f.element == Element::Cone) {
+      u["distance"] = f.u_distance;
+      u["apex_angle_deg"] = f.u_apex_angle * 180 / M_PI;
+    }
+    j["uncertainty"] = u;
+    j["dof"] = f.dof;
+  }
+  if (std::isfinite(f.condition_number) && f.condition_number > 0)
+    j["condition_number"] = f.condition_number;
+  j["warnings"] = f.warnings;
   j["rms"] = f.rms;
   j["max"] = f.max;
   j["iterations"] = f.iterations;

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <string>
+#include <vector>
 
 namespace trueaxis::geometry {
 
@@ -37,11 +38,28 @@ struct Fit {
   double rms = 0, max = 0;    // of |residuals|
   int iterations = 0;         // Gauss–Newton steps (0 for closed-form fits)
   double zone = 0;            // minimum-zone fits: the width of the zone (mm), else 0
+
+  // Least-squares fits: standard uncertainties of the reported quantities, from the Jacobian at
+  // the solution scaled by the residual variance (s² = Σr²/dof), i.e. assuming independent
+  // errors of equal variance in every point. Each component of `point` and `direction` on its
+  // own (mm; direction: unitless, ≈ rad); size in mm; apex angle in rad. Only when
+  // has_uncertainty (the data are redundant: dof > 0).
+  bool has_uncertainty = false;
+  Eigen::Vector3d u_point = Eigen::Vector3d::Zero(), u_direction = Eigen::Vector3d::Zero();
+  double u_diameter = 0, u_distance = 0, u_apex_angle = 0;
+  long dof = 0;                 // residuals − parameters
+  double condition_number = 0;  // of the Jacobian with unit columns at the solution
+  // Plain-language warnings: a poorly determined size (standard uncertainty above 1 % of it),
+  // a cone that cannot be told from a cylinder, an ill-conditioned fit (condition > 1e10).
+  std::vector<std::string> warnings;
 };
 
 // Least-squares fit of `element` to the points (3 × n, mm). Preconditions (else Error): finite
-// coordinates; at least 2 distinct points (line), 3 non-collinear (plane, circle), 4
-// non-coplanar (sphere), 5 (cylinder), 6 (cone).
+// coordinates within 1e9 mm; at least 2 distinct points (line), 3 non-collinear (plane,
+// circle), 4 non-coplanar (sphere), 5 (cylinder), 6 (cone). A diameter whose standard
+// uncertainty exceeds a quarter of it (a sphere fitted to a nearly flat patch) is refused: the
+// points do not determine it. The Gauss–Newton iteration stops only when both the cost and the
+// step are at round-off.
 Fit fit(Element element, const Eigen::Matrix3Xd& points);
 
 // Minimum-zone (Chebyshev) fits: the element in the middle of the thinnest zone that contains
