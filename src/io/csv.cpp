@@ -13,6 +13,8 @@
 namespace trueaxis::io {
 namespace {
 
+constexpr double kMaxCsvMagnitude = 1e12;
+
 bool is_space(char c) {
   return c == ' ' || c == '\t' || c == '\r';
 }
@@ -94,6 +96,12 @@ void parse_chunk(std::string_view text, const std::vector<std::string>& header, 
       if (!std::isfinite(v))
         return fail(colno, fmt::format("{} is not allowed (column '{}')",
                                        std::isnan(v) ? "NaN" : "Inf", header[c]));
+      // No position (mm), deviation (µm), angle (µrad) or current in a trueaxis table comes near
+      // this; beyond it a value is corruption, and would come out as inf or NaN downstream.
+      if (std::abs(v) > kMaxCsvMagnitude)
+        return fail(colno, fmt::format("{:g} is out of range in column '{}' (its size must be "
+                                       "below {:g})",
+                                       v, header[c], kMaxCsvMagnitude));
       out.values.push_back(v);
       f0 = comma + 1;
     }

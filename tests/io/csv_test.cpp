@@ -71,7 +71,7 @@ TEST(Csv, MissingColumnAndMissingFile) {
 TEST(Csv, WriteReadRoundTripIsExact) {
   Eigen::VectorXd a(3), b(3);
   a << 0.1, 1.0 / 3.0, -2e-17;
-  b << 1e300, 5, 6;
+  b << 9.87654321e11, 5, 6;  // inputs are bounded by 1e12
   const std::string p = trueaxis::test::temp_file("rt.csv", "");
   trueaxis::io::write_csv(p, {"a", "b"}, {&a, &b});
   const auto t = CsvTable::read(p);
@@ -162,4 +162,12 @@ TEST(Csv, OnlyRegularFilesAreRead) {
             dir + ": not a regular file (a directory)");
   EXPECT_EQ(trueaxis::test::error_of([&] { CsvTable::read(dir + "/none.csv"); }),
             dir + "/none.csv: no such file");
+}
+
+// Found by fuzzing: 1e308 in a probe file ran through to bare inf/-nan tokens in result.json.
+TEST(Csv, AbsurdMagnitudesAreRefusedWhereTheyStand) {
+  EXPECT_EQ(error_of("x,a\n0,1\n10,1e308\n"),
+            "f.csv:3:4: 1e+308 is out of range in column 'a' (its size must be below 1e+12)");
+  EXPECT_EQ(error_of("x,a\n-2e12,1\n"),
+            "f.csv:2:1: -2e+12 is out of range in column 'x' (its size must be below 1e+12)");
 }
