@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "progress.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/machine.hpp"
@@ -36,7 +37,10 @@ int run_space(const SpaceArgs& a) {
                    : "");
     std::fflush(stdout);
   }
-  const surface::SpaceResult s = surface::measure_space(m, plan);
+  Progress progress("measuring", a.quiet);
+  const surface::SpaceResult s =
+      surface::measure_space(m, plan, [&](double f) { progress.update(f); });
+  progress.done();
   std::optional<surface::Verification> v;
   if (a.verify > 0) v = surface::verify_compensation(m, s.map, a.verify, plan.seed);
   io::write_space(a.output, s, plan, v);
@@ -47,19 +51,29 @@ int run_space(const SpaceArgs& a) {
                                  {report::space_section(a.output, s, v ? &*v : nullptr)}));
   if (!a.quiet) {
     fmt::print("{}", s.summary());
-    if (v)
+    if (v) {
       fmt::print(
           "  compensation check at {} random points (rigid-body part removed):\n"
           "    before: RMS {:.3f} um, max {:.3f} um\n    after:  RMS {:.3f} um, max {:.3f} um "
-          "(improvement x{:.1f})\n    expected after: RMS {:.3f} um = interpolation {:.3f} (+) "
-          "map uncertainty {:.3f}\n",
+          "(improvement x{:.1f})\n",
           v->points, v->before_rms * 1e3, v->before_max * 1e3, v->after_rms * 1e3,
-          v->after_max * 1e3, v->improvement(), v->predicted_rms * 1e3, v->interpolation_rms * 1e3,
-          v->uncertainty_rms * 1e3);
+          v->after_max * 1e3, v->improvement());
+      if (v->uncertainty_known)
+        fmt::print(
+            "    expected after: RMS {:.3f} um = interpolation {:.3f} (+) map uncertainty {:.3f}\n",
+            v->predicted_rms * 1e3, v->interpolation_rms * 1e3, v->uncertainty_rms * 1e3);
+      else
+        fmt::print(
+            "    expected after: at least RMS {:.3f} um (interpolation; the map's uncertainty was "
+            "not computed)\n",
+            v->interpolation_rms * 1e3);
+    }
     fmt::print("wrote {}{}{} in {:.1f} s\n", a.output, a.csv.empty() ? "" : ", " + a.csv,
                a.report.empty() ? "" : ", " + a.report,
                std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
   }
+  for (const auto& w : surface::space_warnings(s, v ? &*v : nullptr))
+    fmt::print(stderr, "trueaxis: warning: {}\n", w);
   return 0;
 }
 

@@ -137,9 +137,16 @@ void write_space(const std::string& path, const surface::SpaceResult& s,
                          {"after_rms", v->after_rms * 1e3},
                          {"after_max", v->after_max * 1e3},
                          {"improvement", v->improvement()},
-                         {"interpolation_rms", v->interpolation_rms * 1e3},
-                         {"uncertainty_rms", v->uncertainty_rms * 1e3},
-                         {"predicted_rms", v->predicted_rms * 1e3}};
+                         {"interpolation_rms", v->interpolation_rms * 1e3}};
+  if (v && v->uncertainty_known) {
+    j["verification"]["uncertainty_rms"] = v->uncertainty_rms * 1e3;
+    j["verification"]["predicted_rms"] = v->predicted_rms * 1e3;
+  } else if (v) {
+    // Not computed: no number, and the prediction is only a lower bound.
+    j["verification"]["uncertainty_rms"] = nullptr;
+    j["verification"]["predicted_rms_at_least"] = v->predicted_rms * 1e3;
+  }
+  j["warnings"] = surface::space_warnings(s, v ? &*v : nullptr);
   write_json(path, j);
 }
 

@@ -94,6 +94,7 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
   const Eigen::Index nx = m.size(0), ny = m.size(1), nz = m.size(2);
   Section s;
   s.title = title;
+  s.warnings = surface::space_warnings(sp, v);
   s.intro_html = fmt::format(
       "<p>Error vectors e = actual − nominal (µm) on a {} × {} × {} grid, from {} straightness "
       "runs and {} laser runs. Not determined by the campaign: {}; {}.</p>",
@@ -114,9 +115,15 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
          fmt::format("{} / {}", um(v->before_rms), um(v->before_max))});
     s.table.push_back({"after compensation: RMS / max",
                        fmt::format("{} / {}", um(v->after_rms), um(v->after_max))});
-    s.table.push_back({"expected after: sqrt(interpolation² + uncertainty²)",
-                       fmt::format("{} = {} ⊕ {}", um(v->predicted_rms), um(v->interpolation_rms),
-                                   um(v->uncertainty_rms))});
+    if (v->uncertainty_known)
+      s.table.push_back({"expected after: sqrt(interpolation² + uncertainty²)",
+                         fmt::format("{} = {} ⊕ {}", um(v->predicted_rms), um(v->interpolation_rms),
+                                     um(v->uncertainty_rms))});
+    else
+      s.table.push_back(
+          {"expected after: at least the interpolation error (uncertainty not "
+           "computed)",
+           fmt::format("≥ {}", um(v->interpolation_rms))});
     s.table.push_back(
         {"improvement (RMS before / after)", fmt::format("×{:.1f}", v->improvement())});
   }
@@ -171,11 +178,12 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
     };
     p.series.push_back({"before", sorted(v->before), {}, "#d62728", false});
     p.series.push_back({"after", sorted(v->after), {}, "#1f77b4", false});
-    p.series.push_back({"expected RMS after",
-                        Eigen::VectorXd::Constant(n, v->predicted_rms * 1e3),
-                        {},
-                        "#2ca02c",
-                        true});
+    p.series.push_back(
+        {v->uncertainty_known ? "expected RMS after" : "expected RMS after (interpolation only)",
+         Eigen::VectorXd::Constant(n, v->predicted_rms * 1e3),
+         {},
+         "#2ca02c",
+         true});
     p.log_y = true;
     s.plots.push_back(std::move(p));
   }

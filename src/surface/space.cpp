@@ -14,6 +14,7 @@ namespace trueaxis::surface {
 namespace {
 
 constexpr const char* kAxis = "xyz";
+constexpr double kTooFine = 2;  // uncertainty / interpolation ratio that calls a grid too fine
 
 // Seeds for the individual runs of one campaign: reproducible and independent.
 std::uint64_t run_seed(std::uint64_t seed, std::uint64_t counter) {
@@ -54,6 +55,7 @@ struct Campaign {
   // Outputs.
   std::vector<LevelSurface> surfaces;
   long straightness_runs = 0, laser_runs = 0;
+  std::function<void()> tick;  // called after every level surface and at the end
   std::vector<std::string> unobservable;
 
   Campaign(const sim::Machine& machine, const SpacePlan& p,
@@ -282,13 +284,17 @@ struct Campaign {
   Eigen::Matrix3Xd run() {
     Eigen::Matrix3Xd E = Eigen::Matrix3Xd::Zero(3, n[0] * n[1] * n[2]);
     for (int c = 0; c < 3; ++c) {
-      for (Eigen::Index k = 0; k < n[c]; ++k) level_surface(c, k, E);
+      for (Eigen::Index k = 0; k < n[c]; ++k) {
+        level_surface(c, k, E);
+        if (tick) tick();
+      }
       stack(c, E);
     }
     if (plan.diagonals)
       squareness(E);
     else
       unobservable.push_back("squareness xy, xz, yz");
+    if (tick) tick();
     return E;
   }
 };
@@ -308,10 +314,23 @@ std::array<Eigen::VectorXd, 3> space_axes(const sim::Machine& m, const SpacePlan
   std::array<Eigen::VectorXd, 3> axes;
   for (int k = 0; k < 3; ++k) {
     const auto& r = m.range[static_cast<std::size_t>(k)];
-    const auto steps = std::max<Eigen::Index>(
-        2, static_cast<Eigen::Index>(std::ceil((r[1] - r[0]) / plan.spacing - 1e-9)));
+    const double want = std::ceil((r[1] - r[0]) / plan.spacing - 1e-9);
+    if (!(want < static_cast<double>(kMaxGridNodes)))
+      throw Error(
+          fmt::format("spacing {:g} mm gives more than {} nodes along {}; a campaign "
+                      "measures at most {} nodes: choose a larger spacing",
+                      plan.spacing, kMaxGridNodes, kAxis[k], kMaxGridNodes));
+    // `spacing` is the largest step; a three-point run needs at least 4 stations on a line.
+    const Eigen::Index fewest = plan.probes == ProbeMethod::ThreePoint ? 3 : 2;
+    const auto steps = std::max<Eigen::Index>(fewest, static_cast<Eigen::Index>(want));
     axes[static_cast<std::size_t>(k)] = Eigen::VectorXd::LinSpaced(steps + 1, r[0], r[1]);
   }
+  const Eigen::Index nodes = axes[0].size() * axes[1].size() * axes[2].size();
+  if (nodes > kMaxGridNodes)
+    throw Error(fmt::format(
+        "spacing {:g} mm gives a {} x {} x {} grid ({} nodes); a campaign measures at most {} "
+        "nodes: choose a larger spacing",
+        plan.spacing, axes[0].size(), axes[1].size(), axes[2].size(), nodes, kMaxGridNodes));
   return axes;
 }
 
@@ -321,12 +340,21 @@ void remove_rigid_motion(map::ErrorMap& map) {
   remove_rigid(p, map.error);
 }
 
-SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan) {
+SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan,
+                          const std::function<void(double)>& progress) {
   machine.validate();
   const auto axes = space_axes(machine, plan);
   SpaceResult out;
   out.map.axes = axes;
+  // Progress: one tick per level surface (and one per campaign's end), over every campaign.
+  const double ticks = static_cast<double>((axes[0].size() + axes[1].size() + axes[2].size() + 1) *
+                                           (1 + (plan.monte_carlo >= 2 ? plan.monte_carlo : 0)));
+  double done = 0;
+  const std::function<void()> tick = [&] {
+    if (progress) progress(std::min(1.0, ++done / ticks));
+  };
   Campaign c0(machine, plan, axes, plan.seed);
+  c0.tick = tick;
   out.map.error = c0.run();
   remove_rigid_motion(out.map);
   out.surfaces = c0.surfaces;
@@ -349,6 +377,7 @@ SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan) {
       rep.axes = axes;
       Campaign c(machine, plan, axes,
                  run_seed(plan.seed, 1'000'000 + static_cast<std::uint64_t>(r)));
+      c.tick = tick;
       rep.error = c.run();
       remove_rigid_motion(rep);
       const Eigen::Matrix3Xd d = rep.error - mean;
@@ -380,12 +409,41 @@ std::string SpaceResult::summary() const {
   if (map.uncertainty.size() != 0)
     s += fmt::format("  standard uncertainty: max {:.3f} um per component\n",
                      map.uncertainty.maxCoeff() * 1e3);
+  else
+    s += "  standard uncertainty: not computed (set monte_carlo in the plan)\n";
   s += fmt::format("  against the virtual machine's truth: RMS {:.4f} um, max {:.4f} um\n",
                    truth_rms * 1e3, truth_max * 1e3);
   std::string u;
   for (const auto& x : unobservable) u += (u.empty() ? "" : ", ") + x;
   s += "  unobservable: " + u + "\n  gauge: " + gauge + "\n";
   return s;
+}
+
+std::vector<std::string> space_warnings(const SpaceResult& space, const Verification* v) {
+  std::vector<std::string> w;
+  if (v && v->after_rms > v->before_rms)
+    w.push_back(fmt::format(
+        "compensating with this map makes the machine worse (RMS {:.3f} um before, {:.3f} um "
+        "after): do not use it",
+        v->before_rms * 1e3, v->after_rms * 1e3));
+  if (space.map.uncertainty.size() == 0) {
+    w.push_back(
+        "the map's uncertainty was not computed (monte_carlo is 0 in the plan): its noise, and "
+        "whether this grid is finer than the campaign supports, cannot be judged; set "
+        "monte_carlo to 20 or more");
+    return w;
+  }
+  // Finer grids interpolate better but make longer three-point runs, whose noise grows with
+  // their length; past the balance the map gets worse. Near the best spacing the interpolation
+  // error and the uncertainty are comparable, so an uncertainty well above it means "too fine".
+  if (v && v->uncertainty_rms > kTooFine * v->interpolation_rms)
+    w.push_back(fmt::format(
+        "the grid is finer than this campaign supports: the map's own uncertainty (RMS {:.3f} "
+        "um) is {:.1f} times what interpolation on this grid costs ({:.3f} um); a larger "
+        "spacing would give a better map",
+        v->uncertainty_rms * 1e3, v->uncertainty_rms / v->interpolation_rms,
+        v->interpolation_rms * 1e3));
+  return w;
 }
 
 Verification verify_compensation(const sim::Machine& machine, const map::ErrorMap& space,
@@ -427,7 +485,8 @@ Verification verify_compensation(const sim::Machine& machine, const map::ErrorMa
   Eigen::Matrix3Xd ct = c;
   map::compensate(truth, ct, options);
   v.interpolation_rms = rms(residual(ct));
-  if (space.uncertainty.size() != 0) {
+  v.uncertainty_known = space.uncertainty.size() != 0;
+  if (v.uncertainty_known) {
     map::ErrorMap u;
     u.axes = space.axes;
     u.error = space.uncertainty.cwiseProduct(space.uncertainty);  // interpolate variances

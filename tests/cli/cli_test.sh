@@ -249,5 +249,13 @@ printf '{"chain": "FYXZ", "ranges": {"x": [0, 800], "y": [0, 600], "z": [0, 1e30
 expect_code 1 "$T" machine error absurd.json bg-cmd.csv
 grep -q "absurd.json:1:[0-9]*: 'ranges.z\[1\]' = 1e+300 is out of range" err.txt && ok || bad "1e300 in machine.json: $(cat err.txt)"
 
+# space: progress with the time left, no figure that was not computed, refusals before work.
+echo '{"spacing": 100}' > p0.json
+TRUEAXIS_PROGRESS=always "$T" space --machine small.json --plan p0.json -o s0.json >out.txt 2>err.txt && ok || bad "space without monte carlo"
+grep -q "% done, " err.txt && grep -q "standard uncertainty: not computed" out.txt && grep -q "at least RMS" out.txt && ok || bad "space progress and not-computed: $(cat out.txt err.txt)"
+grep -q "uncertainty was not computed" err.txt && grep -q '"predicted_rms_at_least"' s0.json && ! grep -q '"uncertainty_rms": 0' s0.json && ok || bad "space.json: no uncomputed figure"
+echo '{"spacing": 1}' > p1.json
+expect_err "spacing 1 mm gives a" "$T" space --machine small.json --plan p1.json -o o.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

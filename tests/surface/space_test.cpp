@@ -39,6 +39,70 @@ TEST(Space, NoiseFreeCampaignRecoversTheMachineUpToItsRigidBodyMotion) {
   }
 }
 
+// A run reports its progress: increasing fractions that end at 1, over every repetition.
+TEST(Space, ProgressAdvancesToTheEnd) {
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.spacing = 100;
+  p.probe_noise = 0.05e-3;
+  p.monte_carlo = 3;
+  std::vector<double> seen;
+  measure_space(m, p, [&](double f) { seen.push_back(f); });
+  ASSERT_GT(seen.size(), 10u);
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_GT(seen.front(), 0);
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+}
+
+// No figure that was not computed, and a word when the grid is finer than the noise allows: a
+// 20 mm grid came out worse than a 50 mm one, with no word.
+TEST(Space, WarningsSayWhatTheDataCannotSupport) {
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.spacing = 100;
+  p.probe_noise = 0.05e-3;
+  SpaceResult r = measure_space(m, p);
+  Verification v = verify_compensation(m, r.map, 200);
+  EXPECT_FALSE(v.uncertainty_known);
+  auto w = space_warnings(r, &v);
+  ASSERT_EQ(w.size(), 1u);
+  EXPECT_NE(w[0].find("uncertainty was not computed"), std::string::npos);
+  EXPECT_NE(r.summary().find("not computed"), std::string::npos);
+
+  p.monte_carlo = 4;
+  r = measure_space(m, p);
+  v = verify_compensation(m, r.map, 200);
+  EXPECT_TRUE(v.uncertainty_known);
+  EXPECT_TRUE(space_warnings(r, &v).empty()) << space_warnings(r, &v)[0];
+
+  p.spacing = 20;
+  p.probe_noise = 0.3e-3;
+  r = measure_space(m, p);
+  v = verify_compensation(m, r.map, 200);
+  w = space_warnings(r, &v);
+  ASSERT_FALSE(w.empty());
+  EXPECT_NE(w.back().find("finer than this campaign supports"), std::string::npos) << w.back();
+}
+
+TEST(Space, AGridTooFineToMeasureIsRefusedBeforeAnyWork) {
+  const sim::Machine m = small_machine();
+  SpacePlan p;
+  p.spacing = 1;  // 401 x 301 x 201 nodes
+  const std::string msg = [&] {
+    try {
+      space_axes(m, p);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  }();
+  EXPECT_NE(msg.find("spacing 1 mm gives a 401 x 301 x 201 grid (24260901 nodes)"),
+            std::string::npos)
+      << msg;
+  p.spacing = 1e-300;
+  EXPECT_THROW(space_axes(m, p), Error);
+}
+
 TEST(Space, WithoutDiagonalsTwistAndSquarenessAreUnobservableAndSaidSo) {
   const sim::Machine m = small_machine();
   SpacePlan p;

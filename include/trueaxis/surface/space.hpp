@@ -23,6 +23,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -66,8 +67,14 @@ struct SpaceResult {
 // The grid of the plan on the machine's ranges.
 std::array<Eigen::VectorXd, 3> space_axes(const sim::Machine& machine, const SpacePlan& plan);
 
-// Runs the campaign on the virtual machine and assembles the error space.
-SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan);
+// The most grid nodes a campaign is run on (a 10 mm grid on a 800 x 600 x 500 mm machine has
+// 252 000).
+constexpr Eigen::Index kMaxGridNodes = 500000;
+
+// Runs the campaign on the virtual machine and assembles the error space. `progress`, if given,
+// is called with the fraction done (0..1] as the campaign and its repetitions advance.
+SpaceResult measure_space(const sim::Machine& machine, const SpacePlan& plan,
+                          const std::function<void(double)>& progress = {});
 
 // Removes the least-squares rigid-body motion t + ω × p (over the nodes) from a map, in place.
 void remove_rigid_motion(map::ErrorMap& map);
@@ -80,11 +87,19 @@ struct Verification {
   double before_rms = 0, before_max = 0, after_rms = 0, after_max = 0;
   // Prediction of after_rms: the interpolation error (the truth sampled on the same grid, no
   // noise) combined with the map's interpolated uncertainty, sqrt(interp² + u²).
+  // Without the map's uncertainty (no Monte Carlo) uncertainty_rms is 0 and not known:
+  // predicted_rms is then only the interpolation part, a lower bound.
   double interpolation_rms = 0, uncertainty_rms = 0, predicted_rms = 0;
+  bool uncertainty_known = false;
   // Per point: the wanted positions and the residual error vectors before and after (3 × points).
   Eigen::Matrix3Xd commands, before, after;
   double improvement() const { return after_rms > 0 ? before_rms / after_rms : 0; }
 };
+// Plain-language warnings about a measured space: the uncertainty was not computed; the grid is
+// finer than the campaign supports (the map's uncertainty is more than twice the interpolation
+// error, which needs the verification).
+std::vector<std::string> space_warnings(const SpaceResult& space, const Verification* v);
+
 Verification verify_compensation(const sim::Machine& machine, const map::ErrorMap& space,
                                  long points = 1000, std::uint64_t seed = 1,
                                  const map::CompensateOptions& options = {});
