@@ -239,8 +239,11 @@ py::dict verification_out(const surface::Verification& v) {
   d["after_rms"] = v.after_rms * 1e3;
   d["after_max"] = v.after_max * 1e3;
   d["interpolation_rms"] = v.interpolation_rms * 1e3;
-  d["uncertainty_rms"] = v.uncertainty_rms * 1e3;
+  // Not computed (no Monte Carlo): None, and the prediction is only its interpolation part.
+  d["uncertainty_rms"] = v.uncertainty_known ? py::object(py::float_(v.uncertainty_rms * 1e3))
+                                             : py::object(py::none());
   d["predicted_rms"] = v.predicted_rms * 1e3;
+  d["predicted_is_lower_bound"] = !v.uncertainty_known;
   d["improvement"] = v.improvement();
   return d;
 }

@@ -299,3 +299,13 @@ def test_space_json_from_the_cli_loads_and_exports(tmp_path):
     assert (tmp_path / "map.csv").read_text().startswith("x,y,z,ex_um,ey_um,ez_um")
     with pytest.raises(trueaxis.Error, match="axis must be"):
         em.export_linuxcnc(str(tmp_path / "w.comp"), "w")
+
+
+def test_measure_space_without_monte_carlo_states_no_uncertainty():
+    # No figure that was not computed: the map's uncertainty is None, the prediction a bound.
+    m = trueaxis.Machine.random(seed=2, ranges=[[0, 400], [0, 300], [0, 200]])
+    s = trueaxis.measure_space(m, spacing=100, probe_noise=0.05, verify=200)
+    v = s["verification"]
+    assert v["uncertainty_rms"] is None
+    assert v["predicted_is_lower_bound"]
+    assert v["predicted_rms"] == pytest.approx(v["interpolation_rms"])
