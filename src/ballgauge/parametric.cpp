@@ -301,7 +301,7 @@ std::string ParametricResult::summary() const {
     for (const auto& u : unobservable) names += (names.empty() ? "" : ", ") + u;
     s += fmt::format("  not seen by this stylus: {}\n", names);
   }
-  return s + model.summary();
+  return s + model.summary(unobservable);
 }
 
 Correction parametric_correction(const ParametricResult& result) {

@@ -160,7 +160,7 @@ Eigen::Matrix3Xd Machine::errors_at(const Eigen::Matrix3Xd& commands) const {
   return out;
 }
 
-std::string Machine::summary() const {
+std::string Machine::summary(const std::vector<std::string>& not_determined) const {
   std::string s =
       fmt::format("{} (chain {}, ranges x [{:g}, {:g}], y [{:g}, {:g}], z [{:g}, {:g}] mm)\n",
                   name.empty() ? "machine" : name, chain, range[0][0], range[0][1], range[1][0],
@@ -180,11 +180,18 @@ std::string Machine::summary() const {
       span[c] = (hi - lo) * (c < 3 ? 1e3 : 1e6);
     }
     const int a = (k + 1) % 3, b = (k + 2) % 3;
-    s += fmt::format(
-        "  {} axis                    {:6.2f} um    {:5.2f} {:5.2f} um        "
-        "{:5.1f} {:5.1f} {:5.1f} urad\n",
-        kAxes[k], span[k], span[std::min(a, b)], span[std::max(a, b)], span[3], span[4], span[5]);
+    auto cell = [&](int c, int width, int digits) {
+      const std::string name = error_name(k, static_cast<Component>(c));
+      for (const auto& n : not_determined)
+        if (n == name) return fmt::format("{:>{}}", "n/d", width);
+      return fmt::format("{:{}.{}f}", span[c], width, digits);
+    };
+    s += fmt::format("  {} axis                    {} um    {} {} um        {} {} {} urad\n",
+                     kAxes[k], cell(k, 6, 2), cell(std::min(a, b), 5, 2),
+                     cell(std::max(a, b), 5, 2), cell(3, 5, 1), cell(4, 5, 1), cell(5, 5, 1));
   }
+  if (!not_determined.empty())
+    s += "  n/d: not determined by the data (no effect on these measurements)\n";
   s += fmt::format("  squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad\n",
                    squareness_c0y * 1e6, squareness_b0z * 1e6, squareness_a0z * 1e6);
   return s;

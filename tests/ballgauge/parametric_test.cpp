@@ -104,6 +104,10 @@ TEST(Parametric, NoiseFreeDataOfAPolynomialMachineAreReproducedExactly) {
   // A stylus hanging straight down is not moved by the yaw of the ram (ECZ); nor is ECX seen.
   EXPECT_NE(std::find(r.unobservable.begin(), r.unobservable.end(), "ECZ"), r.unobservable.end());
   EXPECT_LT(r.rank, r.unknowns);  // the map's rigid motion is not determined
+  // ... and the summary says so in words instead of printing the model's zero for them.
+  const std::string summary = r.summary();
+  EXPECT_NE(summary.find("n/d urad"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("n/d: not determined by the data"), std::string::npos);
   // Held-out gauge blocks, noise-free: the parametric correction makes them exact (the model
   // family holds the truth, so Gauss–Newton on the exact model converges to it). Tip radius 0:
   // otherwise the end points, which the CMM compensates by r along the block, are corrected

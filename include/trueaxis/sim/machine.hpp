@@ -97,7 +97,9 @@ struct Machine {
 
   // A short table of the 21 errors: the span (max − min) of each function over its axis range
   // (µm or µrad) and the squareness values.
-  std::string summary() const;
+  // The error spans per axis. Errors named in `not_determined` (ISO names, e.g. "ECX": an
+  // identified model's functions the data cannot see) read "n/d" instead of a number.
+  std::string summary(const std::vector<std::string>& not_determined = {}) const;
 };
 
 // A seeded random machine with realistic magnitudes (spec 06). Straightness: bow plus cubic plus
