@@ -2,9 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <unordered_map>
 
 #include "trueaxis/error.hpp"
 
@@ -57,6 +59,24 @@ void LengthOptions::validate() const {
     throw Error("length verification: the repeat tolerance must be a finite number >= 0 mm");
 }
 
+namespace {
+
+// A repeat group's hash key: its nominal length and the cell of its first end point.
+struct CellKey {
+  double nominal;
+  std::array<long long, 3> cell;
+  bool operator==(const CellKey& o) const { return nominal == o.nominal && cell == o.cell; }
+};
+struct CellKeyHash {
+  std::size_t operator()(const CellKey& k) const {
+    std::size_t h = std::hash<double>{}(k.nominal);
+    for (long long c : k.cell) h = h * 1000003u ^ std::hash<long long>{}(c);
+    return h;
+  }
+};
+
+}  // namespace
+
 LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
                                   const Correction& corr, const LengthOptions& o) {
   o.validate();
@@ -64,7 +84,14 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
   if (!corr.apply) throw Error("length verification: the correction has no function");
   LengthVerification v;
   v.correction = corr.name;
-  std::vector<const LengthMeasurement*> first;  // first row of each repeat group
+  std::vector<const LengthMeasurement*> first;             // first row of each repeat group
+  const double cell = std::max(o.repeat_tolerance, 1e-6);  // mm
+  const auto cell_of = [cell](const Eigen::Vector3d& p) {
+    return std::array<long long, 3>{static_cast<long long>(std::floor(p.x() / cell)),
+                                    static_cast<long long>(std::floor(p.y() / cell)),
+                                    static_cast<long long>(std::floor(p.z() / cell))};
+  };
+  std::unordered_map<CellKey, std::vector<int>, CellKeyHash> groups;
   Eigen::Matrix3Xd ends(3, 2);
   for (std::size_t i = 0; i < lengths.size(); ++i) {
     const LengthMeasurement& m = lengths[i];
@@ -85,19 +112,43 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
       throw Error(fmt::format("length {}: {}", i, e.what()));
     }
     r.after = (ends.col(1) - ends.col(0)).norm() - m.nominal;
-    r.uncertainty = corr.length_uncertainty ? corr.length_uncertainty(m.a, m.b) : 0.0;
+    r.uncertainty = corr.length_uncertainty && !corr.length_uncertainties
+                        ? corr.length_uncertainty(m.a, m.b)
+                        : 0.0;
+    // Repeat groups are looked up in a hash of cells at least the tolerance wide, over the 27
+    // cells around the first end: linear time (a scan of every group was quadratic).
     r.position = -1;
-    for (std::size_t g = 0; g < first.size() && r.position < 0; ++g)
-      if (first[g]->nominal == m.nominal && (first[g]->a - m.a).norm() <= o.repeat_tolerance &&
-          (first[g]->b - m.b).norm() <= o.repeat_tolerance)
-        r.position = static_cast<int>(g);
+    const std::array<long long, 3> here = cell_of(m.a);
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          const auto it =
+              groups.find(CellKey{m.nominal, {here[0] + dx, here[1] + dy, here[2] + dz}});
+          if (it == groups.end()) continue;
+          for (int g : it->second)
+            if ((r.position < 0 || g < r.position) &&
+                (first[static_cast<std::size_t>(g)]->a - m.a).norm() <= o.repeat_tolerance &&
+                (first[static_cast<std::size_t>(g)]->b - m.b).norm() <= o.repeat_tolerance)
+              r.position = g;
+        }
     if (r.position < 0) {
       r.position = static_cast<int>(first.size());
       first.push_back(&m);
+      groups[CellKey{m.nominal, here}].push_back(r.position);
     }
     v.rows.push_back(r);
   }
   v.positions = static_cast<int>(first.size());
+  if (corr.length_uncertainties) {
+    Eigen::Matrix3Xd a(3, static_cast<Eigen::Index>(lengths.size())), b = a;
+    for (std::size_t i = 0; i < lengths.size(); ++i) {
+      a.col(static_cast<Eigen::Index>(i)) = lengths[i].a;
+      b.col(static_cast<Eigen::Index>(i)) = lengths[i].b;
+    }
+    const Eigen::VectorXd u = corr.length_uncertainties(a, b);
+    for (std::size_t i = 0; i < lengths.size(); ++i)
+      v.rows[i].uncertainty = u[static_cast<Eigen::Index>(i)];
+  }
   v.before = stats(v.rows, &LengthRow::before);
   v.after = stats(v.rows, &LengthRow::after);
   // Pooled repeatability of the measured lengths (before correction: the correction is a smooth

@@ -322,6 +322,27 @@ Correction parametric_correction(const ParametricResult& result) {
     const Eigen::Matrix3Xd cmds = p.colwise() - r->model.offset;
     p += r->model.errors_at(cmds);
   };
+  c.length_uncertainties = [r](const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
+    // The design matrix of all ends at once, in blocks that bound its memory (6·block × P).
+    constexpr Eigen::Index kBlock = 2048;
+    const Eigen::Index n = a.cols();
+    Eigen::VectorXd u(n);
+    for (Eigen::Index s = 0; s < n; s += kBlock) {
+      const Eigen::Index m = std::min(kBlock, n - s);
+      Eigen::Matrix3Xd ends(3, 2 * m);
+      ends.leftCols(m) = a.middleCols(s, m).colwise() - r->model.offset;
+      ends.rightCols(m) = b.middleCols(s, m).colwise() - r->model.offset;
+      const Eigen::MatrixXd J =
+          design_matrix(r->model.chain, r->model.offset, r->degree, r->centre, r->half_span, ends);
+      for (Eigen::Index i = 0; i < m; ++i) {
+        const Eigen::Vector3d d = (b.col(s + i) - a.col(s + i)).normalized();
+        const Eigen::RowVectorXd g =
+            d.transpose() * (J.middleRows(3 * (m + i), 3) - J.middleRows(3 * i, 3));
+        u[s + i] = std::sqrt(std::max(0.0, (g * r->covariance * g.transpose())(0, 0)));
+      }
+    }
+    return u;
+  };
   c.length_uncertainty = [r](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     const Eigen::Vector3d d = (b - a).normalized();
     const Eigen::RowVectorXd g =

@@ -74,7 +74,9 @@ std::string quote_cut(std::string_view s, std::size_t max) {
 
 int workers_for(std::size_t n) {
   constexpr std::size_t kMinPerWorker = 1 << 16;
-  const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
+  // Asked once: glibc answers hardware_concurrency() by reading /sys on every call, which made a
+  // loop of small evaluations (a parametric correction per gauge block) spend its time in open().
+  static const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
   const std::size_t by_size = std::max<std::size_t>(1, n / kMinPerWorker);
   return static_cast<int>(std::min<std::size_t>({hw, by_size, 8}));
 }

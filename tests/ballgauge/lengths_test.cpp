@@ -92,7 +92,7 @@ TEST(Lengths, AnAffineDistortionIsCorrectedExactlyByTheTrilinearMap) {
 }
 
 TEST(Lengths, RepeatsArePooledIntoTheRepeatability) {
-  const ballgauge::Correction none{"none", [](Eigen::Ref<Eigen::Matrix3Xd>) {}, {}};
+  const ballgauge::Correction none{"none", [](Eigen::Ref<Eigen::Matrix3Xd>) {}, {}, {}};
   std::vector<ballgauge::LengthMeasurement> L;
   // Position 0: errors +1, −1, 0 µm; position 1: +2, 0 µm (both ends within 1 mm).
   const double e0[] = {1e-3, -1e-3, 0}, e1[] = {2e-3, 0};
@@ -113,7 +113,7 @@ TEST(Lengths, RepeatsArePooledIntoTheRepeatability) {
 }
 
 TEST(Lengths, BadInputIsRefusedNamingTheRow) {
-  const ballgauge::Correction none{"none", [](Eigen::Ref<Eigen::Matrix3Xd>) {}, {}};
+  const ballgauge::Correction none{"none", [](Eigen::Ref<Eigen::Matrix3Xd>) {}, {}, {}};
   EXPECT_NE(error_of([&] { ballgauge::verify_lengths({}, none); }).find("no measurements"),
             std::string::npos);
   std::vector<ballgauge::LengthMeasurement> L{{{0, 0, 0}, {100, 0, 0}, 100},

@@ -38,6 +38,11 @@ struct Correction {
   std::string name;  // e.g. "grid", "parametric"
   std::function<void(Eigen::Ref<Eigen::Matrix3Xd>)> apply;
   std::function<double(const Eigen::Vector3d&, const Eigen::Vector3d&)> length_uncertainty;
+  // Optional: the same for many lengths at once (ends a.col(i), b.col(i)), used by
+  // verify_lengths when present; a model whose uncertainty needs a design matrix per point
+  // builds it once for all of them.
+  std::function<Eigen::VectorXd(const Eigen::Matrix3Xd&, const Eigen::Matrix3Xd&)>
+      length_uncertainties;
 };
 
 // The grid map's correction (trilinear unless `options` says cubic). Points outside the grid are
