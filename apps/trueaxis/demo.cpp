@@ -54,7 +54,11 @@ int run_demo(const DemoOptions& o) {
   const std::filesystem::path out(o.output);
   const std::filesystem::path dir =
       out.has_parent_path() ? out.parent_path() : std::filesystem::path(".");
-  std::filesystem::create_directories(dir);
+  // The demo writes a folder of its own: it creates it (the one output that does) and says so.
+  if (!std::filesystem::is_directory(dir)) {
+    std::filesystem::create_directories(dir);
+    say(fmt::format("created {}/ for the report and the files behind it", dir.string()));
+  }
 
   // Scenario 1: straightness separation on a pitching carriage with four probes and a level.
   sim::StraightnessOptions so;

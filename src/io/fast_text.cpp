@@ -2,8 +2,10 @@
 
 #include <fmt/compile.h>
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <filesystem>
 #include <thread>
@@ -114,9 +116,28 @@ int flush_only(std::FILE* f) {
 }  // namespace
 
 OutFile::OutFile(const std::string& path)
-    : path_(path == "-" ? "standard output" : path),
-      f_(path == "-" ? stdout : std::fopen(path.c_str(), "wb"),
-         path == "-" ? &flush_only : &std::fclose) {
+    : path_(path == "-" ? "standard output" : path), f_(nullptr, &std::fclose) {
+  if (path == "-") {
+    f_ = std::unique_ptr<std::FILE, int (*)(std::FILE*)>(stdout, &flush_only);
+    return;
+  }
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path p(path);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  if (!fs::is_directory(dir, ec))
+    throw Error(
+        fmt::format("{}: the directory '{}' does not exist (create it first)", path, dir.string()));
+  if (fs::is_directory(p, ec)) throw Error(fmt::format("{}: is a directory", path));
+  const auto st = fs::status(p, ec);
+  if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
+    f_.reset(std::fopen(path.c_str(), "wb"));  // a device or pipe: write to it directly
+  } else {
+    static std::atomic<unsigned> counter{0};
+    target_ = path;
+    partial_ = fmt::format("{}.partial-{}-{}", path, static_cast<long>(getpid()), counter++);
+    f_.reset(std::fopen(partial_.c_str(), "wb"));
+  }
   if (!f_) throw Error(fmt::format("{}: cannot open file for writing", path));
 }
 
@@ -175,13 +196,33 @@ void OutFile::write(const std::vector<std::string>& pieces) {
 
 void OutFile::close() {
   if (!f_) return;
-  const bool ok = std::fflush(f_.get()) == 0;
+  const bool ok = std::fflush(f_.get()) == 0 && !std::ferror(f_.get());
   auto* deleter = f_.get_deleter();
   const bool closed = deleter(f_.release()) == 0;
-  if (!ok || !closed) throw Error(fmt::format("{}: write error", path_));
+  if (!ok || !closed) {
+    if (!partial_.empty()) std::remove(partial_.c_str());
+    partial_.clear();
+    throw Error(fmt::format("{}: write error (disk full?); nothing was written", path_));
+  }
+  if (!partial_.empty()) {
+    std::error_code ec;
+    std::filesystem::rename(partial_, target_, ec);
+    if (ec) {
+      std::remove(partial_.c_str());
+      partial_.clear();
+      throw Error(fmt::format("{}: cannot put the file in place: {}", path_, ec.message()));
+    }
+    partial_.clear();
+  }
 }
 
 OutFile::~OutFile() {
+  if (f_ && !partial_.empty()) {  // never closed: an exception on the way; keep the old file
+    auto* deleter = f_.get_deleter();
+    deleter(f_.release());
+    std::remove(partial_.c_str());
+    return;
+  }
   try {
     close();
   } catch (...) {

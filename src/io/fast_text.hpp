@@ -55,7 +55,10 @@ void format_rows(const std::vector<const double*>& columns, std::size_t n,
                  std::vector<std::string>& pieces);
 
 // A file opened for writing that reports failures as trueaxis::Error naming the path. The path
-// "-" is standard output (flushed, not closed, by close()).
+// "-" is standard output (flushed, not closed, by close()). A regular file is written to a
+// temporary file in the same directory and renamed into place by close(), so that a failed or
+// concurrent run never leaves a file that is half of one run and half of another; a device
+// (/dev/null, /dev/full) is written directly. The directory must exist (it is not created).
 class OutFile {
  public:
   explicit OutFile(const std::string& path);
@@ -63,13 +66,16 @@ class OutFile {
   // Writes v[i]*scale for i in [0, n) separated by `sep`, formatted in parallel.
   void numbers(const double* v, std::size_t n, double scale, char sep);
   void write(const std::vector<std::string>& pieces);
-  // Flushes and closes; throws on a write error. Called by the destructor if not called (errors
-  // are then swallowed), so call it explicitly.
+  // Flushes, closes and puts the file in place; throws on a write error. A file that is never
+  // closed (an exception on the way) is discarded by the destructor and the target left as it
+  // was.
   void close();
   ~OutFile();
 
  private:
-  std::string path_;
+  std::string path_;     // as given (for messages)
+  std::string target_;   // where the file goes; empty for standard output
+  std::string partial_;  // the temporary file written first, renamed to target_ by close()
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f_;
   std::vector<std::string> pieces_;
 };

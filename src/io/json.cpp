@@ -297,10 +297,10 @@ Eigen::VectorXd JsonFile::numbers(const pointer& p, double scale) const {
 }
 
 void write_json(const std::string& path, const nlohmann::ordered_json& j) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error(fmt::format("{}: cannot open file for writing", path));
-  out << j.dump(1) << '\n';
-  if (!out) throw Error(fmt::format("{}: write error", path));
+  detail::OutFile out(path);
+  out.write(j.dump(1));
+  out.write("\n");
+  out.close();
 }
 
 std::string dotted(const JsonFile::pointer& p) {

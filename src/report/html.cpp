@@ -8,6 +8,7 @@
 #include <fstream>
 #include <string_view>
 
+#include "../io/fast_text.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::report {
@@ -225,13 +226,9 @@ svg.ta-fig{max-width:100%;height:auto}
 }
 
 void write(const std::string& path, const std::string& html) {
-  const std::filesystem::path p(path);
-  std::error_code ec;
-  if (p.has_parent_path()) std::filesystem::create_directories(p.parent_path(), ec);
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw Error(fmt::format("{}: cannot open file for writing", path));
-  out << html;
-  if (!out) throw Error(fmt::format("{}: write error", path));
+  io::detail::OutFile out(path);
+  out.write(html);
+  out.close();
 }
 
 Section separation_section(const std::string& title, const separation::Result& r,

@@ -257,5 +257,18 @@ grep -q "uncertainty was not computed" err.txt && grep -q '"predicted_rms_at_lea
 echo '{"spacing": 1}' > p1.json
 expect_err "spacing 1 mm gives a" "$T" space --machine small.json --plan p1.json -o o.json
 
+# Outputs: a write error is an error; one rule for missing directories; whole files only.
+printf 'x,y,z\n1,0,0\n0,1,0\n-1,0,0\n0,-1,0\n0,0,1\n0.6,0.8,0\n' > sph.csv
+expect_err "/dev/full: write error" "$T" fit sphere --input sph.csv --output /dev/full
+expect_err "nodir/r.html: the directory 'nodir' does not exist" "$T" surface --lines lines.json -o o.json --report nodir/r.html
+expect_err "nodir/r.html: the directory 'nodir' does not exist" "$T" report rd.json -o nodir/r.html
+expect_err "nodir/f.json: the directory 'nodir' does not exist" "$T" fit sphere --input sph.csv --output nodir/f.json
+printf 'x,y,z\n2,0,0\n0,2,0\n-2,0,0\n0,-2,0\n0,0,2\n1.2,1.6,0\n' > sph2.csv
+for i in 1 2 3 4 5 6 7 8; do
+  "$T" fit sphere -q --input sph.csv --output race.json & "$T" fit sphere -q --input sph2.csv --output race.json & wait
+  python3 -c "import json,sys; d=json.load(open('race.json')); sys.exit(0 if abs(d['diameter']-2)<1e-9 or abs(d['diameter']-4)<1e-9 else 1)" || bad "concurrent writers left a mixed file"
+done
+ls race.json.partial-* >/dev/null 2>&1 && bad "temporary files left behind" || ok
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -5,6 +5,7 @@
 
 #include <cmath>
 
+#include "../../src/io/fast_text.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
 
@@ -170,4 +171,34 @@ TEST(Csv, AbsurdMagnitudesAreRefusedWhereTheyStand) {
             "f.csv:3:4: 1e+308 is out of range in column 'a' (its size must be below 1e+12)");
   EXPECT_EQ(error_of("x,a\n-2e12,1\n"),
             "f.csv:2:1: -2e+12 is out of range in column 'x' (its size must be below 1e+12)");
+}
+
+// Found by fuzzing: 'fit -o /dev/full' exited 0 with the file lost; concurrent runs writing the
+// same output could leave a mix of both; reports created missing directories while every other
+// output refused. Now: write errors are errors, files are put in place whole, and every output
+// refuses a missing directory.
+TEST(Csv, OutputsAreWholeOrNotAtAllAndNeedTheirDirectory) {
+  namespace fs = std::filesystem;
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(5, 0, 4);
+  EXPECT_NE(trueaxis::test::error_of([&] {
+              trueaxis::io::write_csv("/dev/full", {"x"}, {&x});
+            }).find("/dev/full: write error"),
+            std::string::npos);
+  const std::string dir = trueaxis::test::temp_dir();
+  EXPECT_EQ(trueaxis::test::error_of(
+                [&] { trueaxis::io::write_csv(dir + "/no/such/t.csv", {"x"}, {&x}); }),
+            dir + "/no/such/t.csv: the directory '" + dir +
+                "/no/such' does not exist (create it "
+                "first)");
+  // A file that is never finished leaves the old one as it was, and no temporary behind.
+  const std::string p = trueaxis::test::temp_file("old.csv", "x\n1\n");
+  {
+    trueaxis::io::detail::OutFile f(p);
+    f.write("x\n2\n");
+  }  // destroyed without close(): an exception on the way
+  EXPECT_EQ(CsvTable::read(p).column(0)[0], 1);
+  for (const auto& e : fs::directory_iterator(dir))
+    EXPECT_EQ(e.path().filename().string().find(".partial-"), std::string::npos) << e.path();
+  trueaxis::io::write_csv(p, {"x"}, {&x});
+  EXPECT_EQ(CsvTable::read(p).rows(), 5u);
 }
