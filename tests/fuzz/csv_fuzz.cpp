@@ -1,0 +1,43 @@
+// libFuzzer target: the CSV readers (probes, points, spots, lengths) on arbitrary bytes.
+#include <cstdint>
+
+#include "fuzz_util.hpp"
+#include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/guideway.hpp"
+#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/probes.hpp"
+#include "trueaxis/separation/separation.hpp"
+
+using namespace trueaxis;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string p = fuzz::write_input("in.csv", data, size);
+  fuzz::expect_only_trueaxis_errors([&] { io::CsvTable::read(p); });
+  fuzz::expect_only_trueaxis_errors([&] {
+    const auto probes = io::read_probes(p);
+    if (probes.x.size() <= 2000) separation::separate(probes);
+  });
+  fuzz::expect_only_trueaxis_errors([&] {
+    io::ProbeReadOptions o;
+    o.angle_column = "angle";
+    const auto probes = io::read_probes(p, o);
+    separation::Options so;
+    so.sigma = 1e-4;
+    if (probes.x.size() <= 2000) separation::separate(probes, so);
+  });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_points(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_lengths(p); });
+  fuzz::expect_only_trueaxis_errors([&] {
+    io::GuidewayLayout layout;
+    for (const char* name : {"a", "b", "c"}) {
+      guideway::Detector d;
+      d.name = name;
+      layout.layout.detectors.push_back(d);
+    }
+    layout.layout.detectors[1].position = {60, 0, 150};
+    layout.layout.detectors[2].position = {0, 80, 300};
+    io::read_spots(p, layout, true);
+  });
+  return 0;
+}

@@ -1,0 +1,58 @@
+// libFuzzer target: every JSON configuration and result reader on arbitrary bytes. The first
+// byte chooses the reader, so that the corpus of each file kind evolves on its own.
+#include <cstdint>
+
+#include "fuzz_util.hpp"
+#include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/guideway.hpp"
+#include "trueaxis/io/json.hpp"
+#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/space.hpp"
+#include "trueaxis/io/surface.hpp"
+#include "trueaxis/surface/surface.hpp"
+
+using namespace trueaxis;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size == 0) return 0;
+  const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
+  fuzz::expect_only_trueaxis_errors([&] {
+    io::JsonFile::read(p);
+    switch (data[0] % 10) {
+      case 0:
+        io::read_machine(p);
+        break;
+      case 1:
+        io::read_plan(p);
+        break;
+      case 2: {
+        const auto lines = io::read_lines(p);
+        if (lines.size() <= 50) surface::build(lines);
+        break;
+      }
+      case 3:
+        io::read_layout(p);
+        break;
+      case 4:
+        io::read_gauge(p);
+        break;
+      case 5:
+        io::read_measurements(p);
+        break;
+      case 6:
+        io::read_error_map(p);
+        break;
+      case 7:
+        io::read_result(p);
+        break;
+      case 8:
+        io::read_parametric(p);
+        break;
+      default:
+        io::read_machine(p);
+        break;
+    }
+  });
+  return 0;
+}

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets with clang (AddressSanitizer + UBSan) and runs each for a bounded
+# time, seeded from the repository's data. Exits non-zero on any finding (crash, sanitizer
+# report, uncaught exception, leak, time-out or memory blow-up of one input).
+#   bash tests/fuzz/run.sh [SECONDS_PER_TARGET]   (default 30)
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+seconds=${1:-30}
+build=build-fuzz
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+  -DTRUEAXIS_FUZZ=ON -DTRUEAXIS_PYTHON=OFF -DTRUEAXIS_TESTS=OFF -DTRUEAXIS_BENCHMARKS=OFF >/dev/null
+cmake --build "$build" --target fuzz_csv fuzz_json fuzz_ds fuzz_moody
+corpus=$build/corpus
+rm -rf "$corpus"; mkdir -p "$corpus"/{csv,json,ds,moody}
+cp examples/*.csv "$corpus/csv/"
+printf 'x,a,b,c,angle\n0,1,2,3,4\n10,2,3,4,5\n20,3,4,5,6\n30,4,5,6,7\n' > "$corpus/csv/probes.csv"
+printf 'x1,y1,z1,x2,y2,z2,nominal\n0,0,0,100,0,0,100\n' > "$corpus/csv/lengths.csv"
+printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy\n0,1,2,3,4,5,6\n10,1,2,3,4,5,6\n' > "$corpus/csv/spots.csv"
+# JSON: the first byte picks the reader (see json_fuzz.cpp).
+for f in examples/*.json; do
+  for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/json/$(basename "$f").$r"; done
+done
+printf '\x00{"chain": "FYXZ", "ranges": {"x": [0, 800], "y": [0, 600], "z": [0, 500]}, "errors": {"EXX": {"polynomial": [0, 10]}}}' > "$corpus/json/machine"
+printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
+find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
+for f in tests/data/moody/*.txt; do
+  for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/moody/$(basename "$f").$r"; done
+done
+status=0
+for t in csv json ds moody; do
+  echo "== fuzz_$t for ${seconds} s"
+  mkdir -p "$build/findings/$t"
+  if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
+      "$build/tests/fuzz/fuzz_$t" "$corpus/$t" -max_total_time="$seconds" -timeout=10 \
+      -seed=1 -rss_limit_mb=2048 -max_len=65536 -artifact_prefix="$build/findings/$t/" \
+      -print_final_stats=1 >"$build/fuzz_$t.log" 2>&1; then
+    echo "FINDING in fuzz_$t (reproducer in $build/findings/$t/):"; tail -40 "$build/fuzz_$t.log"
+    status=1
+  else
+    grep -E "stat::number_of_executed_units|Done [0-9]+ runs" "$build/fuzz_$t.log" | tail -1
+  fi
+done
+exit $status
