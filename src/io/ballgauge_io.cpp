@@ -100,6 +100,12 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path,
               const double v = f.number(bp / bk);
               if (v < 0 || v != std::floor(v))
                 f.fail(bp / bk, "index must be a whole number >= 0 (a ball of gauge.json)");
+              // The range is checked on the number, before it is converted (1e10 read as
+              // "ball index -2147483648").
+              if (v > 1e6 || (gauge && v >= static_cast<double>(gauge->balls.size())))
+                f.fail(bp / bk, gauge ? fmt::format("ball index {:g} is not in the gauge (0..{})",
+                                                    v, gauge->balls.size() - 1)
+                                      : fmt::format("ball index {:g} is out of range", v));
               B.index = static_cast<int>(v);
               has_index = true;
               if (gauge && B.index >= static_cast<int>(gauge->balls.size()))

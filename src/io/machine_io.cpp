@@ -124,12 +124,15 @@ sim::Machine read_machine(const JsonFile& f) {
     for (const auto& [key, value] : errs.items()) {
       (void)value;
       const ptr p = ptr("/errors") / key;
-      if (key == "EC0Y") {
-        m.squareness_c0y = f.number(p) * kUrad;
-      } else if (key == "EB0Z") {
-        m.squareness_b0z = f.number(p) * kUrad;
-      } else if (key == "EA0Z") {
-        m.squareness_a0z = f.number(p) * kUrad;
+      if (key == "EC0Y" || key == "EB0Z" || key == "EA0Z") {
+        const double v = f.number(p);
+        // The rotations are exact, but a squareness of a tenth of a radian is no machine.
+        if (std::abs(v) > 1e5)
+          f.fail(p, fmt::format("squareness {} = {:g} urad: must be below 100000 urad (0.1 rad)",
+                                key, v));
+        (key == "EC0Y"   ? m.squareness_c0y
+         : key == "EB0Z" ? m.squareness_b0z
+                         : m.squareness_a0z) = v * kUrad;
       } else if (auto it = axis_errors.find(key); it != axis_errors.end()) {
         const auto [k, c] = it->second;
         auto& fn = m.errors[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)];

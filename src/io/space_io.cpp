@@ -169,6 +169,18 @@ map::ErrorMap read_error_map(const std::string& path) {
   }
   const char* en[3] = {"ex", "ey", "ez"};
   const char* un[3] = {"ux", "uy", "uz"};
+  // The node count is checked against the values the file holds before anything is allocated:
+  // 5000 nodes per axis declare 1.25e11 nodes in a few kilobytes.
+  const double declared = static_cast<double>(m.axes[0].size()) *
+                          static_cast<double>(m.axes[1].size()) *
+                          static_cast<double>(m.axes[2].size());
+  for (int c = 0; c < 3; ++c) {
+    const std::size_t held = f.array(g / en[c]).size();
+    if (static_cast<double>(held) != declared)
+      f.fail(g / en[c], fmt::format("'{}' has {} values for {} x {} x {} = {:.0f} grid nodes",
+                                    dotted(g / en[c]), held, m.axes[0].size(), m.axes[1].size(),
+                                    m.axes[2].size(), declared));
+  }
   m.error.resize(3, m.nodes());
   const bool has_u = f.has(g / "ux");
   if (has_u) m.uncertainty.resize(3, m.nodes());

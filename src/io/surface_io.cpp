@@ -1,8 +1,10 @@
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <map>
 
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
@@ -32,6 +34,9 @@ double parse_number(std::string_view s, const std::string& path, std::size_t lin
   if (!std::isfinite(v))
     throw Error(
         fmt::format("{}:{}:{}: {} is not allowed", path, line, col, std::isnan(v) ? "NaN" : "Inf"));
+  if (std::abs(v) > 1e12)
+    throw Error(fmt::format("{}:{}:{}: {:g} is out of range (its size must be below 1e+12)", path,
+                            line, col, v));
   return v;
 }
 
@@ -58,18 +63,37 @@ surface::MoodyData read_moody(const std::string& dir) {
   if (!fs::is_directory(dir))
     throw Error(fmt::format("{}: not a directory (Moody's files expected)", dir));
   surface::MoodyData d;
+  std::map<std::string, std::vector<std::size_t>> lines_of;  // the line of every reading
+  std::map<std::string, std::size_t> last_line;
   for (const char* name : surface::kMoodyLines) {
     const std::string path = (fs::path(dir) / (std::string(name) + ".txt")).string();
     std::vector<double> v;
-    for_each_content_line(detail::read_text(path),
-                          [&](std::size_t line, std::size_t col, std::string_view l) {
-                            v.push_back(parse_number(l, path, line, col));
-                            return true;
-                          });
+    const std::string text = detail::read_text(path);
+    last_line[name] = static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
+    for_each_content_line(text, [&](std::size_t line, std::size_t col, std::string_view l) {
+      v.push_back(parse_number(l, path, line, col));
+      lines_of[name].push_back(line);
+      return true;
+    });
     if (v.size() < 2)
       throw Error(fmt::format("{}: needs at least 2 readings, found {}", path, v.size()));
     d.readings[name] = Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size()));
   }
+  // Lines that must have as many readings as another: the message points at the first reading
+  // too many, or at the end of a file one short.
+  const auto require_eq = [&](const char* a, const char* b, const char* why) {
+    const std::size_t na = lines_of[a].size(), nb = lines_of[b].size();
+    if (na == nb) return;
+    const std::string path = (fs::path(dir) / (std::string(a) + ".txt")).string();
+    const std::size_t line = na > nb ? lines_of[a][nb] : last_line[a];
+    throw Error(
+        fmt::format("{}:{}:1: {} readings, but {}.txt ({}) has {}", path, line, na, b, why, nb));
+  };
+  require_eq("SE_SW", "NE_NW", "the opposite edge");
+  require_eq("E_W", "NE_NW", "the parallel centre line");
+  require_eq("NW_SW", "NE_SE", "the opposite edge");
+  require_eq("N_S", "NE_SE", "the parallel centre line");
+  require_eq("NE_SW", "NW_SE", "the other diagonal");
   const std::string cpath = (fs::path(dir) / "Config.txt").string();
   bool found = false;  // only the first spacing counts (as in Moody-Method)
   for_each_content_line(
@@ -108,6 +132,10 @@ std::vector<surface::Line> read_lines(const std::string& path) {
     doc.object(at);
     surface::Line l;
     l.name = doc.string(at / "name");
+    if (l.name.empty()) doc.fail(at / "name", "a line's name must not be empty");
+    for (const auto& other : out)
+      if (other.name == l.name)
+        doc.fail(at / "name", fmt::format("duplicated line name '{}'", l.name));
     l.start = vec2(at / "start");
     l.direction = vec2(at / "direction");
     if (l.direction.norm() == 0) doc.fail(at / "direction", "direction must not be zero");
@@ -138,7 +166,9 @@ std::vector<surface::Line> read_lines(const std::string& path) {
                              doc.number(at / "spacing"), l.spacing));
     } else {
       l.spacing = doc.number(at / "spacing");
-      if (!(l.spacing > 0)) doc.fail(at / "spacing", "spacing must be positive");
+      if (!(l.spacing >= 1e-6))
+        doc.fail(at / "spacing",
+                 fmt::format("spacing {:g} mm: must be at least 1e-6 mm (positive)", l.spacing));
       if (doc.has(at / "heights")) {
         l.heights = doc.numbers(at / "heights", 1e-3);
       } else {
@@ -146,6 +176,11 @@ std::vector<surface::Line> read_lines(const std::string& path) {
       }
       if (l.heights.size() < 2)
         doc.fail(at, fmt::format("line '{}': needs at least 2 stations", l.name));
+      if (!l.heights.allFinite() || l.heights.cwiseAbs().maxCoeff() > 1e6)  // mm: a kilometre
+        doc.fail(at / (doc.has(at / "heights") ? "heights" : "slopes"),
+                 fmt::format("line '{}': the heights run beyond a kilometre: check the units "
+                             "(heights in um, slopes in urad)",
+                             l.name));
     }
     out.push_back(std::move(l));
   }

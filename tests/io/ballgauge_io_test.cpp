@@ -70,4 +70,12 @@ TEST(BallGaugeIo, BadFilesNameFileLineAndColumn) {
                 .find("m.json:1:52: ball 3 is measured twice"),
             std::string::npos)
       << gmerr(R"({"placements": [{"balls": [{"index": 3}, {"index": 3}]}]})");
+  // Found by fuzzing: 1e10 was converted first and reported as "ball index -2147483648".
+  EXPECT_NE(gmerr(R"({"placements": [{"balls": [{"index": 1e10, "points": []}]}]})")
+                .find("m.json:1:38: ball index 1e+10 is not in the gauge (0..11)"),
+            std::string::npos)
+      << gmerr(R"({"placements": [{"balls": [{"index": 1e10, "points": []}]}]})");
+  EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 1e10, "points": []}]}]})")
+                .find("ball index 1e+10 is out of range"),
+            std::string::npos);
 }

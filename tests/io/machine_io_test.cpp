@@ -117,3 +117,13 @@ TEST(MachineIo, PointsAreReadAndCheckedAgainstTheRange) {
 
 }  // namespace
 }  // namespace trueaxis::io
+
+// Found by fuzzing: "squareness errors must be finite and small" came with no location.
+TEST(MachineIo, AnAbsurdSquarenessIsRefusedAtItsKey) {
+  const std::string p = trueaxis::test::temp_file(
+      "m.json",
+      "{\"chain\": \"FYXZ\", \"ranges\": {\"x\": [0, 800], \"y\": [0, 600], \"z\": [0, "
+      "500]},\n \"errors\": {\"EB0Z\": 2e5}}");
+  EXPECT_EQ(trueaxis::test::error_of([&] { trueaxis::io::read_machine(p); }),
+            p + ":2:21: squareness EB0Z = 200000 urad: must be below 100000 urad (0.1 rad)");
+}

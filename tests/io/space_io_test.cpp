@@ -82,12 +82,24 @@ TEST(SpaceIo, BadGridsNameTheSpot) {
   };
   for (const Case& c : std::vector<Case>{
            {head + "\n \"ex\": [1,2,3,4,5,6,7], \"ey\": [], \"ez\": []}}",
-            "s.json:2:8: 'grid.ex' has 7 values for 8 grid nodes"},
+            "s.json:2:8: 'grid.ex' has 7 values for 2 x 2 x 2 = 8 grid nodes"},
            {R"({"grid": {"x": [0, 1, 1], "y": [0, 1], "z": [0, 1]}})",
             "s.json:1:23: grid x nodes must increase strictly"},
            {R"({"grid": {"x": [0], "y": [0, 1], "z": [0, 1]}})",
             "s.json:1:16: the grid needs at least two x nodes"},
            {R"({"map": {}})", "s.json:1:1: 'grid' is missing"},
+           // Found by fuzzing: 5000 nodes per axis allocated 1.25e11 nodes (bad_alloc, exit 3).
+           {"{\"grid\": {\"x\": [" +
+                [] {
+                  std::string v;
+                  for (int i = 0; i < 5000; ++i) {
+                    if (i) v.push_back(',');
+                    v.append(std::to_string(i));
+                  }
+                  return v + "], \"y\": [" + v + "], \"z\": [" + v +
+                         "],\n \"ex\": [1], \"ey\": [1], \"ez\": [1]}}";
+                }(),
+            "s.json:2:8: 'grid.ex' has 1 values for 5000 x 5000 x 5000 = 125000000000 grid nodes"},
        }) {
     const std::string msg = error_of([&] { read_error_map(temp_file("s.json", c.text)); });
     EXPECT_NE(msg.find(c.expect), std::string::npos) << "got: " << msg;

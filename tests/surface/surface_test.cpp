@@ -242,7 +242,8 @@ TEST(SurfaceIo, MoodyAndLinesReadersNameFileLineColumn) {
   EXPECT_EQ(error_of([&] { io::read_moody(dir); }), dir + "/E_W.txt:3:3: NaN is not allowed");
   std::ofstream(dir + "/E_W.txt") << "11.7\n12.4\n";
   std::filesystem::remove(dir + "/N_S.txt");
-  EXPECT_NE(error_of([&] { io::read_moody(dir); }).find("N_S.txt: no such file"), std::string::npos);
+  EXPECT_NE(error_of([&] { io::read_moody(dir); }).find("N_S.txt: no such file"),
+            std::string::npos);
   EXPECT_NE(error_of([&] { io::read_moody(dir + "/nope"); }).find("not a directory"),
             std::string::npos);
 
@@ -259,6 +260,55 @@ TEST(SurfaceIo, MoodyAndLinesReadersNameFileLineColumn) {
       "{\"lines\": [{\"name\": \"a\", \"start\": [0, 0], \"direction\": [1, 0], \"spacing\": 10, "
       "\"heights\": [0, 1], \"slopes\": [1]}]}");
   EXPECT_NE(error_of([&] { io::read_lines(lp2); }).find("exactly one of"), std::string::npos);
+}
+
+// Found by fuzzing: messages about lines.json and Moody's files with no location, or a
+// misleading one.
+TEST(SurfaceIo, EveryComplaintAboutAFileNamesItsPlace) {
+  using test::error_of;
+  auto lines = [](const std::string& second) {
+    return test::temp_file(
+        "l.json",
+        "{\"lines\": [\n {\"name\": \"a\", \"start\": [0, 0], \"direction\": [1, 0], "
+        "\"spacing\": 10, \"heights\": [0, 1, 2]},\n " +
+            second + "\n]}");
+  };
+  std::string p = lines(
+      R"({"name": "a", "start": [0, 0], "direction": [0, 1], "spacing": 10, "heights": [0, 1]})");
+  EXPECT_EQ(error_of([&] { io::read_lines(p); }), p + ":3:11: duplicated line name 'a'");
+  p = lines(
+      R"({"name": "", "start": [0, 0], "direction": [0, 1], "spacing": 10, "heights": [0, 1]})");
+  EXPECT_EQ(error_of([&] { io::read_lines(p); }), p + ":3:11: a line's name must not be empty");
+  p = lines(
+      R"({"name": "b", "start": [0, 0], "direction": [0, 1], "spacing": 1e-300, "heights": [0, 1]})");
+  EXPECT_EQ(error_of([&] { io::read_lines(p); }),
+            p + ":3:65: spacing 1e-300 mm: must be at least 1e-6 mm (positive)");
+  p = lines(
+      R"({"name": "b", "start": [0, 0], "direction": [0, 1], "spacing": 10, "slopes": [5e11, 5e11]})");
+  EXPECT_NE(error_of([&] { io::read_lines(p); }).find(":3:79: line 'b': the heights run beyond"),
+            std::string::npos)
+      << error_of([&] { io::read_lines(p); });
+
+  const std::string dir = test::temp_dir() + "/plate";
+  std::filesystem::create_directories(dir);
+  for (const char* n : surface::kMoodyLines) {
+    std::ifstream src(kMoody + "/" + n + ".txt");
+    std::ofstream(dir + "/" + n + ".txt") << src.rdbuf();
+  }
+  std::filesystem::remove_all(dir + "/Config.txt");
+  std::filesystem::create_directories(dir + "/Config.txt");  // a directory, not a file
+  EXPECT_EQ(error_of([&] { io::read_moody(dir); }),
+            dir + "/Config.txt: not a regular file (a directory)");
+  std::filesystem::remove(dir + "/Config.txt");
+  std::ofstream(dir + "/Config.txt") << "I 4\n";
+  {
+    std::ofstream more(dir + "/E_W.txt", std::ios::app);
+    more << "1.5\n";  // one reading more than NE_NW
+  }
+  const std::string m = error_of([&] { io::read_moody(dir); });
+  EXPECT_NE(m.find(dir + "/E_W.txt:"), std::string::npos) << m;
+  EXPECT_NE(m.find("readings, but NE_NW.txt (the parallel centre line) has"), std::string::npos)
+      << m;
 }
 
 TEST(SurfaceIo, LinesFromSlopesAndSeparationResults) {
