@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -165,6 +166,58 @@ struct ErrorPosition : nlohmann::json_sax<nlohmann::json> {
   }
 };
 
+// Byte offset of the first key that repeats a key of its own object (SAX pass with a cursor; the
+// error path only).
+std::size_t second_key_position(const std::string& text) {
+  struct Keys : nlohmann::json_sax<nlohmann::json> {
+    const char* begin;
+    const char** cursor;
+    std::vector<std::vector<std::string>> open;
+    std::ptrdiff_t found = -1;
+    bool null() override { return true; }
+    bool boolean(bool) override { return true; }
+    bool number_integer(number_integer_t) override { return true; }
+    bool number_unsigned(number_unsigned_t) override { return true; }
+    bool number_float(number_float_t, const string_t&) override { return true; }
+    bool string(string_t&) override { return true; }
+    bool binary(binary_t&) override { return true; }
+    bool start_object(std::size_t) override {
+      open.emplace_back();
+      return true;
+    }
+    bool key(string_t& k) override {
+      auto& keys = open.back();
+      if (std::find(keys.begin(), keys.end(), k) != keys.end()) {
+        // The cursor is just past the key's closing quote: back to its opening one.
+        const char* q = *cursor - 1;
+        while (q > begin && *q != '"') --q;
+        --q;
+        while (q > begin && *q != '"') --q;
+        found = q - begin;
+        return false;
+      }
+      keys.push_back(k);
+      return true;
+    }
+    bool end_object() override {
+      open.pop_back();
+      return true;
+    }
+    bool start_array(std::size_t) override { return true; }
+    bool end_array() override { return true; }
+    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+      return false;
+    }
+  } keys;
+  const char* cursor = text.data();
+  keys.begin = text.data();
+  keys.cursor = &cursor;
+  CountingIterator first{text.data(), &cursor};
+  CountingIterator last{text.data() + text.size(), &cursor};
+  nlohmann::json::sax_parse(first, last, &keys);
+  return keys.found < 0 ? 0 : static_cast<std::size_t>(keys.found);
+}
+
 // nlohmann's message with the input it quotes ("last read: '...'") cut to a few dozen
 // characters: a malformed file must not be echoed whole.
 std::string short_message(const std::string& what) {
@@ -210,7 +263,33 @@ JsonFile JsonFile::parse(std::string text, std::string path) {
     }
   }
   try {
-    j.root_ = nlohmann::json::parse(j.text_);
+    // Keys of every open object: a repeated key is refused (nlohmann keeps the last copy
+    // silently, and a message about the value would point at the first).
+    std::vector<std::vector<std::string>> open_keys;
+    std::string duplicate;
+    const nlohmann::json::parser_callback_t cb = [&](int, nlohmann::json::parse_event_t e,
+                                                     nlohmann::json& parsed) {
+      using E = nlohmann::json::parse_event_t;
+      if (e == E::object_start) {
+        open_keys.emplace_back();
+      } else if (e == E::object_end) {
+        if (!open_keys.empty()) open_keys.pop_back();
+      } else if (e == E::key && !open_keys.empty() && duplicate.empty()) {
+        const std::string& k = parsed.get_ref<const std::string&>();
+        auto& keys = open_keys.back();
+        if (std::find(keys.begin(), keys.end(), k) != keys.end())
+          duplicate = k;
+        else
+          keys.push_back(k);
+      }
+      return true;
+    };
+    j.root_ = nlohmann::json::parse(j.text_, cb);
+    if (!duplicate.empty()) {
+      const std::size_t at = second_key_position(j.text_);
+      throw Error(fmt::format("{}:{}: duplicated key '{}'", j.path_, line_col(j.text_, at),
+                              detail::quote_cut(duplicate)));
+    }
   } catch (const nlohmann::json::parse_error& e) {
     throw Error(fmt::format("{}:{}: invalid JSON: {}", j.path_,
                             line_col(j.text_, e.byte ? e.byte - 1 : 0), short_message(e.what())));

@@ -43,3 +43,21 @@ TEST(JsonFile, TypedAccessErrorsNameThePathAndPosition) {
             0u);
   EXPECT_THROW(JsonFile::read("/nonexistent.json"), Error);
 }
+
+// A repeated key is refused where it repeats (nlohmann kept the last copy silently, and a
+// message about its value pointed at the first copy).
+TEST(JsonFile, ADuplicatedKeyIsRefusedAtTheDuplicate) {
+  auto err = [](const std::string& text) {
+    try {
+      trueaxis::io::JsonFile::parse(text, "d.json");
+    } catch (const trueaxis::Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(err("{\"spacing\": 50,\n \"seed\": 1, \"spacing\": 60}"),
+            "d.json:2:13: duplicated key 'spacing'");
+  EXPECT_EQ(err(R"({"a": {"b": 1, "c": {"b": 2}}, "d": [{"x": 1}, {"x": 2, "x": 3}]})"),
+            "d.json:1:57: duplicated key 'x'");
+  EXPECT_EQ(err(R"({"a": {"b": 1}, "b": {"a": 2}})"), "(no error)");  // other objects: fine
+}
