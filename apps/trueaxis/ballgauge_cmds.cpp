@@ -41,9 +41,14 @@ int run_calibrate(const CalArgs& a) {
   }
   io::write_ballgauge_map(a.output, r);
   if (!a.quiet) fmt::print("{}wrote {}\n", r.summary(), a.output);
+  for (const auto& pl : r.placements)
+    for (const auto& d : pl.dropped)
+      fmt::print(stderr, "trueaxis: warning: {}: {}: {}\n", a.measurements, pl.name, d);
   std::optional<ballgauge::ParametricResult> pr;
   if (!a.parametric.empty()) {
     ballgauge::ParametricOptions po = a.po;
+    po.outlier_tolerance = a.o.outlier_tolerance;
+    po.drop_outliers = a.o.drop_outliers;
     if (a.stylus.size() != 3) throw Error("--stylus-offset needs x,y,z (mm)");
     po.offset = Eigen::Vector3d(a.stylus[0], a.stylus[1], a.stylus[2]);
     try {
@@ -226,6 +231,12 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       ->capture_default_str();
   c->add_option("--min-points", ca->o.min_points, "fewest probed points accepted per ball")
       ->capture_default_str();
+  c->add_option("--outlier-tolerance", ca->o.outlier_tolerance,
+                "mm: a probed point this far off the sphere through the ball's other points "
+                "(which fit within it) is a wrong touch, and refused")
+      ->capture_default_str();
+  c->add_flag("--drop-outliers", ca->o.drop_outliers,
+              "leave wrong touches out (each one named on stderr) instead of refusing the file");
   c->add_option("--report", ca->report, "HTML report to write (error-vector field)");
   auto* par = c->add_option("--parametric", ca->parametric,
                             "also identify the 21 rigid-body errors (polynomials per axis) and "

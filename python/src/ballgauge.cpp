@@ -24,12 +24,14 @@ void bind_ballgauge(py::module_& m) {
   m.def(
       "ballgauge",
       [](const std::string& gauge, const std::string& measurements, double match_tolerance,
-         long min_points) {
+         long min_points, double outlier_tolerance, bool drop_outliers) {
         const auto g = io::read_gauge(gauge);
         const auto p = io::read_measurements(measurements, &g);
         ballgauge::Options o;
         o.match_tolerance = match_tolerance;
         o.min_points = min_points;
+        o.outlier_tolerance = outlier_tolerance;
+        o.drop_outliers = drop_outliers;
         ballgauge::Result r;
         try {
           py::gil_scoped_release release;
@@ -58,17 +60,24 @@ void bind_ballgauge(py::module_& m) {
         d["placement"] = placement;
         d["ball"] = ball;
         d["map"] = r.grid ? py::cast(*r.grid) : py::object(py::none());
+        std::vector<std::string> dropped;
+        for (const auto& pl : r.placements)
+          for (const auto& x : pl.dropped) dropped.push_back(pl.name + ": " + x);
+        d["dropped"] = dropped;
         d["summary"] = r.summary();
         return d;
       },
       py::arg("gauge"), py::arg("measurements"), py::kw_only(), py::arg("match_tolerance") = 1.0,
-      py::arg("min_points") = 5,
-      R"doc(CMM error-vector map from ball-gauge placements (spec 04).
+      py::arg("min_points") = 5, py::arg("outlier_tolerance") = 0.02,
+      py::arg("drop_outliers") = false,
+      R"doc(CMM error-vector map from ball-gauge placements (Oya et al. 1988).
 
-gauge, measurements: paths of gauge.json and measurements.json. Returns {'nominal', 'measured'
-(mm), 'error' (measured − true), 'uncertainty' (µm): arrays (points, 3); 'placement', 'ball';
-'map': an ErrorMap when the points form a lattice (use map.correct(points) for X = x − Δ(x)),
-else None; 'summary'}.)doc");
+gauge, measurements: paths of gauge.json and measurements.json. A probed point more than
+outlier_tolerance (mm) off the sphere through its ball's other points is a wrong touch: an error
+names it, or with drop_outliers=True it is left out and listed in 'dropped'. Returns {'nominal',
+'measured' (mm), 'error' (measured − true), 'uncertainty' (µm): arrays (points, 3); 'placement',
+'ball'; 'map': an ErrorMap when the points form a lattice (use map.correct(points) for
+X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
 
   m.def(
       "identify",

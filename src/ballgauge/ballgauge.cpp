@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <set>
 
 #include "common.hpp"
@@ -17,9 +18,50 @@ namespace detail {
 
 // Sphere fit of probed tip centres, with the centre's uncertainty from the residuals:
 // cov = s²·(JᵀJ)⁻¹, s² = Σr² / (n − 4).
-Centre fit_ball(const Eigen::Matrix3Xd& p) {
+Centre fit_ball(const Eigen::Matrix3Xd& points, double tol, bool drop) {
+  Eigen::Matrix3Xd p = points;
+  std::vector<Eigen::Index> original(static_cast<std::size_t>(p.cols()));
+  for (std::size_t i = 0; i < original.size(); ++i) original[i] = static_cast<Eigen::Index>(i);
+  std::vector<std::string> dropped;
+  auto without = [](const Eigen::Matrix3Xd& q, Eigen::Index i) {
+    Eigen::Matrix3Xd r(3, q.cols() - 1);
+    r << q.leftCols(i), q.rightCols(q.cols() - i - 1);
+    return r;
+  };
+  auto max_residual = [](const Eigen::Matrix3Xd& q) {
+    try {
+      return geometry::fit(geometry::Element::Sphere, q).residuals.cwiseAbs().maxCoeff();
+    } catch (const Error&) {
+      return std::numeric_limits<double>::infinity();
+    }
+  };
+  // One wrong touch at a time: the point without which the rest fit within the tolerance.
+  while (p.cols() > 5 && max_residual(p) > tol) {
+    Eigen::Index worst = -1;
+    double best = std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i < p.cols(); ++i) {
+      const double m = max_residual(without(p, i));
+      if (m < best) {
+        best = m;
+        worst = i;
+      }
+    }
+    if (!(best <= tol)) break;  // not one wrong touch: the scatter stays for the fit to show
+    const Eigen::Matrix3Xd rest = without(p, worst);
+    const geometry::Fit g = geometry::fit(geometry::Element::Sphere, rest);
+    const double off = std::abs((p.col(worst) - g.point).norm() - g.diameter / 2);
+    const std::string what = fmt::format(
+        "point {} is {:.4g} mm off the sphere through the other {} points (they fit within "
+        "{:.2g} um): a wrong touch",
+        original[static_cast<std::size_t>(worst)] + 1, off, rest.cols(), best * 1e3);
+    if (!drop) throw Error(what + "; remove it, or drop such points with --drop-outliers");
+    dropped.push_back(what + ", left out");
+    original.erase(original.begin() + worst);
+    p = rest;
+  }
   const geometry::Fit f = geometry::fit(geometry::Element::Sphere, p);
   Centre c;
+  c.dropped = std::move(dropped);
   c.x = f.point;
   c.diameter = f.diameter;
   const Eigen::Index n = p.cols();
@@ -224,10 +266,11 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
                                 b.index, b.points.cols(), o.min_points));
       Centre c;
       try {
-        c = fit_ball(b.points);
+        c = fit_ball(b.points, o.outlier_tolerance, o.drop_outliers);
       } catch (const Error& e) {
         throw Error(fmt::format("{}: ball {}: {}", pname, b.index, e.what()));
       }
+      for (const auto& d : c.dropped) rep.dropped.push_back(fmt::format("ball {}: {}", b.index, d));
       rep.diameter_error_max = std::max(
           rep.diameter_error_max, std::abs(c.diameter - (gauge.ball_diameter + 2 * pl.tip_radius)));
       idx.push_back(b.index);
@@ -407,6 +450,8 @@ std::string Result::summary() const {
                                        r.registration_rms * 1e3)
                          : "",
                      r.diameter_error_max * 1e3);
+  for (const auto& r : placements)
+    for (const auto& d : r.dropped) s += fmt::format("  {}: {}\n", r.name, d);
   return s;
 }
 

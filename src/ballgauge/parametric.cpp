@@ -152,7 +152,7 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
         throw Error(fmt::format("{}, ball {}: {} points; at least {} are needed", name, b.index,
                                 b.points.cols(), o.min_points));
       try {
-        x.push_back(detail::fit_ball(b.points).x);
+        x.push_back(detail::fit_ball(b.points, o.outlier_tolerance, o.drop_outliers).x);
       } catch (const Error& e) {
         throw Error(fmt::format("{}, ball {}: {}", name, b.index, e.what()));
       }

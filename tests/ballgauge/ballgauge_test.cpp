@@ -197,3 +197,34 @@ TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   bad.balls[2] = {160, 0, 0};
   EXPECT_NE(test::error_of([&] { bad.validate(); }).find("must span a plane"), std::string::npos);
 }
+
+// Found by fuzzing: one wrong touch (a probed point 11 m off) gave a map with 11 m errors and
+// only a warning. It is now refused, naming the point, or left out on request with the map as
+// good as without it.
+TEST(BallGauge, AWrongTouchIsRefusedOrLeftOutByName) {
+  const auto g = sim::frame_gauge();
+  sim::BallGaugeOptions so;
+  so.noise = 0.5e-3;
+  const auto c = sim::simulate_ballgauge(cmm(), g, poses(), so);
+  const auto clean = ballgauge::calibrate(g, c.placements);
+  auto bad = c.placements;
+  bad[1].balls[7].points(0, 3) += 11000;  // one point 11 m off
+  const std::string m = test::error_of([&] { ballgauge::calibrate(g, bad); });
+  EXPECT_EQ(m.find(fmt::format("{}: ball {}: point 4 is 1.098e+04 mm off the sphere through the "
+                               "other 9 points",
+                               bad[1].name, bad[1].balls[7].index)),
+            0u)
+      << m;
+  EXPECT_NE(m.find("--drop-outliers"), std::string::npos);
+  ballgauge::Options o;
+  o.drop_outliers = true;
+  const auto r = ballgauge::calibrate(g, bad, o);
+  ASSERT_EQ(r.placements[1].dropped.size(), 1u);
+  EXPECT_NE(r.summary().find("point 4 is"), std::string::npos);
+  double worst = 0;
+  for (std::size_t i = 0; i < r.points.size(); ++i)
+    worst = std::max(worst, (r.points[i].error - clean.points[i].error).norm());
+  EXPECT_LT(worst, 3 * 0.5e-3);  // one point fewer on one ball: a probing-noise-sized change
+  // Ordinary scatter is no wrong touch: the clean data pass the default tolerance untouched.
+  for (const auto& p : clean.placements) EXPECT_TRUE(p.dropped.empty());
+}

@@ -270,5 +270,12 @@ for i in 1 2 3 4 5 6 7 8; do
 done
 ls race.json.partial-* >/dev/null 2>&1 && bad "temporary files left behind" || ok
 
+# A wrong touch in measurements.json is refused by name, or left out with --drop-outliers.
+python3 -c "
+import json; d = json.load(open('bg-meas.json')); d['placements'][1]['balls'][7]['points'][3][0] += 11000
+json.dump(d, open('bg-wrong.json', 'w'))"
+expect_err "section 2: ball [0-9]*: point 4 is .* mm off the sphere" "$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json
+"$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json --drop-outliers >out.txt 2>err.txt && grep -q "warning: bg-wrong.json: section 2: ball [0-9]*: point 4 is" err.txt && ok || bad "--drop-outliers: $(cat err.txt)"
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

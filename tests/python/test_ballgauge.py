@@ -64,3 +64,20 @@ def test_gauge_blocks_grid_and_parametric(tmp_path):
         trueaxis.verify_lengths(a, model=g)
     with pytest.raises(trueaxis.Error, match="degree"):
         trueaxis.identify(g, m, stylus_offset=[0, 0, -100], degree=9)
+
+
+def test_a_wrong_touch_is_refused_or_left_out(tmp_path):
+    import json
+    g, m, t = (str(tmp_path / n) for n in ("gauge.json", "meas.json", "truth.csv"))
+    subprocess.run([TRUEAXIS, "simulate", "ballgauge", "--noise", "0.5", "--gauge", g,
+                    "--measurements", m, "--truth", t, "-q"], check=True)
+    d = json.load(open(m))
+    d["placements"][1]["balls"][7]["points"][3][0] += 11000  # one point 11 m off
+    bad = str(tmp_path / "bad.json")
+    json.dump(d, open(bad, "w"))
+    with pytest.raises(trueaxis.Error, match="point 4 is .* mm off the sphere"):
+        trueaxis.ballgauge(g, bad)
+    r = trueaxis.ballgauge(g, bad, drop_outliers=True)
+    assert len(r["dropped"]) == 1 and "point 4" in r["dropped"][0]
+    clean = trueaxis.ballgauge(g, m)
+    assert np.abs(r["error"] - clean["error"]).max() < 1.5  # um: one point fewer on one ball

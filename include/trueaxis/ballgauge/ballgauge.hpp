@@ -62,6 +62,10 @@ struct Options {
   double match_tolerance =
       1.0;              // mm: a ball is shared when its centre is this close to a mapped one
   long min_points = 5;  // probed points per ball (a sphere needs 4; 5 leaves a residual)
+  // A probed point farther than this (mm) from the sphere through a ball's other points, while
+  // they fit within it, is a wrong touch: refused naming it, or left out with drop_outliers.
+  double outlier_tolerance = 0.02;
+  bool drop_outliers = false;
 };
 
 struct MapPoint {
@@ -77,8 +81,9 @@ struct PlacementReport {
   std::string name;
   Alignment alignment = Alignment::Stitch;
   int balls = 0, shared = 0;
-  double registration_rms = 0;    // mm, shared balls after the fit (stitch)
-  double diameter_error_max = 0;  // mm, |fitted diameter − (ball + 2·tip)|, worst ball
+  double registration_rms = 0;       // mm, shared balls after the fit (stitch)
+  double diameter_error_max = 0;     // mm, |fitted diameter − (ball + 2·tip)|, worst ball
+  std::vector<std::string> dropped;  // wrong touches left out (drop_outliers), one per point
 };
 
 struct Result {

@@ -35,11 +35,13 @@ namespace trueaxis::ballgauge {
 struct ParametricOptions {
   std::string chain = "FYXZ";                        // kinematic chain (sim/machine.hpp)
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // stylus offset of the measurements (mm)
-  int degree = 3;                 // polynomial degree of every error function, 1..8
-  double position_tolerance = 1;  // mm: axis positions closer than this count as one
-  long min_points = 5;            // probed points per ball
-  int max_iterations = 10;        // Gauss–Newton
-  void validate() const;          // throws Error
+  int degree = 3;                   // polynomial degree of every error function, 1..8
+  double position_tolerance = 1;    // mm: axis positions closer than this count as one
+  long min_points = 5;              // probed points per ball
+  double outlier_tolerance = 0.02;  // mm: wrong touches, as for the map (ballgauge.hpp)
+  bool drop_outliers = false;
+  int max_iterations = 10;  // Gauss–Newton
+  void validate() const;    // throws Error
 };
 
 struct ParametricResult {
