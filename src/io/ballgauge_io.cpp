@@ -274,7 +274,7 @@ void write_parametric(const std::string& path, const ballgauge::ParametricResult
       {"parameters", par},
       {"covariance", cov},
       {"residual_rms_um", r.residual_rms * 1e3},
-      {"sigma_um", r.sigma * 1e3},
+      {"sigma_um", std::isfinite(r.sigma) ? ojson(r.sigma * 1e3) : ojson(nullptr)},
       {"balls", r.balls},
       {"placements", r.placements},
       {"unknowns", r.unknowns},
@@ -318,7 +318,8 @@ ballgauge::ParametricResult read_parametric(const std::string& path) {
     r.covariance.row(i) = row.transpose();
   }
   if (f.has(id / "residual_rms_um")) r.residual_rms = f.number(id / "residual_rms_um") * 1e-3;
-  if (f.has(id / "sigma_um")) r.sigma = f.number(id / "sigma_um") * 1e-3;
+  if (f.has(id / "sigma_um"))  // null: no redundancy, the noise level is unknown
+    r.sigma = f.root().at(id / "sigma_um").is_null() ? NAN : f.number(id / "sigma_um") * 1e-3;
   return r;
 }
 

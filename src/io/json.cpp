@@ -375,7 +375,27 @@ Eigen::VectorXd JsonFile::numbers(const pointer& p, double scale) const {
   return v;
 }
 
+namespace {
+// The JSON pointer of the first number that is not finite (nlohmann would write it as null).
+std::string first_non_finite(const nlohmann::ordered_json& j, const std::string& at) {
+  if (j.is_number_float() && !std::isfinite(j.get<double>())) return at.empty() ? "/" : at;
+  if (j.is_object())
+    for (const auto& [k, v] : j.items())
+      if (auto w = first_non_finite(v, at + "/" + k); !w.empty()) return w;
+  if (j.is_array())
+    for (std::size_t i = 0; i < j.size(); ++i)
+      if (auto w = first_non_finite(j[i], at + "/" + std::to_string(i)); !w.empty()) return w;
+  return "";
+}
+}  // namespace
+
 void write_json(const std::string& path, const nlohmann::ordered_json& j) {
+  // Never a non-finite number in a result: refuse (nothing is written) instead of a null.
+  if (const std::string w = first_non_finite(j, ""); !w.empty())
+    throw Error(
+        fmt::format("{}: the computed value at {} is not finite: the input is beyond "
+                    "what these methods can handle; nothing was written",
+                    path, w));
   detail::OutFile out(path);
   out.write(j.dump(1));
   out.write("\n");

@@ -63,6 +63,13 @@ std::string quoted(const std::string& s) {
 }  // namespace
 
 void write_result(const std::string& path, const Result& r) {
+  // Never a bare inf or nan token in the file (invalid JSON that 'report' would refuse).
+  for (const Profile* p : {&r.workpiece, &r.guide, r.pitch ? &*r.pitch : nullptr})
+    if (p && (!p->value.allFinite() || !p->uncertainty.allFinite()))
+      throw Error(
+          fmt::format("{}: the separated profiles are not finite: the readings are "
+                      "beyond what the method can handle; nothing was written",
+                      path));
   detail::OutFile f(path);
   fmt::memory_buffer b;
   fmt::format_to(std::back_inserter(b),

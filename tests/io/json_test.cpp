@@ -2,6 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+
 #include "trueaxis/error.hpp"
 
 using trueaxis::Error;
@@ -60,4 +64,23 @@ TEST(JsonFile, ADuplicatedKeyIsRefusedAtTheDuplicate) {
   EXPECT_EQ(err(R"({"a": {"b": 1, "c": {"b": 2}}, "d": [{"x": 1}, {"x": 2, "x": 3}]})"),
             "d.json:1:57: duplicated key 'x'");
   EXPECT_EQ(err(R"({"a": {"b": 1}, "b": {"a": 2}})"), "(no error)");  // other objects: fine
+}
+
+// Found by fuzzing: results with non-finite numbers were written as null (or bare inf/nan
+// tokens) with exit code 0. A result file never holds one: the write is refused.
+TEST(JsonFile, ANonFiniteResultIsNeverWritten) {
+  nlohmann::ordered_json j;
+  j["fine"] = 1.5;
+  j["values"] = {1.0, std::numeric_limits<double>::infinity()};
+  const std::string p = std::string(TRUEAXIS_TEST_TMP) + "/nonfinite.json";
+  std::remove(p.c_str());
+  try {
+    trueaxis::io::write_json(p, j);
+    ADD_FAILURE() << "written";
+  } catch (const trueaxis::Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the computed value at /values/1 is not finite"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(p));
 }
