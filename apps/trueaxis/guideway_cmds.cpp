@@ -111,7 +111,8 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
   sc->add_option("--axis", sa->axis, "the machine axis the carriage rides")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();
-  sc->add_option("--positions", sa->o.positions, "positions over the axis range")
+  sc->add_option("--stations,--positions", sa->o.positions,
+                 "stops over the axis range (--stations, as for the other simulations)")
       ->capture_default_str();
   sc->add_option("--noise", sa->noise_um, "spot reading noise, um")->capture_default_str();
   sc->add_option("--pointing-noise", sa->pointing_um, "beam pointing jitter, um")

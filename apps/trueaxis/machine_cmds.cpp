@@ -218,9 +218,12 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate) {
       "error",
       "The machine's true error vector (actual - nominal tool point) at given commanded "
       "positions.\npoints.csv: header row with columns x,y,z (mm). Output columns x,y,z (mm) and "
-      "ex,ey,ez (um).\nExample: trueaxis machine error machine.json points.csv -o errors.csv");
-  c->add_option("machine", me->machine, "machine JSON")->required()->check(CLI::ExistingFile);
-  c->add_option("points", me->points, "CSV with columns x,y,z (mm)")
+      "ex,ey,ez (um).\nExample: trueaxis machine error --machine machine.json --input points.csv "
+      "-o errors.csv\n(or, shorter: trueaxis machine error machine.json points.csv)");
+  c->add_option("machine,--machine", me->machine, "machine JSON")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("points,--input,-i", me->points, "CSV with columns x,y,z (mm)")
       ->required()
       ->check(CLI::ExistingFile);
   c->add_option("--output,-o", me->output, "CSV to write (default: standard output)");

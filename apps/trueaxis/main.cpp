@@ -25,7 +25,7 @@ using namespace trueaxis;
 namespace {
 
 struct SeparateArgs {
-  std::string input, output, csv, method = "lsq", reference = "ls";
+  std::string input, output, csv, report, method = "lsq", reference = "ls";
   std::vector<double> offsets;
   std::vector<std::string> probes;
   std::string angle;
@@ -51,8 +51,14 @@ int cmd_separate(const SeparateArgs& a) {
   const separation::Result r = separation::separate(data, o);
   io::write_result(a.output, r);
   if (!a.csv.empty()) io::write_result_csv(a.csv, r);
+  if (!a.report.empty())
+    report::write(a.report, report::render("trueaxis straightness report",
+                                           {report::separation_section(
+                                               std::filesystem::path(a.input).filename().string(),
+                                               r)}));
   if (!a.quiet)
-    fmt::print("{}wrote {}{}\n", r.summary(), a.output, a.csv.empty() ? "" : " and " + a.csv);
+    fmt::print("{}wrote {}{}{}\n", r.summary(), a.output, a.csv.empty() ? "" : ", " + a.csv,
+               a.report.empty() ? "" : ", " + a.report);
   for (const auto& w : r.warnings()) fmt::print(stderr, "trueaxis: warning: {}\n", w);
   return 0;
 }
@@ -214,6 +220,7 @@ int main(int argc, char** argv) {
                   "apply an ISO 16610-21 Gaussian filter with this cut-off, mm");
   sep->add_option("--output,-o", sa.output, "result JSON")->required();
   sep->add_option("--csv", sa.csv, "also write the profiles as CSV");
+  sep->add_option("--report", sa.report, "also write an HTML report (profiles with their bands)");
   sep->add_flag("--quiet,-q", sa.quiet, "print nothing on success");
 
   // surface ----------------------------------------------------------------------------------

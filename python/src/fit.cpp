@@ -32,8 +32,14 @@ void bind_fit(py::module_& m) {
         }
         py::dict d;
         d["element"] = element;
-        d["point"] = Eigen::Vector3d(f.point);
-        d["direction"] = Eigen::Vector3d(f.direction);
+        // The same words as fit.json: center (circle, sphere) or point; normal (plane, circle)
+        // or direction (line, cylinder, cone); a sphere has neither.
+        const bool centre = e == geometry::Element::Circle || e == geometry::Element::Sphere;
+        const bool normal = e == geometry::Element::Plane || e == geometry::Element::Circle;
+        const char* where = centre ? "center" : "point";
+        const char* axis = normal ? "normal" : "direction";
+        d[where] = Eigen::Vector3d(f.point);
+        if (e != geometry::Element::Sphere) d[axis] = Eigen::Vector3d(f.direction);
         if (f.diameter > 0) d["diameter"] = f.diameter;
         if (e == geometry::Element::Cone) {
           d["distance"] = f.distance;
@@ -43,8 +49,8 @@ void bind_fit(py::module_& m) {
         d["residuals"] = f.residuals;
         if (f.has_uncertainty) {
           py::dict u;
-          u["point"] = Eigen::Vector3d(f.u_point);
-          u["direction"] = Eigen::Vector3d(f.u_direction);
+          u[where] = Eigen::Vector3d(f.u_point);
+          if (e != geometry::Element::Sphere) u[axis] = Eigen::Vector3d(f.u_direction);
           if (f.diameter > 0) u["diameter"] = f.u_diameter;
           if (f.element == geometry::Element::Cone) {
             u["distance"] = f.u_distance;

@@ -441,8 +441,8 @@ std::string Result::summary() const {
       emax * 1e3, umax * 1e3);
   for (const auto& r : placements)
     s += fmt::format("  {:<14} {:<6} {} balls{}, sphere diameter error max {:.3f} um\n", r.name,
-                     r.alignment == Alignment::ThreeTwoOne    ? "3-2-1"
-                     : r.alignment == Alignment::LeastSquares ? "LS"
+                     r.alignment == Alignment::ThreeTwoOne    ? "321"
+                     : r.alignment == Alignment::LeastSquares ? "ls"
                                                               : "stitch",
                      r.balls,
                      r.alignment == Alignment::Stitch

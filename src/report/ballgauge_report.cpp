@@ -15,9 +15,10 @@ std::string um(double mm) {
 }
 
 std::string alignment(ballgauge::Alignment a) {
-  return a == ballgauge::Alignment::ThreeTwoOne    ? "3-2-1"
-         : a == ballgauge::Alignment::LeastSquares ? "least squares"
-                                                   : "stitched";
+  // The words of measurements.json, explained.
+  return a == ballgauge::Alignment::ThreeTwoOne    ? "321 (3-2-1 on balls 0, 1, 2)"
+         : a == ballgauge::Alignment::LeastSquares ? "ls (least squares over its balls)"
+                                                   : "stitch (to the map's shared balls)";
 }
 
 }  // namespace

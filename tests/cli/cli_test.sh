@@ -172,7 +172,7 @@ expect_err "bg-out.csv: point 1 (900, 250, 150) mm is outside" "$T" correct --ma
 expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv
 grep -q '"alignment": "ls"' bg-ls.json && ok || bad "simulate ballgauge --alignment ls"
 expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output bg-ls-map.json
-grep -q "section 1      LS" out.txt && ok || bad "ballgauge with the least-squares alignment"
+grep -q "section 1      ls " out.txt && ok || bad "ballgauge with the least-squares alignment"
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json:[0-9]*:[0-9]*: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 
@@ -276,6 +276,15 @@ import json; d = json.load(open('bg-meas.json')); d['placements'][1]['balls'][7]
 json.dump(d, open('bg-wrong.json', 'w'))"
 expect_err "section 2: ball [0-9]*: point 4 is .* mm off the sphere" "$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json
 "$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json --drop-outliers >out.txt 2>err.txt && grep -q "warning: bg-wrong.json: section 2: ball [0-9]*: point 4 is" err.txt && ok || bad "--drop-outliers: $(cat err.txt)"
+
+# One grammar: flags like every other command, --report wherever a result is written.
+expect_ok "$T" machine error --machine machine.json --input bg-cmd.csv -o me-flags.csv
+expect_ok "$T" machine error machine.json bg-cmd.csv -o me-pos.csv
+cmp -s me-flags.csv me-pos.csv && ok || bad "machine error: flags and positionals agree"
+expect_ok "$T" separate --input p3.csv --output sr.json --report sr.html
+grep -q "uPlot" sr.html && ok || bad "separate --report"
+expect_ok "$T" simulate guideway5d --layout gw.json --stations 20 -o gs.csv
+[ "$(wc -l <gs.csv)" -eq 21 ] && ok || bad "simulate guideway5d --stations"
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -19,7 +19,7 @@ def read_ds(path):
 def test_sphere_matches_nist(name):
     ref = np.array((NIST / "Sphere" / f"{name}.fit").read_text().split(), dtype=float)
     f = trueaxis.fit("sphere", read_ds(NIST / "Sphere" / f"{name}.ds"))
-    np.testing.assert_allclose(f["point"], ref[:3], rtol=0, atol=1e-9 * 1000)
+    np.testing.assert_allclose(f["center"], ref[:3], rtol=0, atol=1e-9 * 1000)
     assert f["diameter"] == pytest.approx(ref[3], rel=1e-9)
     assert f["rms"] == pytest.approx(np.sqrt(np.mean(f["residuals"] ** 2)), rel=1e-12)
 
@@ -46,3 +46,29 @@ def test_min_zone_plane_of_alternating_points():
     assert f["zone"] == pytest.approx(2 * h / np.sqrt(1 + 1e-8), abs=1e-14)
     with pytest.raises(trueaxis.Error, match="available for line, plane and circle"):
         trueaxis.fit("sphere", np.random.default_rng(1).normal(size=(10, 3)), zone=True)
+
+
+def test_python_speaks_the_words_of_fit_json(tmp_path):
+    # One grammar: the dictionary's keys are fit.json's (center/point, normal/direction).
+    import json
+    import os
+    import subprocess
+    rng = np.random.default_rng(3)
+    t = rng.uniform(0, 2 * np.pi, 30)
+    pts = {"plane": np.stack([rng.uniform(0, 50, 30), rng.uniform(0, 50, 30), rng.normal(0, 1e-3, 30)], 1),
+           "circle": np.stack([20 * np.cos(t), 20 * np.sin(t), rng.normal(0, 1e-3, 30)], 1),
+           "sphere": np.stack([20 * np.cos(t) * np.sin(t + 1), 20 * np.sin(t) * np.sin(t + 1), 20 * np.cos(t + 1)], 1),
+           "line": np.stack([np.arange(30.0), 2 * np.arange(30.0), rng.normal(0, 1e-3, 30)], 1)}
+    cli = os.environ.get("TRUEAXIS", "trueaxis")
+    for element, p in pts.items():
+        csv = tmp_path / f"{element}.csv"
+        np.savetxt(csv, p, delimiter=",", header="x,y,z", comments="")
+        out = tmp_path / f"{element}.json"
+        subprocess.run([cli, "fit", element, "-q", "--input", str(csv), "--output", str(out)], check=True)
+        from_file = json.loads(out.read_text())
+        f = trueaxis.fit(element, p)
+        for key in ("center", "point", "normal", "direction", "diameter"):
+            assert (key in f) == (key in from_file), (element, key)
+            if key in f:
+                np.testing.assert_allclose(f[key], from_file[key], rtol=1e-12, atol=1e-12)
+        assert set(f["uncertainty"]) == set(from_file["uncertainty"]), element
