@@ -7,13 +7,18 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "commands.hpp"
 #include "moody_data.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/results.hpp"
 #include "trueaxis/io/surface.hpp"
+#include "trueaxis/report/ballgauge.hpp"
+#include "trueaxis/report/fit.hpp"
+#include "trueaxis/report/guideway.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/report/surface.hpp"
 #include "trueaxis/separation/separation.hpp"
@@ -52,10 +57,10 @@ int cmd_separate(const SeparateArgs& a) {
   io::write_result(a.output, r);
   if (!a.csv.empty()) io::write_result_csv(a.csv, r);
   if (!a.report.empty())
-    report::write(a.report, report::render("trueaxis straightness report",
-                                           {report::separation_section(
-                                               std::filesystem::path(a.input).filename().string(),
-                                               r)}));
+    report::write(a.report,
+                  report::render("trueaxis straightness report",
+                                 {report::separation_section(
+                                     std::filesystem::path(a.input).filename().string(), r)}));
   if (!a.quiet)
     fmt::print("{}wrote {}{}{}\n", r.summary(), a.output, a.csv.empty() ? "" : ", " + a.csv,
                a.report.empty() ? "" : ", " + a.report);
@@ -121,13 +126,44 @@ int cmd_surface(const SurfaceArgs& a) {
   return 0;
 }
 
+// Any result file trueaxis writes, by its "kind".
 int cmd_report(const std::string& input, const std::string& output, bool quiet) {
-  const separation::Result r = io::read_result(input);
-  const std::string html = report::render(
-      "trueaxis straightness report",
-      {report::separation_section(std::filesystem::path(input).filename().string(), r)});
-  report::write(output, html);
-  if (!quiet) fmt::print("wrote {}\n", output);
+  const std::string kind = io::read_kind(input);
+  const std::string name = std::filesystem::path(input).filename().string();
+  std::string title;
+  report::Section section;
+  if (kind == "separation") {
+    title = "trueaxis straightness report";
+    section = report::separation_section(name, io::read_result(input));
+  } else if (kind == "surface") {
+    title = "trueaxis surface report";
+    section = report::surface_section(name, io::read_surface(input));
+  } else if (kind == "space") {
+    title = "trueaxis error space report";
+    std::optional<surface::Verification> v;
+    const surface::SpaceResult s = io::read_space(input, &v);
+    section = report::space_section(name, s, v ? &*v : nullptr);
+  } else if (kind == "guideway") {
+    title = "trueaxis guideway report";
+    section = report::guideway_section(name, io::read_guideway_result(input));
+  } else if (kind == "ballgauge map") {
+    title = "trueaxis ball-gauge map";
+    section = report::ballgauge_section(name, io::read_ballgauge_map(input));
+  } else if (kind == "length verification") {
+    title = "trueaxis length verification";
+    section = report::lengths_section(name, io::read_length_verification(input));
+  } else if (kind == "fit") {
+    title = "trueaxis fit report";
+    section = report::fit_section(name, io::read_fit(input));
+  } else {
+    throw Error(fmt::format("{}: a '{}' file has no report of its own{}", input, kind,
+                            kind == "parametric model"
+                                ? " (it is drawn with its map: 'trueaxis ballgauge --parametric "
+                                  "model.json --report map.html')"
+                                : ""));
+  }
+  report::write(output, report::render(title, {section}));
+  if (!quiet) fmt::print("wrote {} ({})\n", output, kind);
   return 0;
 }
 
@@ -294,7 +330,9 @@ int main(int argc, char** argv) {
   bool rquiet = false;
   auto* rep = app.add_subcommand(
       "report", "Write an HTML report (interactive plots, works offline) of a result JSON");
-  rep->add_option("result", rin, "result JSON written by 'trueaxis separate'")
+  rep->add_option("result", rin,
+                  "any result JSON trueaxis writes (separate, surface, space, guideway, "
+                  "ballgauge, verify-lengths, fit)")
       ->required()
       ->check(CLI::ExistingFile);
   rep->add_option("--output,-o", rout, "HTML file to write")->capture_default_str();

@@ -172,6 +172,7 @@ void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
                   {"registration_rms_um", p.registration_rms * 1e3},
                   {"diameter_error_max_um", p.diameter_error_max * 1e3}});
   ojson j;
+  j["kind"] = "ballgauge map";
   j["frame"] =
       "machine coordinates (mm); error = measured - true ball centre (um); correct with X = x - "
       "error(x)";
@@ -248,12 +249,14 @@ void write_length_verification(const std::string& path,
                    {"expected_after_rms", num(v.predicted_after)},
                    {"lengths", rows}});
   }
-  write_json(path, ojson{{"units", "nominal in mm; length errors (measured - nominal) in um"},
+  write_json(path, ojson{{"kind", "length verification"},
+                         {"units", "nominal in mm; length errors (measured - nominal) in um"},
                          {"results", out}});
 }
 
 void write_parametric(const std::string& path, const ballgauge::ParametricResult& r) {
   ojson j = machine_json(r.model);
+  j["kind"] = "parametric model";
   ojson cov = ojson::array();
   for (Eigen::Index i = 0; i < r.covariance.rows(); ++i) {
     ojson row = ojson::array();

@@ -203,6 +203,7 @@ Spots read_spots(const std::string& path, const GuidewayLayout& g, bool skip_bad
 
 void write_guideway_result(const std::string& path, const guideway::Result& r) {
   ojson j;
+  j["kind"] = "guideway";
   j["s"] = array_or_null(r.s, 1.0);
   for (int e = 0; e < guideway::kErrors; ++e)
     j[guideway::kErrorNames[e]] =

@@ -106,6 +106,7 @@ void write_space(const std::string& path, const surface::SpaceResult& s,
   const map::ErrorMap& m = s.map;
   m.validate();
   ojson j;
+  j["kind"] = "space";
   j["frame"] =
       "machine coordinates (mm); error = actual - nominal tool point (um), at the nodes of the "
       "grid";

@@ -189,6 +189,7 @@ std::vector<surface::Line> read_lines(const std::string& path) {
 
 void write_surface(const std::string& path, const surface::Result& r) {
   nlohmann::ordered_json j;
+  j["kind"] = "surface";
   j["method"] = r.method;
   j["units"] = {{"x", "mm"}, {"y", "mm"}, {"height", "um"}};
   j["reference"] = r.reference;

@@ -286,5 +286,17 @@ grep -q "uPlot" sr.html && ok || bad "separate --report"
 expect_ok "$T" simulate guideway5d --layout gw.json --stations 20 -o gs.csv
 [ "$(wc -l <gs.csv)" -eq 21 ] && ok || bad "simulate guideway5d --stations"
 
+# 'trueaxis report FILE' reads every result file trueaxis writes, by its "kind".
+expect_ok "$T" fit sphere --input sph.csv --output sph-fit.json
+for pair in r-lsq.json:separation moody.json:surface space.json:space gw-sim.json:guideway bg-ls-map.json:"ballgauge map" bg-verify.json:"length verification" sph-fit.json:fit; do
+  f=${pair%%:*}; kind=${pair#*:}
+  grep -q "\"kind\": \"$kind\"" "$f" || bad "$f has kind '$kind'"
+  if "$T" report "$f" -o "rep-$f.html" >out.txt 2>err.txt && grep -q "($kind)" out.txt && grep -q "<table>" "rep-$f.html"; then ok; else bad "report $f: $(cat err.txt)"; fi
+done
+grep -q "Drag across a plot" rep-sph-fit.json.html && bad "a report without plots promises zoom" || ok
+expect_err "model.json: a 'parametric model' file has no report of its own" "$T" report bg-model.json -o o.html
+echo '{"hello": 1}' > notours.json
+expect_err "notours.json:1:1: not a trueaxis result file" "$T" report notours.json -o o.html
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]
