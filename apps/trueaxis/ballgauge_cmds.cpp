@@ -275,7 +275,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   auto va = std::make_shared<VerifyArgs>();
   c = app.add_subcommand(
       "verify-lengths",
-      "Gauge-block check of a correction (ISO 10360-2 style, the paper's figure 10): length "
+      "Gauge-block check of a correction (ISO 10360-2 positions, as in Oya et al. 1988): length "
       "errors before and after correction, range and RMS, and the level the repeatability "
       "predicts.\nlengths.csv: columns x1,y1,z1,x2,y2,z2 (measured end points, mm), nominal "
       "(mm).\nExample: trueaxis verify-lengths --map map.json --input lengths.csv --output "
@@ -300,12 +300,12 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c = simulate.add_subcommand(
       "ballgauge",
       "A ball gauge probed on a virtual CMM: a 5 x 4 x 2 frame at 80 mm pitch, stacked in "
-      "sections (the paper's layout), each ball probed at points spread over its upper "
+      "sections (Oya et al.'s layout), each ball probed at points spread over its upper "
       "hemisphere.\nExample: trueaxis simulate ballgauge --machine machine.json --noise 0.5");
   sa->machine.add_options(c);
   c->add_option("--sections", sa->sections, "placements stacked in z")->capture_default_str();
   c->add_option("--alignment", sa->alignment,
-                "the first placement's alignment: 321 (the paper's, balls 0, 1, 2) or ls (least "
+                "the first placement's alignment: 321 (3-2-1 on balls 0, 1, 2) or ls (least "
                 "squares over all its balls)")
       ->check(CLI::IsMember({"321", "ls"}))
       ->capture_default_str();

@@ -81,13 +81,13 @@ int run_demo(const DemoOptions& o) {
 
   std::vector<report::Section> sections;
   report::Section intro;
-  intro.title = "Straightness error separation (spec 01)";
+  intro.title = "Straightness error separation";
   intro.intro_html =
       "<p>A virtual carriage pitches by a few µrad while four displacement probes (5 mm apart) and "
       "an electronic level read a workpiece. Each method recovers the workpiece profile and the "
       "guide's straightness; the dashed red curves are the simulator's truth in the same "
       "reference. "
-      "The two-point method cannot see pitch, so it integrates it into the profiles; the seed's "
+      "The two-point method cannot see pitch, so it integrates it into the profiles; Mitsubishi's "
       "three-point method removes pitch but cannot tell a parabola in the guide from one in the "
       "workpiece (and its noise grows fastest); the least-squares solver uses all four probes and "
       "the level, recovers the curvature and has the smallest uncertainty.</p>";
@@ -100,7 +100,7 @@ int run_demo(const DemoOptions& o) {
     bool angle;
   };
   const Run runs[] = {{"two-point", separation::Method::TwoPoint, 2, false},
-                      {"three-point (seed)", separation::Method::ThreePoint, 3, false},
+                      {"three-point (JPH0464003B2)", separation::Method::ThreePoint, 3, false},
                       {"least squares", separation::Method::Lsq, 4, true}};
   for (const Run& run : runs) {
     separation::Options opt;
@@ -145,7 +145,7 @@ int run_demo(const DemoOptions& o) {
       "closure RMS {:.3f} um, max {:.3f} um -> surface-moody*.json",
       classic.flatness_min_zone * 1e3, moody_lsq.closure_rms * 1e3, moody_lsq.closure_max * 1e3));
   sections.push_back(report::surface_section(
-      "Error surface: Moody's surface plate (spec 02)", classic,
+      "Error surface: Moody's surface plate (1955)", classic,
       "<p>J. C. Moody's 1955 Union Jack: eight autocollimator lines over a granite plate, one "
       "reading per 4-inch foot. The classic worksheet reproduces his published heights (the "
       "test suite checks every one of them). Try <code>trueaxis surface --moody moody "
@@ -184,13 +184,13 @@ int run_demo(const DemoOptions& o) {
       "points: RMS {:.2f} -> {:.2f} um (expected {:.2f}), x{:.1f} -> space.json, x.comp",
       space.straightness_runs, space.laser_runs, space.truth_rms * 1e3, check.before_rms * 1e3,
       check.after_rms * 1e3, check.predicted_rms * 1e3, check.improvement()));
-  sections.push_back(report::space_section(
-      "Error space and compensation of a virtual CMM (spec 02)", space, &check));
+  sections.push_back(
+      report::space_section("Error space and compensation of a virtual CMM", space, &check));
   sections.back().intro_html =
       fmt::format(
           "<p>A seeded virtual bridge CMM (chain {}; all 21 ISO 230-1 errors, below) is measured "
           "like a real one: three-point probe runs along every grid line with {} µm probe noise, "
-          "separated (spec 01) and assembled into surfaces; laser positioning runs stack them and "
+          "separated and assembled into surfaces; laser positioning runs stack them and "
           "face diagonals fix the squareness. The map is then used to compensate 1000 random "
           "commands. Files: <code>machine.json</code>, <code>space.json</code>, "
           "<code>x.comp</code> (LinuxCNC). Try <code>trueaxis space --machine machine.json -o "
@@ -230,8 +230,8 @@ int run_demo(const DemoOptions& o) {
       "z = 0: {} -> layout.json, spots.csv",
       go.positions, worst_z,
       gflat.layout.message.substr(0, gflat.layout.message.find(" (singular"))));
-  auto gs = report::guideway_section("Five guideway errors from three laser spots (spec 03)", g,
-                                     &carriage.truth);
+  auto gs =
+      report::guideway_section("Five guideway errors from three laser spots", g, &carriage.truth);
   gs.intro_html =
       fmt::format(
           "<p>The X carriage of the same virtual machine carries three quadrant detectors "
@@ -284,10 +284,12 @@ int run_demo(const DemoOptions& o) {
       checks[0].before.max * 1e3, checks[0].after.min * 1e3, checks[0].after.max * 1e3,
       checks[0].after.rms * 1e3, checks[0].predicted_after * 1e3, checks[1].after.min * 1e3,
       checks[1].after.max * 1e3, checks[1].after.rms * 1e3, checks[1].predicted_after * 1e3));
-  auto bs = report::ballgauge_section("CMM error map from a ball gauge (spec 04)", bmap, &model);
+  auto bs =
+      report::ballgauge_section("CMM error map from a ball gauge (Oya et al. 1988)", bmap, &model);
   bs.intro_html =
       "<p>The same virtual CMM measures a 5 × 4 × 2 frame of 25 mm balls at 80 mm pitch in "
-      "three placements stacked in z (the paper's four sections, 320 × 240 × 240 mm), 10 probed "
+      "three placements stacked in z (as Oya et al.'s four sections, 320 × 240 × 240 mm), 10 "
+      "probed "
       "points per ball with 0.5 µm noise. The first placement is aligned by least squares, the "
       "others are stitched over their 20 shared balls. The same data also give the 21 "
       "rigid-body errors as cubic polynomials (the parametric model, <code>model.json</code>, a "
@@ -296,7 +298,7 @@ int run_demo(const DemoOptions& o) {
       "m.html</code>.</p>" +
       bs.intro_html;
   sections.push_back(std::move(bs));
-  auto ls = report::lengths_section("Gauge-block verification (spec 04, figure 10)", checks);
+  auto ls = report::lengths_section("Gauge-block verification (ISO 10360-2 positions)", checks);
   ls.intro_html +=
       "<p>Held-out gauge blocks in the ISO 10360-2 positions (x, y, z and the four space "
       "diagonals of the mapped box), five lengths each, three repeats, measured on the same "

@@ -108,7 +108,8 @@ int cmd_surface(const SurfaceArgs& a) {
   } else {
     if (a.method == "classic") throw Error("--method classic needs --moody DIR");
     surface::Options o;
-    o.method = a.method == "seed" ? surface::Method::Seed : surface::Method::Lsq;
+    o.method =
+        a.method == "boundary" || a.method == "seed" ? surface::Method::Seed : surface::Method::Lsq;
     r = surface::build(io::read_lines(a.lines), o);
   }
   io::write_surface(a.output, r);
@@ -221,10 +222,10 @@ int main(int argc, char** argv) {
   sep->add_option("--input,-i", sa.input, "probes CSV (x in mm, one column of um per probe)")
       ->required()
       ->check(CLI::ExistingFile);
-  sep->add_option(
-         "--method,-m", sa.method,
-         "two-point: probes at 0,h (no pitch); three-point: the seed method, probes at 0,h,2h; "
-         "lsq: least squares, any whole-step offsets, optional angle channel")
+  sep->add_option("--method,-m", sa.method,
+                  "two-point: probes at 0,h (no pitch); three-point: with pitch, probes at 0,h,2h "
+                  "(Mitsubishi JPH0464003B2); "
+                  "lsq: least squares, any whole-step offsets, optional angle channel")
       ->check(CLI::IsMember({"two-point", "three-point", "lsq"}))
       ->capture_default_str();
   sep->add_option("--offsets", sa.offsets,
@@ -241,11 +242,11 @@ int main(int argc, char** argv) {
       "known zero difference of a three-probe layout, um (o_A - 2 o_B + o_C for equal spacing); "
       "removes the parabola ambiguity");
   sep->add_flag("--invert", sa.invert, "negate probe readings (probes that read the gap)");
-  sep->add_option(
-         "--reference", sa.reference,
-         "ls: residuals from least-squares lines; seed: the patent's own numbers (three-point); "
-         "min-zone: relative to minimum-zone lines")
-      ->check(CLI::IsMember({"ls", "seed", "min-zone"}))
+  sep->add_option("--reference", sa.reference,
+                  "ls: residuals from least-squares lines; patent: the numbers of JPH0464003B2 "
+                  "(three-point); "
+                  "min-zone: relative to minimum-zone lines")
+      ->check(CLI::IsMember({"ls", "patent", "seed", "min-zone"}))
       ->capture_default_str();
   sep->add_option("--sigma", sa.sigma,
                   "probe noise, um (standard deviation) for the uncertainties; "
@@ -276,11 +277,12 @@ int main(int argc, char** argv) {
                    "directory with Moody's eight line files (arc-seconds) and Config.txt")
       ->check(CLI::ExistingDirectory)
       ->excludes(sf_in);
-  surf->add_option("--method", sf.method,
-                   "with --lines: lsq (default; all lines jointly, closure at every crossing) or "
-                   "seed (x lines hung on two boundary y lines); with --moody: classic (default, "
-                   "Moody's worksheet) or lsq")
-      ->check(CLI::IsMember({"lsq", "seed", "classic"}));
+  surf->add_option(
+          "--method", sf.method,
+          "with --lines: lsq (default; all lines jointly, closure at every crossing) or "
+          "boundary (x lines hung on two boundary y lines); with --moody: classic (default, "
+          "Moody's worksheet) or lsq")
+      ->check(CLI::IsMember({"lsq", "boundary", "seed", "classic"}));
   surf->add_option("--output,-o", sf.output, "surface JSON to write")->required();
   surf->add_option("--report", sf.report,
                    "also write an HTML report (heat map of the heights, closure at the crossings)");

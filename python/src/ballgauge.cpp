@@ -111,7 +111,7 @@ X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
       },
       py::arg("gauge"), py::arg("measurements"), py::kw_only(), py::arg("stylus_offset"),
       py::arg("degree") = 3, py::arg("chain") = "FYXZ", py::arg("output") = "",
-      R"doc(The 21 rigid-body errors of the CMM from the ball-gauge data (spec 04, parametric model).
+      R"doc(The 21 rigid-body errors of the CMM from the ball-gauge data (parametric model).
 
 stylus_offset: the stylus tip's offset [x, y, z] (mm) from the ram, as in machine.json. Every
 error function is a polynomial of `degree` in its axis coordinate. Returns {'machine': the
@@ -194,7 +194,7 @@ output='model.json' the model and its covariance are written for verify_lengths(
       },
       py::arg("lengths"), py::kw_only(), py::arg("map") = py::none(), py::arg("model") = py::none(),
       py::arg("repeat_tolerance") = 1.0, py::arg("clamp") = false,
-      R"doc(Gauge-block verification of a correction (spec 04, the paper's figure 10).
+      R"doc(Gauge-block verification of a correction (ISO 10360-2 positions, as in Oya et al. 1988).
 
 lengths: a lengths.csv path, or an array (n, 7) of x1, y1, z1, x2, y2, z2, nominal (mm).
 map: an ErrorMap or a map.json path (grid correction); model: a model.json path (parametric);

@@ -109,7 +109,7 @@ void bind_guideway(py::module_& m) {
       },
       py::arg("layout"), py::arg("s"), py::arg("readings"), py::kw_only(),
       py::arg("sigma") = py::none(),
-      R"doc(Five motion errors of a guideway from laser spots on quadrant detectors (spec 03).
+      R"doc(Five motion errors of a guideway from laser spots on quadrant detectors.
 
 layout: a layout.json path or a list of dicts {'name', 'kind': 'position' | 'angle', 'position':
 [x, y, z] (mm; z along the travel, x horizontal, y vertical), 'focal_length' (mm, angle)}; s:

@@ -126,11 +126,12 @@ PYBIND11_MODULE(_trueaxis, m) {
         py::arg("zero_difference") = py::none(), py::arg("reference") = "ls",
         py::arg("sigma") = py::none(), py::arg("angle_sigma") = 1.0, py::arg("invert") = false,
         py::arg("filter_cutoff") = 0.0,
-        R"doc(Straightness error separation (spec 01).
+        R"doc(Straightness error separation with displacement probes (two-point, three-point after
+JPH0464003B2, or least squares).
 
 x: station positions (mm, equal steps); readings: array (stations, probes) in µm; offsets: probe
 offsets from the first probe in mm (default 0, h, 2h, ...); method: 'two-point', 'three-point' or
-'lsq'; angle: pitch channel in µrad (lsq); zero_difference: µm; reference: 'ls', 'seed' or
+'lsq'; angle: pitch channel in µrad (lsq); zero_difference: µm; reference: 'ls', 'patent' or
 'min-zone'; sigma: probe noise in µm; angle_sigma: µrad.
 
 Returns a dict with 'workpiece', 'guide' and 'pitch' (each {'x', 'value', 'uncertainty'}; µm or

@@ -252,7 +252,8 @@ py::dict verification_out(const surface::Verification& v) {
 
 void bind_space(py::module_& m) {
   // ---- Machine --------------------------------------------------------------------------------
-  py::class_<sim::Machine>(m, "Machine", R"doc(A rigid-body virtual 3-axis machine (spec 06).
+  py::class_<sim::Machine>(m, "Machine",
+                           R"doc(A rigid-body virtual 3-axis machine (21 ISO 230-1 errors).
 
 The 21 ISO 230-1 errors (EXX ... ECZ as functions of their axis' coordinate, EC0Y, EB0Z, EA0Z
 squareness), exact homogeneous transformations along the kinematic chain (e.g. 'FYXZ', a bridge
@@ -472,10 +473,10 @@ at the nearest face with clamp=True; never extrapolated.)doc")
         surface::Options o;
         if (method == "lsq")
           o.method = surface::Method::Lsq;
-        else if (method == "seed")
+        else if (method == "boundary" || method == "seed")
           o.method = surface::Method::Seed;
         else
-          throw Error(fmt::format("method must be 'lsq' or 'seed', not '{}'", method));
+          throw Error(fmt::format("method must be 'lsq' or 'boundary', not '{}'", method));
         surface::Result r;
         {
           py::gil_scoped_release release;
@@ -484,11 +485,11 @@ at the nearest face with clamp=True; never extrapolated.)doc")
         return surface_out(r);
       },
       py::arg("lines"), py::kw_only(), py::arg("method") = "lsq",
-      R"doc(Error surface from a network of straightness lines (spec 02).
+      R"doc(Error surface from a network of straightness lines (Moody 1955; least squares over any crossing lines).
 
 lines: a lines.json path, or a list of dicts {'name', 'start': [x, y] (mm), 'direction':
 [dx, dy], 'spacing': mm, and 'heights' (µm) or 'slopes' (µrad, one per foot)}. method: 'lsq'
-(all lines jointly) or 'seed' (X lines hung on two boundary Y lines).
+(all lines jointly) or 'boundary' (X lines hung on two boundary Y lines).
 
 Returns {'points': {'line', 'station', 'x', 'y', 'height' (µm)}, 'grid' ({'x', 'y', 'height'
 (len(y), len(x))} or None), 'flatness': {'ls', 'min_zone'}, 'closure': {'rms', 'max'},

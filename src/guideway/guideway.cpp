@@ -166,8 +166,9 @@ void Layout::validate() const {
     const bool collinear = scale == 0 || sv.size() < 2 || sv[1] <= 1e-9 * sv[0];
     if (collinear && pos.size() >= 3)
       throw Error(fmt::format(
-          "layout: the position detectors {} lie on one line; they must span a triangle (the "
-          "seed's a, b, c) for roll and the two straightness errors to be separable",
+          "layout: the position detectors {} lie on one line; they must span a triangle (like "
+          "the three spots of a classic layout) for roll and the two straightness errors to be "
+          "separable",
           list));
     if (scale == 0)
       throw Error(fmt::format("layout: the position detectors {} are at the same point", list));

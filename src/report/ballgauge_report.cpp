@@ -27,6 +27,7 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
                           const ballgauge::ParametricResult* pr) {
   Section s;
   s.title = title;
+  s.references = {refs::kOya, refs::kIso230, refs::kGum};
   double emax = 0, umax = 0;
   for (const auto& p : r.points) {
     emax = std::max(emax, p.error.norm());
@@ -66,12 +67,14 @@ Section lengths_section(const std::string& title,
                         const std::vector<ballgauge::LengthVerification>& results) {
   Section s;
   s.title = title;
+  s.references = {refs::kIso10360_2, refs::kOya, refs::kGum};
   if (results.empty()) return s;
   const auto& first = results.front();
   s.intro_html = fmt::format(
       "<p>{} calibrated lengths in {} positions (repeats: same nominal, same end points). "
       "Length error = measured − nominal, before and after correction, against the nominal "
-      "length (the paper's figure 10). Expected after correction: the repeatability of the "
+      "length (as in Oya et al. 1988, figure 10). Expected after correction: the repeatability of "
+      "the "
       "measurement and the correction's own uncertainty, added in quadrature.</p>",
       first.rows.size(), first.positions);
   s.table = {
@@ -95,7 +98,7 @@ Section lengths_section(const std::string& title,
     return first.rows[a].nominal < first.rows[b].nominal;
   });
   Plot p;
-  p.title = "Length error against nominal length (figure 10)";
+  p.title = "Length error against nominal length";
   p.x_label = "nominal length (mm)";
   p.y_label = "length error (µm)";
   const auto n = static_cast<Eigen::Index>(order.size());

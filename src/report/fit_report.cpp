@@ -10,6 +10,7 @@ Section fit_section(const std::string& title, const geometry::Fit& f) {
   using geometry::Element;
   Section s;
   s.title = title;
+  s.references = {refs::kIso10360_6, refs::kShakarji, refs::kGum};
   s.warnings = f.warnings;
   const bool zone = f.zone > 0;
   s.intro_html = fmt::format(

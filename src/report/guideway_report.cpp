@@ -8,6 +8,7 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
                          const std::array<Eigen::VectorXd, guideway::kErrors>* truth) {
   Section s;
   s.title = title;
+  s.references = {refs::kIso230, refs::kGum};
   s.intro_html = fmt::format(
       "<p>{} positions; condition number of the layout's observable part {:.3g}; reading noise "
       "{:.3f} µm ({}).{}</p>",

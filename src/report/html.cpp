@@ -210,6 +210,16 @@ svg.ta-fig{max-width:100%;height:auto}
       h += "</div>\n";
     }
   }
+  // One list of the sources the sections' methods follow, each once, in order of first use.
+  std::vector<std::string> refs;
+  for (const auto& s : sections)
+    for (const auto& r : s.references)
+      if (std::find(refs.begin(), refs.end(), r) == refs.end()) refs.push_back(r);
+  if (!refs.empty()) {
+    h += "<h2>References</h2>\n<ol class=\"refs\">";
+    for (const auto& r : refs) h += "<li>" + escape(r) + "</li>";
+    h += "</ol>\n";
+  }
   script += fmt::format("var TA_FIGURES={};\n", figures);
   h += "<script>\n" + script + R"JS(
 (function(){
@@ -244,6 +254,7 @@ Section separation_section(const std::string& title, const separation::Result& r
                            const separation::Result* truth) {
   Section s;
   s.title = title;
+  s.references = {refs::kThreePoint, refs::kIso12780, refs::kIso16610, refs::kGum};
   std::string unobs;
   for (const auto& u : r.unobservable) unobs += (unobs.empty() ? "" : ", ") + u;
   s.warnings = r.warnings();

@@ -36,6 +36,7 @@ Section surface_section(const std::string& title, const surface::Result& r,
                         const std::string& intro_html) {
   Section s;
   s.title = title;
+  s.references = {refs::kMoody, refs::kIso12780};
   s.intro_html = intro_html +
                  fmt::format("<p>Heights in µm, {}. Not determined by the lines: {}; {}.</p>",
                              escape(r.reference), escape(joined(r.unobservable)), escape(r.gauge));
@@ -94,6 +95,7 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
   const Eigen::Index nx = m.size(0), ny = m.size(1), nz = m.size(2);
   Section s;
   s.title = title;
+  s.references = {refs::kIso230, refs::kIso230_2, refs::kThreePoint, refs::kGum};
   s.warnings = surface::space_warnings(sp, v);
   s.intro_html = fmt::format(
       "<p>Error vectors e = actual − nominal (µm) on a {} × {} × {} grid, from {} straightness "

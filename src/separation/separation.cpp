@@ -38,7 +38,7 @@ const char* to_string(Reference r) {
     case Reference::LeastSquares:
       return "ls";
     case Reference::Seed:
-      return "seed";
+      return "patent";
     case Reference::MinZone:
       return "min-zone";
   }
@@ -54,9 +54,9 @@ Method method_from_string(const std::string& s) {
 
 Reference reference_from_string(const std::string& s) {
   if (s == "ls") return Reference::LeastSquares;
-  if (s == "seed") return Reference::Seed;
+  if (s == "patent" || s == "seed") return Reference::Seed;  // "seed": earlier files
   if (s == "min-zone") return Reference::MinZone;
-  throw Error(fmt::format("unknown reference '{}' (expected ls, seed or min-zone)", s));
+  throw Error(fmt::format("unknown reference '{}' (expected ls, patent or min-zone)", s));
 }
 
 double ProbeData::step() const {
@@ -109,7 +109,7 @@ void Options::validate() const {
   if (zero_difference && !std::isfinite(*zero_difference))
     throw Error("zero difference must be finite");
   if (reference == Reference::Seed && method != Method::ThreePoint)
-    throw Error("reference 'seed' is defined for the three-point method only");
+    throw Error("reference 'patent' is defined for the three-point method only");
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -243,7 +243,7 @@ bool parallel(const Eigen::Vector2d& u, const Eigen::Vector2d& axis) {
 
 Result build_seed(const std::vector<Line>& lines, const Options& o) {
   Result r;
-  r.method = "seed";
+  r.method = "boundary";
   std::vector<int> xl, yl;
   for (int i = 0; i < static_cast<int>(lines.size()); ++i) {
     const Line& l = lines[static_cast<std::size_t>(i)];
@@ -253,13 +253,14 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
       yl.push_back(i);
     else
       throw Error(fmt::format(
-          "seed method: line '{}' is neither along x nor along y; use --method lsq", l.name));
+          "boundary method: line '{}' is neither along x nor along y; use --method lsq", l.name));
   }
   if (xl.empty() || yl.size() != 2)
-    throw Error(fmt::format(
-        "seed method: needs a family of x lines and exactly two boundary y lines (got {} x lines "
-        "and {} y lines); use --method lsq for other layouts",
-        xl.size(), yl.size()));
+    throw Error(
+        fmt::format("boundary method: needs a family of x lines and exactly two boundary y lines "
+                    "(got {} x lines "
+                    "and {} y lines); use --method lsq for other layouts",
+                    xl.size(), yl.size()));
   auto xrange = [&](int i) {
     const Line& l = lines[static_cast<std::size_t>(i)];
     const double x0 = l.start.x(), x1 = l.station(l.heights.size() - 1).x();
@@ -270,10 +271,11 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
   for (int i : xl) {
     const auto [a, b] = xrange(i);
     if (std::abs(a - xmin) > tol || std::abs(b - xmax) > tol)
-      throw Error(fmt::format(
-          "seed method: x line '{}' spans x = {}..{} mm but the family spans {}..{} mm (every x "
-          "line must end on the two boundary lines)",
-          lines[static_cast<std::size_t>(i)].name, a, b, xmin, xmax));
+      throw Error(
+          fmt::format("boundary method: x line '{}' spans x = {}..{} mm but the family spans "
+                      "{}..{} mm (every x "
+                      "line must end on the two boundary lines)",
+                      lines[static_cast<std::size_t>(i)].name, a, b, xmin, xmax));
   }
   int left = -1, right = -1;
   for (int j : yl) {
@@ -282,9 +284,10 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
     if (std::abs(x - xmax) <= tol) right = j;
   }
   if (left < 0 || right < 0 || left == right)
-    throw Error(fmt::format(
-        "seed method: the two y lines must lie at the x family's end coordinates x = {} and {} mm",
-        xmin, xmax));
+    throw Error(
+        fmt::format("boundary method: the two y lines must lie at the x family's end coordinates x "
+                    "= {} and {} mm",
+                    xmin, xmax));
   r.crossings = find_crossings(lines, tol);
   require_connected(lines, r.crossings, tol);
   // Hang every x line on the boundary curves (their own heights, i.e. their own references).
@@ -295,7 +298,7 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
     const double t = (y - b.start.y()) / b.direction.y();
     if (t < -tol || t > b.length() + tol)
       throw Error(
-          fmt::format("seed method: boundary line '{}' does not reach y = {} mm", b.name, y));
+          fmt::format("boundary method: boundary line '{}' does not reach y = {} mm", b.name, y));
     return height_at(b, b.heights, std::clamp(t, 0.0, b.length()));
   };
   for (int i : xl) {

@@ -30,8 +30,10 @@ head -1 r-lsq.csv | grep -q "^x,workpiece_um" && ok || bad "result csv header"
 # two-point needs exactly two probe columns: give it a two-probe file.
 cut -d, -f1-3 p3.csv > p2.csv
 expect_ok "$T" separate --input p2.csv --method two-point --output r-two.json
-expect_ok "$T" separate --input p3.csv --method three-point --reference seed --output r-seed.json
-grep -q '"reference": "seed"' r-seed.json && ok || bad "seed reference recorded"
+expect_ok "$T" separate --input p3.csv --method three-point --reference patent --output r-seed.json
+grep -q '"reference": "patent"' r-seed.json && ok || bad "patent reference recorded"
+expect_ok "$T" separate --input p3.csv --method three-point --reference seed --output r-seed2.json
+cmp -s r-seed.json r-seed2.json && ok || bad "'seed' is still read as 'patent'"
 expect_ok "$T" separate --input p3.csv --method lsq --reference min-zone --sigma 0.05 --output r-mz.json
 grep -q '"uncertainty"' r-mz.json && ok || bad "uncertainty written with --sigma"
 expect_ok "$T" report r-lsq.json -o rep.html
@@ -113,7 +115,7 @@ expect_err "not a whole multiple of the step" "$T" separate --input p3.csv --off
 expect_err "missing column 'level'" "$T" separate --input p3.csv --angle level --output o.json
 "$T" simulate straightness --stations 100 --offsets 0,20,40 --output chain.csv --truth tc.csv -q
 expect_err "chain offsets" "$T" separate --input chain.csv --offsets 0,20,40 --output o.json
-expect_err "seed' is defined for the three-point method only" "$T" separate --input p3.csv --reference seed --output o.json
+expect_err "patent' is defined for the three-point method only" "$T" separate --input p3.csv --reference patent --output o.json
 printf '{"workpiece": {"x": [0,1], "value": [1,' > broken.json
 expect_err "broken.json:1:" "$T" report broken.json -o x.html
 expect_err "" "$T" separate --input does-not-exist.csv --output o.json
@@ -297,6 +299,14 @@ grep -q "Drag across a plot" rep-sph-fit.json.html && bad "a report without plot
 expect_err "model.json: a 'parametric model' file has no report of its own" "$T" report bg-model.json -o o.html
 echo '{"hello": 1}' > notours.json
 expect_err "notours.json:1:1: not a trueaxis result file" "$T" report notours.json -o o.html
+
+# Reports a metrologist would sign: no internal words, a list of references.
+for f in rep-*.html sr.html; do
+  grep -qi "spec 0\|(seed)\|the paper's\|seed method" "$f" && bad "$f speaks of specs, seeds or the paper" || ok
+done
+grep -q "<h2>References</h2>" rep-sph-fit.json.html && grep -q "ISO 10360-6" rep-sph-fit.json.html && ok || bad "fit report cites its sources"
+"$T" --help > help.txt; for c in separate surface space fit ballgauge verify-lengths guideway; do "$T" help $c >> help.txt; done
+grep -qi "spec 0\|the seed\|the paper's" help.txt && bad "help speaks of specs, seeds or the paper" || ok
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -172,9 +172,9 @@ def test_surface_recovers_a_known_plate():
     want = residual_from_plane(p["x"], p["y"], plate(p["x"], p["y"]))
     np.testing.assert_allclose(p["height"], want, atol=ROUND_OFF_UM)
     # Without a diagonal, lsq and seed agree with the truth up to plane and twist.
-    for method in ("lsq", "seed"):
+    for method in ("lsq", "boundary"):
         # The seed's construction hangs the x lines on the two boundary y lines.
-        y_lines = (0, 600) if method == "seed" else (0, 300, 600)
+        y_lines = (0, 600) if method == "boundary" else (0, 300, 600)
         s = trueaxis.surface(network(rng, diagonal=False, y_lines=y_lines), method=method)
         assert "twist" in s["unobservable"]
         p = s["points"]

@@ -291,7 +291,7 @@ TEST(Separation, BadInputsGiveClearErrors) {
   expect_error(camp.data, o, "method two-point needs probes at offsets 0, 10 mm");
   o.method = Method::Lsq;
   o.reference = Reference::Seed;
-  expect_error(camp.data, o, "reference 'seed' is defined for the three-point method only");
+  expect_error(camp.data, o, "reference 'patent' is defined for the three-point method only");
   o.reference = Reference::LeastSquares;
   o.zero_difference = 1e-3;
   d = camp.data;

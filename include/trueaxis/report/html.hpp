@@ -67,6 +67,7 @@ struct Section {
   std::string title;
   std::string intro_html;                       // trusted HTML (escape user text!)
   std::vector<std::string> warnings;            // plain text, shown prominently before the intro
+  std::vector<std::string> references;          // sources the section's methods follow (text)
   std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
   std::vector<Plot> plots;
   std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit
@@ -74,6 +75,42 @@ struct Section {
 };
 
 std::string escape(const std::string& text);
+
+// Sources cited by the sections (listed once under "References" at the end of a report).
+namespace refs {
+inline constexpr const char* kThreePoint =
+    "Mitsubishi Heavy Industries, straightness measurement by the three-point method with pitch "
+    "(sequential three-point method), Japanese patent JPH0464003B2.";
+inline constexpr const char* kIso12780 =
+    "ISO 12780-1/-2:2011, Geometrical product specifications: straightness (least-squares and "
+    "minimum-zone reference lines).";
+inline constexpr const char* kIso16610 =
+    "ISO 16610-21:2011, Filtration: linear profile filters, Gaussian filters.";
+inline constexpr const char* kMoody =
+    "J. C. Moody, How to calibrate surface plates in the plant, The Tool Engineer, October 1955 "
+    "(the Union Jack method).";
+inline constexpr const char* kIso230 =
+    "ISO 230-1:2012, Test code for machine tools, Part 1: geometric accuracy (error names "
+    "E<component><axis>, squareness).";
+inline constexpr const char* kIso230_2 =
+    "ISO 230-2:2014, Test code for machine tools, Part 2: positioning accuracy and "
+    "repeatability.";
+inline constexpr const char* kOya =
+    "M. Oya, H. Hokari, H. Tamura, A method of improving the accuracy of the three-coordinate "
+    "measuring machine (2nd report: calibration method using the three-dimensional standard), "
+    "Transactions of the JSME (C), 1988.";
+inline constexpr const char* kIso10360_2 =
+    "ISO 10360-2:2009, Acceptance and reverification tests for CMMs, Part 2: CMMs used for "
+    "measuring linear dimensions (E0, the seven positions).";
+inline constexpr const char* kIso10360_6 =
+    "ISO 10360-6:2001, Estimation of errors in computing Gaussian associated features.";
+inline constexpr const char* kShakarji =
+    "C. M. Shakarji, Least-squares fitting algorithms of the NIST algorithm testing system, "
+    "J. Res. NIST 103(6), 633-641, 1998.";
+inline constexpr const char* kGum =
+    "JCGM 100:2008, Evaluation of measurement data: Guide to the expression of uncertainty in "
+    "measurement (GUM); expanded uncertainty U = k·u, k = 2.";
+}  // namespace refs
 
 // The plane of an error map spanned by axes a and b (0..2 = x, y, z) at node `at` of the third
 // axis: in-plane errors as the node displacements, the third component as colour (µm). `name`
