@@ -95,7 +95,7 @@ int run_correct(const CorrectArgs& a) {
 }
 
 struct VerifyArgs {
-  std::string map, model, input, output, report;
+  std::string map, model, input, output, report, mpe;
   ballgauge::LengthOptions o;
   bool clamp = false, quiet = false;
 };
@@ -122,14 +122,29 @@ int run_verify(const VerifyArgs& a) {
       throw Error(fmt::format("{}: {} correction: {}", a.input, c.name, e.what()));
     }
   }
-  io::write_length_verification(a.output, results);
+  std::optional<ballgauge::Mpe> mpe;
+  if (!a.mpe.empty()) mpe = ballgauge::Mpe::parse(a.mpe);
+  io::write_length_verification(a.output, results, mpe ? &*mpe : nullptr);
   if (!a.quiet) {
     for (const auto& r : results) fmt::print("{}", r.summary());
     fmt::print("wrote {}\n", a.output);
   }
+  if (mpe) {
+    const auto say = [&](const std::string& name, const std::vector<ballgauge::LengthRow>& rows,
+                         bool after) {
+      const auto c = ballgauge::check_mpe(rows, *mpe, after);
+      if (!a.quiet)
+        fmt::print("E0 {} against MPE {} um: {} ({} of {} beyond, worst {:.0f} % of MPE)\n", name,
+                   mpe->text, c.pass() ? "PASS" : "FAIL", c.failed, c.lengths, 100 * c.worst_ratio);
+    };
+    say("before correction", results.front().rows, false);
+    for (const auto& r : results) say("after the " + r.correction + " correction", r.rows, true);
+  }
   if (!a.report.empty()) {
-    report::write(a.report, report::render("trueaxis length verification",
-                                           {report::lengths_section("Gauge blocks", results)}));
+    report::write(
+        a.report,
+        report::render("trueaxis length verification",
+                       {report::lengths_section("Gauge blocks", results, mpe ? &*mpe : nullptr)}));
     if (!a.quiet) fmt::print("wrote {}\n", a.report);
   }
   return 0;
@@ -289,6 +304,18 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--input,-i", va->input, "lengths CSV")->required()->check(CLI::ExistingFile);
   c->add_option("--output,-o", va->output, "verification JSON to write")->required();
   c->add_option("--report", va->report, "HTML report to write (figure-10 scatter)");
+  c->add_option("--mpe", va->mpe,
+                "E0 check against a maximum permissible error A+L/K (um, L in mm; e.g. "
+                "\"1.5+L/300\", or \"1.5+L/300,4\" capped at 4 um): PASS/FAIL and the envelope in "
+                "the report")
+      ->check([](const std::string& t) {
+        try {
+          ballgauge::Mpe::parse(t);
+        } catch (const Error& e) {
+          return std::string(e.what());
+        }
+        return std::string();
+      });
   c->add_option("--repeat-tolerance", va->o.repeat_tolerance,
                 "mm: rows with the same nominal and both ends this close are repeats")
       ->capture_default_str();

@@ -123,7 +123,10 @@ output='model.json' the model and its covariance are written for verify_lengths(
       "verify_lengths",
       [](const std::variant<std::string, Eigen::MatrixXd>& lengths,
          const std::optional<std::variant<std::string, map::ErrorMap>>& map,
-         const std::optional<std::string>& model, double repeat_tolerance, bool clamp) {
+         const std::optional<std::string>& model, double repeat_tolerance, bool clamp,
+         const std::optional<std::string>& mpe_text) {
+        std::optional<ballgauge::Mpe> mpe;
+        if (mpe_text) mpe = ballgauge::Mpe::parse(*mpe_text);
         std::vector<ballgauge::LengthMeasurement> L;
         if (const auto* path = std::get_if<std::string>(&lengths)) {
           L = io::read_lengths(*path);
@@ -188,12 +191,25 @@ output='model.json' the model and its covariance are written for verify_lengths(
           d["repeatability"] = v.repeatability * 1e3;
           d["expected_after"] = v.predicted_after * 1e3;
           d["summary"] = v.summary();
+          if (mpe) {
+            auto e0 = [&](bool after) {
+              const auto c = ballgauge::check_mpe(v.rows, *mpe, after);
+              py::dict x;
+              x["pass"] = c.pass();
+              x["beyond"] = c.failed;
+              x["lengths"] = c.lengths;
+              x["worst_fraction_of_mpe"] = c.worst_ratio;
+              return x;
+            };
+            d["e0_before"] = e0(false);
+            d["e0_after"] = e0(true);
+          }
           out.append(d);
         }
         return out;
       },
       py::arg("lengths"), py::kw_only(), py::arg("map") = py::none(), py::arg("model") = py::none(),
-      py::arg("repeat_tolerance") = 1.0, py::arg("clamp") = false,
+      py::arg("repeat_tolerance") = 1.0, py::arg("clamp") = false, py::arg("mpe") = py::none(),
       R"doc(Gauge-block verification of a correction (ISO 10360-2 positions, as in Oya et al. 1988).
 
 lengths: a lengths.csv path, or an array (n, 7) of x1, y1, z1, x2, y2, z2, nominal (mm).
@@ -201,7 +217,8 @@ map: an ErrorMap or a map.json path (grid correction); model: a model.json path 
 either or both. Returns one dict per correction: 'correction', 'nominal' (mm), 'before',
 'after', 'uncertainty' (µm per length), 'position' (repeat group), 'before_stats' and
 'after_stats' (min, max, range, mean, rms in µm), 'repeatability' and 'expected_after' (µm;
-NaN without repeats), 'summary'.)doc");
+NaN without repeats), 'summary'. With mpe="A+L/K" (µm, L in mm; ",B" caps it): 'e0_before' and
+'e0_after' ({'pass', 'beyond', 'lengths', 'worst_fraction_of_mpe'}), every |E| <= MPE(L).)doc");
 }
 
 }  // namespace trueaxis::python

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -191,6 +192,54 @@ std::string LengthVerification::summary() const {
         "  expected after: {:.2f} um RMS (repeatability {:.2f} um, correction u {:.2f} um)\n",
         predicted_after * 1e3, repeatability * 1e3, correction_u_rms * 1e3);
   return s;
+}
+
+double Mpe::at(double length_mm) const {
+  const double v = a + (k > 0 ? length_mm / k : 0.0);
+  return std::min(v, cap);
+}
+
+Mpe Mpe::parse(const std::string& text) {
+  Mpe m;
+  m.text = text;
+  std::string t;
+  for (char c : text)
+    if (c != ' ') t += c;
+  auto number = [&](const std::string& s, const char* what) {
+    double v = 0;
+    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !(v > 0) || !std::isfinite(v))
+      throw Error(
+          fmt::format("MPE '{}': {} '{}' must be a positive number (write A+L/K or "
+                      "A+L/K,B in um with L in mm, e.g. 1.5+L/300)",
+                      text, what, s));
+    return v;
+  };
+  std::string body = t;
+  if (const auto comma = t.find(','); comma != std::string::npos) {
+    m.cap = number(t.substr(comma + 1), "the cap B");
+    body = t.substr(0, comma);
+  }
+  const auto plus = body.find("+L/");
+  if (plus == std::string::npos) {
+    m.a = number(body, "A");
+  } else {
+    m.a = number(body.substr(0, plus), "A");
+    m.k = number(body.substr(plus + 3), "K");
+  }
+  return m;
+}
+
+MpeCheck check_mpe(const std::vector<LengthRow>& rows, const Mpe& mpe, bool after) {
+  MpeCheck c;
+  for (const auto& r : rows) {
+    const double e = std::abs(after ? r.after : r.before) * 1e3;  // µm
+    const double limit = mpe.at(r.nominal);
+    ++c.lengths;
+    if (e > limit) ++c.failed;
+    c.worst_ratio = std::max(c.worst_ratio, e / limit);
+  }
+  return c;
 }
 
 }  // namespace trueaxis::ballgauge

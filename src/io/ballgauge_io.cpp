@@ -222,7 +222,8 @@ void write_lengths(const std::string& path,
 }
 
 void write_length_verification(const std::string& path,
-                               const std::vector<ballgauge::LengthVerification>& results) {
+                               const std::vector<ballgauge::LengthVerification>& results,
+                               const ballgauge::Mpe* mpe) {
   auto stats = [](const ballgauge::LengthStats& s) {
     return ojson{{"min", s.min * 1e3},
                  {"max", s.max * 1e3},
@@ -249,9 +250,25 @@ void write_length_verification(const std::string& path,
                    {"expected_after_rms", num(v.predicted_after)},
                    {"lengths", rows}});
   }
-  write_json(path, ojson{{"kind", "length verification"},
-                         {"units", "nominal in mm; length errors (measured - nominal) in um"},
-                         {"results", out}});
+  ojson j{{"kind", "length verification"},
+          {"units", "nominal in mm; length errors (measured - nominal) in um"},
+          {"results", out}};
+  if (mpe && !results.empty()) {
+    auto check = [&](const std::vector<ballgauge::LengthRow>& rows, bool after) {
+      const auto c = ballgauge::check_mpe(rows, *mpe, after);
+      return ojson{{"pass", c.pass()},
+                   {"lengths", c.lengths},
+                   {"beyond", c.failed},
+                   {"worst_fraction_of_mpe", c.worst_ratio}};
+    };
+    ojson after = ojson::object();
+    for (const auto& v : results) after[v.correction] = check(v.rows, true);
+    j["e0"] = {{"mpe", mpe->text},
+               {"before", check(results.front().rows, false)},
+               {"after", after},
+               {"rule", "every |E| <= MPE(L) (ISO 10360-2 simple acceptance)"}};
+  }
+  write_json(path, j);
 }
 
 void write_parametric(const std::string& path, const ballgauge::ParametricResult& r) {

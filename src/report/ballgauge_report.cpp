@@ -64,7 +64,8 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
 }
 
 Section lengths_section(const std::string& title,
-                        const std::vector<ballgauge::LengthVerification>& results) {
+                        const std::vector<ballgauge::LengthVerification>& results,
+                        const ballgauge::Mpe* mpe) {
   Section s;
   s.title = title;
   s.references = {refs::kIso10360_2, refs::kOya, refs::kGum};
@@ -91,6 +92,19 @@ Section lengths_section(const std::string& title,
             ? "no repeats"
             : fmt::format("{} (repeatability {} ⊕ u {})", um(v.predicted_after),
                           um(v.repeatability), um(v.correction_u_rms)));
+  if (mpe) {
+    s.table.push_back({"", "", "", "", "", "", ""});
+    auto verdict = [&](const std::string& name, const std::vector<ballgauge::LengthRow>& rows,
+                       bool after) {
+      const auto c = ballgauge::check_mpe(rows, *mpe, after);
+      s.table.push_back({fmt::format("E0 {} against MPE {} µm", name, mpe->text),
+                         c.pass() ? "PASS" : "FAIL",
+                         fmt::format("{} of {} beyond", c.failed, c.lengths),
+                         fmt::format("worst {:.0f} % of MPE", 100 * c.worst_ratio), "", "", ""});
+    };
+    verdict("before correction", first.rows, false);
+    for (const auto& v : results) verdict("after, " + v.correction, v.rows, true);
+  }
   // Scatter: rows sorted by nominal length (uPlot wants x ascending; equal x are fine).
   std::vector<std::size_t> order(first.rows.size());
   std::iota(order.begin(), order.end(), 0);
@@ -117,6 +131,17 @@ Section lengths_section(const std::string& title,
     for (Eigen::Index i = 0; i < n; ++i)
       after.y[i] = results[c].rows[order[static_cast<std::size_t>(i)]].after * 1e3;
     p.series.push_back(after);
+  }
+  if (mpe) {  // the envelope ±MPE(L)
+    Series up{"+MPE", Eigen::VectorXd(n), {}, "#444444", true, false};
+    Series down{"−MPE", Eigen::VectorXd(n), {}, "#444444", true, false};
+    for (Eigen::Index i = 0; i < n; ++i) {
+      up.y[i] = mpe->at(p.x[i]);
+      down.y[i] = -up.y[i];
+    }
+    p.series.push_back(up);
+    p.series.push_back(down);
+    p.title += fmt::format(", with the E0 envelope ±({}) µm", mpe->text);
   }
   s.plots.push_back(std::move(p));
   return s;

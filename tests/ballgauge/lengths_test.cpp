@@ -193,3 +193,29 @@ TEST(Lengths, ThePaperResultAtHalfAMicrometreOfProbingNoise) {
   // The repeatability estimates the block noise: two ends, 0.5 µm along the block each.
   EXPECT_NEAR(v.repeatability, std::sqrt(2.0) * 0.5e-3, 0.25 * std::sqrt(2.0) * 0.5e-3);
 }
+
+// The E0 check against a user's MPE (ISO 10360-2 simple acceptance): the envelope A + L/K,
+// capped at B, and the verdict from the largest |E| / MPE(L).
+TEST(Lengths, E0AgainstAnMpe) {
+  const auto m = ballgauge::Mpe::parse("1.5 + L/300");
+  EXPECT_DOUBLE_EQ(m.at(300), 2.5);
+  EXPECT_DOUBLE_EQ(ballgauge::Mpe::parse("2").at(1000), 2);
+  EXPECT_DOUBLE_EQ(ballgauge::Mpe::parse("1.5+L/300,2").at(600), 2);
+  for (const char* bad : {"", "x", "1.5+L/0", "1.5+L/-3", "-1", "1.5+L/300,", "1.5*L"})
+    EXPECT_NE(error_of([&] { ballgauge::Mpe::parse(bad); }).find("MPE"), std::string::npos) << bad;
+  std::vector<ballgauge::LengthRow> rows(3);
+  rows[0].nominal = 300;
+  rows[0].before = 2.4e-3;  // 96 % of 2.5 µm
+  rows[1].nominal = 0.001;
+  rows[1].before = -1.4e-3;
+  rows[2].nominal = 600;
+  rows[2].before = 3.6e-3;  // 3.5 µm allowed: beyond
+  auto c = ballgauge::check_mpe(rows, m, false);
+  EXPECT_FALSE(c.pass());
+  EXPECT_EQ(c.failed, 1);
+  EXPECT_NEAR(c.worst_ratio, 3.6 / 3.5, 1e-12);
+  rows[2].before = -3.4e-3;
+  c = ballgauge::check_mpe(rows, m, false);
+  EXPECT_TRUE(c.pass());
+  EXPECT_NEAR(c.worst_ratio, 3.4 / 3.5, 1e-12);
+}

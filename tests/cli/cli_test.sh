@@ -308,5 +308,12 @@ grep -q "<h2>References</h2>" rep-sph-fit.json.html && grep -q "ISO 10360-6" rep
 "$T" --help > help.txt; for c in separate surface space fit ballgauge verify-lengths guideway; do "$T" help $c >> help.txt; done
 grep -qi "spec 0\|the seed\|the paper's" help.txt && bad "help speaks of specs, seeds or the paper" || ok
 
+# E0 against a user-given MPE: verdict, envelope, JSON; a malformed MPE is a usage error.
+expect_ok "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o bg-e0.json --report bg-e0.html --mpe "1.5+L/300"
+grep -q "E0 after the grid correction against MPE 1.5+L/300 um: PASS" out.txt && grep -q '"e0"' bg-e0.json && grep -q "E0 envelope" bg-e0.html && ok || bad "verify-lengths --mpe: $(cat out.txt)"
+expect_ok "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o bg-e0t.json --mpe "0.1"
+grep -q "E0 after the grid correction against MPE 0.1 um: FAIL" out.txt && ok || bad "a tight MPE fails"
+expect_code 2 "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o o.json --mpe "1.5+L/x"
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -82,5 +83,26 @@ struct LengthVerification {
 // end points, or (from the correction) points outside its domain; messages name the row (0-based).
 LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
                                   const Correction& correction, const LengthOptions& options = {});
+
+// A maximum permissible error of length measurement, ISO 10360-2 style: E0,MPE = A + L/K (µm, L
+// in mm), optionally capped at B: written "A", "A+L/K" or "A+L/K,B" (e.g. "1.5+L/300").
+struct Mpe {
+  double a = 0;                                          // µm
+  double k = 0;                                          // mm per µm; 0: no length term
+  double cap = std::numeric_limits<double>::infinity();  // µm
+  std::string text;                                      // as given
+  double at(double length_mm) const;                     // µm
+  // Throws Error naming what is wrong with the text.
+  static Mpe parse(const std::string& text);
+};
+
+// The E0 check of one set of length errors against an MPE: every |E| ≤ MPE(L) passes (the
+// simple acceptance of ISO 10360-2; the test's own uncertainty is not deducted).
+struct MpeCheck {
+  int lengths = 0, failed = 0;
+  double worst_ratio = 0;  // largest |E| / MPE(L)
+  bool pass() const { return failed == 0 && lengths > 0; }
+};
+MpeCheck check_mpe(const std::vector<LengthRow>& rows, const Mpe& mpe, bool after_correction);
 
 }  // namespace trueaxis::ballgauge

@@ -44,7 +44,8 @@ std::vector<ballgauge::LengthMeasurement> read_lengths(const std::string& path);
 void write_lengths(const std::string& path,
                    const std::vector<ballgauge::LengthMeasurement>& lengths);
 void write_length_verification(const std::string& path,
-                               const std::vector<ballgauge::LengthVerification>& results);
+                               const std::vector<ballgauge::LengthVerification>& results,
+                               const ballgauge::Mpe* mpe = nullptr);
 
 void write_parametric(const std::string& path, const ballgauge::ParametricResult& result);
 ballgauge::ParametricResult read_parametric(const std::string& path);

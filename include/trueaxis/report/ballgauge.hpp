@@ -20,7 +20,10 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& res
 // Gauge-block verification like the paper's figure 10: length errors against the nominal length
 // before and after each correction (scatter), and a table of range, mean and RMS with the level
 // the repeatability and the correction's uncertainty predict.
+// With `mpe`: the E0 check of every set (before and after each correction) with its verdict,
+// and the ±MPE envelope in the figure.
 Section lengths_section(const std::string& title,
-                        const std::vector<ballgauge::LengthVerification>& results);
+                        const std::vector<ballgauge::LengthVerification>& results,
+                        const ballgauge::Mpe* mpe = nullptr);
 
 }  // namespace trueaxis::report
