@@ -63,7 +63,8 @@ int run_calibrate(const CalArgs& a) {
     report::write(
         a.report,
         report::render("trueaxis ball-gauge map",
-                       {report::ballgauge_section("Error-vector map", r, pr ? &*pr : nullptr)}));
+                       {report::ballgauge_section("Error-vector map", r, pr ? &*pr : nullptr)},
+                       4000, cli::report_meta()));
     if (!a.quiet) fmt::print("wrote {}\n", a.report);
   }
   if (!r.grid)
@@ -144,7 +145,8 @@ int run_verify(const VerifyArgs& a) {
     report::write(
         a.report,
         report::render("trueaxis length verification",
-                       {report::lengths_section("Gauge blocks", results, mpe ? &*mpe : nullptr)}));
+                       {report::lengths_section("Gauge blocks", results, mpe ? &*mpe : nullptr)},
+                       4000, cli::report_meta()));
     if (!a.quiet) fmt::print("wrote {}\n", a.report);
   }
   return 0;
@@ -253,6 +255,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_flag("--drop-outliers", ca->o.drop_outliers,
               "leave wrong touches out (each one named on stderr) instead of refusing the file");
   c->add_option("--report", ca->report, "HTML report to write (error-vector field)");
+  add_meta_option(c);
   auto* par = c->add_option("--parametric", ca->parametric,
                             "also identify the 21 rigid-body errors (polynomials per axis) and "
                             "write them as a machine JSON with their covariance");
@@ -303,7 +306,9 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       ->check(CLI::ExistingFile);
   c->add_option("--input,-i", va->input, "lengths CSV")->required()->check(CLI::ExistingFile);
   c->add_option("--output,-o", va->output, "verification JSON to write")->required();
-  c->add_option("--report", va->report, "HTML report to write (figure-10 scatter)");
+  c->add_option("--report", va->report,
+                "HTML report to write (length errors against nominal length)");
+  add_meta_option(c);
   c->add_option("--mpe", va->mpe,
                 "E0 check against a maximum permissible error A+L/K (um, L in mm; e.g. "
                 "\"1.5+L/300\", or \"1.5+L/300,4\" capped at 4 um): PASS/FAIL and the envelope in "

@@ -14,6 +14,8 @@ namespace trueaxis::sim {
 struct Machine;
 }
 
+#include <utility>
+
 namespace trueaxis::cli {
 
 // The virtual machine of a simulation: --machine FILE, or a random one from --machine-seed.
@@ -38,6 +40,12 @@ struct Command {
   CLI::App* app;
   std::function<int()> run;
 };
+
+// --meta key=value (repeatable) on a command that writes a report: what the report is about
+// (machine, instrument, operator, temperature, ...), shown in its header.
+void add_meta_option(CLI::App* command);
+// The pairs given, in order.
+std::vector<std::pair<std::string, std::string>> report_meta();
 
 // The default truth file of a simulation: the output's name with "-truth.csv" (probes.csv ->
 // probes-truth.csv), so that simulations never overwrite each other's truth.

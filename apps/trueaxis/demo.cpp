@@ -306,7 +306,7 @@ int run_demo(const DemoOptions& o) {
       "--model model.json -i lengths.csv -o v.json --report v.html</code>.</p>";
   sections.push_back(std::move(ls));
 
-  report::write(o.output, report::render("trueaxis demo", sections));
+  report::write(o.output, report::render("trueaxis demo", sections, 4000, cli::report_meta()));
   say(fmt::format("wrote {}", o.output));
   return 0;
 }

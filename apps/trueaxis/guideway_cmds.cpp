@@ -33,8 +33,9 @@ int run_guideway(const GuidewayArgs& a) {
   const guideway::Result r = guideway::solve(g.layout, sp.s, sp.spots, o);
   io::write_guideway_result(a.output, r);
   if (!a.report.empty())
-    report::write(a.report, report::render("trueaxis guideway report",
-                                           {report::guideway_section(a.input, r)}));
+    report::write(a.report,
+                  report::render("trueaxis guideway report", {report::guideway_section(a.input, r)},
+                                 4000, cli::report_meta()));
   if (!r.layout.message.empty())
     std::fprintf(stderr, "trueaxis guideway: %s\n", r.layout.message.c_str());
   if (!a.quiet)
@@ -158,6 +159,7 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
                 "standard deviation of one spot reading (um) for the uncertainties (default: "
                 "estimated from the residuals when the layout is redundant)");
   c->add_option("--report", a->report, "also write an HTML report (one plot per error)");
+  add_meta_option(c);
   c->add_flag("--skip-bad", a->skip_bad,
               "drop positions with a lost or out-of-range spot instead of failing");
   c->add_flag("--quiet,-q", a->quiet, "print nothing on success");

@@ -15,6 +15,34 @@
 
 namespace trueaxis::cli {
 
+namespace {
+std::vector<std::string>& meta_args() {
+  static std::vector<std::string> args;
+  return args;
+}
+}  // namespace
+
+void add_meta_option(CLI::App* command) {
+  command
+      ->add_option("--meta", meta_args(),
+                   "key=value for the report's header, repeatable (e.g. --meta \"machine=Prismo "
+                   "7\" --meta operator=Kim --meta \"temperature=20.1 C\")")
+      ->check([](const std::string& kv) {
+        const auto eq = kv.find('=');
+        return eq == std::string::npos || eq == 0 ? std::string("--meta takes key=value")
+                                                  : std::string();
+      });
+}
+
+std::vector<std::pair<std::string, std::string>> report_meta() {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& kv : meta_args()) {
+    const auto eq = kv.find('=');
+    out.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
+  }
+  return out;
+}
+
 std::string truth_beside(const std::string& output) {
   const std::filesystem::path p(output);
   return (p.parent_path() / (p.stem().string() + "-truth.csv")).string();

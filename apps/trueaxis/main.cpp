@@ -60,7 +60,8 @@ int cmd_separate(const SeparateArgs& a) {
     report::write(a.report,
                   report::render("trueaxis straightness report",
                                  {report::separation_section(
-                                     std::filesystem::path(a.input).filename().string(), r)}));
+                                     std::filesystem::path(a.input).filename().string(), r)},
+                                 4000, cli::report_meta()));
   if (!a.quiet)
     fmt::print("{}wrote {}{}{}\n", r.summary(), a.output, a.csv.empty() ? "" : ", " + a.csv,
                a.report.empty() ? "" : ", " + a.report);
@@ -119,8 +120,8 @@ int cmd_surface(const SurfaceArgs& a) {
         report::render(
             "trueaxis surface report",
             {report::surface_section(
-                std::filesystem::path(a.moody.empty() ? a.lines : a.moody).filename().string(),
-                r)}));
+                std::filesystem::path(a.moody.empty() ? a.lines : a.moody).filename().string(), r)},
+            4000, cli::report_meta()));
   if (!a.quiet)
     fmt::print("{}wrote {}{}\n", r.summary(), a.output,
                a.report.empty() ? "" : fmt::format(" and {}", a.report));
@@ -163,7 +164,7 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
                                   "model.json --report map.html')"
                                 : ""));
   }
-  report::write(output, report::render(title, {section}));
+  report::write(output, report::render(title, {section}, 4000, cli::report_meta()));
   if (!quiet) fmt::print("wrote {} ({})\n", output, kind);
   return 0;
 }
@@ -258,6 +259,7 @@ int main(int argc, char** argv) {
   sep->add_option("--output,-o", sa.output, "result JSON")->required();
   sep->add_option("--csv", sa.csv, "also write the profiles as CSV");
   sep->add_option("--report", sa.report, "also write an HTML report (profiles with their bands)");
+  cli::add_meta_option(sep);
   sep->add_flag("--quiet,-q", sa.quiet, "print nothing on success");
 
   // surface ----------------------------------------------------------------------------------
@@ -284,6 +286,7 @@ int main(int argc, char** argv) {
           "Moody's worksheet) or lsq")
       ->check(CLI::IsMember({"lsq", "boundary", "seed", "classic"}));
   surf->add_option("--output,-o", sf.output, "surface JSON to write")->required();
+  cli::add_meta_option(surf);
   surf->add_option("--report", sf.report,
                    "also write an HTML report (heat map of the heights, closure at the crossings)");
   surf->add_flag("--quiet,-q", sf.quiet, "print nothing on success");
@@ -339,12 +342,14 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingFile);
   rep->add_option("--output,-o", rout, "HTML file to write")->capture_default_str();
   rep->add_flag("--quiet,-q", rquiet, "print nothing on success");
+  cli::add_meta_option(rep);
 
   // demo -------------------------------------------------------------------------------------
   cli::DemoOptions da;
   auto* demo = app.add_subcommand(
       "demo", "Run every capability on the built-in virtual machine and write an HTML report");
   demo->add_option("--output,-o", da.output, "HTML report to write")->capture_default_str();
+  cli::add_meta_option(demo);
   demo->add_option("--seed", da.seed, "random seed of the virtual machine")->capture_default_str();
   demo->add_option("--stations", da.stations, "stations of the straightness campaign")
       ->capture_default_str();

@@ -46,9 +46,9 @@ int run_space(const SpaceArgs& a) {
   io::write_space(a.output, s, plan, v);
   if (!a.csv.empty()) io::write_map_csv(a.csv, s.map);
   if (!a.report.empty())
-    report::write(a.report,
-                  report::render("trueaxis error space report",
-                                 {report::space_section(a.output, s, v ? &*v : nullptr)}));
+    report::write(a.report, report::render("trueaxis error space report",
+                                           {report::space_section(a.output, s, v ? &*v : nullptr)},
+                                           4000, cli::report_meta()));
   if (!a.quiet) {
     fmt::print("{}", s.summary());
     if (v) {
@@ -152,6 +152,7 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       ->check(CLI::ExistingFile);
   c->add_option("--output,-o", sa->output, "space JSON to write")->required();
   c->add_option("--csv", sa->csv, "also write the grid as a CSV table");
+  add_meta_option(c);
   c->add_option("--report", sa->report,
                 "also write an HTML report (distorted planes, level surfaces, uncertainty, "
                 "before/after compensation)");

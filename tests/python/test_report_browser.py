@@ -59,3 +59,29 @@ def test_report_command_renders(tmp_path):
     subprocess.run([TRUEAXIS, "report", str(r), "-o", str(h), "-q"], check=True)
     dom = dump_dom(h, tmp_path)
     assert 'data-plots-rendered="3"' in dom and 'data-script-errors="' not in dom
+
+
+def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
+    # A report a metrologist would sign, as Chromium renders it: the E0 verdict and envelope,
+    # the header with the date, the given metadata and k = 2, a CSV link per table and curve,
+    # the references, and no script error.
+    g, m, t, L, mp, v, h = (str(tmp_path / n) for n in
+                            ("g.json", "m.json", "t.csv", "l.csv", "map.json", "v.json", "v.html"))
+    subprocess.run([TRUEAXIS, "simulate", "ballgauge", "--noise", "0.5", "--alignment", "ls",
+                    "--gauge", g, "--measurements", m, "--truth", t, "--lengths", L, "-q"], check=True)
+    subprocess.run([TRUEAXIS, "ballgauge", "--gauge", g, "--measurements", m, "-o", mp, "-q"],
+                   check=True)
+    subprocess.run([TRUEAXIS, "verify-lengths", "--map", mp, "-i", L, "-o", v, "--report", h,
+                    "--mpe", "1.5+L/300", "--meta", "machine=Virtual CMM", "--meta",
+                    "operator=K. Tanaka", "-q"], check=True)
+    dom = dump_dom(h, tmp_path)
+    assert 'data-script-errors="' not in dom
+    assert re.search(r'data-plots-rendered="1"', dom)
+    assert "E0 envelope" in dom and ">PASS<" in dom and "+MPE" in dom
+    assert "<th>machine</th><td>Virtual CMM</td>" in dom
+    assert "<th>operator</th><td>K. Tanaka</td>" in dom
+    assert re.search(r"<th>date</th><td>\d{4}-\d\d-\d\d", dom)
+    assert "k = 2" in dom
+    links = re.findall(r'<a class="csv" download="([^"]+)" href="data:text/csv', dom)
+    assert "gauge-blocks-table.csv" in links and len(links) == 2, links
+    assert "<h2>References</h2>" in dom and "ISO 10360-2:2009" in dom

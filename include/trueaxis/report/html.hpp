@@ -126,8 +126,14 @@ std::string svg(const DistortedGrid& g);
 double nice_magnification(double max_error_um, double step_mm, double fraction = 0.4);
 
 // Renders a complete HTML document.
+// What the report is about, shown in its header after the date: (name, value) pairs such as
+// ("machine", "Zeiss Prismo 7"), ("operator", "K. Tanaka"), ("temperature", "20.1 °C").
+using Meta = std::vector<std::pair<std::string, std::string>>;
+
+// Renders a complete HTML document: a header (title, date, `meta`, coverage factor), the
+// sections, each table and plot with a CSV download link, and the references.
 std::string render(const std::string& title, const std::vector<Section>& sections,
-                   std::size_t max_points = 4000);
+                   std::size_t max_points = 4000, const Meta& meta = {});
 
 // Writes `html` to `path`, creating parent directories. Throws Error on failure.
 void write(const std::string& path, const std::string& html);
