@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <numeric>
@@ -19,6 +20,62 @@ std::string alignment(ballgauge::Alignment a) {
   return a == ballgauge::Alignment::ThreeTwoOne    ? "321 (3-2-1 on balls 0, 1, 2)"
          : a == ballgauge::Alignment::LeastSquares ? "ls (least squares over its balls)"
                                                    : "stitch (to the map's shared balls)";
+}
+
+}  // namespace
+
+namespace {
+
+// The identified error functions against travel, per axis: positioning and straightness (µm),
+// roll, pitch and yaw (µrad), each with its ±2u band from the parameter covariance (the
+// Chebyshev basis of the function at u against the covariance of its coefficients). Functions
+// the data cannot see are left out and named.
+void parametric_curves(const ballgauge::ParametricResult& pr, Section& s) {
+  const int q = pr.degree + 1;
+  const char* axes = "XYZ";
+  for (int k = 0; k < 3; ++k) {
+    const auto& range = pr.model.range[static_cast<std::size_t>(k)];
+    constexpr int kPoints = 101;
+    const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(kPoints, range[0], range[1]);
+    for (int group = 0; group < 2; ++group) {
+      Plot p;
+      p.title = fmt::format("{} axis, identified {} against travel (±2u)", axes[k],
+                            group == 0 ? "positioning and straightness" : "roll, pitch and yaw");
+      p.x_label = fmt::format("{} (mm)", static_cast<char>(std::tolower(axes[k])));
+      p.y_label = group == 0 ? "error (µm)" : "error (µrad)";
+      p.x = u;
+      std::string missing;
+      for (int j = group * 3; j < group * 3 + 3; ++j) {
+        const std::string name = sim::error_name(k, static_cast<sim::Component>(j));
+        if (std::find(pr.unobservable.begin(), pr.unobservable.end(), name) !=
+            pr.unobservable.end()) {
+          missing += (missing.empty() ? "" : ", ") + name;
+          continue;
+        }
+        const double sc = j < 3 ? 1e3 : 1e6;
+        const auto& f = pr.model.errors[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)];
+        const Eigen::Index base = (k * 6 + j) * q;
+        Eigen::VectorXd y(kPoints), band(kPoints);
+        for (int i = 0; i < kPoints; ++i) {
+          y[i] = f(u[i]) * sc;
+          const double t = (u[i] - pr.centre[k]) / pr.half_span[k];
+          Eigen::VectorXd T(q);
+          T[0] = 1;
+          if (q > 1) T[1] = t;
+          for (int d = 2; d < q; ++d) T[d] = 2 * t * T[d - 1] - T[d - 2];
+          const bool have = pr.covariance.rows() >= base + q;
+          band[i] =
+              have ? std::sqrt(std::max(
+                         0.0, (T.transpose() * pr.covariance.block(base, base, q, q) * T)(0, 0))) *
+                         sc
+                   : 0.0;
+        }
+        p.series.push_back({name, y, band, "", false});
+      }
+      if (!missing.empty()) p.title += " (not determined by the data: " + missing + ")";
+      if (!p.series.empty()) s.plots.push_back(std::move(p));
+    }
+  }
 }
 
 }  // namespace
@@ -47,7 +104,26 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
     s.table.push_back({"parametric model (residual RMS, σ)", fmt::format("degree {}", pr->degree),
                        std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),
                        um(pr->residual_rms), "σ " + um(pr->sigma)});
+    // Squareness, the last three parameters (rad), with U = 2u.
+    const Eigen::Index sq = 18 * (pr->degree + 1);
+    const char* names[3] = {"EC0Y", "EB0Z", "EA0Z"};
+    const double values[3] = {pr->model.squareness_c0y, pr->model.squareness_b0z,
+                              pr->model.squareness_a0z};
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Index at = sq + i;
+      const bool have = pr->covariance.rows() > at;
+      const bool seen = std::find(pr->unobservable.begin(), pr->unobservable.end(), names[i]) ==
+                        pr->unobservable.end();
+      s.table.push_back({fmt::format("squareness {}", names[i]),
+                         seen ? fmt::format("{:.2f} µrad", values[i] * 1e6) : "not determined",
+                         seen && have
+                             ? fmt::format("U = {:.2f} µrad (k = 2)",
+                                           2e6 * std::sqrt(std::max(0.0, pr->covariance(at, at))))
+                             : "",
+                         "", "", ""});
+    }
   }
+  if (pr) parametric_curves(*pr, s);
   if (r.grid) {
     const map::ErrorMap& m = *r.grid;
     double step = std::numeric_limits<double>::infinity();

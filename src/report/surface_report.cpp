@@ -130,6 +130,41 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
         {"improvement (RMS before / after)", fmt::format("×{:.1f}", v->improvement())});
   }
 
+  // Per axis, the error vector along the grid line through the centre of the volume against
+  // travel: the positioning error (the component along the axis) and the two straightness
+  // components, with ±2u bands where the uncertainty was computed.
+  {
+    const char* names = "xyz";
+    const Eigen::Index mid[3] = {nx / 2, ny / 2, nz / 2};
+    for (int a = 0; a < 3; ++a) {
+      Plot p;
+      p.title = fmt::format(
+          "along {} through the centre ({} = {:g}, {} = {:g} mm): positioning e{} and "
+          "straightness e{}, e{}",
+          names[a], names[(a + 1) % 3],
+          m.axes[static_cast<std::size_t>((a + 1) % 3)][mid[(a + 1) % 3]], names[(a + 2) % 3],
+          m.axes[static_cast<std::size_t>((a + 2) % 3)][mid[(a + 2) % 3]], names[a],
+          names[(a + 1) % 3], names[(a + 2) % 3]);
+      p.x_label = fmt::format("{} (mm)", names[a]);
+      p.y_label = "error (µm)";
+      p.x = m.axes[static_cast<std::size_t>(a)];
+      const Eigen::Index n = m.size(a);
+      for (int c : {a, (a + 1) % 3, (a + 2) % 3}) {
+        Eigen::VectorXd y(n), band;
+        if (m.uncertainty.cols()) band.resize(n);
+        for (Eigen::Index i = 0; i < n; ++i) {
+          Eigen::Index ijk[3] = {mid[0], mid[1], mid[2]};
+          ijk[a] = i;
+          const Eigen::Index node = m.index(ijk[0], ijk[1], ijk[2]);
+          y[i] = m.error(c, node) * 1e3;
+          if (band.size()) band[i] = m.uncertainty(c, node) * 1e3;
+        }
+        p.series.push_back({fmt::format("e{}", names[c]), y, band, "", false});
+      }
+      s.plots.push_back(std::move(p));
+    }
+  }
+
   // Distorted grids of three planes through the volume.
   auto plane = [&](int a, int b, Eigen::Index at, const char* name) {
     s.grids.push_back(distorted_plane(m, a, b, at, name));

@@ -16,6 +16,7 @@
 #include "trueaxis/io/ballgauge.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/io/machine.hpp"
+#include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
 
 using namespace trueaxis;
@@ -299,4 +300,36 @@ TEST(LengthsIo, BadLengthFilesNameFileLineAndColumn) {
   EXPECT_EQ(back[0].a, L[0].a);
   EXPECT_EQ(back[0].b, L[0].b);
   EXPECT_EQ(back[0].nominal, L[0].nominal);
+}
+
+// The report's per-axis curves of the identified model: every function the data see, with a
+// ±2u band from the parameter covariance; the ones they cannot see are named, not drawn as 0.
+TEST(Parametric, TheReportDrawsEachAxisErrorsWithBandsAndNamesTheUnseen) {
+  const sim::Machine m = smooth_machine(3);
+  const auto g = sim::frame_gauge();
+  sim::BallGaugeOptions so;
+  so.noise = 0.5e-3;
+  const auto c = sim::simulate_ballgauge(m, g, paper_poses(), so);
+  const auto r = ballgauge::identify(g, c.placements, options(m));
+  const auto map = ballgauge::calibrate(g, c.placements);
+  const auto s = report::ballgauge_section("map", map, &r);
+  ASSERT_EQ(s.plots.size(), 6u);  // per axis: linear and angular
+  int series = 0;
+  for (const auto& p : s.plots)
+    for (const auto& ser : p.series) {
+      ++series;
+      ASSERT_EQ(ser.band.size(), ser.y.size());
+      EXPECT_GT(ser.band.minCoeff(), 0);  // noisy data: a real uncertainty everywhere
+    }
+  EXPECT_EQ(series, 18 - static_cast<int>(r.unobservable.size()));
+  EXPECT_NE(s.plots[5].title.find("not determined by the data: ECZ"), std::string::npos)
+      << s.plots[5].title;
+  // Squareness in the table, each with U = 2u.
+  int squareness = 0;
+  for (const auto& row : s.table)
+    if (row[0].rfind("squareness", 0) == 0) {
+      ++squareness;
+      EXPECT_NE(row[2].find("U = "), std::string::npos);
+    }
+  EXPECT_EQ(squareness, 3);
 }

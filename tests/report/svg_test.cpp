@@ -120,10 +120,18 @@ TEST(Svg, SpaceSectionShowsPlanesLevelsAndTheCompensationCheck) {
   const auto s = report::space_section("space", space, &v);
   EXPECT_EQ(s.grids.size(), 3u);           // XY, XZ, YZ
   EXPECT_EQ(s.heat_maps.size(), 4u + 1u);  // 4 z levels and the uncertainty
-  ASSERT_EQ(s.plots.size(), 1u);
-  EXPECT_EQ(s.plots[0].series.size(), 3u);  // before, after, expected
-  EXPECT_TRUE(s.plots[0].log_y);
-  const Eigen::VectorXd& after = s.plots[0].series[1].y;
+  // Three per-axis curves through the centre (positioning and two straightness components, each
+  // with its ±2u band), then the compensation check.
+  ASSERT_EQ(s.plots.size(), 4u);
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_EQ(s.plots[k].series.size(), 3u);
+    EXPECT_EQ(s.plots[k].series[0].band.size(), s.plots[k].x.size());
+    EXPECT_EQ(s.plots[k].x.size(), space.map.size(k));
+  }
+  EXPECT_EQ(s.plots[0].series[0].label, "ex");  // along x: the positioning error first
+  EXPECT_EQ(s.plots[3].series.size(), 3u);      // before, after, expected
+  EXPECT_TRUE(s.plots[3].log_y);
+  const Eigen::VectorXd& after = s.plots[3].series[1].y;
   EXPECT_NEAR(after[after.size() - 1], v.after_max * 1e3, 1e-9);  // sorted: the max is last
   const std::string html = report::render("t", {s});
   EXPECT_EQ(count(html, "<svg class=\"ta-fig\""), 8u);
