@@ -20,6 +20,19 @@
 #include "trueaxis/sim/ballgauge.hpp"
 
 namespace trueaxis::cli {
+
+// Before correcting: the first point outside the map is refused at its place in the input file
+// (file:line:col, counted as the file counts), unless --clamp.
+void refuse_outside(const map::ErrorMap& m, const Eigen::Matrix3Xd& p, const std::string& input,
+                    double tolerance) {
+  for (Eigen::Index i = 0; i < p.cols(); ++i)
+    if (!m.contains(p.col(i), tolerance)) {
+      const io::CsvTable t = io::CsvTable::read(input);
+      throw Error(fmt::format("{}point {} {}", t.where(static_cast<long>(i), t.require("x")), i + 1,
+                              m.outside_message(p.col(i))));
+    }
+}
+
 namespace {
 
 struct CalArgs {
@@ -82,6 +95,7 @@ struct CorrectArgs {
 int run_correct(const CorrectArgs& a) {
   const map::ErrorMap m = io::read_error_map(a.map);
   Eigen::Matrix3Xd p = io::read_points(a.input);
+  if (!a.clamp) refuse_outside(m, p, a.input);
   map::EvalOptions o;
   o.outside = a.clamp ? map::Outside::Clamp : map::Outside::Refuse;
   try {

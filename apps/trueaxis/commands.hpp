@@ -13,7 +13,11 @@ class App;
 namespace trueaxis::sim {
 struct Machine;
 }
+namespace trueaxis::map {
+struct ErrorMap;
+}
 
+#include <Eigen/Core>
 #include <utility>
 
 namespace trueaxis::cli {
@@ -46,6 +50,11 @@ struct Command {
 void add_meta_option(CLI::App* command);
 // The pairs given, in order.
 std::vector<std::pair<std::string, std::string>> report_meta();
+
+// Refuses the first point outside the map at its place in the input CSV (file:line:col, the
+// point counted from 1), naming --clamp. Used before correcting or compensating.
+void refuse_outside(const map::ErrorMap& map, const Eigen::Matrix3Xd& points,
+                    const std::string& input, double tolerance = 1e-9);
 
 // The default truth file of a simulation: the output's name with "-truth.csv" (probes.csv ->
 // probes-truth.csv), so that simulations never overwrite each other's truth.

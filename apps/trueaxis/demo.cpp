@@ -310,8 +310,8 @@ int run_demo(const DemoOptions& o) {
       "m.html</code>.</p>" +
       bs.intro_html;
   sections.push_back(std::move(bs));
-  auto ls = report::lengths_section("Gauge-block verification (ISO 10360-2 positions)", checks,
-                                    &mpe);
+  auto ls =
+      report::lengths_section("Gauge-block verification (ISO 10360-2 positions)", checks, &mpe);
   ls.intro_html +=
       "<p>Held-out gauge blocks in the ISO 10360-2 positions (x, y, z and the four space "
       "diagonals of the mapped box), five lengths each, three repeats, measured on the same "

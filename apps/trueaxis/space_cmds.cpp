@@ -86,6 +86,7 @@ struct CompensateArgs {
 int run_compensate(const CompensateArgs& a) {
   const map::ErrorMap m = io::read_error_map(a.space);
   Eigen::Matrix3Xd p = io::read_points(a.input);
+  if (!a.clamp) refuse_outside(m, p, a.input);
   map::CompensateOptions o;
   o.eval.interpolation = map::interpolation_from_string(a.interpolation);
   o.eval.outside = a.clamp ? map::Outside::Clamp : map::Outside::Refuse;

@@ -97,11 +97,12 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
   for (std::size_t i = 0; i < lengths.size(); ++i) {
     const LengthMeasurement& m = lengths[i];
     if (!(m.nominal > 0) || !std::isfinite(m.nominal))
-      throw Error(fmt::format("length {}: the nominal length must be a positive number of mm", i));
+      throw Error(
+          fmt::format("length {}: the nominal length must be a positive number of mm", i + 1));
     if (!m.a.allFinite() || !m.b.allFinite())
-      throw Error(fmt::format("length {}: non-finite end point", i));
+      throw Error(fmt::format("length {}: non-finite end point", i + 1));
     if (!((m.b - m.a).norm() > 0))
-      throw Error(fmt::format("length {}: the two end points coincide", i));
+      throw Error(fmt::format("length {}: the two end points coincide", i + 1));
     LengthRow r;
     r.nominal = m.nominal;
     r.before = (m.b - m.a).norm() - m.nominal;
@@ -110,7 +111,7 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
     try {
       corr.apply(ends);
     } catch (const Error& e) {
-      throw Error(fmt::format("length {}: {}", i, e.what()));
+      throw Error(fmt::format("length {}: {}", i + 1, e.what()));
     }
     r.after = (ends.col(1) - ends.col(0)).norm() - m.nominal;
     r.uncertainty = corr.length_uncertainty && !corr.length_uncertainties

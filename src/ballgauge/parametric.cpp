@@ -315,7 +315,7 @@ Correction parametric_correction(const ParametricResult& result) {
         throw Error(fmt::format(
             "point {} ({:.3f}, {:.3f}, {:.3f}) is outside the identified span x {:.3f}..{:.3f}, "
             "y {:.3f}..{:.3f}, z {:.3f}..{:.3f} mm (commands)",
-            i, p(0, i), p(1, i), p(2, i), r->model.range[0][0], r->model.range[0][1],
+            i + 1, p(0, i), p(1, i), p(2, i), r->model.range[0][0], r->model.range[0][1],
             r->model.range[1][0], r->model.range[1][1], r->model.range[2][0],
             r->model.range[2][1]));
     }

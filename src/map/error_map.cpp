@@ -79,6 +79,16 @@ Eigen::Vector3d ErrorMap::node(Eigen::Index n) const {
   return {axes[0][i], axes[1][j], axes[2][k]};
 }
 
+std::string ErrorMap::outside_message(const Eigen::Vector3d& p) const {
+  const auto& a = axes;
+  return fmt::format(
+      "({:.3f}, {:.3f}, {:.3f}) mm is outside the map's grid x [{:.3f}, {:.3f}], y [{:.3f}, "
+      "{:.3f}], z [{:.3f}, {:.3f}] mm (give --clamp, or clamp=True in Python, to hold the edge "
+      "value)",
+      p.x(), p.y(), p.z(), a[0][0], a[0][a[0].size() - 1], a[1][0], a[1][a[1].size() - 1], a[2][0],
+      a[2][a[2].size() - 1]);
+}
+
 bool ErrorMap::contains(const Eigen::Vector3d& p, double tol) const {
   for (int a = 0; a < 3; ++a) {
     const auto& x = axes[static_cast<std::size_t>(a)];
@@ -160,11 +170,7 @@ Eigen::Vector3d Interpolator::clamped(const Eigen::Vector3d& p) const {
 
 Eigen::Vector3d Interpolator::operator()(const Eigen::Vector3d& p) const {
   if (options_.outside == Outside::Refuse && !map_->contains(p, options_.tolerance))
-    throw Error(fmt::format(
-        "({}, {}, {}) mm is outside the map's grid x [{}, {}], y [{}, {}], z [{}, {}] mm (ask for "
-        "a clamp to hold the edge value)",
-        p.x(), p.y(), p.z(), axis_[0].x[0], axis_[0].x[axis_[0].n - 1], axis_[1].x[0],
-        axis_[1].x[axis_[1].n - 1], axis_[2].x[0], axis_[2].x[axis_[2].n - 1]));
+    throw Error(map_->outside_message(p));
   return clamped(p);
 }
 
@@ -221,12 +227,7 @@ namespace {
 
 [[noreturn]] void refuse(const ErrorMap& map, const Eigen::Ref<const Eigen::Matrix3Xd>& p,
                          Eigen::Index i) {
-  const auto& a = map.axes;
-  throw Error(fmt::format(
-      "point {} ({}, {}, {}) mm is outside the map's grid x [{}, {}], y [{}, {}], z [{}, {}] mm "
-      "(ask for a clamp to hold the edge value)",
-      i, p(0, i), p(1, i), p(2, i), a[0][0], a[0][a[0].size() - 1], a[1][0], a[1][a[1].size() - 1],
-      a[2][0], a[2][a[2].size() - 1]));
+  throw Error(fmt::format("point {} {}", i + 1, map.outside_message(p.col(i))));
 }
 
 // Runs fn(i) over the columns in parallel, checking first (in the same pass) that column i lies

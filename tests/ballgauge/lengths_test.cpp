@@ -118,10 +118,10 @@ TEST(Lengths, BadInputIsRefusedNamingTheRow) {
             std::string::npos);
   std::vector<ballgauge::LengthMeasurement> L{{{0, 0, 0}, {100, 0, 0}, 100},
                                               {{0, 0, 0}, {100, 0, 0}, -1}};
-  EXPECT_NE(error_of([&] { ballgauge::verify_lengths(L, none); }).find("length 1: the nominal"),
+  EXPECT_NE(error_of([&] { ballgauge::verify_lengths(L, none); }).find("length 2: the nominal"),
             std::string::npos);
   L[1] = {{5, 5, 5}, {5, 5, 5}, 10};
-  EXPECT_NE(error_of([&] { ballgauge::verify_lengths(L, none); }).find("length 1: the two end"),
+  EXPECT_NE(error_of([&] { ballgauge::verify_lengths(L, none); }).find("length 2: the two end"),
             std::string::npos);
   // Outside the grid: refused (or clamped when asked).
   const auto m =
@@ -131,7 +131,7 @@ TEST(Lengths, BadInputIsRefusedNamingTheRow) {
   L[1] = {{0, 0, 0}, {150, 0, 0}, 150};
   EXPECT_NE(error_of([&] {
               ballgauge::verify_lengths(L, ballgauge::grid_correction(m));
-            }).find("length 1: point 1 (150, 0, 0) mm is outside"),
+            }).find("length 2: point 2 (150.000, 0.000, 0.000) mm is outside"),
             std::string::npos);
   map::EvalOptions clamp;
   clamp.outside = map::Outside::Clamp;

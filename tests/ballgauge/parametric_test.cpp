@@ -226,7 +226,7 @@ TEST(Parametric, RefusalsNameTheProblem) {
   p << 700, 200, 200;
   EXPECT_NE(error_of([&] {
               ballgauge::parametric_correction(r).apply(p);
-            }).find("point 0 (700.000, 200.000, 200.000) is outside the identified span"),
+            }).find("point 1 (700.000, 200.000, 200.000) is outside the identified span"),
             std::string::npos);
 }
 

@@ -91,7 +91,7 @@ expect_ok "$T" compensate --space space.json -i cmds.csv -o corrected.csv
 expect_ok "$T" compensate --space space.json -i cmds.csv -o - --interpolation cubic
 [ "$(wc -l <out.txt)" -eq 3 ] && ok || bad "compensate to stdout prints only the CSV"
 printf 'x,y,z\n10,20,30\n10,20,999\n' > outside.csv
-expect_err "outside.csv: point 1 (10, 20, 999) mm is outside the map's grid" "$T" compensate --space space.json -i outside.csv -o o.csv
+expect_err "outside.csv:3:1: point 2 (10.000, 20.000, 999.000) mm is outside the map's grid" "$T" compensate --space space.json -i outside.csv -o o.csv
 expect_ok "$T" compensate --space space.json -i outside.csv -o o.csv --clamp
 expect_ok "$T" export linuxcnc --space space.json --axis y --type 0 -o y.comp
 [ "$(wc -l <y.comp)" -eq 5 ] && awk 'NF != 3 { exit 1 } NR > 1 && $1 <= prev { exit 1 } { prev = $1 }' y.comp && ok || bad "y.comp: triplets, increasing"
@@ -170,7 +170,7 @@ grep -q "80 mapped points on a 5 x 4 x 4 grid" out.txt && grep -q '"grid"' bg-ma
 printf 'x,y,z\n300,250,150\n' > bg-pts.csv
 expect_ok "$T" correct --map bg-map.json --input bg-pts.csv --output bg-corr.csv
 printf 'x,y,z\n300,250,150\n900,250,150\n' > bg-out.csv
-expect_err "bg-out.csv: point 1 (900, 250, 150) mm is outside" "$T" correct --map bg-map.json --input bg-out.csv --output o.csv
+expect_err "bg-out.csv:3:1: point 2 (900.000, 250.000, 150.000) mm is outside" "$T" correct --map bg-map.json --input bg-out.csv --output o.csv
 expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv
 grep -q '"alignment": "ls"' bg-ls.json && ok || bad "simulate ballgauge --alignment ls"
 expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output bg-ls-map.json
@@ -193,8 +193,8 @@ expect_err "needs --map" "$T" verify-lengths -i bg-lengths.csv -o o.json
 printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,300,200,200,100\n200,200,200,300,200,200,0\n' > bg-badlen.csv
 expect_err "bg-badlen.csv:3:[0-9]*: nominal length 0 mm: must be > 0" "$T" verify-lengths --map bg-ls-map.json -i bg-badlen.csv -o o.json
 printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,900,200,200,700\n' > bg-outlen.csv
-expect_err "bg-outlen.csv: grid correction: length 0: point 1 (900, 200, 200) mm is outside" "$T" verify-lengths --map bg-ls-map.json -i bg-outlen.csv -o o.json
-expect_err "bg-outlen.csv: parametric correction: length 0: point 1 (900.000, 200.000, 200.000) is outside the identified span" "$T" verify-lengths --model bg-model.json -i bg-outlen.csv -o o.json
+expect_err "bg-outlen.csv: grid correction: length 1: point 2 (900.000, 200.000, 200.000) mm is outside" "$T" verify-lengths --map bg-ls-map.json -i bg-outlen.csv -o o.json
+expect_err "bg-outlen.csv: parametric correction: length 1: point 2 (900.000, 200.000, 200.000) is outside the identified span" "$T" verify-lengths --model bg-model.json -i bg-outlen.csv -o o.json
 expect_err "bg-ls-map.json:[0-9]*:[0-9]*: not a parametric model" "$T" verify-lengths --model bg-ls-map.json -i bg-lengths.csv -o o.json
 
 # One grammar: every command-line mistake exits 2 (CLI11's own codes are 105, 106, 109...).

@@ -142,7 +142,7 @@ TEST(ErrorMap, OutsideTheGridIsRefusedOrClampedNeverExtrapolated) {
     evaluate(m, p);
     FAIL() << "should refuse";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("point 2 (900, 0, 100) mm is outside"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("point 3 (900.000, 0.000, 100.000) mm is outside"), std::string::npos)
         << e.what();
   }
   const Eigen::Matrix3Xd c = evaluate(m, p, {Interpolation::Linear, Outside::Clamp});

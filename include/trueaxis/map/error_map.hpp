@@ -33,6 +33,8 @@ struct ErrorMap {
   }
   Eigen::Vector3d node(Eigen::Index n) const;
   bool contains(const Eigen::Vector3d& p, double tolerance = 1e-9) const;
+  // "(x, y, z) mm is outside the map's grid x [..], y [..], z [..] mm (give --clamp ...)".
+  std::string outside_message(const Eigen::Vector3d& p) const;
   // Throws Error naming the problem (axes not increasing, sizes, non-finite values).
   void validate() const;
 };
