@@ -99,6 +99,12 @@ struct SurfaceArgs {
   bool quiet = false;
 };
 
+// The name a report gives an input: its file name, or a directory's own name ("plate/").
+std::string display_name(std::string path) {
+  while (path.size() > 1 && path.back() == '/') path.pop_back();
+  return std::filesystem::path(path).filename().string();
+}
+
 int cmd_surface(const SurfaceArgs& a) {
   surface::Result r;
   if (!a.moody.empty()) {
@@ -115,13 +121,11 @@ int cmd_surface(const SurfaceArgs& a) {
   }
   io::write_surface(a.output, r);
   if (!a.report.empty())
-    report::write(
-        a.report,
-        report::render(
-            "trueaxis surface report",
-            {report::surface_section(
-                std::filesystem::path(a.moody.empty() ? a.lines : a.moody).filename().string(), r)},
-            4000, cli::report_meta()));
+    report::write(a.report,
+                  report::render("trueaxis surface report",
+                                 {report::surface_section(
+                                     display_name(a.moody.empty() ? a.lines : a.moody), r)},
+                                 4000, cli::report_meta()));
   if (!a.quiet)
     fmt::print("{}wrote {}{}\n", r.summary(), a.output,
                a.report.empty() ? "" : fmt::format(" and {}", a.report));

@@ -157,7 +157,7 @@ std::string render(const std::string& title, const std::vector<Section>& section
   h += R"CSS(
 body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sans-serif;margin:24px auto;max-width:1100px;color:#222;padding:0 16px}
 h1{font-size:1.6em} h2{border-bottom:1px solid #ddd;padding-bottom:4px;margin-top:2em}
-table{border-collapse:collapse;margin:8px 0} td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}
+table{border-collapse:collapse;margin:8px 0;display:block;max-width:100%;overflow-x:auto} td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}
 th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
 .plot{margin:16px 0} .plot h3{font-size:1em;margin:4px 0}
 .note{color:#666;font-size:.9em}
@@ -202,24 +202,31 @@ svg.ta-fig{max-width:100%;height:auto}
     for (const auto& w : s.warnings)
       h += "<p class=\"warn\"><b>Warning:</b> " + escape(w) + "</p>\n";
     h += s.intro_html + "\n";
-    if (!s.table.empty()) {
+    std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>> tables;
+    if (!s.table.empty()) tables.emplace_back("", s.table);
+    for (const auto& t : s.more_tables) tables.push_back(t);
+    for (std::size_t ti = 0; ti < tables.size(); ++ti) {
+      const auto& [caption, table] = tables[ti];
+      if (!caption.empty()) h += "<h3>" + escape(caption) + "</h3>";
       h += "<table>";
-      for (std::size_t r = 0; r < s.table.size(); ++r) {
+      for (std::size_t r = 0; r < table.size(); ++r) {
         h += "<tr>";
-        for (const auto& c : s.table[r])
+        for (const auto& c : table[r])
           h += (r == 0 ? "<th>" : "<td>") + escape(c) + (r == 0 ? "</th>" : "</td>");
         h += "</tr>";
       }
       h += "</table>\n";
       std::string csv;
-      for (const auto& row : s.table) {
+      for (const auto& row : table) {
         for (std::size_t c = 0; c < row.size(); ++c) {
           if (c) csv.push_back(',');
           csv.append(csv_cell(row[c]));
         }
         csv += "\n";
       }
-      h += "<p class=\"dl\">" + csv_link(slug(s.title) + "-table.csv", csv) + "</p>\n";
+      const std::string name =
+          slug(s.title) + (ti == 0 && caption.empty() ? "-table" : "-" + slug(caption)) + ".csv";
+      h += "<p class=\"dl\">" + csv_link(name, csv) + "</p>\n";
     }
     for (const auto& p : s.plots) {
       const std::string id = fmt::format("plot{}", pid++);

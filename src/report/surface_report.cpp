@@ -50,6 +50,30 @@ Section surface_section(const std::string& title, const surface::Result& r,
     s.table.push_back(
         {"closure RMS / max (µm)", fmt::format("{} / {}", um(r.closure_rms), um(r.closure_max))});
   }
+  if (r.method.rfind("moody", 0) == 0) {
+    // The numeric Union Jack, as Moody's worksheet shows it: every line's heights, station by
+    // station (µm).
+    std::vector<std::vector<std::string>> t;
+    std::size_t longest = 0;
+    std::vector<std::vector<double>> per_line(r.lines.size());
+    for (const auto& p : r.points) {
+      auto& v = per_line[static_cast<std::size_t>(p.line)];
+      if (v.size() <= static_cast<std::size_t>(p.station))
+        v.resize(static_cast<std::size_t>(p.station) + 1, NAN);
+      v[static_cast<std::size_t>(p.station)] = p.height * 1e3;
+      longest = std::max(longest, v.size());
+    }
+    t.push_back({"line"});
+    for (std::size_t k = 0; k < longest; ++k) t[0].push_back(fmt::format("station {}", k));
+    for (std::size_t l = 0; l < r.lines.size(); ++l) {
+      t.push_back({r.lines[l]});
+      for (std::size_t k = 0; k < longest; ++k)
+        t.back().push_back(k < per_line[l].size() && std::isfinite(per_line[l][k])
+                               ? fmt::format("{:.2f}", per_line[l][k])
+                               : "");
+    }
+    s.more_tables.emplace_back("Union Jack: heights along every line (µm)", std::move(t));
+  }
   HeatMap h = xy_map("heights at every station (lines in grey)", "height (µm)", 620);
   const auto n = static_cast<Eigen::Index>(r.points.size());
   h.px.resize(n);
@@ -78,12 +102,30 @@ Section surface_section(const std::string& title, const surface::Result& r,
     c.px.resize(m);
     c.py.resize(m);
     c.pvalue.resize(m);
+    // Crossings at one point (Moody's centre: four lines) are drawn on a small ring around it,
+    // so that no marker hides another.
+    double extent = 0;
+    for (const auto& x : r.crossings) extent = std::max(extent, x.xy.cwiseAbs().maxCoeff());
+    const double ring = 0.025 * std::max(extent, 1.0);
+    bool spread = false;
     for (Eigen::Index k = 0; k < m; ++k) {
       const auto& x = r.crossings[static_cast<std::size_t>(k)];
-      c.px[k] = x.xy.x();
-      c.py[k] = x.xy.y();
+      std::vector<Eigen::Index> same;
+      for (Eigen::Index q = 0; q < m; ++q)
+        if ((r.crossings[static_cast<std::size_t>(q)].xy - x.xy).norm() <= 1e-6 * ring)
+          same.push_back(q);
+      Eigen::Vector2d at = x.xy;
+      if (same.size() > 1) {
+        const auto pos = std::find(same.begin(), same.end(), k) - same.begin();
+        const double a = 2 * M_PI * static_cast<double>(pos) / static_cast<double>(same.size());
+        at += ring * Eigen::Vector2d(std::cos(a), std::sin(a));
+        spread = true;
+      }
+      c.px[k] = at.x();
+      c.py[k] = at.y();
       c.pvalue[k] = x.residual * 1e3;
     }
+    if (spread) c.title += "; crossings at one point are drawn on a small ring around it";
     s.heat_maps.push_back(std::move(c));
   }
   return s;

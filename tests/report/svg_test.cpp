@@ -1,10 +1,12 @@
 // SVG figures (heat maps, distorted grids) and the surface/space report sections.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/surface.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/report/surface.hpp"
 #include "trueaxis/sim/machine.hpp"
@@ -136,4 +138,27 @@ TEST(Svg, SpaceSectionShowsPlanesLevelsAndTheCompensationCheck) {
   const std::string html = report::render("t", {s});
   EXPECT_EQ(count(html, "<svg class=\"ta-fig\""), 8u);
   EXPECT_NE(html.find("var TA_FIGURES=8;"), std::string::npos);
+}
+
+// What a Moody report shows: the numeric Union Jack (every line's heights, station by station,
+// with its CSV), and closure markers that do not hide each other where four lines cross.
+TEST(Svg, MoodySectionHasTheUnionJackTableAndSpreadsCoincidentClosures) {
+  const auto plate = surface::moody(io::read_moody(std::string(TRUEAXIS_TEST_DATA) + "/moody"));
+  const auto s = report::surface_section("plate", plate);
+  ASSERT_EQ(s.more_tables.size(), 1u);
+  const auto& t = s.more_tables[0].second;
+  ASSERT_EQ(t.size(), 9u);  // header and the eight lines
+  EXPECT_EQ(t[1][0], plate.lines[0]);
+  std::size_t filled = 0;
+  for (std::size_t r = 1; r < t.size(); ++r)
+    for (std::size_t c = 1; c < t[r].size(); ++c) filled += !t[r][c].empty();
+  EXPECT_EQ(filled, plate.points.size());
+  ASSERT_EQ(s.heat_maps.size(), 2u);
+  const auto& c = s.heat_maps[1];
+  for (Eigen::Index a = 0; a < c.px.size(); ++a)
+    for (Eigen::Index b = a + 1; b < c.px.size(); ++b)
+      EXPECT_GT(std::hypot(c.px[a] - c.px[b], c.py[a] - c.py[b]), 1.0) << a << " " << b;
+  const std::string html = report::render("t", {s});
+  EXPECT_NE(html.find("download=\"plate-union-jack-heights-along-every-line-m.csv\""),
+            std::string::npos);
 }

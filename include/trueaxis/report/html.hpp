@@ -69,6 +69,8 @@ struct Section {
   std::vector<std::string> warnings;            // plain text, shown prominently before the intro
   std::vector<std::string> references;          // sources the section's methods follow (text)
   std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
+  // Further tables after the first, each with a caption (first row = header).
+  std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>> more_tables;
   std::vector<Plot> plots;
   std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit
   std::vector<DistortedGrid> grids;  // drawn after the heat maps
