@@ -141,11 +141,8 @@ class Locator : public nlohmann::json_sax<nlohmann::json> {
   std::vector<Frame> stack_;
 };
 
-// Where a SAX parse stops with an error (nlohmann's DOM parser reports a number too large for a
-// double, '1e309', without a position).
-struct ErrorPosition : nlohmann::json_sax<nlohmann::json> {
-  std::size_t byte = 0;
-  std::string token;
+// A SAX handler that accepts every event and stops at an error: the base of the passes below.
+struct AcceptAll : nlohmann::json_sax<nlohmann::json> {
   bool null() override { return true; }
   bool boolean(bool) override { return true; }
   bool number_integer(number_integer_t) override { return true; }
@@ -158,6 +155,16 @@ struct ErrorPosition : nlohmann::json_sax<nlohmann::json> {
   bool end_object() override { return true; }
   bool start_array(std::size_t) override { return true; }
   bool end_array() override { return true; }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
+    return false;
+  }
+};
+
+// Where a SAX parse stops with an error (nlohmann's DOM parser reports a number too large for a
+// double, '1e309', without a position).
+struct ErrorPosition : AcceptAll {
+  std::size_t byte = 0;
+  std::string token;
   bool parse_error(std::size_t position, const std::string& last_token,
                    const nlohmann::detail::exception&) override {
     byte = position;
@@ -169,18 +176,11 @@ struct ErrorPosition : nlohmann::json_sax<nlohmann::json> {
 // Byte offset of the first key that repeats a key of its own object (SAX pass with a cursor; the
 // error path only).
 std::size_t second_key_position(const std::string& text) {
-  struct Keys : nlohmann::json_sax<nlohmann::json> {
+  struct Keys : AcceptAll {
     const char* begin;
     const char** cursor;
     std::vector<std::vector<std::string>> open;
     std::ptrdiff_t found = -1;
-    bool null() override { return true; }
-    bool boolean(bool) override { return true; }
-    bool number_integer(number_integer_t) override { return true; }
-    bool number_unsigned(number_unsigned_t) override { return true; }
-    bool number_float(number_float_t, const string_t&) override { return true; }
-    bool string(string_t&) override { return true; }
-    bool binary(binary_t&) override { return true; }
     bool start_object(std::size_t) override {
       open.emplace_back();
       return true;
@@ -202,11 +202,6 @@ std::size_t second_key_position(const std::string& text) {
     bool end_object() override {
       open.pop_back();
       return true;
-    }
-    bool start_array(std::size_t) override { return true; }
-    bool end_array() override { return true; }
-    bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception&) override {
-      return false;
     }
   } keys;
   const char* cursor = text.data();
