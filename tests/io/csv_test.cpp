@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 
 #include "../../src/io/fast_text.hpp"
 #include "../test_util.hpp"
@@ -201,4 +203,17 @@ TEST(Csv, OutputsAreWholeOrNotAtAllAndNeedTheirDirectory) {
     EXPECT_EQ(e.path().filename().string().find(".partial-"), std::string::npos) << e.path();
   trueaxis::io::write_csv(p, {"x"}, {&x});
   EXPECT_EQ(CsvTable::read(p).rows(), 5u);
+}
+
+// Found by fuzzing: a 2 GB CSV took 45-58 s and 10.5 GB of memory before it was refused. A file
+// over the limit is refused by its size, before anything is read (a sparse file here).
+TEST(Csv, AFileOverTheLimitIsRefusedBeforeReading) {
+  const std::string p = trueaxis::test::temp_dir() + "/huge.csv";
+  { std::ofstream(p) << "x,a\n"; }
+  std::filesystem::resize_file(p, trueaxis::io::detail::kMaxInputBytes + 1);
+  // The size refusal comes from the file system's answer, not from reading (no timing asserted).
+  const std::string m = trueaxis::test::error_of([&] { CsvTable::read(p); });
+  std::filesystem::remove(p);
+  EXPECT_NE(m.find("huge.csv: 1.1 GB is more than trueaxis reads in one file"), std::string::npos)
+      << m;
 }
