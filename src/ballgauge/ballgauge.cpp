@@ -7,6 +7,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include "common.hpp"
@@ -28,53 +29,48 @@ Centre fit_ball(const Eigen::Matrix3Xd& points, double tol, bool drop) {
     r << q.leftCols(i), q.rightCols(q.cols() - i - 1);
     return r;
   };
-  auto max_residual = [](const Eigen::Matrix3Xd& q) {
+  auto max_residual = [](const geometry::Fit& f) { return f.residuals.cwiseAbs().maxCoeff(); };
+  // A fit that may fail (a set dragged far off by a wrong touch): nullopt then.
+  auto try_fit = [](const Eigen::Matrix3Xd& q) -> std::optional<geometry::Fit> {
     try {
-      return geometry::fit(geometry::Element::Sphere, q).residuals.cwiseAbs().maxCoeff();
+      return geometry::fit(geometry::Element::Sphere, q);
     } catch (const Error&) {
-      return std::numeric_limits<double>::infinity();
+      return std::nullopt;
     }
   };
+  std::optional<geometry::Fit> f = try_fit(p);
   // One wrong touch at a time: the point without which the rest fit within the tolerance.
-  while (p.cols() > 5 && max_residual(p) > tol) {
+  while (p.cols() > 5 && (!f || max_residual(*f) > tol)) {
     Eigen::Index worst = -1;
-    double best = std::numeric_limits<double>::infinity();
+    std::optional<geometry::Fit> best;
     for (Eigen::Index i = 0; i < p.cols(); ++i) {
-      const double m = max_residual(without(p, i));
-      if (m < best) {
-        best = m;
+      auto g = try_fit(without(p, i));
+      if (g && (!best || max_residual(*g) < max_residual(*best))) {
+        best = std::move(g);
         worst = i;
       }
     }
-    if (!(best <= tol)) break;  // not one wrong touch: the scatter stays for the fit to show
-    const Eigen::Matrix3Xd rest = without(p, worst);
-    const geometry::Fit g = geometry::fit(geometry::Element::Sphere, rest);
-    const double off = std::abs((p.col(worst) - g.point).norm() - g.diameter / 2);
+    if (!best || !(max_residual(*best) <= tol)) break;  // not one wrong touch: the fit shows it
+    const double off = std::abs((p.col(worst) - best->point).norm() - best->diameter / 2);
     const std::string what = fmt::format(
         "point {} is {:.4g} mm off the sphere through the other {} points (they fit within "
         "{:.2g} um): a wrong touch",
-        original[static_cast<std::size_t>(worst)] + 1, off, rest.cols(), best * 1e3);
+        original[static_cast<std::size_t>(worst)] + 1, off, p.cols() - 1,
+        max_residual(*best) * 1e3);
     if (!drop) throw Error(what + "; remove it, or drop such points with --drop-outliers");
     dropped.push_back(what + ", left out");
     original.erase(original.begin() + worst);
-    p = rest;
+    p = without(p, worst);
+    f = std::move(best);
   }
-  const geometry::Fit f = geometry::fit(geometry::Element::Sphere, p);
+  if (!f) f = geometry::fit(geometry::Element::Sphere, p);  // throws with the reason
   Centre c;
   c.dropped = std::move(dropped);
-  c.x = f.point;
-  c.diameter = f.diameter;
-  const Eigen::Index n = p.cols();
-  if (n > 4) {
-    Eigen::MatrixXd J(n, 4);
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Vector3d d = (p.col(i) - f.point).normalized();
-      J.row(i) << -d.x(), -d.y(), -d.z(), -1;
-    }
-    const double s2 = f.residuals.squaredNorm() / static_cast<double>(n - 4);
-    const Eigen::Matrix4d cov = s2 * (J.transpose() * J).inverse();
-    c.u = cov.diagonal().head<3>().cwiseMax(0).cwiseSqrt();
-  }
+  c.x = f->point;
+  c.diameter = f->diameter;
+  // The centre's standard uncertainty from the fit itself (Jacobian at the solution, residual
+  // variance over n − 4), when the points are redundant.
+  if (f->has_uncertainty) c.u = f->u_point;
   return c;
 }
 

@@ -731,7 +731,8 @@ Result separate(const ProbeData& data, const Options& opt) {
 
   if (opt.reference == Reference::Seed) {
     res.gauge =
-        "seed: X_0 = Y_0 = 0, alpha = X_1 and beta = 2Y_1 - Y_2 minimise sum of X_K^2 (K >= 2); "
+        "patent (JPH0464003B2): X_0 = Y_0 = 0, alpha = X_1 and beta = 2Y_1 - Y_2 minimise sum of "
+        "X_K^2 (K >= 2); "
         "pitch relative to the first station";
     if (opt.zero_difference) res.gauge += "; beta from the known zero difference";
   } else {
@@ -793,7 +794,7 @@ Result separate(const ProbeData& data, const Options& opt) {
 void express_in_reference(Profile& workpiece, Profile& guide, Profile* pitch, Reference reference,
                           bool parabola_free) {
   if (reference == Reference::Seed)
-    throw Error("express_in_reference: the seed reference depends on the readings");
+    throw Error("express_in_reference: the patent reference depends on the readings");
   Raw r;
   r.xw = workpiece.x;
   r.w = workpiece.value;

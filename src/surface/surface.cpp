@@ -314,7 +314,8 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
   }
   r.unobservable = {"plane", "twist"};
   r.gauge =
-      "seed construction: x lines hung on the two boundary y lines, whose own reference lines fix "
+      "boundary construction: x lines hung on the two boundary y lines, whose own reference lines "
+      "fix "
       "the twist; heights are residuals from the least-squares plane of all points";
   finish(r, lines, h, true);
   return r;
