@@ -315,5 +315,16 @@ expect_ok "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o bg-e0t.j
 grep -q "E0 after the grid correction against MPE 0.1 um: FAIL" out.txt && ok || bad "a tight MPE fails"
 expect_code 2 "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o o.json --mpe "1.5+L/x"
 
+# New inputs refuse bad values: --meta without '=', a result file with a broken reference, and
+# 'examples' over existing files (nothing written without --force).
+expect_code 2 "$T" report rd.json -o o.html --meta novalue
+python3 -c "
+import json; d = json.load(open('moody.json')); d['crossings'][0]['lines'][0] = 'nope'
+json.dump(d, open('badsurf.json', 'w'), indent=1)"
+expect_err "badsurf.json:[0-9]*:[0-9]*: line 'nope' is not in 'lines'" "$T" report badsurf.json -o o.html
+mkdir -p ex && (cd ex && "$T" examples -q) && ok || bad "examples"
+expect_err "lines.json: exists; nothing was written (use --force to overwrite)" "$T" examples -o ex
+expect_ok "$T" examples -o ex --force -q
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]
