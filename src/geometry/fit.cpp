@@ -4,6 +4,7 @@
 #include <glpk.h>
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -81,15 +82,22 @@ void check(Element e, const Eigen::Matrix3Xd& p, const Pca& s) {
 // Levenberg–Marquardt on a state re-parametrised at every step: `eval(state, r, J)` fills the
 // residuals (and the Jacobian with respect to a local correction dx, if J is not null);
 // `update(state, dx)` returns the corrected state. Stops when a step no longer lowers the cost
-// beyond round-off. Returns the number of accepted steps.
+// beyond round-off.
+struct Refined {
+  int steps = 0;           // accepted steps
+  bool converged = false;  // false: stopped by the iteration cap, still descending
+};
+
+constexpr int kMaxIterations = 500;
+
 template <class State, class Eval, class Update>
-int refine(State& st, Eval&& eval, Update&& update, double step_tol = 1e-12) {
+Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double roundoff) {
   Eigen::VectorXd r, rt;
   Eigen::MatrixXd J;
   eval(st, r, &J);
-  double cost = r.squaredNorm(), lambda = 0;
-  int accepted = 0;
-  for (int it = 0; it < 500; ++it) {
+  double cost = r.squaredNorm(), lambda = 0, previous = 0;
+  Refined out;
+  for (int it = 0; it < kMaxIterations; ++it) {
     const Eigen::Index k = J.cols();
     Eigen::MatrixXd A(J.rows() + k, k);
     Eigen::VectorXd b = Eigen::VectorXd::Zero(J.rows() + k);
@@ -99,28 +107,160 @@ int refine(State& st, Eval&& eval, Update&& update, double step_tol = 1e-12) {
       for (Eigen::Index j = 0; j < k; ++j)
         A(J.rows() + j, j) = std::sqrt(lambda) * std::max(J.col(j).norm(), 1e-300);
     b.head(J.rows()) = -r;
-    const Eigen::VectorXd dx = A.colPivHouseholderQr().solve(b);
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    const Eigen::VectorXd dx = qr.solve(b);
+    // Along the step, shorten it while the cost rises: in a curved valley (a small patch of a
+    // wide cone) the full step overshoots where a fraction of it still descends.
     State trial = update(st, dx);
     eval(trial, rt, nullptr);
-    const double ct = rt.squaredNorm();
+    double ct = rt.squaredNorm(), fraction = 1;
+    for (; !(std::isfinite(ct) && ct <= cost) && fraction > 1e-3;) {
+      fraction /= 2;
+      trial = update(st, fraction * dx);
+      eval(trial, rt, nullptr);
+      ct = rt.squaredNorm();
+    }
     if (std::isfinite(ct) && ct <= cost) {
-      // Stop only where the cost no longer falls AND the step itself is at round-off: on a flat
-      // valley (a cone's apex against its angle) the cost can stall while the parameters still
-      // move.
+      // Stop where the Gauss–Newton step (zero at a stationary point, whatever fraction of it
+      // was taken) is at the tolerance and so is what is left to go: in a flat valley (a
+      // cone's apex against its angle, a short patch) the iteration converges linearly, the
+      // steps shrinking by a ratio ρ close to 1 and leaving step·ρ/(1 − ρ) still to go. The
+      // tolerance is never below what round-off in the residuals lets the solution resolve
+      // (their error over the smallest singular value of the Jacobian).
       const double step = dx.template lpNorm<Eigen::Infinity>();
-      const bool done = ct == cost || (cost - ct <= 1e-15 * cost + 1e-300 && step <= step_tol);
+      const double ratio = previous > 0 ? step / previous : 1;
+      const double left = ratio < 1 ? step * ratio / (1 - ratio) : HUGE_VAL;
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
+          qr.matrixR().topLeftCorner(k, k).template triangularView<Eigen::Upper>());
+      const double smallest = svd.singularValues()[k - 1];
+      const double floor =
+          smallest > 0 ? roundoff * std::sqrt(static_cast<double>(J.rows())) / smallest : 0;
+      const double tol = std::max(step_tol, floor);
+      const bool done = step <= tol && (left <= tol || ct == cost);
       st = trial;
       cost = ct;
-      ++accepted;
+      previous = step;
+      ++out.steps;
       lambda = lambda > 1e-12 ? lambda / 10 : 0;
       eval(st, r, &J);
-      if (done) break;
+      if (done) {
+        out.converged = true;
+        break;
+      }
     } else {
       lambda = lambda > 0 ? lambda * 10 : 1e-8;
-      if (lambda > 1e12) break;  // no descent left: at the minimum to round-off
+      if (lambda > 1e12) {  // no descent left: at the minimum to round-off
+        out.converged = true;
+        break;
+      }
     }
   }
-  return accepted;
+  return out;
+}
+
+[[noreturn]] void not_converged(Element e) {
+  throw Error(fmt::format(
+      "{} fit: no least-squares solution found in {} iterations: the points fix the {} too "
+      "weakly (too little of its surface for their scatter); measure more of it",
+      to_string(e), kMaxIterations, to_string(e)));
+}
+
+// ---- polishing in extended precision -----------------------------------------------------------
+//
+// Gauss–Newton leaves out the residuals' curvature. Where the residuals are large (NIST's
+// circles with millimetres of form error) it overshoots and crawls; on a short patch or a wide
+// cone the cost has a flat direction (the axis tilting against the apex moving) where double
+// precision no longer sees the gradient. Either way the double-precision solution can stop
+// ~1e-9 of the part's size short of the minimum. From there, a few Newton steps in 80-bit
+// arithmetic (the Hessian with the residuals' curvature, by central differences of the exact
+// gradient) reach the minimum to round-off of the result.
+
+using Ld = long double;
+using Vec3L = Eigen::Matrix<Ld, 3, 1>;
+using Mat3L = Eigen::Matrix<Ld, 3, 3>;
+using VecXL = Eigen::Matrix<Ld, Eigen::Dynamic, 1>;
+using MatXL = Eigen::Matrix<Ld, Eigen::Dynamic, Eigen::Dynamic>;
+
+// Newton's method in 80-bit arithmetic from a state near the minimum: `grad(state, g)` returns
+// ½Σr² and its gradient g with respect to a local correction, `move(state, dx)` applies one; `h`
+// holds the central-difference steps for the Hessian. Steps that lower the cost, or that leave it
+// the same to round-off and lower the gradient, are taken; at most 12. `settled` (if given) says
+// whether the last Newton step was below `settle`: the state is a minimum to that tolerance.
+template <class State, class Grad, class Move>
+State newton_polish(State s, Grad&& grad, Move&& move, const VecXL& h, Ld stop, Ld settle = 0,
+                    bool* settled = nullptr) {
+  const Eigen::Index k = h.size();
+  VecXL g, gp, gm, gt;
+  Ld cost = grad(s, g);
+  if (settled) *settled = false;
+  for (int it = 0; it < 12; ++it) {
+    MatXL H(k, k);
+    for (Eigen::Index j = 0; j < k; ++j) {
+      VecXL e = VecXL::Zero(k);
+      e[j] = h[j];
+      grad(move(s, e), gp);
+      grad(move(s, -e), gm);
+      H.col(j) = (gp - gm) / (2 * h[j]);
+    }
+    H = ((H + H.transpose()) / 2).eval();
+    const Eigen::LDLT<MatXL> ldlt(H);
+    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;  // not near a minimum
+    VecXL dx = -ldlt.solve(g);
+    if (!dx.allFinite()) break;
+    if (settled) *settled = dx.cwiseAbs().maxCoeff() <= settle;
+    bool better = false;
+    for (int half = 0; half < 8 && !better; ++half, dx /= 2) {
+      const State t = move(s, dx);
+      const Ld ct = grad(t, gt);
+      // Near the minimum the cost stops resolving the step before the gradient does.
+      if (ct < cost || (ct <= cost * (1 + 1e-15L) && gt.norm() < g.norm())) {
+        s = t;
+        cost = ct;
+        g = gt;
+        better = true;
+      }
+    }
+    if (!better || dx.cwiseAbs().maxCoeff() * 2 <= stop) break;
+  }
+  return s;
+}
+
+// A circle (centre c, radius r) or a sphere, in centred coordinates q (2 × n or 3 × n).
+template <int D>
+struct RoundL {
+  Eigen::Matrix<Ld, D, 1> c;
+  Ld r;
+};
+
+template <int D>
+Ld round_gradient(const Eigen::Matrix<double, D, Eigen::Dynamic>& q, const RoundL<D>& s, VecXL& g) {
+  g = VecXL::Zero(D + 1);
+  Ld cost = 0;
+  for (Eigen::Index i = 0; i < q.cols(); ++i) {
+    const Eigen::Matrix<Ld, D, 1> d = q.col(i).template cast<Ld>() - s.c;
+    const Ld rho = d.norm(), res = rho - s.r;
+    cost += res * res;
+    g.template head<D>() -= res * d / rho;
+    g[D] -= res;
+  }
+  return cost / 2;
+}
+
+// Polishes a circle or sphere fit (centre and radius in the coordinates of q) in place.
+template <int D>
+void polish_round(const Eigen::Matrix<double, D, Eigen::Dynamic>& q,
+                  Eigen::Matrix<double, D, 1>& centre, double& radius) {
+  const Ld size = std::max<Ld>(1, q.cwiseAbs().maxCoeff());
+  const VecXL h = VecXL::Constant(D + 1, 1e-7L * size);
+  const RoundL<D> s = newton_polish(
+      RoundL<D>{centre.template cast<Ld>(), radius},
+      [&](const RoundL<D>& x, VecXL& g) { return round_gradient<D>(q, x, g); },
+      [](const RoundL<D>& x, const VecXL& dx) {
+        return RoundL<D>{x.c + dx.template head<D>(), x.r + dx[D]};
+      },
+      h, 1e-16L * size);
+  centre = s.c.template cast<double>();
+  radius = static_cast<double>(s.r);
 }
 
 // ---- circle in a plane (2-D) ------------------------------------------------------------------
@@ -142,6 +282,7 @@ Circle2 circle2_algebraic(const Eigen::Matrix2Xd& q) {
   return {s.head<2>(), std::sqrt(std::max(0.0, s[2] + s.head<2>().squaredNorm()))};
 }
 
+// `q`: centred coordinates (mm).
 Circle2 circle2_fit(const Eigen::Matrix2Xd& q, int* iterations) {
   Circle2 c = circle2_algebraic(q);
   auto eval = [&](const Circle2& s, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
@@ -157,8 +298,12 @@ Circle2 circle2_fit(const Eigen::Matrix2Xd& q, int* iterations) {
   auto update = [](const Circle2& s, const Eigen::VectorXd& dx) {
     return Circle2{s.c + dx.head<2>(), s.r + dx[2]};
   };
-  const int it = refine(c, eval, update);
-  if (iterations) *iterations = it;
+  // Residuals carry the round-off of the centred coordinates.
+  const double roundoff = 4 * std::numeric_limits<double>::epsilon() * q.cwiseAbs().maxCoeff();
+  const Refined it = refine(c, eval, update, 1e-13 * std::max(1.0, c.r), roundoff);
+  if (!it.converged) not_converged(Element::Circle);
+  if (iterations) *iterations = it.steps;
+  polish_round<2>(q, c.c, c.r);
   return c;
 }
 
@@ -223,6 +368,67 @@ void cone_eval(const Eigen::Matrix3Xd& p, const AxisState& s, Eigen::VectorXd& r
   }
 }
 
+// ---- polishing an axis fit in extended precision (see newton_polish) ----------------------
+
+struct AxisStateL {
+  Vec3L x0;
+  Mat3L R;  // frame: third column the axis; the first two move with it without jumps
+  Ld r = 0, psi = 0;
+};
+
+// Residuals (as cone_eval; ψ = 0 for a cylinder) and the gradient of ½Σr² with respect to the
+// local correction (x0 in the plane, the axis' tilt, r, ψ) in the state's own frame.
+Ld axis_gradient(const Eigen::Matrix3Xd& p, const AxisStateL& s, bool cone, VecXL& g) {
+  const Ld C = std::cos(s.psi), S = std::sin(s.psi), T = std::tan(s.psi);
+  g = VecXL::Zero(cone ? 6 : 5);
+  Ld cost = 0;
+  for (Eigen::Index i = 0; i < p.cols(); ++i) {
+    const Vec3L q = s.R.transpose() * (p.col(i).cast<Ld>() - s.x0);
+    const Ld x = q[0], y = q[1], z = q[2], rho = std::sqrt(x * x + y * y);
+    const Ld gap = rho - s.r - z * T, res = gap * C;
+    cost += res * res;
+    g[0] += res * (-C * x / rho);
+    g[1] += res * (-C * y / rho);
+    g[2] += res * C * (-x * z / rho - T * x);
+    g[3] += res * C * (-y * z / rho - T * y);
+    g[4] += res * -C;
+    if (cone) g[5] += res * (-z / C - gap * S);
+  }
+  return cost / 2;
+}
+
+AxisStateL move_axis_l(const AxisStateL& s, const VecXL& dx, const Vec3L& centroid, bool cone) {
+  AxisStateL t = s;
+  t.x0 = s.x0 + s.R * Vec3L(dx[0], dx[1], 0);
+  const Vec3L a = s.R.col(2), b = (s.R * Vec3L(dx[2], dx[3], 1)).normalized();
+  t.R = Eigen::Quaternion<Ld>::FromTwoVectors(a, b).toRotationMatrix() * s.R;
+  t.r = s.r + dx[4];
+  if (cone) t.psi = s.psi + dx[5];
+  const Ld tau = (centroid - t.x0).dot(b);  // back to the foot of the centroid
+  t.x0 += tau * b;
+  if (cone) t.r += tau * std::tan(t.psi);
+  return t;
+}
+
+AxisState polish_axis(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid,
+                      const AxisState& s0, bool cone, double extent, bool* settled) {
+  const Vec3L c = centroid.cast<Ld>();
+  VecXL h(cone ? 6 : 5);  // ~1e-7 of the size (mm) or of a radian
+  h << 1e-7L * extent, 1e-7L * extent, 1e-7L, 1e-7L, 1e-7L * extent;
+  if (cone) h[5] = 1e-7L;
+  const AxisStateL s = newton_polish(
+      AxisStateL{s0.x0.cast<Ld>(), basis(s0.a).cast<Ld>(), s0.r, s0.psi},
+      [&](const AxisStateL& x, VecXL& g) { return axis_gradient(p, x, cone, g); },
+      [&](const AxisStateL& x, const VecXL& dx) { return move_axis_l(x, dx, c, cone); }, h,
+      1e-16L * extent, 1e-10L * extent, settled);
+  AxisState out = s0;
+  out.x0 = s.x0.cast<double>();
+  out.a = s.R.col(2).cast<double>().normalized();
+  out.r = static_cast<double>(s.r);
+  out.psi = static_cast<double>(s.psi);
+  return out;
+}
+
 // Start values for an axis along w: the algebraic circle of the points projected on the plane
 // normal to w (cylinder), or the algebraic cone x² + y² = 2cx·x + 2cy·y + k0 + k1·z + k2·z².
 bool axis_start(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid,
@@ -251,6 +457,33 @@ bool axis_start(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid,
   s.r = std::sqrt(r0sq);
   s.psi = std::atan(k[3] / (2 * s.r));
   return std::isfinite(s.psi);
+}
+
+// The axis direction of the algebraic quadric through the points (the singular vector of the
+// smallest singular value of [x² y² z² 2xy 2xz 2yz x y z 1], in centred and scaled coordinates):
+// the eigenvector of its quadratic part whose eigenvalue stands apart from the other two (a
+// cone's (1, 1, −tan²ψ), a cylinder's (1, 1, 0)). Catches axes that no principal direction of
+// the cloud is near, as on a small patch of a wide cone. False when the points do not fix it.
+bool quadric_axis(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid, Eigen::Vector3d& w) {
+  const Eigen::Index n = p.cols();
+  if (n < 10) return false;
+  const Eigen::Matrix3Xd q = p.colwise() - centroid;
+  const double scale = q.colwise().norm().maxCoeff();
+  if (!(scale > 0)) return false;
+  Eigen::MatrixXd D(n, 10);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d v = q.col(i) / scale;
+    D.row(i) << v.x() * v.x(), v.y() * v.y(), v.z() * v.z(), 2 * v.x() * v.y(), 2 * v.x() * v.z(),
+        2 * v.y() * v.z(), v.x(), v.y(), v.z(), 1;
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(D, Eigen::ComputeThinV);
+  const Eigen::VectorXd c = svd.matrixV().col(9);
+  Eigen::Matrix3d A;
+  A << c[0], c[3], c[4], c[3], c[1], c[5], c[4], c[5], c[2];
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(A);
+  const Eigen::Vector3d e = es.eigenvalues();  // ascending
+  w = es.eigenvectors().col(e[1] - e[0] < e[2] - e[1] ? 2 : 0);
+  return w.allFinite() && w.norm() > 0.5;
 }
 
 }  // namespace
@@ -407,6 +640,10 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
   f.element = element;
   const double extent = std::max(1.0, (p.colwise() - s.centroid).colwise().norm().maxCoeff());
   const double step_tol = 1e-13 * extent;
+  // Residuals carry the round-off of the coordinates they are computed from: centred ones for
+  // circles and spheres, the raw ones (less the axis point) for cylinders and cones.
+  constexpr double kEps = std::numeric_limits<double>::epsilon();
+  const double roundoff = 4 * kEps * p.cwiseAbs().maxCoeff();
   switch (element) {
     case Element::Line: {
       f.point = s.centroid;
@@ -507,7 +744,10 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       auto update = [](const SphereState& x, const Eigen::VectorXd& dx) {
         return SphereState{x.c + dx.head<3>(), x.r + dx[3]};
       };
-      f.iterations = refine(st, eval, update, step_tol);
+      const Refined it = refine(st, eval, update, step_tol, 4 * kEps * extent);
+      if (!it.converged) not_converged(element);
+      f.iterations = it.steps;
+      polish_round<3>(q, st.c, st.r);
       f.point = s.centroid + st.c;
       f.diameter = 2 * std::abs(st.r);
       Eigen::VectorXd r;
@@ -531,22 +771,44 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       auto eval = [&](const AxisState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
         cone ? cone_eval(p, x, r, J) : cylinder_eval(p, x, r, J);
       };
-      for (int k = 0; k < 3; ++k) {
+      // Start from each principal direction of the cloud, and from the quadric's axis.
+      Eigen::Matrix<double, 3, 4> starts;
+      starts.leftCols<3>() = s.axes;
+      Eigen::Vector3d wq;
+      const int n_starts = quadric_axis(p, s.centroid, wq) ? 4 : 3;
+      if (n_starts == 4) starts.col(3) = wq.normalized();
+      // Re-centre the axis point on the foot of the centroid after every step, so that the
+      // axis turns about the data and not about a point the data have left behind.
+      auto update = [&](const AxisState& x, const Eigen::VectorXd& dx) {
+        AxisState t = move_axis(x, dx);
+        const double tau = (s.centroid - t.x0).dot(t.a);
+        t.x0 += tau * t.a;
+        if (cone) t.r += tau * std::tan(t.psi);
+        return t;
+      };
+      bool converged = false;
+      for (int k = 0; k < n_starts; ++k) {
         AxisState st;
-        if (!axis_start(p, s.centroid, s.axes.col(k), cone, st)) continue;
-        const int it = refine(st, eval, move_axis, step_tol);
+        if (!axis_start(p, s.centroid, starts.col(k), cone, st)) continue;
+        const Refined it = refine(st, eval, update, step_tol, roundoff);
         Eigen::VectorXd r;
         eval(st, r, nullptr);
         const double cost = r.squaredNorm();
         if (std::isfinite(cost) && cost < best) {
           best = cost;
           found = st;
-          f.iterations = it;
+          converged = it.converged;
+          f.iterations = it.steps;
         }
       }
       if (!std::isfinite(best))
         throw Error(fmt::format("{} fit: no start value converged (are the points on a {}?)",
                                 to_string(element), to_string(element)));
+      // Where Gauss–Newton crept to the iteration cap, Newton's steps may still settle on the
+      // minimum; if they do not, whatever the lowest cost is, it is not a minimum.
+      bool settled = false;
+      found = polish_axis(p, s.centroid, found, cone, extent, &settled);
+      if (!converged && !settled) not_converged(element);
       // Report the axis point nearest the centroid; a cone opens towards +direction.
       const double sign = found.psi < 0 ? -1 : 1;
       auto report = [&](const AxisState& x) {

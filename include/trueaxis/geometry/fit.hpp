@@ -58,8 +58,11 @@ struct Fit {
 // coordinates within 1e9 mm; at least 2 distinct points (line), 3 non-collinear (plane,
 // circle), 4 non-coplanar (sphere), 5 (cylinder), 6 (cone). A diameter whose standard
 // uncertainty exceeds a quarter of it (a sphere fitted to a nearly flat patch) is refused: the
-// points do not determine it. The Gauss–Newton iteration stops only when both the cost and the
-// step are at round-off.
+// points do not determine it. The Gauss–Newton iteration stops when its step, and the distance
+// its rate of convergence leaves to go, are at round-off; Newton steps in 80-bit arithmetic then
+// reach the minimum to round-off of the result (circle, sphere, cylinder, cone). A fit that
+// finds no minimum (Gauss–Newton still descending after 500 steps and Newton not settling, as on
+// a small sector of a wide cone with noise) is refused with an Error.
 Fit fit(Element element, const Eigen::Matrix3Xd& points);
 
 // Minimum-zone (Chebyshev) fits: the element in the middle of the thinnest zone that contains
