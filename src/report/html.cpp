@@ -303,12 +303,13 @@ svg.ta-fig{max-width:100%;height:auto}
           "TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{},log:{}}});\n", id, data,
           series, bands, js_string(p.x_label), js_string(p.y_label), p.log_y ? "true" : "false");
     }
-    if (!s.heat_maps.empty() || !s.grids.empty()) {
+    if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty()) {
       h += "<div class=\"figs\">";
       auto figure = [&](const std::string& title, const std::string& body) {
         h += "<figure><figcaption>" + escape(title) + "</figcaption>" + body + "</figure>\n";
         ++figures;
       };
+      for (const auto& v : s.views) figure(v.title, svg(v));
       for (const auto& m : s.heat_maps) figure(m.title, svg(m));
       for (const auto& g : s.grids) figure(g.title, svg(g));
       h += "</div>\n";

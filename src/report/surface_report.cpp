@@ -74,6 +74,24 @@ Section surface_section(const std::string& title, const surface::Result& r,
     }
     s.more_tables.emplace_back("Union Jack: heights along every line (µm)", std::move(t));
   }
+  {
+    // The 3-D view: every measured line at its height, in station order.
+    SurfaceView view;
+    view.title = "the surface in 3-D: every measured line at its height";
+    view.value_label = "height (µm)";
+    std::vector<std::vector<std::pair<int, Eigen::Vector3d>>> along(r.lines.size());
+    for (const auto& p : r.points)
+      along[static_cast<std::size_t>(p.line)].push_back(
+          {p.station, Eigen::Vector3d(p.xy.x(), p.xy.y(), p.height * 1e3)});
+    for (auto& l : along) {
+      std::sort(l.begin(), l.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      if (l.size() < 2) continue;
+      Eigen::Matrix3Xd m(3, static_cast<Eigen::Index>(l.size()));
+      for (std::size_t k = 0; k < l.size(); ++k) m.col(static_cast<Eigen::Index>(k)) = l[k].second;
+      view.lines.push_back(std::move(m));
+    }
+    if (!view.lines.empty()) s.views.push_back(std::move(view));
+  }
   HeatMap h = xy_map("heights at every station (lines in grey)", "height (µm)", 620);
   const auto n = static_cast<Eigen::Index>(r.points.size());
   h.px.resize(n);

@@ -217,6 +217,79 @@ std::string svg(const HeatMap& h) {
   return s;
 }
 
+std::string svg(const SurfaceView& v) {
+  if (v.lines.empty()) throw Error(fmt::format("surface view '{}': no lines", v.title));
+  double hmin = INFINITY, hmax = -INFINITY, x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY,
+         y1 = -INFINITY;
+  for (const auto& l : v.lines) {
+    if (l.cols() < 2) throw Error(fmt::format("surface view '{}': a line of < 2 points", v.title));
+    if (!l.allFinite()) throw Error(fmt::format("surface view '{}': non-finite value", v.title));
+    x0 = std::min(x0, l.row(0).minCoeff());
+    x1 = std::max(x1, l.row(0).maxCoeff());
+    y0 = std::min(y0, l.row(1).minCoeff());
+    y1 = std::max(y1, l.row(1).maxCoeff());
+    hmin = std::min(hmin, l.row(2).minCoeff());
+    hmax = std::max(hmax, l.row(2).maxCoeff());
+  }
+  // Isometric projection (x to the lower right, y to the upper right, height up), heights in µm
+  // magnified into mm so that their span takes ~15 % of the plate's diagonal.
+  const double size = std::hypot(x1 - x0, y1 - y0), span = std::max(hmax - hmin, 1e-9);
+  const double mag = v.magnification > 0 ? v.magnification : nice_magnification(span, size, 0.15);
+  const double c30 = std::cos(M_PI / 6), s30 = 0.5;
+  auto U = [&](double x, double y) { return (x - x0) * c30 + (y - y0) * c30; };
+  auto V = [&](double x, double y, double h) {
+    return -(x - x0) * s30 + (y - y0) * s30 + (h - hmin) * 1e-3 * mag;
+  };
+  double u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+  for (const auto& l : v.lines)
+    for (Eigen::Index k = 0; k < l.cols(); ++k)
+      for (double h : {hmin, l(2, k)}) {
+        u0 = std::min(u0, U(l(0, k), l(1, k)));
+        u1 = std::max(u1, U(l(0, k), l(1, k)));
+        v0 = std::min(v0, V(l(0, k), l(1, k), h));
+        v1 = std::max(v1, V(l(0, k), l(1, k), h));
+      }
+  const double pad = 0.04 * std::max(u1 - u0, v1 - v0);
+  Frame f(u0 - pad, u1 + pad, v0 - pad, v1 + pad, v.width, 110);
+  f.left = 10;
+  const Scale sc(hmin, hmax, hmin < 0 && hmax > 0);
+  std::string s = open_svg(f, v.title);
+  for (const auto& l : v.lines) {  // the nominal plane: the lines at the lowest height
+    std::string pts;
+    for (Eigen::Index k = 0; k < l.cols(); ++k)
+      pts +=
+          fmt::format("{:.2f},{:.2f} ", f.X(U(l(0, k), l(1, k))), f.Y(V(l(0, k), l(1, k), hmin)));
+    s += "<polyline fill=\"none\" stroke=\"#ccc\" stroke-width=\"1\" points=\"" + pts + "\"/>";
+  }
+  for (const auto& l : v.lines)
+    for (Eigen::Index k = 0; k + 1 < l.cols(); ++k) {
+      const double h = 0.5 * (l(2, k) + l(2, k + 1));
+      s += fmt::format(
+          "<line x1=\"{:.2f}\" y1=\"{:.2f}\" x2=\"{:.2f}\" y2=\"{:.2f}\" stroke=\"{}\" "
+          "stroke-width=\"2.2\" stroke-linecap=\"round\"><title>{:g}, {:g} mm: {:.4g}; "
+          "{:g}, {:g} mm: {:.4g}</title></line>",
+          f.X(U(l(0, k), l(1, k))), f.Y(V(l(0, k), l(1, k), l(2, k))),
+          f.X(U(l(0, k + 1), l(1, k + 1))), f.Y(V(l(0, k + 1), l(1, k + 1), l(2, k + 1))), sc(h),
+          l(0, k), l(1, k), l(2, k), l(0, k + 1), l(1, k + 1), l(2, k + 1));
+    }
+  // The plate's x and y directions at its corner, and the magnification.
+  const double ax = 0.22 * std::min(x1 - x0 > 0 ? x1 - x0 : size, y1 - y0 > 0 ? y1 - y0 : size);
+  auto arrow = [&](double x, double y, const char* name) {
+    return fmt::format(
+        "<line x1=\"{:.1f}\" y1=\"{:.1f}\" x2=\"{:.1f}\" y2=\"{:.1f}\" stroke=\"#666\"/>"
+        "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#666\">{}</text>",
+        f.X(U(x0, y0)), f.Y(V(x0, y0, hmin)), f.X(U(x, y)), f.Y(V(x, y, hmin)), f.X(U(x, y)) + 3,
+        f.Y(V(x, y, hmin)) + 12, name);
+  };
+  s += arrow(x0 + ax, y0, "x") + arrow(x0, y0 + ax, "y");
+  s += colour_bar(f, sc, v.value_label);
+  s += fmt::format(
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#444\">heights ×{:g} over the plate "
+      "(isometric view; grey: the lines at the lowest height)</text>",
+      f.left, f.top + f.ph + 30, mag);
+  return s + "</svg>";
+}
+
 std::string svg(const DistortedGrid& g) {
   const Eigen::Index nu = g.u.size(), nv = g.v.size();
   if (nu < 2 || nv < 2) throw Error(fmt::format("grid '{}': needs >= 2 nodes per axis", g.title));

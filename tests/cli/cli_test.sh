@@ -43,7 +43,7 @@ grep -q "uPlot" rep.html && ok || bad "report embeds uPlot"
 expect_ok "$T" surface --moody "$DATA/moody" -o moody.json
 grep -q '"method": "moody"' moody.json && grep -q '"min_zone"' moody.json && ok || bad "moody surface.json"
 expect_ok "$T" surface --moody "$DATA/moody" --method lsq -o moody-lsq.json --report moody.html
-[ "$(grep -o '<svg class="ta-fig"' moody.html | wc -l)" -eq 2 ] && grep -q "closure at every crossing" moody.html && ok || bad "surface --report: heights and closure figures"
+[ "$(grep -o '<svg class="ta-fig"' moody.html | wc -l)" -eq 3 ] && grep -q "the surface in 3-D" moody.html && grep -q "closure at every crossing" moody.html && ok || bad "surface --report: 3-D view, heights and closure figures"
 cat > lines.json <<'JSON'
 {"lines": [
   {"name": "A", "start": [0, 0], "direction": [0, 1], "from": "r-two.json"},

@@ -47,6 +47,7 @@ def test_demo_report_renders_every_plot(tmp_path):
     figures = re.search(r'data-figures-total="(\d+)"', dom)
     assert figures and int(figures.group(1)) >= 4 + 3 + 3
     assert dom.count('<svg class="ta-fig"') == int(figures.group(1))
+    assert dom.count("the surface in 3-D") >= 2  # Moody's plate, classic and least squares
     for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt",
                  "layout.json", "spots.csv"):
         assert (report.parent / name).stat().st_size > 0, name

@@ -1,4 +1,5 @@
 // SVG figures (heat maps, distorted grids) and the surface/space report sections.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -160,5 +161,38 @@ TEST(Svg, MoodySectionHasTheUnionJackTableAndSpreadsCoincidentClosures) {
       EXPECT_GT(std::hypot(c.px[a] - c.px[b], c.py[a] - c.py[b]), 1.0) << a << " " << b;
   const std::string html = report::render("t", {s});
   EXPECT_NE(html.find("download=\"plate-union-jack-heights-along-every-line-m.csv\""),
+            std::string::npos);
+}
+
+// The 3-D view a surface-plate report shows: the eight lines at their heights, one coloured
+// segment per pair of neighbouring stations, over the same lines in grey, with the
+// magnification written out; every station's height appears in a hover title.
+TEST(Svg, MoodySectionHasAnIsometricViewOfEveryLine) {
+  const auto plate = surface::moody(io::read_moody(std::string(TRUEAXIS_TEST_DATA) + "/moody"));
+  const auto s = report::surface_section("plate", plate);
+  ASSERT_EQ(s.views.size(), 1u);
+  const auto& v = s.views[0];
+  ASSERT_EQ(v.lines.size(), plate.lines.size());
+  std::size_t points = 0;
+  for (const auto& l : v.lines) points += static_cast<std::size_t>(l.cols());
+  EXPECT_EQ(points, plate.points.size());
+  const std::string out = report::svg(v);
+  std::size_t segments = 0, greys = 0;
+  for (auto at = out.find("stroke-width=\"2.2\""); at != std::string::npos;
+       at = out.find("stroke-width=\"2.2\"", at + 1))
+    ++segments;
+  for (auto at = out.find("stroke=\"#ccc\""); at != std::string::npos;
+       at = out.find("stroke=\"#ccc\"", at + 1))
+    ++greys;
+  EXPECT_EQ(segments, points - plate.lines.size());
+  EXPECT_EQ(greys, plate.lines.size());
+  EXPECT_NE(out.find("heights ×"), std::string::npos);
+  // The highest station's height is in a title, to the 4 digits shown.
+  double top = 0;
+  for (const auto& p : plate.points) top = std::max(top, p.height * 1e3);
+  EXPECT_NE(out.find(fmt::format("{:.4g}", top)), std::string::npos);
+  report::SurfaceView bad;
+  bad.lines.push_back(Eigen::Matrix3Xd::Zero(3, 1));
+  EXPECT_NE(test::error_of([&] { report::svg(bad); }).find("a line of < 2 points"),
             std::string::npos);
 }

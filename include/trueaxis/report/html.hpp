@@ -63,6 +63,18 @@ struct DistortedGrid {
   int width = 520;                             // px
 };
 
+// An isometric 3-D view of a surface, as a surface-plate report shows it: the lines along which
+// heights were measured (a Union Jack's eight lines, a grid's rows and columns) drawn at their
+// magnified height over the x-y plane, each segment coloured by height, over the same lines at
+// zero height in grey. Each line is 3 × n: x, y (mm) and height (µm); at least 2 points.
+struct SurfaceView {
+  std::string title;
+  std::string value_label;  // the height with its unit, e.g. "height (µm)"
+  std::vector<Eigen::Matrix3Xd> lines;
+  double magnification = 0;  // heights drawn ×this; 0: automatic (span → 15 % of size)
+  int width = 620;           // px
+};
+
 struct Section {
   std::string title;
   std::string intro_html;                       // trusted HTML (escape user text!)
@@ -72,6 +84,7 @@ struct Section {
   // Further tables after the first, each with a caption (first row = header).
   std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>> more_tables;
   std::vector<Plot> plots;
+  std::vector<SurfaceView> views;    // drawn first among the figures
   std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit
   std::vector<DistortedGrid> grids;  // drawn after the heat maps
 };
@@ -123,6 +136,7 @@ DistortedGrid distorted_plane(const map::ErrorMap& map, int a, int b, Eigen::Ind
 // The SVG figures alone (an <svg> element each), for embedding elsewhere.
 std::string svg(const HeatMap& h);
 std::string svg(const DistortedGrid& g);
+std::string svg(const SurfaceView& v);
 // The largest "nice" magnification (1, 2 or 5 × 10^k) that draws an error of `max_error_um` as at
 // most `fraction` of `step_mm`.
 double nice_magnification(double max_error_um, double step_mm, double fraction = 0.4);
