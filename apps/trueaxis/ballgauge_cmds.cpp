@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <memory>
 #include <optional>
+#include <regex>
 
 #include "commands.hpp"
 #include "trueaxis/ballgauge/ballgauge.hpp"
@@ -134,7 +135,19 @@ int run_verify(const VerifyArgs& a) {
     try {
       results.push_back(ballgauge::verify_lengths(lengths, c, a.o));
     } catch (const Error& e) {
-      throw Error(fmt::format("{}: {} correction: {}", a.input, c.name, e.what()));
+      // "length N: [point K ...]" counts the file's data rows: name the file, line and column
+      // (the point's x column), reading the file again on this error path only.
+      const std::string what = e.what();
+      std::smatch m;
+      static const std::regex kLength(R"(^length (\d+): (point ([12]) )?)");
+      if (std::regex_search(what, m, kLength)) {
+        const auto table = io::CsvTable::read(a.input);
+        const long row = std::stol(m[1].str()) - 1;
+        const int col = table.find(m[3].matched && m[3].str() == "2" ? "x2" : "x1");
+        if (row >= 0 && static_cast<std::size_t>(row) < table.rows() && col >= 0)
+          throw Error(fmt::format("{}{} correction: {}", table.where(row, col), c.name, what));
+      }
+      throw Error(fmt::format("{}: {} correction: {}", a.input, c.name, what));
     }
   }
   std::optional<ballgauge::Mpe> mpe;

@@ -193,8 +193,8 @@ expect_err "needs --map" "$T" verify-lengths -i bg-lengths.csv -o o.json
 printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,300,200,200,100\n200,200,200,300,200,200,0\n' > bg-badlen.csv
 expect_err "bg-badlen.csv:3:[0-9]*: nominal length 0 mm: must be > 0" "$T" verify-lengths --map bg-ls-map.json -i bg-badlen.csv -o o.json
 printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,900,200,200,700\n' > bg-outlen.csv
-expect_err "bg-outlen.csv: grid correction: length 1: point 2 (900.000, 200.000, 200.000) mm is outside" "$T" verify-lengths --map bg-ls-map.json -i bg-outlen.csv -o o.json
-expect_err "bg-outlen.csv: parametric correction: length 1: point 2 (900.000, 200.000, 200.000) is outside the identified span" "$T" verify-lengths --model bg-model.json -i bg-outlen.csv -o o.json
+expect_err "bg-outlen.csv:2:13: grid correction: length 1: point 2 (900.000, 200.000, 200.000) mm is outside" "$T" verify-lengths --map bg-ls-map.json -i bg-outlen.csv -o o.json
+expect_err "bg-outlen.csv:2:13: parametric correction: length 1: point 2 (900.000, 200.000, 200.000) is outside the identified span" "$T" verify-lengths --model bg-model.json -i bg-outlen.csv -o o.json
 expect_err "bg-ls-map.json:[0-9]*:[0-9]*: not a parametric model" "$T" verify-lengths --model bg-ls-map.json -i bg-lengths.csv -o o.json
 
 # One grammar: every command-line mistake exits 2 (CLI11's own codes are 105, 106, 109...).
