@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 
 #include "commands.hpp"
 #include "moody_data.hpp"
@@ -14,6 +13,7 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/guideway/guideway.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/files.hpp"
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/probes.hpp"
@@ -131,9 +131,7 @@ int run_demo(const DemoOptions& o) {
   const std::filesystem::path moody_dir = dir / "moody";
   std::filesystem::create_directories(moody_dir);
   for (const auto& [name, text] : moody_files()) {
-    std::ofstream f(moody_dir / std::string(name), std::ios::binary);
-    f << text;
-    if (!f) throw Error(fmt::format("{}: cannot write", (moody_dir / std::string(name)).string()));
+    io::write_text((moody_dir / std::string(name)).string(), text);
   }
   const auto moody_data = io::read_moody(moody_dir.string());
   const auto classic = surface::moody(moody_data);

@@ -6,13 +6,13 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 
 #include "commands.hpp"
 #include "moody_data.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/files.hpp"
 #include "trueaxis/io/probes.hpp"
 #include "trueaxis/io/results.hpp"
 #include "trueaxis/io/surface.hpp"
@@ -191,10 +191,7 @@ int cmd_examples(const std::string& dir, bool force, bool quiet) {
                                 path.string()));
   fs::create_directories(root / "plate");
   for (const auto& [path, text] : files) {
-    std::ofstream f(path, std::ios::binary);
-    f.write(text.data(), static_cast<std::streamsize>(text.size()));
-    f.close();
-    if (!f) throw Error(fmt::format("{}: cannot write", path.string()));
+    io::write_text(path.string(), text);
   }
   if (!quiet)
     fmt::print(

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/files.hpp"
 
 namespace trueaxis::io::detail {
 
@@ -230,3 +231,13 @@ OutFile::~OutFile() {
 }
 
 }  // namespace trueaxis::io::detail
+
+namespace trueaxis::io {
+
+void write_text(const std::string& path, std::string_view text) {
+  detail::OutFile f(path);
+  f.write(text);
+  f.close();
+}
+
+}  // namespace trueaxis::io

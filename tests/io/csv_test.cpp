@@ -10,6 +10,7 @@
 #include "../../src/io/fast_text.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/files.hpp"
 
 using trueaxis::Error;
 using trueaxis::io::CsvTable;
@@ -216,4 +217,16 @@ TEST(Csv, AFileOverTheLimitIsRefusedBeforeReading) {
   std::filesystem::remove(p);
   EXPECT_NE(m.find("huge.csv: 1.1 GB is more than trueaxis reads in one file"), std::string::npos)
       << m;
+}
+
+// The examples and the demo's copies of Moody's files are written like every result: whole, or
+// not at all; into a folder that does not exist, refused by name.
+TEST(Files, WriteTextReplacesWholeOrRefusesByName) {
+  const std::string p = trueaxis::test::temp_file("text.txt", "old\n");
+  trueaxis::io::write_text(p, "new\n");
+  EXPECT_EQ(CsvTable::read(p).header()[0], "new");
+  const std::string missing = trueaxis::test::temp_dir() + "/no-such-folder/a.txt";
+  const std::string m = trueaxis::test::error_of([&] { trueaxis::io::write_text(missing, "x"); });
+  EXPECT_NE(m.find("no-such-folder"), std::string::npos) << m;
+  EXPECT_FALSE(std::filesystem::exists(missing));
 }
