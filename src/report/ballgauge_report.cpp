@@ -191,27 +191,54 @@ Section lengths_section(const std::string& title,
   p.title = "Length error against nominal length";
   p.x_label = "nominal length (mm)";
   p.y_label = "length error (µm)";
+  // Before, and after each correction, at the same nominal lengths: each set is drawn a little
+  // to the side of the nominal (in the order of the legend) so that no marker hides another.
   const auto n = static_cast<Eigen::Index>(order.size());
-  p.x.resize(n);
-  Series before{"before correction", Eigen::VectorXd(n), {}, "#d62728", false, true};
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto& r = first.rows[order[static_cast<std::size_t>(i)]];
-    p.x[i] = r.nominal;
-    before.y[i] = r.before * 1e3;
-  }
-  p.series.push_back(before);
+  const auto sets = static_cast<Eigen::Index>(results.size()) + 1;
+  const double lo = n ? first.rows[order.front()].nominal : 0;
+  const double hi = n ? first.rows[order.back()].nominal : 0;
+  const double dodge = sets > 1 ? 0.008 * std::max(hi - lo, 1.0) : 0.0;
+  p.x.resize(n * sets);
+  std::vector<Series> series;
+  series.push_back(
+      {"before correction", Eigen::VectorXd::Constant(n * sets, NAN), {}, "#d62728", false, true});
   const char* colours[] = {"#1f77b4", "#2ca02c", "#9467bd"};
-  for (std::size_t c = 0; c < results.size(); ++c) {
-    Series after{
-        "after, " + results[c].correction, Eigen::VectorXd(n), {}, colours[c % 3], false, true};
-    for (Eigen::Index i = 0; i < n; ++i)
-      after.y[i] = results[c].rows[order[static_cast<std::size_t>(i)]].after * 1e3;
-    p.series.push_back(after);
+  for (std::size_t c = 0; c < results.size(); ++c)
+    series.push_back({"after, " + results[c].correction,
+                      Eigen::VectorXd::Constant(n * sets, NAN),
+                      {},
+                      colours[c % 3],
+                      false,
+                      true});
+  for (Eigen::Index i = 0; i < n; ++i)
+    for (Eigen::Index k = 0; k < sets; ++k) {
+      const std::size_t row = order[static_cast<std::size_t>(i)];
+      const Eigen::Index at = i * sets + k;
+      p.x[at] = first.rows[row].nominal +
+                dodge * (static_cast<double>(k) - 0.5 * static_cast<double>(sets - 1));
+      series[static_cast<std::size_t>(k)].y[at] =
+          (k == 0 ? first.rows[row].before
+                  : results[static_cast<std::size_t>(k - 1)].rows[row].after) *
+          1e3;
+    }
+  // Offsets are far smaller than the spacing of gauge lengths, but uPlot wants x ascending.
+  std::vector<Eigen::Index> by_x(static_cast<std::size_t>(p.x.size()));
+  std::iota(by_x.begin(), by_x.end(), Eigen::Index{0});
+  std::stable_sort(by_x.begin(), by_x.end(),
+                   [&](Eigen::Index a, Eigen::Index b) { return p.x[a] < p.x[b]; });
+  const Eigen::VectorXd x = p.x;
+  for (std::size_t k = 0; k < by_x.size(); ++k) p.x[static_cast<Eigen::Index>(k)] = x[by_x[k]];
+  for (auto& se : series) {
+    const Eigen::VectorXd y = se.y;
+    for (std::size_t k = 0; k < by_x.size(); ++k) se.y[static_cast<Eigen::Index>(k)] = y[by_x[k]];
+    p.series.push_back(std::move(se));
   }
+  if (dodge > 0)
+    p.title += fmt::format(" (each set drawn {:.2g} mm apart, beside its nominal length)", dodge);
   if (mpe) {  // the envelope ±MPE(L)
-    Series up{"+MPE", Eigen::VectorXd(n), {}, "#444444", true, false};
-    Series down{"−MPE", Eigen::VectorXd(n), {}, "#444444", true, false};
-    for (Eigen::Index i = 0; i < n; ++i) {
+    Series up{"+MPE", Eigen::VectorXd(p.x.size()), {}, "#444444", true, false};
+    Series down{"−MPE", Eigen::VectorXd(p.x.size()), {}, "#444444", true, false};
+    for (Eigen::Index i = 0; i < p.x.size(); ++i) {
       up.y[i] = mpe->at(p.x[i]);
       down.y[i] = -up.y[i];
     }

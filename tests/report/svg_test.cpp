@@ -6,8 +6,10 @@
 #include <string>
 
 #include "../test_util.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/surface.hpp"
+#include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/report/surface.hpp"
 #include "trueaxis/sim/machine.hpp"
@@ -195,4 +197,44 @@ TEST(Svg, MoodySectionHasAnIsometricViewOfEveryLine) {
   bad.lines.push_back(Eigen::Matrix3Xd::Zero(3, 1));
   EXPECT_NE(test::error_of([&] { report::svg(bad); }).find("a line of < 2 points"),
             std::string::npos);
+}
+
+// Gauge-block scatter: the sets before and after each correction at one nominal length are drawn
+// side by side, so that equal errors do not hide each other; every length appears once per set,
+// and x stays ascending (as the plotting library needs).
+TEST(Report, LengthScatterHidesNoPoint) {
+  ballgauge::LengthVerification a, b;
+  a.correction = "grid";
+  b.correction = "parametric";
+  for (double L : {100.0, 100.0, 300.0, 500.0}) {
+    ballgauge::LengthRow r;
+    r.nominal = L;
+    r.before = 2e-3;
+    r.after = 1e-4;  // both corrections leave the same error: the worst case for overlap
+    a.rows.push_back(r);
+    b.rows.push_back(r);
+  }
+  const ballgauge::Mpe mpe = ballgauge::Mpe::parse("1.5+L/300");
+  const auto s = report::lengths_section("lengths", {a, b}, &mpe);
+  ASSERT_EQ(s.plots.size(), 1u);
+  const auto& p = s.plots[0];
+  ASSERT_EQ(p.series.size(), 5u);  // before, two afters, ±MPE
+  for (Eigen::Index i = 1; i < p.x.size(); ++i) EXPECT_LE(p.x[i - 1], p.x[i]);
+  std::vector<std::pair<double, double>> drawn;
+  for (std::size_t k = 0; k < 3; ++k) {
+    int shown = 0;
+    for (Eigen::Index i = 0; i < p.x.size(); ++i)
+      if (std::isfinite(p.series[k].y[i])) {
+        ++shown;
+        drawn.emplace_back(p.x[i], p.series[k].y[i]);
+      }
+    EXPECT_EQ(shown, 4) << p.series[k].label;
+  }
+  // No two markers of different sets at one spot (the repeats of one set may coincide).
+  for (std::size_t i = 0; i < drawn.size(); ++i)
+    for (std::size_t j = i + 1; j < drawn.size(); ++j)
+      if (i / 4 != j / 4) {
+        EXPECT_NE(drawn[i], drawn[j]) << i << " " << j;
+      }
+  EXPECT_NE(p.title.find("drawn"), std::string::npos);
 }

@@ -80,7 +80,8 @@ struct LengthVerification {
 };
 
 // Throws Error: no measurements, a non-positive or non-finite nominal, non-finite or coincident
-// end points, or (from the correction) points outside its domain; messages name the row (0-based).
+// end points, or (from the correction) points outside its domain; messages name the length by its
+// 1-based count ("length 3: ...").
 LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
                                   const Correction& correction, const LengthOptions& options = {});
 

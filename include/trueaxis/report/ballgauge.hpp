@@ -17,11 +17,11 @@ namespace trueaxis::report {
 Section ballgauge_section(const std::string& title, const ballgauge::Result& result,
                           const ballgauge::ParametricResult* parametric = nullptr);
 
-// Gauge-block verification like the paper's figure 10: length errors against the nominal length
-// before and after each correction (scatter), and a table of range, mean and RMS with the level
-// the repeatability and the correction's uncertainty predict.
-// With `mpe`: the E0 check of every set (before and after each correction) with its verdict,
-// and the ±MPE envelope in the figure.
+// Gauge-block verification as in Oya et al. 1988, figure 10: length errors against the nominal
+// length before and after each correction (scatter), and a table of range, mean and RMS with the
+// level the repeatability and the correction's uncertainty predict. With `mpe`: the E0 check of
+// every set (before and after each correction) with its verdict, and the ±MPE envelope in the
+// figure.
 Section lengths_section(const std::string& title,
                         const std::vector<ballgauge::LengthVerification>& results,
                         const ballgauge::Mpe* mpe = nullptr);
