@@ -338,33 +338,38 @@ AxisState move_axis(const AxisState& s, const Eigen::VectorXd& dx) {
   return t;
 }
 
-void cylinder_eval(const Eigen::Matrix3Xd& p, const AxisState& s, Eigen::VectorXd& r,
-                   Eigen::MatrixXd* J) {
-  Eigen::Matrix3d R;
-  const Eigen::Matrix3Xd q = local(p, s, R);
-  r.resize(p.cols());
-  if (J) J->resize(p.cols(), 5);
-  for (Eigen::Index i = 0; i < p.cols(); ++i) {
-    const double x = q(0, i), y = q(1, i), z = q(2, i), rho = std::hypot(x, y);
-    r[i] = rho - s.r;
-    if (J) J->row(i) << -x / rho, -y / rho, -x * z / rho, -y * z / rho, -1;
+// One point's orthogonal distance to a cone (ψ = 0: a cylinder) from its coordinates x, y, z
+// (mm) in the axis frame, given r at the frame's origin and cos ψ, sin ψ, tan ψ; with `d`, its
+// derivatives with respect to the local correction (x0 in the plane, the axis' tilt, r, and ψ
+// for a cone). One formula for the fit (double) and its polish (80-bit).
+template <class T>
+T axis_residual(T x, T y, T z, T r0, T C, T S, T Tn, bool cone, T* d) {
+  const T rho = std::hypot(x, y);
+  const T gap = rho - r0 - z * Tn;  // radial gap at the point's axial position
+  if (d) {
+    d[0] = -C * x / rho;
+    d[1] = -C * y / rho;
+    d[2] = C * (-x * z / rho - Tn * x);
+    d[3] = C * (-y * z / rho - Tn * y);
+    d[4] = -C;
+    if (cone) d[5] = -z / C - gap * S;
   }
+  return gap * C;
 }
 
-void cone_eval(const Eigen::Matrix3Xd& p, const AxisState& s, Eigen::VectorXd& r,
+void axis_eval(const Eigen::Matrix3Xd& p, const AxisState& s, bool cone, Eigen::VectorXd& r,
                Eigen::MatrixXd* J) {
   Eigen::Matrix3d R;
   const Eigen::Matrix3Xd q = local(p, s, R);
   const double C = std::cos(s.psi), S = std::sin(s.psi), T = std::tan(s.psi);
+  const int k = cone ? 6 : 5;
   r.resize(p.cols());
-  if (J) J->resize(p.cols(), 6);
+  if (J) J->resize(p.cols(), k);
+  double d[6];
   for (Eigen::Index i = 0; i < p.cols(); ++i) {
-    const double x = q(0, i), y = q(1, i), z = q(2, i), rho = std::hypot(x, y);
-    const double g = rho - s.r - z * T;  // radial gap at the point's axial position
-    r[i] = g * C;
+    r[i] = axis_residual(q(0, i), q(1, i), q(2, i), s.r, C, S, T, cone, J ? d : nullptr);
     if (J)
-      J->row(i) << -C * x / rho, -C * y / rho, C * (-x * z / rho - T * x),
-          C * (-y * z / rho - T * y), -C, -z / C - g * S;
+      for (int j = 0; j < k; ++j) (*J)(i, j) = d[j];
   }
 }
 
@@ -376,23 +381,18 @@ struct AxisStateL {
   Ld r = 0, psi = 0;
 };
 
-// Residuals (as cone_eval; ψ = 0 for a cylinder) and the gradient of ½Σr² with respect to the
-// local correction (x0 in the plane, the axis' tilt, r, ψ) in the state's own frame.
+// ½Σr² (r as axis_eval) and its gradient with respect to the local correction in the state's
+// own frame.
 Ld axis_gradient(const Eigen::Matrix3Xd& p, const AxisStateL& s, bool cone, VecXL& g) {
   const Ld C = std::cos(s.psi), S = std::sin(s.psi), T = std::tan(s.psi);
-  g = VecXL::Zero(cone ? 6 : 5);
-  Ld cost = 0;
+  const int k = cone ? 6 : 5;
+  g = VecXL::Zero(k);
+  Ld cost = 0, d[6];
   for (Eigen::Index i = 0; i < p.cols(); ++i) {
     const Vec3L q = s.R.transpose() * (p.col(i).cast<Ld>() - s.x0);
-    const Ld x = q[0], y = q[1], z = q[2], rho = std::sqrt(x * x + y * y);
-    const Ld gap = rho - s.r - z * T, res = gap * C;
+    const Ld res = axis_residual(q[0], q[1], q[2], s.r, C, S, T, cone, d);
     cost += res * res;
-    g[0] += res * (-C * x / rho);
-    g[1] += res * (-C * y / rho);
-    g[2] += res * C * (-x * z / rho - T * x);
-    g[3] += res * C * (-y * z / rho - T * y);
-    g[4] += res * -C;
-    if (cone) g[5] += res * (-z / C - gap * S);
+    for (int j = 0; j < k; ++j) g[j] += res * d[j];
   }
   return cost / 2;
 }
@@ -769,7 +769,7 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       double best = std::numeric_limits<double>::infinity();
       AxisState found;
       auto eval = [&](const AxisState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
-        cone ? cone_eval(p, x, r, J) : cylinder_eval(p, x, r, J);
+        axis_eval(p, x, cone, r, J);
       };
       // Start from each principal direction of the cloud, and from the quadric's axis.
       Eigen::Matrix<double, 3, 4> starts;
