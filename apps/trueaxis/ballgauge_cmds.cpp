@@ -3,7 +3,6 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
-#include <cctype>
 #include <memory>
 #include <optional>
 
@@ -130,30 +129,17 @@ int run_verify(const VerifyArgs& a) {
   }
   if (!a.model.empty())
     corrections.push_back(ballgauge::parametric_correction(io::read_parametric(a.model)));
+  // A length the verification refuses is named by the file's line and the column of the end
+  // at fault (its x), reading the file again on that error path only.
+  ballgauge::LengthOptions o = a.o;
+  o.locate = [&](std::size_t index, int end) {
+    const auto table = io::CsvTable::read(a.input);
+    const int col = table.find(end == 2 ? "x2" : "x1");
+    return index < table.rows() && col >= 0 ? table.where(static_cast<long>(index), col)
+                                            : a.input + ": ";
+  };
   std::vector<ballgauge::LengthVerification> results;
-  for (const auto& c : corrections) {
-    try {
-      results.push_back(ballgauge::verify_lengths(lengths, c, a.o));
-    } catch (const Error& e) {
-      // "length N: [point K ...]" counts the file's data rows: name the file, line and column
-      // (the point's x column), reading the file again on this error path only.
-      const std::string what = e.what();
-      // (No std::regex: GCC 12 warns falsely inside it under the sanitizers.)
-      if (what.rfind("length ", 0) == 0) {
-        std::size_t end = 7;
-        while (end < what.size() && std::isdigit(static_cast<unsigned char>(what[end]))) ++end;
-        if (end > 7 && end < what.size() && what[end] == ':') {
-          const long row = std::stol(what.substr(7, end - 7)) - 1;
-          const bool second = what.compare(end, 10, ": point 2 ") == 0;
-          const auto table = io::CsvTable::read(a.input);
-          const int col = table.find(second ? "x2" : "x1");
-          if (row >= 0 && static_cast<std::size_t>(row) < table.rows() && col >= 0)
-            throw Error(fmt::format("{}{} correction: {}", table.where(row, col), c.name, what));
-        }
-      }
-      throw Error(fmt::format("{}: {} correction: {}", a.input, c.name, what));
-    }
-  }
+  for (const auto& c : corrections) results.push_back(ballgauge::verify_lengths(lengths, c, o));
   std::optional<ballgauge::Mpe> mpe;
   if (!a.mpe.empty()) mpe = ballgauge::Mpe::parse(a.mpe);
   io::write_length_verification(a.output, results, mpe ? &*mpe : nullptr);

@@ -94,15 +94,18 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
   };
   std::unordered_map<CellKey, std::vector<int>, CellKeyHash> groups;
   Eigen::Matrix3Xd ends(3, 2);
+  // "<where>grid correction: length 3: " — the caller's location of the length (or end), then
+  // the 1-based count.
+  const auto refuse = [&](std::size_t i, int end, const std::string& why) {
+    return Error(fmt::format("{}{} correction: length {}: {}",
+                             o.locate ? o.locate(i, end) : std::string(), corr.name, i + 1, why));
+  };
   for (std::size_t i = 0; i < lengths.size(); ++i) {
     const LengthMeasurement& m = lengths[i];
     if (!(m.nominal > 0) || !std::isfinite(m.nominal))
-      throw Error(
-          fmt::format("length {}: the nominal length must be a positive number of mm", i + 1));
-    if (!m.a.allFinite() || !m.b.allFinite())
-      throw Error(fmt::format("length {}: non-finite end point", i + 1));
-    if (!((m.b - m.a).norm() > 0))
-      throw Error(fmt::format("length {}: the two end points coincide", i + 1));
+      throw refuse(i, 0, "the nominal length must be a positive number of mm");
+    if (!m.a.allFinite() || !m.b.allFinite()) throw refuse(i, 0, "non-finite end point");
+    if (!((m.b - m.a).norm() > 0)) throw refuse(i, 0, "the two end points coincide");
     LengthRow r;
     r.nominal = m.nominal;
     r.before = (m.b - m.a).norm() - m.nominal;
@@ -111,7 +114,17 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
     try {
       corr.apply(ends);
     } catch (const Error& e) {
-      throw Error(fmt::format("length {}: {}", i + 1, e.what()));
+      // Error path only: which end the correction refuses, for the caller's location.
+      int end = 0;
+      for (int k = 0; k < 2 && end == 0; ++k) {
+        Eigen::Matrix3Xd one = k == 0 ? m.a : m.b;
+        try {
+          corr.apply(one);
+        } catch (const Error&) {
+          end = k + 1;
+        }
+      }
+      throw refuse(i, end, e.what());
     }
     r.after = (ends.col(1) - ends.col(0)).norm() - m.nominal;
     r.uncertainty = corr.length_uncertainty && !corr.length_uncertainties

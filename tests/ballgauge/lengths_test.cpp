@@ -133,6 +133,15 @@ TEST(Lengths, BadInputIsRefusedNamingTheRow) {
               ballgauge::verify_lengths(L, ballgauge::grid_correction(m));
             }).find("length 2: point 2 (150.000, 0.000, 0.000) mm is outside"),
             std::string::npos);
+  // The caller's location comes first, for the end the correction refuses (the second here).
+  ballgauge::LengthOptions located;
+  located.locate = [](std::size_t index, int end) {
+    return "f.csv:" + std::to_string(index + 2) + ":end" + std::to_string(end) + ": ";
+  };
+  EXPECT_EQ(error_of([&] {
+              ballgauge::verify_lengths(L, ballgauge::grid_correction(m), located);
+            }).rfind("f.csv:3:end2: grid correction: length 2: point 2 (150.000", 0),
+            0u);
   map::EvalOptions clamp;
   clamp.outside = map::Outside::Clamp;
   EXPECT_LT(

@@ -52,7 +52,10 @@ Correction grid_correction(const map::ErrorMap& map, const map::EvalOptions& opt
 
 struct LengthOptions {
   double repeat_tolerance = 1.0;  // mm: rows are repeats when both ends agree this closely
-  void validate() const;          // throws Error
+  // Where length `index` (0-based) came from, for messages: end 1 or 2 (0: the length as a
+  // whole), e.g. "lengths.csv:7:13: " for a file's line and column. Empty: the count alone.
+  std::function<std::string(std::size_t index, int end)> locate;
+  void validate() const;  // throws Error
 };
 
 struct LengthRow {
