@@ -159,7 +159,12 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
   s.warnings = surface::space_warnings(sp, v);
   s.intro_html = fmt::format(
       "<p>Error vectors e = actual − nominal (µm) on a {} × {} × {} grid, from {} straightness "
-      "runs and {} laser runs. Not determined by the campaign: {}; {}.</p>",
+      "runs and {} laser runs. Not determined by the campaign: {}; {}.</p>"
+      "<p>An error space holds translations of the probe point only. Roll, pitch and yaw act "
+      "on it through the probe offset and are contained in these vectors, but a map measured "
+      "with one probe offset cannot separate them from straightness, so no angular curves are "
+      "drawn. The parametric model fitted to ball-gauge placements ('trueaxis ballgauge "
+      "--parametric model.json') reports them with ±2u bands.</p>",
       nx, ny, nz, sp.straightness_runs, sp.laser_runs, escape(joined(sp.unobservable)),
       escape(sp.gauge));
   s.table = {{"quantity", "value (µm)"},

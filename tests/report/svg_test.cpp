@@ -134,7 +134,9 @@ TEST(Svg, SpaceSectionShowsPlanesLevelsAndTheCompensationCheck) {
     EXPECT_EQ(s.plots[k].x.size(), space.map.size(k));
   }
   EXPECT_EQ(s.plots[0].series[0].label, "ex");  // along x: the positioning error first
-  EXPECT_EQ(s.plots[3].series.size(), 3u);      // before, after, expected
+  // No angular curves: the page says why rather than leaving a reader to wonder.
+  EXPECT_NE(s.intro_html.find("cannot separate them from straightness"), std::string::npos);
+  EXPECT_EQ(s.plots[3].series.size(), 3u);  // before, after, expected
   EXPECT_TRUE(s.plots[3].log_y);
   const Eigen::VectorXd& after = s.plots[3].series[1].y;
   EXPECT_NEAR(after[after.size() - 1], v.after_max * 1e3, 1e-9);  // sorted: the max is last
