@@ -330,6 +330,7 @@ int main(int argc, char** argv) {
   for (auto& c : cli::add_guideway_commands(app, *simc)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_fit_commands(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_ballgauge_commands(app, *simc)) machine_cmds.push_back(std::move(c));
+  for (auto& c : cli::add_design_commands(app)) machine_cmds.push_back(std::move(c));
 
   // report -----------------------------------------------------------------------------------
   std::string rin, rout = "report.html";
@@ -421,6 +422,10 @@ int main(int argc, char** argv) {
   } catch (const Error& e) {
     std::fprintf(stderr, "trueaxis: error: %s\n", e.what());
     return 1;
+  } catch (const CLI::Error& e) {
+    // Usage mistakes found once the options are combined (a command's own checks).
+    std::fprintf(stderr, "trueaxis: %s\nRun with --help for more information.\n", e.what());
+    return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "trueaxis: internal error: %s\n", e.what());
     return 3;

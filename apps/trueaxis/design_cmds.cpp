@@ -1,0 +1,193 @@
+// trueaxis CLI — design data for scanning: 'design' (STEP sections or design.json -> design.json,
+// with the scanning path of each section).
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <memory>
+#include <sstream>
+
+#include "commands.hpp"
+#include "trueaxis/design/design.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/files.hpp"
+
+namespace trueaxis::cli {
+namespace {
+
+struct DesignArgs {
+  std::string step, design, output, path_csv;
+  std::vector<std::string> sections;
+  design::PathOptions path;
+  bool quiet = false;
+};
+
+// "origin=X,Y,Z;normal=I,J,K[;name=N]" -> a section request, or a usage error.
+design::StepSectionRequest parse_section(const std::string& text, std::size_t index) {
+  design::StepSectionRequest r;
+  r.name = fmt::format("S{}", index + 1);
+  bool origin = false, normal = false;
+  std::stringstream ss(text);
+  std::string part;
+  auto triple = [&](const std::string& key, const std::string& v) {
+    Eigen::Vector3d out;
+    std::stringstream vs(v);
+    std::string num;
+    int k = 0;
+    while (std::getline(vs, num, ',')) {
+      if (k == 3)
+        throw CLI::ValidationError(fmt::format("'{}': {} needs three numbers X,Y,Z", text, key));
+      try {
+        std::size_t used = 0;
+        out[k] = std::stod(num, &used);
+        if (used != num.size() || !std::isfinite(out[k])) throw std::invalid_argument(num);
+      } catch (const std::exception&) {
+        throw CLI::ValidationError(fmt::format("'{}': {} has '{}', not a number", text, key, num));
+      }
+      ++k;
+    }
+    if (k != 3)
+      throw CLI::ValidationError(fmt::format("'{}': {} needs three numbers X,Y,Z", text, key));
+    return out;
+  };
+  while (std::getline(ss, part, ';')) {
+    const auto eq = part.find('=');
+    const std::string key = part.substr(0, eq),
+                      value = eq == std::string::npos ? "" : part.substr(eq + 1);
+    if (key == "origin") {
+      r.plane.origin = triple(key, value);
+      origin = true;
+    } else if (key == "normal") {
+      r.plane.normal = triple(key, value);
+      if (!(r.plane.normal.norm() > 0))
+        throw CLI::ValidationError(fmt::format("'{}': the normal is zero", text));
+      normal = true;
+    } else if (key == "name" && !value.empty()) {
+      r.name = value;
+    } else {
+      throw CLI::ValidationError(
+          "--section", fmt::format("'{}': expected origin=X,Y,Z;normal=I,J,K[;name=N]", text));
+    }
+  }
+  if (!origin || !normal)
+    throw CLI::ValidationError("--section",
+                               fmt::format("'{}': give both origin=X,Y,Z and normal=I,J,K", text));
+  return r;
+}
+
+// "37–100" (slowest and fastest segment), or "100" when all are equal.
+std::string speeds(const design::ScanPath& p) {
+  double lo = 1e300, hi = 0;
+  for (const auto& g : p.segments) {
+    lo = std::min(lo, g.speed);
+    hi = std::max(hi, g.speed);
+  }
+  return std::round(lo) == std::round(hi) ? fmt::format("{:.0f}", hi)
+                                          : fmt::format("{:.0f}–{:.0f}", lo, hi);
+}
+
+int run_design(const DesignArgs& a) {
+  design::Design d;
+  if (!a.step.empty()) {
+    std::vector<design::StepSectionRequest> req;
+    for (std::size_t i = 0; i < a.sections.size(); ++i)
+      req.push_back(parse_section(a.sections[i], i));
+    d = design::from_step(a.step, req);
+  } else {
+    d = io::read_design(a.design);
+  }
+  std::string table =
+      "section,segment,length_mm,speed_mm_s,curvature_1_mm,ax,ay,az,bx,by,bz,cx,cy,cz,dx,dy,dz\n";
+  for (const auto& s : d.sections) {
+    const auto p = design::make_path(s, a.path);
+    if (!a.quiet)
+      fmt::print(
+          "{}: {} contour of {:.3f} mm, material on the {}; scanning path {:.3f} mm in {} cubic "
+          "segments (chordal error {:.2g} µm), {:.1f} s at {} mm/s\n",
+          s.name, s.closed ? "closed" : "open", design::length(s), design::to_string(s.material),
+          p.length(), p.segments.size(), p.chordal_error * 1e3, p.nominal_time(), speeds(p));
+    for (std::size_t i = 0; i < p.segments.size(); ++i) {
+      const auto& g = p.segments[i];
+      table += fmt::format("{},{},{:.9g},{:.6g},{:.6g}", s.name, i, g.length, g.speed, g.curvature);
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 3; ++r) table += fmt::format(",{:.12g}", g.coeff(r, c));
+      table += '\n';
+    }
+  }
+  if (!a.output.empty()) {
+    io::write_design(a.output, d);
+    if (!a.quiet) fmt::print("wrote {} ({} sections)\n", a.output, d.sections.size());
+  }
+  if (!a.path_csv.empty()) {
+    io::write_text(a.path_csv, table);
+    if (!a.quiet) fmt::print("wrote {}\n", a.path_csv);
+  }
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> add_design_commands(CLI::App& app) {
+  auto a = std::make_shared<DesignArgs>();
+  auto* c = app.add_subcommand(
+      "design",
+      "Design data for scanning: cut a STEP part with planes into section contours (or check a "
+      "hand-written design.json), and compute each section's scanning path: the contour offset "
+      "by the tip radius less the pushing amount, as cubic segments with a speed from curvature.\n"
+      "Examples:\n"
+      "  trueaxis design --step part.stp --section \"origin=0,0,25;normal=0,0,1\" -o design.json\n"
+      "  trueaxis design --design design.json --tip-radius 1.5 --path path.csv");
+  auto* step = c->add_option("--step", a->step, "STEP file (AP203/AP214) of the part (mm)")
+                   ->check(CLI::ExistingFile);
+  auto* des = c->add_option("--design", a->design, "design.json to check and convert instead")
+                  ->check(CLI::ExistingFile);
+  step->excludes(des);
+  c->add_option("--section", a->sections,
+                "a cutting plane \"origin=X,Y,Z;normal=I,J,K[;name=N]\" (mm; repeat for more "
+                "sections). A plane that cuts several contours gives sections N.1, N.2, ... "
+                "(largest first)")
+      ->needs(step)
+      ->check(CLI::Validator(
+          [](std::string& v) -> std::string {
+            try {
+              parse_section(v, 0);
+            } catch (const CLI::ValidationError& e) {
+              return e.what();
+            }
+            return {};
+          },
+          "PLANE"));
+  c->add_option("--output,-o", a->output, "design.json to write");
+  c->add_option("--path", a->path_csv,
+                "CSV of the scanning paths' cubic segments: p(u) = a + b u + c u² + d u³, "
+                "u in [0, 1] (mm), with length, speed and curvature");
+  c->add_option("--tip-radius", a->path.tip_radius, "stylus tip radius (mm)")
+      ->capture_default_str();
+  c->add_option("--pushing", a->path.pushing, "pushing amount: probe deflection on the path (mm)")
+      ->capture_default_str();
+  c->add_option("--chordal-tolerance", a->path.chordal_tolerance,
+                "largest distance of the cubic segments from the exact path (mm)")
+      ->capture_default_str();
+  c->add_option("--max-speed", a->path.max_speed, "scanning speed on straight parts (mm/s)")
+      ->capture_default_str();
+  c->add_option("--max-acceleration", a->path.max_normal_acceleration,
+                "largest v²/R on curves, which sets their speed (mm/s²)")
+      ->capture_default_str();
+  c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {{c, [a] {
+             if (a->step.empty() == a->design.empty())
+               throw CLI::ValidationError("give --step FILE with --section, or --design FILE");
+             if (!a->step.empty() && a->sections.empty())
+               throw CLI::ValidationError("--step needs at least one --section");
+             a->path.min_speed = std::min(a->path.min_speed, a->path.max_speed);
+             try {
+               a->path.validate();
+             } catch (const Error& e) {
+               throw CLI::ValidationError(e.what());
+             }
+             return run_design(*a);
+           }}};
+}
+
+}  // namespace trueaxis::cli

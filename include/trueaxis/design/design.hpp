@@ -1,0 +1,146 @@
+// trueaxis::design — design data for scanning: planar sections of a part, as NURBS curves or
+// polylines, read from CAD (STEP, through Open CASCADE Technology) or written by hand, and the
+// scanning path computed from them.
+//
+// Units: mm. Frames: the part's (CAD) coordinates. A section is the intersection of the part
+// with a plane; its curve lies in that plane. The material side is stated as seen from the
+// plane's normal while walking along the curve's direction: "left" means the material lies to
+// the left (so a counter-clockwise outer contour, seen from the normal, has material on its
+// left). Surface normals of a section point away from the material.
+//
+// The scanning path is the stylus-centre path of design-value scanning: the contour offset away
+// from the material by the tip radius less the pushing amount (the ball would sink that far into
+// a perfect part, so the probe is deflected by the pushing amount), as a chain of parametric
+// cubic curve (PCC) segments within a stated chordal tolerance, each with a speed from its
+// curvature. NURBS evaluation, offsetting and STEP sectioning are done by Open CASCADE
+// Technology (OCCT 7.6).
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace trueaxis::design {
+
+struct Plane {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit
+};
+
+// A non-uniform rational B-spline: `degree` ≥ 1, n = control_points.cols() ≥ degree + 1,
+// knots: n + degree + 1 non-decreasing values (the full, "flat" vector, every repeated knot
+// written out, as in STEP and most texts), weights: n positive values (all 1 = polynomial).
+struct Nurbs {
+  int degree = 3;
+  Eigen::VectorXd knots;
+  Eigen::VectorXd weights;
+  Eigen::Matrix3Xd control_points;
+};
+
+enum class Side { Left, Right };
+const char* to_string(Side s);
+
+struct Section {
+  std::string name;
+  Plane plane;
+  bool closed = true;  // the curve returns to its start (first and last points coincide)
+  // Exactly one of the two: a NURBS curve, or a polyline (3 × n points, straight between them).
+  std::optional<Nurbs> nurbs;
+  Eigen::Matrix3Xd polyline;
+  Side material = Side::Left;
+};
+
+struct Design {
+  std::vector<Section> sections;
+};
+
+// Planarity tolerance: every control point or polyline vertex within this of its plane (mm).
+constexpr double kPlanarTolerance = 1e-3;
+// A closed curve's first and last points coincide within this (mm).
+constexpr double kClosureTolerance = 1e-3;
+
+// What is wrong with a section, and where: `field` is the JSON path of the offending value
+// inside the section as design.json writes it ("plane/normal", "curve/nurbs/knots",
+// "curve/polyline", "closed", ...), `index` the element within it (−1: the whole value).
+struct Problem {
+  std::string field;
+  long index = -1;
+  std::string what;  // one line, for a metrologist
+};
+
+// Checks a section: a normal of non-zero length, a NURBS that OCCT can represent (degree 1..25,
+// n + degree + 1 non-decreasing knots with interior multiplicity ≤ degree, positive weights,
+// at least degree + 1 control points) or a polyline of ≥ 2 points with no two consecutive ones
+// equal, all points in the plane (kPlanarTolerance), all values finite and within 1e6 mm, and a
+// curve marked closed that closes (kClosureTolerance). Returns the first problem found.
+std::optional<Problem> check(const Section& s);
+
+// Arc length of a section's curve (mm), computed by OCCT (Gauss integration).
+double length(const Section& s);
+
+// Points along the curve at (about) `spacing` mm, with their unit surface normals (in the plane,
+// away from the material): 3 × m each. Closed curves do not repeat the start point.
+struct Samples {
+  Eigen::Matrix3Xd points, normals;
+  Eigen::VectorXd arc;  // arc length of each point from the curve's start (mm)
+};
+Samples sample(const Section& s, double spacing);
+
+// Sections of a STEP (AP203/AP214) solid, cut by planes. Each closed contour of the cut becomes
+// a section named "<prefix><i>" (or "<prefix><i>.<k>" when the plane cuts several contours,
+// largest first), its curve one NURBS (lines and arcs converted exactly, joined where they
+// meet), oriented counter-clockwise seen from the plane's normal, with the material side found
+// by classifying a point beside the curve against the solid. Throws Error naming the file for
+// unreadable files, files with no solid, and planes that miss the part.
+struct StepSectionRequest {
+  std::string name;  // the section's name (its contours get ".1", ".2" when there are several)
+  Plane plane;
+};
+Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes);
+
+// ---------------------------------------------------------------------------------------------
+// Scanning path: parametric cubic curve segments.
+
+struct PathOptions {
+  double tip_radius = 1.0;          // stylus ball radius (mm), > 0
+  double pushing = 0.3;             // pushing amount Ep: probe deflection held on the path (mm)
+  double chordal_tolerance = 1e-3;  // max distance of the PCC from the exact offset curve (mm)
+  double max_speed = 100;           // scanning speed on straight or gently curved parts (mm/s)
+  double min_speed = 5;             // never slower than this (mm/s)
+  double max_normal_acceleration = 2000;  // v²/R limit that sets the speed on curves (mm/s²)
+  // Throws Error naming the option if a value is out of range (pushing must be below the tip
+  // radius; speeds positive, min ≤ max; tolerance 1e-7..1 mm).
+  void validate() const;
+};
+
+// One cubic segment p(u) = a + b u + c u² + d u³, u ∈ [0, 1], of the stylus-centre path.
+struct PccSegment {
+  Eigen::Matrix<double, 3, 4> coeff;  // columns a, b, c, d (mm)
+  double length = 0;                  // arc length (mm)
+  double speed = 0;                   // scanning speed on this segment (mm/s)
+  double curvature = 0;               // largest curvature of the offset curve on it (1/mm)
+  Eigen::Vector3d point(double u) const;
+  Eigen::Vector3d tangent(double u) const;  // dp/du (not unit)
+};
+
+struct ScanPath {
+  std::string section;
+  Plane plane;
+  bool closed = true;
+  double offset = 0;  // tip radius − pushing (mm)
+  std::vector<PccSegment> segments;
+  // Largest distance of the PCC from the exact offset curve, measured at 16 points per segment
+  // after the fit (mm): the achieved chordal error.
+  double chordal_error = 0;
+  double length() const;
+  // Design time along the path at each segment's speed (s), without acceleration phases.
+  double nominal_time() const;
+};
+
+// The stylus-centre path of design-value scanning for one section. Throws Error if the offset
+// cannot be made (e.g. a tip too large for a concave corner or a narrow slot of the section).
+ScanPath make_path(const Section& s, const PathOptions& options = {});
+
+}  // namespace trueaxis::design

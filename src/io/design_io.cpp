@@ -1,0 +1,163 @@
+// design.json: planar section curves of a part.
+#include <fmt/format.h>
+
+#include <set>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/json.hpp"
+
+namespace trueaxis::io {
+namespace {
+
+using ptr = JsonFile::pointer;
+using ojson = nlohmann::ordered_json;
+
+Eigen::Vector3d triple(const JsonFile& f, const ptr& p, const char* what) {
+  const Eigen::VectorXd v = f.numbers(p);
+  if (v.size() != 3) f.fail(p, fmt::format("'{}' needs [{}]", dotted(p), what));
+  return v;
+}
+
+Eigen::Matrix3Xd point_list(const JsonFile& f, const ptr& p) {
+  const auto& a = f.array(p);
+  Eigen::Matrix3Xd m(3, static_cast<Eigen::Index>(a.size()));
+  for (std::size_t i = 0; i < a.size(); ++i)
+    m.col(static_cast<Eigen::Index>(i)) = triple(f, p / i, "x, y, z (mm)");
+  return m;
+}
+
+void only(const JsonFile& f, const ptr& p, std::initializer_list<const char*> keys) {
+  for (const auto& [key, value] : f.object(p).items()) {
+    (void)value;
+    bool known = false;
+    std::string list;
+    for (const char* k : keys) {
+      known = known || key == k;
+      list += (list.empty() ? "" : ", ") + std::string(k);
+    }
+    if (!known) f.fail(p / key, fmt::format("unknown key '{}' ({})", key, list));
+  }
+}
+
+void need(const JsonFile& f, const ptr& p, const char* key) {
+  if (!f.has(p / key)) f.fail(p, fmt::format("'{}' is missing", dotted(p / key)));
+}
+
+design::Section read_section(const JsonFile& f, const ptr& p) {
+  only(f, p, {"name", "plane", "closed", "curve", "material"});
+  for (const char* k : {"name", "plane", "closed", "curve", "material"}) need(f, p, k);
+  design::Section s;
+  s.name = f.string(p / "name");
+  if (s.name.empty()) f.fail(p / "name", "a section needs a name");
+  only(f, p / "plane", {"origin", "normal"});
+  need(f, p / "plane", "origin");
+  need(f, p / "plane", "normal");
+  s.plane.origin = triple(f, p / "plane" / "origin", "x, y, z (mm)");
+  s.plane.normal = triple(f, p / "plane" / "normal", "i, j, k");
+  if (!f.root()[p / "closed"].is_boolean()) f.fail(p / "closed", "'closed' must be true or false");
+  s.closed = f.root()[p / "closed"].get<bool>();
+  const std::string side = f.string(p / "material");
+  if (side == "left")
+    s.material = design::Side::Left;
+  else if (side == "right")
+    s.material = design::Side::Right;
+  else
+    f.fail(p / "material", fmt::format("material '{}': use \"left\" or \"right\" (seen from the "
+                                       "plane normal, along the curve)",
+                                       side));
+  const ptr c = p / "curve";
+  only(f, c, {"nurbs", "polyline"});
+  const bool has_n = f.has(c / "nurbs"), has_p = f.has(c / "polyline");
+  if (has_n == has_p) f.fail(c, "'curve' needs exactly one of 'nurbs' or 'polyline'");
+  if (has_n) {
+    const ptr n = c / "nurbs";
+    only(f, n, {"degree", "knots", "weights", "control_points"});
+    for (const char* k : {"degree", "knots", "control_points"}) need(f, n, k);
+    design::Nurbs nu;
+    const double deg = f.number(n / "degree");
+    if (deg != std::floor(deg) || deg < 1 || deg > 25)
+      f.fail(n / "degree", "the degree must be a whole number from 1 to 25");
+    nu.degree = static_cast<int>(deg);
+    nu.knots = f.numbers(n / "knots");
+    nu.control_points = point_list(f, n / "control_points");
+    nu.weights = f.has(n / "weights") ? f.numbers(n / "weights")
+                                      : Eigen::VectorXd::Ones(nu.control_points.cols());
+    s.nurbs = std::move(nu);
+  } else {
+    s.polyline = point_list(f, c / "polyline");
+  }
+  if (auto pr = design::check(s)) {
+    // Map the problem's field (as design.json spells it) to its place in the file.
+    ptr at = p;
+    std::string field = pr->field;
+    for (std::size_t a = 0; a <= field.size();) {
+      const std::size_t b = std::min(field.find('/', a), field.size());
+      at /= field.substr(a, b - a);
+      a = b + 1;
+    }
+    if (pr->index >= 0) at /= static_cast<std::size_t>(pr->index);
+    f.fail(at, fmt::format("section '{}': {}", s.name, pr->what));
+  }
+  return s;
+}
+
+ojson vec(const Eigen::Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+design::Design design_from(const JsonFile& f) {
+  only(f, ptr(), {"sections"});
+  need(f, ptr(), "sections");
+  const auto& a = f.array(ptr() / "sections");
+  if (a.empty()) f.fail(ptr() / "sections", "no sections: nothing to scan");
+  design::Design d;
+  std::set<std::string> names;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    d.sections.push_back(read_section(f, ptr() / "sections" / i));
+    if (!names.insert(d.sections.back().name).second)
+      f.fail(ptr() / "sections" / i / "name",
+             fmt::format("section name '{}' is used twice", d.sections.back().name));
+  }
+  return d;
+}
+
+}  // namespace
+
+design::Design parse_design(std::string text, const std::string& path) {
+  return design_from(JsonFile::parse(std::move(text), path));
+}
+
+design::Design read_design(const std::string& path) {
+  return design_from(JsonFile::read(path));
+}
+
+void write_design(const std::string& path, const design::Design& d) {
+  ojson secs = ojson::array();
+  for (const auto& s : d.sections) {
+    ojson curve;
+    if (s.nurbs) {
+      ojson cps = ojson::array();
+      for (Eigen::Index i = 0; i < s.nurbs->control_points.cols(); ++i)
+        cps.push_back(vec(s.nurbs->control_points.col(i)));
+      curve["nurbs"] = {
+          {"degree", s.nurbs->degree},
+          {"knots", std::vector<double>(s.nurbs->knots.begin(), s.nurbs->knots.end())},
+          {"weights", std::vector<double>(s.nurbs->weights.begin(), s.nurbs->weights.end())},
+          {"control_points", cps}};
+    } else {
+      ojson pts = ojson::array();
+      for (Eigen::Index i = 0; i < s.polyline.cols(); ++i) pts.push_back(vec(s.polyline.col(i)));
+      curve["polyline"] = pts;
+    }
+    secs.push_back(
+        ojson{{"name", s.name},
+              {"plane", {{"origin", vec(s.plane.origin)}, {"normal", vec(s.plane.normal)}}},
+              {"closed", s.closed},
+              {"curve", curve},
+              {"material", design::to_string(s.material)}});
+  }
+  write_json(path, ojson{{"sections", secs}});
+}
+
+}  // namespace trueaxis::io

@@ -1,0 +1,342 @@
+// Design data: STEP sections (NIST's I++ test part and solids built with OCCT here), design.json
+// reading and its refusals, and the PCC scanning path (offset distance, chordal error, speeds).
+#include "trueaxis/design/design.hpp"
+
+#include <gtest/gtest.h>
+
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepBuilderAPI_NurbsConvert.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
+#include <BRep_Tool.hxx>
+#include <GeomAPI_Interpolate.hxx>
+#include <GeomAPI_ProjectPointOnCurve.hxx>
+#include <GeomAdaptor_Curve.hxx>
+#include <Geom_BSplineSurface.hxx>
+#include <STEPControl_Writer.hxx>
+#include <TColgp_HArray1OfPnt.hxx>
+#include <TopExp_Explorer.hxx>
+#include <TopoDS.hxx>
+#include <cmath>
+
+#include "../test_util.hpp"
+#include "trueaxis/io/design.hpp"
+
+namespace trueaxis {
+namespace {
+
+constexpr double kLengthTol = 1e-6;  // mm: OCCT's arc length of lines and exact arcs
+constexpr double kOffsetTol = 1e-6;  // mm: OCCT's offset of lines and arcs is exact
+const std::string kIpp = std::string(TRUEAXIS_TEST_DATA) + "/ippdme/ipp_simple.stp";
+
+design::Plane z_plane(double z) {
+  return {Eigen::Vector3d(0, 0, z), Eigen::Vector3d::UnitZ()};
+}
+
+// Distance from p to the boundary of the ipp_simple section at z = 25: the square [0,100]² and
+// the circle of radius 25 about (50, 50).
+double dist_to_square(const Eigen::Vector3d& p) {
+  const double dx = std::max({0.0 - p.x(), p.x() - 100, 0.0});
+  const double dy = std::max({0.0 - p.y(), p.y() - 100, 0.0});
+  if (dx > 0 || dy > 0) return std::hypot(dx, dy);
+  return std::min({p.x(), 100 - p.x(), p.y(), 100 - p.y()});
+}
+
+TEST(Design, IppSimpleSectionIsFourLinesAndTheHole) {
+  const auto d = design::from_step(kIpp, {{"mid", z_plane(25)}});
+  ASSERT_EQ(d.sections.size(), 2u);
+  const auto& outer = d.sections[0];
+  const auto& hole = d.sections[1];
+  EXPECT_EQ(outer.name, "mid.1");
+  EXPECT_EQ(hole.name, "mid.2");
+  EXPECT_NEAR(design::length(outer), 400, kLengthTol);
+  EXPECT_NEAR(design::length(hole), 50 * M_PI, kLengthTol);
+  EXPECT_NEAR(design::length(outer) + design::length(hole), 557.08, 0.005);
+  EXPECT_TRUE(outer.closed);
+  EXPECT_TRUE(hole.closed);
+  EXPECT_FALSE(design::check(outer));
+  EXPECT_FALSE(design::check(hole));
+  // Counter-clockwise seen from +z: the block's material is inside the outer contour (left) and
+  // outside the hole (right).
+  EXPECT_EQ(outer.material, design::Side::Left);
+  EXPECT_EQ(hole.material, design::Side::Right);
+  // Surface normals point away from the material: out of the block, into the hole's axis.
+  const auto so = design::sample(outer, 5);
+  for (Eigen::Index i = 0; i < so.points.cols(); ++i) {
+    EXPECT_NEAR(dist_to_square(so.points.col(i)), 0, 1e-9);
+    EXPECT_NEAR(so.points(2, i), 25, 1e-12);
+    const Eigen::Vector3d out = so.points.col(i) + 0.5 * so.normals.col(i);
+    EXPECT_TRUE(out.x() < 0 || out.x() > 100 || out.y() < 0 || out.y() > 100) << i;
+  }
+  const auto sh = design::sample(hole, 5);
+  for (Eigen::Index i = 0; i < sh.points.cols(); ++i) {
+    const Eigen::Vector3d r = sh.points.col(i) - Eigen::Vector3d(50, 50, 25);
+    EXPECT_NEAR(r.norm(), 25, 1e-9);
+    EXPECT_NEAR(sh.normals.col(i).dot(r / 25), -1, 1e-9);
+  }
+}
+
+TEST(Design, ObliqueSectionOfTheIppPart) {
+  // A plane tilted 20° about x through the block's centre: the outer contour is a
+  // 100 × 100/cos20 rectangle, the hole an ellipse.
+  const double tilt = 20 * M_PI / 180;
+  const Eigen::Vector3d n(0, -std::sin(tilt), std::cos(tilt));
+  const auto d = design::from_step(kIpp, {{"tilt", {Eigen::Vector3d(50, 50, 25), n}}});
+  ASSERT_EQ(d.sections.size(), 2u);
+  EXPECT_NEAR(design::length(d.sections[0]), 200 + 200 / std::cos(tilt), 1e-6);
+  for (const auto& s : d.sections) {
+    const auto smp = design::sample(s, 2);
+    for (Eigen::Index i = 0; i < smp.points.cols(); ++i) {
+      EXPECT_NEAR((smp.points.col(i) - Eigen::Vector3d(50, 50, 25)).dot(n), 0, 1e-7);
+      EXPECT_NEAR(smp.normals.col(i).dot(n), 0, 1e-9);
+    }
+  }
+}
+
+TEST(Design, StepRefusals) {
+  EXPECT_NE(test::error_of([] {
+              design::from_step("/nonexistent.stp", {{"a", z_plane(25)}});
+            }).find("cannot open"),
+            std::string::npos);
+  const std::string junk = test::temp_file("junk.stp", "hello\n");
+  EXPECT_NE(test::error_of([&] {
+              design::from_step(junk, {{"a", z_plane(25)}});
+            }).find(junk + ":1:1: not a STEP file"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([] {
+              design::from_step(kIpp, {{"above", z_plane(80)}});
+            }).find("misses the part"),
+            std::string::npos);
+}
+
+TEST(Design, PathAroundTheIppSectionKeepsTheOffset) {
+  const auto d = design::from_step(kIpp, {{"mid", z_plane(25)}});
+  design::PathOptions o;
+  o.tip_radius = 2;
+  o.pushing = 0.3;
+  o.chordal_tolerance = 1e-4;
+  const double off = o.tip_radius - o.pushing;
+  const auto outer = design::make_path(d.sections[0], o);
+  const auto hole = design::make_path(d.sections[1], o);
+  EXPECT_DOUBLE_EQ(outer.offset, off);
+  // Around the outside: four sides and a quarter circle of radius `off` at each corner. Cubics
+  // within the chordal tolerance t of a full circle of radius R differ in length by less than
+  // 2πR·t/R = 2πt.
+  const double length_tol = 2 * M_PI * o.chordal_tolerance;
+  EXPECT_NEAR(outer.length(), 400 + 2 * M_PI * off, length_tol);
+  EXPECT_NEAR(hole.length(), 2 * M_PI * (25 - off), length_tol);
+  EXPECT_LE(outer.chordal_error, o.chordal_tolerance);
+  EXPECT_LE(hole.chordal_error, o.chordal_tolerance);
+  for (const auto& seg : outer.segments)
+    for (double u : {0.0, 0.3, 0.7, 1.0})
+      EXPECT_NEAR(dist_to_square(seg.point(u)), off, o.chordal_tolerance + kOffsetTol);
+  for (const auto& seg : hole.segments)
+    for (double u : {0.0, 0.5})
+      EXPECT_NEAR((seg.point(u) - Eigen::Vector3d(50, 50, 25)).norm(), 25 - off,
+                  o.chordal_tolerance + kOffsetTol);
+  // The path is continuous, closed, starts beside the design curve's start and runs its way.
+  for (std::size_t i = 0; i + 1 < outer.segments.size(); ++i)
+    EXPECT_LT((outer.segments[i].point(1) - outer.segments[i + 1].point(0)).norm(), 1e-9);
+  EXPECT_LT((outer.segments.back().point(1) - outer.segments.front().point(0)).norm(), 1e-9);
+  const auto s0 = design::sample(d.sections[0], 1);
+  EXPECT_LT((outer.segments.front().point(0) - (s0.points.col(0) + off * s0.normals.col(0))).norm(),
+            1e-6);
+  const Eigen::Vector3d t_design = s0.points.col(1) - s0.points.col(0);
+  EXPECT_GT(outer.segments.front().tangent(0).dot(t_design), 0);
+  // Speeds: full speed on the sides, slower round the tight corner arcs, v²/R within the limit.
+  double vmin = 1e9, vmax = 0;
+  for (const auto& seg : outer.segments) {
+    vmin = std::min(vmin, seg.speed);
+    vmax = std::max(vmax, seg.speed);
+    EXPECT_LE(seg.speed * seg.speed * seg.curvature, o.max_normal_acceleration * (1 + 1e-9));
+  }
+  EXPECT_DOUBLE_EQ(vmax, o.max_speed);
+  EXPECT_NEAR(vmin, std::sqrt(o.max_normal_acceleration * off), 1e-6);
+  EXPECT_GT(outer.nominal_time(), outer.length() / o.max_speed);
+}
+
+// A 50-edge star polygon (concave corners trimmed, convex ones rounded) and an open polyline.
+TEST(Design, PolylinePathsStayAtTheOffsetOnTheFreeSide) {
+  design::Section s;
+  s.name = "star";
+  s.polyline.resize(3, 51);
+  for (int i = 0; i <= 50; ++i) {
+    const double a = 2 * M_PI * (i % 50) / 50, r = (i % 2) ? 40 : 50;
+    s.polyline.col(i) << r * std::cos(a), r * std::sin(a), 0;
+  }
+  s.closed = true;
+  s.material = design::Side::Left;
+  auto dist = [&](const Eigen::Vector3d& p) {
+    double best = 1e9;
+    for (Eigen::Index i = 0; i + 1 < s.polyline.cols(); ++i) {
+      const Eigen::Vector3d a = s.polyline.col(i), b = s.polyline.col(i + 1);
+      const double t = std::clamp((p - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+      best = std::min(best, (a + t * (b - a) - p).norm());
+    }
+    return best;
+  };
+  design::PathOptions o;
+  const double off = o.tip_radius - o.pushing;
+  const auto path = design::make_path(s, o);
+  EXPECT_LE(path.chordal_error, o.chordal_tolerance);
+  for (const auto& seg : path.segments)
+    for (double u : {0.0, 0.5}) {
+      EXPECT_NEAR(dist(seg.point(u)), off, o.chordal_tolerance + kOffsetTol);
+      EXPECT_GT(seg.point(u).head<2>().norm(), 40 * std::cos(M_PI / 50) - 1e-9);  // outside
+    }
+
+  // Open: an L, material on the right; the path must lie on its left.
+  design::Section l;
+  l.name = "L";
+  l.closed = false;
+  l.material = design::Side::Right;
+  l.polyline.resize(3, 3);
+  l.polyline << 0, 50, 50, 0, 0, 50, 0, 0, 0;
+  const auto lp = design::make_path(l, o);
+  for (const auto& seg : lp.segments) {
+    const Eigen::Vector3d p = seg.point(0.5);
+    EXPECT_TRUE(p.y() > 0 && p.x() < 50 + 1e-9) << p.transpose();
+  }
+  EXPECT_NEAR(lp.length(), 100 - 2 * off, 1e-6);  // the inner corner is trimmed
+  // A straight open line, too (OCCT cannot find its plane by itself).
+  design::Section line = l;
+  line.polyline = l.polyline.leftCols(2);
+  const auto linep = design::make_path(line, o);
+  EXPECT_NEAR(linep.length(), 50, 1e-9);
+  EXPECT_NEAR(linep.segments.front().point(0).y(), off, 1e-9);
+}
+
+// A solid bounded by B-spline surfaces, built here with OCCT, exported to STEP and sectioned.
+TEST(Design, BsplineSolidFromStep) {
+  Handle(TColgp_HArray1OfPnt) pts = new TColgp_HArray1OfPnt(1, 12);
+  for (int i = 0; i < 12; ++i) {
+    const double a = 2 * M_PI * i / 12, r = 30 + 4 * std::cos(3 * a);
+    pts->SetValue(i + 1, gp_Pnt(r * std::cos(a), r * std::sin(a), 0));
+  }
+  GeomAPI_Interpolate interp(pts, Standard_True, 1e-9);
+  interp.Perform();
+  ASSERT_TRUE(interp.IsDone());
+  const TopoDS_Edge e = BRepBuilderAPI_MakeEdge(interp.Curve()).Edge();
+  const TopoDS_Face f = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(e).Wire()).Face();
+  const TopoDS_Shape prism = BRepPrimAPI_MakePrism(f, gp_Vec(0, 0, 40)).Shape();
+  const TopoDS_Shape nurbs = BRepBuilderAPI_NurbsConvert(prism).Shape();
+  int bspline_faces = 0;
+  for (TopExp_Explorer x(nurbs, TopAbs_FACE); x.More(); x.Next())
+    bspline_faces +=
+        !Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(TopoDS::Face(x.Current())))
+             .IsNull();
+  ASSERT_GE(bspline_faces, 1);
+  const std::string path = test::temp_dir() + "/lobed.stp";
+  STEPControl_Writer w;
+  ASSERT_EQ(w.Transfer(nurbs, STEPControl_AsIs), IFSelect_RetDone);
+  ASSERT_EQ(w.Write(path.c_str()), IFSelect_RetDone);
+
+  const auto d = design::from_step(path, {{"z10", z_plane(10)}});
+  ASSERT_EQ(d.sections.size(), 1u);
+  const auto& s = d.sections[0];
+  EXPECT_EQ(s.material, design::Side::Left);
+  // The cut matches the profile curve: every sample within OCCT's section tolerance of it.
+  GeomAdaptor_Curve profile(interp.Curve());
+  const auto smp = design::sample(s, 1);
+  for (Eigen::Index i = 0; i < smp.points.cols(); ++i) {
+    GeomAPI_ProjectPointOnCurve pr(gp_Pnt(smp.points(0, i), smp.points(1, i), 0), interp.Curve());
+    ASSERT_GT(pr.NbPoints(), 0);
+    EXPECT_LT(pr.LowerDistance(), 1e-4);
+    EXPECT_NEAR(smp.points(2, i), 10, 1e-9);
+  }
+  const auto p = design::make_path(s);
+  EXPECT_LE(p.chordal_error, design::PathOptions{}.chordal_tolerance);
+  EXPECT_GT(p.length(), design::length(s));  // outside a convex-ish part: longer
+}
+
+TEST(Design, JsonRoundTripAndOptionRefusals) {
+  const auto d = design::from_step(kIpp, {{"mid", z_plane(25)}});
+  const std::string path = test::temp_dir() + "/design.json";
+  io::write_design(path, d);
+  const auto back = io::read_design(path);
+  ASSERT_EQ(back.sections.size(), 2u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(back.sections[i].name, d.sections[i].name);
+    EXPECT_EQ(back.sections[i].material, d.sections[i].material);
+    EXPECT_NEAR(design::length(back.sections[i]), design::length(d.sections[i]), 1e-12);
+  }
+  design::PathOptions o;
+  o.pushing = 2;
+  EXPECT_NE(test::error_of([&] { o.validate(); }).find("less than the tip radius"),
+            std::string::npos);
+  o = {};
+  o.chordal_tolerance = 0;
+  EXPECT_NE(test::error_of([&] { o.validate(); }).find("chordal tolerance"), std::string::npos);
+  // A tip that does not fit the hole.
+  o = {};
+  o.tip_radius = 30;
+  EXPECT_NE(test::error_of([&] { design::make_path(d.sections[1], o); }).find("does not fit"),
+            std::string::npos);
+}
+
+// Every refusal names file:line:col of the offending value.
+TEST(Design, ReaderRefusesBadDesignsWithTheirPlace) {
+  auto err = [](const std::string& curve, const std::string& extra = "",
+                const std::string& normal = "[0, 0, 1]") {
+    const std::string text =
+        "{\"sections\": [{\"name\": \"s\", \"plane\": {\"origin\": [0, 0, 0],"
+        " \"normal\": " +
+        normal + "}, \"closed\": " + (extra.empty() ? "false" : extra) + ",\n \"curve\": " + curve +
+        ",\n \"material\": \"left\"}]}";
+    return test::error_of([&] { io::parse_design(text, "d.json"); });
+  };
+  const std::string ok =
+      R"({"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 1, 1], "weights": [1, 0.7, 1],
+          "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}})";
+  EXPECT_EQ(err(ok), "(no error)");
+  // Knots that decrease: the place of the offending knot.
+  const std::string e1 = err(
+      R"({"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 0.5, 1], "weights": [1, 1, 1],
+          "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}})");
+  EXPECT_NE(e1.find("d.json:2:57: section 's': knots must not decrease"), std::string::npos) << e1;
+  const std::string e2 = err(
+      R"({"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 1, 1], "weights": [1, 0, 1],
+          "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}})");
+  EXPECT_NE(e2.find("d.json:2:79: section 's': weights must be positive"), std::string::npos) << e2;
+  const std::string e3 = err(
+      R"({"nurbs": {"degree": 3, "knots": [0, 0, 0, 1, 1, 1], "weights": [1, 1, 1],
+          "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}})");
+  EXPECT_NE(e3.find("3 control points are too few for degree 3"), std::string::npos) << e3;
+  const std::string e4 = err(
+      R"({"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 1], "weights": [1, 1, 1],
+          "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}})");
+  EXPECT_NE(e4.find("5 knots; a degree-2 curve with 3 control points needs 6"), std::string::npos)
+      << e4;
+  // Non-planar point: its place in the list.
+  const std::string e5 = err(R"({"polyline": [[0, 0, 0], [1, 0, 0], [1, 1, 0.5]]})");
+  EXPECT_NE(e5.find("d.json:2:47: section 's': the point is 0.5 mm off the section plane"),
+            std::string::npos)
+      << e5;
+  // An open curve marked closed.
+  const std::string e6 = err(R"({"polyline": [[0, 0, 0], [1, 0, 0], [1, 1, 0]]})", "true");
+  EXPECT_NE(e6.find("d.json:1:92: section 's': the curve is marked closed but ends 1.414 mm"),
+            std::string::npos)
+      << e6;
+  EXPECT_NE(err(R"({"polyline": [[0, 0, 0]]})").find("a polyline needs at least 2"),
+            std::string::npos);
+  EXPECT_NE(err(R"({"polyline": [[0, 0, 0], [0, 0, 0]]})").find("repeats the one before"),
+            std::string::npos);
+  EXPECT_NE(err(R"({"polyline": [[0, 0, 0], [1, 0, 0]]})", "", "[0, 0, 0]").find("no direction"),
+            std::string::npos);
+  EXPECT_NE(err(R"({"spline": []})").find("unknown key 'spline'"), std::string::npos);
+  EXPECT_NE(err(R"({})").find("exactly one of"), std::string::npos);
+  EXPECT_NE(err(R"({"polyline": [[0, 0, 1e309], [1, 0, 0]]})").find("d.json:2:"),
+            std::string::npos);
+  EXPECT_NE(err(R"({"polyline": [[0, 0], [1, 0, 0]]})").find("needs [x, y, z (mm)]"),
+            std::string::npos);
+  EXPECT_NE(
+      test::error_of([] { io::parse_design(R"({"sections": []})", "d.json"); }).find("no sections"),
+      std::string::npos);
+  EXPECT_NE(
+      test::error_of([] { io::read_design("/nonexistent/design.json"); }).find("no such file"),
+      std::string::npos);
+}
+
+}  // namespace
+}  // namespace trueaxis
