@@ -15,6 +15,7 @@ if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
     g++ cmake ninja-build git $node_pkgs \
     libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev libglpk-dev \
+    libocct-data-exchange-dev libocct-modeling-algorithms-dev libtbb-dev \
     libgtest-dev libgmock-dev libbenchmark-dev \
     pybind11-dev python3-dev python3-numpy python3-pytest \
     chromium gawk clang-format >/dev/null

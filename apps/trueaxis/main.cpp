@@ -196,7 +196,7 @@ int cmd_examples(const std::string& dir, bool force, bool quiet) {
   if (!quiet)
     fmt::print(
         "wrote the example inputs in {}: lines.json, plan.json, points.csv, commands.csv, "
-        "layout.json, cylinder.csv and plate/ (Moody's 1955 surface plate)\n",
+        "layout.json, cylinder.csv, ipp_simple.stp and plate/ (Moody's 1955 surface plate)\n",
         dir);
   return 0;
 }
@@ -368,7 +368,8 @@ int main(int argc, char** argv) {
   auto* examples = app.add_subcommand(
       "examples",
       "Write the example inputs that the README's examples use (lines.json, plan.json, "
-      "points.csv, commands.csv, layout.json, cylinder.csv and Moody's plate in plate/)");
+      "points.csv, commands.csv, layout.json, cylinder.csv, NIST's I++ test part ipp_simple.stp "
+      "and Moody's plate in plate/)");
   examples->add_option("--output,-o", ex_dir, "directory to write them in")->capture_default_str();
   examples->add_flag("--force", ex_force, "overwrite files that exist");
   examples->add_flag("--quiet,-q", ex_quiet, "print nothing on success");

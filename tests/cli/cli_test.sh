@@ -326,5 +326,22 @@ mkdir -p ex && (cd ex && "$T" examples -q) && ok || bad "examples"
 expect_err "lines.json: exists; nothing was written (use --force to overwrite)" "$T" examples -o ex
 expect_ok "$T" examples -o ex --force -q
 
+# Design data for scanning: sections of NIST's I++ test part, paths, and refusals.
+expect_ok "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0,25;normal=0,0,1;name=mid" -o design.json --path path.csv
+grep -q "mid.1: closed contour of 400.000 mm, material on the left" out.txt && grep -q "mid.2: closed contour of 157.080 mm, material on the right" out.txt && ok || bad "design: ipp sections $(cat out.txt)"
+head -1 path.csv | grep -q "^section,segment,length_mm,speed_mm_s" && [ "$(grep -c '^mid.1,' path.csv)" -ge 8 ] && ok || bad "design --path csv"
+expect_ok "$T" design --design design.json --tip-radius 2 --pushing 0.5 -q
+expect_code 2 "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0;normal=0,0,1"
+expect_code 2 "$T" design --step "$DATA/ippdme/ipp_simple.stp"
+expect_code 2 "$T" design --design design.json --pushing 5
+expect_err "misses the part" "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0,90;normal=0,0,1"
+expect_err "does not fit" "$T" design --design design.json --tip-radius 30
+python3 -c "
+import json; d = json.load(open('design.json')); d['sections'][0]['curve']['nurbs']['knots'][3] = -500
+json.dump(d, open('baddesign.json', 'w'), indent=1)"
+expect_err "baddesign.json:[0-9]*:[0-9]*: section 'mid.1': knots must not decrease" "$T" design --design baddesign.json
+printf 'not a step file\n' > bad.stp
+expect_err "bad.stp:1:1: not a STEP file" "$T" design --step bad.stp --section "origin=0,0,25;normal=0,0,1"
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

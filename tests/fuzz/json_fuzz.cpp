@@ -4,6 +4,7 @@
 
 #include "fuzz_util.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/design.hpp"
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/io/machine.hpp"
@@ -50,7 +51,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         io::read_parametric(p);
         break;
       default:
-        io::read_machine(p);
+        io::read_design(p);
         break;
     }
   });

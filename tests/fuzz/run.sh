@@ -21,6 +21,7 @@ for f in examples/*.json; do
   for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/json/$(basename "$f").$r"; done
 done
 printf '\x00{"chain": "FYXZ", "ranges": {"x": [0, 800], "y": [0, 600], "z": [0, 500]}, "errors": {"EXX": {"polynomial": [0, 10]}}}' > "$corpus/json/machine"
+printf '\x09{"sections": [{"name": "s", "plane": {"origin": [0, 0, 0], "normal": [0, 0, 1]}, "closed": false, "curve": {"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 1, 1], "weights": [1, 0.7, 1], "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}}, "material": "left"}]}' > "$corpus/json/design"
 printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
 find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
 for f in tests/data/moody/*.txt; do
