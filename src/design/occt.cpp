@@ -113,13 +113,30 @@ TopoDS_Wire wire(const Section& s) {
   for (std::size_t i = 0; i + 1 < cuts.size(); ++i) {
     Handle(Geom_BSplineCurve) piece = Handle(Geom_BSplineCurve)::DownCast(c->Copy());
     if (cuts.size() > 2) piece->Segment(cuts[i], cuts[i + 1]);
-    BRepBuilderAPI_MakeEdge me(piece);
+    // Straight pieces as lines: OCCT offsets those exactly and fast.
+    const bool straight = piece->Degree() == 1 && piece->NbPoles() == 2;
+    BRepBuilderAPI_MakeEdge me =
+        straight ? BRepBuilderAPI_MakeEdge(piece->StartPoint(), piece->EndPoint())
+                 : BRepBuilderAPI_MakeEdge(piece);
     if (!me.IsDone()) throw Error("cannot make an edge of the section curve");
     mw.Add(me.Edge());
     if (!mw.IsDone())
       throw Error("the pieces of the section curve do not join (a gap between its corners)");
   }
   return mw.Wire();
+}
+
+double signed_area(const Geom_BSplineCurve& c, const Eigen::Vector3d& normal) {
+  const int m = 2000;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Vector3d prev = vec(c.Value(c.FirstParameter()));
+  for (int i = 1; i <= m; ++i) {
+    const double t = c.FirstParameter() + (c.LastParameter() - c.FirstParameter()) * i / m;
+    const Eigen::Vector3d p = vec(c.Value(t));
+    sum += prev.cross(p);
+    prev = p;
+  }
+  return 0.5 * sum.dot(normal);
 }
 
 Nurbs nurbs(const Geom_BSplineCurve& c) {

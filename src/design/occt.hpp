@@ -46,6 +46,10 @@ TopoDS_Wire wire(const Section& s);
 // tangent differs from its start tangent.
 std::vector<double> corners(const Geom_BSplineCurve& c, bool closed);
 
+// Signed area enclosed by a closed curve seen from `normal` (positive: counter-clockwise), by the
+// shoelace formula on 2000 points (mm²).
+double signed_area(const Geom_BSplineCurve& c, const Eigen::Vector3d& normal);
+
 // A B-spline back to our flat-knot NURBS.
 Nurbs nurbs(const Geom_BSplineCurve& c);
 

@@ -227,9 +227,15 @@ ScanPath make_path(const Section& s0, const PathOptions& o) {
   std::vector<Span> spans;
   if (d > 0) {
     const TopoDS_Wire w = occt::wire(s);
-    // OCCT's sign convention depends on the wire's orientation; take the side that lies away
-    // from the material, and check its distance.
-    for (double sign : {1.0, -1.0}) {
+    // OCCT offsets a closed wire outwards for a positive distance. Try the side away from the
+    // material first, check it, and fall back to the other sign if OCCT saw it differently.
+    double first = 1;
+    if (s.closed) {
+      const bool ccw = occt::signed_area(*c, s.plane.normal) > 0;
+      const bool material_inside = ccw == (s.material == Side::Left);
+      first = material_inside ? 1 : -1;
+    }
+    for (double sign : {first, -first}) {
       auto r = offset_wire(w, s.plane, sign * d, !s.closed);
       if (!r) continue;
       const double dist = side_distance(*r, s, c);

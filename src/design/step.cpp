@@ -56,20 +56,6 @@ Handle(Geom_BSplineCurve) join(const TopoDS_Wire& w) {
   return joined.BSplineCurve();
 }
 
-// Signed area of the closed curve seen from `n` (positive: counter-clockwise).
-double signed_area(const Geom_BSplineCurve& c, const Eigen::Vector3d& n) {
-  const int m = 2000;
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Vector3d prev = occt::vec(c.Value(c.FirstParameter()));
-  for (int i = 1; i <= m; ++i) {
-    const double t = c.FirstParameter() + (c.LastParameter() - c.FirstParameter()) * i / m;
-    const Eigen::Vector3d p = occt::vec(c.Value(t));
-    sum += prev.cross(p);
-    prev = p;
-  }
-  return 0.5 * sum.dot(n);
-}
-
 // The outward unit normal of the face of the solid that passes through p (within 1e-4 mm), or
 // nothing if none does.
 std::optional<Eigen::Vector3d> outward_normal(const std::vector<TopoDS_Face>& faces,
@@ -154,7 +140,7 @@ Design from_step(const std::string& path, const std::vector<StepSectionRequest>&
             fmt::format("{}: section '{}': a contour of the cut is open ({:.3g} mm gap): "
                         "is the solid closed?",
                         path, rq.name, c->StartPoint().Distance(c->EndPoint())));
-      if (signed_area(*c, normal) < 0) c->Reverse();
+      if (occt::signed_area(*c, normal) < 0) c->Reverse();
       Section s;
       s.plane = {rq.plane.origin, normal};
       s.closed = true;
