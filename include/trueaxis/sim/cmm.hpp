@@ -1,0 +1,126 @@
+// trueaxis::sim — the moving parts of a virtual scanning CMM: a servo-controlled 3-axis
+// carriage, a workpiece section contour the probe can touch, and a spring-mounted scanning probe
+// with a ball tip.
+//
+// Units: mm, s. Frame: the machine's (which is also the part's: the part is clamped with its
+// design frame on the machine frame). Time advances in servo ticks; machine time is counted in
+// simulated seconds, independent of how fast the simulation runs.
+//
+// Servo. Each axis runs the same discrete position loop at `rate_hz`: commanded velocity
+//   v_cmd = v_ff + kp·(target − position), clamped to ±max_velocity,
+// the drive follows it as a first-order lag of time constant `lag`, its acceleration clamped to
+// ±max_acceleration, and the position integrates the drive's velocity. With the path's velocity
+// fed forward, a straight line at constant speed is followed with no error once the transient
+// has died; on a curve of radius R at speed v the following error is of order lag²·v²/R.
+//
+// Probe. The ball (radius r) centre sits at the carriage's position when free. Where the true
+// surface is closer than r, the ball is pushed out along the surface normal by the penetration:
+// the deflection. The probe reads the deflection (3-D) with Gaussian noise; no contact means no
+// deflection (lifted off); a deflection beyond the measuring range is an over-push. The ball
+// centre is position + deflection, and the surface point is the ball centre − r·normal.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+namespace trueaxis::sim {
+
+struct ServoOptions {
+  double rate_hz = 1000;           // control-loop rate (Hz)
+  double max_velocity = 250;       // per axis (mm/s)
+  double max_acceleration = 3000;  // per axis (mm/s²)
+  double lag = 0.002;              // drive time constant (s)
+  double position_gain = 200;      // kp (1/s)
+  // Throws Error naming the option when out of range (rate 10 Hz–100 kHz; the lag at least two
+  // ticks and below 1 s; positive limits and gain; kp·lag ≤ 0.5 so that the loop is stable).
+  void validate() const;
+  double dt() const { return 1.0 / rate_hz; }
+};
+
+class Servo {
+ public:
+  Servo(const ServoOptions& options, const Eigen::Vector3d& start);
+  // One control tick: `target` is the path's position at the current machine time (the start of
+  // the tick) and `feed` its velocity, fed forward (mm, mm/s). After the tick, time() has
+  // advanced by one period.
+  void step(const Eigen::Vector3d& target, const Eigen::Vector3d& feed);
+  const Eigen::Vector3d& position() const { return position_; }
+  const Eigen::Vector3d& velocity() const { return velocity_; }
+  double time() const { return time_; }  // simulated seconds since construction
+  long ticks() const { return ticks_; }
+  const ServoOptions& options() const { return o_; }
+
+ private:
+  ServoOptions o_;
+  Eigen::Vector3d position_, velocity_ = Eigen::Vector3d::Zero();
+  double time_ = 0;
+  long ticks_ = 0;
+};
+
+// A workpiece section: a closed or open polyline in a plane, with the material on one side.
+// Nearest-point queries keep a hint of the last segment found, so that a probe moving along the
+// contour costs O(1) per query; a jump falls back to a full search.
+class Contour {
+ public:
+  // points: 3 × n (n ≥ 2), in the plane through points with unit normal `plane_normal`.
+  // material_left: the material is on the left walking along the points, seen from the normal.
+  Contour(Eigen::Matrix3Xd points, const Eigen::Vector3d& plane_normal, bool closed,
+          bool material_left);
+
+  struct Nearest {
+    Eigen::Vector3d point;   // foot on the contour (mm)
+    Eigen::Vector3d normal;  // unit, in the plane, away from the material
+    double distance = 0;     // signed in-plane distance: > 0 on the free side, < 0 in material
+    double arc = 0;          // arc length of the foot from the contour's start (mm)
+  };
+  // The nearest point of the contour to q's projection into the plane.
+  Nearest nearest(const Eigen::Vector3d& q) const;
+
+  const Eigen::Matrix3Xd& points() const { return p_; }
+  const Eigen::Vector3d& plane_normal() const { return n_; }
+  bool closed() const { return closed_; }
+  double length() const { return arc_[arc_.size() - 1]; }
+
+ private:
+  Nearest at_segment(Eigen::Index i, const Eigen::Vector3d& q) const;
+  Eigen::Matrix3Xd p_;
+  Eigen::Vector3d n_;
+  bool closed_, left_;
+  Eigen::VectorXd arc_;       // cumulative length at each point
+  Eigen::Matrix3Xd normals_;  // per segment, away from the material
+  mutable Eigen::Index hint_ = -1;
+};
+
+struct ProbeOptions {
+  double tip_radius = 1.0;  // ball radius (mm)
+  double range = 1.0;       // measuring range of the deflection (mm)
+  double noise = 0;         // standard deviation of each deflection component (mm)
+  std::uint64_t seed = 1;
+  void validate() const;  // throws Error: radius in (0, 50], range in (0, 10], noise in [0, 0.1]
+};
+
+struct ProbeReading {
+  bool contact = false;     // the ball touches the surface (deflection > 0)
+  bool overtravel = false;  // deflection beyond the measuring range
+  Eigen::Vector3d deflection = Eigen::Vector3d::Zero();  // as read, with noise (mm)
+  Eigen::Vector3d true_deflection = Eigen::Vector3d::Zero();
+  Contour::Nearest surface;  // where the ball touches (or the nearest point when free)
+};
+
+class Probe {
+ public:
+  explicit Probe(const ProbeOptions& options);
+  // The reading with the carriage (free ball centre) at `position` against `part`.
+  ProbeReading read(const Eigen::Vector3d& position, const Contour& part);
+  const ProbeOptions& options() const { return o_; }
+
+ private:
+  ProbeOptions o_;
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> gauss_{0.0, 1.0};
+};
+
+}  // namespace trueaxis::sim
