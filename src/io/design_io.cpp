@@ -1,11 +1,13 @@
 // design.json: planar section curves of a part.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <set>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/json.hpp"
+#include "trueaxis/sim/part.hpp"
 
 namespace trueaxis::io {
 namespace {
@@ -106,20 +108,78 @@ ojson vec(const Eigen::Vector3d& v) {
   return {v.x(), v.y(), v.z()};
 }
 
-design::Design design_from(const JsonFile& f) {
-  only(f, ptr(), {"sections"});
-  need(f, ptr(), "sections");
-  const auto& a = f.array(ptr() / "sections");
-  if (a.empty()) f.fail(ptr() / "sections", "no sections: nothing to scan");
+design::Design design_at(const JsonFile& f, const ptr& base) {
+  only(f, base, {"sections"});
+  need(f, base, "sections");
+  const auto& a = f.array(base / "sections");
+  if (a.empty()) f.fail(base / "sections", "no sections: nothing to scan");
   design::Design d;
   std::set<std::string> names;
   for (std::size_t i = 0; i < a.size(); ++i) {
-    d.sections.push_back(read_section(f, ptr() / "sections" / i));
+    d.sections.push_back(read_section(f, base / "sections" / i));
     if (!names.insert(d.sections.back().name).second)
-      f.fail(ptr() / "sections" / i / "name",
+      f.fail(base / "sections" / i / "name",
              fmt::format("section name '{}' is used twice", d.sections.back().name));
   }
   return d;
+}
+
+design::Design design_from(const JsonFile& f) {
+  return design_at(f, ptr());
+}
+
+ojson design_json(const design::Design& d);
+
+sim::Part part_from(const JsonFile& f) {
+  only(f, ptr(), {"design", "deviation"});
+  need(f, ptr(), "design");
+  need(f, ptr(), "deviation");
+  sim::Part part;
+  part.design = design_at(f, ptr() / "design");
+  const ptr v = ptr() / "deviation";
+  only(f, v,
+       {"scale", "scale_about", "scale_direction", "directional_scale", "rotation_deg",
+        "translation", "bumps", "noise_um", "seed"});
+  sim::PartDeviation& d = part.deviation;
+  if (f.has(v / "scale")) d.scale = f.number(v / "scale");
+  if (f.has(v / "scale_about")) {
+    d.scale_about = triple(f, v / "scale_about", "x, y, z (mm)");
+    d.scale_about_given = true;
+  }
+  if (f.has(v / "scale_direction")) d.scale_direction = triple(f, v / "scale_direction", "i, j, k");
+  if (f.has(v / "directional_scale")) d.directional_scale = f.number(v / "directional_scale");
+  if (f.has(v / "rotation_deg")) d.rotation_deg = triple(f, v / "rotation_deg", "ax, ay, az (°)");
+  if (f.has(v / "translation")) d.translation = triple(f, v / "translation", "dx, dy, dz (mm)");
+  if (f.has(v / "noise_um")) d.noise = f.number(v / "noise_um") * 1e-3;
+  if (f.has(v / "seed")) {
+    const double seed = f.number(v / "seed");
+    if (seed < 0 || seed != std::floor(seed) || seed > 9e15)
+      f.fail(v / "seed", "the seed must be a whole number ≥ 0");
+    d.seed = static_cast<std::uint64_t>(seed);
+  }
+  if (f.has(v / "bumps")) {
+    const auto& b = f.array(v / "bumps");
+    for (std::size_t i = 0; i < b.size(); ++i) {
+      const ptr q = v / "bumps" / i;
+      only(f, q, {"section", "arc_mm", "height_mm", "width_mm"});
+      for (const char* k : {"section", "arc_mm", "height_mm", "width_mm"}) need(f, q, k);
+      d.bumps.push_back({f.string(q / "section"), f.number(q / "arc_mm"), f.number(q / "height_mm"),
+                         f.number(q / "width_mm")});
+      try {
+        sim::Part one{part.design, {}};
+        one.deviation.bumps = {d.bumps.back()};
+        one.validate();
+      } catch (const Error& e) {
+        f.fail(q, e.what());
+      }
+    }
+  }
+  try {
+    part.validate();
+  } catch (const Error& e) {
+    f.fail(v, e.what());
+  }
+  return part;
 }
 
 }  // namespace
@@ -132,7 +192,40 @@ design::Design read_design(const std::string& path) {
   return design_from(JsonFile::read(path));
 }
 
+sim::Part read_part(const std::string& path) {
+  return part_from(JsonFile::read(path));
+}
+
+sim::Part parse_part(std::string text, const std::string& path) {
+  return part_from(JsonFile::parse(std::move(text), path));
+}
+
+void write_part(const std::string& path, const sim::Part& part) {
+  const sim::PartDeviation& d = part.deviation;
+  ojson bumps = ojson::array();
+  for (const auto& b : d.bumps)
+    bumps.push_back({{"section", b.section},
+                     {"arc_mm", b.arc},
+                     {"height_mm", b.height},
+                     {"width_mm", b.width}});
+  ojson dev{{"scale", d.scale}};
+  if (d.scale_about_given) dev["scale_about"] = vec(d.scale_about);
+  dev["scale_direction"] = vec(d.scale_direction);
+  dev["directional_scale"] = d.directional_scale;
+  dev["rotation_deg"] = vec(d.rotation_deg);
+  dev["translation"] = vec(d.translation);
+  dev["bumps"] = bumps;
+  dev["noise_um"] = d.noise * 1e3;
+  dev["seed"] = d.seed;
+  write_json(path, ojson{{"design", design_json(part.design)}, {"deviation", dev}});
+}
+
 void write_design(const std::string& path, const design::Design& d) {
+  write_json(path, design_json(d));
+}
+
+namespace {
+ojson design_json(const design::Design& d) {
   ojson secs = ojson::array();
   for (const auto& s : d.sections) {
     ojson curve;
@@ -157,7 +250,8 @@ void write_design(const std::string& path, const design::Design& d) {
               {"curve", curve},
               {"material", design::to_string(s.material)}});
   }
-  write_json(path, ojson{{"sections", secs}});
+  return ojson{{"sections", secs}};
 }
+}  // namespace
 
 }  // namespace trueaxis::io

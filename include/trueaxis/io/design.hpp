@@ -1,4 +1,4 @@
-// trueaxis::io — design data for scanning (design.json).
+// trueaxis::io — design data for scanning (design.json) and simulated parts (part.json).
 //
 // design.json: {"sections": [{"name": str, "plane": {"origin": [x, y, z], "normal": [i, j, k]},
 //   "closed": bool, "curve": {"nurbs": {"degree": int, "knots": [...], "weights": [...],
@@ -13,6 +13,7 @@
 #include <string>
 
 #include "trueaxis/design/design.hpp"
+#include "trueaxis/sim/part.hpp"
 
 namespace trueaxis::io {
 
@@ -20,5 +21,13 @@ design::Design read_design(const std::string& path);
 // Parses text (`path` names it in messages).
 design::Design parse_design(std::string text, const std::string& path);
 void write_design(const std::string& path, const design::Design& design);
+
+// part.json: {"design": {design.json's content}, "deviation": {"scale", "scale_about": [mm],
+//   "scale_direction": [..], "directional_scale", "rotation_deg": [ax, ay, az], "translation":
+//   [mm], "bumps": [{"section", "arc_mm", "height_mm", "width_mm"}], "noise_um", "seed"}}
+// (every deviation optional; see sim/part.hpp). Refusals name file:line:col.
+sim::Part read_part(const std::string& path);
+sim::Part parse_part(std::string text, const std::string& path);
+void write_part(const std::string& path, const sim::Part& part);
 
 }  // namespace trueaxis::io

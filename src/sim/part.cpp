@@ -1,0 +1,120 @@
+// A manufactured part that differs from its design.
+#include "trueaxis/sim/part.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <random>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::sim {
+
+void Part::validate() const {
+  const PartDeviation& v = deviation;
+  auto bad = [](const std::string& what) { throw Error(what); };
+  if (design.sections.empty()) bad("part: the design has no sections");
+  if (!(v.scale >= 0.5 && v.scale <= 2))
+    bad(fmt::format("part scale {:g}: must be in [0.5, 2]", v.scale));
+  if (!(v.directional_scale >= 0.5 && v.directional_scale <= 2))
+    bad(fmt::format("part directional scale {:g}: must be in [0.5, 2]", v.directional_scale));
+  if (!v.scale_direction.allFinite() || !(v.scale_direction.norm() > 0))
+    bad("part scale direction: needs a non-zero direction");
+  if (!v.scale_about.allFinite() || v.scale_about.cwiseAbs().maxCoeff() > 1e6)
+    bad("part scale centre: not a point within ±1e6 mm");
+  if (!v.rotation_deg.allFinite() || v.rotation_deg.cwiseAbs().maxCoeff() > 45)
+    bad("part rotation: each angle must be within ±45°");
+  if (!v.translation.allFinite() || v.translation.cwiseAbs().maxCoeff() > 1000)
+    bad("part translation: each component must be within ±1000 mm");
+  if (!(v.noise >= 0 && v.noise <= 1))
+    bad(fmt::format("part form noise {:g} mm: must be in [0, 1] mm", v.noise));
+  for (const Bump& b : v.bumps) {
+    bool found = false;
+    for (const auto& s : design.sections) found = found || s.name == b.section;
+    if (!found) bad(fmt::format("bump on section '{}': the design has no such section", b.section));
+    if (!(std::abs(b.height) <= 10))
+      bad(fmt::format("bump on '{}': height {:g} mm is beyond ±10 mm", b.section, b.height));
+    if (!(b.width > 0 && b.width <= 1e4))
+      bad(fmt::format("bump on '{}': width {:g} mm must be in (0, 10000]", b.section, b.width));
+    if (!std::isfinite(b.arc))
+      bad(fmt::format("bump on '{}': the arc position is not a number", b.section));
+  }
+}
+
+Eigen::Vector3d centroid(const design::Design& d) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  double w = 0;
+  for (const auto& s : d.sections) {
+    const auto smp = design::sample(s, 0.5);
+    sum += smp.points.rowwise().sum();
+    w += static_cast<double>(smp.points.cols());
+  }
+  return w > 0 ? Eigen::Vector3d(sum / w) : sum;
+}
+
+Eigen::Affine3d transform(const Part& part) {
+  const PartDeviation& v = part.deviation;
+  const Eigen::Vector3d c = centroid(part.design);
+  const Eigen::Vector3d about = v.scale_about_given ? v.scale_about : c;
+  const Eigen::Vector3d u = v.scale_direction.normalized();
+  const Eigen::Matrix3d S =
+      v.scale * (Eigen::Matrix3d::Identity() + (v.directional_scale - 1) * u * u.transpose());
+  const Eigen::Vector3d a = v.rotation_deg * (M_PI / 180);
+  const Eigen::Matrix3d R = (Eigen::AngleAxisd(a.z(), Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(a.y(), Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(a.x(), Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  // x -> R (S (x − about) + about − c) + c + t
+  Eigen::Affine3d T = Eigen::Affine3d::Identity();
+  T.linear() = R * S;
+  T.translation() = R * (about - S * about - c) + c + v.translation;
+  return T;
+}
+
+Contour true_contour(const Part& part, const design::Section& s, double spacing) {
+  const PartDeviation& v = part.deviation;
+  const auto smp = design::sample(s, spacing);
+  const Eigen::Index n = smp.points.cols();
+  const double total = design::length(s);
+  Eigen::VectorXd dev = Eigen::VectorXd::Zero(n);
+  for (const Bump& b : v.bumps) {
+    if (b.section != s.name) continue;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double d = smp.arc[i] - b.arc;
+      if (s.closed) d -= total * std::round(d / total);  // around the start of a closed curve
+      if (std::abs(d) < b.width / 2)
+        dev[i] += b.height * 0.5 * (1 + std::cos(2 * M_PI * d / b.width));
+    }
+  }
+  if (v.noise > 0) {
+    // Gaussian values every 2 mm of arc, joined by a smooth (cosine) blend: form noise with the
+    // stated standard deviation at the knots, seeded per section.
+    std::seed_seq seq{static_cast<std::uint64_t>(v.seed),
+                      static_cast<std::uint64_t>(std::hash<std::string>{}(s.name))};
+    std::mt19937_64 rng(seq);
+    std::normal_distribution<double> g(0, v.noise);
+    // Knots about 2 mm apart; on a closed curve they divide it evenly and wrap around.
+    const int m = s.closed ? std::max(1, static_cast<int>(std::round(total / 2)))
+                           : static_cast<int>(std::ceil(total / 2)) + 1;
+    const double step = s.closed ? total / m : 2.0;
+    std::vector<double> k(static_cast<std::size_t>(m));
+    for (double& x : k) x = g(rng);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double x = smp.arc[i] / step;
+      const int j = std::min(static_cast<int>(std::floor(x)), s.closed ? m - 1 : m - 2);
+      const double f = 0.5 * (1 - std::cos(M_PI * std::clamp(x - j, 0.0, 1.0)));
+      const int j1 = s.closed ? (j + 1) % m : std::min(j + 1, m - 1);
+      dev[i] += (1 - f) * k[static_cast<std::size_t>(j)] + f * k[static_cast<std::size_t>(j1)];
+    }
+  }
+  const Eigen::Affine3d T = transform(part);
+  Eigen::Vector3d normal = s.plane.normal.normalized();
+  Eigen::Matrix3Xd p(3, n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d x = T * (smp.points.col(i) + dev[i] * smp.normals.col(i));
+    p.col(i) = x - (x - s.plane.origin).dot(normal) * normal;
+  }
+  return Contour(std::move(p), normal, s.closed, s.material == design::Side::Left);
+}
+
+}  // namespace trueaxis::sim
