@@ -74,8 +74,8 @@ std::vector<Command> add_fit_commands(CLI::App& app);
 // 'ballgauge', 'correct' and 'simulate ballgauge' (under `simulate`).
 std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate);
 
-// 'design' (STEP sections or design.json -> design.json and scanning paths).
-std::vector<Command> add_design_commands(CLI::App& app);
+// 'design' (STEP sections or design.json -> design.json and scanning paths) and 'simulate part'.
+std::vector<Command> add_design_commands(CLI::App& app, CLI::App& simulate);
 
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);

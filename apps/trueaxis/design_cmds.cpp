@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <sstream>
@@ -12,6 +13,7 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/files.hpp"
+#include "trueaxis/sim/part.hpp"
 
 namespace trueaxis::cli {
 namespace {
@@ -126,9 +128,137 @@ int run_design(const DesignArgs& a) {
   return 0;
 }
 
+// "X,Y,Z" -> a vector, or a usage error naming the option.
+Eigen::Vector3d parse_triple(const std::string& option, const std::string& text) {
+  std::stringstream ss(text);
+  std::string num;
+  Eigen::Vector3d out;
+  int k = 0;
+  while (std::getline(ss, num, ',')) {
+    if (k == 3) break;
+    try {
+      std::size_t used = 0;
+      out[k] = std::stod(num, &used);
+      if (used != num.size() || !std::isfinite(out[k])) throw std::invalid_argument(num);
+    } catch (const std::exception&) {
+      throw CLI::ValidationError(option, fmt::format("'{}': '{}' is not a number", text, num));
+    }
+    ++k;
+  }
+  if (k != 3 || ss.rdbuf()->in_avail() > 0 || std::count(text.begin(), text.end(), ',') != 2)
+    throw CLI::ValidationError(option, fmt::format("'{}': give three numbers X,Y,Z", text));
+  return out;
+}
+
+struct PartArgs {
+  std::string design, output, scale_about, rotate, translate, scale_along;
+  std::vector<std::string> bumps;
+  double scale = 1, noise_um = 0;
+  std::uint64_t seed = 1;
+  bool quiet = false;
+};
+
+int run_simulate_part(const PartArgs& a) {
+  sim::Part p;
+  p.design = io::read_design(a.design);
+  sim::PartDeviation& d = p.deviation;
+  d.scale = a.scale;
+  if (!a.scale_about.empty()) {
+    d.scale_about = parse_triple("--scale-about", a.scale_about);
+    d.scale_about_given = true;
+  }
+  if (!a.scale_along.empty()) {
+    const auto c = std::count(a.scale_along.begin(), a.scale_along.end(), ',');
+    const auto last = a.scale_along.rfind(',');
+    if (c != 3)
+      throw CLI::ValidationError("--scale-along",
+                                 fmt::format("'{}': give I,J,K,FACTOR", a.scale_along));
+    d.scale_direction = parse_triple("--scale-along", a.scale_along.substr(0, last));
+    try {
+      d.directional_scale = std::stod(a.scale_along.substr(last + 1));
+    } catch (const std::exception&) {
+      throw CLI::ValidationError("--scale-along",
+                                 fmt::format("'{}': the factor is not a number", a.scale_along));
+    }
+  }
+  if (!a.rotate.empty()) d.rotation_deg = parse_triple("--rotate", a.rotate);
+  if (!a.translate.empty()) d.translation = parse_triple("--translate", a.translate);
+  for (const auto& b : a.bumps) {
+    // SECTION,ARC_MM,HEIGHT_MM,WIDTH_MM (the section name may itself hold no comma)
+    std::vector<std::string> f;
+    std::stringstream ss(b);
+    for (std::string x; std::getline(ss, x, ',');) f.push_back(x);
+    if (f.size() != 4)
+      throw CLI::ValidationError("--bump",
+                                 fmt::format("'{}': give SECTION,ARC_MM,HEIGHT_MM,WIDTH_MM", b));
+    sim::Bump bump;
+    bump.section = f[0];
+    try {
+      bump.arc = std::stod(f[1]);
+      bump.height = std::stod(f[2]);
+      bump.width = std::stod(f[3]);
+    } catch (const std::exception&) {
+      throw CLI::ValidationError("--bump",
+                                 fmt::format("'{}': arc, height and width are numbers (mm)", b));
+    }
+    d.bumps.push_back(bump);
+  }
+  d.noise = a.noise_um * 1e-3;
+  d.seed = a.seed;
+  p.validate();
+  io::write_part(a.output, p);
+  if (!a.quiet) {
+    const Eigen::Affine3d T = sim::transform(p);
+    const std::string along =
+        d.directional_scale != 1
+            ? fmt::format(" × {:g} along ({:g}, {:g}, {:g})", d.directional_scale,
+                          d.scale_direction.x(), d.scale_direction.y(), d.scale_direction.z())
+            : "";
+    fmt::print(
+        "part of {} sections: scale {:g}{}, rotation ({:g}, {:g}, {:g})°, translation ({:g}, "
+        "{:g}, {:g}) mm, {} bumps, form noise {:g} µm; the design's centroid moves by "
+        "{:.4f} mm -> {}\n",
+        p.design.sections.size(), d.scale, along, d.rotation_deg.x(), d.rotation_deg.y(),
+        d.rotation_deg.z(), d.translation.x(), d.translation.y(), d.translation.z(), d.bumps.size(),
+        a.noise_um, (T * sim::centroid(p.design) - sim::centroid(p.design)).norm(), a.output);
+  }
+  return 0;
+}
+
+Command simulate_part(CLI::App& simulate) {
+  auto a = std::make_shared<PartArgs>();
+  auto* c = simulate.add_subcommand(
+      "part",
+      "A part that differs from its design, for scanning: scaled, rotated, moved, with bumps and "
+      "form noise. Writes part.json (the design and the deviations).\n"
+      "Example: trueaxis simulate part --design design.json --translate 2,0,0 --bump "
+      "mid.1,150,0.5,20 --seed 1 -o part.json");
+  c->add_option("--design", a->design, "design.json of the part")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--scale", a->scale, "uniform scale factor (about --scale-about)")
+      ->capture_default_str();
+  c->add_option("--scale-about", a->scale_about,
+                "X,Y,Z: centre of scaling (mm; default: the design's centroid)");
+  c->add_option("--scale-along", a->scale_along,
+                "I,J,K,FACTOR: a further scale along one direction");
+  c->add_option("--rotate", a->rotate,
+                "AX,AY,AZ: rotation (degrees) about x, y, z at the design's centroid");
+  c->add_option("--translate", a->translate, "DX,DY,DZ: translation (mm)");
+  c->add_option("--bump", a->bumps,
+                "SECTION,ARC_MM,HEIGHT_MM,WIDTH_MM: a smooth bump along the outward normal "
+                "centred at that arc length (negative height: a dent); repeatable");
+  c->add_option("--noise", a->noise_um, "form noise along the normal, standard deviation (µm)")
+      ->capture_default_str();
+  c->add_option("--seed", a->seed, "random seed of the form noise")->capture_default_str();
+  c->add_option("--output,-o", a->output, "part.json to write")->required();
+  c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {c, [a] { return run_simulate_part(*a); }};
+}
+
 }  // namespace
 
-std::vector<Command> add_design_commands(CLI::App& app) {
+std::vector<Command> add_design_commands(CLI::App& app, CLI::App& simulate) {
   auto a = std::make_shared<DesignArgs>();
   auto* c = app.add_subcommand(
       "design",
@@ -175,7 +305,8 @@ std::vector<Command> add_design_commands(CLI::App& app) {
                 "largest v²/R on curves, which sets their speed (mm/s²)")
       ->capture_default_str();
   c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
-  return {{c, [a] {
+  return {{c,
+           [a] {
              if (a->step.empty() == a->design.empty())
                throw CLI::ValidationError("give --step FILE with --section, or --design FILE");
              if (!a->step.empty() && a->sections.empty())
@@ -187,7 +318,8 @@ std::vector<Command> add_design_commands(CLI::App& app) {
                throw CLI::ValidationError(e.what());
              }
              return run_design(*a);
-           }}};
+           }},
+          simulate_part(simulate)};
 }
 
 }  // namespace trueaxis::cli

@@ -343,5 +343,12 @@ expect_err "baddesign.json:[0-9]*:[0-9]*: section 'mid.1': knots must not decrea
 printf 'not a step file\n' > bad.stp
 expect_err "bad.stp:1:1: not a STEP file" "$T" design --step bad.stp --section "origin=0,0,25;normal=0,0,1"
 
+expect_ok "$T" simulate part --design design.json --translate 2,0,0 --rotate 0,0,0.5 --bump mid.1,150,0.5,20 --noise 1 --seed 3 -o part.json
+grep -q '"bumps"' part.json && grep -q '"sections"' part.json && grep -q "centroid moves by 2.0000 mm" out.txt && ok || bad "simulate part: $(cat out.txt)"
+expect_err "bump on section 'nope': the design has no such section" "$T" simulate part --design design.json --bump nope,1,1,1 -o p.json
+expect_code 2 "$T" simulate part --design design.json --translate 1,2 -o p.json
+expect_code 2 "$T" simulate part --design design.json --bump mid.1,1,1 -o p.json
+expect_err "part scale 3: must be in" "$T" simulate part --design design.json --scale 3 -o p.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]
