@@ -204,6 +204,28 @@ double ScanPath::length() const {
   for (const auto& s : segments) l += s.length;
   return l;
 }
+PathPoint ScanPath::at(double s) const {
+  if (segments.empty()) throw Error("the scanning path is empty");
+  if (cumulative_.size() != segments.size() + 1) {
+    cumulative_.assign(1, 0.0);
+    for (const auto& g : segments) cumulative_.push_back(cumulative_.back() + g.length);
+    last_ = 0;
+  }
+  s = std::clamp(s, 0.0, cumulative_.back());
+  // Scans walk forward: start from the last segment found.
+  if (last_ >= segments.size() || s < cumulative_[last_]) last_ = 0;
+  while (last_ + 1 < segments.size() && s >= cumulative_[last_ + 1]) ++last_;
+  const PccSegment& g = segments[last_];
+  const double u = g.length > 0 ? std::clamp((s - cumulative_[last_]) / g.length, 0.0, 1.0) : 0.0;
+  PathPoint r;
+  r.p = g.point(u);
+  r.tangent = g.tangent(u).normalized();
+  const Eigen::Vector3d left = plane.normal.cross(r.tangent);
+  r.normal = material == Side::Left ? Eigen::Vector3d(-left) : left;
+  r.speed = g.speed;
+  return r;
+}
+
 double ScanPath::nominal_time() const {
   double t = 0;
   for (const auto& s : segments) t += s.length / s.speed;
@@ -222,6 +244,7 @@ ScanPath make_path(const Section& s0, const PathOptions& o) {
   path.section = s.name;
   path.plane = s.plane;
   path.closed = s.closed;
+  path.material = s.material;
   path.offset = d;
 
   std::vector<Span> spans;

@@ -125,11 +125,19 @@ struct PccSegment {
   Eigen::Vector3d tangent(double u) const;  // dp/du (not unit)
 };
 
+// A point of a path at arc length s: position, unit tangent, and unit normal in the plane away
+// from the material.
+struct PathPoint {
+  Eigen::Vector3d p, tangent, normal;
+  double speed = 0;  // of the segment (mm/s)
+};
+
 struct ScanPath {
   std::string section;
   Plane plane;
   bool closed = true;
-  double offset = 0;  // tip radius − pushing (mm)
+  Side material = Side::Left;  // as the section's: seen from the plane normal, along the path
+  double offset = 0;           // tip radius − pushing (mm)
   std::vector<PccSegment> segments;
   // Largest distance of the PCC from the exact offset curve, measured at 16 points per segment
   // after the fit (mm): the achieved chordal error.
@@ -137,6 +145,12 @@ struct ScanPath {
   double length() const;
   // Design time along the path at each segment's speed (s), without acceleration phases.
   double nominal_time() const;
+  // The point at arc length s (clamped to [0, length()]); within a segment u ∝ arc.
+  PathPoint at(double s) const;
+
+ private:
+  mutable std::vector<double> cumulative_;  // segment start arcs, built on first use
+  mutable std::size_t last_ = 0;
 };
 
 // The stylus-centre path of design-value scanning for one section. Throws Error if the offset

@@ -1,0 +1,129 @@
+// trueaxis::scan — what the scanning controller needs from a CMM, and a virtual CMM that
+// provides it (servo-level simulation of spec 06).
+//
+// The interface is the small set of operations a CMM controller offers (and I++ DME carries:
+// GoTo, PtMeas, ScanOnCurve, ScanUnknownHint): move, touch a point along a direction, scan along
+// a stylus-centre path (design-value scanning), and scan an unknown contour in a plane
+// (autonomous scanning). Every operation runs in machine time and reports what it measured.
+//
+// Units: mm, s. Frame: the machine's, which is the part's design frame. Points returned are
+// workpiece surface points: the ball centre compensated by the tip radius along the measured
+// normal (the deflection direction), so the pushing amount is compensated too.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <vector>
+
+#include "trueaxis/design/design.hpp"
+#include "trueaxis/sim/cmm.hpp"
+#include "trueaxis/sim/part.hpp"
+
+namespace trueaxis::scan {
+
+// One recorded point of a scan.
+struct Sample {
+  double t = 0;                                       // machine time (s)
+  double arc = 0;                                     // along the path or scan (mm)
+  Eigen::Vector3d surface = Eigen::Vector3d::Zero();  // workpiece surface point (mm)
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();   // measured surface normal (unit)
+  // Trajectory error: how far the ball centre runs from where it would on the design, along the
+  // path normal (mm): (ball centre − path point)·normal − Ep, 0 on a perfect part.
+  double delta_l = 0;
+  bool contact = false, overtravel = false;
+};
+
+// What a running scan tells its monitor each servo tick; the monitor returns false to stop.
+using Monitor = std::function<bool(const Sample&)>;
+
+struct ScanOutcome {
+  std::vector<Sample> samples;  // recorded at about `record_spacing` mm
+  bool completed = false;       // ran to the end (else stopped by the monitor or a fault)
+  Sample stop;                  // the last tick's state (where it stopped)
+  std::string fault;            // why the machine stopped by itself ("" if it did not)
+};
+
+struct Touch {
+  Eigen::Vector3d surface, normal;  // tip-compensated surface point and measured normal
+  double t = 0;
+};
+
+struct ScanSettings {
+  double pushing = 0.3;             // Ep held by active scanning (mm)
+  bool active = true;               // active (pushing held along the normal) or passive
+  double record_spacing = 0.2;      // mm between recorded samples
+  double approach_clearance = 1.0;  // start the approach this far outside the path (mm)
+  double approach_limit = 3.0;      // give up if no surface this far inside the path (mm)
+};
+
+class Machine {
+ public:
+  virtual ~Machine() = default;
+  virtual double time() const = 0;  // machine seconds so far
+  virtual Eigen::Vector3d position() const = 0;
+  // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s.
+  virtual void move(const Eigen::Vector3d& to, double speed) = 0;
+  // From `start` (stylus centre), approach along unit `direction` at `speed` until the deflection
+  // reaches `trigger`; then back to `start`. Nothing if no contact within `distance` mm.
+  virtual std::optional<Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
+                                     const Eigen::Vector3d& direction, double distance,
+                                     double speed, double trigger) = 0;
+  // Design-value scanning along a stylus-centre path (its segments' speeds).
+  virtual ScanOutcome scan_path(const design::ScanPath& path, const ScanSettings& settings,
+                                const Monitor& monitor) = 0;
+  // Autonomous scanning in a plane: from `start` (stylus centre, free) approach along
+  // `approach` to the surface, then follow it with the deflection held at settings.pushing, the
+  // material on `material` side of the direction of travel, at `speed`, until back at the first
+  // contact (closed) or after `length` mm (open).
+  virtual ScanOutcome scan_unknown(const design::Plane& plane, const Eigen::Vector3d& start,
+                                   const Eigen::Vector3d& approach, design::Side material,
+                                   bool closed, double length, double speed,
+                                   const ScanSettings& settings) = 0;
+};
+
+// The virtual CMM: a servo-controlled carriage and a scanning probe in front of a simulated
+// part. The part's section whose design plane contains an operation's plane is the surface the
+// probe meets (each section's true contour, built once).
+struct VirtualCmmOptions {
+  sim::ServoOptions servo;
+  sim::ProbeOptions probe;
+  double path_acceleration = 1000;  // ramps of the path speed at a scan's start and end (mm/s²)
+  double correction_gain = 60;      // active scanning: normal correction rate (1/s)
+};
+
+class VirtualCmm : public Machine {
+ public:
+  VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
+             const Eigen::Vector3d& home = Eigen::Vector3d::Zero());
+  double time() const override { return servo_.time(); }
+  Eigen::Vector3d position() const override { return servo_.position(); }
+  void move(const Eigen::Vector3d& to, double speed) override;
+  std::optional<Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
+                             const Eigen::Vector3d& direction, double distance, double speed,
+                             double trigger) override;
+  ScanOutcome scan_path(const design::ScanPath& path, const ScanSettings& settings,
+                        const Monitor& monitor) override;
+  ScanOutcome scan_unknown(const design::Plane& plane, const Eigen::Vector3d& start,
+                           const Eigen::Vector3d& approach, design::Side material, bool closed,
+                           double length, double speed, const ScanSettings& settings) override;
+
+  // Signed distance of p from the true part in `plane` (the nearest of the contours the part
+  // has there; > 0 outside the material), for checks against the truth. Throws Error if the
+  // part has no section in that plane.
+  double distance(const design::Plane& plane, const Eigen::Vector3d& p) const;
+  const sim::Part& part() const { return part_; }
+
+ private:
+  sim::Part part_;
+  VirtualCmmOptions o_;
+  sim::Servo servo_;
+  sim::Probe probe_;
+  std::vector<std::pair<design::Plane, sim::Contour>> contours_;
+  // The contours of the part in a plane (a plane may cut several: an outline and its holes).
+  std::vector<const sim::Contour*> in_plane(const design::Plane& plane) const;
+  sim::ProbeReading read(const std::vector<const sim::Contour*>& part);
+  Sample sample(const sim::ProbeReading& r, double arc) const;
+};
+
+}  // namespace trueaxis::scan

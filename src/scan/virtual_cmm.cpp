@@ -1,0 +1,277 @@
+// The virtual CMM: servo-level moves, touches, design-value and autonomous scans against a
+// simulated part.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/scan/machine.hpp"
+
+namespace trueaxis::scan {
+namespace {
+
+constexpr long kMaxTicks = 50'000'000;  // 14 hours of machine time at 1 kHz: a runaway guard
+
+bool same_plane(const design::Plane& a, const design::Plane& b) {
+  const Eigen::Vector3d na = a.normal.normalized(), nb = b.normal.normalized();
+  return na.cross(nb).norm() < 1e-9 && std::abs((b.origin - a.origin).dot(na)) < 1e-6;
+}
+
+}  // namespace
+
+VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
+                       const Eigen::Vector3d& home)
+    : part_(std::move(part)), o_(options), servo_(options.servo, home), probe_(options.probe) {
+  part_.validate();
+  for (const auto& s : part_.design.sections) {
+    design::Plane pl = s.plane;
+    pl.normal.normalize();
+    contours_.emplace_back(pl, sim::true_contour(part_, s));
+  }
+}
+
+std::vector<const sim::Contour*> VirtualCmm::in_plane(const design::Plane& plane) const {
+  std::vector<const sim::Contour*> out;
+  for (const auto& [pl, c] : contours_)
+    if (same_plane(pl, plane)) out.push_back(&c);
+  if (out.empty()) throw Error("the simulated part has no section in this plane");
+  return out;
+}
+
+double VirtualCmm::distance(const design::Plane& plane, const Eigen::Vector3d& p) const {
+  double best = 1e300;
+  for (const sim::Contour* c : in_plane(plane)) {
+    const double d = c->nearest(p).distance;
+    if (std::abs(d) < std::abs(best)) best = d;
+  }
+  return best;
+}
+
+sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part) {
+  // The ball meets the nearest contour of the plane.
+  const sim::Contour* nearest = part.front();
+  double best = 1e300;
+  for (const sim::Contour* c : part) {
+    const double d = std::abs(c->nearest(servo_.position()).distance);
+    if (d < best) {
+      best = d;
+      nearest = c;
+    }
+  }
+  return probe_.read(servo_.position(), *nearest);
+}
+
+Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
+  Sample s;
+  s.t = servo_.time();
+  s.arc = arc;
+  s.contact = r.contact;
+  s.overtravel = r.overtravel;
+  const double m = r.deflection.norm();
+  if (r.contact && m > 0) {
+    s.normal = r.deflection / m;
+    s.surface = servo_.position() + r.deflection - probe_.options().tip_radius * s.normal;
+  }
+  return s;
+}
+
+void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
+  if (!(speed > 0) || !to.allFinite()) throw Error("move: bad target or speed");
+  const Eigen::Vector3d from = servo_.position();
+  const double L = (to - from).norm();
+  const Eigen::Vector3d dir = L > 0 ? Eigen::Vector3d((to - from) / L) : Eigen::Vector3d::Zero();
+  const double a = o_.path_acceleration, dt = servo_.options().dt();
+  double s = 0, v = 0;
+  for (long k = 0; k < kMaxTicks; ++k) {
+    const bool at_end = s >= L;
+    if (at_end && (servo_.position() - to).norm() < 1e-4 && servo_.velocity().norm() < 1) return;
+    v = at_end ? 0 : std::min({speed, v + a * dt, std::sqrt(2 * a * std::max(0.0, L - s))});
+    servo_.step(from + dir * std::min(s, L), dir * v);
+    s = std::min(L, s + v * dt);
+  }
+  throw Error("move: the carriage did not settle");
+}
+
+std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::Vector3d& start,
+                                       const Eigen::Vector3d& direction, double distance,
+                                       double speed, double trigger) {
+  const auto c = in_plane(plane);
+  move(start, std::max(speed, 50.0));
+  const Eigen::Vector3d d = direction.normalized();
+  const double dt = servo_.options().dt();
+  std::optional<Touch> out;
+  double s = 0;
+  while (s <= distance) {
+    servo_.step(start + d * s, d * speed);
+    s += speed * dt;
+    const auto r = read(c);
+    if (r.overtravel) break;
+    if (r.contact && r.deflection.norm() >= trigger) {
+      const Sample smp = sample(r, 0);
+      out = Touch{smp.surface, smp.normal, smp.t};
+      break;
+    }
+  }
+  move(start, std::max(speed, 50.0));
+  return out;
+}
+
+ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettings& st,
+                                  const Monitor& monitor) {
+  const auto c = in_plane(path.plane);
+  ScanOutcome out;
+  const double L = path.length(), dt = servo_.options().dt(), a = o_.path_acceleration;
+  const auto p0 = path.at(0);
+  // Approach: from outside the path, along the normal, until the probe is pushed by Ep.
+  const Eigen::Vector3d outside = p0.p + st.approach_clearance * p0.normal;
+  move(outside, 100);
+  double cnorm = st.approach_clearance;  // the normal correction: offset from the path (mm)
+  const double approach_speed = 5;
+  for (;;) {
+    servo_.step(p0.p + cnorm * p0.normal, -approach_speed * p0.normal);
+    cnorm -= approach_speed * dt;
+    const auto r = read(c);
+    Sample smp = sample(r, 0);
+    smp.delta_l = (servo_.position() + r.deflection - p0.p).dot(p0.normal) - st.pushing;
+    if (r.contact && r.deflection.norm() >= st.pushing) break;
+    if (r.overtravel || cnorm < -st.approach_limit) {
+      out.stop = smp;
+      out.fault = r.overtravel ? "over-travel on the approach"
+                               : fmt::format("no surface within {:g} mm of the path's start",
+                                             st.approach_limit);
+      move(outside, 100);
+      return out;
+    }
+  }
+  if (!st.active) cnorm = 0;
+  // Look-ahead: the speed allowed at each segment's start so that the carriage can slow down in
+  // time for slower (tighter) segments ahead and stop at the end.
+  const std::size_t ns = path.segments.size();
+  std::vector<double> begin(ns + 1, 0.0), entry(ns + 1, 0.0);
+  for (std::size_t i = 0; i < ns; ++i) begin[i + 1] = begin[i] + path.segments[i].length;
+  for (std::size_t i = ns; i-- > 0;)
+    entry[i] = std::min(path.segments[i].speed,
+                        std::sqrt(entry[i + 1] * entry[i + 1] + 2 * a * path.segments[i].length));
+  std::size_t seg = 0;
+  double s = 0, v = 0, next_record = 0;
+  for (long k = 0; k < kMaxTicks; ++k) {
+    const auto here = path.at(s);
+    while (seg + 1 < ns && s >= begin[seg + 1]) ++seg;
+    const double ahead =
+        std::sqrt(entry[seg + 1] * entry[seg + 1] + 2 * a * std::max(0.0, begin[seg + 1] - s));
+    v = std::min({here.speed, v + a * dt, ahead});
+    servo_.step(here.p + cnorm * here.normal, here.tangent * v);
+    s = std::min(L, s + v * dt);
+    const auto now = path.at(s);
+    const auto r = read(c);
+    Sample smp = sample(r, s);
+    // On a perfect part the ball centre runs Ep outside the (pushed-in) path.
+    smp.delta_l = (servo_.position() + r.deflection - now.p).dot(now.normal) - st.pushing;
+    if (st.active) {
+      const double e = r.contact ? r.deflection.dot(now.normal) - st.pushing : -st.pushing;
+      cnorm += o_.correction_gain * e * dt;
+    }
+    out.stop = smp;
+    if (r.contact && s >= next_record) {
+      out.samples.push_back(smp);
+      next_record += st.record_spacing;
+    }
+    if (!monitor(smp)) break;
+    if (r.overtravel) {
+      out.fault = "over-travel: the probe was pushed beyond its measuring range";
+      break;
+    }
+    if (s >= L && v < 1e-9) {
+      out.completed = true;
+      break;
+    }
+  }
+  // Retract away from the surface.
+  const auto end = path.at(s);
+  move(servo_.position() + st.approach_clearance * end.normal, 100);
+  return out;
+}
+
+ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Vector3d& start,
+                                     const Eigen::Vector3d& approach, design::Side material,
+                                     bool closed, double length, double speed,
+                                     const ScanSettings& st) {
+  const auto c = in_plane(plane);
+  const Eigen::Vector3d n = plane.normal.normalized();
+  const double dt = servo_.options().dt(), gain = 40;
+  ScanOutcome out;
+  move(start, 100);
+  // Approach until pushed by Ep.
+  const Eigen::Vector3d dir = approach.normalized();
+  double s = 0;
+  sim::ProbeReading r;
+  for (;;) {
+    servo_.step(start + s * dir, dir * 5.0);
+    s += 5.0 * dt;
+    r = read(c);
+    if (r.contact && r.deflection.norm() >= st.pushing) break;
+    if (s > 3 * st.approach_clearance + 10) {
+      out.fault = "autonomous scan: no surface found on the approach";
+      move(start, 100);
+      return out;
+    }
+  }
+  Eigen::Vector3d dhat = r.deflection.normalized();
+  const Sample first = sample(r, 0);
+  Eigen::Vector3d last_surface = first.surface;
+  Eigen::Vector3d t0 =
+      (material == design::Side::Left ? n.cross(dhat) : Eigen::Vector3d(dhat.cross(n)));
+  double arc = 0, next_record = 0, lost = 0, v = 0;
+  const double limit = closed ? 5 * length + 100 : length;
+  for (long k = 0; k < kMaxTicks; ++k) {
+    if (r.contact && r.deflection.norm() > 0) dhat = r.deflection.normalized();
+    const Eigen::Vector3d d =
+        material == design::Side::Left ? n.cross(dhat) : Eigen::Vector3d(dhat.cross(n));
+    const double e = r.contact ? r.deflection.norm() - st.pushing : -st.pushing;
+    v = std::min(speed, v + o_.path_acceleration * dt);
+    const Eigen::Vector3d vel = v * d + gain * e * dhat;
+    servo_.step(servo_.position(), vel);
+    r = read(c);
+    Sample smp = sample(r, arc);
+    if (r.contact) {
+      arc += (smp.surface - last_surface).norm();
+      last_surface = smp.surface;
+      smp.arc = arc;
+      lost = 0;
+      if (arc >= next_record) {
+        out.samples.push_back(smp);
+        next_record += st.record_spacing;
+      }
+    } else {
+      lost += v * dt;
+    }
+    out.stop = smp;
+    if (r.overtravel) {
+      out.fault = "over-travel in the autonomous scan";
+      break;
+    }
+    if (lost > 5) {
+      out.fault = "autonomous scan: contact lost for 5 mm";
+      break;
+    }
+    if (closed && arc > 5 && (smp.surface - first.surface).norm() < 1 &&
+        (smp.surface - first.surface).dot(t0) >= 0) {
+      out.completed = true;
+      break;
+    }
+    if (!closed && arc >= length) {
+      out.completed = true;
+      break;
+    }
+    if (arc > limit) {
+      out.fault = "autonomous scan: did not return to its start";
+      break;
+    }
+  }
+  move(servo_.position() + st.approach_clearance * dhat, 100);
+  return out;
+}
+
+}  // namespace trueaxis::scan

@@ -1,0 +1,90 @@
+// The virtual CMM on a part equal to its design and on a moved one: design-value scanning,
+// touches and autonomous scanning measure the true surface.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "../test_util.hpp"
+#include "trueaxis/scan/machine.hpp"
+
+namespace trueaxis {
+namespace {
+
+// Noise-free: what is left is the servo's following error across the path and the contour's
+// sampling (0.05 mm chords): both well under a micrometre on these parts.
+constexpr double kServoTol = 2e-3;  // mm, for surface points measured on the move
+
+design::Design square_and_hole() {
+  design::Design d;
+  design::Section sq;
+  sq.name = "outer";
+  sq.plane = {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()};
+  sq.polyline.resize(3, 5);
+  sq.polyline << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
+  d.sections.push_back(sq);
+  design::Section hole;
+  hole.name = "hole";
+  hole.plane = sq.plane;
+  hole.material = design::Side::Right;
+  const int n = 73;
+  hole.polyline.resize(3, n);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * (i % (n - 1)) / (n - 1);
+    hole.polyline.col(i) << 50 + 25 * std::cos(a), 50 + 25 * std::sin(a), 25;
+  }
+  d.sections.push_back(hole);
+  return d;
+}
+
+TEST(VirtualCmm, DesignValueScanOfAPerfectPartFollowsItsSurface) {
+  sim::Part part{square_and_hole(), {}};
+  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  design::PathOptions po;
+  po.tip_radius = 1;
+  po.pushing = 0.3;
+  for (const auto& s : part.design.sections) {
+    const auto path = design::make_path(s, po);
+    double worst_dl = 0;
+    const auto out = cmm.scan_path(path, {}, [&](const scan::Sample& x) {
+      worst_dl = std::max(worst_dl, std::abs(x.delta_l));
+      return true;
+    });
+    ASSERT_TRUE(out.completed) << s.name << ": " << out.fault;
+    EXPECT_GT(out.samples.size(), path.length() / 0.2 * 0.9);
+    double worst = 0;
+    for (const auto& x : out.samples)
+      worst = std::max(worst, std::abs(cmm.distance(s.plane, x.surface)));
+    EXPECT_LT(worst, kServoTol) << s.name;
+    EXPECT_LT(worst_dl, 0.05) << s.name;  // the servo lags on the corner arcs, a little
+  }
+  EXPECT_GT(cmm.time(), 5);  // 550 mm at ≤ 100 mm/s, and the approaches
+}
+
+TEST(VirtualCmm, TouchAndAutonomousScanFindAMovedPart) {
+  sim::Part part{square_and_hole(), {}};
+  part.deviation.translation = Eigen::Vector3d(2, -1, 0);
+  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  const auto& plane = part.design.sections[0].plane;
+  const auto t =
+      cmm.touch(plane, Eigen::Vector3d(50, -10, 25), Eigen::Vector3d(0, 1, 0), 20, 5, 0.3);
+  ASSERT_TRUE(t);
+  EXPECT_NEAR(t->surface.y(), -1, 1e-6);
+  EXPECT_NEAR(t->normal.dot(Eigen::Vector3d(0, -1, 0)), 1, 1e-9);
+  EXPECT_FALSE(
+      cmm.touch(plane, Eigen::Vector3d(50, -30, 25), Eigen::Vector3d(0, 1, 0), 10, 5, 0.3));
+
+  const double t0 = cmm.time();
+  scan::ScanSettings st;
+  const auto out = cmm.scan_unknown(plane, Eigen::Vector3d(50, -10, 25), Eigen::Vector3d(0, 1, 0),
+                                    design::Side::Left, true, 400, 12, st);
+  ASSERT_TRUE(out.completed) << out.fault;
+  double worst = 0;
+  for (const auto& x : out.samples)
+    worst = std::max(worst, std::abs(cmm.distance(plane, x.surface)));
+  EXPECT_LT(worst, kServoTol);
+  EXPECT_NEAR(out.samples.back().arc, 400, 2);
+  EXPECT_GT(cmm.time() - t0, 400 / 12.0);  // slow: about 10× the design-value time
+}
+
+}  // namespace
+}  // namespace trueaxis
