@@ -1,0 +1,108 @@
+// trueaxis::scan — error-tolerant design-value scanning: the controller that keeps a CMM
+// scanning when the part is too far from its design (after Mitutoyo's method, JP 6484108 B2).
+//
+// For each section: scan along the path computed from the design data (fast). While the
+// trajectory error ΔL stays within the tolerance, that is all. On a trajectory error:
+//  1. a section that is not planar ends in an error (nothing here can correct it);
+//  2. first time (flag = 0): touch points along the design normals, fit a menu of geometric
+//     corrections (translation; rotation; uniform scale; scale and rotation; scale along one
+//     direction — each with a translation) and keep the simplest one that brings every touch
+//     point closer and leaves none further than `accept` from the corrected design; apply it to
+//     this section's design data only, set flag = 1 and rescan;
+//  3. no correction fits, or an error again with flag = 1: scan the section autonomously
+//     (slowly, following the surface), overwrite its design data with what was measured
+//     (tip radius and pushing amount compensated), set flag = 0 and rescan in design mode;
+//  4. stop with an error after `max_autonomous` autonomous corrections of one section.
+// The corrected design data are returned, so that the next part of a batch scans with them.
+//
+// Units: mm, s (machine time). Every decision is logged as an Event.
+#pragma once
+
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "trueaxis/design/design.hpp"
+#include "trueaxis/scan/machine.hpp"
+
+namespace trueaxis::scan {
+
+enum class Strategy { ErrorTolerant, Design, Autonomous };
+const char* to_string(Strategy s);
+Strategy strategy_from_string(const std::string& s);  // throws Error
+
+struct ControllerOptions {
+  Strategy strategy = Strategy::ErrorTolerant;
+  design::PathOptions path;      // tip radius, pushing, tolerance and speeds of the path
+  double tolerance = 1.5;        // |ΔL| allowed during design-value scanning (mm)
+  int max_autonomous = 3;        // autonomous corrections per section before giving up
+  bool active = true;            // active (pushing held) or passive design-value scanning
+  int touch_points = 16;         // points touched for a geometric correction
+  double touch_trigger = 0.3;    // deflection that records a touch (mm)
+  double touch_speed = 5;        // mm/s
+  double move_speed = 100;       // free moves (mm/s)
+  double autonomous_speed = 12;  // mm/s
+  double accept = 0.05;          // a correction must leave every touch point within this (mm)
+  double record_spacing = 0.2;   // mm between recorded surface points
+  // Throws Error naming the option when out of range.
+  void validate() const;
+};
+
+struct Event {
+  double t = 0;  // machine time (s)
+  std::string section;
+  double arc = 0, delta_l = 0;  // where on the path, and the trajectory error there (mm)
+  std::string mode;             // design, touch, autonomous, correction, section
+  std::string event;            // trajectory_error, touch, correction_applied, correction_rejected,
+                      // autonomous_scan, design_overwritten, rescan, section_done, error_exit,
+                      // loop_limit
+  std::string decision;  // in words
+};
+
+struct Correction {
+  std::string type;  // translation, rotation, scale, scale+rotation, directional-scale
+  std::vector<std::pair<std::string, double>> parameters;  // named values (mm, °, factor)
+  double residual_before = 0, residual_after = 0;  // max |distance| of the touch points (mm)
+  bool accepted = false;
+};
+
+struct MachineTime {
+  double total = 0, design = 0, touch = 0, autonomous = 0, moves = 0;  // s
+};
+
+struct SectionResult {
+  std::string name;
+  bool ok = false;
+  std::string reason;  // why it ended in an error ("" when ok)
+  MachineTime time;
+  std::vector<Correction> corrections;
+  int autonomous_count = 0, trajectory_errors = 0;
+  std::vector<Sample> points;  // the final scan's surface points
+};
+
+struct Result {
+  std::vector<SectionResult> sections;
+  std::vector<Event> events;
+  MachineTime time;
+  design::Design design;  // the design data after the corrections: input for the next part
+  bool ok() const;
+  std::string summary() const;
+};
+
+// Scans every section of `design` on `machine`. `progress(section index, count)` is called as
+// each section starts (may be empty).
+Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
+            const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+// The geometric-correction menu on its own. `touched` (3 × m, mm) are surface points found by
+// touching along the design normals at `feet` (3 × m, points of the design curve). Returns every
+// model tried, in menu order, with `accepted` set on the one chosen (at most one); `corrected`
+// receives the section with that correction applied (its curve transformed, the plane kept).
+std::vector<Correction> fit_corrections(const design::Section& section,
+                                        const Eigen::Matrix3Xd& feet,
+                                        const Eigen::Matrix3Xd& touched, double accept,
+                                        design::Section* corrected);
+
+}  // namespace trueaxis::scan

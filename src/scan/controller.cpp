@@ -1,0 +1,305 @@
+// The error-tolerant scanning controller.
+#include "trueaxis/scan/controller.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::scan {
+namespace {
+
+// Machine time of one operation, added to a category.
+template <class Fn>
+auto timed(Machine& m, double& bucket, Fn&& fn) {
+  const double t0 = m.time();
+  struct Add {
+    Machine& m;
+    double& b;
+    double t0;
+    ~Add() { b += m.time() - t0; }
+  } add{m, bucket, t0};
+  return fn();
+}
+
+// The measured section as design data: surface points every ~0.5 mm as a polyline in the plane.
+design::Section overwrite(const design::Section& s, const std::vector<Sample>& samples) {
+  design::Section out = s;
+  out.nurbs.reset();
+  const Eigen::Vector3d n = s.plane.normal.normalized();
+  std::vector<Eigen::Vector3d> pts;
+  for (const auto& x : samples) {
+    const Eigen::Vector3d p = x.surface - (x.surface - s.plane.origin).dot(n) * n;
+    if (pts.empty() || (p - pts.back()).norm() >= 0.5) pts.push_back(p);
+  }
+  if (s.closed) {
+    while (pts.size() > 2 && (pts.back() - pts.front()).norm() < 0.25) pts.pop_back();
+    pts.push_back(pts.front());
+  }
+  out.polyline.resize(3, static_cast<Eigen::Index>(pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    out.polyline.col(static_cast<Eigen::Index>(i)) = pts[i];
+  return out;
+}
+
+struct SectionRun {
+  Machine& m;
+  const ControllerOptions& o;
+  std::vector<Event>& events;
+  SectionResult r;
+  design::Section current;
+  ScanSettings settings() const {
+    ScanSettings st;
+    st.pushing = o.path.pushing;
+    st.active = o.active;
+    st.record_spacing = o.record_spacing;
+    st.approach_clearance = 1.0;
+    st.approach_limit = o.tolerance + 1.0;
+    return st;
+  }
+  void log(double arc, double dl, const std::string& mode, const std::string& ev,
+           const std::string& decision) {
+    events.push_back({m.time(), current.name, arc, dl, mode, ev, decision});
+  }
+
+  // Design-value scan; true when it ran through within the tolerance.
+  bool design_scan(Sample& stop, std::string& why) {
+    const auto path = design::make_path(current, o.path);
+    bool error = false;
+    const auto out = timed(m, r.time.design, [&] {
+      return m.scan_path(path, settings(), [&](const Sample& s) {
+        if (std::abs(s.delta_l) > o.tolerance || (!o.active && !s.contact)) {
+          error = true;
+          return false;
+        }
+        return true;
+      });
+    });
+    stop = out.stop;
+    if (out.completed && !error) {
+      r.points = out.samples;
+      return true;
+    }
+    why = !out.fault.empty() ? out.fault
+          : !o.active && !stop.contact
+              ? "the probe lifted off the surface"
+              : fmt::format("trajectory error {:+.3f} mm beyond the ±{:g} mm tolerance",
+                            stop.delta_l, o.tolerance);
+    return false;
+  }
+
+  // Touch points along the design normals; returns the feet and touched points.
+  std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> touch() {
+    const double L = design::length(current);
+    const int k = o.touch_points;
+    const auto smp = design::sample(current, L / (current.closed ? k : k - 1) / 4);
+    Eigen::Matrix3Xd feet(3, 0), got(3, 0);
+    const double reach = o.path.tip_radius + o.tolerance + 3;
+    for (int i = 0; i < k; ++i) {
+      const double arc = current.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / (k - 1)) * L;
+      Eigen::Index j = 0;
+      (smp.arc.array() - arc).abs().minCoeff(&j);
+      const Eigen::Vector3d p = smp.points.col(j), nn = smp.normals.col(j);
+      const auto t = timed(m, r.time.touch, [&] {
+        return m.touch(current.plane, p + reach * nn, -nn, 2 * reach, o.touch_speed,
+                       o.touch_trigger);
+      });
+      if (!t) {
+        log(arc, 0, "touch", "touch", "no surface found along the design normal here");
+        continue;
+      }
+      const double dev = (t->surface - p).dot(nn);
+      log(arc, dev, "touch", "touch", fmt::format("surface {:+.4f} mm from the design", dev));
+      feet.conservativeResize(3, feet.cols() + 1);
+      got.conservativeResize(3, got.cols() + 1);
+      feet.col(feet.cols() - 1) = p;
+      got.col(got.cols() - 1) = t->surface;
+    }
+    return {feet, got};
+  }
+
+  bool autonomous() {
+    const auto smp = design::sample(current, 1.0);
+    const Eigen::Vector3d p = smp.points.col(0), nn = smp.normals.col(0);
+    const double reach = o.path.tip_radius + o.tolerance + 3;
+    const auto out = timed(m, r.time.autonomous, [&] {
+      return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
+                            design::length(current), o.autonomous_speed, settings());
+    });
+    ++r.autonomous_count;
+    if (!out.completed || out.samples.size() < 10) {
+      log(out.stop.arc, 0, "autonomous", "error_exit",
+          "the autonomous scan failed: " + (out.fault.empty() ? "too few points" : out.fault));
+      r.reason = "autonomous scan failed: " + out.fault;
+      return false;
+    }
+    log(out.stop.arc, 0, "autonomous", "autonomous_scan",
+        fmt::format("{} points over {:.1f} mm", out.samples.size(), out.samples.back().arc));
+    r.points = out.samples;
+    if (o.strategy == Strategy::Autonomous) return true;
+    current = overwrite(current, out.samples);
+    log(0, 0, "autonomous", "design_overwritten",
+        fmt::format("the section's design data replaced by the measured contour ({} points, "
+                    "tip radius and pushing amount compensated)",
+                    current.polyline.cols()));
+    return true;
+  }
+
+  void run() {
+    r.name = current.name;
+    const double t0 = m.time();
+    if (o.strategy == Strategy::Autonomous) {
+      r.ok = autonomous();
+      if (r.ok) log(0, 0, "section", "section_done", "measured by autonomous scanning only");
+      r.time.total = m.time() - t0;
+      return;
+    }
+    int flag = 0;
+    for (int loop = 0;; ++loop) {
+      Sample stop;
+      std::string why;
+      if (design_scan(stop, why)) {
+        r.ok = true;
+        log(stop.arc, stop.delta_l, "design", "section_done",
+            loop == 0 ? "scanned along the design" : "rescan succeeded");
+        break;
+      }
+      ++r.trajectory_errors;
+      if (o.strategy == Strategy::Design) {
+        log(stop.arc, stop.delta_l, "design", "error_exit", why);
+        r.reason = why;
+        break;
+      }
+      log(stop.arc, stop.delta_l, "design", "trajectory_error", why);
+      // The path is a plane section by construction of design data here; a three-dimensional
+      // path (no plane) cannot be corrected.
+      if (!(current.plane.normal.norm() > 0)) {
+        r.reason = "the scan path is not a plane section: it cannot be corrected";
+        log(stop.arc, stop.delta_l, "design", "error_exit", r.reason);
+        break;
+      }
+      bool corrected = false;
+      if (flag == 0) {
+        auto [feet, got] = touch();
+        if (got.cols() >= 4) {
+          design::Section fixed;
+          auto tried = fit_corrections(current, feet, got, o.accept, &fixed);
+          for (const auto& c : tried) {
+            std::string params;
+            for (const auto& [k, v] : c.parameters)
+              if (k.rfind("centre", 0) != 0) params += fmt::format(" {}={:.6g}", k, v);
+            log(stop.arc, stop.delta_l, "correction",
+                c.accepted ? "correction_applied" : "correction_rejected",
+                fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f})", c.type, params,
+                            c.residual_after, c.residual_before));
+            if (c.accepted) corrected = true;
+          }
+          r.corrections.insert(r.corrections.end(), tried.begin(), tried.end());
+          if (corrected) current = fixed;
+        } else {
+          log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+              fmt::format("only {} touch points found: no correction can be fitted", got.cols()));
+        }
+      }
+      if (corrected) {
+        flag = 1;
+        log(stop.arc, stop.delta_l, "design", "rescan", "rescan with the corrected design data");
+        continue;
+      }
+      if (r.autonomous_count >= o.max_autonomous) {
+        r.reason = fmt::format("loop limit: still failing after {} autonomous corrections",
+                               r.autonomous_count);
+        log(stop.arc, stop.delta_l, "autonomous", "loop_limit", r.reason);
+        break;
+      }
+      if (!autonomous()) break;
+      flag = 0;
+      log(0, 0, "design", "rescan", "rescan in design mode with the measured design data");
+    }
+    r.time.total = m.time() - t0;
+    r.time.moves = std::max(0.0, r.time.total - r.time.design - r.time.touch - r.time.autonomous);
+  }
+};
+
+}  // namespace
+
+const char* to_string(Strategy s) {
+  return s == Strategy::ErrorTolerant ? "error-tolerant"
+         : s == Strategy::Design      ? "design"
+                                      : "autonomous";
+}
+
+Strategy strategy_from_string(const std::string& s) {
+  if (s == "error-tolerant") return Strategy::ErrorTolerant;
+  if (s == "design") return Strategy::Design;
+  if (s == "autonomous") return Strategy::Autonomous;
+  throw Error("strategy '" + s + "': use error-tolerant, design or autonomous");
+}
+
+void ControllerOptions::validate() const {
+  path.validate();
+  auto bad = [](const char* name, double v, const char* why) {
+    throw Error(fmt::format("{} = {:g}: {}", name, v, why));
+  };
+  if (!(tolerance > 0 && tolerance <= 10)) bad("tolerance", tolerance, "must be in (0, 10] mm");
+  if (max_autonomous < 0 || max_autonomous > 100)
+    bad("max autonomous", max_autonomous, "must be 0 to 100");
+  if (touch_points < 4 || touch_points > 1000)
+    bad("touch points", touch_points, "must be 4 to 1000");
+  if (!(touch_trigger > 0 && touch_trigger < path.tip_radius))
+    bad("touch trigger", touch_trigger, "must be positive and below the tip radius (mm)");
+  if (!(touch_speed > 0 && touch_speed <= 50))
+    bad("touch speed", touch_speed, "must be in (0, 50] mm/s");
+  if (!(move_speed > 0 && move_speed <= 1000))
+    bad("move speed", move_speed, "must be in (0, 1000] mm/s");
+  if (!(autonomous_speed > 0 && autonomous_speed <= 100))
+    bad("autonomous speed", autonomous_speed, "must be in (0, 100] mm/s");
+  if (!(accept > 0 && accept < tolerance))
+    bad("accept", accept, "must be positive and below the tolerance");
+  if (!(record_spacing >= 0.01 && record_spacing <= 10))
+    bad("record spacing", record_spacing, "must be in [0.01, 10] mm");
+}
+
+bool Result::ok() const {
+  for (const auto& s : sections)
+    if (!s.ok) return false;
+  return true;
+}
+
+std::string Result::summary() const {
+  int ok = 0, errors = 0, aut = 0, corr = 0;
+  for (const auto& s : sections) {
+    ok += s.ok;
+    errors += s.trajectory_errors;
+    aut += s.autonomous_count;
+    for (const auto& c : s.corrections) corr += c.accepted;
+  }
+  return fmt::format(
+      "{} of {} sections scanned; {} trajectory errors, {} geometric corrections, {} autonomous "
+      "scans; machine time {:.1f} s (design {:.1f}, touch {:.1f}, autonomous {:.1f}, moves {:.1f})",
+      ok, sections.size(), errors, corr, aut, time.total, time.design, time.touch, time.autonomous,
+      time.moves);
+}
+
+Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
+            const std::function<void(std::size_t, std::size_t)>& progress) {
+  options.validate();
+  Result res;
+  res.design = design;
+  for (std::size_t i = 0; i < design.sections.size(); ++i) {
+    if (progress) progress(i, design.sections.size());
+    SectionRun run{machine, options, res.events, {}, design.sections[i]};
+    run.run();
+    res.design.sections[i] = run.current;
+    res.time.total += run.r.time.total;
+    res.time.design += run.r.time.design;
+    res.time.touch += run.r.time.touch;
+    res.time.autonomous += run.r.time.autonomous;
+    res.time.moves += run.r.time.moves;
+    res.sections.push_back(std::move(run.r));
+  }
+  return res;
+}
+
+}  // namespace trueaxis::scan

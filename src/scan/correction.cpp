@@ -1,0 +1,233 @@
+// The geometric-correction menu: in-plane transformations of a section's design data fitted to
+// touched points by Gauss–Newton on their normal distances.
+#include <fmt/format.h>
+
+#include <Eigen/QR>
+#include <cmath>
+
+#include "trueaxis/scan/controller.hpp"
+#include "trueaxis/sim/cmm.hpp"
+
+namespace trueaxis::scan {
+namespace {
+
+// The section plane's frame, centred on the section's centroid.
+struct Frame {
+  Eigen::Vector3d o, e1, e2, n;
+  Eigen::Vector2d to2(const Eigen::Vector3d& x) const { return {(x - o).dot(e1), (x - o).dot(e2)}; }
+  Eigen::Vector3d to3(const Eigen::Vector2d& x, const Eigen::Vector3d& like) const {
+    return o + e1 * x.x() + e2 * x.y() + n * (like - o).dot(n);
+  }
+};
+
+Frame frame_of(const design::Section& s) {
+  Frame f;
+  f.n = s.plane.normal.normalized();
+  const Eigen::Vector3d a =
+      std::abs(f.n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  f.e1 = (a - a.dot(f.n) * f.n).normalized();
+  f.e2 = f.n.cross(f.e1);
+  const auto smp = design::sample(s, 0.5);
+  f.o = smp.points.rowwise().mean();
+  return f;
+}
+
+enum class Kind { Translation, Rotation, Scale, ScaleRotation, Directional };
+const char* name(Kind k) {
+  switch (k) {
+    case Kind::Translation:
+      return "translation";
+    case Kind::Rotation:
+      return "rotation";
+    case Kind::Scale:
+      return "scale";
+    case Kind::ScaleRotation:
+      return "scale+rotation";
+    case Kind::Directional:
+      return "directional-scale";
+  }
+  return "";
+}
+
+// x -> A x + t in the plane frame.
+struct Affine2 {
+  Eigen::Matrix2d A = Eigen::Matrix2d::Identity();
+  Eigen::Vector2d t = Eigen::Vector2d::Zero();
+};
+
+Affine2 model(Kind k, const Eigen::VectorXd& q) {
+  Affine2 m;
+  auto rot = [](double a) {
+    Eigen::Matrix2d r;
+    r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+    return r;
+  };
+  switch (k) {
+    case Kind::Translation:
+      m.t = q.head<2>();
+      break;
+    case Kind::Rotation:
+      m.A = rot(q[2]);
+      m.t = q.head<2>();
+      break;
+    case Kind::Scale:
+      m.A *= 1 + q[2];
+      m.t = q.head<2>();
+      break;
+    case Kind::ScaleRotation:
+      m.A = (1 + q[2]) * rot(q[3]);
+      m.t = q.head<2>();
+      break;
+    case Kind::Directional: {
+      const Eigen::Vector2d u(std::cos(q[3]), std::sin(q[3]));
+      m.A += q[2] * u * u.transpose();
+      m.t = q.head<2>();
+      break;
+    }
+  }
+  return m;
+}
+
+int params(Kind k) {
+  return k == Kind::Translation ? 2 : (k == Kind::Rotation || k == Kind::Scale) ? 3 : 4;
+}
+
+// Normal distances of the touched points from the transformed design at their feet.
+Eigen::VectorXd residuals(Kind k, const Eigen::VectorXd& q, const std::vector<Eigen::Vector2d>& p,
+                          const std::vector<Eigen::Vector2d>& m,
+                          const std::vector<Eigen::Vector2d>& touched) {
+  const Affine2 a = model(k, q);
+  const Eigen::Matrix2d nt = a.A.inverse().transpose();
+  Eigen::VectorXd r(static_cast<Eigen::Index>(p.size()));
+  for (std::size_t i = 0; i < p.size(); ++i)
+    r[static_cast<Eigen::Index>(i)] =
+        (touched[i] - (a.A * p[i] + a.t)).dot((nt * m[i]).normalized());
+  return r;
+}
+
+Eigen::VectorXd gauss_newton(Kind k, Eigen::VectorXd q, const std::vector<Eigen::Vector2d>& p,
+                             const std::vector<Eigen::Vector2d>& m,
+                             const std::vector<Eigen::Vector2d>& touched) {
+  for (int it = 0; it < 30; ++it) {
+    const Eigen::VectorXd r = residuals(k, q, p, m, touched);
+    Eigen::MatrixXd J(r.size(), q.size());
+    for (Eigen::Index j = 0; j < q.size(); ++j) {
+      Eigen::VectorXd h = q;
+      const double step = 1e-7;
+      h[j] += step;
+      const Eigen::VectorXd rp = residuals(k, h, p, m, touched);
+      h[j] -= 2 * step;
+      J.col(j) = (rp - residuals(k, h, p, m, touched)) / (2 * step);
+    }
+    const Eigen::VectorXd dq = J.colPivHouseholderQr().solve(-r);
+    if (!dq.allFinite()) break;
+    q += dq;
+    if (dq.norm() < 1e-12) break;
+  }
+  return q;
+}
+
+design::Section apply(const design::Section& s, const Frame& f, const Affine2& a) {
+  design::Section out = s;
+  auto map = [&](Eigen::Matrix3Xd& pts) {
+    for (Eigen::Index i = 0; i < pts.cols(); ++i) {
+      const Eigen::Vector2d x = f.to2(pts.col(i));
+      pts.col(i) = f.to3(a.A * x + a.t, pts.col(i));
+    }
+  };
+  if (out.nurbs)
+    map(out.nurbs->control_points);
+  else
+    map(out.polyline);
+  return out;
+}
+
+// Signed distances of the touched points from a section's curve (sampled every 0.02 mm).
+Eigen::VectorXd distances(const design::Section& s, const Eigen::Matrix3Xd& touched) {
+  const auto smp = design::sample(s, 0.02);
+  const sim::Contour c(smp.points, s.plane.normal, s.closed, s.material == design::Side::Left);
+  Eigen::VectorXd d(touched.cols());
+  for (Eigen::Index i = 0; i < touched.cols(); ++i) d[i] = c.nearest(touched.col(i)).distance;
+  return d;
+}
+
+}  // namespace
+
+std::vector<Correction> fit_corrections(const design::Section& section,
+                                        const Eigen::Matrix3Xd& feet,
+                                        const Eigen::Matrix3Xd& touched, double accept,
+                                        design::Section* corrected) {
+  const Frame f = frame_of(section);
+  std::vector<Eigen::Vector2d> p, m, t;
+  design::Section unit = section;
+  unit.plane.normal.normalize();
+  const auto smp = design::sample(unit, 0.02);
+  const sim::Contour design_curve(smp.points, unit.plane.normal, unit.closed,
+                                  unit.material == design::Side::Left);
+  for (Eigen::Index i = 0; i < feet.cols(); ++i) {
+    const auto nr = design_curve.nearest(feet.col(i));
+    p.push_back(f.to2(nr.point));
+    m.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
+    t.push_back(f.to2(touched.col(i)));
+  }
+  const Eigen::VectorXd before = distances(section, touched);
+  const double worst_before = before.cwiseAbs().maxCoeff();
+  std::vector<Correction> out;
+  bool done = false;
+  for (Kind k :
+       {Kind::Translation, Kind::Rotation, Kind::Scale, Kind::ScaleRotation, Kind::Directional}) {
+    if (static_cast<int>(p.size()) < params(k) + 2) continue;  // keep some redundancy
+    Eigen::VectorXd best;
+    double best_cost = 1e300;
+    for (int start = 0; start < (k == Kind::Directional ? 4 : 1); ++start) {
+      Eigen::VectorXd q = Eigen::VectorXd::Zero(params(k));
+      if (k == Kind::Directional) q[3] = start * M_PI / 4;
+      q = gauss_newton(k, q, p, m, t);
+      const double cost = residuals(k, q, p, m, t).squaredNorm();
+      if (q.allFinite() && cost < best_cost) {
+        best_cost = cost;
+        best = q;
+      }
+    }
+    if (best.size() == 0) continue;
+    const Affine2 a = model(k, best);
+    const design::Section cand = apply(section, f, a);
+    const Eigen::VectorXd after = distances(cand, touched);
+    Correction c;
+    c.type = name(k);
+    c.residual_before = worst_before;
+    c.residual_after = after.cwiseAbs().maxCoeff();
+    const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();
+    if (k == Kind::Rotation || k == Kind::ScaleRotation)
+      c.parameters.push_back({"rotation_deg", best[k == Kind::Rotation ? 2 : 3] * 180 / M_PI});
+    if (k == Kind::Scale || k == Kind::ScaleRotation || k == Kind::Directional)
+      c.parameters.push_back({"scale", 1 + best[2]});
+    if (k == Kind::Directional) {
+      const Eigen::Vector3d u = f.e1 * std::cos(best[3]) + f.e2 * std::sin(best[3]);
+      c.parameters.push_back({"direction_x", u.x()});
+      c.parameters.push_back({"direction_y", u.y()});
+      c.parameters.push_back({"direction_z", u.z()});
+    }
+    c.parameters.push_back({"dx_mm", t3.x()});
+    c.parameters.push_back({"dy_mm", t3.y()});
+    c.parameters.push_back({"dz_mm", t3.z()});
+    if (k != Kind::Translation) {
+      c.parameters.push_back({"centre_x_mm", f.o.x()});
+      c.parameters.push_back({"centre_y_mm", f.o.y()});
+      c.parameters.push_back({"centre_z_mm", f.o.z()});
+    }
+    bool closer = c.residual_after <= accept;
+    for (Eigen::Index i = 0; closer && i < after.size(); ++i)
+      closer = std::abs(after[i]) <= std::max(std::abs(before[i]), accept);
+    if (!done && closer) {
+      c.accepted = true;
+      done = true;
+      if (corrected) *corrected = cand;
+    }
+    out.push_back(std::move(c));
+    if (done) break;
+  }
+  return out;
+}
+
+}  // namespace trueaxis::scan
