@@ -77,6 +77,9 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate);
 // 'design' (STEP sections or design.json -> design.json and scanning paths) and 'simulate part'.
 std::vector<Command> add_design_commands(CLI::App& app, CLI::App& simulate);
 
+// 'scan' (error-tolerant design-value scanning on the virtual CMM).
+std::vector<Command> add_scan_commands(CLI::App& app);
+
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);
 

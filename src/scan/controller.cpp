@@ -95,15 +95,17 @@ struct SectionRun {
     const int k = o.touch_points;
     const auto smp = design::sample(current, L / (current.closed ? k : k - 1) / 4);
     Eigen::Matrix3Xd feet(3, 0), got(3, 0);
-    const double reach = o.path.tip_radius + o.tolerance + 3;
+    // Start just outside the band where the surface can be (the tolerance, and a margin), and
+    // search across the band.
+    const double reach = o.path.tip_radius + o.tolerance + 0.5;
     for (int i = 0; i < k; ++i) {
       const double arc = current.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / (k - 1)) * L;
       Eigen::Index j = 0;
       (smp.arc.array() - arc).abs().minCoeff(&j);
       const Eigen::Vector3d p = smp.points.col(j), nn = smp.normals.col(j);
       const auto t = timed(m, r.time.touch, [&] {
-        return m.touch(current.plane, p + reach * nn, -nn, 2 * reach, o.touch_speed,
-                       o.touch_trigger);
+        return m.touch(current.plane, p + reach * nn, -nn,
+                       2 * (o.tolerance + 0.5) + o.touch_trigger, o.touch_speed, o.touch_trigger);
       });
       if (!t) {
         log(arc, 0, "touch", "touch", "no surface found along the design normal here");
@@ -120,8 +122,32 @@ struct SectionRun {
   }
 
   bool autonomous() {
+    // Approach where the design is smooth: the sample farthest (in arc) from any corner, so
+    // that a moved part is still met along the normal.
     const auto smp = design::sample(current, 1.0);
-    const Eigen::Vector3d p = smp.points.col(0), nn = smp.normals.col(0);
+    const Eigen::Index n = smp.points.cols();
+    std::vector<double> corners;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Index j = (i + 1) % n;
+      if ((current.closed || j > i) && smp.normals.col(i).dot(smp.normals.col(j)) < std::cos(0.2))
+        corners.push_back(smp.arc[i]);
+    }
+    Eigen::Index best = 0;
+    double best_gap = -1;
+    const double L = design::length(current);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      double gap = current.closed ? L : std::min(smp.arc[i], L - smp.arc[i]);
+      for (double c : corners) {
+        double d = std::abs(smp.arc[i] - c);
+        if (current.closed) d = std::min(d, L - d);
+        gap = std::min(gap, d);
+      }
+      if (gap > best_gap) {
+        best_gap = gap;
+        best = i;
+      }
+    }
+    const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
     const double reach = o.path.tip_radius + o.tolerance + 3;
     const auto out = timed(m, r.time.autonomous, [&] {
       return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
@@ -186,6 +212,13 @@ struct SectionRun {
           design::Section fixed;
           auto tried = fit_corrections(current, feet, got, o.accept, &fixed);
           for (const auto& c : tried) {
+            if (c.type == "none") {
+              log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+                  fmt::format("the touch points agree with the design within {:.4f} mm: the "
+                              "deviation is local, no geometric correction fits it",
+                              c.residual_before));
+              continue;
+            }
             std::string params;
             for (const auto& [k, v] : c.parameters)
               if (k.rfind("centre", 0) != 0) params += fmt::format(" {}={:.6g}", k, v);
@@ -195,7 +228,8 @@ struct SectionRun {
                             c.residual_after, c.residual_before));
             if (c.accepted) corrected = true;
           }
-          r.corrections.insert(r.corrections.end(), tried.begin(), tried.end());
+          for (const auto& c : tried)
+            if (c.type != "none") r.corrections.push_back(c);
           if (corrected) current = fixed;
         } else {
           log(stop.arc, stop.delta_l, "correction", "correction_rejected",

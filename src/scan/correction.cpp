@@ -173,6 +173,15 @@ std::vector<Correction> fit_corrections(const design::Section& section,
   const Eigen::VectorXd before = distances(section, touched);
   const double worst_before = before.cwiseAbs().maxCoeff();
   std::vector<Correction> out;
+  if (worst_before <= accept) {
+    // The touch points already agree with the design: the deviation that stopped the scan is
+    // local, and no geometric correction of the whole section is indicated.
+    Correction c;
+    c.type = "none";
+    c.residual_before = c.residual_after = worst_before;
+    out.push_back(c);
+    return out;
+  }
   bool done = false;
   for (Kind k :
        {Kind::Translation, Kind::Rotation, Kind::Scale, Kind::ScaleRotation, Kind::Directional}) {

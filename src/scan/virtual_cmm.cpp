@@ -98,7 +98,7 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
                                        const Eigen::Vector3d& direction, double distance,
                                        double speed, double trigger) {
   const auto c = in_plane(plane);
-  move(start, std::max(speed, 50.0));
+  move(start, o_.positioning_speed);
   const Eigen::Vector3d d = direction.normalized();
   const double dt = servo_.options().dt();
   std::optional<Touch> out;
@@ -114,7 +114,9 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
       break;
     }
   }
-  move(start, std::max(speed, 50.0));
+  // Retract along the approach direction, by 1 mm or back to the start if that is nearer.
+  const double back = std::min(1.0, (servo_.position() - start).norm());
+  move(servo_.position() - d * back, o_.positioning_speed);
   return out;
 }
 
@@ -126,9 +128,9 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   const auto p0 = path.at(0);
   // Approach: from outside the path, along the normal, until the probe is pushed by Ep.
   const Eigen::Vector3d outside = p0.p + st.approach_clearance * p0.normal;
-  move(outside, 100);
+  move(outside, o_.positioning_speed);
   double cnorm = st.approach_clearance;  // the normal correction: offset from the path (mm)
-  const double approach_speed = 5;
+  const double approach_speed = o_.approach_speed;
   for (;;) {
     servo_.step(p0.p + cnorm * p0.normal, -approach_speed * p0.normal);
     cnorm -= approach_speed * dt;
@@ -141,7 +143,7 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
       out.fault = r.overtravel ? "over-travel on the approach"
                                : fmt::format("no surface within {:g} mm of the path's start",
                                              st.approach_limit);
-      move(outside, 100);
+      move(outside, o_.positioning_speed);
       return out;
     }
   }
@@ -190,7 +192,7 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   }
   // Retract away from the surface.
   const auto end = path.at(s);
-  move(servo_.position() + st.approach_clearance * end.normal, 100);
+  move(servo_.position() + st.approach_clearance * end.normal, o_.positioning_speed);
   return out;
 }
 
@@ -202,19 +204,19 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
   const Eigen::Vector3d n = plane.normal.normalized();
   const double dt = servo_.options().dt(), gain = 40;
   ScanOutcome out;
-  move(start, 100);
+  move(start, o_.positioning_speed);
   // Approach until pushed by Ep.
   const Eigen::Vector3d dir = approach.normalized();
   double s = 0;
   sim::ProbeReading r;
   for (;;) {
-    servo_.step(start + s * dir, dir * 5.0);
-    s += 5.0 * dt;
+    servo_.step(start + s * dir, dir * o_.approach_speed);
+    s += o_.approach_speed * dt;
     r = read(c);
     if (r.contact && r.deflection.norm() >= st.pushing) break;
-    if (s > 3 * st.approach_clearance + 10) {
+    if (s > 2 * (st.approach_clearance + st.approach_limit) + 10) {
       out.fault = "autonomous scan: no surface found on the approach";
-      move(start, 100);
+      move(start, o_.positioning_speed);
       return out;
     }
   }
@@ -270,7 +272,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
       break;
     }
   }
-  move(servo_.position() + st.approach_clearance * dhat, 100);
+  move(servo_.position() + st.approach_clearance * dhat, o_.positioning_speed);
   return out;
 }
 

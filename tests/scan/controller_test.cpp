@@ -14,13 +14,15 @@ namespace {
 constexpr double kServoTol = 2e-3;  // mm: noise-free points on the true surface
 constexpr double kParamTol = 5e-3;  // mm: a fitted translation against the truth
 
-design::Design square_and_hole() {
+// NIST's I++ test part in the section at z = 25 (a 100 mm square around a Ø50 mm hole), or the
+// same `k` times larger.
+design::Design square_and_hole(double k = 1) {
   design::Design d;
   design::Section sq;
   sq.name = "outer";
   sq.plane = {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()};
   sq.polyline.resize(3, 5);
-  sq.polyline << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
+  sq.polyline << 0, 100 * k, 100 * k, 0, 0, 0, 0, 100 * k, 100 * k, 0, 25, 25, 25, 25, 25;
   d.sections.push_back(sq);
   design::Section hole;
   hole.name = "hole";
@@ -30,7 +32,7 @@ design::Design square_and_hole() {
   hole.polyline.resize(3, n);
   for (int i = 0; i < n; ++i) {
     const double a = 2 * M_PI * (i % (n - 1)) / (n - 1);
-    hole.polyline.col(i) << 50 + 25 * std::cos(a), 50 + 25 * std::sin(a), 25;
+    hole.polyline.col(i) << k * (50 + 25 * std::cos(a)), k * (50 + 25 * std::sin(a)), 25;
   }
   d.sections.push_back(hole);
   return d;
@@ -171,6 +173,88 @@ TEST(Controller, LoopLimitAndPlainDesignStrategyStop) {
     EXPECT_NE(r.sections[0].reason.find("trajectory error"), std::string::npos);
     EXPECT_EQ(count(r, "error_exit"), 1);
   }
+}
+
+}  // namespace
+}  // namespace trueaxis
+
+namespace trueaxis {
+namespace {
+
+// Batches of five parts that all trip a plain design-value scan: error-tolerant scanning (the
+// first part corrects the design data, the other four use it) against autonomous-only scanning,
+// in machine seconds. Returns {error-tolerant total, autonomous total, first part alone}.
+struct BatchTimes {
+  double tolerant = 0, autonomous = 0, first = 0, first_autonomous = 0;
+};
+BatchTimes batch(const sim::PartDeviation& dev, double size = 1) {
+  const auto d = square_and_hole(size);
+  scan::VirtualCmmOptions vo;
+  vo.probe.noise = 0.0005;
+  BatchTimes bt;
+  design::Design current = d;
+  scan::ControllerOptions aut;
+  aut.strategy = scan::Strategy::Autonomous;
+  for (std::uint64_t k = 1; k <= 5; ++k) {
+    sim::Part part{d, dev};
+    part.deviation.seed = k;
+    scan::VirtualCmm a(part, vo, Eigen::Vector3d(50, -20, 40));
+    const auto r = scan::scan(a, current, {});
+    EXPECT_TRUE(r.ok()) << k << ": " << r.summary();
+    if (k == 1) bt.first = r.time.total;
+    if (k > 1) {
+      EXPECT_EQ(count(r, "trajectory_error"), 0) << k;
+    }
+    bt.tolerant += r.time.total;
+    current = r.design;
+    scan::VirtualCmm b(part, vo, Eigen::Vector3d(50, -20, 40));
+    const auto ra = scan::scan(b, d, aut);
+    EXPECT_TRUE(ra.ok()) << k << ": " << ra.summary();
+    if (k == 1) bt.first_autonomous = ra.time.total;
+    bt.autonomous += ra.time.total;
+    // Both measure the same surface, within the probe and form noise.
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_LT(worst_distance(b, d.sections[i], ra.sections[i].points), 0.005);
+      EXPECT_LT(worst_distance(a, d.sections[i], r.sections[i].points), 0.005);
+    }
+  }
+  return bt;
+}
+
+// The gain grows with the contour's length: the touches cost the same whatever the length, the
+// scans scale with it (design-value ~70 mm/s on average here, autonomous ~11.5 mm/s).
+TEST(Controller, BatchOfFiveMovedPartsIsAtLeastFiveTimesFasterThanAutonomousOnly) {
+  sim::PartDeviation dev;
+  dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  dev.noise = 0.002;
+  for (double size : {1.0, 2.0}) {
+    const auto bt = batch(dev, size);
+    const std::string tag = size == 1 ? "557mm" : "1114mm";
+    RecordProperty("machine_s_error_tolerant_" + tag, std::to_string(bt.tolerant));
+    RecordProperty("machine_s_autonomous_" + tag, std::to_string(bt.autonomous));
+    RecordProperty("machine_s_first_part_" + tag, std::to_string(bt.first));
+    RecordProperty("machine_s_first_part_autonomous_" + tag, std::to_string(bt.first_autonomous));
+    // 557 mm of contour and 16 touches: ~4.9×; twice the size: over 5×.
+    EXPECT_GE(bt.autonomous / bt.tolerant, size == 1 ? 4.5 : 5.0)
+        << size << ": " << bt.tolerant << " s against " << bt.autonomous;
+    EXPECT_LT(bt.first, bt.first_autonomous);  // even the first part gains
+  }
+}
+
+TEST(Controller, BatchWithABumpPaysOnceForTheAutonomousScan) {
+  sim::PartDeviation dev;
+  dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  dev.bumps = {{"outer", 150, 2.0, 30}};
+  dev.noise = 0.002;
+  const auto bt = batch(dev);
+  RecordProperty("machine_s_error_tolerant", std::to_string(bt.tolerant));
+  RecordProperty("machine_s_autonomous", std::to_string(bt.autonomous));
+  RecordProperty("machine_s_first_part", std::to_string(bt.first));
+  // The first part costs more than scanning it autonomously (touches, the autonomous scan of
+  // the bumped section, rescans); the four after it cost a design-value scan each.
+  EXPECT_GT(bt.first, bt.first_autonomous);
+  EXPECT_GT(bt.autonomous / bt.tolerant, 2) << bt.tolerant << " s against " << bt.autonomous;
 }
 
 }  // namespace

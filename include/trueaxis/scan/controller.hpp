@@ -39,9 +39,9 @@ struct ControllerOptions {
   double tolerance = 1.5;        // |ΔL| allowed during design-value scanning (mm)
   int max_autonomous = 3;        // autonomous corrections per section before giving up
   bool active = true;            // active (pushing held) or passive design-value scanning
-  int touch_points = 16;         // points touched for a geometric correction
+  int touch_points = 8;          // points touched for a geometric correction
   double touch_trigger = 0.3;    // deflection that records a touch (mm)
-  double touch_speed = 5;        // mm/s
+  double touch_speed = 10;       // mm/s
   double move_speed = 100;       // free moves (mm/s)
   double autonomous_speed = 12;  // mm/s
   double accept = 0.05;          // a correction must leave every touch point within this (mm)
@@ -100,6 +100,8 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
 // touching along the design normals at `feet` (3 × m, points of the design curve). Returns every
 // model tried, in menu order, with `accepted` set on the one chosen (at most one); `corrected`
 // receives the section with that correction applied (its curve transformed, the plane kept).
+// When the touch points already lie within `accept` of the design, nothing is fitted: the result
+// is one entry of type "none" (the deviation is local).
 std::vector<Correction> fit_corrections(const design::Section& section,
                                         const Eigen::Matrix3Xd& feet,
                                         const Eigen::Matrix3Xd& touched, double accept,

@@ -65,7 +65,8 @@ class Machine {
   // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s.
   virtual void move(const Eigen::Vector3d& to, double speed) = 0;
   // From `start` (stylus centre), approach along unit `direction` at `speed` until the deflection
-  // reaches `trigger`; then back to `start`. Nothing if no contact within `distance` mm.
+  // reaches `trigger`; then retract 1 mm along the approach (no further than `start`). Nothing if
+  // no contact within `distance` mm.
   virtual std::optional<Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
                                      const Eigen::Vector3d& direction, double distance,
                                      double speed, double trigger) = 0;
@@ -88,8 +89,10 @@ class Machine {
 struct VirtualCmmOptions {
   sim::ServoOptions servo;
   sim::ProbeOptions probe;
-  double path_acceleration = 1000;  // ramps of the path speed at a scan's start and end (mm/s²)
+  double path_acceleration = 2000;  // ramps of the path speed at a scan's start and end (mm/s²)
   double correction_gain = 60;      // active scanning: normal correction rate (1/s)
+  double positioning_speed = 100;   // free moves within an operation (mm/s)
+  double approach_speed = 10;       // approaching the surface before a scan (mm/s)
 };
 
 class VirtualCmm : public Machine {

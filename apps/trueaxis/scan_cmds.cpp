@@ -1,0 +1,135 @@
+// trueaxis CLI — error-tolerant design-value scanning on the virtual CMM: 'scan'.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <memory>
+
+#include "commands.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/files.hpp"
+#include "trueaxis/io/scan.hpp"
+#include "trueaxis/scan/controller.hpp"
+
+namespace trueaxis::cli {
+namespace {
+
+struct ScanArgs {
+  std::string design, part, output, points, log, corrected, truth, strategy = "error-tolerant";
+  scan::ControllerOptions o;
+  double probe_noise_um = 0;
+  std::uint64_t seed = 1;
+  bool passive = false, quiet = false;
+};
+
+int run_scan(ScanArgs& a) {
+  a.o.strategy = scan::strategy_from_string(a.strategy);
+  a.o.active = !a.passive;
+  a.o.validate();
+  const design::Design d = io::read_design(a.design);
+  const sim::Part part = io::read_part(a.part);
+  scan::VirtualCmmOptions vo;
+  vo.probe.tip_radius = a.o.path.tip_radius;
+  vo.probe.noise = a.probe_noise_um * 1e-3;
+  vo.probe.seed = a.seed;
+  vo.probe.range = std::max(1.0, 3 * a.o.path.pushing);
+  // Start above the part's first section, clear of it.
+  const auto smp = design::sample(d.sections.front(), 1.0);
+  const Eigen::Vector3d home = smp.points.col(0) + (a.o.path.tip_radius + 20) * smp.normals.col(0);
+  scan::VirtualCmm cmm(part, vo, home);
+  const auto r = scan::scan(cmm, d, a.o, [&](std::size_t i, std::size_t n) {
+    if (!a.quiet)
+      fmt::print(stderr, "scanning section {}/{} '{}' ...\n", i + 1, n, d.sections[i].name);
+  });
+  io::write_scan(a.output, r, a.o);
+  if (!a.points.empty()) io::write_scan_points(a.points, r);
+  if (!a.log.empty()) io::write_scan_events(a.log, r);
+  if (!a.corrected.empty()) io::write_design(a.corrected, r.design);
+  double worst = 0;
+  if (!a.truth.empty()) {
+    std::string out = "section,x,y,z,distance_um\n";
+    for (std::size_t i = 0; i < r.sections.size(); ++i)
+      for (const auto& p : r.sections[i].points) {
+        const double dist = cmm.distance(d.sections[i].plane, p.surface);
+        worst = std::max(worst, std::abs(dist));
+        out += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.3f}\n", r.sections[i].name, p.surface.x(),
+                           p.surface.y(), p.surface.z(), dist * 1e3);
+      }
+    io::write_text(a.truth, out);
+  }
+  if (!a.quiet) {
+    for (const auto& s : r.sections)
+      fmt::print(
+          "{}: {} — {} points, {} trajectory errors, {} corrections, {} autonomous scans, "
+          "{:.1f} s\n",
+          s.name, s.ok ? "ok" : "ERROR: " + s.reason, s.points.size(), s.trajectory_errors,
+          std::count_if(s.corrections.begin(), s.corrections.end(),
+                        [](const auto& c) { return c.accepted; }),
+          s.autonomous_count, s.time.total);
+    fmt::print("{}\n", r.summary());
+    if (!a.truth.empty())
+      fmt::print("measured points against the simulated part: max |distance| {:.2f} µm -> {}\n",
+                 worst * 1e3, a.truth);
+    fmt::print("wrote {}\n", a.output);
+  }
+  for (const auto& s : r.sections)
+    if (!s.ok) fmt::print(stderr, "trueaxis: error: section '{}': {}\n", s.name, s.reason);
+  return r.ok() ? 0 : 1;
+}
+
+}  // namespace
+
+std::vector<Command> add_scan_commands(CLI::App& app) {
+  auto a = std::make_shared<ScanArgs>();
+  auto* c = app.add_subcommand(
+      "scan",
+      "Scan a (simulated) part section by section along its design data on a servo-level "
+      "virtual CMM. With the error-tolerant strategy a trajectory error leads to touch points "
+      "and a geometric correction of the section's design data, or else to a slow autonomous "
+      "scan that replaces them; then the section is rescanned along the design.\n"
+      "Example: trueaxis scan --design design.json --part part.json -o scan.json --points "
+      "points.csv --log events.csv --corrected-design design2.json");
+  c->add_option("--design", a->design, "design.json of the part")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--part", a->part, "part.json: the simulated real part (trueaxis simulate part)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--strategy", a->strategy,
+                "error-tolerant (default), design (stop at a trajectory error) or autonomous "
+                "(slow surface following only)")
+      ->check(CLI::IsMember({"error-tolerant", "design", "autonomous"}))
+      ->capture_default_str();
+  c->add_option("--tolerance", a->o.tolerance, "trajectory-error tolerance |ΔL| (mm)")
+      ->capture_default_str();
+  c->add_option("--max-autonomous", a->o.max_autonomous,
+                "autonomous corrections allowed per section before it is given up")
+      ->capture_default_str();
+  c->add_option("--tip-radius", a->o.path.tip_radius, "stylus tip radius (mm)")
+      ->capture_default_str();
+  c->add_option("--pushing", a->o.path.pushing, "pushing amount held while scanning (mm)")
+      ->capture_default_str();
+  c->add_flag("--passive", a->passive, "passive design-value scanning (no pushing correction)");
+  c->add_option("--probe-noise", a->probe_noise_um, "probe noise, standard deviation (µm)")
+      ->capture_default_str();
+  c->add_option("--seed", a->seed, "random seed of the probe noise")->capture_default_str();
+  c->add_option("--output,-o", a->output, "scan.json to write")->required();
+  c->add_option("--points", a->points, "points.csv: section,x,y,z,nx,ny,nz,t");
+  c->add_option("--log", a->log, "events.csv: every decision of the flow");
+  c->add_option("--corrected-design", a->corrected,
+                "design.json after the corrections: the input for the next part of the batch");
+  c->add_option("--truth", a->truth,
+                "truth.csv: each measured point's distance from the simulated part (µm)");
+  c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {{c, [a] {
+             try {
+               a->o.validate();
+             } catch (const Error& e) {
+               throw CLI::ValidationError(e.what());
+             }
+             return run_scan(*a);
+           }}};
+}
+
+}  // namespace trueaxis::cli
