@@ -66,6 +66,47 @@ Contour::Contour(Eigen::Matrix3Xd points, const Eigen::Vector3d& plane_normal, b
     const Eigen::Vector3d left = n_.cross(d / len);
     normals_.col(i) = left_ ? -left : left;
   }
+  // The grid: about 128 cells along the larger side, each cell listing the segments whose
+  // bounding box touches it.
+  const Eigen::Vector3d a =
+      std::abs(n_.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+  e1_ = (a - a.dot(n_) * n_).normalized();
+  e2_ = n_.cross(e1_);
+  Eigen::Matrix2Xd q(2, n);
+  for (Eigen::Index i = 0; i < n; ++i) q.col(i) << p_.col(i).dot(e1_), p_.col(i).dot(e2_);
+  lo_ = q.rowwise().minCoeff();
+  const Eigen::Vector2d ext = q.rowwise().maxCoeff() - lo_;
+  h_ = std::max(ext.maxCoeff() / 128, 1e-3);
+  nx_ = static_cast<int>(ext.x() / h_) + 1;
+  ny_ = static_cast<int>(ext.y() / h_) + 1;
+  // Cells per segment (bounding box), counted, then filled (compressed rows).
+  const std::size_t ncell = static_cast<std::size_t>(nx_) * static_cast<std::size_t>(ny_);
+  cell_start_.assign(ncell + 1, 0);
+  auto each_cell = [&](Eigen::Index i, auto&& fn) {
+    const Eigen::Vector2d u = q.col(i), v = q.col((i + 1) % n);
+    const int x0 = std::max(0, static_cast<int>((std::min(u.x(), v.x()) - lo_.x()) / h_));
+    const int x1 = std::min(nx_ - 1, static_cast<int>((std::max(u.x(), v.x()) - lo_.x()) / h_));
+    const int y0 = std::max(0, static_cast<int>((std::min(u.y(), v.y()) - lo_.y()) / h_));
+    const int y1 = std::min(ny_ - 1, static_cast<int>((std::max(u.y(), v.y()) - lo_.y()) / h_));
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) fn(static_cast<std::size_t>(y) * nx_ + x);
+  };
+  for (Eigen::Index i = 0; i < segs; ++i)
+    each_cell(i, [&](std::size_t c) { ++cell_start_[c + 1]; });
+  for (std::size_t c = 0; c < ncell; ++c) cell_start_[c + 1] += cell_start_[c];
+  cell_items_.resize(static_cast<std::size_t>(cell_start_[ncell]));
+  std::vector<int> fill(cell_start_.begin(), cell_start_.end() - 1);
+  for (Eigen::Index i = 0; i < segs; ++i)
+    each_cell(i, [&](std::size_t c) {
+      cell_items_[static_cast<std::size_t>(fill[c]++)] = static_cast<int>(i);
+    });
+}
+
+double Contour::dist2(Eigen::Index i, const Eigen::Vector3d& q) const {
+  const Eigen::Index n = p_.cols();
+  const Eigen::Vector3d a = p_.col(i), d = p_.col((i + 1) % n) - a;
+  const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (q - a - t * d).squaredNorm();
 }
 
 Contour::Nearest Contour::at_segment(Eigen::Index i, const Eigen::Vector3d& q) const {
@@ -98,40 +139,64 @@ Contour::Nearest Contour::at_segment(Eigen::Index i, const Eigen::Vector3d& q) c
 Contour::Nearest Contour::nearest(const Eigen::Vector3d& q0) const {
   const Eigen::Vector3d q = q0 - (q0 - p_.col(0)).dot(n_) * n_;
   const Eigen::Index segs = normals_.cols();
-  auto search = [&](Eigen::Index from, Eigen::Index count, Eigen::Index& best_i) {
+  constexpr Eigen::Index kWindow = 8;
+  if (hint_ >= 0 && segs > 4 * kWindow) {
     Nearest best;
     double best_d = 1e300;
-    for (Eigen::Index k = 0; k < count; ++k) {
-      Eigen::Index i = from + k;
+    Eigen::Index bi = -1;
+    for (Eigen::Index k = -kWindow; k <= kWindow; ++k) {
+      Eigen::Index i = hint_ + k;
       if (closed_)
         i = ((i % segs) + segs) % segs;
       else if (i < 0 || i >= segs)
         continue;
-      const Nearest r = at_segment(i, q);
-      if (std::abs(r.distance) < best_d - 1e-12) {
-        best_d = std::abs(r.distance);
-        best = r;
-        best_i = i;
+      const double d2 = dist2(i, q);
+      if (d2 < best_d) {
+        best_d = d2;
+        bi = i;
       }
     }
-    return best;
-  };
-  constexpr Eigen::Index kWindow = 8;
-  if (hint_ >= 0 && segs > 4 * kWindow) {
-    Eigen::Index bi = -1;
-    Nearest r = search(hint_ - kWindow, 2 * kWindow + 1, bi);
-    // Accept a minimum strictly inside the window; at its edge the probe has moved far.
+    if (bi >= 0) best = at_segment(bi, q);
     Eigen::Index off = bi - hint_;
     if (closed_) off = ((off + segs + segs / 2) % segs) - segs / 2;
+    // A minimum strictly inside the window is taken as the nearest point: right for a probe
+    // moving along the contour, unless another part of the contour (the far wall of a slot
+    // narrower than twice the probe's distance) comes closer.
     if (bi >= 0 && std::abs(off) < kWindow) {
       hint_ = bi;
-      return r;
+      return best;
     }
   }
-  Eigen::Index bi = 0;
-  Nearest r = search(0, segs, bi);
-  hint_ = bi;
-  return r;
+  const Eigen::Vector2d g((q.dot(e1_) - lo_.x()) / h_, (q.dot(e2_) - lo_.y()) / h_);
+  // The query's cell, clamped into the grid; rings of cells around it. A cell in ring r lies at
+  // least (r − 1)·h from the query, plus the query's distance outside the grid.
+  const int cx = std::clamp(static_cast<int>(std::floor(g.x())), 0, nx_ - 1);
+  const int cy = std::clamp(static_cast<int>(std::floor(g.y())), 0, ny_ - 1);
+  const double outside =
+      h_ * std::hypot(std::max({0.0, -g.x(), g.x() - nx_}), std::max({0.0, -g.y(), g.y() - ny_}));
+  double best_d = 1e300;
+  const int rings = std::max(nx_, ny_);
+  for (int r = 0; r <= rings; ++r) {
+    if (best_d <= outside + (r - 1) * h_) break;
+    for (int y = cy - r; y <= cy + r; ++y) {
+      if (y < 0 || y >= ny_) continue;
+      const bool edge_row = y == cy - r || y == cy + r;
+      for (int x = cx - r; x <= cx + r; x += (edge_row || r == 0) ? 1 : 2 * r) {
+        if (x < 0 || x >= nx_) continue;
+        const std::size_t cell = static_cast<std::size_t>(y) * nx_ + x;
+        for (int k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+          const int i = cell_items_[static_cast<std::size_t>(k)];
+          const double d = std::sqrt(dist2(i, q));
+          // Ties (a vertex shared by two segments) keep the first found: both agree.
+          if (d < best_d - 1e-12) {
+            best_d = d;
+            hint_ = i;
+          }
+        }
+      }
+    }
+  }
+  return at_segment(hint_, q);
 }
 
 // -------------------------------------------------------------------------------------------

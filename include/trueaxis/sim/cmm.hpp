@@ -61,8 +61,10 @@ class Servo {
 };
 
 // A workpiece section: a closed or open polyline in a plane, with the material on one side.
-// Nearest-point queries keep a hint of the last segment found, so that a probe moving along the
-// contour costs O(1) per query; a jump falls back to a full search.
+// Nearest-point queries first look around the segment found last (a probe moving along the
+// contour finds its minimum there, in O(1)); when that minimum lies at the edge of the window,
+// a uniform grid of the segments is searched in rings outward from the query until no closer
+// segment can remain.
 class Contour {
  public:
   // points: 3 × n (n ≥ 2), in the plane through points with unit normal `plane_normal`.
@@ -86,11 +88,18 @@ class Contour {
 
  private:
   Nearest at_segment(Eigen::Index i, const Eigen::Vector3d& q) const;
+  double dist2(Eigen::Index i, const Eigen::Vector3d& q) const;  // squared, unsigned
   Eigen::Matrix3Xd p_;
   Eigen::Vector3d n_;
   bool closed_, left_;
   Eigen::VectorXd arc_;       // cumulative length at each point
   Eigen::Matrix3Xd normals_;  // per segment, away from the material
+  // The grid: cell (i, j) of size h_ in the plane frame (e1_, e2_) from corner lo_.
+  Eigen::Vector3d e1_, e2_;
+  Eigen::Vector2d lo_;
+  double h_ = 1;
+  int nx_ = 1, ny_ = 1;
+  std::vector<int> cell_start_, cell_items_;  // segments of cell c: items[start[c] .. start[c+1])
   mutable Eigen::Index hint_ = -1;
 };
 
