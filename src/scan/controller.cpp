@@ -95,9 +95,10 @@ struct SectionRun {
     const int k = o.touch_points;
     const auto smp = design::sample(current, L / (current.closed ? k : k - 1) / 4);
     Eigen::Matrix3Xd feet(3, 0), got(3, 0);
-    // Start just outside the band where the surface can be (the tolerance, and a margin), and
-    // search across the band.
-    const double reach = o.path.tip_radius + o.tolerance + 0.5;
+    // Start just outside the band where the surface is looked for (the tolerance and 1.5 mm
+    // more each way), and search across the band.
+    constexpr double kMargin = 1.5;
+    const double reach = o.path.tip_radius + o.tolerance + kMargin;
     for (int i = 0; i < k; ++i) {
       const double arc = current.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / (k - 1)) * L;
       Eigen::Index j = 0;

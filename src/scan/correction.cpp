@@ -160,7 +160,7 @@ std::vector<Correction> fit_corrections(const design::Section& section,
                                         const Eigen::Matrix3Xd& touched, double accept,
                                         design::Section* corrected) {
   const Frame f = frame_of(section);
-  std::vector<Eigen::Vector2d> p, m, t;
+  std::vector<Eigen::Vector2d> p0, m0, t;
   design::Section unit = section;
   unit.plane.normal.normalize();
   const auto smp = design::sample(unit, kSampling);
@@ -168,8 +168,8 @@ std::vector<Correction> fit_corrections(const design::Section& section,
                                   unit.material == design::Side::Left);
   for (Eigen::Index i = 0; i < feet.cols(); ++i) {
     const auto nr = design_curve.nearest(feet.col(i));
-    p.push_back(f.to2(nr.point));
-    m.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
+    p0.push_back(f.to2(nr.point));
+    m0.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
     t.push_back(f.to2(touched.col(i)));
   }
   const Eigen::VectorXd before = distances(section, touched);
@@ -187,7 +187,8 @@ std::vector<Correction> fit_corrections(const design::Section& section,
   bool done = false;
   for (Kind k :
        {Kind::Translation, Kind::Rotation, Kind::Scale, Kind::ScaleRotation, Kind::Directional}) {
-    if (static_cast<int>(p.size()) < params(k) + 2) continue;  // keep some redundancy
+    if (static_cast<int>(p0.size()) < params(k) + 2) continue;  // keep some redundancy
+    std::vector<Eigen::Vector2d> p = p0, m = m0;
     Eigen::VectorXd best;
     double best_cost = 1e300;
     for (int start = 0; start < (k == Kind::Directional ? 4 : 1); ++start) {
@@ -201,6 +202,27 @@ std::vector<Correction> fit_corrections(const design::Section& section,
       }
     }
     if (best.size() == 0) continue;
+    // Refine on the exact curve: take each touched point's nearest point on the corrected design
+    // as its new foot (mapped back to the design), and fit again, until the feet settle.
+    for (int it = 0; it < 8; ++it) {
+      const Affine2 a = model(k, best);
+      const design::Section moved = apply(section, f, a);
+      const auto ms = design::sample(moved, kSampling);
+      const sim::Contour mc(ms.points, moved.plane.normal.normalized(), moved.closed,
+                            moved.material == design::Side::Left);
+      const Eigen::Matrix2d Ainv = a.A.inverse();
+      double shift = 0;
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const auto nr = mc.nearest(touched.col(static_cast<Eigen::Index>(i)));
+        const Eigen::Vector2d foot = Ainv * (f.to2(nr.point) - a.t);
+        const Eigen::Vector2d n2(nr.normal.dot(f.e1), nr.normal.dot(f.e2));
+        shift = std::max(shift, (foot - p[i]).norm());
+        p[i] = foot;
+        m[i] = (a.A.transpose() * n2).normalized();
+      }
+      best = gauss_newton(k, best, p, m, t);
+      if (shift < 1e-7) break;
+    }
     const Affine2 a = model(k, best);
     const design::Section cand = apply(section, f, a);
     const Eigen::VectorXd after = distances(cand, touched);

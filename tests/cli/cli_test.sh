@@ -350,5 +350,29 @@ expect_code 2 "$T" simulate part --design design.json --translate 1,2 -o p.json
 expect_code 2 "$T" simulate part --design design.json --bump mid.1,1,1 -o p.json
 expect_err "part scale 3: must be in" "$T" simulate part --design design.json --scale 3 -o p.json
 
+# Error-tolerant scanning: a moved part with a bump, its events, points and the truth; the second
+# part of the batch scans with the corrected design and has no trajectory error.
+expect_ok "$T" simulate part --design design.json --translate 1.8,-1.1,0 --bump mid.1,150,2,30 --seed 3 -o bumped.json
+expect_ok "$T" scan --design design.json --part bumped.json -o scan.json --points points.csv --log events.csv --corrected-design design2.json --truth truth.csv
+grep -q "2 of 2 sections scanned" out.txt && grep -q "max |distance| 0.00 µm" out.txt && ok || bad "scan summary: $(cat out.txt)"
+head -1 points.csv | grep -qx "section,x,y,z,nx,ny,nz,t" && head -1 events.csv | grep -qx "t,section,arc_mm,delta_l_mm,mode,event,decision" && ok || bad "scan csv headers"
+for ev in trajectory_error touch correction_applied autonomous_scan design_overwritten rescan section_done; do
+  grep -q ",$ev," events.csv && ok || bad "events.csv lacks $ev"
+done
+python3 -c "
+import json; s = json.load(open('scan.json'))
+assert s['ok'] and len(s['sections']) == 2, s['summary']
+a, b = s['sections']
+assert a['autonomous_count'] == 1 and b['autonomous_count'] == 0
+assert any(c['accepted'] and c['type'] == 'translation' for c in b['corrections'])
+assert abs(s['machine_time_s']['total'] - sum(x['machine_time_s']['total'] for x in s['sections'])) < 1e-6
+" && ok || bad "scan.json content"
+expect_ok "$T" simulate part --design design.json --translate 1.8,-1.1,0 --bump mid.1,150,2,30 --seed 4 -o bumped2.json
+expect_ok "$T" scan --design design2.json --part bumped2.json -o scan2.json --log events2.csv
+grep -q ",trajectory_error," events2.csv && bad "second part still has trajectory errors" || ok
+expect_err "section 'mid.1': trajectory error" "$T" scan --design design.json --part bumped.json --strategy design -o scan3.json -q
+expect_code 2 "$T" scan --design design.json --part bumped.json --strategy fast -o s.json
+expect_code 2 "$T" scan --design design.json --part bumped.json --tolerance 0 -o s.json
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]
