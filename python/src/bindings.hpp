@@ -14,5 +14,7 @@ void bind_guideway(pybind11::module_& m);
 void bind_fit(pybind11::module_& m);
 // The ball-gauge error map (ballgauge.cpp).
 void bind_ballgauge(pybind11::module_& m);
+// Error-tolerant scanning on the virtual CMM (scan.cpp).
+void bind_scan(pybind11::module_& m);
 
 }  // namespace trueaxis::python

@@ -179,4 +179,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
   trueaxis::python::bind_guideway(m);
   trueaxis::python::bind_fit(m);
   trueaxis::python::bind_ballgauge(m);
+  trueaxis::python::bind_scan(m);
 }
