@@ -77,7 +77,8 @@ struct Problem {
 // curve marked closed that closes (kClosureTolerance). Returns the first problem found.
 std::optional<Problem> check(const Section& s);
 
-// Arc length of a section's curve (mm), computed by OCCT (Gauss integration).
+// Arc length of a section's curve (mm): exact for a polyline, by OCCT's Gauss integration for a
+// NURBS.
 double length(const Section& s);
 
 // Points along the curve at (about) `spacing` mm, with their unit surface normals (in the plane,
@@ -89,11 +90,11 @@ struct Samples {
 Samples sample(const Section& s, double spacing);
 
 // Sections of a STEP (AP203/AP214) solid, cut by planes. Each closed contour of the cut becomes
-// a section named "<prefix><i>" (or "<prefix><i>.<k>" when the plane cuts several contours,
-// largest first), its curve one NURBS (lines and arcs converted exactly, joined where they
-// meet), oriented counter-clockwise seen from the plane's normal, with the material side found
-// by classifying a point beside the curve against the solid. Throws Error naming the file for
-// unreadable files, files with no solid, and planes that miss the part.
+// a section named after its request ("<name>", or "<name>.<k>" when the plane cuts several
+// contours, largest first), its curve one NURBS (lines and arcs converted exactly, joined where
+// they meet), oriented counter-clockwise seen from the plane's normal, with the material side
+// taken from the outward normals of the solid's faces under the cut. Throws Error naming the
+// file for unreadable files, files with no solid, and planes that miss the part.
 struct StepSectionRequest {
   std::string name;  // the section's name (its contours get ".1", ".2" when there are several)
   Plane plane;
