@@ -4,6 +4,14 @@
 
 #include <gtest/gtest.h>
 
+#include <BRepBuilderAPI_MakeEdge.hxx>
+#include <BRepBuilderAPI_MakeFace.hxx>
+#include <BRepBuilderAPI_MakeWire.hxx>
+#include <BRepBuilderAPI_NurbsConvert.hxx>
+#include <BRepPrimAPI_MakePrism.hxx>
+#include <GeomAPI_Interpolate.hxx>
+#include <STEPControl_Writer.hxx>
+#include <TColgp_HArray1OfPnt.hxx>
 #include <cmath>
 
 #include "../test_util.hpp"
@@ -255,6 +263,76 @@ TEST(Controller, BatchWithABumpPaysOnceForTheAutonomousScan) {
   // the bumped section, rescans); the four after it cost a design-value scan each.
   EXPECT_GT(bt.first, bt.first_autonomous);
   EXPECT_GT(bt.autonomous / bt.tolerant, 2) << bt.tolerant << " s against " << bt.autonomous;
+}
+
+}  // namespace
+}  // namespace trueaxis
+
+namespace trueaxis {
+namespace {
+
+// A solid with B-spline faces (a lobed prism built with OCCT), through STEP, its section scanned
+// end to end: the design's NURBS path, a moved part corrected, and passive scanning.
+TEST(Controller, BsplineSolidFromStepScannedEndToEnd) {
+  Handle(TColgp_HArray1OfPnt) pts = new TColgp_HArray1OfPnt(1, 12);
+  for (int i = 0; i < 12; ++i) {
+    const double a = 2 * M_PI * i / 12, r = 30 + 4 * std::cos(3 * a);
+    pts->SetValue(i + 1, gp_Pnt(r * std::cos(a), r * std::sin(a), 0));
+  }
+  GeomAPI_Interpolate interp(pts, Standard_True, 1e-9);
+  interp.Perform();
+  ASSERT_TRUE(interp.IsDone());
+  const TopoDS_Edge e = BRepBuilderAPI_MakeEdge(interp.Curve()).Edge();
+  const TopoDS_Face f = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(e).Wire()).Face();
+  const TopoDS_Shape solid =
+      BRepBuilderAPI_NurbsConvert(BRepPrimAPI_MakePrism(f, gp_Vec(0, 0, 40)).Shape()).Shape();
+  const std::string path = test::temp_dir() + "/lobed.stp";
+  STEPControl_Writer w;
+  ASSERT_EQ(w.Transfer(solid, STEPControl_AsIs), IFSelect_RetDone);
+  ASSERT_EQ(w.Write(path.c_str()), IFSelect_RetDone);
+  const auto d =
+      design::from_step(path, {{"z10", {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()}}});
+  ASSERT_EQ(d.sections.size(), 1u);
+  ASSERT_TRUE(d.sections[0].nurbs);
+  {
+    scan::VirtualCmm cmm(sim::Part{d, {}}, {}, Eigen::Vector3d(0, -60, 40));
+    const auto r = scan::scan(cmm, d, {});
+    ASSERT_TRUE(r.ok()) << r.summary();
+    EXPECT_EQ(count(r, "trajectory_error"), 0);
+    EXPECT_LT(worst_distance(cmm, d.sections[0], r.sections[0].points), kServoTol);
+  }
+  {
+    sim::Part part{d, {}};
+    part.deviation.translation = Eigen::Vector3d(-1.2, 1.4, 0);
+    scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(0, -60, 40));
+    const auto r = scan::scan(cmm, d, {});
+    ASSERT_TRUE(r.ok()) << r.summary();
+    const auto& c = r.sections[0].corrections.back();
+    EXPECT_EQ(c.type, "translation");
+    EXPECT_NEAR(param(c, "dx_mm"), -1.2, kParamTol);
+    EXPECT_NEAR(param(c, "dy_mm"), 1.4, kParamTol);
+    EXPECT_LT(worst_distance(cmm, d.sections[0], r.sections[0].points), kServoTol);
+  }
+  {
+    // Passive scanning: the probe's deflection absorbs small deviations, and a part moved by
+    // more than the pushing amount lifts the probe off (a trajectory error), which the flow
+    // then corrects like any other.
+    scan::ControllerOptions o;
+    o.active = false;
+    sim::Part part{d, {}};
+    part.deviation.translation = Eigen::Vector3d(0.1, 0, 0);
+    scan::VirtualCmm small(part, {}, Eigen::Vector3d(0, -60, 40));
+    auto r = scan::scan(small, d, o);
+    ASSERT_TRUE(r.ok()) << r.summary();
+    EXPECT_EQ(count(r, "trajectory_error"), 0);
+    part.deviation.translation = Eigen::Vector3d(0.8, 0, 0);
+    scan::VirtualCmm large(part, {}, Eigen::Vector3d(0, -60, 40));
+    r = scan::scan(large, d, o);
+    ASSERT_TRUE(r.ok()) << r.summary();
+    EXPECT_GE(count(r, "trajectory_error"), 1);
+    EXPECT_EQ(count(r, "correction_applied"), 1);
+    EXPECT_LT(worst_distance(large, d.sections[0], r.sections[0].points), kServoTol);
+  }
 }
 
 }  // namespace
