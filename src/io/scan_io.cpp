@@ -55,7 +55,8 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
                     {"trajectory_errors", s.trajectory_errors},
                     {"points", pts}});
   }
-  write_json(path, ojson{{"strategy", scan::to_string(o.strategy)},
+  write_json(path, ojson{{"kind", "scan"},
+                         {"strategy", scan::to_string(o.strategy)},
                          {"tolerance_mm", o.tolerance},
                          {"ok", r.ok()},
                          {"summary", r.summary()},

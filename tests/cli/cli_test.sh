@@ -372,6 +372,7 @@ expect_ok "$T" scan --design design2.json --part bumped2.json -o scan2.json --lo
 grep -q ",trajectory_error," events2.csv && bad "second part still has trajectory errors" || ok
 expect_err "section 'mid.1': trajectory error" "$T" scan --design design.json --part bumped.json --strategy design -o scan3.json -q
 expect_code 2 "$T" scan --design design.json --part bumped.json --strategy fast -o s.json
+expect_err "scan.json: a 'scan' file has no report of its own" "$T" report scan.json -o scan.html
 expect_code 2 "$T" scan --design design.json --part bumped.json --tolerance 0 -o s.json
 
 echo "cli: $passes passed, $fails failed"

@@ -1,6 +1,6 @@
 // trueaxis::io — results of a scanning run.
 //
-// scan.json: {"strategy", "tolerance_mm", "ok", "summary", "machine_time_s": {"total", "design",
+// scan.json: {"kind": "scan", "strategy", "tolerance_mm", "ok", "summary", "machine_time_s": {"total", "design",
 //   "touch", "autonomous", "moves"}, "sections": [{"name", "status" ("ok" | "error"), "reason",
 //   "machine_time_s": {…}, "corrections": [{"type", "parameters": {name: value}, "accepted",
 //   "residual_before_mm", "residual_after_mm"}], "autonomous_count", "trajectory_errors",
