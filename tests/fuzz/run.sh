@@ -32,6 +32,7 @@ for t in csv json ds moody; do
   echo "== fuzz_$t for ${seconds} s"
   mkdir -p "$build/findings/$t"
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
+      LSAN_OPTIONS=suppressions="$(pwd)/tests/lsan.supp":print_suppressions=0 \
       "$build/tests/fuzz/fuzz_$t" "$corpus/$t" -max_total_time="$seconds" -timeout=10 \
       -seed=1 -rss_limit_mb=2048 -max_len=65536 -artifact_prefix="$build/findings/$t/" \
       -print_final_stats=1 >"$build/fuzz_$t.log" 2>&1; then
