@@ -10,13 +10,15 @@
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/files.hpp"
 #include "trueaxis/io/scan.hpp"
+#include "trueaxis/report/scan.hpp"
 #include "trueaxis/scan/controller.hpp"
 
 namespace trueaxis::cli {
 namespace {
 
 struct ScanArgs {
-  std::string design, part, output, points, log, corrected, truth, strategy = "error-tolerant";
+  std::string design, part, output, points, log, corrected, truth, report,
+      strategy = "error-tolerant";
   scan::ControllerOptions o;
   double probe_noise_um = 0;
   std::uint64_t seed = 1;
@@ -47,17 +49,29 @@ int run_scan(ScanArgs& a) {
   if (!a.log.empty()) io::write_scan_events(a.log, r);
   if (!a.corrected.empty()) io::write_design(a.corrected, r.design);
   double worst = 0;
-  if (!a.truth.empty()) {
-    std::string out = "section,x,y,z,distance_um\n";
-    for (std::size_t i = 0; i < r.sections.size(); ++i)
-      for (const auto& p : r.sections[i].points) {
-        const double dist = cmm.distance(d.sections[i].plane, p.surface);
-        worst = std::max(worst, std::abs(dist));
+  // Each measured point's distance from the simulated part (µm): for --truth and the report.
+  std::vector<Eigen::VectorXd> truth_um;
+  std::string out = "section,x,y,z,distance_um\n";
+  for (std::size_t i = 0; i < r.sections.size(); ++i) {
+    const auto& pts = r.sections[i].points;
+    Eigen::VectorXd t(static_cast<Eigen::Index>(pts.size()));
+    for (std::size_t k = 0; k < pts.size(); ++k) {
+      const auto& p = pts[k];
+      const double dist = cmm.distance(d.sections[i].plane, p.surface);
+      t[static_cast<Eigen::Index>(k)] = dist * 1e3;
+      worst = std::max(worst, std::abs(dist));
+      if (!a.truth.empty())
         out += fmt::format("{},{:.6f},{:.6f},{:.6f},{:.3f}\n", r.sections[i].name, p.surface.x(),
                            p.surface.y(), p.surface.z(), dist * 1e3);
-      }
-    io::write_text(a.truth, out);
+    }
+    truth_um.push_back(std::move(t));
   }
+  if (!a.truth.empty()) io::write_text(a.truth, out);
+  if (!a.report.empty())
+    report::write(a.report,
+                  report::render("trueaxis scanning report",
+                                 {report::scan_section(a.design, r, d, a.o.tolerance, truth_um)},
+                                 4000, report_meta()));
   if (!a.quiet) {
     for (const auto& s : r.sections)
       fmt::print(
@@ -71,7 +85,7 @@ int run_scan(ScanArgs& a) {
     if (!a.truth.empty())
       fmt::print("measured points against the simulated part: max |distance| {:.2f} µm -> {}\n",
                  worst * 1e3, a.truth);
-    fmt::print("wrote {}\n", a.output);
+    fmt::print("wrote {}{}\n", a.output, a.report.empty() ? "" : " and " + a.report);
   }
   for (const auto& s : r.sections)
     if (!s.ok) fmt::print(stderr, "trueaxis: error: section '{}': {}\n", s.name, s.reason);
@@ -121,6 +135,10 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
                 "design.json after the corrections: the input for the next part of the batch");
   c->add_option("--truth", a->truth,
                 "truth.csv: each measured point's distance from the simulated part (µm)");
+  c->add_option("--report", a->report,
+                "HTML report: status and machine time per section, ΔL along every scan with the "
+                "tolerance, the measured contour against the design, every decision");
+  add_meta_option(c);
   c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
   return {{c, [a] {
              try {

@@ -7,6 +7,7 @@
 #include <GCPnts_UniformAbscissa.hxx>
 #include <GeomAdaptor_Curve.hxx>
 #include <cmath>
+#include <vector>
 
 #include "occt.hpp"
 #include "trueaxis/error.hpp"
@@ -133,32 +134,46 @@ double length(const Section& s) {
 }
 
 namespace {
-// A polyline sampled directly (exact, and far faster than integrating its B-spline form).
+// A polyline sampled directly (exact, and far faster than integrating its B-spline form): each
+// segment divided evenly at no more than `spacing`, so that every vertex is a sample.
 Samples sample_polyline(const Section& s, double spacing) {
   const Eigen::Matrix3Xd& p = s.polyline;
   const Eigen::Index m = p.cols();
-  Eigen::VectorXd cum(m);
-  cum[0] = 0;
-  for (Eigen::Index i = 1; i < m; ++i) cum[i] = cum[i - 1] + (p.col(i) - p.col(i - 1)).norm();
-  const double total = cum[m - 1];
-  const int n = std::max(2, static_cast<int>(std::ceil(total / spacing)) + 1);
-  const int count = s.closed ? n - 1 : n;
+  std::vector<int> pieces(static_cast<std::size_t>(m - 1));
+  int count = 1;
+  for (Eigen::Index i = 0; i + 1 < m; ++i) {
+    const double len = (p.col(i + 1) - p.col(i)).norm();
+    pieces[static_cast<std::size_t>(i)] =
+        std::max(1, static_cast<int>(std::ceil(len / spacing - 1e-9)));
+    count += pieces[static_cast<std::size_t>(i)];
+  }
+  if (s.closed) --count;  // the end repeats the start
   Samples out;
   out.points.resize(3, count);
   out.normals.resize(3, count);
   out.arc.resize(count);
   const Eigen::Vector3d pn = s.plane.normal.normalized();
-  Eigen::Index seg = 0;
-  for (int i = 0; i < count; ++i) {
-    const double a = total * i / (n - 1);
-    while (seg + 2 < m && cum[seg + 1] <= a) ++seg;
-    const double len = cum[seg + 1] - cum[seg];
-    const double t = len > 0 ? (a - cum[seg]) / len : 0;
-    const Eigen::Vector3d d = (p.col(seg + 1) - p.col(seg)) / len;
-    out.points.col(i) = p.col(seg) + t * (p.col(seg + 1) - p.col(seg));
-    const Eigen::Vector3d left = pn.cross(d);
-    out.normals.col(i) = s.material == Side::Left ? Eigen::Vector3d(-left) : left;
-    out.arc[i] = a;
+  int k = 0;
+  double arc = 0;
+  for (Eigen::Index i = 0; i + 1 < m && k < count; ++i) {
+    const Eigen::Vector3d d = p.col(i + 1) - p.col(i);
+    const double len = d.norm();
+    const Eigen::Vector3d left = pn.cross(d / len);
+    const Eigen::Vector3d normal = s.material == Side::Left ? Eigen::Vector3d(-left) : left;
+    const int n = pieces[static_cast<std::size_t>(i)];
+    for (int j = 0; j < n && k < count; ++j, ++k) {
+      out.points.col(k) = p.col(i) + d * (static_cast<double>(j) / n);
+      out.normals.col(k) = normal;
+      out.arc[k] = arc + len * j / n;
+    }
+    arc += len;
+  }
+  if (k < count) {  // an open polyline: its last point
+    const Eigen::Vector3d d = p.col(m - 1) - p.col(m - 2);
+    const Eigen::Vector3d left = pn.cross(d.normalized());
+    out.points.col(k) = p.col(m - 1);
+    out.normals.col(k) = s.material == Side::Left ? Eigen::Vector3d(-left) : left;
+    out.arc[k] = arc;
   }
   return out;
 }

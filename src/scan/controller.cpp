@@ -67,8 +67,16 @@ struct SectionRun {
   bool design_scan(Sample& stop, std::string& why) {
     const auto path = design::make_path(current, o.path);
     bool error = false;
+    Trace tr;
+    tr.label = r.traces.empty() ? "design" : fmt::format("rescan {}", r.traces.size());
+    double next = 0;
     const auto out = timed(m, r.time.design, [&] {
       return m.scan_path(path, settings(), [&](const Sample& s) {
+        if (s.arc >= next) {
+          tr.arc.push_back(s.arc);
+          tr.delta_l.push_back(s.delta_l);
+          next = s.arc + 0.5;
+        }
         if (std::abs(s.delta_l) > o.tolerance || (!o.active && !s.contact)) {
           error = true;
           return false;
@@ -77,6 +85,10 @@ struct SectionRun {
       });
     });
     stop = out.stop;
+    tr.arc.push_back(stop.arc);
+    tr.delta_l.push_back(stop.delta_l);
+    tr.completed = out.completed && !error;
+    r.traces.push_back(std::move(tr));
     if (out.completed && !error) {
       r.points = out.samples;
       return true;
@@ -106,7 +118,8 @@ struct SectionRun {
       const Eigen::Vector3d p = smp.points.col(j), nn = smp.normals.col(j);
       const auto t = timed(m, r.time.touch, [&] {
         return m.touch(current.plane, p + reach * nn, -nn,
-                       2 * (o.tolerance + 0.5) + o.touch_trigger, o.touch_speed, o.touch_trigger);
+                       2 * (o.tolerance + kMargin) + o.touch_trigger, o.touch_speed,
+                       o.touch_trigger);
       });
       if (!t) {
         log(arc, 0, "touch", "touch", "no surface found along the design normal here");

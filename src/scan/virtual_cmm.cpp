@@ -50,17 +50,23 @@ double VirtualCmm::distance(const design::Plane& plane, const Eigen::Vector3d& p
 }
 
 sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part) {
-  // The ball meets the nearest contour of the plane.
-  const sim::Contour* nearest = part.front();
-  double best = 1e300;
-  for (const sim::Contour* c : part) {
-    const double d = std::abs(c->nearest(servo_.position()).distance);
-    if (d < best) {
-      best = d;
-      nearest = c;
+  // The ball meets the nearest contour of the plane: the one met last is usually it, and the
+  // others only need looking at within that distance.
+  const Eigen::Vector3d pos = servo_.position();
+  std::size_t first = 0;
+  for (std::size_t k = 0; k < part.size(); ++k)
+    if (part[k] == last_contour_) first = k;
+  const sim::Contour* nearest = part[first];
+  double best = std::abs(nearest->nearest(pos).distance);
+  for (std::size_t k = 0; k < part.size(); ++k) {
+    if (k == first) continue;
+    if (const auto n = part[k]->nearest_within(pos, best); n && std::abs(n->distance) < best) {
+      best = std::abs(n->distance);
+      nearest = part[k];
     }
   }
-  return probe_.read(servo_.position(), *nearest);
+  last_contour_ = nearest;
+  return probe_.read(pos, *nearest);
 }
 
 Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {

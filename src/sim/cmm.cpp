@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "trueaxis/error.hpp"
 
@@ -57,16 +58,20 @@ Contour::Contour(Eigen::Matrix3Xd points, const Eigen::Vector3d& plane_normal, b
   const Eigen::Index n = p_.cols(), segs = closed_ ? n : n - 1;
   arc_.resize(segs + 1);
   normals_.resize(3, segs);
+  dir_.resize(3, segs);
+  inv_len2_.resize(segs);
   arc_[0] = 0;
   for (Eigen::Index i = 0; i < segs; ++i) {
     const Eigen::Vector3d d = p_.col((i + 1) % n) - p_.col(i);
     const double len = d.norm();
     if (!(len > 0)) throw Error(fmt::format("contour: points {} and {} coincide", i, (i + 1) % n));
     arc_[i + 1] = arc_[i] + len;
+    dir_.col(i) = d;
+    inv_len2_[i] = 1 / (len * len);
     const Eigen::Vector3d left = n_.cross(d / len);
     normals_.col(i) = left_ ? -left : left;
   }
-  // The grid: about 128 cells along the larger side, each cell listing the segments whose
+  // The grid: about 64 cells along the larger side, each cell listing the segments whose
   // bounding box touches it.
   const Eigen::Vector3d a =
       std::abs(n_.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
@@ -76,7 +81,7 @@ Contour::Contour(Eigen::Matrix3Xd points, const Eigen::Vector3d& plane_normal, b
   for (Eigen::Index i = 0; i < n; ++i) q.col(i) << p_.col(i).dot(e1_), p_.col(i).dot(e2_);
   lo_ = q.rowwise().minCoeff();
   const Eigen::Vector2d ext = q.rowwise().maxCoeff() - lo_;
-  h_ = std::max(ext.maxCoeff() / 128, 1e-3);
+  h_ = std::max(ext.maxCoeff() / 64, 1e-3);
   nx_ = static_cast<int>(ext.x() / h_) + 1;
   ny_ = static_cast<int>(ext.y() / h_) + 1;
   // Cells per segment (bounding box), counted, then filled (compressed rows).
@@ -103,9 +108,8 @@ Contour::Contour(Eigen::Matrix3Xd points, const Eigen::Vector3d& plane_normal, b
 }
 
 double Contour::dist2(Eigen::Index i, const Eigen::Vector3d& q) const {
-  const Eigen::Index n = p_.cols();
-  const Eigen::Vector3d a = p_.col(i), d = p_.col((i + 1) % n) - a;
-  const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  const Eigen::Vector3d a = p_.col(i), d = dir_.col(i);
+  const double t = std::clamp((q - a).dot(d) * inv_len2_[i], 0.0, 1.0);
   return (q - a - t * d).squaredNorm();
 }
 
@@ -136,48 +140,44 @@ Contour::Nearest Contour::at_segment(Eigen::Index i, const Eigen::Vector3d& q) c
   return r;
 }
 
-Contour::Nearest Contour::nearest(const Eigen::Vector3d& q0) const {
+Contour::Nearest Contour::nearest(const Eigen::Vector3d& q) const {
+  return *nearest_within(q, std::numeric_limits<double>::infinity());
+}
+
+std::optional<Contour::Nearest> Contour::nearest_within(const Eigen::Vector3d& q0,
+                                                        double radius) const {
   const Eigen::Vector3d q = q0 - (q0 - p_.col(0)).dot(n_) * n_;
   const Eigen::Index segs = normals_.cols();
-  constexpr Eigen::Index kWindow = 8;
-  if (hint_ >= 0 && segs > 4 * kWindow) {
-    Nearest best;
-    double best_d = 1e300;
-    Eigen::Index bi = -1;
+  // A first bound from the segments around the one found last (a probe moving along the contour
+  // finds its minimum there), then the grid: rings of cells outward from the query until no cell
+  // can hold a closer segment. A cell in ring r lies at least (r − 1)·h from the query, and at
+  // least as far as the query is outside the grid.
+  double best_d = radius;
+  Eigen::Index best_i = -1;
+  if (hint_ >= 0) {
+    constexpr Eigen::Index kWindow = 2;
     for (Eigen::Index k = -kWindow; k <= kWindow; ++k) {
       Eigen::Index i = hint_ + k;
       if (closed_)
         i = ((i % segs) + segs) % segs;
       else if (i < 0 || i >= segs)
         continue;
-      const double d2 = dist2(i, q);
-      if (d2 < best_d) {
-        best_d = d2;
-        bi = i;
+      const double d = std::sqrt(dist2(i, q));
+      if (d < best_d) {
+        best_d = d;
+        best_i = i;
       }
-    }
-    if (bi >= 0) best = at_segment(bi, q);
-    Eigen::Index off = bi - hint_;
-    if (closed_) off = ((off + segs + segs / 2) % segs) - segs / 2;
-    // A minimum strictly inside the window is taken as the nearest point: right for a probe
-    // moving along the contour, unless another part of the contour (the far wall of a slot
-    // narrower than twice the probe's distance) comes closer.
-    if (bi >= 0 && std::abs(off) < kWindow) {
-      hint_ = bi;
-      return best;
     }
   }
   const Eigen::Vector2d g((q.dot(e1_) - lo_.x()) / h_, (q.dot(e2_) - lo_.y()) / h_);
-  // The query's cell, clamped into the grid; rings of cells around it. A cell in ring r lies at
-  // least (r − 1)·h from the query, plus the query's distance outside the grid.
   const int cx = std::clamp(static_cast<int>(std::floor(g.x())), 0, nx_ - 1);
   const int cy = std::clamp(static_cast<int>(std::floor(g.y())), 0, ny_ - 1);
   const double outside =
       h_ * std::hypot(std::max({0.0, -g.x(), g.x() - nx_}), std::max({0.0, -g.y(), g.y() - ny_}));
-  double best_d = 1e300;
+  double best_d2 = best_d * best_d * (1 - 1e-12);
   const int rings = std::max(nx_, ny_);
   for (int r = 0; r <= rings; ++r) {
-    if (best_d <= outside + (r - 1) * h_) break;
+    if (best_d <= std::max(outside, (r - 1) * h_)) break;
     for (int y = cy - r; y <= cy + r; ++y) {
       if (y < 0 || y >= ny_) continue;
       const bool edge_row = y == cy - r || y == cy + r;
@@ -186,17 +186,20 @@ Contour::Nearest Contour::nearest(const Eigen::Vector3d& q0) const {
         const std::size_t cell = static_cast<std::size_t>(y) * nx_ + x;
         for (int k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
           const int i = cell_items_[static_cast<std::size_t>(k)];
-          const double d = std::sqrt(dist2(i, q));
+          const double d2 = dist2(i, q);
           // Ties (a vertex shared by two segments) keep the first found: both agree.
-          if (d < best_d - 1e-12) {
-            best_d = d;
-            hint_ = i;
+          if (d2 < best_d2) {
+            best_d2 = d2;
+            best_d = std::sqrt(d2);
+            best_i = i;
           }
         }
       }
     }
   }
-  return at_segment(hint_, q);
+  if (best_i < 0) return std::nullopt;
+  hint_ = best_i;
+  return at_segment(best_i, q);
 }
 
 // -------------------------------------------------------------------------------------------

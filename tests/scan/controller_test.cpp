@@ -102,6 +102,12 @@ TEST(Controller, TranslatedPartIsCorrectedByATranslation) {
   }
   EXPECT_EQ(count(r, "correction_applied"), 2);
   EXPECT_EQ(count(r, "rescan"), 2);
+  // Every touch found the surface, the far side of the tolerance band included.
+  for (const auto& e : r.events) {
+    if (e.event == "touch") {
+      EXPECT_EQ(e.decision.find("no surface"), std::string::npos) << e.arc;
+    }
+  }
 }
 
 TEST(Controller, RotatedAndScaledPartsGetTheirCorrections) {

@@ -82,7 +82,8 @@ std::optional<Problem> check(const Section& s);
 double length(const Section& s);
 
 // Points along the curve at (about) `spacing` mm, with their unit surface normals (in the plane,
-// away from the material): 3 × m each. Closed curves do not repeat the start point.
+// away from the material): 3 × m each. Closed curves do not repeat the start point. A polyline's
+// vertices are always samples (each segment divided evenly at no more than `spacing`).
 struct Samples {
   Eigen::Matrix3Xd points, normals;
   Eigen::VectorXd arc;  // arc length of each point from the curve's start (mm)

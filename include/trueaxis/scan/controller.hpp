@@ -72,6 +72,14 @@ struct MachineTime {
   double total = 0, design = 0, touch = 0, autonomous = 0, moves = 0;  // s
 };
 
+// The trajectory error along one design-value scan of a section, every 0.5 mm of path (and where
+// it stopped).
+struct Trace {
+  std::string label;                 // "design", "rescan 1", ...
+  std::vector<double> arc, delta_l;  // mm
+  bool completed = false;
+};
+
 struct SectionResult {
   std::string name;
   bool ok = false;
@@ -80,6 +88,7 @@ struct SectionResult {
   std::vector<Correction> corrections;
   int autonomous_count = 0, trajectory_errors = 0;
   std::vector<Sample> points;  // the final scan's surface points
+  std::vector<Trace> traces;   // ΔL of every design-value scan of the section, in order
 };
 
 struct Result {

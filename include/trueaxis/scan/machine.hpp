@@ -126,6 +126,7 @@ class VirtualCmm : public Machine {
   // The contours of the part in a plane (a plane may cut several: an outline and its holes).
   std::vector<const sim::Contour*> in_plane(const design::Plane& plane) const;
   sim::ProbeReading read(const std::vector<const sim::Contour*>& part);
+  const sim::Contour* last_contour_ = nullptr;
   Sample sample(const sim::ProbeReading& r, double arc) const;
 };
 

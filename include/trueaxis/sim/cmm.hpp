@@ -23,6 +23,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -61,10 +62,10 @@ class Servo {
 };
 
 // A workpiece section: a closed or open polyline in a plane, with the material on one side.
-// Nearest-point queries first look around the segment found last (a probe moving along the
-// contour finds its minimum there, in O(1)); when that minimum lies at the edge of the window,
-// a uniform grid of the segments is searched in rings outward from the query until no closer
-// segment can remain.
+// Nearest-point queries are exact: a first bound from the segments around the one found last (a
+// probe moving along the contour finds its minimum there), then a uniform grid of the segments
+// searched in rings outward from the query until no closer segment can remain. Near the contour
+// that costs a few cells, whatever the contour's length.
 class Contour {
  public:
   // points: 3 × n (n ≥ 2), in the plane through points with unit normal `plane_normal`.
@@ -80,6 +81,8 @@ class Contour {
   };
   // The nearest point of the contour to q's projection into the plane.
   Nearest nearest(const Eigen::Vector3d& q) const;
+  // The same, if it lies closer than `radius` (mm; in the plane): cheap when nothing does.
+  std::optional<Nearest> nearest_within(const Eigen::Vector3d& q, double radius) const;
 
   const Eigen::Matrix3Xd& points() const { return p_; }
   const Eigen::Vector3d& plane_normal() const { return n_; }
@@ -94,6 +97,8 @@ class Contour {
   bool closed_, left_;
   Eigen::VectorXd arc_;       // cumulative length at each point
   Eigen::Matrix3Xd normals_;  // per segment, away from the material
+  Eigen::Matrix3Xd dir_;      // per segment: end − start
+  Eigen::VectorXd inv_len2_;  // per segment: 1 / |end − start|²
   // The grid: cell (i, j) of size h_ in the plane frame (e1_, e2_) from corner lo_.
   Eigen::Vector3d e1_, e2_;
   Eigen::Vector2d lo_;

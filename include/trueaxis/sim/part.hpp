@@ -58,7 +58,8 @@ Eigen::Vector3d centroid(const design::Design& d);
 Eigen::Affine3d transform(const Part& part);
 
 // The true contour of `section` (a section of part.design), sampled every `spacing` mm of design
-// arc, ready for the probe. Material side as in the design.
-Contour true_contour(const Part& part, const design::Section& section, double spacing = 0.05);
+// arc (chords within spacing²/8R of a curve of radius R: 0.05 µm at R = 25 mm), ready for the
+// probe. Material side as in the design.
+Contour true_contour(const Part& part, const design::Section& section, double spacing = 0.1);
 
 }  // namespace trueaxis::sim

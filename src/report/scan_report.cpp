@@ -1,0 +1,148 @@
+// Report section for an error-tolerant scanning run.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "trueaxis/report/scan.hpp"
+#include "trueaxis/sim/cmm.hpp"
+
+namespace trueaxis::report {
+
+Section scan_section(const std::string& title, const scan::Result& r, const design::Design& design,
+                     double tolerance, const std::vector<Eigen::VectorXd>& truth_um) {
+  Section s;
+  s.title = title;
+  s.references = {kErrorTolerantScanning};
+  s.intro_html = fmt::format(
+      "<p>Each section is scanned along its design data (design-value scanning). When the "
+      "trajectory error ΔL (how far the stylus centre runs from where it would on the design, "
+      "along the normal) leaves ±{:g} mm, points are touched along the design normals and a "
+      "geometric correction of that section's design data is fitted (translation, rotation, "
+      "scale, scale and rotation, scale along one direction); if none fits, the section is "
+      "scanned autonomously (slowly, following the surface) and its design data are replaced by "
+      "the measured contour. Then it is scanned along the design again. Times are machine "
+      "seconds.</p><p>{}</p>",
+      tolerance, escape(r.summary()));
+  s.table = {{"section", "status", "machine time (s)", "design / touch / autonomous (s)",
+              "trajectory errors", "correction applied", "autonomous scans", "points",
+              "max |distance| from the simulated part (µm)"}};
+  for (std::size_t i = 0; i < r.sections.size(); ++i) {
+    const auto& sec = r.sections[i];
+    if (!sec.ok) s.warnings.push_back(fmt::format("section '{}': {}", sec.name, sec.reason));
+    std::string applied = "none";
+    for (const auto& c : sec.corrections)
+      if (c.accepted) {
+        applied = c.type;
+        for (const auto& [k, v] : c.parameters)
+          if (k.rfind("centre", 0) != 0) applied += fmt::format(" {}={:.5g}", k, v);
+      }
+    std::string truth = "not known";
+    if (i < truth_um.size() && truth_um[i].size())
+      truth = fmt::format("{:.2f}", truth_um[i].cwiseAbs().maxCoeff());
+    s.table.push_back({sec.name, sec.ok ? "ok" : "error", fmt::format("{:.1f}", sec.time.total),
+                       fmt::format("{:.1f} / {:.1f} / {:.1f}", sec.time.design, sec.time.touch,
+                                   sec.time.autonomous),
+                       std::to_string(sec.trajectory_errors), applied,
+                       std::to_string(sec.autonomous_count), std::to_string(sec.points.size()),
+                       truth});
+  }
+
+  for (std::size_t i = 0; i < r.sections.size() && i < design.sections.size(); ++i) {
+    const auto& sec = r.sections[i];
+    // ΔL of every design-value scan on one arc axis (0.5 mm), with the tolerance.
+    double end = 0;
+    for (const auto& t : sec.traces)
+      if (!t.arc.empty()) end = std::max(end, t.arc.back());
+    if (!sec.traces.empty() && end > 0) {
+      Plot p;
+      p.title =
+          fmt::format("section '{}': trajectory error ΔL along each design-value scan", sec.name);
+      p.x_label = "arc along the path (mm)";
+      p.y_label = "ΔL (mm)";
+      const Eigen::Index n = static_cast<Eigen::Index>(std::ceil(end / 0.5)) + 1;
+      p.x = Eigen::VectorXd::LinSpaced(n, 0, 0.5 * static_cast<double>(n - 1));
+      for (const auto& t : sec.traces) {
+        Eigen::VectorXd y = Eigen::VectorXd::Constant(n, NAN);
+        for (std::size_t k = 0; k < t.arc.size(); ++k) {
+          const auto j = static_cast<Eigen::Index>(std::lround(t.arc[k] / 0.5));
+          if (j >= 0 && j < n) y[j] = t.delta_l[k];
+        }
+        p.series.push_back({t.label + (t.completed ? "" : " (stopped)"), y, {}, "", false, false});
+      }
+      p.series.push_back(
+          {"+tolerance", Eigen::VectorXd::Constant(n, tolerance), {}, "#c62828", true, false});
+      p.series.push_back(
+          {"−tolerance", Eigen::VectorXd::Constant(n, -tolerance), {}, "#c62828", true, false});
+      s.plots.push_back(std::move(p));
+    }
+    if (sec.points.empty()) continue;
+    // The measured contour against the design it started from: deviation along the normal.
+    const design::Section& d = design.sections[i];
+    const auto smp = design::sample(d, 0.05);
+    const sim::Contour c(smp.points, d.plane.normal.normalized(), d.closed,
+                         d.material == design::Side::Left);
+    const Eigen::Index m = static_cast<Eigen::Index>(sec.points.size());
+    Eigen::VectorXd arc(m), dev(m), px(m), py(m);
+    const Eigen::Vector3d n = d.plane.normal.normalized();
+    const Eigen::Vector3d a =
+        std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    const Eigen::Vector3d e1 = (a - a.dot(n) * n).normalized(), e2 = n.cross(e1);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const auto& pt = sec.points[static_cast<std::size_t>(k)].surface;
+      const auto nr = c.nearest(pt);
+      arc[k] = nr.arc;
+      dev[k] = nr.distance;
+      px[k] = (pt - d.plane.origin).dot(e1);
+      py[k] = (pt - d.plane.origin).dot(e2);
+    }
+    Plot p;
+    p.title =
+        fmt::format("section '{}': measured surface minus the design, along the design", sec.name);
+    p.x_label = "arc along the design (mm)";
+    p.y_label = "deviation along the outward normal (mm)";
+    // Sorted by arc, so that the curve reads left to right.
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(m));
+    for (Eigen::Index k = 0; k < m; ++k) order[static_cast<std::size_t>(k)] = k;
+    std::sort(order.begin(), order.end(), [&](auto u, auto v) { return arc[u] < arc[v]; });
+    p.x.resize(m);
+    Eigen::VectorXd y(m), tr(m);
+    const bool has_truth = i < truth_um.size() && truth_um[i].size() == m;
+    for (Eigen::Index k = 0; k < m; ++k) {
+      const Eigen::Index j = order[static_cast<std::size_t>(k)];
+      p.x[k] = arc[j];
+      y[k] = dev[j];
+      if (has_truth) tr[k] = truth_um[i][j] * 1e-3;
+    }
+    p.series.push_back({"measured − design", y, {}, "", false, true});
+    if (has_truth)
+      p.series.push_back({"measured − simulated part", tr, {}, "#2e7d32", false, true});
+    s.plots.push_back(std::move(p));
+
+    HeatMap h;
+    h.title = fmt::format(
+        "section '{}': the measured contour, coloured by its deviation from the "
+        "design",
+        sec.name);
+    h.x_label = "in-plane u (mm)";
+    h.y_label = "in-plane v (mm)";
+    h.value_label = "deviation (µm)";
+    h.px = px;
+    h.py = py;
+    h.pvalue = dev * 1e3;
+    std::vector<Eigen::Index> line(static_cast<std::size_t>(m));
+    for (Eigen::Index k = 0; k < m; ++k) line[static_cast<std::size_t>(k)] = k;
+    h.lines.push_back(std::move(line));
+    s.heat_maps.push_back(std::move(h));
+  }
+
+  std::vector<std::vector<std::string>> ev{
+      {"t (s)", "section", "arc (mm)", "ΔL (mm)", "mode", "event", "decision"}};
+  for (const auto& e : r.events)
+    ev.push_back({fmt::format("{:.3f}", e.t), e.section, fmt::format("{:.1f}", e.arc),
+                  fmt::format("{:+.3f}", e.delta_l), e.mode, e.event, e.decision});
+  s.more_tables.push_back({"every decision of the flow", std::move(ev)});
+  return s;
+}
+
+}  // namespace trueaxis::report
