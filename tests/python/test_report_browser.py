@@ -86,3 +86,24 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     links = re.findall(r'<a class="csv" download="([^"]+)" href="data:text/csv', dom)
     assert "gauge-blocks-table.csv" in links and len(links) == 2, links
     assert "<h2>References</h2>" in dom and "ISO 10360-2:2009" in dom
+
+
+def test_scan_report_renders(tmp_path):
+    data = os.path.join(os.path.dirname(__file__), "..", "data", "ippdme", "ipp_simple.stp")
+    d, p, s, h = (tmp_path / n for n in ("design.json", "part.json", "scan.json", "scan.html"))
+    subprocess.run([TRUEAXIS, "design", "--step", data, "--section", "origin=0,0,25;normal=0,0,1;name=mid",
+                    "-o", str(d), "-q"], check=True)
+    subprocess.run([TRUEAXIS, "simulate", "part", "--design", str(d), "--translate", "1.8,-1.1,0",
+                    "--bump", "mid.1,150,2,30", "-o", str(p), "-q"], check=True)
+    subprocess.run([TRUEAXIS, "scan", "--design", str(d), "--part", str(p), "-o", str(s),
+                    "--report", str(h), "--meta", "machine=virtual CMM", "-q"], check=True)
+    dom = dump_dom(h, tmp_path)
+    total = re.search(r'data-plots-total="(\d+)"', dom)
+    rendered = re.search(r'data-plots-rendered="(\d+)"', dom)
+    assert total and rendered, "report script did not run"
+    assert int(total.group(1)) == 4  # per section: ΔL along each scan, measured − design
+    assert rendered.group(1) == total.group(1)
+    assert 'data-script-errors="' not in dom, "script errors in the report"
+    assert dom.count('<svg class="ta-fig"') == 2  # the measured contours, coloured
+    assert "every decision of the flow" in dom and "design_overwritten" in dom
+    assert "virtual CMM" in dom and "JP 6484108 B2" in dom

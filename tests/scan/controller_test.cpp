@@ -15,6 +15,7 @@
 #include <cmath>
 
 #include "../test_util.hpp"
+#include "trueaxis/report/scan.hpp"
 
 namespace trueaxis {
 namespace {
@@ -339,6 +340,51 @@ TEST(Controller, BsplineSolidFromStepScannedEndToEnd) {
     EXPECT_EQ(count(r, "correction_applied"), 1);
     EXPECT_LT(worst_distance(large, d.sections[0], r.sections[0].points), kServoTol);
   }
+}
+
+}  // namespace
+}  // namespace trueaxis
+
+namespace trueaxis {
+namespace {
+
+TEST(Controller, ReportShowsEveryScanAndEveryDecision) {
+  const auto d = square_and_hole();
+  sim::Part part{d, {}};
+  part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  part.deviation.bumps = {{"outer", 150, 2.0, 30}};
+  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  const auto r = scan::scan(cmm, d, {});
+  ASSERT_TRUE(r.ok()) << r.summary();
+  // ΔL traces: the outer section was scanned three times (design, after the correction, after
+  // the autonomous scan), the hole twice.
+  ASSERT_EQ(r.sections[0].traces.size(), 3u);
+  EXPECT_EQ(r.sections[1].traces.size(), 2u);
+  EXPECT_FALSE(r.sections[0].traces[0].completed);
+  EXPECT_TRUE(r.sections[0].traces.back().completed);
+  std::vector<Eigen::VectorXd> truth;
+  for (std::size_t i = 0; i < 2; ++i) {
+    Eigen::VectorXd t(static_cast<Eigen::Index>(r.sections[i].points.size()));
+    for (Eigen::Index k = 0; k < t.size(); ++k)
+      t[k] = cmm.distance(d.sections[i].plane, r.sections[i].points[static_cast<std::size_t>(k)].surface) * 1e3;
+    truth.push_back(t);
+  }
+  const auto s = report::scan_section("scan", r, d, 1.5, truth);
+  ASSERT_EQ(s.table.size(), 3u);  // header and two sections
+  EXPECT_EQ(s.table[1][1], "ok");
+  EXPECT_EQ(s.table[1][6], "1");                          // one autonomous scan of the outline
+  EXPECT_NE(s.table[2][5].find("translation"), std::string::npos);  // the hole's correction
+  ASSERT_EQ(s.plots.size(), 4u);  // per section: ΔL along each scan, measured − design
+  EXPECT_EQ(s.plots[0].series.size(), 3u + 2u);  // three scans and the two tolerance lines
+  // The measured outline against the design: the translation shows (1.1 to 1.8 mm off the
+  // design), the truth stays at zero.
+  const Eigen::VectorXd& dev = s.plots[1].series[0].y;
+  EXPECT_GT(dev.cwiseAbs().maxCoeff(), 1.0);
+  EXPECT_LT(s.plots[1].series[1].y.cwiseAbs().maxCoeff(), 0.002);
+  EXPECT_EQ(s.heat_maps.size(), 2u);
+  ASSERT_EQ(s.more_tables.size(), 1u);
+  EXPECT_EQ(s.more_tables[0].second.size(), r.events.size() + 1);
+  EXPECT_TRUE(s.warnings.empty());
 }
 
 }  // namespace

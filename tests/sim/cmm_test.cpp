@@ -156,3 +156,33 @@ TEST(Probe, ContactLiftOffAndOvertravel) {
 
 }  // namespace
 }  // namespace trueaxis
+
+namespace trueaxis {
+namespace {
+
+// Queries that walk inside the material past a convex corner: the nearest point jumps to the
+// other side of the corner, far along the contour from the last one found. (A search around the
+// last segment alone stayed on the first side.)
+TEST(Contour, NearestIsExactWhenTheNearestSideSwitches) {
+  Eigen::Matrix3Xd p(3, 8000);
+  for (int i = 0; i < 8000; ++i) {
+    const double a = 0.05 * i;  // arc along the square's sides
+    const int side = static_cast<int>(a / 100);
+    const double u = a - 100 * side;
+    const double xy[4][2] = {{u, 0}, {100, u}, {100 - u, 100}, {0, 100 - u}};
+    p.col(i) << xy[side][0], xy[side][1], 0;
+  }
+  const sim::Contour walked(p, Eigen::Vector3d::UnitZ(), true, true);
+  for (int k = 0; k <= 300; ++k) {
+    const Eigen::Vector3d q(99.9 - 0.01 * k, 98.9, 0);  // from near x = 100 to near y = 100
+    const sim::Contour fresh(p, Eigen::Vector3d::UnitZ(), true, true);
+    const auto a = walked.nearest(q), b = fresh.nearest(q);
+    EXPECT_NEAR(a.distance, b.distance, kRoundoff) << k;
+    EXPECT_NEAR(a.distance, -std::min(100 - q.x(), 100 - q.y()), kRoundoff) << k;
+  }
+  EXPECT_FALSE(walked.nearest_within(Eigen::Vector3d(50, 50, 0), 10));  // the centre: 50 away
+  EXPECT_TRUE(walked.nearest_within(Eigen::Vector3d(50, 5, 0), 10));
+}
+
+}  // namespace
+}  // namespace trueaxis
