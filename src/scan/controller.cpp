@@ -212,13 +212,8 @@ struct SectionRun {
         break;
       }
       log(stop.arc, stop.delta_l, "design", "trajectory_error", why);
-      // The path is a plane section by construction of design data here; a three-dimensional
-      // path (no plane) cannot be corrected.
-      if (!(current.plane.normal.norm() > 0)) {
-        r.reason = "the scan path is not a plane section: it cannot be corrected";
-        log(stop.arc, stop.delta_l, "design", "error_exit", r.reason);
-        break;
-      }
+      // The flow's 2-D test passes by construction: design data are plane sections (design::check
+      // refuses points off the plane). Three-dimensional scan paths are not supported yet.
       bool corrected = false;
       if (flag == 0) {
         auto [feet, got] = touch();

@@ -3,7 +3,8 @@
 //
 // For each section: scan along the path computed from the design data (fast). While the
 // trajectory error ΔL stays within the tolerance, that is all. On a trajectory error:
-//  1. a section that is not planar ends in an error (nothing here can correct it);
+//  1. (a path that is not a plane section would end in an error; design data here are plane
+//     sections by construction, so this test always passes);
 //  2. first time (flag = 0): touch points along the design normals, fit a menu of geometric
 //     corrections (translation; rotation; uniform scale; scale and rotation; scale along one
 //     direction — each with a translation) and keep the simplest one that brings every touch
