@@ -20,15 +20,14 @@ struct Frame {
   }
 };
 
-Frame frame_of(const design::Section& s) {
+Frame frame_of(const design::Section& s, const Eigen::Matrix3Xd& samples) {
   Frame f;
   f.n = s.plane.normal.normalized();
   const Eigen::Vector3d a =
       std::abs(f.n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
   f.e1 = (a - a.dot(f.n) * f.n).normalized();
   f.e2 = f.n.cross(f.e1);
-  const auto smp = design::sample(s, 0.5);
-  f.o = smp.points.rowwise().mean();
+  f.o = samples.rowwise().mean();
   return f;
 }
 
@@ -145,9 +144,15 @@ design::Section apply(const design::Section& s, const Frame& f, const Affine2& a
 // Signed distances of the touched points from a section's curve, sampled every 0.05 mm (chords
 // within 0.05²/8R of the curve: 0.3 µm at R = 1 mm).
 constexpr double kSampling = 0.05;
-Eigen::VectorXd distances(const design::Section& s, const Eigen::Matrix3Xd& touched) {
+// A section's curve as a contour for distance queries.
+sim::Contour curve_of(const design::Section& s) {
   const auto smp = design::sample(s, kSampling);
-  const sim::Contour c(smp.points, s.plane.normal, s.closed, s.material == design::Side::Left);
+  return sim::Contour(smp.points, s.plane.normal.normalized(), s.closed,
+                      s.material == design::Side::Left);
+}
+
+// Signed distances of the touched points from a curve.
+Eigen::VectorXd distances(const sim::Contour& c, const Eigen::Matrix3Xd& touched) {
   Eigen::VectorXd d(touched.cols());
   for (Eigen::Index i = 0; i < touched.cols(); ++i) d[i] = c.nearest(touched.col(i)).distance;
   return d;
@@ -159,20 +164,16 @@ std::vector<Correction> fit_corrections(const design::Section& section,
                                         const Eigen::Matrix3Xd& feet,
                                         const Eigen::Matrix3Xd& touched, double accept,
                                         design::Section* corrected) {
-  const Frame f = frame_of(section);
+  const sim::Contour design_curve = curve_of(section);
+  const Frame f = frame_of(section, design_curve.points());
   std::vector<Eigen::Vector2d> p0, m0, t;
-  design::Section unit = section;
-  unit.plane.normal.normalize();
-  const auto smp = design::sample(unit, kSampling);
-  const sim::Contour design_curve(smp.points, unit.plane.normal, unit.closed,
-                                  unit.material == design::Side::Left);
   for (Eigen::Index i = 0; i < feet.cols(); ++i) {
     const auto nr = design_curve.nearest(feet.col(i));
     p0.push_back(f.to2(nr.point));
     m0.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
     t.push_back(f.to2(touched.col(i)));
   }
-  const Eigen::VectorXd before = distances(section, touched);
+  const Eigen::VectorXd before = distances(design_curve, touched);
   const double worst_before = before.cwiseAbs().maxCoeff();
   std::vector<Correction> out;
   if (worst_before <= accept) {
@@ -207,9 +208,7 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     for (int it = 0; it < 8; ++it) {
       const Affine2 a = model(k, best);
       const design::Section moved = apply(section, f, a);
-      const auto ms = design::sample(moved, kSampling);
-      const sim::Contour mc(ms.points, moved.plane.normal.normalized(), moved.closed,
-                            moved.material == design::Side::Left);
+      const sim::Contour mc = curve_of(moved);
       const Eigen::Matrix2d Ainv = a.A.inverse();
       double shift = 0;
       for (std::size_t i = 0; i < p.size(); ++i) {
@@ -225,7 +224,7 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     }
     const Affine2 a = model(k, best);
     const design::Section cand = apply(section, f, a);
-    const Eigen::VectorXd after = distances(cand, touched);
+    const Eigen::VectorXd after = distances(curve_of(cand), touched);
     Correction c;
     c.type = name(k);
     c.residual_before = worst_before;

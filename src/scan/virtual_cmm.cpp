@@ -56,17 +56,17 @@ sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part)
   std::size_t first = 0;
   for (std::size_t k = 0; k < part.size(); ++k)
     if (part[k] == last_contour_) first = k;
-  const sim::Contour* nearest = part[first];
-  double best = std::abs(nearest->nearest(pos).distance);
+  last_contour_ = part[first];
+  sim::Contour::Nearest best = part[first]->nearest(pos);
   for (std::size_t k = 0; k < part.size(); ++k) {
     if (k == first) continue;
-    if (const auto n = part[k]->nearest_within(pos, best); n && std::abs(n->distance) < best) {
-      best = std::abs(n->distance);
-      nearest = part[k];
+    if (const auto n = part[k]->nearest_within(pos, std::abs(best.distance));
+        n && std::abs(n->distance) < std::abs(best.distance)) {
+      best = *n;
+      last_contour_ = part[k];
     }
   }
-  last_contour_ = nearest;
-  return probe_.read(pos, *nearest);
+  return probe_.read(best);
 }
 
 Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
@@ -164,15 +164,16 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
                         std::sqrt(entry[i + 1] * entry[i + 1] + 2 * a * path.segments[i].length));
   std::size_t seg = 0;
   double s = 0, v = 0, next_record = 0;
+  auto here = path.at(s);
   for (long k = 0; k < kMaxTicks; ++k) {
-    const auto here = path.at(s);
     while (seg + 1 < ns && s >= begin[seg + 1]) ++seg;
     const double ahead =
         std::sqrt(entry[seg + 1] * entry[seg + 1] + 2 * a * std::max(0.0, begin[seg + 1] - s));
     v = std::min({here.speed, v + a * dt, ahead});
     servo_.step(here.p + cnorm * here.normal, here.tangent * v);
     s = std::min(L, s + v * dt);
-    const auto now = path.at(s);
+    here = path.at(s);  // where the path is now, and where the next tick starts
+    const auto& now = here;
     const auto r = read(c);
     Sample smp = sample(r, s);
     // On a perfect part the ball centre runs Ep outside the (pushed-in) path.

@@ -218,8 +218,12 @@ Probe::Probe(const ProbeOptions& options) : o_(options), rng_(options.seed) {
 }
 
 ProbeReading Probe::read(const Eigen::Vector3d& position, const Contour& part) {
+  return read(part.nearest(position));
+}
+
+ProbeReading Probe::read(const Contour::Nearest& surface) {
   ProbeReading r;
-  r.surface = part.nearest(position);
+  r.surface = surface;
   const double penetration = o_.tip_radius - r.surface.distance;
   if (penetration > 0) {
     r.contact = true;

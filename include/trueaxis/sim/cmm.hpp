@@ -129,6 +129,8 @@ class Probe {
   explicit Probe(const ProbeOptions& options);
   // The reading with the carriage (free ball centre) at `position` against `part`.
   ProbeReading read(const Eigen::Vector3d& position, const Contour& part);
+  // The same, given the nearest point of the part already found for that position.
+  ProbeReading read(const Contour::Nearest& surface);
   const ProbeOptions& options() const { return o_; }
 
  private:
