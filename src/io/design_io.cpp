@@ -166,9 +166,7 @@ sim::Part part_from(const JsonFile& f) {
       d.bumps.push_back({f.string(q / "section"), f.number(q / "arc_mm"), f.number(q / "height_mm"),
                          f.number(q / "width_mm")});
       try {
-        sim::Part one{part.design, {}};
-        one.deviation.bumps = {d.bumps.back()};
-        one.validate();
+        sim::validate(d.bumps.back(), part.design);
       } catch (const Error& e) {
         f.fail(q, e.what());
       }

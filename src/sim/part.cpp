@@ -28,17 +28,21 @@ void Part::validate() const {
     bad("part translation: each component must be within ±1000 mm");
   if (!(v.noise >= 0 && v.noise <= 1))
     bad(fmt::format("part form noise {:g} mm: must be in [0, 1] mm", v.noise));
-  for (const Bump& b : v.bumps) {
-    bool found = false;
-    for (const auto& s : design.sections) found = found || s.name == b.section;
-    if (!found) bad(fmt::format("bump on section '{}': the design has no such section", b.section));
-    if (!(std::abs(b.height) <= 10))
-      bad(fmt::format("bump on '{}': height {:g} mm is beyond ±10 mm", b.section, b.height));
-    if (!(b.width > 0 && b.width <= 1e4))
-      bad(fmt::format("bump on '{}': width {:g} mm must be in (0, 10000]", b.section, b.width));
-    if (!std::isfinite(b.arc))
-      bad(fmt::format("bump on '{}': the arc position is not a number", b.section));
-  }
+  for (const Bump& b : v.bumps) sim::validate(b, design);
+}
+
+void validate(const Bump& b, const design::Design& design) {
+  bool found = false;
+  for (const auto& s : design.sections) found = found || s.name == b.section;
+  if (!found)
+    throw Error(fmt::format("bump on section '{}': the design has no such section", b.section));
+  if (!(std::abs(b.height) <= 10))
+    throw Error(fmt::format("bump on '{}': height {:g} mm is beyond ±10 mm", b.section, b.height));
+  if (!(b.width > 0 && b.width <= 1e4))
+    throw Error(
+        fmt::format("bump on '{}': width {:g} mm must be in (0, 10000]", b.section, b.width));
+  if (!std::isfinite(b.arc))
+    throw Error(fmt::format("bump on '{}': the arc position is not a number", b.section));
 }
 
 Eigen::Vector3d centroid(const design::Design& d) {

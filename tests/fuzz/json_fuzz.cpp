@@ -20,7 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 10) {
+    switch (data[0] % 11) {
       case 0:
         io::read_machine(p);
         break;
@@ -50,8 +50,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 8:
         io::read_parametric(p);
         break;
-      default:
+      case 9:
         io::read_design(p);
+        break;
+      default:
+        io::read_part(p);
         break;
     }
   });

@@ -22,6 +22,7 @@ for f in examples/*.json; do
 done
 printf '\x00{"chain": "FYXZ", "ranges": {"x": [0, 800], "y": [0, 600], "z": [0, 500]}, "errors": {"EXX": {"polynomial": [0, 10]}}}' > "$corpus/json/machine"
 printf '\x09{"sections": [{"name": "s", "plane": {"origin": [0, 0, 0], "normal": [0, 0, 1]}, "closed": false, "curve": {"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 1, 1], "weights": [1, 0.7, 1], "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}}, "material": "left"}]}' > "$corpus/json/design"
+printf '\x0a{"design": {"sections": [{"name": "s", "plane": {"origin": [0, 0, 0], "normal": [0, 0, 1]}, "closed": false, "curve": {"polyline": [[0, 0, 0], [10, 0, 0], [10, 5, 0]]}, "material": "left"}]}, "deviation": {"scale": 1.01, "rotation_deg": [0, 0, 1], "translation": [1, 0, 0], "bumps": [{"section": "s", "arc_mm": 5, "height_mm": 0.2, "width_mm": 4}], "noise_um": 1, "seed": 3}}' > "$corpus/json/part"
 printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
 find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
 for f in tests/data/moody/*.txt; do

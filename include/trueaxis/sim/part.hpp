@@ -51,6 +51,10 @@ struct Part {
   void validate() const;
 };
 
+// Throws Error unless the bump lies on a section of `design`, |height| ≤ 10 mm, width in
+// (0, 10000] mm and its arc position is a number.
+void validate(const Bump& bump, const design::Design& design);
+
 // Centroid of the design's section curves (arc-length weighted), mm.
 Eigen::Vector3d centroid(const design::Design& d);
 
