@@ -128,30 +128,10 @@ int run_design(const DesignArgs& a) {
   return 0;
 }
 
-// "X,Y,Z" -> a vector, or a usage error naming the option.
-Eigen::Vector3d parse_triple(const std::string& option, const std::string& text) {
-  std::stringstream ss(text);
-  std::string num;
-  Eigen::Vector3d out;
-  int k = 0;
-  while (std::getline(ss, num, ',')) {
-    if (k == 3) break;
-    try {
-      std::size_t used = 0;
-      out[k] = std::stod(num, &used);
-      if (used != num.size() || !std::isfinite(out[k])) throw std::invalid_argument(num);
-    } catch (const std::exception&) {
-      throw CLI::ValidationError(option, fmt::format("'{}': '{}' is not a number", text, num));
-    }
-    ++k;
-  }
-  if (k != 3 || ss.rdbuf()->in_avail() > 0 || std::count(text.begin(), text.end(), ',') != 2)
-    throw CLI::ValidationError(option, fmt::format("'{}': give three numbers X,Y,Z", text));
-  return out;
-}
-
 struct PartArgs {
-  std::string design, output, scale_about, rotate, translate, scale_along;
+  std::string design, output;
+  // Comma-separated numbers; CLI11 checks their count and that they are numbers.
+  std::vector<double> scale_about, rotate, translate, scale_along;
   std::vector<std::string> bumps;
   double scale = 1, noise_um = 0;
   std::uint64_t seed = 1;
@@ -163,26 +143,17 @@ int run_simulate_part(const PartArgs& a) {
   p.design = io::read_design(a.design);
   sim::PartDeviation& d = p.deviation;
   d.scale = a.scale;
+  auto vec = [](const std::vector<double>& v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
   if (!a.scale_about.empty()) {
-    d.scale_about = parse_triple("--scale-about", a.scale_about);
+    d.scale_about = vec(a.scale_about);
     d.scale_about_given = true;
   }
   if (!a.scale_along.empty()) {
-    const auto c = std::count(a.scale_along.begin(), a.scale_along.end(), ',');
-    const auto last = a.scale_along.rfind(',');
-    if (c != 3)
-      throw CLI::ValidationError("--scale-along",
-                                 fmt::format("'{}': give I,J,K,FACTOR", a.scale_along));
-    d.scale_direction = parse_triple("--scale-along", a.scale_along.substr(0, last));
-    try {
-      d.directional_scale = std::stod(a.scale_along.substr(last + 1));
-    } catch (const std::exception&) {
-      throw CLI::ValidationError("--scale-along",
-                                 fmt::format("'{}': the factor is not a number", a.scale_along));
-    }
+    d.scale_direction = vec(a.scale_along);
+    d.directional_scale = a.scale_along[3];
   }
-  if (!a.rotate.empty()) d.rotation_deg = parse_triple("--rotate", a.rotate);
-  if (!a.translate.empty()) d.translation = parse_triple("--translate", a.translate);
+  if (!a.rotate.empty()) d.rotation_deg = vec(a.rotate);
+  if (!a.translate.empty()) d.translation = vec(a.translate);
   for (const auto& b : a.bumps) {
     // SECTION,ARC_MM,HEIGHT_MM,WIDTH_MM (the section name may itself hold no comma)
     std::vector<std::string> f;
@@ -239,12 +210,20 @@ Command simulate_part(CLI::App& simulate) {
   c->add_option("--scale", a->scale, "uniform scale factor (about --scale-about)")
       ->capture_default_str();
   c->add_option("--scale-about", a->scale_about,
-                "X,Y,Z: centre of scaling (mm; default: the design's centroid)");
+                "X,Y,Z: centre of scaling (mm; default: the design's centroid)")
+      ->delimiter(',')
+      ->expected(3);
   c->add_option("--scale-along", a->scale_along,
-                "I,J,K,FACTOR: a further scale along one direction");
+                "I,J,K,FACTOR: a further scale along one direction")
+      ->delimiter(',')
+      ->expected(4);
   c->add_option("--rotate", a->rotate,
-                "AX,AY,AZ: rotation (degrees) about x, y, z at the design's centroid");
-  c->add_option("--translate", a->translate, "DX,DY,DZ: translation (mm)");
+                "AX,AY,AZ: rotation (degrees) about x, y, z at the design's centroid")
+      ->delimiter(',')
+      ->expected(3);
+  c->add_option("--translate", a->translate, "DX,DY,DZ: translation (mm)")
+      ->delimiter(',')
+      ->expected(3);
   c->add_option("--bump", a->bumps,
                 "SECTION,ARC_MM,HEIGHT_MM,WIDTH_MM: a smooth bump along the outward normal "
                 "centred at that arc length (negative height: a dent); repeatable");

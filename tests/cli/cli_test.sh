@@ -347,6 +347,8 @@ expect_ok "$T" simulate part --design design.json --translate 2,0,0 --rotate 0,0
 grep -q '"bumps"' part.json && grep -q '"sections"' part.json && grep -q "centroid moves by 2.0000 mm" out.txt && ok || bad "simulate part: $(cat out.txt)"
 expect_err "bump on section 'nope': the design has no such section" "$T" simulate part --design design.json --bump nope,1,1,1 -o p.json
 expect_code 2 "$T" simulate part --design design.json --translate 1,2 -o p.json
+expect_code 2 "$T" simulate part --design design.json --rotate 0,0,x -o p.json
+expect_code 2 "$T" simulate part --design design.json --scale-along 0,1,0 -o p.json
 expect_code 2 "$T" simulate part --design design.json --bump mid.1,1,1 -o p.json
 expect_err "part scale 3: must be in" "$T" simulate part --design design.json --scale 3 -o p.json
 
