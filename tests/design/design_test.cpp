@@ -4,22 +4,17 @@
 
 #include <gtest/gtest.h>
 
-#include <BRepBuilderAPI_MakeEdge.hxx>
 #include <BRepBuilderAPI_MakeFace.hxx>
-#include <BRepBuilderAPI_MakeWire.hxx>
-#include <BRepBuilderAPI_NurbsConvert.hxx>
-#include <BRepPrimAPI_MakePrism.hxx>
 #include <BRep_Tool.hxx>
-#include <GeomAPI_Interpolate.hxx>
 #include <GeomAPI_ProjectPointOnCurve.hxx>
-#include <GeomAdaptor_Curve.hxx>
 #include <Geom_BSplineSurface.hxx>
 #include <STEPControl_Writer.hxx>
-#include <TColgp_HArray1OfPnt.hxx>
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <cmath>
+#include <gp_Pln.hxx>
 
+#include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/io/design.hpp"
 
@@ -107,6 +102,16 @@ TEST(Design, StepRefusals) {
   EXPECT_NE(test::error_of([] {
               design::from_step(kIpp, {{"above", z_plane(80)}});
             }).find("misses the part"),
+            std::string::npos);
+  // A valid STEP file with a surface but no solid: no material side to know.
+  const std::string face = test::temp_dir() + "/face.stp";
+  STEPControl_Writer w;
+  ASSERT_EQ(w.Transfer(BRepBuilderAPI_MakeFace(gp_Pln(), 0, 10, 0, 10).Face(), STEPControl_AsIs),
+            IFSelect_RetDone);
+  ASSERT_EQ(w.Write(face.c_str()), IFSelect_RetDone);
+  EXPECT_NE(test::error_of([&] {
+              design::from_step(face, {{"a", z_plane(0)}});
+            }).find(face + ": the STEP file holds no solid"),
             std::string::npos);
 }
 
@@ -209,38 +214,24 @@ TEST(Design, PolylinePathsStayAtTheOffsetOnTheFreeSide) {
 
 // A solid bounded by B-spline surfaces, built here with OCCT, exported to STEP and sectioned.
 TEST(Design, BsplineSolidFromStep) {
-  Handle(TColgp_HArray1OfPnt) pts = new TColgp_HArray1OfPnt(1, 12);
-  for (int i = 0; i < 12; ++i) {
-    const double a = 2 * M_PI * i / 12, r = 30 + 4 * std::cos(3 * a);
-    pts->SetValue(i + 1, gp_Pnt(r * std::cos(a), r * std::sin(a), 0));
-  }
-  GeomAPI_Interpolate interp(pts, Standard_True, 1e-9);
-  interp.Perform();
-  ASSERT_TRUE(interp.IsDone());
-  const TopoDS_Edge e = BRepBuilderAPI_MakeEdge(interp.Curve()).Edge();
-  const TopoDS_Face f = BRepBuilderAPI_MakeFace(BRepBuilderAPI_MakeWire(e).Wire()).Face();
-  const TopoDS_Shape prism = BRepPrimAPI_MakePrism(f, gp_Vec(0, 0, 40)).Shape();
-  const TopoDS_Shape nurbs = BRepBuilderAPI_NurbsConvert(prism).Shape();
+  const std::string path = test::temp_dir() + "/lobed.stp";
+  const TopoDS_Shape nurbs = test::write_lobed_solid(path);
+  const Handle(Geom_BSplineCurve) profile = test::lobed_profile();
   int bspline_faces = 0;
   for (TopExp_Explorer x(nurbs, TopAbs_FACE); x.More(); x.Next())
     bspline_faces +=
         !Handle(Geom_BSplineSurface)::DownCast(BRep_Tool::Surface(TopoDS::Face(x.Current())))
              .IsNull();
   ASSERT_GE(bspline_faces, 1);
-  const std::string path = test::temp_dir() + "/lobed.stp";
-  STEPControl_Writer w;
-  ASSERT_EQ(w.Transfer(nurbs, STEPControl_AsIs), IFSelect_RetDone);
-  ASSERT_EQ(w.Write(path.c_str()), IFSelect_RetDone);
 
   const auto d = design::from_step(path, {{"z10", z_plane(10)}});
   ASSERT_EQ(d.sections.size(), 1u);
   const auto& s = d.sections[0];
   EXPECT_EQ(s.material, design::Side::Left);
   // The cut matches the profile curve: every sample within OCCT's section tolerance of it.
-  GeomAdaptor_Curve profile(interp.Curve());
   const auto smp = design::sample(s, 1);
   for (Eigen::Index i = 0; i < smp.points.cols(); ++i) {
-    GeomAPI_ProjectPointOnCurve pr(gp_Pnt(smp.points(0, i), smp.points(1, i), 0), interp.Curve());
+    GeomAPI_ProjectPointOnCurve pr(gp_Pnt(smp.points(0, i), smp.points(1, i), 0), profile);
     ASSERT_GT(pr.NbPoints(), 0);
     EXPECT_LT(pr.LowerDistance(), 1e-4);
     EXPECT_NEAR(smp.points(2, i), 10, 1e-9);

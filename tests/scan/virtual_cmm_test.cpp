@@ -4,37 +4,19 @@
 
 #include <cmath>
 
+#include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/scan/machine.hpp"
 
 namespace trueaxis {
 namespace {
 
-// Noise-free: what is left is the servo's following error across the path and the contour's
-// sampling (0.05 mm chords): both well under a micrometre on these parts.
-constexpr double kServoTol = 2e-3;  // mm, for surface points measured on the move
+// Noise-free: each point is the ball centre (carriage position + deflection) less the tip radius
+// along the deflection, which lands on the true surface whatever the servo's following error;
+// only round-off is left.
+constexpr double kRoundoff = 1e-9;  // mm
 
-design::Design square_and_hole() {
-  design::Design d;
-  design::Section sq;
-  sq.name = "outer";
-  sq.plane = {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()};
-  sq.polyline.resize(3, 5);
-  sq.polyline << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
-  d.sections.push_back(sq);
-  design::Section hole;
-  hole.name = "hole";
-  hole.plane = sq.plane;
-  hole.material = design::Side::Right;
-  const int n = 73;
-  hole.polyline.resize(3, n);
-  for (int i = 0; i < n; ++i) {
-    const double a = 2 * M_PI * (i % (n - 1)) / (n - 1);
-    hole.polyline.col(i) << 50 + 25 * std::cos(a), 50 + 25 * std::sin(a), 25;
-  }
-  d.sections.push_back(hole);
-  return d;
-}
+using test::square_and_hole;
 
 TEST(VirtualCmm, DesignValueScanOfAPerfectPartFollowsItsSurface) {
   sim::Part part{square_and_hole(), {}};
@@ -54,7 +36,7 @@ TEST(VirtualCmm, DesignValueScanOfAPerfectPartFollowsItsSurface) {
     double worst = 0;
     for (const auto& x : out.samples)
       worst = std::max(worst, std::abs(cmm.distance(s.plane, x.surface)));
-    EXPECT_LT(worst, kServoTol) << s.name;
+    EXPECT_LT(worst, kRoundoff) << s.name;
     EXPECT_LT(worst_dl, 0.05) << s.name;  // the servo lags on the corner arcs, a little
   }
   EXPECT_GT(cmm.time(), 5);  // 550 mm at ≤ 100 mm/s, and the approaches
@@ -81,7 +63,7 @@ TEST(VirtualCmm, TouchAndAutonomousScanFindAMovedPart) {
   double worst = 0;
   for (const auto& x : out.samples)
     worst = std::max(worst, std::abs(cmm.distance(plane, x.surface)));
-  EXPECT_LT(worst, kServoTol);
+  EXPECT_LT(worst, kRoundoff);
   EXPECT_NEAR(out.samples.back().arc, 400, 2);
   EXPECT_GT(cmm.time() - t0, 400 / 12.0);  // slow: about 10× the design-value time
 }

@@ -6,6 +6,7 @@
 
 #include <cmath>
 
+#include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/io/design.hpp"
 
@@ -14,15 +15,10 @@ namespace {
 
 constexpr double kTol = 1e-9;  // mm
 
-// The ipp_simple section at z = 25 written by hand: the square (material inside) and the hole.
+// The square of NIST's I++ test part at z = 25 (material inside), alone.
 design::Design ipp_like() {
-  design::Design d;
-  design::Section sq;
-  sq.name = "outer";
-  sq.plane = {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()};
-  sq.polyline.resize(3, 5);
-  sq.polyline << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
-  d.sections.push_back(sq);
+  auto d = test::square_and_hole();
+  d.sections.resize(1);
   return d;
 }
 
