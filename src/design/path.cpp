@@ -173,6 +173,34 @@ std::optional<std::vector<Span>> offset_wire(const TopoDS_Wire& w, const Plane& 
   }
 }
 
+// Measured contours (a section overwritten by an autonomous scan) have nanometre kinks between
+// otherwise collinear points; OCCT 7.6's offset fails on chains of such nearly tangent edges.
+// Points that lie within `eps` of the chord between their kept neighbours carry no shape and
+// are dropped (eps well inside the chordal tolerance; greedy: a point is dropped while every point
+// since the last kept one stays within eps of the chord from it to the next point).
+Eigen::Matrix3Xd drop_collinear(const Eigen::Matrix3Xd& p, double eps) {
+  const Eigen::Index n = p.cols();
+  if (n < 3) return p;
+  std::vector<Eigen::Index> keep{0};
+  for (Eigen::Index j = 2; j < n; ++j) {
+    const Eigen::Vector3d a = p.col(keep.back()), b = p.col(j);
+    const Eigen::Vector3d ab = b - a;
+    const double l2 = ab.squaredNorm();
+    bool fits = l2 > 0;
+    fits = fits && j - keep.back() < 1000;  // bounded work on long straight runs
+    for (Eigen::Index i = keep.back() + 1; fits && i < j; ++i) {
+      const double t = (p.col(i) - a).dot(ab) / l2;
+      fits = t > 0 && t < 1 && (p.col(i) - a - t * ab).norm() <= eps;
+    }
+    if (!fits) keep.push_back(j - 1);
+  }
+  keep.push_back(n - 1);
+  Eigen::Matrix3Xd out(3, static_cast<Eigen::Index>(keep.size()));
+  for (std::size_t k = 0; k < keep.size(); ++k)
+    out.col(static_cast<Eigen::Index>(k)) = p.col(keep[k]);
+  return out;
+}
+
 }  // namespace
 
 void PathOptions::validate() const {
@@ -238,6 +266,7 @@ ScanPath make_path(const Section& s0, const PathOptions& o) {
     throw Error(fmt::format("section '{}': {}: {}", s0.name, p->field, p->what));
   Section s = s0;
   s.plane.normal.normalize();
+  if (!s.nurbs) s.polyline = drop_collinear(s.polyline, std::min(1e-4, 0.1 * o.chordal_tolerance));
   const double d = o.tip_radius - o.pushing;
   Handle(Geom_BSplineCurve) c = occt::curve(s);
   ScanPath path;

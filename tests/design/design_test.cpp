@@ -212,6 +212,38 @@ TEST(Design, PolylinePathsStayAtTheOffsetOnTheFreeSide) {
   EXPECT_NEAR(linep.segments.front().point(0).y(), off, 1e-9);
 }
 
+// A measured contour (what an autonomous scan writes over a section): the square sampled every
+// 0.6 mm with a smooth sub-micrometre ripple, as a CMM's geometric errors leave on it. Its
+// nearly collinear points must not stop the offset; the path keeps the offset from the points.
+TEST(Design, MeasuredPolylineWithNanometreRippleGetsAPath) {
+  for (double ripple : {1e-6, 1e-5, 1e-4, 1e-3}) {  // mm
+    std::vector<Eigen::Vector3d> pts;
+    const Eigen::Vector2d c[] = {{0, 0}, {100, 0}, {100, 100}, {0, 100}};
+    for (int e = 0; e < 4; ++e)
+      for (int k = 0; k < 167; ++k) {
+        const Eigen::Vector2d a = c[e], b = c[(e + 1) % 4];
+        const Eigen::Vector2d dir = (b - a) / 100, left(-dir.y(), dir.x());
+        const double u = 100.0 * k / 167;
+        const Eigen::Vector2d q = a + u * dir + ripple * std::sin(u / 7.0) * left;
+        pts.emplace_back(q.x(), q.y(), 25);
+      }
+    design::Section s;
+    s.name = "measured";
+    s.plane = z_plane(25);
+    s.closed = true;
+    s.material = design::Side::Left;
+    s.polyline.resize(3, static_cast<Eigen::Index>(pts.size() + 1));
+    for (std::size_t i = 0; i <= pts.size(); ++i)
+      s.polyline.col(static_cast<Eigen::Index>(i)) = pts[i % pts.size()];
+    design::PathOptions o;
+    const double off = o.tip_radius - o.pushing;
+    const auto path = design::make_path(s, o);
+    EXPECT_NEAR(path.length(), 400 + 2 * M_PI * off, 0.01) << ripple;
+    for (const auto& seg : path.segments)
+      EXPECT_NEAR(dist_to_square(seg.point(0.5)), off, ripple + o.chordal_tolerance) << ripple;
+  }
+}
+
 // A solid bounded by B-spline surfaces, built here with OCCT, exported to STEP and sectioned.
 TEST(Design, BsplineSolidFromStep) {
   const std::string path = test::temp_dir() + "/lobed.stp";
