@@ -9,6 +9,7 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/files.hpp"
+#include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/scan.hpp"
 #include "trueaxis/report/scan.hpp"
 #include "trueaxis/scan/controller.hpp"
@@ -17,9 +18,10 @@ namespace trueaxis::cli {
 namespace {
 
 struct ScanArgs {
-  std::string design, part, output, points, log, corrected, truth, report,
+  std::string design, part, machine, output, points, log, corrected, truth, report,
       strategy = "error-tolerant";
   scan::ControllerOptions o;
+  std::vector<double> part_origin;
   double probe_noise_um = 0;
   std::uint64_t seed = 1;
   bool passive = false, quiet = false;
@@ -36,6 +38,9 @@ int run_scan(ScanArgs& a) {
   vo.probe.noise = a.probe_noise_um * 1e-3;
   vo.probe.seed = a.seed;
   vo.probe.range = std::max(1.0, 3 * a.o.path.pushing);
+  if (!a.machine.empty()) vo.geometry = io::read_machine(a.machine);
+  if (!a.part_origin.empty())
+    vo.part_origin = Eigen::Vector3d(a.part_origin[0], a.part_origin[1], a.part_origin[2]);
   // Start above the part's first section, clear of it.
   const auto smp = design::sample(d.sections.front(), 1.0);
   const Eigen::Vector3d home = smp.points.col(0) + (a.o.path.tip_radius + 20) * smp.normals.col(0);
@@ -44,7 +49,12 @@ int run_scan(ScanArgs& a) {
     if (!a.quiet)
       fmt::print(stderr, "scanning section {}/{} '{}' ...\n", i + 1, n, d.sections[i].name);
   });
-  io::write_scan(a.output, r, a.o);
+  io::ScanCmm rec{a.o.path.tip_radius, a.probe_noise_um, {}, {}};
+  if (vo.geometry) {
+    rec.machine = vo.geometry->name.empty() ? a.machine : vo.geometry->name;
+    rec.part_origin = cmm.part_origin();
+  }
+  io::write_scan(a.output, r, a.o, rec);
   if (!a.points.empty()) io::write_scan_points(a.points, r);
   if (!a.log.empty()) io::write_scan_events(a.log, r);
   if (!a.corrected.empty()) io::write_design(a.corrected, r.design);
@@ -73,6 +83,11 @@ int run_scan(ScanArgs& a) {
                                  {report::scan_section(a.design, r, d, a.o.tolerance, truth_um)},
                                  4000, report_meta()));
   if (!a.quiet) {
+    if (vo.geometry)
+      fmt::print(
+          "CMM with the geometric errors of '{}'; part origin at ({:.1f}, {:.1f}, {:.1f}) mm in "
+          "machine coordinates\n",
+          rec.machine, rec.part_origin->x(), rec.part_origin->y(), rec.part_origin->z());
     for (const auto& s : r.sections)
       fmt::print(
           "{}: {} — {} points, {} trajectory errors, {} corrections, {} autonomous scans, "
@@ -110,6 +125,16 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
   c->add_option("--part", a->part, "part.json: the simulated real part (trueaxis simulate part)")
       ->required()
       ->check(CLI::ExistingFile);
+  c->add_option("--machine", a->machine,
+                "machine.json: the CMM's 21 geometric errors (trueaxis simulate machine); the "
+                "measured points carry them, as on a real CMM")
+      ->check(CLI::ExistingFile);
+  c->add_option("--part-origin", a->part_origin,
+                "X,Y,Z: where the part's design origin sits in machine coordinates (mm; with "
+                "--machine; default: the part centred in the travel)")
+      ->delimiter(',')
+      ->expected(3)
+      ->needs("--machine");
   c->add_option("--strategy", a->strategy,
                 "error-tolerant (default), design (stop at a trajectory error) or autonomous "
                 "(slow surface following only)")

@@ -7,6 +7,7 @@
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/design.hpp"
+#include "trueaxis/io/machine.hpp"
 #include "trueaxis/scan/controller.hpp"
 
 namespace py = pybind11;
@@ -27,7 +28,7 @@ py::dict times(const scan::MachineTime& t) {
 py::dict run_scan(const std::string& design, const std::string& part, const std::string& strategy,
                   double tolerance, int max_autonomous, double tip_radius, double pushing,
                   bool passive, double probe_noise_um, std::uint64_t seed,
-                  const std::string& corrected_design) {
+                  const std::string& corrected_design, const std::string& machine) {
   scan::ControllerOptions o;
   o.strategy = scan::strategy_from_string(strategy);
   o.tolerance = tolerance;
@@ -43,6 +44,7 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
   vo.probe.noise = probe_noise_um * 1e-3;
   vo.probe.seed = seed;
   vo.probe.range = std::max(1.0, 3 * pushing);
+  if (!machine.empty()) vo.geometry = io::read_machine(machine);
   const auto smp = design::sample(d.sections.front(), 1.0);
   scan::Result r;
   std::vector<std::vector<double>> truth;
@@ -132,13 +134,14 @@ void bind_scan(py::module_& m) {
         py::arg("strategy") = "error-tolerant", py::arg("tolerance") = 1.5,
         py::arg("max_autonomous") = 3, py::arg("tip_radius") = 1.0, py::arg("pushing") = 0.3,
         py::arg("passive") = false, py::arg("probe_noise_um") = 0.0, py::arg("seed") = 1,
-        py::arg("corrected_design") = "",
+        py::arg("corrected_design") = "", py::arg("machine") = "",
         "Scan a simulated part (part.json) along its design data (design.json) on the virtual "
         "CMM, as 'trueaxis scan' does. Returns a dict: ok, summary, machine_time_s, sections "
         "(each with points and normals as (n, 3) arrays in mm, t in s, truth_um: each point's "
         "distance from the simulated part, corrections, counts) and events (arrays: t, section, "
         "arc_mm, delta_l_mm, mode, event, decision). corrected_design: a design.json to write "
-        "for the next part of the batch.");
+        "for the next part of the batch. machine: a machine.json whose 21 geometric errors the "
+        "CMM has (the part centred in its travel).");
 }
 
 }  // namespace trueaxis::python

@@ -31,7 +31,8 @@ std::string field(const std::string& s) {
 
 }  // namespace
 
-void write_scan(const std::string& path, const scan::Result& r, const scan::ControllerOptions& o) {
+void write_scan(const std::string& path, const scan::Result& r, const scan::ControllerOptions& o,
+                const ScanCmm& cmm) {
   ojson secs = ojson::array();
   for (const auto& s : r.sections) {
     ojson corr = ojson::array();
@@ -55,13 +56,22 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
                     {"trajectory_errors", s.trajectory_errors},
                     {"points", pts}});
   }
-  write_json(path, ojson{{"kind", "scan"},
-                         {"strategy", scan::to_string(o.strategy)},
-                         {"tolerance_mm", o.tolerance},
-                         {"ok", r.ok()},
-                         {"summary", r.summary()},
-                         {"machine_time_s", times(r.time)},
-                         {"sections", secs}});
+  write_json(
+      path,
+      ojson{{"kind", "scan"},
+            {"strategy", scan::to_string(o.strategy)},
+            {"tolerance_mm", o.tolerance},
+            {"ok", r.ok()},
+            {"summary", r.summary()},
+            {"cmm",
+             {{"tip_radius_mm", cmm.tip_radius},
+              {"probe_noise_um", cmm.probe_noise_um},
+              {"geometric_errors", cmm.machine.empty() ? ojson(nullptr) : ojson(cmm.machine)},
+              {"part_origin_mm", cmm.part_origin ? ojson{cmm.part_origin->x(), cmm.part_origin->y(),
+                                                         cmm.part_origin->z()}
+                                                 : ojson(nullptr)}}},
+            {"machine_time_s", times(r.time)},
+            {"sections", secs}});
 }
 
 void write_scan_points(const std::string& path, const scan::Result& r) {

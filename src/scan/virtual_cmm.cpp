@@ -30,6 +30,38 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     pl.normal.normalize();
     contours_.emplace_back(pl, sim::true_contour(part_, s));
   }
+  if (const auto& m = o_.geometry) {
+    m->validate();
+    // The part's bounding box, grown by the clearance, must lie within the travel.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+    for (const auto& [pl, c] : contours_) {
+      lo = lo.cwiseMin(c.points().rowwise().minCoeff());
+      hi = hi.cwiseMax(c.points().rowwise().maxCoeff());
+    }
+    lo.array() -= o_.clearance;
+    hi.array() += o_.clearance;
+    if (o_.part_origin) {
+      origin_ = *o_.part_origin;
+    } else {
+      for (int k = 0; k < 3; ++k)
+        origin_[k] = 0.5 * (m->range[k][0] + m->range[k][1]) - 0.5 * (lo[k] + hi[k]);
+      origin_ += m->offset;
+    }
+    if (!origin_.allFinite()) throw Error("the part's origin on the machine must be finite");
+    for (int k = 0; k < 3; ++k) {
+      const double a = lo[k] + origin_[k] - m->offset[k], b = hi[k] + origin_[k] - m->offset[k];
+      if (a < m->range[k][0] || b > m->range[k][1])
+        throw Error(fmt::format(
+            "the part does not fit on machine '{}': along {} it needs commands {:.1f} to {:.1f} "
+            "mm ({:g} mm clearance included), the travel is {:g} to {:g} mm",
+            m->name, "XYZ"[k], a, b, o_.clearance, m->range[k][0], m->range[k][1]));
+    }
+  }
+}
+
+Eigen::Vector3d VirtualCmm::machine_error(const Eigen::Vector3d& p) const {
+  if (!o_.geometry) return Eigen::Vector3d::Zero();
+  return o_.geometry->error(p + origin_ - o_.geometry->offset);
 }
 
 std::vector<const sim::Contour*> VirtualCmm::in_plane(const design::Plane& plane) const {
@@ -52,7 +84,8 @@ double VirtualCmm::distance(const design::Plane& plane, const Eigen::Vector3d& p
 sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part) {
   // The ball meets the nearest contour of the plane: the one met last is usually it, and the
   // others only need looking at within that distance.
-  const Eigen::Vector3d pos = servo_.position();
+  Eigen::Vector3d pos = servo_.position();
+  if (o_.geometry) pos += machine_error(pos);  // where the ball centre really is
   std::size_t first = 0;
   for (std::size_t k = 0; k < part.size(); ++k)
     if (part[k] == last_contour_) first = k;

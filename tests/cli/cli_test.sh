@@ -376,6 +376,17 @@ expect_err "section 'mid.1': trajectory error" "$T" scan --design design.json --
 expect_code 2 "$T" scan --design design.json --part bumped.json --strategy fast -o s.json
 expect_err "scan.json: a 'scan' file has no report of its own" "$T" report scan.json -o scan.html
 expect_code 2 "$T" scan --design design.json --part bumped.json --tolerance 0 -o s.json
+# A CMM with geometric errors: the part scans as before, and its points carry the machine's errors.
+expect_ok "$T" scan --design design2.json --part bumped2.json --machine machine.json -o scan4.json --truth truth4.csv
+grep -q "CMM with the geometric errors of 'random FXYZ machine, seed 3'" out.txt && ok || bad "scan --machine: $(cat out.txt)"
+python3 -c "
+import csv, json; s = json.load(open('scan4.json'))
+assert s['ok'] and s['cmm']['geometric_errors'] == 'random FXYZ machine, seed 3', s['cmm']
+worst = max(abs(float(r['distance_um'])) for r in csv.DictReader(open('truth4.csv')))
+assert 1 < worst < 100, worst
+" && ok || bad "scan --machine: points do not carry the machine's errors"
+expect_err "the part does not fit on machine" "$T" scan --design design.json --part bumped.json --machine small.json --part-origin 290,100,75 -o s.json
+expect_code 2 "$T" scan --design design.json --part bumped.json --part-origin 1,2,3 -o s.json
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

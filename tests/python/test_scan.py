@@ -55,3 +55,14 @@ def test_scan_refuses_bad_options(files):
     bad.write_text(json.dumps({"sections": []}))
     with pytest.raises(trueaxis.Error, match="no sections"):
         trueaxis.scan(str(bad), str(files / "part.json"))
+
+
+def test_scan_on_a_cmm_with_geometric_errors(files):
+    subprocess.run([TRUEAXIS, "simulate", "machine", "--seed", "4", "--positioning", "50",
+                    "-o", str(files / "machine.json"), "-q"], check=True)
+    r = trueaxis.scan(str(files / "design.json"), str(files / "part.json"),
+                      machine=str(files / "machine.json"))
+    assert r["ok"], r["summary"]
+    # The points carry the machine's errors: microns off the true part, not round-off.
+    worst = max(np.max(np.abs(s["truth_um"])) for s in r["sections"])
+    assert 1 < worst < 100

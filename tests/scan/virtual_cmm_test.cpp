@@ -68,5 +68,54 @@ TEST(VirtualCmm, TouchAndAutonomousScanFindAMovedPart) {
   EXPECT_GT(cmm.time() - t0, 400 / 12.0);  // slow: about 10× the design-value time
 }
 
+// A CMM with geometric errors measures the part with its errors in the points: each reported
+// point plus the machine's error at the scale position it was read at lies on the true surface.
+TEST(VirtualCmm, GeometricErrorsOfTheMachineAreInTheMeasuredPoints) {
+  sim::Part part{square_and_hole(), {}};
+  sim::Machine m;
+  m.name = "skewed";
+  m.offset = Eigen::Vector3d(0, 0, -100);
+  m.errors[0][0].polynomial = {0, 0.2};      // EXX: 200 µm/m scale error of X
+  m.errors[1][2].polynomial = {0, 0, 0.05};  // EZY: a 50 µm/m² bow
+  m.errors[2][3].polynomial = {0, 50e-6};    // EAZ: roll of the ram, 50 µrad/m
+  m.squareness_c0y = 30e-6;                  // Y leans 30 µrad towards X
+  scan::VirtualCmmOptions vo;
+  vo.geometry = m;
+  scan::VirtualCmm cmm(part, vo, Eigen::Vector3d(50, -20, 40));
+  // Centred in the default 800 × 600 × 500 travel.
+  EXPECT_NEAR(cmm.part_origin().x(), 400 - 50, 1e-9);
+  EXPECT_NEAR(cmm.part_origin().z(), 250 - 25 - 100, 1e-9);
+  design::PathOptions po;
+  const auto& s = part.design.sections[0];
+  const auto out = cmm.scan_path(design::make_path(s, po), {}, [](const auto&) { return true; });
+  ASSERT_TRUE(out.completed) << out.fault;
+  // The scale position is the reported point + (r − pushing) along the normal to within the
+  // deflection's noise-free difference; the error's slope (≈ 2·10⁻⁴) makes that ≪ 0.1 µm.
+  constexpr double kModel = 1e-4;  // mm
+  double raw = 0, corrected = 0;
+  for (const auto& x : out.samples) {
+    raw = std::max(raw, std::abs(cmm.distance(s.plane, x.surface)));
+    const Eigen::Vector3d scale = x.surface + (po.tip_radius - po.pushing) * x.normal;
+    corrected =
+        std::max(corrected, std::abs(cmm.distance(s.plane, x.surface + cmm.machine_error(scale))));
+  }
+  EXPECT_GT(raw, 0.02);  // 200 µm/m at 300–400 mm from the scale's zero
+  EXPECT_LT(corrected, kModel);
+
+  // A part that does not fit in the travel is refused in words.
+  vo.geometry->range[0] = {0, 100};
+  EXPECT_THROW(
+      {
+        try {
+          scan::VirtualCmm small(part, vo);
+        } catch (const Error& e) {
+          EXPECT_NE(std::string(e.what()).find("does not fit on machine 'skewed'"),
+                    std::string::npos);
+          throw;
+        }
+      },
+      Error);
+}
+
 }  // namespace
 }  // namespace trueaxis

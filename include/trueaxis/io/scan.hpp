@@ -1,23 +1,34 @@
 // trueaxis::io — results of a scanning run.
 //
-// scan.json: {"kind": "scan", "strategy", "tolerance_mm", "ok", "summary", "machine_time_s": {"total", "design",
-//   "touch", "autonomous", "moves"}, "sections": [{"name", "status" ("ok" | "error"), "reason",
-//   "machine_time_s": {…}, "corrections": [{"type", "parameters": {name: value}, "accepted",
-//   "residual_before_mm", "residual_after_mm"}], "autonomous_count", "trajectory_errors",
-//   "points": [[x, y, z], …]}]}
+// scan.json: {"kind": "scan", "strategy", "tolerance_mm", "ok", "summary", "cmm": {"tip_radius_mm",
+//   "probe_noise_um", "geometric_errors" (the machine's name, or null), "part_origin_mm"
+//   ([x, y, z] in machine coordinates, with geometric errors)}, "machine_time_s": {"total",
+//   "design", "touch", "autonomous", "moves"}, "sections": [{"name", "status" ("ok" | "error"),
+//   "reason", "machine_time_s": {…}, "corrections": [{"type", "parameters": {name: value},
+//   "accepted", "residual_before_mm", "residual_after_mm"}], "autonomous_count",
+//   "trajectory_errors", "points": [[x, y, z], …]}]}
 // points.csv: section,x,y,z,nx,ny,nz,t — workpiece surface points (mm, tip-compensated), the
 //   measured normal, machine time (s).
 // events.csv: t,section,arc_mm,delta_l_mm,mode,event,decision — every decision of the flow.
 #pragma once
 
+#include <Eigen/Core>
+#include <optional>
 #include <string>
 
 #include "trueaxis/scan/controller.hpp"
 
 namespace trueaxis::io {
 
+// The CMM a scan ran on, as recorded in scan.json.
+struct ScanCmm {
+  double tip_radius = 0, probe_noise_um = 0;
+  std::string machine;                         // the geometric-error model's name ("" = none)
+  std::optional<Eigen::Vector3d> part_origin;  // mm, machine coordinates
+};
+
 void write_scan(const std::string& path, const scan::Result& result,
-                const scan::ControllerOptions& options);
+                const scan::ControllerOptions& options, const ScanCmm& cmm = {});
 void write_scan_points(const std::string& path, const scan::Result& result);
 void write_scan_events(const std::string& path, const scan::Result& result);
 

@@ -18,6 +18,7 @@
 
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/sim/cmm.hpp"
+#include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/part.hpp"
 
 namespace trueaxis::scan {
@@ -86,6 +87,14 @@ class Machine {
 // The virtual CMM: a servo-controlled carriage and a scanning probe in front of a simulated
 // part. The part's section whose design plane contains an operation's plane is the surface the
 // probe meets (each section's true contour, built once).
+//
+// Optionally the CMM has the 21 geometric errors of a sim::Machine: the servo runs on the
+// scale readings, and the ball centre really is where the erroneous axes put it. With the
+// part's design origin at `part_origin` in machine coordinates, the scale position p (part
+// frame) is the machine command c = p + part_origin − machine.offset, and the free ball centre
+// is p + machine.error(c). The probe meets the part at the real ball centre, while every
+// reported point is built from the scale readings, so the machine's errors are in the
+// measurement as on a real CMM.
 struct VirtualCmmOptions {
   sim::ServoOptions servo;
   sim::ProbeOptions probe;
@@ -93,6 +102,11 @@ struct VirtualCmmOptions {
   double correction_gain = 60;      // active scanning: normal correction rate (1/s)
   double positioning_speed = 100;   // free moves within an operation (mm/s)
   double approach_speed = 10;       // approaching the surface before a scan (mm/s)
+  std::optional<sim::Machine> geometry;  // the CMM's geometric errors (none if empty)
+  // Machine coordinates of the part's design origin (mm). Empty: the part's bounding box is
+  // centred in the machine's travel.
+  std::optional<Eigen::Vector3d> part_origin;
+  double clearance = 30;  // the part's box grown by this must fit in the travel (mm)
 };
 
 class VirtualCmm : public Machine {
@@ -116,6 +130,10 @@ class VirtualCmm : public Machine {
   // part has no section in that plane.
   double distance(const design::Plane& plane, const Eigen::Vector3d& p) const;
   const sim::Part& part() const { return part_; }
+  // With geometric errors: the part's design origin in machine coordinates, and the CMM's
+  // error (real − read ball centre, mm) at scale position p (part frame). Zero without.
+  const Eigen::Vector3d& part_origin() const { return origin_; }
+  Eigen::Vector3d machine_error(const Eigen::Vector3d& p) const;
 
  private:
   sim::Part part_;
@@ -127,6 +145,7 @@ class VirtualCmm : public Machine {
   std::vector<const sim::Contour*> in_plane(const design::Plane& plane) const;
   sim::ProbeReading read(const std::vector<const sim::Contour*>& part);
   const sim::Contour* last_contour_ = nullptr;
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
   Sample sample(const sim::ProbeReading& r, double arc) const;
 };
 
