@@ -77,11 +77,20 @@ int run_scan(ScanArgs& a) {
     truth_um.push_back(std::move(t));
   }
   if (!a.truth.empty()) io::write_text(a.truth, out);
-  if (!a.report.empty())
-    report::write(a.report,
-                  report::render("trueaxis scanning report",
-                                 {report::scan_section(a.design, r, d, a.o.tolerance, truth_um)},
-                                 4000, report_meta()));
+  if (!a.report.empty()) {
+    // The simulated part's contour of each scanned section (matched by name).
+    std::vector<Eigen::Matrix3Xd> true_part;
+    for (const auto& ds : d.sections) {
+      true_part.emplace_back(3, 0);
+      for (const auto& ps : part.design.sections)
+        if (ps.name == ds.name) true_part.back() = sim::true_contour(part, ps).points();
+    }
+    report::write(
+        a.report,
+        report::render("trueaxis scanning report",
+                       {report::scan_section(a.design, r, d, a.o.tolerance, truth_um, true_part)},
+                       4000, report_meta()));
+  }
   if (!a.quiet) {
     if (vo.geometry)
       fmt::print(

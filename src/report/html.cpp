@@ -303,7 +303,7 @@ svg.ta-fig{max-width:100%;height:auto}
           "TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{},log:{}}});\n", id, data,
           series, bands, js_string(p.x_label), js_string(p.y_label), p.log_y ? "true" : "false");
     }
-    if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty()) {
+    if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty() || !s.planes.empty()) {
       h += "<div class=\"figs\">";
       auto figure = [&](const std::string& title, const std::string& body) {
         h += "<figure><figcaption>" + escape(title) + "</figcaption>" + body + "</figure>\n";
@@ -312,6 +312,7 @@ svg.ta-fig{max-width:100%;height:auto}
       for (const auto& v : s.views) figure(v.title, svg(v));
       for (const auto& m : s.heat_maps) figure(m.title, svg(m));
       for (const auto& g : s.grids) figure(g.title, svg(g));
+      for (const auto& v : s.planes) figure(v.title, svg(v));
       h += "</div>\n";
     }
   }

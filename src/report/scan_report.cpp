@@ -10,7 +10,8 @@
 namespace trueaxis::report {
 
 Section scan_section(const std::string& title, const scan::Result& r, const design::Design& design,
-                     double tolerance, const std::vector<Eigen::VectorXd>& truth_um) {
+                     double tolerance, const std::vector<Eigen::VectorXd>& truth_um,
+                     const std::vector<Eigen::Matrix3Xd>& true_part) {
   Section s;
   s.title = title;
   s.references = {kErrorTolerantScanning};
@@ -74,6 +75,15 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
           {"+tolerance", Eigen::VectorXd::Constant(n, tolerance), {}, "#c62828", true, false});
       p.series.push_back(
           {"−tolerance", Eigen::VectorXd::Constant(n, -tolerance), {}, "#c62828", true, false});
+      // Where each scan stopped on a trajectory error.
+      Eigen::VectorXd stops = Eigen::VectorXd::Constant(n, NAN);
+      for (const auto& e : r.events)
+        if (e.section == sec.name && e.event == "trajectory_error") {
+          const auto j = static_cast<Eigen::Index>(std::lround(e.arc / 0.5));
+          if (j >= 0 && j < n) stops[j] = e.delta_l;
+        }
+      if (stops.array().isFinite().any())
+        p.series.push_back({"trajectory error: scan stopped", stops, {}, "#000000", false, true});
       s.plots.push_back(std::move(p));
     }
     if (sec.points.empty()) continue;
@@ -134,6 +144,49 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     for (Eigen::Index k = 0; k < m; ++k) line[static_cast<std::size_t>(k)] = k;
     h.lines.push_back(std::move(line));
     s.heat_maps.push_back(std::move(h));
+
+    // The section in its plane: design, corrected design, measured points and the true part,
+    // each drawn at the design's foot point plus its deviation along the design normal × M.
+    auto project = [&](const Eigen::Matrix3Xd& q, bool magnify, double mag) {
+      Eigen::Matrix2Xd xy(2, q.cols());
+      for (Eigen::Index k = 0; k < q.cols(); ++k) {
+        Eigen::Vector3d p = q.col(k);
+        if (magnify) {
+          const auto nr = c.nearest(p);
+          p = nr.point + mag * nr.distance * nr.normal;
+        }
+        xy.col(k) << (p - d.plane.origin).dot(e1), (p - d.plane.origin).dot(e2);
+      }
+      return xy;
+    };
+    std::vector<std::pair<std::string, Eigen::Matrix3Xd>> others;
+    if (i < r.design.sections.size())
+      others.emplace_back("corrected design", design::sample(r.design.sections[i], 0.5).points);
+    if (i < true_part.size() && true_part[i].cols() > 1)
+      others.emplace_back("simulated true part", true_part[i]);
+    Eigen::Matrix3Xd measured(3, m);
+    for (Eigen::Index k = 0; k < m; ++k)
+      measured.col(k) = sec.points[static_cast<std::size_t>(k)].surface;
+    double worst = dev.cwiseAbs().maxCoeff();
+    for (const auto& [label, q] : others)
+      for (Eigen::Index k = 0; k < q.cols(); ++k)
+        worst = std::max(worst, std::abs(c.nearest(q.col(k)).distance));
+    const double size = std::max(px.maxCoeff() - px.minCoeff(), py.maxCoeff() - py.minCoeff());
+    const double mag = std::max(1.0, nice_magnification(worst * 1e3, size, 0.06));
+    PlaneView v;
+    v.title =
+        fmt::format("section '{}' in its plane: deviations from the design ×{:g}", sec.name, mag);
+    v.x_label = "in-plane u (mm)";
+    v.y_label = "in-plane v (mm)";
+    v.curves.push_back({"design", project(smp.points, false, 1), "#757575", false, false, false});
+    const char* colours[] = {"#1565c0", "#2e7d32"};
+    for (std::size_t k = 0; k < others.size(); ++k)
+      v.curves.push_back({others[k].first, project(others[k].second, true, mag),
+                          others[k].first == "corrected design" ? colours[0] : colours[1],
+                          others[k].first == "corrected design", false, false});
+    v.curves.push_back(
+        {"measured points", project(measured, true, mag), "#e65100", false, true, false});
+    s.planes.push_back(std::move(v));
   }
 
   std::vector<std::vector<std::string>> ev{

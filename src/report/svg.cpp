@@ -379,3 +379,62 @@ DistortedGrid distorted_plane(const map::ErrorMap& m, int a, int b, Eigen::Index
 }
 
 }  // namespace trueaxis::report
+
+namespace trueaxis::report {
+
+std::string svg(const PlaneView& v) {
+  double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+  for (const auto& c : v.curves) {
+    if (!c.xy.allFinite())
+      throw Error(
+          fmt::format("plane view '{}': curve '{}' has a non-finite value", v.title, c.label));
+    if (c.xy.cols() == 0) continue;
+    x0 = std::min(x0, c.xy.row(0).minCoeff());
+    x1 = std::max(x1, c.xy.row(0).maxCoeff());
+    y0 = std::min(y0, c.xy.row(1).minCoeff());
+    y1 = std::max(y1, c.xy.row(1).maxCoeff());
+  }
+  if (!std::isfinite(x0)) throw Error(fmt::format("plane view '{}': no data", v.title));
+  const double pad = 0.04 * std::max(x1 - x0, y1 - y0);
+  const Frame f(x0 - pad, x1 + pad, y0 - pad, y1 + pad, v.width, 0);
+  // Room for the legend under the axes: one line per curve.
+  const double legend_top = f.height();
+  const double height = legend_top + 16.0 * static_cast<double>(v.curves.size()) + 4;
+  std::string s = fmt::format(
+      "<svg class=\"ta-fig\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" "
+      "height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" role=\"img\" aria-label=\"{}\" "
+      "font-family=\"system-ui,sans-serif\" font-size=\"11\">",
+      f.width(), height, f.width(), height, escape(v.title));
+  s += axes(f, v.x_label, v.y_label);
+  for (std::size_t i = 0; i < v.curves.size(); ++i) {
+    const auto& c = v.curves[i];
+    const std::string dash = c.dashed ? " stroke-dasharray=\"6 4\"" : "";
+    if (c.points) {
+      s += "<g fill=\"" + c.color + "\"><title>" + escape(c.label) + "</title>";
+      for (Eigen::Index k = 0; k < c.xy.cols(); ++k)
+        s += fmt::format("<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"1.6\"/>", f.X(c.xy(0, k)),
+                         f.Y(c.xy(1, k)));
+      s += "</g>";
+    } else if (c.xy.cols() > 1) {
+      std::string pts;
+      for (Eigen::Index k = 0; k < c.xy.cols(); ++k)
+        pts += fmt::format("{:.2f},{:.2f} ", f.X(c.xy(0, k)), f.Y(c.xy(1, k)));
+      s += fmt::format(
+          "<{} fill=\"none\" stroke=\"{}\" stroke-width=\"1.4\"{} points=\"{}\"><title>{}</title>"
+          "</{}>",
+          c.closed ? "polygon" : "polyline", c.color, dash, pts, escape(c.label),
+          c.closed ? "polygon" : "polyline");
+    }
+    const double ly = legend_top + 16.0 * static_cast<double>(i) + 8;
+    s += c.points ? fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3\" fill=\"{}\"/>",
+                                f.left + 12, ly - 4, c.color)
+                  : fmt::format(
+                        "<line x1=\"{:.1f}\" x2=\"{:.1f}\" y1=\"{:.1f}\" y2=\"{:.1f}\" "
+                        "stroke=\"{}\" stroke-width=\"2\"{}/>",
+                        f.left, f.left + 24, ly - 4, ly - 4, c.color, dash);
+    s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\">{}</text>", f.left + 32, ly, escape(c.label));
+  }
+  return s + "</svg>";
+}
+
+}  // namespace trueaxis::report

@@ -48,8 +48,12 @@ def test_demo_report_renders_every_plot(tmp_path):
     assert figures and int(figures.group(1)) >= 4 + 3 + 3
     assert dom.count('<svg class="ta-fig"') == int(figures.group(1))
     assert dom.count("the surface in 3-D") >= 2  # Moody's plate, classic and least squares
+    # The scanning scenario: two parts of a batch, each section drawn in its plane.
+    assert dom.count("in its plane: deviations from the design") == 4 * 2  # caption, label
+    assert "Error-tolerant scanning, part 2 of a batch" in dom
     for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt",
-                 "layout.json", "spots.csv"):
+                 "layout.json", "spots.csv", "ipp_simple.stp", "design.json", "part1.json",
+                 "scan1.json", "scan2.json", "design-corrected.json"):
         assert (report.parent / name).stat().st_size > 0, name
 
 
@@ -104,6 +108,12 @@ def test_scan_report_renders(tmp_path):
     assert int(total.group(1)) == 4  # per section: ΔL along each scan, measured − design
     assert rendered.group(1) == total.group(1)
     assert 'data-script-errors="' not in dom, "script errors in the report"
-    assert dom.count('<svg class="ta-fig"') == 2  # the measured contours, coloured
+    # Per section: the measured contour coloured by deviation, and the section in its plane
+    # (design, corrected design, true part, measured points; deviations magnified).
+    assert dom.count('<svg class="ta-fig"') == 4
+    assert dom.count("in its plane: deviations from the design") == 2 * 2  # caption, label
+    for curve in ("corrected design", "simulated true part", "measured points"):
+        assert curve in dom, curve
+    assert "trajectory error: scan stopped" in dom  # the stops marked on the ΔL plots
     assert "every decision of the flow" in dom and "design_overwritten" in dom
     assert "virtual CMM" in dom and "JP 6484108 B2" in dom

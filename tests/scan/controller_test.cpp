@@ -344,19 +344,42 @@ TEST(Controller, ReportShowsEveryScanAndEveryDecision) {
              1e3;
     truth.push_back(t);
   }
-  const auto s = report::scan_section("scan", r, d, 1.5, truth);
+  std::vector<Eigen::Matrix3Xd> true_part;
+  for (const auto& sec : d.sections)
+    true_part.push_back(sim::true_contour(cmm.part(), sec).points());
+  const auto s = report::scan_section("scan", r, d, 1.5, truth, true_part);
   ASSERT_EQ(s.table.size(), 3u);  // header and two sections
   EXPECT_EQ(s.table[1][1], "ok");
   EXPECT_EQ(s.table[1][6], "1");  // one autonomous scan of the outline
   EXPECT_NE(s.table[2][5].find("translation"), std::string::npos);  // the hole's correction
   ASSERT_EQ(s.plots.size(), 4u);  // per section: ΔL along each scan, measured − design
-  EXPECT_EQ(s.plots[0].series.size(), 3u + 2u);  // three scans and the two tolerance lines
+  // Three scans, the two tolerance lines and the marks where a trajectory error stopped a scan
+  // (the first two scans of the outline).
+  ASSERT_EQ(s.plots[0].series.size(), 3u + 2u + 1u);
+  EXPECT_EQ(s.plots[0].series[5].y.array().isFinite().count(), 2);
+  for (double y : s.plots[0].series[5].y)
+    if (std::isfinite(y)) {
+      EXPECT_GT(std::abs(y), 1.5);  // each mark is beyond the tolerance
+    }
   // The measured outline against the design: the translation shows (1.1 to 1.8 mm off the
   // design), the truth stays at zero.
   const Eigen::VectorXd& dev = s.plots[1].series[0].y;
   EXPECT_GT(dev.cwiseAbs().maxCoeff(), 1.0);
   EXPECT_LT(s.plots[1].series[1].y.cwiseAbs().maxCoeff(), 0.002);
   EXPECT_EQ(s.heat_maps.size(), 2u);
+  // Each section in its plane: design, corrected design, true part and measured points; the
+  // hole's corrected design and true part coincide where the design does not.
+  ASSERT_EQ(s.planes.size(), 2u);
+  ASSERT_EQ(s.planes[1].curves.size(), 4u);
+  EXPECT_EQ(s.planes[1].curves[1].label, "corrected design");
+  EXPECT_EQ(s.planes[1].curves[2].label, "simulated true part");
+  EXPECT_TRUE(s.planes[1].curves[3].points);
+  const auto centre = [](const Eigen::Matrix2Xd& xy) -> Eigen::Vector2d {
+    return xy.rowwise().mean();
+  };
+  const auto& pv = s.planes[1].curves;
+  EXPECT_GT((centre(pv[0].xy) - centre(pv[2].xy)).norm(), 1.0);   // the part moved 2.1 mm
+  EXPECT_LT((centre(pv[1].xy) - centre(pv[2].xy)).norm(), 0.05);  // and the correction found it
   ASSERT_EQ(s.more_tables.size(), 1u);
   EXPECT_EQ(s.more_tables[0].second.size(), r.events.size() + 1);
   EXPECT_TRUE(s.warnings.empty());

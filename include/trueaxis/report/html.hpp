@@ -75,6 +75,22 @@ struct SurfaceView {
   int width = 620;           // px
 };
 
+// Curves in a plane at true aspect ratio, each in its own colour with a legend: e.g. a scanned
+// section's design, corrected design, measured points and the true part. Each curve is 2 × n in
+// plane coordinates (mm); `points` draws markers instead of a line.
+struct PlaneView {
+  struct Curve {
+    std::string label;
+    Eigen::Matrix2Xd xy;
+    std::string color;  // CSS colour
+    bool dashed = false, points = false, closed = false;
+  };
+  std::string title;
+  std::string x_label, y_label;  // with units
+  std::vector<Curve> curves;
+  int width = 560;  // px
+};
+
 struct Section {
   std::string title;
   std::string intro_html;                       // trusted HTML (escape user text!)
@@ -87,6 +103,7 @@ struct Section {
   std::vector<SurfaceView> views;    // drawn first among the figures
   std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit
   std::vector<DistortedGrid> grids;  // drawn after the heat maps
+  std::vector<PlaneView> planes;     // drawn after the grids
 };
 
 std::string escape(const std::string& text);
@@ -137,6 +154,7 @@ DistortedGrid distorted_plane(const map::ErrorMap& map, int a, int b, Eigen::Ind
 std::string svg(const HeatMap& h);
 std::string svg(const DistortedGrid& g);
 std::string svg(const SurfaceView& v);
+std::string svg(const PlaneView& v);
 // The largest "nice" magnification (1, 2 or 5 × 10^k) that draws an error of `max_error_um` as at
 // most `fraction` of `step_mm`.
 double nice_magnification(double max_error_um, double step_mm, double fraction = 0.4);

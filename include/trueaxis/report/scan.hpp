@@ -21,9 +21,13 @@ inline constexpr const char* kErrorTolerantScanning =
 
 // `design`: the design data the run started from (deviations are drawn against it).
 // `tolerance`: the ΔL tolerance of the run (mm). `truth_um`: per section, each measured point's
-// distance from the simulated part (µm), or empty.
+// distance from the simulated part (µm), or empty. `true_part`: per section, points of the
+// simulated part's true contour (3 × n, mm), or empty. A plane view per section draws the
+// design, the corrected design, the measured points and the true part, their deviations from
+// the design magnified.
 Section scan_section(const std::string& title, const scan::Result& result,
                      const design::Design& design, double tolerance,
-                     const std::vector<Eigen::VectorXd>& truth_um = {});
+                     const std::vector<Eigen::VectorXd>& truth_um = {},
+                     const std::vector<Eigen::Matrix3Xd>& true_part = {});
 
 }  // namespace trueaxis::report
