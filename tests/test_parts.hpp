@@ -43,6 +43,49 @@ inline design::Design square_and_hole(double k = 1) {
   return d;
 }
 
+// A spiral over a sphere of radius 50 mm about (50, 50, 0): three turns from 20° to 70° from the
+// pole, every ~0.5 mm, with the sphere's outward normals. A scan path that no plane contains.
+inline design::Section spiral_on_sphere() {
+  design::Section s;
+  s.name = "spiral";
+  s.closed = false;
+  const double R = 50;
+  const Eigen::Vector3d c(50, 50, 0);
+  const int n = 1301;  // ~ 640 mm of curve
+  s.polyline.resize(3, n);
+  s.normals.resize(3, n);
+  for (int i = 0; i < n; ++i) {
+    const double t = static_cast<double>(i) / (n - 1);
+    const double theta = (20 + 50 * t) * M_PI / 180, phi = 3 * 2 * M_PI * t;
+    const Eigen::Vector3d u(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
+                            std::cos(theta));
+    s.polyline.col(i) = c + R * u;
+    s.normals.col(i) = u;
+  }
+  return s;
+}
+
+// A Ø60 mm circle in a plane tilted 30° about x through (50, 50, 25), given as a space curve
+// (144-gon with its outward normals in the plane): the outline of a boss cut obliquely.
+inline design::Section oblique_circle() {
+  design::Section s;
+  s.name = "oblique";
+  s.closed = true;
+  const Eigen::Vector3d c(50, 50, 25);
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const int n = 145;
+  s.polyline.resize(3, n);
+  s.normals.resize(3, n);
+  for (int i = 0; i < n; ++i) {
+    const double a = 2 * M_PI * (i % (n - 1)) / (n - 1);
+    const Eigen::Vector3d u = R * Eigen::Vector3d(std::cos(a), std::sin(a), 0);
+    s.polyline.col(i) = c + 30 * u;
+    s.normals.col(i) = u;
+  }
+  return s;
+}
+
 // The profile of a lobed prism: a periodic B-spline through 12 points at radius 30 + 4 cos 3a
 // in the plane z = 0.
 inline Handle(Geom_BSplineCurve) lobed_profile() {

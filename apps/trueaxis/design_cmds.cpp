@@ -105,10 +105,14 @@ int run_design(const DesignArgs& a) {
     const auto p = design::make_path(s, a.path);
     if (!a.quiet)
       fmt::print(
-          "{}: {} contour of {:.3f} mm, material on the {}; scanning path {:.3f} mm in {} cubic "
-          "segments (chordal error {:.2g} µm), {:.1f} s at {} mm/s\n",
-          s.name, s.closed ? "closed" : "open", design::length(s), design::to_string(s.material),
-          p.length(), p.segments.size(), p.chordal_error * 1e3, p.nominal_time(), speeds(p));
+          "{}: {} {} of {:.3f} mm, {}; scanning path {:.3f} mm in {} {} segments "
+          "(chordal error {:.2g} µm), {:.1f} s at {} mm/s\n",
+          s.name, s.closed ? "closed" : "open", s.space_curve() ? "space curve" : "contour",
+          design::length(s),
+          s.space_curve() ? "material behind its surface normals"
+                          : fmt::format("material on the {}", design::to_string(s.material)),
+          p.length(), p.segments.size(), s.space_curve() ? "straight" : "cubic",
+          p.chordal_error * 1e3, p.nominal_time(), speeds(p));
     for (std::size_t i = 0; i < p.segments.size(); ++i) {
       const auto& g = p.segments[i];
       table += fmt::format("{},{},{:.9g},{:.6g},{:.6g}", s.name, i, g.length, g.speed, g.curvature);

@@ -67,7 +67,7 @@ int run_scan(ScanArgs& a) {
     Eigen::VectorXd t(static_cast<Eigen::Index>(pts.size()));
     for (std::size_t k = 0; k < pts.size(); ++k) {
       const auto& p = pts[k];
-      const double dist = cmm.distance(d.sections[i].plane, p.surface);
+      const double dist = cmm.distance(d.sections[i], p.surface);
       t[static_cast<Eigen::Index>(k)] = dist * 1e3;
       worst = std::max(worst, std::abs(dist));
       if (!a.truth.empty())
@@ -83,7 +83,9 @@ int run_scan(ScanArgs& a) {
     for (const auto& ds : d.sections) {
       true_part.emplace_back(3, 0);
       for (const auto& ps : part.design.sections)
-        if (ps.name == ds.name) true_part.back() = sim::true_contour(part, ps).points();
+        if (ps.name == ds.name)
+          true_part.back() = ps.space_curve() ? sim::true_space_curve(part, ps).points()
+                                              : sim::true_contour(part, ps).points();
     }
     report::write(
         a.report,

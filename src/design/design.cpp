@@ -3,9 +3,11 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/SVD>
 #include <GCPnts_AbscissaPoint.hxx>
 #include <GCPnts_UniformAbscissa.hxx>
 #include <GeomAdaptor_Curve.hxx>
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -40,7 +42,39 @@ const char* to_string(Side s) {
   return s == Side::Left ? "left" : "right";
 }
 
+namespace {
+std::optional<Problem> check_space_curve(const Section& s) {
+  if (s.nurbs) return Problem{"curve/nurbs", -1, "a space curve (with normals) is a polyline"};
+  const Eigen::Matrix3Xd& p = s.polyline;
+  if (p.cols() < 2)
+    return Problem{"curve/polyline", -1,
+                   fmt::format("{} point(s): a polyline needs at least 2", p.cols())};
+  if (s.normals.cols() != p.cols())
+    return Problem{"normals", -1,
+                   fmt::format("{} normals for {} points: a space curve needs one surface "
+                               "normal per point",
+                               s.normals.cols(), p.cols())};
+  for (Eigen::Index i = 0; i < p.cols(); ++i) {
+    if (!p.col(i).allFinite() || p.col(i).cwiseAbs().maxCoeff() > kMaxCoordinate)
+      return Problem{"curve/polyline", i,
+                     fmt::format("a coordinate is not a number within ±{:g} mm", kMaxCoordinate)};
+    if (i > 0 && (p.col(i) - p.col(i - 1)).norm() < 1e-9)
+      return Problem{"curve/polyline", i, "the point repeats the one before it"};
+    if (!s.normals.col(i).allFinite() || !(s.normals.col(i).norm() > 1e-9))
+      return Problem{"normals", i, "the surface normal has no direction (zero length)"};
+  }
+  if (s.closed && (p.col(p.cols() - 1) - p.col(0)).norm() > kClosureTolerance)
+    return Problem{"closed", -1,
+                   fmt::format("the curve is marked closed but ends {:.4g} mm from its start "
+                               "(allowed {:g} mm): repeat the first point at the end, or set "
+                               "\"closed\": false",
+                               (p.col(p.cols() - 1) - p.col(0)).norm(), kClosureTolerance)};
+  return std::nullopt;
+}
+}  // namespace
+
 std::optional<Problem> check(const Section& s) {
+  if (s.space_curve()) return check_space_curve(s);
   if (!s.plane.origin.allFinite() || s.plane.origin.cwiseAbs().maxCoeff() > kMaxCoordinate)
     return Problem{"plane/origin", -1, "the plane origin is not a point within ±1e6 mm"};
   if (!s.plane.normal.allFinite() || !(s.plane.normal.norm() > 1e-9))
@@ -122,6 +156,41 @@ std::optional<Problem> check(const Section& s) {
   return std::nullopt;
 }
 
+std::optional<Section> as_plane_section(const Section& s, std::string* why) {
+  if (!s.space_curve()) return s;
+  const Eigen::Matrix3Xd& p = s.polyline;
+  const Eigen::Vector3d c = p.rowwise().mean();
+  const Eigen::Matrix3Xd q = p.colwise() - c;
+  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(q, Eigen::ComputeFullU);
+  const Eigen::Vector3d n = svd.matrixU().col(2);  // the direction of least spread
+  const double off = (n.transpose() * q).cwiseAbs().maxCoeff();
+  double tilt = 0;
+  for (Eigen::Index i = 0; i < p.cols(); ++i)
+    tilt = std::max(
+        tilt, std::abs(std::asin(std::clamp(s.normals.col(i).normalized().dot(n), -1.0, 1.0))));
+  if (off > kPlanarTolerance || tilt > 1e-3) {
+    if (why)
+      *why = fmt::format(
+          "the path is three-dimensional: its points leave their best-fit plane by up to "
+          "{:.3f} mm and its surface normals tilt out of it by up to {:.1f}°",
+          off, tilt * 180 / M_PI);
+    return std::nullopt;
+  }
+  Section out = s;
+  out.normals.resize(3, 0);
+  out.plane = {c, n};
+  // Material on the left (seen from n, along the curve) when the surface normals point to the
+  // right of the direction of travel: t × n.
+  double vote = 0;
+  for (Eigen::Index i = 0; i + 1 < p.cols(); ++i)
+    vote += (p.col(i + 1) - p.col(i)).cross(n).dot(s.normals.col(i));
+  out.material = vote >= 0 ? Side::Left : Side::Right;
+  // Exactly in the plane.
+  for (Eigen::Index i = 0; i < p.cols(); ++i)
+    out.polyline.col(i) -= (out.polyline.col(i) - c).dot(n) * n;
+  return out;
+}
+
 double length(const Section& s) {
   if (!s.nurbs) {
     double l = 0;
@@ -153,6 +222,7 @@ Samples sample_polyline(const Section& s, double spacing) {
   out.normals.resize(3, count);
   out.arc.resize(count);
   const Eigen::Vector3d pn = s.plane.normal.normalized();
+  const bool space = s.space_curve();
   int k = 0;
   double arc = 0;
   for (Eigen::Index i = 0; i + 1 < m && k < count; ++i) {
@@ -162,8 +232,12 @@ Samples sample_polyline(const Section& s, double spacing) {
     const Eigen::Vector3d normal = s.material == Side::Left ? Eigen::Vector3d(-left) : left;
     const int n = pieces[static_cast<std::size_t>(i)];
     for (int j = 0; j < n && k < count; ++j, ++k) {
-      out.points.col(k) = p.col(i) + d * (static_cast<double>(j) / n);
-      out.normals.col(k) = normal;
+      const double f = static_cast<double>(j) / n;
+      out.points.col(k) = p.col(i) + d * f;
+      out.normals.col(k) = space ? Eigen::Vector3d(((1 - f) * s.normals.col(i).normalized() +
+                                                    f * s.normals.col(i + 1).normalized())
+                                                       .normalized())
+                                 : normal;
       out.arc[k] = arc + len * j / n;
     }
     arc += len;
@@ -172,7 +246,8 @@ Samples sample_polyline(const Section& s, double spacing) {
     const Eigen::Vector3d d = p.col(m - 1) - p.col(m - 2);
     const Eigen::Vector3d left = pn.cross(d.normalized());
     out.points.col(k) = p.col(m - 1);
-    out.normals.col(k) = s.material == Side::Left ? Eigen::Vector3d(-left) : left;
+    out.normals.col(k) = space ? Eigen::Vector3d(s.normals.col(m - 1).normalized())
+                               : Eigen::Vector3d(s.material == Side::Left ? -left : left);
     out.arc[k] = arc;
   }
   return out;

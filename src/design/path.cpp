@@ -248,8 +248,12 @@ PathPoint ScanPath::at(double s) const {
   PathPoint r;
   r.p = g.point(u);
   r.tangent = g.tangent(u).normalized();
-  const Eigen::Vector3d left = plane.normal.cross(r.tangent);
-  r.normal = material == Side::Left ? Eigen::Vector3d(-left) : left;
+  if (space()) {
+    r.normal = ((1 - u) * space_normals[last_] + u * space_normals[last_ + 1]).normalized();
+  } else {
+    const Eigen::Vector3d left = plane.normal.cross(r.tangent);
+    r.normal = material == Side::Left ? Eigen::Vector3d(-left) : left;
+  }
   r.speed = g.speed;
   return r;
 }
@@ -260,10 +264,57 @@ double ScanPath::nominal_time() const {
   return t;
 }
 
+// A space curve's path: each point moved along its surface normal, straight between them.
+ScanPath space_path(const Section& s, const PathOptions& o) {
+  const double d = o.tip_radius - o.pushing;
+  const Eigen::Index n = s.polyline.cols();
+  ScanPath path;
+  path.section = s.name;
+  path.closed = s.closed;
+  path.offset = d;
+  std::vector<Eigen::Vector3d> p(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d nn = s.normals.col(i).normalized();
+    p[static_cast<std::size_t>(i)] = s.polyline.col(i) + d * nn;
+    path.space_normals.push_back(nn);
+  }
+  // Curvature at a vertex: the turning angle over the mean of the two segment lengths.
+  auto turn = [&](std::size_t i) {
+    if (i == 0 || i + 1 >= p.size()) {
+      if (!s.closed || p.size() < 3) return 0.0;
+      // A closed curve turns at its start (= end) point too.
+      const Eigen::Vector3d a = p[0] - p[p.size() - 2], b = p[1] - p[0];
+      return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) /
+             (0.5 * (a.norm() + b.norm()));
+    }
+    const Eigen::Vector3d a = p[i] - p[i - 1], b = p[i + 1] - p[i];
+    return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) /
+           (0.5 * (a.norm() + b.norm()));
+  };
+  for (std::size_t i = 0; i + 1 < p.size(); ++i) {
+    PccSegment g;
+    g.coeff.setZero();
+    g.coeff.col(0) = p[i];
+    g.coeff.col(1) = p[i + 1] - p[i];
+    g.length = (p[i + 1] - p[i]).norm();
+    if (!(g.length > 0))
+      throw Error(
+          fmt::format("section '{}': two points of the path coincide after the offset "
+                      "along the normals (point {})",
+                      s.name, i + 1));
+    g.curvature = std::max(turn(i), turn(i + 1));
+    g.speed = g.curvature > 0 ? std::sqrt(o.max_normal_acceleration / g.curvature) : o.max_speed;
+    g.speed = std::clamp(g.speed, o.min_speed, o.max_speed);
+    path.segments.push_back(g);
+  }
+  return path;
+}
+
 ScanPath make_path(const Section& s0, const PathOptions& o) {
   o.validate();
   if (auto p = check(s0))
     throw Error(fmt::format("section '{}': {}: {}", s0.name, p->field, p->what));
+  if (s0.space_curve()) return space_path(s0, o);
   Section s = s0;
   s.plane.normal.normalize();
   if (!s.nurbs) s.polyline = drop_collinear(s.polyline, std::min(1e-4, 0.1 * o.chordal_tolerance));

@@ -47,27 +47,43 @@ void need(const JsonFile& f, const ptr& p, const char* key) {
 }
 
 design::Section read_section(const JsonFile& f, const ptr& p) {
-  only(f, p, {"name", "plane", "closed", "curve", "material"});
-  for (const char* k : {"name", "plane", "closed", "curve", "material"}) need(f, p, k);
+  only(f, p, {"name", "plane", "closed", "curve", "material", "normals"});
+  // A space curve (surface normals per point) has no plane and no material side.
+  const bool space = f.has(p / "normals");
+  for (const char* k : {"name", "closed", "curve"}) need(f, p, k);
+  if (!space)
+    for (const char* k : {"plane", "material"}) need(f, p, k);
+  if (space)
+    for (const char* k : {"plane", "material"})
+      if (f.has(p / k))
+        f.fail(p / k, fmt::format("a space curve (with 'normals') has no '{}': its surface "
+                                  "normals say where the material is",
+                                  k));
   design::Section s;
   s.name = f.string(p / "name");
   if (s.name.empty()) f.fail(p / "name", "a section needs a name");
-  only(f, p / "plane", {"origin", "normal"});
-  need(f, p / "plane", "origin");
-  need(f, p / "plane", "normal");
-  s.plane.origin = triple(f, p / "plane" / "origin", "x, y, z (mm)");
-  s.plane.normal = triple(f, p / "plane" / "normal", "i, j, k");
+  if (!space) {
+    only(f, p / "plane", {"origin", "normal"});
+    need(f, p / "plane", "origin");
+    need(f, p / "plane", "normal");
+    s.plane.origin = triple(f, p / "plane" / "origin", "x, y, z (mm)");
+    s.plane.normal = triple(f, p / "plane" / "normal", "i, j, k");
+  }
   if (!f.root()[p / "closed"].is_boolean()) f.fail(p / "closed", "'closed' must be true or false");
   s.closed = f.root()[p / "closed"].get<bool>();
-  const std::string side = f.string(p / "material");
-  if (side == "left")
-    s.material = design::Side::Left;
-  else if (side == "right")
-    s.material = design::Side::Right;
-  else
-    f.fail(p / "material", fmt::format("material '{}': use \"left\" or \"right\" (seen from the "
-                                       "plane normal, along the curve)",
-                                       side));
+  if (space) {
+    s.normals = point_list(f, p / "normals");
+  } else {
+    const std::string side = f.string(p / "material");
+    if (side == "left")
+      s.material = design::Side::Left;
+    else if (side == "right")
+      s.material = design::Side::Right;
+    else
+      f.fail(p / "material", fmt::format("material '{}': use \"left\" or \"right\" (seen from "
+                                         "the plane normal, along the curve)",
+                                         side));
+  }
   const ptr c = p / "curve";
   only(f, c, {"nurbs", "polyline"});
   const bool has_n = f.has(c / "nurbs"), has_p = f.has(c / "polyline");
@@ -240,6 +256,13 @@ ojson design_json(const design::Design& d) {
       ojson pts = ojson::array();
       for (Eigen::Index i = 0; i < s.polyline.cols(); ++i) pts.push_back(vec(s.polyline.col(i)));
       curve["polyline"] = pts;
+    }
+    if (s.space_curve()) {
+      ojson normals = ojson::array();
+      for (Eigen::Index i = 0; i < s.normals.cols(); ++i) normals.push_back(vec(s.normals.col(i)));
+      secs.push_back(
+          ojson{{"name", s.name}, {"closed", s.closed}, {"curve", curve}, {"normals", normals}});
+      continue;
     }
     secs.push_back(
         ojson{{"name", s.name},

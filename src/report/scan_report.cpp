@@ -89,6 +89,7 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     if (sec.points.empty()) continue;
     // The measured contour against the design it started from: deviation along the normal.
     const design::Section& d = design.sections[i];
+    if (d.space_curve()) continue;  // no plane to draw a space curve in
     const auto smp = design::sample(d, 0.05);
     const sim::Contour c(smp.points, d.plane.normal.normalized(), d.closed,
                          d.material == design::Side::Left);

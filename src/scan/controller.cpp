@@ -135,7 +135,26 @@ struct SectionRun {
     return {feet, got};
   }
 
+  // The 2-D test: geometric correction and autonomous scanning work in a plane section. A
+  // space curve that lies in a plane becomes that plane section; any other ends the section.
+  bool two_dimensional(double arc, double dl) {
+    if (!current.space_curve()) return true;
+    std::string why;
+    if (auto plane = design::as_plane_section(current, &why)) {
+      current = *plane;
+      log(arc, dl, "design", "two_dimensional",
+          "the space curve lies in one plane: treated as a plane section from here on");
+      return true;
+    }
+    r.reason = why +
+               "; geometric correction and autonomous scanning need a plane section, so the "
+               "section is not measured";
+    log(arc, dl, "design", "error_exit", r.reason);
+    return false;
+  }
+
   bool autonomous() {
+    if (!two_dimensional(0, 0)) return false;
     // Approach where the design is smooth: the sample farthest (in arc) from any corner, so
     // that a moved part is still met along the normal.
     const auto smp = design::sample(current, 1.0);
@@ -212,8 +231,7 @@ struct SectionRun {
         break;
       }
       log(stop.arc, stop.delta_l, "design", "trajectory_error", why);
-      // The flow's 2-D test passes by construction: design data are plane sections (design::check
-      // refuses points off the plane). Three-dimensional scan paths are not supported yet.
+      if (!two_dimensional(stop.arc, stop.delta_l)) break;
       bool corrected = false;
       if (flag == 0) {
         auto [feet, got] = touch();

@@ -26,6 +26,16 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     : part_(std::move(part)), o_(options), servo_(options.servo, home), probe_(options.probe) {
   part_.validate();
   for (const auto& s : part_.design.sections) {
+    if (s.space_curve()) {
+      spaces_.emplace_back(s.name, sim::true_space_curve(part_, s));
+      // A space curve in one plane is also that plane's contour, for touches and autonomous
+      // scans once the controller treats it as a plane section.
+      if (auto planar = design::as_plane_section(s)) {
+        planar->plane.normal.normalize();
+        contours_.emplace_back(planar->plane, sim::true_contour(part_, *planar));
+      }
+      continue;
+    }
     design::Plane pl = s.plane;
     pl.normal.normalize();
     contours_.emplace_back(pl, sim::true_contour(part_, s));
@@ -35,6 +45,10 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     // The part's bounding box, grown by the clearance, must lie within the travel.
     Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
     for (const auto& [pl, c] : contours_) {
+      lo = lo.cwiseMin(c.points().rowwise().minCoeff());
+      hi = hi.cwiseMax(c.points().rowwise().maxCoeff());
+    }
+    for (const auto& [name, c] : spaces_) {
       lo = lo.cwiseMin(c.points().rowwise().minCoeff());
       hi = hi.cwiseMax(c.points().rowwise().maxCoeff());
     }
@@ -81,11 +95,23 @@ double VirtualCmm::distance(const design::Plane& plane, const Eigen::Vector3d& p
   return best;
 }
 
+const sim::SpaceCurve& VirtualCmm::space_curve(const std::string& name) const {
+  for (const auto& [n, c] : spaces_)
+    if (n == name) return c;
+  throw Error("the simulated part has no space-curve section '" + name + "'");
+}
+
+double VirtualCmm::distance(const design::Section& section, const Eigen::Vector3d& p) const {
+  if (section.space_curve()) return space_curve(section.name).nearest(p).distance;
+  return distance(section.plane, p);
+}
+
 sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part) {
   // The ball meets the nearest contour of the plane: the one met last is usually it, and the
   // others only need looking at within that distance.
   Eigen::Vector3d pos = servo_.position();
   if (o_.geometry) pos += machine_error(pos);  // where the ball centre really is
+  if (space_) return probe_.read(space_->nearest(pos));
   std::size_t first = 0;
   for (std::size_t k = 0; k < part.size(); ++k)
     if (part[k] == last_contour_) first = k;
@@ -161,7 +187,16 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
 
 ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettings& st,
                                   const Monitor& monitor) {
-  const auto c = in_plane(path.plane);
+  // A space path meets the part's space curve of that name; a plane path the plane's contours.
+  struct Meet {
+    const sim::SpaceCurve*& slot;
+    ~Meet() { slot = nullptr; }
+  } meet{space_};
+  std::vector<const sim::Contour*> c;
+  if (path.space())
+    space_ = &space_curve(path.section);
+  else
+    c = in_plane(path.plane);
   ScanOutcome out;
   const double L = path.length(), dt = servo_.options().dt(), a = o_.path_acceleration;
   const auto p0 = path.at(0);

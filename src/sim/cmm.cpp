@@ -213,6 +213,40 @@ void ProbeOptions::validate() const {
     throw Error(fmt::format("probe noise = {:g} mm: must be in [0, 0.1] mm", noise));
 }
 
+SpaceCurve::SpaceCurve(Eigen::Matrix3Xd points, Eigen::Matrix3Xd normals)
+    : p_(std::move(points)), n_(std::move(normals)) {
+  if (p_.cols() < 2 || n_.cols() != p_.cols())
+    throw Error("a space curve needs at least 2 points and one normal per point");
+  for (Eigen::Index i = 0; i < n_.cols(); ++i) {
+    if (!(n_.col(i).norm() > 0)) throw Error("a space curve's normal has no direction");
+    n_.col(i).normalize();
+  }
+  arc_.resize(p_.cols());
+  arc_[0] = 0;
+  for (Eigen::Index i = 1; i < p_.cols(); ++i)
+    arc_[i] = arc_[i - 1] + (p_.col(i) - p_.col(i - 1)).norm();
+}
+
+Contour::Nearest SpaceCurve::nearest(const Eigen::Vector3d& q) const {
+  double best = INFINITY;
+  Contour::Nearest out;
+  for (Eigen::Index i = 0; i + 1 < p_.cols(); ++i) {
+    const Eigen::Vector3d a = p_.col(i), d = p_.col(i + 1) - a;
+    const double l2 = d.squaredNorm();
+    const double t = l2 > 0 ? std::clamp((q - a).dot(d) / l2, 0.0, 1.0) : 0.0;
+    const Eigen::Vector3d f = a + t * d;
+    const double d2 = (q - f).squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      out.point = f;
+      out.normal = ((1 - t) * n_.col(i) + t * n_.col(i + 1)).normalized();
+      out.arc = arc_[i] + t * std::sqrt(l2);
+    }
+  }
+  out.distance = (q - out.point).dot(out.normal);
+  return out;
+}
+
 Probe::Probe(const ProbeOptions& options) : o_(options), rng_(options.seed) {
   o_.validate();
 }

@@ -75,9 +75,11 @@ Eigen::Affine3d transform(const Part& part) {
   return T;
 }
 
-Contour true_contour(const Part& part, const design::Section& s, double spacing) {
+namespace {
+// The local form deviation along the outward normal at each sample (mm): bumps and form noise.
+Eigen::VectorXd form_deviation(const Part& part, const design::Section& s,
+                               const design::Samples& smp) {
   const PartDeviation& v = part.deviation;
-  const auto smp = design::sample(s, spacing);
   const Eigen::Index n = smp.points.cols();
   const double total = design::length(s);
   Eigen::VectorXd dev = Eigen::VectorXd::Zero(n);
@@ -111,6 +113,16 @@ Contour true_contour(const Part& part, const design::Section& s, double spacing)
       dev[i] += (1 - f) * k[static_cast<std::size_t>(j)] + f * k[static_cast<std::size_t>(j1)];
     }
   }
+  return dev;
+}
+}  // namespace
+
+Contour true_contour(const Part& part, const design::Section& s, double spacing) {
+  if (s.space_curve())
+    throw Error("section '" + s.name + "' is a space curve, not a contour in a plane");
+  const auto smp = design::sample(s, spacing);
+  const Eigen::Index n = smp.points.cols();
+  const Eigen::VectorXd dev = form_deviation(part, s, smp);
   const Eigen::Affine3d T = transform(part);
   Eigen::Vector3d normal = s.plane.normal.normalized();
   Eigen::Matrix3Xd p(3, n);
@@ -119,6 +131,23 @@ Contour true_contour(const Part& part, const design::Section& s, double spacing)
     p.col(i) = x - (x - s.plane.origin).dot(normal) * normal;
   }
   return Contour(std::move(p), normal, s.closed, s.material == design::Side::Left);
+}
+
+SpaceCurve true_space_curve(const Part& part, const design::Section& s, double spacing) {
+  const auto smp = design::sample(s, spacing);
+  const Eigen::Index n = smp.points.cols();
+  const Eigen::VectorXd dev = form_deviation(part, s, smp);
+  const Eigen::Affine3d T = transform(part);
+  // Normals transform with the inverse transpose (a scale along one direction tilts them).
+  const Eigen::Matrix3d N = T.linear().inverse().transpose();
+  const Eigen::Index m = s.closed ? n + 1 : n;  // a closed curve's samples do not repeat the start
+  Eigen::Matrix3Xd p(3, m), nn(3, m);
+  for (Eigen::Index i = 0; i < m; ++i) {
+    const Eigen::Index k = i % n;
+    p.col(i) = T * (smp.points.col(k) + dev[k] * smp.normals.col(k));
+    nn.col(i) = (N * smp.normals.col(k)).normalized();
+  }
+  return SpaceCurve(std::move(p), std::move(nn));
 }
 
 }  // namespace trueaxis::sim

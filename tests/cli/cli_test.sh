@@ -387,6 +387,24 @@ assert 1 < worst < 100, worst
 " && ok || bad "scan --machine: points do not carry the machine's errors"
 expect_err "the part does not fit on machine" "$T" scan --design design.json --part bumped.json --machine small.json --part-origin 290,100,75 -o s.json
 expect_code 2 "$T" scan --design design.json --part bumped.json --part-origin 1,2,3 -o s.json
+# A spiral over a sphere (a space curve with its surface normals): scanned along its design when
+# the part is where it should be; moved 2 mm, an error exit that says why (no plane contains it).
+python3 -c "
+import json, math
+n = 1301; pts = []; nor = []
+for i in range(n):
+    t = i / (n - 1); th = math.radians(20 + 50 * t); ph = 6 * math.pi * t
+    u = [math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)]
+    pts.append([50 + 50 * u[0], 50 + 50 * u[1], 50 * u[2]]); nor.append(u)
+json.dump({'sections': [{'name': 'spiral', 'closed': False, 'curve': {'polyline': pts}, 'normals': nor}]},
+          open('spiral.json', 'w'))"
+expect_ok "$T" design --design spiral.json
+grep -q "spiral: open space curve of 647.07. mm" out.txt && ok || bad "design of a space curve: $(cat out.txt)"
+expect_ok "$T" simulate part --design spiral.json --seed 1 -o spiral-part.json
+expect_ok "$T" scan --design spiral.json --part spiral-part.json -o spiral-scan.json
+expect_ok "$T" simulate part --design spiral.json --translate 2,0,0 --seed 1 -o spiral-moved.json
+expect_err "section 'spiral': the path is three-dimensional" "$T" scan --design spiral.json --part spiral-moved.json -o spiral-scan2.json --report spiral.html -q
+[ -s spiral.html ] && grep -q '"status": "error"' spiral-scan2.json && ok || bad "a failed space-curve scan still writes its files"
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -363,3 +363,80 @@ TEST(Design, ReaderRefusesBadDesignsWithTheirPlace) {
 
 }  // namespace
 }  // namespace trueaxis
+
+namespace trueaxis {
+namespace {
+
+// Space curves: a spiral over a sphere fails the 2-D test with how far it leaves its plane; an
+// oblique circle given as a space curve passes it and becomes that plane section; the path
+// runs along the surface normals; design.json carries the normals and refuses bad ones.
+TEST(Design, SpaceCurvesThePlaneTestPathsAndTheirFile) {
+  const auto spiral = test::spiral_on_sphere();
+  EXPECT_FALSE(design::check(spiral));
+  std::string why;
+  EXPECT_FALSE(design::as_plane_section(spiral, &why));
+  EXPECT_NE(why.find("the path is three-dimensional: its points leave their best-fit plane by"),
+            std::string::npos)
+      << why;
+
+  const auto circle = test::oblique_circle();
+  const auto plane = design::as_plane_section(circle);
+  ASSERT_TRUE(plane);
+  EXPECT_FALSE(plane->space_curve());
+  const Eigen::Vector3d tilted =
+      Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitX()) * Eigen::Vector3d::UnitZ();
+  EXPECT_NEAR(std::abs(plane->plane.normal.dot(tilted)), 1, 1e-12);
+  // Its outward normals point out of the circle: the material is inside.
+  const auto smp = design::sample(*plane, 1.0);
+  for (Eigen::Index i = 0; i < smp.points.cols(); ++i)
+    EXPECT_GT(smp.normals.col(i).dot(smp.points.col(i) - Eigen::Vector3d(50, 50, 25)), 29.9);
+
+  // The path: each point at the offset along its normal, on the sphere of radius R + d.
+  design::PathOptions o;
+  const double off = o.tip_radius - o.pushing;
+  const auto path = design::make_path(spiral, o);
+  EXPECT_TRUE(path.space());
+  EXPECT_EQ(path.segments.size() + 1, static_cast<std::size_t>(spiral.polyline.cols()));
+  for (double s = 0; s < path.length(); s += 7.3) {
+    const auto p = path.at(s);
+    const Eigen::Vector3d radial = (p.p - Eigen::Vector3d(50, 50, 0)).normalized();
+    EXPECT_NEAR((p.p - Eigen::Vector3d(50, 50, 0)).norm(), 50 + off, 2e-3) << s;  // chord sag
+    EXPECT_NEAR(p.normal.dot(radial), 1, 1e-6) << s;
+    EXPECT_NEAR(p.tangent.dot(p.normal), 0, 1e-2) << s;
+  }
+  for (const auto& g : path.segments) EXPECT_LE(g.speed, o.max_speed);
+
+  // design.json: written and read back, normals and all; bad normals refused at their place.
+  design::Design d;
+  d.sections.push_back(spiral);
+  const std::string file = ::testing::TempDir() + "spiral.json";
+  io::write_design(file, d);
+  const auto back = io::read_design(file);
+  ASSERT_TRUE(back.sections[0].space_curve());
+  EXPECT_TRUE(back.sections[0].normals.isApprox(spiral.normals, 1e-12));
+  auto err = [](const std::string& section) {
+    return test::error_of([&] { io::parse_design("{\"sections\": [" + section + "]}", "s.json"); });
+  };
+  const std::string pts = R"("curve": {"polyline": [[0, 0, 0], [1, 0, 1], [2, 1, 1]]})";
+  EXPECT_EQ(err(R"({"name": "a", "closed": false, )" + pts +
+                R"(, "normals": [[0, 0, 1], [0, 0, 1], [0, 1, 0]]})"),
+            "(no error)");
+  EXPECT_NE(
+      err(R"({"name": "a", "closed": false, )" + pts + R"(, "normals": [[0, 0, 1], [0, 0, 1]]})")
+          .find("2 normals for 3 points"),
+      std::string::npos);
+  const std::string zero = err(R"({"name": "a", "closed": false, )" + pts +
+                               R"(, "normals": [[0, 0, 1], [0, 0, 0], [0, 1, 0]]})");
+  EXPECT_NE(zero.find("s.json:1:127: section 'a': the surface normal has no direction"),
+            std::string::npos)
+      << zero;
+  EXPECT_NE(err(R"({"name": "a", "closed": false, "material": "left", )" + pts +
+                R"(, "normals": [[0, 0, 1], [0, 0, 1], [0, 1, 0]]})")
+                .find("a space curve (with 'normals') has no 'material'"),
+            std::string::npos);
+  const std::string noplane = err(R"({"name": "a", "closed": false, )" + pts + "}");
+  EXPECT_NE(noplane.find("plane' is missing"), std::string::npos) << noplane;
+}
+
+}  // namespace
+}  // namespace trueaxis

@@ -148,6 +148,83 @@ TEST(Controller, LocalBumpFallsBackToAutonomousAndTheNextPartScansClean) {
   EXPECT_LT(r2.time.total, r.time.total / 3);
 }
 
+// The 2-D test. A spiral over a sphere scans along its design when the part is where the design
+// says; moved 2 mm, it has a trajectory error, and since no plane contains the path there is
+// no geometric correction or autonomous scan to fall back on: an error exit with the reason.
+TEST(Controller, SpiralOnASphereScansOrEndsInAnErrorExit) {
+  design::Design d;
+  d.sections.push_back(test::spiral_on_sphere());
+  const Eigen::Vector3d home(50, 50, 120);
+  {
+    scan::VirtualCmm cmm(sim::Part{d, {}}, {}, home);
+    const auto r = scan::scan(cmm, d, {});
+    ASSERT_TRUE(r.ok()) << r.summary();
+    EXPECT_EQ(count(r, "trajectory_error"), 0);
+    const auto& pts = r.sections[0].points;
+    EXPECT_GT(pts.size(), 3000u);  // 640 mm every 0.2 mm
+    // On the sphere to within the design polyline's own chord sag (its chords cut inside the
+    // sphere; the probe follows them, where the surface model is exact).
+    const auto& poly = d.sections[0].polyline;
+    double sag = 0;
+    for (Eigen::Index i = 0; i + 1 < poly.cols(); ++i)
+      sag = std::max(
+          sag, 50 - (0.5 * (poly.col(i) + poly.col(i + 1)) - Eigen::Vector3d(50, 50, 0)).norm());
+    EXPECT_GT(sag, 1e-4);  // micrometres: it is that, not round-off, that the bound allows
+    const double kOnSphere = sag + kRoundoff;
+    double worst = 0;
+    for (const auto& p : pts)
+      worst = std::max(worst, std::abs((p.surface - Eigen::Vector3d(50, 50, 0)).norm() - 50));
+    EXPECT_LT(worst, kOnSphere);
+  }
+  sim::Part moved{d, {}};
+  moved.deviation.translation = Eigen::Vector3d(2, 0, 0);
+  scan::VirtualCmm cmm(moved, {}, home);
+  const auto r = scan::scan(cmm, d, {});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.sections[0].reason.find("the path is three-dimensional"), std::string::npos)
+      << r.sections[0].reason;
+  EXPECT_NE(r.sections[0].reason.find("need a plane section"), std::string::npos);
+  EXPECT_EQ(count(r, "trajectory_error"), 1);
+  EXPECT_EQ(count(r, "error_exit"), 1);
+  EXPECT_EQ(count(r, "touch"), 0);
+  EXPECT_EQ(r.sections[0].autonomous_count, 0);
+  // The autonomous strategy cannot follow it either.
+  scan::ControllerOptions aut;
+  aut.strategy = scan::Strategy::Autonomous;
+  const auto ra = scan::scan(cmm, d, aut);
+  EXPECT_FALSE(ra.ok());
+  EXPECT_NE(ra.sections[0].reason.find("three-dimensional"), std::string::npos);
+}
+
+// A space curve that lies in an oblique plane passes the 2-D test: the controller treats it as
+// that plane section, touches, and corrects the translation of the part.
+TEST(Controller, SpaceCurveInAnObliquePlaneIsCorrectedAsAPlaneSection) {
+  design::Design d;
+  d.sections.push_back(test::oblique_circle());
+  sim::Part moved{d, {}};
+  // 2 mm along the plane's own x direction, and 1 mm along its tilted y (in the plane).
+  const Eigen::Vector3d shift =
+      Eigen::Vector3d(2, 0, 0) +
+      Eigen::AngleAxisd(M_PI / 6, Eigen::Vector3d::UnitX()) * Eigen::Vector3d(0, 1, 0);
+  moved.deviation.translation = shift;
+  scan::VirtualCmm cmm(moved, {}, Eigen::Vector3d(50, 50, 120));
+  const auto r = scan::scan(cmm, d, {});
+  ASSERT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(count(r, "two_dimensional"), 1);
+  EXPECT_EQ(r.sections[0].autonomous_count, 0);
+  ASSERT_FALSE(r.sections[0].corrections.empty());
+  const auto& c = r.sections[0].corrections.front();
+  EXPECT_TRUE(c.accepted);
+  EXPECT_EQ(c.type, "translation");
+  // The corrected design is the plane section moved by the part's shift.
+  ASSERT_FALSE(r.design.sections[0].space_curve());
+  const Eigen::Vector3d moved_centre = r.design.sections[0].polyline.rowwise().mean();
+  const Eigen::Vector3d design_centre = d.sections[0].polyline.rowwise().mean();
+  constexpr double kShiftTol = 1e-3;  // mm: the 144-gon's chords against the touch points
+  EXPECT_LT((moved_centre - design_centre - shift).norm(), kShiftTol);
+  EXPECT_LT(worst_distance(cmm, r.design.sections[0], r.sections[0].points), kRoundoff);
+}
+
 TEST(Controller, LoopLimitAndPlainDesignStrategyStop) {
   const auto d = square_and_hole();
   sim::Part part{d, {}};

@@ -50,6 +50,11 @@ struct Section {
   std::optional<Nurbs> nurbs;
   Eigen::Matrix3Xd polyline;
   Side material = Side::Left;
+  // A space curve instead of a plane section (e.g. a spiral over a sphere): the surface normal
+  // at each polyline point (3 × n, unit, away from the material). Empty for a plane section.
+  // A space curve is a polyline; `plane` and `material` do not apply to it.
+  Eigen::Matrix3Xd normals;
+  bool space_curve() const { return normals.cols() > 0; }
 };
 
 struct Design {
@@ -70,20 +75,29 @@ struct Problem {
   std::string what;  // one line, for a metrologist
 };
 
-// Checks a section: a normal of non-zero length, a NURBS that OCCT can represent (degree 1..25,
+// Checks a section: a normal of non-zero length (a space curve: a polyline with one non-zero
+// normal per point, no plane check), a NURBS that OCCT can represent (degree 1..25,
 // n + degree + 1 non-decreasing knots with interior multiplicity ≤ degree, positive weights,
 // at least degree + 1 control points) or a polyline of ≥ 2 points with no two consecutive ones
 // equal, all points in the plane (kPlanarTolerance), all values finite and within 1e6 mm, and a
 // curve marked closed that closes (kClosureTolerance). Returns the first problem found.
 std::optional<Problem> check(const Section& s);
 
+// The 2-D test of scanning: does a space curve lie in one plane (points within
+// kPlanarTolerance, surface normals in the plane within 1e-3 rad), so that it is a plane
+// section after all (an oblique one, perhaps)? Returns it as one (the least-squares plane
+// through its points, the material side from its normals), or nothing with `why` saying how
+// far it leaves its best-fit plane. A plane section is returned as it is.
+std::optional<Section> as_plane_section(const Section& s, std::string* why = nullptr);
+
 // Arc length of a section's curve (mm): exact for a polyline, by OCCT's Gauss integration for a
 // NURBS.
 double length(const Section& s);
 
 // Points along the curve at (about) `spacing` mm, with their unit surface normals (in the plane,
-// away from the material): 3 × m each. Closed curves do not repeat the start point. A polyline's
-// vertices are always samples (each segment divided evenly at no more than `spacing`).
+// away from the material; a space curve's own normals, interpolated): 3 × m each. Closed curves do
+// not repeat the start point. A polyline's vertices are always samples (each segment divided evenly
+// at no more than `spacing`).
 struct Samples {
   Eigen::Matrix3Xd points, normals;
   Eigen::VectorXd arc;  // arc length of each point from the curve's start (mm)
@@ -141,6 +155,11 @@ struct ScanPath {
   Side material = Side::Left;  // as the section's: seen from the plane normal, along the path
   double offset = 0;           // tip radius − pushing (mm)
   std::vector<PccSegment> segments;
+  // A space curve's path: the surface normal at each segment's start and at the last one's
+  // end (segments.size() + 1); empty for a plane section. `plane` and `material` then do not
+  // apply, and the normal along a segment is interpolated between its ends.
+  std::vector<Eigen::Vector3d> space_normals;
+  bool space() const { return !space_normals.empty(); }
   // Largest distance of the PCC from the exact offset curve, measured at 16 points per segment
   // after the fit (mm): the achieved chordal error.
   double chordal_error = 0;
@@ -157,6 +176,9 @@ struct ScanPath {
 
 // The stylus-centre path of design-value scanning for one section. Throws Error if the offset
 // cannot be made (e.g. a tip too large for a concave corner or a narrow slot of the section).
+// A space curve's path is each point moved along its surface normal, straight between them
+// (the design's own polyline, so no chordal error), each segment's speed from the turning of
+// the path at its ends.
 ScanPath make_path(const Section& s, const PathOptions& options = {});
 
 }  // namespace trueaxis::design

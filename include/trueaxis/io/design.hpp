@@ -4,7 +4,10 @@
 //   "closed": bool, "curve": {"nurbs": {"degree": int, "knots": [...], "weights": [...],
 //   "control_points": [[x, y, z], ...]}} or {"polyline": [[x, y, z], ...]},
 //   "material": "left" | "right"}, ...]}
-// mm, part coordinates. "weights" may be left out (all 1). The material side is seen from the
+// mm, part coordinates. A space curve (a scan path that need not lie in a plane, e.g. a spiral
+// over a sphere) is written instead as {"name", "closed", "curve": {"polyline": [...]},
+// "normals": [[i, j, k], ...]}: one surface normal per point, away from the material, and no
+// plane or material side. "weights" may be left out (all 1). The material side is seen from the
 // plane's normal, walking along the curve. Every problem design::check() finds, and every
 // structural one (a missing key, a wrong type, an unknown key, a duplicate section name), is
 // refused with file:line:col of the offending value.

@@ -3,8 +3,9 @@
 //
 // For each section: scan along the path computed from the design data (fast). While the
 // trajectory error ΔL stays within the tolerance, that is all. On a trajectory error:
-//  1. (a path that is not a plane section would end in an error; design data here are plane
-//     sections by construction, so this test always passes);
+//  1. the 2-D test: a section given as a space curve (with surface normals) that does not lie
+//     in one plane (a spiral over a sphere) ends in an error exit with the reason; one that
+//     does is treated as that (possibly oblique) plane section from here on;
 //  2. first time (flag = 0): touch points along the design normals, fit a menu of geometric
 //     corrections (translation; rotation; uniform scale; scale and rotation; scale along one
 //     direction — each with a translation) and keep the simplest one that brings every touch
@@ -58,7 +59,7 @@ struct Event {
   std::string mode;             // design, touch, autonomous, correction, section
   std::string event;            // trajectory_error, touch, correction_applied, correction_rejected,
                       // autonomous_scan, design_overwritten, rescan, section_done, error_exit,
-                      // loop_limit
+                      // loop_limit, two_dimensional (a space curve found to lie in a plane)
   std::string decision;  // in words
 };
 

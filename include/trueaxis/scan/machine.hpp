@@ -86,7 +86,8 @@ class Machine {
 
 // The virtual CMM: a servo-controlled carriage and a scanning probe in front of a simulated
 // part. The part's section whose design plane contains an operation's plane is the surface the
-// probe meets (each section's true contour, built once).
+// probe meets (each section's true contour, built once). A space-curve path meets the part's
+// space-curve section of the same name (sim::SpaceCurve: its tangent planes along the curve).
 //
 // Optionally the CMM has the 21 geometric errors of a sim::Machine: the servo runs on the
 // scale readings, and the ball centre really is where the erroneous axes put it. With the
@@ -129,6 +130,9 @@ class VirtualCmm : public Machine {
   // has there; > 0 outside the material), for checks against the truth. Throws Error if the
   // part has no section in that plane.
   double distance(const design::Plane& plane, const Eigen::Vector3d& p) const;
+  // The same for the part's section of that name as the probe meets it (a space curve's
+  // surface, or the contours in the section's plane).
+  double distance(const design::Section& section, const Eigen::Vector3d& p) const;
   const sim::Part& part() const { return part_; }
   // With geometric errors: the part's design origin in machine coordinates, and the CMM's
   // error (real − read ball centre, mm) at scale position p (part frame). Zero without.
@@ -141,6 +145,9 @@ class VirtualCmm : public Machine {
   sim::Servo servo_;
   sim::Probe probe_;
   std::vector<std::pair<design::Plane, sim::Contour>> contours_;
+  std::vector<std::pair<std::string, sim::SpaceCurve>> spaces_;  // space-curve sections
+  const sim::SpaceCurve* space_ = nullptr;  // the surface of the space path being scanned
+  const sim::SpaceCurve& space_curve(const std::string& name) const;
   // The contours of the part in a plane (a plane may cut several: an outline and its holes).
   std::vector<const sim::Contour*> in_plane(const design::Plane& plane) const;
   sim::ProbeReading read(const std::vector<const sim::Contour*>& part);

@@ -108,6 +108,24 @@ class Contour {
   mutable Eigen::Index hint_ = -1;
 };
 
+// A workpiece surface along a space curve (e.g. a spiral over a sphere): the curve's points with
+// their surface normals (away from the material). Near the curve the surface is taken as its
+// tangent plane at the nearest curve point: the signed distance of q is (q − foot)·normal, the
+// normal interpolated along each segment. That is exact on the curve and good to
+// (lateral offset)²/2R on a surface of radius R, for a probe that follows the curve. Nearest
+// points by a scan of all segments, starting from the one found last.
+class SpaceCurve {
+ public:
+  // points, normals: 3 × n (n ≥ 2); normals of non-zero length.
+  SpaceCurve(Eigen::Matrix3Xd points, Eigen::Matrix3Xd normals);
+  Contour::Nearest nearest(const Eigen::Vector3d& q) const;
+  const Eigen::Matrix3Xd& points() const { return p_; }
+
+ private:
+  Eigen::Matrix3Xd p_, n_;
+  Eigen::VectorXd arc_;
+};
+
 struct ProbeOptions {
   double tip_radius = 1.0;  // ball radius (mm)
   double range = 1.0;       // measuring range of the deflection (mm)

@@ -64,6 +64,11 @@ Eigen::Affine3d transform(const Part& part);
 // The true contour of `section` (a section of part.design), sampled every `spacing` mm of design
 // arc (chords within spacing²/8R of a curve of radius R: 0.05 µm at R = 25 mm), ready for the
 // probe. Material side as in the design.
+// Throws Error for a space-curve section.
 Contour true_contour(const Part& part, const design::Section& section, double spacing = 0.1);
+
+// The same for a space-curve section: the real curve and its surface normals (the part's
+// transformation applied to both), every `spacing` mm.
+SpaceCurve true_space_curve(const Part& part, const design::Section& section, double spacing = 0.1);
 
 }  // namespace trueaxis::sim
