@@ -3,12 +3,18 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "trueaxis/error.hpp"
+#include "trueaxis/sim/cmm.hpp"
 
 namespace trueaxis::scan {
 namespace {
+
+// Free moves between touch points keep this much beyond the band the surface is searched in
+// (mm): room for a part that is off its design by more than that band somewhere between them.
+constexpr double kRouteMargin = 2.0;
 
 // Machine time of one operation, added to a category.
 template <class Fn>
@@ -49,12 +55,82 @@ struct SectionRun {
   std::vector<Event>& events;
   SectionResult r;
   design::Section current;
+  double safe_z = 0;  // free moves between operations pass at this height (mm)
+
+  // A free move by way of the safe height: up, across, down.
+  void safe_move(const Eigen::Vector3d& to) {
+    const Eigen::Vector3d from = m.position();
+    if ((to - from).norm() < 1e-6) return;
+    timed(m, r.time.moves, [&] {
+      const double z = std::max({safe_z, from.z(), to.z()});
+      m.move(Eigen::Vector3d(from.x(), from.y(), z), o.move_speed);
+      m.move(Eigen::Vector3d(to.x(), to.y(), z), o.move_speed);
+      m.move(to, o.move_speed);
+      return 0;
+    });
+  }
+
+  // A free move in the section's plane from one touch start to the next (each at `reach` from
+  // the design, the edge of the band the real surface is searched in), around the outside of
+  // the design kRouteMargin beyond that: along the design's offset, cutting straight wherever
+  // the chord keeps clear of the design.
+  void route(const design::Samples& smp, const sim::Contour& design, double reach,
+             Eigen::Index from, Eigen::Index to) {
+    const Eigen::Index n = smp.points.cols();
+    const Eigen::Vector3d next_start = smp.points.col(to) + reach * smp.normals.col(to);
+    // Waypoints kRouteMargin beyond the touch starts; chords between them may cut in to half
+    // of that margin.
+    const double keep = reach + 0.5 * kRouteMargin;
+    reach += kRouteMargin;
+    std::vector<Eigen::Vector3d> way;
+    for (Eigen::Index k = from;; k = (k + 1) % n) {
+      const Eigen::Index next = (k + 1) % n;
+      way.push_back(smp.points.col(k) + reach * smp.normals.col(k));
+      if (k == to) break;
+      // Round a corner (normals turning by more than 15°) on an arc of waypoints.
+      const Eigen::Vector3d a = smp.normals.col(k), b = smp.normals.col(next);
+      const double turn = std::acos(std::clamp(a.dot(b), -1.0, 1.0));
+      const int steps = static_cast<int>(turn / (M_PI / 12));
+      const Eigen::Vector3d corner = smp.points.col(next);
+      for (int j = 1; j <= steps; ++j) {
+        const double f = static_cast<double>(j) / (steps + 1);
+        way.push_back(corner + reach * ((1 - f) * a + f * b).normalized());
+      }
+    }
+    auto clear = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+      const int k = std::max(2, static_cast<int>((q - p).norm() / 0.5));
+      for (int j = 0; j <= k; ++j)
+        if (design.nearest(p + (q - p) * (static_cast<double>(j) / k)).distance < keep)
+          return false;
+      return true;
+    };
+    timed(m, r.time.moves, [&] {
+      // Back out along the last touch's approach line to the route (the touch start lies on
+      // the way), round, and in along the next touch's approach line.
+      m.move(way.front(), o.move_speed);
+      std::size_t at = 0;
+      while (at + 1 < way.size()) {
+        std::size_t best = at + 1;
+        for (std::size_t j = way.size() - 1; j > at + 1; --j)
+          if (clear(way[at], way[j])) {
+            best = j;
+            break;
+          }
+        m.move(way[best], o.move_speed);
+        at = best;
+      }
+      m.move(next_start, o.move_speed);
+      return 0;
+    });
+  }
   ScanSettings settings() const {
     ScanSettings st;
     st.pushing = o.path.pushing;
     st.active = o.active;
     st.record_spacing = o.record_spacing;
-    st.approach_clearance = 1.0;
+    // Start the approach beyond the band the real surface may lie in (the tolerance and 1.5 mm
+    // more), so that the free move there cannot meet a part that is off its design.
+    st.approach_clearance = o.tolerance + 1.5;
     st.approach_limit = o.tolerance + 1.0;
     return st;
   }
@@ -66,6 +142,8 @@ struct SectionRun {
   // Design-value scan; true when it ran through within the tolerance.
   bool design_scan(Sample& stop, std::string& why) {
     const auto path = design::make_path(current, o.path);
+    const auto start = path.at(0);
+    safe_move(start.p + settings().approach_clearance * start.normal);
     bool error = false;
     Trace tr;
     tr.label = r.traces.empty() ? "design" : fmt::format("rescan {}", r.traces.size());
@@ -111,11 +189,19 @@ struct SectionRun {
     // more each way), and search across the band.
     constexpr double kMargin = 1.5;
     const double reach = o.path.tip_radius + o.tolerance + kMargin;
+    const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
+                               current.material == design::Side::Left);
+    Eigen::Index last = -1;
     for (int i = 0; i < k; ++i) {
       const double arc = current.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / (k - 1)) * L;
       Eigen::Index j = 0;
       (smp.arc.array() - arc).abs().minCoeff(&j);
       const Eigen::Vector3d p = smp.points.col(j), nn = smp.normals.col(j);
+      if (last < 0)
+        safe_move(p + reach * nn);
+      else
+        route(smp, outline, reach, last, j);
+      last = j;
       const auto t = timed(m, r.time.touch, [&] {
         return m.touch(current.plane, p + reach * nn, -nn,
                        2 * (o.tolerance + kMargin) + o.touch_trigger, o.touch_speed,
@@ -182,6 +268,7 @@ struct SectionRun {
     }
     const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
     const double reach = o.path.tip_radius + o.tolerance + 3;
+    safe_move(p + reach * nn);
     const auto out = timed(m, r.time.autonomous, [&] {
       return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
                             design::length(current), o.autonomous_speed, settings());
@@ -279,7 +366,6 @@ struct SectionRun {
       log(0, 0, "design", "rescan", "rescan in design mode with the measured design data");
     }
     r.time.total = m.time() - t0;
-    r.time.moves = std::max(0.0, r.time.total - r.time.design - r.time.touch - r.time.autonomous);
   }
 };
 
@@ -314,6 +400,8 @@ void ControllerOptions::validate() const {
     bad("touch speed", touch_speed, "must be in (0, 50] mm/s");
   if (!(move_speed > 0 && move_speed <= 1000))
     bad("move speed", move_speed, "must be in (0, 1000] mm/s");
+  if (!(clearance >= 1 && clearance <= 1000))
+    bad("clearance", clearance, "must be in [1, 1000] mm");
   if (!(autonomous_speed > 0 && autonomous_speed <= 100))
     bad("autonomous speed", autonomous_speed, "must be in (0, 100] mm/s");
   if (!(accept > 0 && accept < tolerance))
@@ -348,9 +436,13 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
   options.validate();
   Result res;
   res.design = design;
+  double top = -INFINITY;
+  for (const auto& s : design.sections)
+    top = std::max(top, design::sample(s, 1.0).points.row(2).maxCoeff());
+  const double safe_z = top + options.clearance;
   for (std::size_t i = 0; i < design.sections.size(); ++i) {
     if (progress) progress(i, design.sections.size());
-    SectionRun run{machine, options, res.events, {}, design.sections[i]};
+    SectionRun run{machine, options, res.events, {}, design.sections[i], safe_z};
     run.run();
     res.design.sections[i] = run.current;
     res.time.total += run.r.time.total;

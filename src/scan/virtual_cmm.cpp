@@ -142,9 +142,34 @@ Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
   return s;
 }
 
+double VirtualCmm::penetration() const {
+  // The ball against every section whose plane it straddles (the part is known there only).
+  Eigen::Vector3d pos = servo_.position();
+  if (o_.geometry) pos += machine_error(pos);
+  const double r = probe_.options().tip_radius;
+  double worst = 0;
+  for (const auto& [pl, c] : contours_) {
+    if (std::abs((pos - pl.origin).dot(pl.normal)) > r) continue;
+    if (const auto n = c.nearest_within(pos, r)) worst = std::max(worst, r - n->distance);
+  }
+  return worst;
+}
+
+void VirtualCmm::settle() {
+  // Hold where the carriage is now; it coasts to rest in the servo's lag (a scan stopped at
+  // speed overshoots by about v·(1/kp + lag)).
+  const Eigen::Vector3d hold = servo_.position();
+  for (long k = 0; k < kMaxTicks && servo_.velocity().norm() > 1e-3; ++k)
+    servo_.step(hold, Eigen::Vector3d::Zero());
+}
+
 void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
   if (!(speed > 0) || !to.allFinite()) throw Error("move: bad target or speed");
   const Eigen::Vector3d from = servo_.position();
+  // A free move must not push the ball into the part: more than the deflection it started with
+  // (a retract starts in contact) and 50 µm is a collision.
+  const double start = penetration();
+  constexpr double kCollision = 0.05;  // mm
   const double L = (to - from).norm();
   const Eigen::Vector3d dir = L > 0 ? Eigen::Vector3d((to - from) / L) : Eigen::Vector3d::Zero();
   const double a = o_.path_acceleration, dt = servo_.options().dt();
@@ -155,6 +180,14 @@ void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
     v = at_end ? 0 : std::min({speed, v + a * dt, std::sqrt(2 * a * std::max(0.0, L - s))});
     servo_.step(from + dir * std::min(s, L), dir * v);
     s = std::min(L, s + v * dt);
+    if (penetration() > start + kCollision) {
+      const Eigen::Vector3d p = servo_.position();
+      settle();  // the machine stops
+      throw Error(fmt::format(
+          "collision: a free move from ({:.2f}, {:.2f}, {:.2f}) to ({:.2f}, {:.2f}, {:.2f}) mm "
+          "ran the stylus into the part at ({:.2f}, {:.2f}, {:.2f}) mm",
+          from.x(), from.y(), from.z(), to.x(), to.y(), to.z(), p.x(), p.y(), p.z()));
+    }
   }
   throw Error("move: the carriage did not settle");
 }
@@ -181,6 +214,7 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
   }
   // Retract along the approach direction, by 1 mm or back to the start if that is nearer.
   const double back = std::min(1.0, (servo_.position() - start).norm());
+  settle();
   move(servo_.position() - d * back, o_.positioning_speed);
   return out;
 }
@@ -267,6 +301,7 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   }
   // Retract away from the surface.
   const auto end = path.at(s);
+  settle();
   move(servo_.position() + st.approach_clearance * end.normal, o_.positioning_speed);
   return out;
 }
@@ -347,6 +382,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
       break;
     }
   }
+  settle();
   move(servo_.position() + st.approach_clearance * dhat, o_.positioning_speed);
   return out;
 }

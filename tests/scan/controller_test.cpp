@@ -225,6 +225,34 @@ TEST(Controller, SpaceCurveInAnObliquePlaneIsCorrectedAsAPlaneSection) {
   EXPECT_LT(worst_distance(cmm, r.design.sections[0], r.sections[0].points), kRoundoff);
 }
 
+// Free moves: the virtual CMM stops a move that runs the stylus into the part; the controller's
+// moves (over the part between sections, round the outside between touch points) never do, even
+// on a part 3 mm off its design, and their time is counted apart.
+TEST(Controller, FreeMovesGoRoundThePartAndACollisionIsCaught) {
+  const auto d = square_and_hole();
+  sim::Part moved{d, {}};
+  moved.deviation.translation = Eigen::Vector3d(2.4, -1.8, 0);  // 3 mm: the edge of the band
+  {
+    scan::VirtualCmm cmm(moved, {}, Eigen::Vector3d(50, -20, 25));
+    const std::string e = test::error_of([&] { cmm.move(Eigen::Vector3d(50, 120, 25), 100); });
+    EXPECT_NE(e.find("collision: a free move from (50.00, -20.00, 25.00) to (50.00, 120.00, "
+                     "25.00) mm ran the stylus into the part at (50.00, -"),
+              std::string::npos)
+        << e;
+    // Above the section plane by more than the tip radius the slice is not met.
+    cmm.move(Eigen::Vector3d(50, -20, 40), 100);
+    cmm.move(Eigen::Vector3d(50, 120, 40), 100);
+  }
+  scan::VirtualCmm cmm(moved, {}, Eigen::Vector3d(50, -20, 40));
+  const auto r = scan::scan(cmm, d, {});  // throws on a collision
+  ASSERT_TRUE(r.ok()) << r.summary();
+  EXPECT_EQ(count(r, "touch"), 16);
+  EXPECT_GT(r.time.moves, 1.0);
+  for (const auto& sec : r.sections)
+    EXPECT_NEAR(sec.time.design + sec.time.touch + sec.time.autonomous + sec.time.moves,
+                sec.time.total, 1e-9);
+}
+
 TEST(Controller, LoopLimitAndPlainDesignStrategyStop) {
   const auto d = square_and_hole();
   sim::Part part{d, {}};
@@ -300,8 +328,10 @@ BatchTimes batch(const sim::PartDeviation& dev, double size = 1) {
   return bt;
 }
 
-// The gain grows with the contour's length: the touches cost the same whatever the length, the
-// scans scale with it (design-value ~70 mm/s on average here, autonomous ~11.5 mm/s).
+// The gain grows with the contour's length: the touches and the collision-free moves between
+// them cost the same whatever the length, the scans scale with it (design-value ~70 mm/s on
+// average here, autonomous ~11.5 mm/s). Five times at twice NIST's part; about four times on
+// NIST's part itself, where 16 touches and their moves weigh more (BENCHMARKS.md).
 TEST(Controller, BatchOfFiveMovedPartsIsAtLeastFiveTimesFasterThanAutonomousOnly) {
   sim::PartDeviation dev;
   dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
@@ -314,8 +344,8 @@ TEST(Controller, BatchOfFiveMovedPartsIsAtLeastFiveTimesFasterThanAutonomousOnly
     RecordProperty("machine_s_autonomous_" + tag, std::to_string(bt.autonomous));
     RecordProperty("machine_s_first_part_" + tag, std::to_string(bt.first));
     RecordProperty("machine_s_first_part_autonomous_" + tag, std::to_string(bt.first_autonomous));
-    // 557 mm of contour and 16 touches: 4.7×; twice the size: over 5×.
-    EXPECT_GE(bt.autonomous / bt.tolerant, size == 1 ? 4.5 : 5.0)
+    // 557 mm of contour and 16 touches: 4.1×; twice the size: over 5×.
+    EXPECT_GE(bt.autonomous / bt.tolerant, size == 1 ? 4.0 : 5.0)
         << size << ": " << bt.tolerant << " s against " << bt.autonomous;
     EXPECT_LT(bt.first, bt.first_autonomous);  // even the first part gains
   }

@@ -26,6 +26,12 @@ TEST(VirtualCmm, DesignValueScanOfAPerfectPartFollowsItsSurface) {
   po.pushing = 0.3;
   for (const auto& s : part.design.sections) {
     const auto path = design::make_path(s, po);
+    // Over the part to the next section's start: the machine checks free moves for collisions.
+    const Eigen::Vector3d start =
+        path.at(0).p + scan::ScanSettings{}.approach_clearance * path.at(0).normal;
+    cmm.move(Eigen::Vector3d(cmm.position().x(), cmm.position().y(), 60), 100);
+    cmm.move(Eigen::Vector3d(start.x(), start.y(), 60), 100);
+    cmm.move(start, 100);
     double worst_dl = 0;
     const auto out = cmm.scan_path(path, {}, [&](const scan::Sample& x) {
       worst_dl = std::max(worst_dl, std::abs(x.delta_l));

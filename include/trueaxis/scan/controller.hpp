@@ -37,14 +37,18 @@ Strategy strategy_from_string(const std::string& s);  // throws Error
 
 struct ControllerOptions {
   Strategy strategy = Strategy::ErrorTolerant;
-  design::PathOptions path;      // tip radius, pushing, tolerance and speeds of the path
-  double tolerance = 1.5;        // |ΔL| allowed during design-value scanning (mm)
-  int max_autonomous = 3;        // autonomous corrections per section before giving up
-  bool active = true;            // active (pushing held) or passive design-value scanning
-  int touch_points = 8;          // points touched for a geometric correction
-  double touch_trigger = 0.3;    // deflection that records a touch (mm)
-  double touch_speed = 10;       // mm/s
-  double move_speed = 100;       // free moves (mm/s)
+  design::PathOptions path;    // tip radius, pushing, tolerance and speeds of the path
+  double tolerance = 1.5;      // |ΔL| allowed during design-value scanning (mm)
+  int max_autonomous = 3;      // autonomous corrections per section before giving up
+  bool active = true;          // active (pushing held) or passive design-value scanning
+  int touch_points = 8;        // points touched for a geometric correction
+  double touch_trigger = 0.3;  // deflection that records a touch (mm)
+  double touch_speed = 10;     // mm/s
+  double move_speed = 200;     // free moves (mm/s)
+  // Free moves between sections and to a scan's start go up (machine +z) to this far above
+  // the design data's highest point, across, and down; between touch points of a section they
+  // follow the design outside the search band. (mm)
+  double clearance = 20;
   double autonomous_speed = 12;  // mm/s
   double accept = 0.05;          // a correction must leave every touch point within this (mm)
   double record_spacing = 0.2;   // mm between recorded surface points
@@ -70,6 +74,9 @@ struct Correction {
   bool accepted = false;
 };
 
+// Machine time by activity (s). `moves` are the free moves between operations (safe-height
+// moves, the route between touch points); the approach and retract within an operation count
+// to that operation.
 struct MachineTime {
   double total = 0, design = 0, touch = 0, autonomous = 0, moves = 0;  // s
 };

@@ -63,7 +63,8 @@ class Machine {
   virtual ~Machine() = default;
   virtual double time() const = 0;  // machine seconds so far
   virtual Eigen::Vector3d position() const = 0;
-  // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s.
+  // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s, in a straight line.
+  // Throws Error if it runs the stylus into the part (a collision).
   virtual void move(const Eigen::Vector3d& to, double speed) = 0;
   // From `start` (stylus centre), approach along unit `direction` at `speed` until the deflection
   // reaches `trigger`; then retract 1 mm along the approach (no further than `start`). Nothing if
@@ -154,6 +155,11 @@ class VirtualCmm : public Machine {
   const sim::Contour* last_contour_ = nullptr;
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
   Sample sample(const sim::ProbeReading& r, double arc) const;
+  // How far the ball sinks into the part's sections it straddles (mm; 0 when free). Space
+  // curves, whose surface model holds only near them, are not checked.
+  double penetration() const;
+  // Brings the carriage to rest where it is (the end of a scan or touch, before retracting).
+  void settle();
 };
 
 }  // namespace trueaxis::scan
