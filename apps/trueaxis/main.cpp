@@ -162,11 +162,13 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
     title = "trueaxis fit report";
     section = report::fit_section(name, io::read_fit(input));
   } else {
-    throw Error(fmt::format("{}: a '{}' file has no report of its own{}", input, kind,
-                            kind == "parametric model"
-                                ? " (it is drawn with its map: 'trueaxis ballgauge --parametric "
-                                  "model.json --report map.html')"
-                                : ""));
+    throw Error(fmt::format(
+        "{}: a '{}' file has no report of its own{}", input, kind,
+        kind == "parametric model" ? " (it is drawn with its map: 'trueaxis ballgauge --parametric "
+                                     "model.json --report map.html')"
+        : kind == "scan"           ? " (the scanning report needs the run's traces and design: "
+                                     "'trueaxis scan ... --report scan.html')"
+                                   : ""));
   }
   report::write(output, report::render(title, {section}, 4000, cli::report_meta()));
   if (!quiet) fmt::print("wrote {} ({})\n", output, kind);

@@ -25,7 +25,7 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
       "the measured contour. Then it is scanned along the design again. Times are machine "
       "seconds.</p><p>{}</p>",
       tolerance, escape(r.summary()));
-  s.table = {{"section", "status", "machine time (s)", "design / touch / autonomous (s)",
+  s.table = {{"section", "status", "machine time (s)", "design / touch / autonomous / moves (s)",
               "trajectory errors", "correction applied", "autonomous scans", "points",
               "max |distance| from the simulated part (µm)"}};
   for (std::size_t i = 0; i < r.sections.size(); ++i) {
@@ -42,8 +42,8 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     if (i < truth_um.size() && truth_um[i].size())
       truth = fmt::format("{:.2f}", truth_um[i].cwiseAbs().maxCoeff());
     s.table.push_back({sec.name, sec.ok ? "ok" : "error", fmt::format("{:.1f}", sec.time.total),
-                       fmt::format("{:.1f} / {:.1f} / {:.1f}", sec.time.design, sec.time.touch,
-                                   sec.time.autonomous),
+                       fmt::format("{:.1f} / {:.1f} / {:.1f} / {:.1f}", sec.time.design,
+                                   sec.time.touch, sec.time.autonomous, sec.time.moves),
                        std::to_string(sec.trajectory_errors), applied,
                        std::to_string(sec.autonomous_count), std::to_string(sec.points.size()),
                        truth});
