@@ -9,9 +9,9 @@ seconds=${1:-30}
 build=build-fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
   -DTRUEAXIS_FUZZ=ON -DTRUEAXIS_PYTHON=OFF -DTRUEAXIS_TESTS=OFF -DTRUEAXIS_BENCHMARKS=OFF >/dev/null
-cmake --build "$build" --target fuzz_csv fuzz_json fuzz_ds fuzz_moody
+cmake --build "$build" --target fuzz_csv fuzz_json fuzz_ds fuzz_moody fuzz_ippdme
 corpus=$build/corpus
-rm -rf "$corpus"; mkdir -p "$corpus"/{csv,json,ds,moody}
+rm -rf "$corpus"; mkdir -p "$corpus"/{csv,json,ds,moody,ippdme}
 cp examples/*.csv "$corpus/csv/"
 printf 'x,a,b,c,angle\n0,1,2,3,4\n10,2,3,4,5\n20,3,4,5,6\n30,4,5,6,7\n' > "$corpus/csv/probes.csv"
 printf 'x1,y1,z1,x2,y2,z2,nominal\n0,0,0,100,0,0,100\n' > "$corpus/csv/lengths.csv"
@@ -28,8 +28,15 @@ find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$
 for f in tests/data/moody/*.txt; do
   for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/moody/$(basename "$f").$r"; done
 done
+# I++ DME: every line of NIST's programs and recordings, one per file.
+n=0
+for f in tests/data/ippdme/nist/*.prg tests/data/ippdme/nist/*.res; do
+  tr -d '\r' < "$f" | grep -v -e '^\\\\$' -e '^:' | while IFS= read -r l; do
+    n=$((n + 1)); printf '%s' "$l" > "$corpus/ippdme/$(basename "$f").$n"
+  done
+done
 status=0
-for t in csv json ds moody; do
+for t in csv json ds moody ippdme; do
   echo "== fuzz_$t for ${seconds} s"
   mkdir -p "$build/findings/$t"
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \

@@ -1,0 +1,28 @@
+// libFuzzer target: the I++ DME line parser on arbitrary bytes, as command and as response. A
+// parse must end in a value or a syntax error, never throw; whatever parses formats back to the
+// same characters and parses again to the same text.
+#include <cstdint>
+#include <cstdlib>
+#include <string_view>
+
+#include "trueaxis/ippdme/protocol.hpp"
+
+using namespace trueaxis;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::string_view line(reinterpret_cast<const char*>(data), size);
+  if (const auto c = ippdme::parse_command(line)) {
+    const std::string back = ippdme::format(*c.value);
+    if (back != line) std::abort();
+    const auto again = ippdme::parse_command(back);
+    if (!again || ippdme::format(*again.value) != back) std::abort();
+  } else if (c.error.column == 0 || c.error.what.empty()) {
+    std::abort();
+  }
+  if (const auto r = ippdme::parse_response(line)) {
+    if (ippdme::format(*r.value) != line) std::abort();
+  } else if (r.error.column == 0 || r.error.what.empty()) {
+    std::abort();
+  }
+  return 0;
+}
