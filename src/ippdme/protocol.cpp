@@ -13,7 +13,7 @@ namespace trueaxis::ippdme {
 namespace {
 
 constexpr int kIllegalTag = 1, kNoSpace = 2, kIllegalCharacter = 7, kIncorrectArguments = 502,
-              kBadNumber = 509;
+              kIllegalCommand = 507, kBadArgument = 509, kBadNumber = 509;
 // Calls nest at most this deep (Format(X(), ...) is two): a guard against hostile input.
 constexpr int kMaxDepth = 32;
 
@@ -92,12 +92,11 @@ class Reader {
     ++i_;  // the opening quote
     while (!end() && s_[i_] != '"') {
       if (s_[i_] < 32 || s_[i_] > 126)
-        fail(kIllegalCharacter, i_,
-             fmt::format("{} in a string (only printable ASCII)", shown(s_[i_])));
+        fail(kBadArgument, i_, fmt::format("{} in a string (only printable ASCII)", shown(s_[i_])));
       ++i_;
     }
-    if (end()) fail(kIncorrectArguments, a, "the string has no closing quote");
-    if (i_ == a + 1) fail(kIncorrectArguments, a, "an empty string (\"\") is not allowed");
+    if (end()) fail(kBadArgument, a, "the string has no closing quote");
+    if (i_ == a + 1) fail(kBadArgument, a, "an empty string (\"\") is not allowed");
     ++i_;
     return std::string(s_.substr(a + 1, i_ - a - 2));
   }
@@ -129,6 +128,13 @@ class Reader {
 
   // Argument :== String | Number | Property | ETag | BasicName, and calls within calls.
   Value value(int depth) {
+    const std::size_t at = i_;
+    Value v = value_at(depth);
+    v.column = static_cast<std::uint32_t>(at + 1);
+    return v;
+  }
+
+  Value value_at(int depth) {
     Value v;
     const char c = peek();
     if (c == '"') {
@@ -162,7 +168,7 @@ class Reader {
         v.text = std::move(name);
       }
     } else {
-      fail(end() ? kIncorrectArguments : kIllegalCharacter, i_,
+      fail(kIncorrectArguments, i_,
            end() ? "the line ends where a value should be"
                  : fmt::format("{} cannot start a value", shown(c)));
     }
@@ -222,7 +228,7 @@ class Reader {
 
   void expect_end() const {
     if (!end())
-      fail(kIncorrectArguments, i_,
+      fail(kIllegalCommand, i_,
            fmt::format("{} after the end of the line's content", shown(s_[i_])));
   }
 
@@ -340,6 +346,7 @@ Parsed<Command> parse_command(std::string_view line) {
       rd.fail(kIncorrectArguments, rd.pos(),
               fmt::format("the command '{}' needs its parentheses: {}()", name, name));
     c.method = rd.call_rest(std::move(name), before, 0, at);
+    c.method.column = static_cast<std::uint32_t>(at + 1);
     c.trailing = rd.spaces();
     rd.expect_end();
     out.value = std::move(c);

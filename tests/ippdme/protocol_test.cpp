@@ -119,7 +119,11 @@ TEST(IppProtocol, NistResponseNumberErrorsAreRefused) {
 }
 
 TEST(IppProtocol, SyntaxCornersWithTheirColumns) {
-  auto err = [](std::string_view l) { return ippdme::parse_command(l).error; };
+  // The error of a refused line; error −1 if it parsed.
+  auto err = [](std::string_view l) {
+    const auto c = ippdme::parse_command(l);
+    return c ? ippdme::SyntaxError{-1, 0, "parsed"} : c.error;
+  };
   EXPECT_EQ(err("A2345 GoTo(X(1))").error, 1);
   EXPECT_EQ(err("00000 Home()").error, 1);
   EXPECT_EQ(err("E0000 AbortE()").error, 1);  // E0000 is the server's
@@ -129,14 +133,15 @@ TEST(IppProtocol, SyntaxCornersWithTheirColumns) {
   EXPECT_EQ(dp.error, 509);
   EXPECT_EQ(dp.column, 18u);  // the second decimal point
   EXPECT_EQ(dp.message(), "column 18: a number with two decimal points (error 0509)");
-  EXPECT_EQ(err("00001 GoTo(X(1)) ").error, 502);
+  EXPECT_EQ(err("00001 GoTo(X(1)) ").error, -1);  // trailing spaces are tolerated
+  EXPECT_EQ(err("00001 GoTo(X(1))2").error, 507);
   EXPECT_EQ(err("00001 Tool.Home()").error, 502);
   EXPECT_EQ(err("00001 GetProp(Tool.Name)").error, 502);
-  EXPECT_EQ(err("00001 ChangeTool(\"\")").error, 502);
+  EXPECT_EQ(err("00001 ChangeTool(\"\")").error, 509);
   EXPECT_EQ(err("00001 ChangeTool(\"a\tb\")").error, 7);
   EXPECT_EQ(err(std::string("00001 Home()") + '\r').error, 7);
   EXPECT_EQ(err("00001 GoTo(X(1e1234))").error, 509);
-  EXPECT_EQ(err("00001 GoTo(X(1),)").error, 7);
+  EXPECT_EQ(err("00001 GoTo(X(1),)").error, 502);
   EXPECT_EQ(err("00001 GoTo(X(1)").error, 502);
   // Spaces where the grammar allows them, kept as written.
   const std::string spaced = "00002 GoTo ( X( 1.5 ) ,Y(-2)  , Z(.5e+2 ))";

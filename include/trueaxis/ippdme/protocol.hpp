@@ -18,10 +18,11 @@
 // nested: the arguments of the scan commands of version 1.5 and later (Format(X(), Y(), IJK()),
 // Data(...)) parse as calls within calls.
 //
-// Syntax errors name the column (1-based) and carry the specification's error number: 0001
-// illegal tag, 0002 no space at position 6, 0007 illegal character, 0509 bad number (no digits,
-// more than 16 digits, two decimal points, an exponent of other than 1–3 digits), 0502
-// incorrect arguments (any other misplaced character).
+// Syntax errors name the column (1-based) and carry the specification's error number as NIST's
+// reference parser assigns it: 0001 illegal tag, 0002 no space at position 6, 0007 a character
+// outside printable ASCII, 0509 bad number or string (no digits, more than 16 digits, two
+// decimal points, an exponent of other than 1–3 digits; an unclosed or empty string), 0507
+// characters after the command's end, 0502 incorrect arguments (anything else misplaced).
 #pragma once
 
 #include <cstdint>
@@ -55,6 +56,7 @@ struct Value {
   // Optional spaces of a call, for formatting it back as written: before "(", after "(", then
   // before and after each comma, and before ")".
   std::vector<std::uint16_t> spaces;
+  std::uint32_t column = 0;  // where it starts in the parsed line (1-based; 0: built in code)
 
   double number() const;  // the value of a Number (precondition: kind == Number)
   bool is_call(std::string_view name) const { return kind == Kind::Call && text == name; }
