@@ -1,10 +1,11 @@
 // libFuzzer target: the I++ DME line parser on arbitrary bytes, as command and as response. A
 // parse must end in a value or a syntax error, never throw; whatever parses formats back to the
-// same characters and parses again to the same text.
+// same characters and parses again to the same text; the command checks never throw either.
 #include <cstdint>
 #include <cstdlib>
 #include <string_view>
 
+#include "trueaxis/ippdme/commands.hpp"
 #include "trueaxis/ippdme/protocol.hpp"
 
 using namespace trueaxis;
@@ -16,6 +17,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (back != line) std::abort();
     const auto again = ippdme::parse_command(back);
     if (!again || ippdme::format(*again.value) != back) std::abort();
+    if (const auto e = ippdme::check(*c.value); e && (e->column == 0 || e->what.empty()))
+      std::abort();
   } else if (c.error.column == 0 || c.error.what.empty()) {
     std::abort();
   }
