@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -315,6 +316,253 @@ const std::map<std::string, Check, std::less<>>& table() {
 }
 
 }  // namespace
+
+namespace {
+
+// Responses.
+constexpr int kProtocol = 8;
+
+void rbad(const Value& at, std::string what) {
+  throw Bad{{kProtocol, at.column ? at.column : 1, std::move(what)}};
+}
+
+bool one_flag(const Value& v) {
+  return v.args.size() == 1 && v.args[0].kind == Value::Kind::Number &&
+         (v.args[0].text == "0" || v.args[0].text == "1");
+}
+
+bool numbers_only(const Value& v, std::size_t n) {
+  return v.args.size() == n && std::all_of(v.args.begin(), v.args.end(), [](const Value& a) {
+           return a.kind == Value::Kind::Number;
+         });
+}
+
+bool is_position_item(const std::string& name) {
+  static const std::set<std::string, std::less<>> names = {"X",      "Y",      "Z",      "R",  "ER",
+                                                           "Tool.A", "Tool.B", "Tool.C", "IJK"};
+  return names.count(name) > 0;
+}
+
+// X(1), Y(2), Z(3), IJK(0, 0, 1), R(0.5), ER(0.001), Tool.A(90), ... each once.
+void position_items(const std::vector<Value>& items, bool zero_ijk) {
+  std::set<std::string> seen;
+  for (const auto& a : items) {
+    if (a.kind != Value::Kind::Call) rbad(a, fmt::format("'{}' is not a data item", format(a)));
+    if (!is_position_item(a.text)) rbad(a, fmt::format("{}(...) is not a position item", a.text));
+    if (!seen.insert(a.text).second) rbad(a, a.text + " is given twice");
+    if (a.text == "IJK") {
+      if (!numbers_only(a, 3)) rbad(a, "IJK(i, j, k) has three numbers");
+      if (zero_ijk &&
+          std::any_of(a.args.begin(), a.args.end(), [](const Value& x) { return x.number() != 0; }))
+        rbad(a, "a move reports IJK(0, 0, 0)");
+    } else if (!numbers_only(a, 1)) {
+      rbad(a, fmt::format("{}(n) has one number", a.text));
+    }
+  }
+}
+
+// A property in a response: Tool.PtMeasPar.Speed(10), Tool.Name("probe"), Tool.Alignment(...).
+void property_item(const Value& a, bool set_event) {
+  const auto p = parts(a);
+  if (p.size() < 2 || (p[0] != "Tool" && p[0] != "FoundTool"))
+    rbad(a, fmt::format("{}(...) is not a property of Tool or FoundTool", a.text));
+  if (p[1] == "Name" || p[1] == "Id") {
+    if (p.size() != 2 || a.args.size() != 1 || a.args[0].kind != Value::Kind::String)
+      rbad(a, fmt::format("{}(\"...\") has one string", a.text));
+    return;
+  }
+  if (p[1] == "Alignment" || p[1] == "CollisionVolume" || p[1] == "AvrRadius" ||
+      p[1] == "AlignmentVolume") {
+    if (p[0] == "FoundTool" || p.size() != 2) rbad(a, a.text + " is not a property");
+    const std::size_t n = a.args.size();
+    if (p[1] == "Alignment" && !(numbers_only(a, 3) || numbers_only(a, 6)))
+      rbad(a, "Alignment has three or six numbers");
+    // Shapes, each a name and its numbers (OBB, 150, 10, ...), or nothing.
+    if (p[1] == "CollisionVolume" && ((n > 0 && a.args[0].kind != Value::Kind::Name) || n == 1 ||
+                                      std::any_of(a.args.begin(), a.args.end(), [](const Value& x) {
+                                        return x.kind != Value::Kind::Number &&
+                                               x.kind != Value::Kind::Name;
+                                      })))
+      rbad(a, "CollisionVolume has shapes, each a name and its numbers");
+    if (p[1] == "AvrRadius" && !numbers_only(a, 1)) rbad(a, "AvrRadius has one number");
+    return;
+  }
+  if (p[1] != "GoToPar" && p[1] != "PtMeasPar") rbad(a, a.text + " is not a property");
+  static const std::set<std::string, std::less<>> go = {"Speed", "Accel"},
+                                                  pt = {"Speed", "Accel", "Approach", "Search",
+                                                        "Retract"},
+                                                  sub = {"Act", "Def", "Min", "Max"};
+  if (p.size() < 3 || !(p[1] == "GoToPar" ? go : pt).count(p[2]))
+    rbad(a, fmt::format("{} has no such parameter", p[1]));
+  if (p.size() > 4 || (p.size() == 4 && (!sub.count(p[3]) || (set_event && p[3] != "Act"))))
+    rbad(a, a.text + " is not a parameter value");
+  if (!numbers_only(a, 1)) rbad(a, fmt::format("{}(n) has one number", a.text));
+}
+
+void check_data(const Response& r) {
+  const auto& it = r.items;
+  const Value& f = it.front();
+  if (f.kind != Value::Kind::Call) {
+    for (const auto& v : it)
+      if (v.kind != Value::Kind::Number && v.kind != Value::Kind::String)
+        rbad(v, fmt::format("'{}' is not data", format(v)));
+    return;  // numbers (scan data, ...) or strings (tool names, property names)
+  }
+  static const std::set<std::string, std::less<>> flags = {
+      "CenterPart", "TiltPart", "TiltCenterPart", "IsHomed", "IsUserEnabled", "ErrStatus"};
+  auto alone = [&] {
+    if (it.size() != 1) rbad(it[1], f.text + "(...) is the whole response");
+  };
+  if (f.text.empty()) {  // AlignPart's and AlignTool's vectors
+    alone();
+    if (!(numbers_only(f, 3) || numbers_only(f, 6))) rbad(f, "an alignment has 3 or 6 numbers");
+  } else if (flags.count(f.text)) {
+    alone();
+    if (!one_flag(f)) rbad(f, f.text + "(0) or " + f.text + "(1)");
+  } else if (f.text == "ChangeToolAction") {
+    alone();
+    static const std::set<std::string, std::less<>> act = {"Switch", "Rotate", "MoveAuto",
+                                                           "MoveMan"};
+    if (f.args.size() != 4 || f.args[0].kind != Value::Kind::Name || !act.count(f.args[0].text))
+      rbad(f, "ChangeToolAction(Switch|Rotate|MoveAuto|MoveMan, X(), Y(), Z())");
+    position_items({f.args.begin() + 1, f.args.end()}, false);
+  } else if (f.text == "CoordSystem") {
+    alone();
+    static const std::set<std::string, std::less<>> csys = {
+        "MachineCsy", "MoveableMachineCsy", "MultipleArmCsy", "RotaryTableVarCsy", "PartCsy"};
+    if (f.args.size() != 1 || f.args[0].kind != Value::Kind::Name || !csys.count(f.args[0].text))
+      rbad(f, "CoordSystem(...) names a coordinate system");
+  } else if (f.text == "GetCsyTransformation") {
+    alone();
+    if (!numbers_only(f, 6)) rbad(f, "GetCsyTransformation has six numbers");
+  } else if (f.text == "DMEVersion" || f.text == "KeyPress" || f.text == "ChangeTool") {
+    alone();
+    if (f.args.size() != 1 || f.args[0].kind != Value::Kind::String)
+      rbad(f, f.text + "(\"...\") has one string");
+  } else if (f.text == "GetMachineClass") {
+    alone();
+    if (f.args.size() != 1 || f.args[0].kind != Value::Kind::String ||
+        (f.args[0].text != "CartCMM" && f.args[0].text != "CartCMMWithRotaryTable"))
+      rbad(f, "GetMachineClass(\"CartCMM\") or GetMachineClass(\"CartCMMWithRotaryTable\")");
+  } else if (f.text == "GoTo" || f.text == "PtMeas") {
+    alone();
+    if (f.args.empty()) rbad(f, f.text + "(...) reports a position");
+    position_items(f.args, f.text == "GoTo");
+  } else if (f.text == "SetProp") {
+    alone();
+    if (f.args.empty()) rbad(f, "SetProp(...) reports properties");
+    for (const auto& a : f.args) {
+      if (a.kind != Value::Kind::Call) rbad(a, "SetProp(...) reports properties");
+      property_item(a, true);
+    }
+  } else {
+    // Positions (Get, PtMeas) and properties (GetProp), in any order.
+    std::vector<Value> positions;
+    for (const auto& a : it) {
+      if (a.kind != Value::Kind::Call) rbad(a, fmt::format("'{}' is not a data item", format(a)));
+      if (is_position_item(a.text))
+        positions.push_back(a);
+      else if (a.text.rfind("Tool.", 0) == 0 || a.text.rfind("FoundTool.", 0) == 0)
+        property_item(a, false);
+      else
+        rbad(a, fmt::format("{}(...) is neither a position item nor a property", a.text));
+    }
+    position_items(positions, false);
+  }
+}
+
+}  // namespace
+
+std::optional<ErrorInfo> error_info(int number) {
+  static const std::map<int, ErrorInfo> t = {
+      {0, {0, "Buffer full"}},
+      {1, {2, "Illegal tag"}},
+      {2, {2, "No space at pos. 6"}},
+      {3, {2, "Reserved"}},
+      {4, {2, "Reserved"}},
+      {5, {2, "Reserved"}},
+      {6, {2, "Transaction aborted (Use ClearAllErrors To Continue)"}},
+      {7, {3, "Illegal character"}},
+      {8, {3, "Protocol error"}},
+      {500, {3, "Emergency stop"}},
+      {501, {3, "Unsupported command"}},
+      {502, {3, "Incorrect arguments"}},
+      {503, {9, "Controller communications failure"}},
+      {504, {1, "Argument out of range"}},
+      {505, {3, "Argument not recognized"}},
+      {506, {3, "Argument not supported"}},
+      {507, {3, "Illegal command"}},
+      {508, {3, "Bad context"}},
+      {509, {3, "Bad argument"}},
+      {510, {3, "Bad property"}},
+      {511, {3, "Error processing method"}},
+      {512, {1, "No daemons are active"}},
+      {513, {2, "Daemon does not exist"}},
+      {514, {2, "Use ClearAllErrors to continue"}},
+      {515, {2, "Daemon already exists"}},
+      {1000, {3, "Machine in error state"}},
+      {1001, {2, "Illegal touch"}},
+      {1002, {9, "Axis does not exist"}},
+      {1003, {2, "No touch"}},
+      {1004, {9, "Number of angles not supported on current device"}},
+      {1005, {3, "Error during home"}},
+      {1006, {2, "Surface not found"}},
+      {1007, {3, "Theta out of range"}},
+      {1008, {3, "Target position out of machine volume"}},
+      {1009, {3, "Air pressure out of range"}},
+      {1010, {2, "Vector has no norm"}},
+      {1011, {2, "Unable to move"}},
+      {1012, {2, "Bad lock combinations"}},
+      {1500, {3, "Failed to re-seat head"}},
+      {1501, {3, "Probe not armed"}},
+      {1502, {3, "Tool not found"}},
+      {1503, {3, "Tool not defined"}},
+      {2000, {3, "Tool not calibrated"}},
+      {2001, {2, "Head error excessive force"}},
+      {2002, {3, "Type of probe does not allow this operation"}},
+      {2500, {3, "Machine limit encountered [Move Out Of Limits]"}},
+      {2501, {3, "Axis not active"}},
+      {2502, {3, "Axis position error"}},
+      {2503, {9, "Scale read head failure"}},
+      {2504, {3, "Collision"}},
+      {2505, {2, "Specified angle out of range"}},
+      {2506, {2, "Part not aligned"}},
+  };
+  const auto it = t.find(number);
+  if (it == t.end()) return std::nullopt;
+  return it->second;
+}
+
+std::optional<SyntaxError> check(const Response& r) {
+  try {
+    if (r.tag.event && r.tag.number == 0 &&
+        (r.kind == Response::Kind::Ack || r.kind == Response::Kind::Done))
+      throw Bad{{kProtocol, 1, "E0000 carries events (data or errors), not '&' or '%'"}};
+    if (r.kind == Response::Kind::Error) {
+      const auto& a = r.items[0].args;
+      const int number = static_cast<int>(a[1].number());
+      const auto info = error_info(number);
+      if (!info) rbad(a[1], fmt::format("{} is not an I++ DME error number", a[1].text));
+      auto lower = [](std::string_view x) {
+        std::string o(x);
+        for (char& ch : o) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+        return o;
+      };
+      // Servers differ in capitals ("Bad Argument"); the words must be the specification's.
+      if (lower(a[3].text) != lower(info->text))
+        rbad(a[3], fmt::format("the text of error {} is \"{}\"", a[1].text, info->text));
+      if (static_cast<int>(a[0].number()) != info->severity)
+        rbad(a[0], fmt::format("error {} has severity {}", a[1].text, info->severity));
+    } else if (r.kind == Response::Kind::Data) {
+      if (r.tag.event && r.tag.number == 0 && r.items.front().kind != Value::Kind::Call)
+        rbad(r.items.front(), "an event (E0000) names what it reports");
+      check_data(r);
+    }
+  } catch (const Bad& b) {
+    return b.e;
+  }
+  return std::nullopt;
+}
 
 bool is_event_command(std::string_view name) {
   return name == "AbortE" || name == "GetErrStatusE" || name == "GetPropE" ||

@@ -24,6 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   if (const auto r = ippdme::parse_response(line)) {
     if (ippdme::format(*r.value) != line) std::abort();
+    if (const auto e = ippdme::check(*r.value); e && e->what.empty()) std::abort();
   } else if (r.error.column == 0 || r.error.what.empty()) {
     std::abort();
   }

@@ -8,6 +8,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <set>
 #include <sstream>
@@ -167,6 +168,55 @@ TEST(IppProtocol, ValidNistProgramsPassTheCommandChecks) {
     }
   }
   EXPECT_GT(checked, 1100u);
+}
+
+// The entries of a NIST file: the text between its "\\" lines, each entry's lines framed by
+// CR LF only (a bare LF is part of a line, as a server would see it).
+std::vector<std::vector<std::string>> entries_of(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  std::vector<std::vector<std::string>> out(1);
+  for (std::size_t a = 0; a < all.size();) {
+    std::size_t b = all.find("\r\n", a);
+    if (b == std::string::npos) b = all.size();
+    const std::string l = all.substr(a, b - a);
+    if (l == "\\\\") {
+      out.emplace_back();
+    } else if (!l.empty() && l[0] != ':') {
+      out.back().push_back(l);
+    }
+    a = b + 2;
+  }
+  std::erase_if(out, [](const auto& e) { return e.empty(); });
+  return out;
+}
+
+// Every response NIST's server recorded passes the response checks; every line of NIST's
+// parserResErrors.res is refused, by the grammar or by the checks.
+TEST(IppProtocol, NistResponsesAreCheckedAndItsBadResponsesRefused) {
+  std::size_t checked = 0;
+  for (const auto& e : fs::directory_iterator(kNist)) {
+    const std::string name = e.path().filename().string();
+    if (e.path().extension() != ".res" || bad_file(name)) continue;
+    for (const auto& l : lines_of(e.path())) {
+      const auto r = ippdme::parse_response(l);
+      ASSERT_TRUE(r) << name << ": " << l;
+      const auto err = ippdme::check(*r.value);
+      EXPECT_FALSE(err) << name << ": " << l << ": " << err->message();
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 3000u);
+  const auto bad = entries_of(kNist / "parserResErrors.res");
+  ASSERT_GT(bad.size(), 120u);
+  for (const auto& entry : bad) {
+    bool refused = false;
+    for (const auto& l : entry) {
+      const auto r = ippdme::parse_response(l);
+      refused = refused || !r || ippdme::check(*r.value);
+    }
+    EXPECT_TRUE(refused) << entry.front() << " should be refused";
+  }
 }
 
 TEST(IppProtocol, NistResponseNumberErrorsAreRefused) {

@@ -27,4 +27,18 @@ const std::vector<std::string_view>& command_names();
 // True for the commands that go through the fast queue and must carry an E tag.
 bool is_event_command(std::string_view name);
 
+// The predefined errors of the specification (section 8.2): default severity and text.
+struct ErrorInfo {
+  int severity = 0;
+  std::string_view text;
+};
+std::optional<ErrorInfo> error_info(int number);
+
+// Checks a response that parsed, by what it says of itself: an error's number, severity and
+// text against the predefined list; data by their names (IsHomed(0|1), ErrStatus(0|1),
+// CoordSystem(...), ChangeToolAction(Switch|Rotate|MoveAuto|MoveMan, X(), Y(), Z()), points
+// and positions as X(), Y(), Z(), IJK(i, j, k), ... each once, properties by their paths, the
+// events of E0000). Nothing, or what is wrong (error 0008, protocol error).
+std::optional<SyntaxError> check(const Response& response);
+
 }  // namespace trueaxis::ippdme
