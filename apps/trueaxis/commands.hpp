@@ -80,6 +80,9 @@ std::vector<Command> add_design_commands(CLI::App& app, CLI::App& simulate);
 // 'scan' (error-tolerant design-value scanning on the virtual CMM).
 std::vector<Command> add_scan_commands(CLI::App& app);
 
+// ipp check (ipp_cmds.cpp).
+std::vector<Command> add_ipp_commands(CLI::App& app);
+
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);
 

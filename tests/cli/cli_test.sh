@@ -406,5 +406,19 @@ expect_ok "$T" simulate part --design spiral.json --translate 2,0,0 --seed 1 -o 
 expect_err "section 'spiral': the path is three-dimensional" "$T" scan --design spiral.json --part spiral-moved.json -o spiral-scan2.json --report spiral.html -q
 [ -s spiral.html ] && grep -q '"status": "error"' spiral-scan2.json && ok || bad "a failed space-curve scan still writes its files"
 
+# I++ DME: NIST's programs and recorded responses are valid; its parser-error program is not, and
+# each bad line is named with its place and the specification's error number.
+NIST="$DATA/ippdme/nist"
+expect_ok "$T" ipp check "$NIST/GoTo.prg" "$NIST/GoTo.res" "$NIST/PtMeas.prg" "$NIST/PtMeas.res"
+grep -q "lines checked (.* commands, .* responses): all valid I++ DME" out.txt && ok || bad "ipp check: $(cat out.txt)"
+if "$T" ipp check "$NIST/numbersErrorCmd.prg" >out.txt 2>err.txt; then bad "ipp check should fail on NIST's number errors"; else
+  grep -q "numbersErrorCmd.prg:[0-9]*:14: error 0509: a number of 17 digits (at most 16)" out.txt && ok || bad "ipp check numbers: $(head -3 out.txt)"
+fi
+printf '00001 StartSession()\r\n00002 GoTo(X(1), X(2))\r\n00003 AbortE()\r\n00004 Home()\n' > prog.prg
+"$T" ipp check prog.prg >out.txt 2>&1
+[ "$(grep -c ': error ' out.txt)" -eq 2 ] && grep -q "prog.prg:2:18: error 0502: GoTo: X is given twice" out.txt && grep -q "prog.prg:3:7: error 0001" out.txt && ok || bad "ipp check prog: $(cat out.txt)"
+expect_code 2 "$T" ipp
+expect_code 2 "$T" ipp check
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

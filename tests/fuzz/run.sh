@@ -8,6 +8,7 @@ cd "$(dirname "$0")/../.."
 seconds=${1:-30}
 build=build-fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
   -DTRUEAXIS_FUZZ=ON -DTRUEAXIS_PYTHON=OFF -DTRUEAXIS_TESTS=OFF -DTRUEAXIS_BENCHMARKS=OFF >/dev/null
 cmake --build "$build" --target fuzz_csv fuzz_json fuzz_ds fuzz_moody fuzz_ippdme
 corpus=$build/corpus
