@@ -19,7 +19,17 @@ struct Bad {
   SyntaxError e;
 };
 
-using Args = std::vector<Value>;
+// The parameters of a tool's GoToPar and PtMeasPar blocks (6.3.6, 6.3.7), and the values each
+// has: shared by the command and the response checks.
+bool is_parameter(const std::string& block, const std::string& name) {
+  static const std::set<std::string, std::less<>> go = {"Speed", "Accel"},
+                                                  pt = {"Speed", "Accel", "Approach", "Search",
+                                                        "Retract"};
+  return (block == "GoToPar" ? go : pt).count(name) > 0;
+}
+bool is_parameter_value(const std::string& name) {
+  return name == "Act" || name == "Def" || name == "Min" || name == "Max";
+}
 
 [[noreturn]] void bad(int error, const Value& at, std::string what) {
   throw Bad{{error, at.column ? at.column : 1, std::move(what)}};
@@ -183,15 +193,11 @@ void property(const Value& m, const Value& a, bool set) {
     if (!a.args.empty()) bad(kValue, a, m.text + ": the property ends in ()");
     return;
   }
-  static const std::set<std::string, std::less<>> go = {"Speed", "Accel"},
-                                                  pt = {"Speed", "Accel", "Approach", "Search",
-                                                        "Retract"};
-  if (!(p[1] == "GoToPar" ? go : pt).count(p[2]))
+  if (!is_parameter(p[1], p[2]))
     bad(kValue, a, fmt::format("{}: {} has no parameter {}", m.text, p[1], p[2]));
   if (p.size() > 4) bad(kValue, a, fmt::format("{}: {} is too deep", m.text, a.text));
   if (p.size() == 4) {
-    static const std::set<std::string, std::less<>> sub = {"Act", "Def", "Min", "Max"};
-    if (!sub.count(p[3]) || (set && p[3] != "Act"))
+    if (!is_parameter_value(p[3]) || (set && p[3] != "Act"))
       bad(kValue, a,
           fmt::format("{}: {} is not {}", m.text, p[3],
                       set ? "Act (only the actual value can be set)" : "Act, Def, Min or Max"));
@@ -388,13 +394,10 @@ void property_item(const Value& a, bool set_event) {
     return;
   }
   if (p[1] != "GoToPar" && p[1] != "PtMeasPar") rbad(a, a.text + " is not a property");
-  static const std::set<std::string, std::less<>> go = {"Speed", "Accel"},
-                                                  pt = {"Speed", "Accel", "Approach", "Search",
-                                                        "Retract"},
-                                                  sub = {"Act", "Def", "Min", "Max"};
-  if (p.size() < 3 || !(p[1] == "GoToPar" ? go : pt).count(p[2]))
+  if (p.size() < 3 || !is_parameter(p[1], p[2]))
     rbad(a, fmt::format("{} has no such parameter", p[1]));
-  if (p.size() > 4 || (p.size() == 4 && (!sub.count(p[3]) || (set_event && p[3] != "Act"))))
+  if (p.size() > 4 ||
+      (p.size() == 4 && (!is_parameter_value(p[3]) || (set_event && p[3] != "Act"))))
     rbad(a, a.text + " is not a parameter value");
   if (!numbers_only(a, 1)) rbad(a, fmt::format("{}(n) has one number", a.text));
 }

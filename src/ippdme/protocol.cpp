@@ -5,9 +5,7 @@
 #include <fmt/format.h>
 
 #include <charconv>
-#include <cmath>
 #include <cstdlib>
-#include <limits>
 
 namespace trueaxis::ippdme {
 namespace {

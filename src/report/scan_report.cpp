@@ -99,9 +99,11 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     const Eigen::Vector3d a =
         std::abs(n.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
     const Eigen::Vector3d e1 = (a - a.dot(n) * n).normalized(), e2 = n.cross(e1);
+    std::vector<sim::Contour::Nearest> measured_feet;  // each measured point's foot on the design
+    measured_feet.reserve(static_cast<std::size_t>(m));
     for (Eigen::Index k = 0; k < m; ++k) {
       const auto& pt = sec.points[static_cast<std::size_t>(k)].surface;
-      const auto nr = c.nearest(pt);
+      const auto& nr = measured_feet.emplace_back(c.nearest(pt));
       arc[k] = nr.arc;
       dev[k] = nr.distance;
       px[k] = (pt - d.plane.origin).dot(e1);
@@ -148,45 +150,55 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
 
     // The section in its plane: design, corrected design, measured points and the true part,
     // each drawn at the design's foot point plus its deviation along the design normal × M.
-    auto project = [&](const Eigen::Matrix3Xd& q, bool magnify, double mag) {
-      Eigen::Matrix2Xd xy(2, q.cols());
-      for (Eigen::Index k = 0; k < q.cols(); ++k) {
-        Eigen::Vector3d p = q.col(k);
-        if (magnify) {
-          const auto nr = c.nearest(p);
-          p = nr.point + mag * nr.distance * nr.normal;
-        }
-        xy.col(k) << (p - d.plane.origin).dot(e1), (p - d.plane.origin).dot(e2);
-      }
-      return xy;
+    // Each point's foot on the design is found once.
+    struct Curve {
+      std::string label;
+      std::vector<sim::Contour::Nearest> feet;
     };
-    std::vector<std::pair<std::string, Eigen::Matrix3Xd>> others;
+    auto feet_of = [&](std::string label, const Eigen::Matrix3Xd& q) {
+      Curve cv{std::move(label), {}};
+      cv.feet.reserve(static_cast<std::size_t>(q.cols()));
+      for (Eigen::Index k = 0; k < q.cols(); ++k) cv.feet.push_back(c.nearest(q.col(k)));
+      return cv;
+    };
+    std::vector<Curve> curves;
     if (i < r.design.sections.size())
-      others.emplace_back("corrected design", design::sample(r.design.sections[i], 0.5).points);
+      curves.push_back(
+          feet_of("corrected design", design::sample(r.design.sections[i], 0.5).points));
     if (i < true_part.size() && true_part[i].cols() > 1)
-      others.emplace_back("simulated true part", true_part[i]);
-    Eigen::Matrix3Xd measured(3, m);
-    for (Eigen::Index k = 0; k < m; ++k)
-      measured.col(k) = sec.points[static_cast<std::size_t>(k)].surface;
-    double worst = dev.cwiseAbs().maxCoeff();
-    for (const auto& [label, q] : others)
-      for (Eigen::Index k = 0; k < q.cols(); ++k)
-        worst = std::max(worst, std::abs(c.nearest(q.col(k)).distance));
+      curves.push_back(feet_of("simulated true part", true_part[i]));
+    curves.push_back({"measured points", std::move(measured_feet)});
+    double worst = 0;
+    for (const auto& cv : curves)
+      for (const auto& f : cv.feet) worst = std::max(worst, std::abs(f.distance));
     const double size = std::max(px.maxCoeff() - px.minCoeff(), py.maxCoeff() - py.minCoeff());
     const double mag = std::max(1.0, nice_magnification(worst * 1e3, size, 0.06));
+    auto in_plane = [&](const Eigen::Vector3d& p) {
+      return Eigen::Vector2d((p - d.plane.origin).dot(e1), (p - d.plane.origin).dot(e2));
+    };
     PlaneView v;
     v.title =
         fmt::format("section '{}' in its plane: deviations from the design ×{:g}", sec.name, mag);
     v.x_label = "in-plane u (mm)";
     v.y_label = "in-plane v (mm)";
-    v.curves.push_back({"design", project(smp.points, false, 1), "#757575", false, false, false});
-    const char* colours[] = {"#1565c0", "#2e7d32"};
-    for (std::size_t k = 0; k < others.size(); ++k)
-      v.curves.push_back({others[k].first, project(others[k].second, true, mag),
-                          others[k].first == "corrected design" ? colours[0] : colours[1],
-                          others[k].first == "corrected design", false, false});
-    v.curves.push_back(
-        {"measured points", project(measured, true, mag), "#e65100", false, true, false});
+    Eigen::Matrix2Xd design_xy(2, smp.points.cols());
+    for (Eigen::Index k = 0; k < smp.points.cols(); ++k)
+      design_xy.col(k) = in_plane(smp.points.col(k));
+    v.curves.push_back({"design", design_xy, "#757575", false, false, false});
+    for (const auto& cv : curves) {
+      Eigen::Matrix2Xd xy(2, static_cast<Eigen::Index>(cv.feet.size()));
+      for (std::size_t k = 0; k < cv.feet.size(); ++k) {
+        const auto& f = cv.feet[k];
+        xy.col(static_cast<Eigen::Index>(k)) = in_plane(f.point + mag * f.distance * f.normal);
+      }
+      const bool corrected = cv.label == "corrected design";
+      const bool points = cv.label == "measured points";
+      v.curves.push_back({cv.label, xy,
+                          corrected ? "#1565c0"
+                          : points  ? "#e65100"
+                                    : "#2e7d32",
+                          corrected, points, false});
+    }
     s.planes.push_back(std::move(v));
   }
 

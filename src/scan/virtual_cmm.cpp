@@ -106,11 +106,15 @@ double VirtualCmm::distance(const design::Section& section, const Eigen::Vector3
   return distance(section.plane, p);
 }
 
+Eigen::Vector3d VirtualCmm::free_ball_centre() const {
+  const Eigen::Vector3d& p = servo_.position();
+  return o_.geometry ? Eigen::Vector3d(p + machine_error(p)) : p;
+}
+
 sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part) {
   // The ball meets the nearest contour of the plane: the one met last is usually it, and the
   // others only need looking at within that distance.
-  Eigen::Vector3d pos = servo_.position();
-  if (o_.geometry) pos += machine_error(pos);  // where the ball centre really is
+  const Eigen::Vector3d pos = free_ball_centre();
   if (space_) return probe_.read(space_->nearest(pos));
   std::size_t first = 0;
   for (std::size_t k = 0; k < part.size(); ++k)
@@ -144,8 +148,7 @@ Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
 
 double VirtualCmm::penetration() const {
   // The ball against every section whose plane it straddles (the part is known there only).
-  Eigen::Vector3d pos = servo_.position();
-  if (o_.geometry) pos += machine_error(pos);
+  const Eigen::Vector3d pos = free_ball_centre();
   const double r = probe_.options().tip_radius;
   double worst = 0;
   for (const auto& [pl, c] : contours_) {

@@ -155,6 +155,8 @@ class VirtualCmm : public Machine {
   const sim::Contour* last_contour_ = nullptr;
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
   Sample sample(const sim::ProbeReading& r, double arc) const;
+  // Where the undeflected ball centre really is: the scale position plus the machine's error.
+  Eigen::Vector3d free_ball_centre() const;
   // How far the ball sinks into the part's sections it straddles (mm; 0 when free). Space
   // curves, whose surface model holds only near them, are not checked.
   double penetration() const;

@@ -113,7 +113,7 @@ class Contour {
 // tangent plane at the nearest curve point: the signed distance of q is (q − foot)·normal, the
 // normal interpolated along each segment. That is exact on the curve and good to
 // (lateral offset)²/2R on a surface of radius R, for a probe that follows the curve. Nearest
-// points by a scan of all segments, starting from the one found last.
+// points by a scan of all segments (O(n) per query; space-curve sections are short).
 class SpaceCurve {
  public:
   // points, normals: 3 × n (n ≥ 2); normals of non-zero length.
