@@ -159,12 +159,13 @@ TEST(IppProtocol, ValidNistProgramsPassTheCommandChecks) {
       const auto err = first_error(l);
       ++checked;
       if (err.error == -1) continue;
-      // The server's error for this tag, with this number.
+      // The server's error for this tag, with this number: "TAG ! Error(S, NNNN, ...".
       const std::string tag = l.substr(0, 5);
-      EXPECT_NE(answers.find(fmt::format("{} ! Error(", tag)), std::string::npos)
-          << name << ": " << l << ": " << err.message();
-      EXPECT_NE(answers.find(fmt::format("{:04d}", err.error)), std::string::npos)
-          << name << ": " << l << ": " << err.message();
+      const auto at = answers.find(fmt::format("{} ! Error(", tag));
+      ASSERT_NE(at, std::string::npos) << name << ": " << l << ": " << err.message();
+      const std::string answer = answers.substr(at, answers.find('\n', at) - at);
+      EXPECT_NE(answer.find(fmt::format(", {:04d},", err.error)), std::string::npos)
+          << name << ": " << l << ": " << err.message() << " / " << answer;
     }
   }
   EXPECT_GT(checked, 1100u);
