@@ -82,6 +82,7 @@ std::vector<Command> add_scan_commands(CLI::App& app);
 
 // ipp check (ipp_cmds.cpp).
 std::vector<Command> add_ipp_commands(CLI::App& app);
+std::vector<Command> add_serve_command(CLI::App& app);
 
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);

@@ -1,15 +1,25 @@
-// trueaxis CLI — I++ DME tools: 'ipp check' (validate program and session-log lines).
+// trueaxis CLI — I++ DME: 'serve' (the virtual CMM as an I++ DME server), 'ipp run' (run a
+// program against a server, compare with a recording) and 'ipp check' (validate lines).
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <atomic>
+#include <csignal>
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <thread>
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/machine.hpp"
+#include "trueaxis/ippdme/client.hpp"
 #include "trueaxis/ippdme/commands.hpp"
 #include "trueaxis/ippdme/protocol.hpp"
+#include "trueaxis/ippdme/recording.hpp"
+#include "trueaxis/ippdme/server.hpp"
+#include "trueaxis/scan/machine.hpp"
 
 namespace trueaxis::cli {
 namespace {
@@ -62,7 +72,167 @@ int run_ipp_check(const IppCheckArgs& a) {
   return bad ? 1 : 0;
 }
 
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open the file");
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+struct ServeArgs {
+  std::string host = "127.0.0.1", machine, part, log;
+  int port = 1294;
+  std::vector<double> part_origin;
+  double time_scale = 1, tip_radius = 1, probe_noise_um = 0;
+  std::uint64_t seed = 1;
+  long sessions = 0;
+  bool quiet = false;
+};
+
+std::atomic<bool> g_interrupted{false};
+
+int run_serve(const ServeArgs& a) {
+  ippdme::ServerOptions o;
+  o.host = a.host;
+  o.port = static_cast<unsigned short>(a.port);
+  o.log = a.log;
+  auto& e = o.engine;
+  e.time_scale = a.time_scale;
+  e.cmm.probe.tip_radius = a.tip_radius;
+  e.cmm.probe.noise = a.probe_noise_um * 1e-3;
+  e.cmm.probe.seed = a.seed;
+  if (!a.machine.empty()) {
+    e.cmm.geometry = io::read_machine(a.machine);
+    const auto& g = *e.cmm.geometry;
+    // Home: the back left top corner of the travel (tool point, machine coordinates).
+    e.cmm.home = Eigen::Vector3d(g.range[0][0], g.range[1][1], g.range[2][1]) + g.offset;
+  }
+  if (!a.part.empty()) {
+    e.part = io::read_part(a.part);
+    if (!a.part_origin.empty()) {
+      e.part_origin = Eigen::Vector3d(a.part_origin[0], a.part_origin[1], a.part_origin[2]);
+    } else if (e.cmm.geometry) {
+      // Where `trueaxis scan --machine` puts it: centred in the travel.
+      scan::VirtualCmmOptions vo;
+      vo.geometry = e.cmm.geometry;
+      e.part_origin = scan::VirtualCmm(*e.part, vo).part_origin();
+    }
+  }
+  ippdme::Server server(o);
+  fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}; Ctrl-C stops\n", a.host,
+             server.port(),
+             e.part ? fmt::format("the part of {}", a.part) : std::string("the nominal world"),
+             e.cmm.geometry ? fmt::format(" on the machine of {}", a.machine) : std::string());
+  std::fflush(stdout);
+  std::signal(SIGINT, [](int) { g_interrupted = true; });
+  std::signal(SIGTERM, [](int) { g_interrupted = true; });
+  std::atomic<bool> done{false};
+  std::thread watch([&] {
+    while (!done) {
+      if (g_interrupted || (a.sessions > 0 && static_cast<long>(server.sessions_served()) >=
+                                                  a.sessions && !server.session_active()))
+        server.stop();
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+  });
+  server.run();
+  done = true;
+  watch.join();
+  if (!a.quiet) fmt::print("trueaxis serve: stopped after {} session(s)\n", server.sessions_served());
+  return 0;
+}
+
+struct RunArgs {
+  std::string program, host = "127.0.0.1", log, expect;
+  int port = 1294;
+  double timeout = 120;
+  bool quiet = false;
+};
+
+int run_ipp_run(const RunArgs& a) {
+  const auto program = ippdme::recorded_lines(slurp(a.program));
+  std::vector<std::string> expected;
+  if (!a.expect.empty()) expected = ippdme::recorded_lines(slurp(a.expect));
+  ippdme::ClientOptions co;
+  co.host = a.host;
+  co.port = static_cast<unsigned short>(a.port);
+  co.timeout = a.timeout;
+  co.log = a.log;
+  ippdme::Client client(co);
+  long number = 0;
+  for (std::size_t i = 0; i < program.size(); ++i) {
+    const std::string& line = program[i];
+    ++number;
+    const auto parsed = ippdme::parse_command(line);
+    if (!parsed)
+      fmt::print(stderr, "{}: line {}: {} (sent as it is)\n", a.program, number,
+                 parsed.error.message());
+    client.send_line(line);
+    // The next command goes when this one completed; an AbortE goes at once, while it runs.
+    if (i + 1 < program.size() && program[i + 1].find("AbortE") != std::string::npos) continue;
+    if (line.size() < 5) continue;
+    const auto tag = ippdme::parse_command(line.substr(0, 5) + " X()");
+    if (!tag) continue;
+    client.wait(tag.value->tag);
+  }
+  // What came back, in order; then what differs from the recording.
+  const auto got = client.received();
+  if (!a.quiet)
+    for (const auto& l : got) fmt::print("{}\n", l);
+  if (a.expect.empty()) return 0;
+  const auto d = ippdme::compare_structure(expected, got);
+  for (const auto& x : d)
+    fmt::print("{}: tag {}: expected [{}], got [{}]\n", a.expect, x.tag, x.expected, x.got);
+  fmt::print("{} lines sent, {} received; {}\n", program.size(), got.size(),
+             d.empty() ? fmt::format("the structure matches {}", a.expect)
+                       : fmt::format("{} tag(s) differ from {}", d.size(), a.expect));
+  return d.empty() ? 0 : 1;
+}
+
 }  // namespace
+
+std::vector<Command> add_serve_command(CLI::App& app) {
+  auto a = std::make_shared<ServeArgs>();
+  auto* c = app.add_subcommand(
+      "serve",
+      "Serve the virtual CMM over I++ DME (VDMA 8722), the protocol CMM software uses to drive "
+      "CMM controllers: measuring software or 'trueaxis ipp run' connects over TCP and moves, "
+      "probes and scans it. One session at a time. Without --part each probing meets the "
+      "surface its command describes (a plane through a PtMeas point, the circle of a "
+      "ScanOnCircle); with --part the simulated part's sections.\n"
+      "Example: trueaxis serve --machine machine.json --part part.json --log session.log");
+  c->add_option("--host", a->host, "address to listen on")->capture_default_str();
+  c->add_option("--port", a->port, "TCP port (0: any free one, printed)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65535));
+  c->add_option("--machine", a->machine,
+                "machine.json: the CMM's 21 geometric errors and travel (trueaxis simulate "
+                "machine); the measured points carry them")
+      ->check(CLI::ExistingFile);
+  c->add_option("--part", a->part, "part.json: the simulated part (trueaxis simulate part)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--part-origin", a->part_origin,
+                "X,Y,Z: the part's design origin in machine coordinates (mm; default: the "
+                "machine origin, or centred in the travel with --machine)")
+      ->expected(3)
+      ->delimiter(',');
+  c->add_option("--time-scale", a->time_scale,
+                "wall-clock seconds per machine second: 1 real time, 0 as fast as it computes")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
+  c->add_option("--tip-radius", a->tip_radius, "stylus tip radius of Probe1 (mm)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.05, 50.0));
+  c->add_option("--probe-noise", a->probe_noise_um, "probe noise, standard deviation (µm)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 100.0));
+  c->add_option("--seed", a->seed, "random seed of the probe noise")->capture_default_str();
+  c->add_option("--log", a->log, "session log: every line received and sent, with the time");
+  c->add_option("--sessions", a->sessions, "stop after this many sessions (0: serve until Ctrl-C)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  c->add_flag("--quiet,-q", a->quiet, "print only the listening line");
+  return {{c, [a] { return run_serve(*a); }}};
+}
 
 std::vector<Command> add_ipp_commands(CLI::App& app) {
   auto* ipp = app.add_subcommand(
@@ -79,7 +249,29 @@ std::vector<Command> add_ipp_commands(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   c->add_flag("--quiet,-q", a->quiet, "print only the bad lines");
-  return {{c, [a] { return run_ipp_check(*a); }}};
+  auto r = std::make_shared<RunArgs>();
+  auto* run = ipp->add_subcommand(
+      "run",
+      "Run an I++ DME program (one command per line, as NIST's test programs) against a server "
+      "and print every response. With --expect, compare the responses' structure (tags, "
+      "kinds, error numbers, numbers of data items; scan data as a whole) with a recorded "
+      "file; exit 1 if they differ.\n"
+      "Example: trueaxis ipp run PtMeas.prg --port 1294 --expect PtMeas.res");
+  run->add_option("program", r->program, "the program: command lines (CR LF or LF)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  run->add_option("--host", r->host, "the server's address")->capture_default_str();
+  run->add_option("--port", r->port, "the server's TCP port")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 65535));
+  run->add_option("--expect", r->expect, "a recording (.res) to compare the structure with")
+      ->check(CLI::ExistingFile);
+  run->add_option("--log", r->log, "session log: every line sent and received, with the time");
+  run->add_option("--timeout", r->timeout, "seconds to wait for any one response")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  run->add_flag("--quiet,-q", r->quiet, "print only the comparison");
+  return {{c, [a] { return run_ipp_check(*a); }}, {run, [r] { return run_ipp_run(*r); }}};
 }
 
 }  // namespace trueaxis::cli

@@ -334,6 +334,7 @@ int main(int argc, char** argv) {
   for (auto& c : cli::add_ballgauge_commands(app, *simc)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_design_commands(app, *simc)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_scan_commands(app)) machine_cmds.push_back(std::move(c));
+  for (auto& c : cli::add_serve_command(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_ipp_commands(app)) machine_cmds.push_back(std::move(c));
 
   // report -----------------------------------------------------------------------------------

@@ -1197,6 +1197,14 @@ void Engine::receive(std::string_view text) {
   s.line(c.tag, '%');
 }
 
+void Engine::refuse_overlong(std::string_view start) {
+  std::lock_guard lk(s_->m);
+  Tag t{true, 0};
+  if (start.size() >= 5)
+    if (auto p = parse_command(std::string(start.substr(0, 5)) + " X()")) t = p.value->tag;
+  s_->error(t, 8, "line longer than 65536 characters");
+}
+
 bool Engine::execute_next(bool wait) {
   State& s = *s_;
   std::unique_lock lk(s.m);

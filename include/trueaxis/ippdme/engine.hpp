@@ -82,6 +82,8 @@ class Engine {
   // A received line (without CR LF): syntax errors are answered, a valid command acknowledged;
   // fast-queue commands run at once, the others are queued for execute_next().
   void receive(std::string_view line);
+  // A line longer than kMaxLine that the transport skipped: error 0008 with the tag of its start.
+  void refuse_overlong(std::string_view start);
   // Runs the next queued command. With `wait`, waits for one (or for stop()); returns false when
   // there was nothing to run.
   bool execute_next(bool wait);
