@@ -17,7 +17,7 @@ if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
     libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev libglpk-dev \
     libocct-data-exchange-dev libocct-modeling-algorithms-dev libtbb-dev \
     libgtest-dev libgmock-dev libbenchmark-dev \
-    pybind11-dev python3-dev python3-numpy python3-pytest \
+    pybind11-dev python3-dev python3-numpy python3-pytest libasio-dev \
     chromium gawk clang-format >/dev/null
 fi
 (cd web && npm ci --no-audit --no-fund --silent)

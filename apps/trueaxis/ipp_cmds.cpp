@@ -118,8 +118,7 @@ int run_serve(const ServeArgs& a) {
     }
   }
   ippdme::Server server(o);
-  fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}; Ctrl-C stops\n", a.host,
-             server.port(),
+  fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}; Ctrl-C stops\n", a.host, server.port(),
              e.part ? fmt::format("the part of {}", a.part) : std::string("the nominal world"),
              e.cmm.geometry ? fmt::format(" on the machine of {}", a.machine) : std::string());
   std::fflush(stdout);
@@ -128,8 +127,9 @@ int run_serve(const ServeArgs& a) {
   std::atomic<bool> done{false};
   std::thread watch([&] {
     while (!done) {
-      if (g_interrupted || (a.sessions > 0 && static_cast<long>(server.sessions_served()) >=
-                                                  a.sessions && !server.session_active()))
+      if (g_interrupted ||
+          (a.sessions > 0 && static_cast<long>(server.sessions_served()) >= a.sessions &&
+           !server.session_active()))
         server.stop();
       std::this_thread::sleep_for(std::chrono::milliseconds(50));
     }
@@ -137,7 +137,8 @@ int run_serve(const ServeArgs& a) {
   server.run();
   done = true;
   watch.join();
-  if (!a.quiet) fmt::print("trueaxis serve: stopped after {} session(s)\n", server.sessions_served());
+  if (!a.quiet)
+    fmt::print("trueaxis serve: stopped after {} session(s)\n", server.sessions_served());
   return 0;
 }
 

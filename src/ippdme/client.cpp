@@ -9,8 +9,8 @@
 #include <deque>
 #include <fstream>
 #include <map>
-#include <set>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "trueaxis/error.hpp"
@@ -131,7 +131,9 @@ Client::Client(ClientOptions options) : p_(std::make_unique<Impl>()) {
   p_->connect();
 }
 
-Client::~Client() { p_->close(); }
+Client::~Client() {
+  p_->close();
+}
 
 void Client::on_event(std::function<void(const std::string&)> f) {
   std::lock_guard lk(p_->m);

@@ -470,6 +470,24 @@ class Executor {
   void need_probe() {
     if (!s_.tool().measures) throw Fail{2002};
   }
+  // A measuring command: a session, a homed machine and a tool that measures.
+  void need_measuring() {
+    need_session();
+    need_homed();
+    need_probe();
+  }
+  // After a scan: back off the surface along n by `distance` (within the travel; no lock held).
+  void retract_from(const Eigen::Vector3d& n, double distance) {
+    const Eigen::Vector3d back = s_.cmm.position() + distance * n;
+    if (s_.cmm.within_travel(back)) s_.cmm.move(back, s_.par("GoToPar", "Speed"), 1000);
+  }
+  // How a scan ended, as the specification's errors: over-push 2001, the travel 2500, the
+  // surface lost or never met 1006.
+  static void ended(SimulatedCmm::ScanEnd end) {
+    if (end == SimulatedCmm::ScanEnd::OverPushed) throw Fail{2001};
+    if (end == SimulatedCmm::ScanEnd::Travel) throw Fail{2500};
+    if (end != SimulatedCmm::ScanEnd::Done) throw Fail{1006};
+  }
   // One probing as PtMeas does it; the contact, or Fail 1006.
   SimulatedCmm::Contact probe(const Eigen::Vector3d& x, const Eigen::Vector3d& n,
                               std::optional<double> retract_override);
@@ -551,9 +569,7 @@ void Executor::report_point(const std::vector<std::string>& format, const Simula
 }
 
 void Executor::ptmeas() {
-  need_session();
-  need_homed();
-  need_probe();
+  need_measuring();
   auto t = s_.target(m_);
   Eigen::Vector3d n;
   if (t.ijk) {
@@ -606,9 +622,7 @@ void Executor::scan(
 }
 
 void Executor::scan_on_line() {
-  need_session();
-  need_homed();
-  need_probe();
+  need_measuring();
   const auto v = numbers(m_);
   const Eigen::Vector3d S = s_.to_machine(vec(v, 0)), E = s_.to_machine(vec(v, 3));
   const Eigen::Vector3d n = unit(s_.dir_to_machine(vec(v, 6)));
@@ -633,18 +647,13 @@ void Executor::scan_on_line() {
         surface, plane, along, speed, 0.2, step, 2 * L + 10,
         [&](const SimulatedCmm::Point& p, double) { return (p.centre - c.centre).norm() >= L; },
         emit);
-    const Eigen::Vector3d back = s_.cmm.position() + retract * n;
-    if (s_.cmm.within_travel(back)) s_.cmm.move(back, s_.par("GoToPar", "Speed"), 1000);
+    retract_from(n, retract);
   });
-  if (end == SimulatedCmm::ScanEnd::OverPushed) throw Fail{2001};
-  if (end == SimulatedCmm::ScanEnd::Travel) throw Fail{2500};
-  if (end != SimulatedCmm::ScanEnd::Done) throw Fail{1006};
+  ended(end);
 }
 
 void Executor::scan_on_circle() {
-  need_session();
-  need_homed();
-  need_probe();
+  need_measuring();
   const auto v = numbers(m_);
   const Eigen::Vector3d C = s_.to_machine(vec(v, 0)), S = s_.to_machine(vec(v, 3));
   const Eigen::Vector3d ax = unit(s_.dir_to_machine(vec(v, 6)));
@@ -692,18 +701,13 @@ void Executor::scan_on_circle() {
           return std::abs(swept) >= std::abs(delta) * kDeg;
         },
         emit);
-    const Eigen::Vector3d back = s_.cmm.position() + retract * c.normal;
-    if (s_.cmm.within_travel(back)) s_.cmm.move(back, s_.par("GoToPar", "Speed"), 1000);
+    retract_from(c.normal, retract);
   });
-  if (end == SimulatedCmm::ScanEnd::OverPushed) throw Fail{2001};
-  if (end == SimulatedCmm::ScanEnd::Travel) throw Fail{2500};
-  if (end != SimulatedCmm::ScanEnd::Done) throw Fail{1006};
+  ended(end);
 }
 
 void Executor::scan_on_curve() {
-  need_session();
-  need_homed();
-  need_probe();
+  need_measuring();
   // Closed(c), Format(X(), Y(), Z(), IJK(), tag[, pi, pj, pk[, si, sj, sk]]), Data(...)
   bool closed = false;
   std::size_t width = 0;
@@ -751,17 +755,14 @@ void Executor::scan_on_curve() {
     s_.go(path.front() + (s_.par("PtMeasPar", "Approach") + push) * nrm.front(), go_speed,
           go_accel);
     end = s_.cmm.along(path, surface, speed, s_.unknown_density, emit);
-    const Eigen::Vector3d back = s_.cmm.position() + retract * nrm.back();
-    if (s_.cmm.within_travel(back)) s_.cmm.move(back, go_speed, go_accel);
+    retract_from(nrm.back(), retract);
   });
-  if (end == SimulatedCmm::ScanEnd::OverPushed) throw Fail{2001};
+  ended(end);
 }
 
 // ScanInPlaneEndIs{Sphere,Plane,Cyl} and ScanInCylEndIs{Sphere,Plane}.
 void Executor::scan_unknown() {
-  need_session();
-  need_homed();
-  need_probe();
+  need_measuring();
   const auto v = numbers(m_);
   const bool in_cyl = name_.rfind("ScanInCyl", 0) == 0;
   const std::size_t o = in_cyl ? 6 : 0;  // the cylinder's axis comes first
@@ -854,12 +855,9 @@ void Executor::scan_unknown() {
           return stop;
         },
         emit);
-    const Eigen::Vector3d back = s_.cmm.position() + retract * c.normal;
-    if (s_.cmm.within_travel(back)) s_.cmm.move(back, s_.par("GoToPar", "Speed"), 1000);
+    retract_from(c.normal, retract);
   });
-  if (end == SimulatedCmm::ScanEnd::OverPushed) throw Fail{2001};
-  if (end == SimulatedCmm::ScanEnd::Travel) throw Fail{2500};
-  if (end != SimulatedCmm::ScanEnd::Done) throw Fail{1006};
+  ended(end);
 }
 
 // AlignPart, CenterPart, TiltPart, TiltCenterPart: the rotary table turns about the machine's

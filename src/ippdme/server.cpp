@@ -112,31 +112,32 @@ struct Server::Impl {
   }
 
   void read(const std::shared_ptr<Conn>& c) {
-    c->sock.async_read_some(
-        asio::buffer(c->buf), [this, c](const asio::error_code& ec, std::size_t n) {
-          if (ec) return gone(c);
-          for (std::size_t i = 0; i < n; ++i) {
-            const char ch = c->buf[i];
-            if (ch == '\n') {
-              if (!c->line.empty() && c->line.back() == '\r') c->line.pop_back();
-              if (c->overlong) {
-                engine->refuse_overlong(c->line);
-              } else {
-                write_log("received", c->line);
-                engine->receive(c->line);
-              }
-              c->line.clear();
-              c->overlong = false;
-            } else if (!c->overlong) {
-              c->line.push_back(ch);
-              if (c->line.size() > kMaxLine + 1) {
-                c->overlong = true;
-                c->line.resize(16);  // keep the start: its tag
-              }
-            }
-          }
-          read(c);
-        });
+    c->sock.async_read_some(asio::buffer(c->buf),
+                            [this, c](const asio::error_code& ec, std::size_t n) {
+                              if (ec) return gone(c);
+                              for (std::size_t i = 0; i < n; ++i) {
+                                const char ch = c->buf[i];
+                                if (ch == '\n') {
+                                  if (!c->line.empty() && c->line.back() == '\r')
+                                    c->line.pop_back();
+                                  if (c->overlong) {
+                                    engine->refuse_overlong(c->line);
+                                  } else {
+                                    write_log("received", c->line);
+                                    engine->receive(c->line);
+                                  }
+                                  c->line.clear();
+                                  c->overlong = false;
+                                } else if (!c->overlong) {
+                                  c->line.push_back(ch);
+                                  if (c->line.size() > kMaxLine + 1) {
+                                    c->overlong = true;
+                                    c->line.resize(16);  // keep the start: its tag
+                                  }
+                                }
+                              }
+                              read(c);
+                            });
   }
 
   void accept() {
@@ -178,7 +179,8 @@ Server::Server(ServerOptions options) : p_(std::make_unique<Impl>()) {
     p_->log.open(p_->o.log);
     if (!p_->log) throw Error(fmt::format("{}: cannot write the session log", p_->o.log));
   }
-  p_->engine = std::make_unique<Engine>(p_->o.engine, [this](const std::string& l) { p_->send(l); });
+  p_->engine =
+      std::make_unique<Engine>(p_->o.engine, [this](const std::string& l) { p_->send(l); });
   try {
     const tcp::endpoint ep(asio::ip::make_address(p_->o.host), p_->o.port);
     p_->acceptor.open(ep.protocol());
@@ -195,8 +197,12 @@ Server::~Server() {
   if (p_->worker.joinable()) p_->worker.join();
 }
 
-unsigned short Server::port() const { return p_->acceptor.local_endpoint().port(); }
-std::size_t Server::sessions_served() const { return p_->sessions; }
+unsigned short Server::port() const {
+  return p_->acceptor.local_endpoint().port();
+}
+std::size_t Server::sessions_served() const {
+  return p_->sessions;
+}
 bool Server::session_active() const {
   std::lock_guard lk(p_->m);
   return p_->current && !p_->current->closed;

@@ -420,5 +420,23 @@ printf '00001 StartSession()\r\n00002 GoTo(X(1), X(2))\r\n00003 AbortE()\r\n0000
 expect_code 2 "$T" ipp
 expect_code 2 "$T" ipp check
 
+# The virtual CMM served over I++ DME: NIST's programs run through 'ipp run' and compared with
+# NIST's recordings; the server stops after the sessions asked for.
+"$T" serve --port 0 --time-scale 0 --sessions 2 >serve.txt 2>&1 &
+SERVE=$!
+for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
+PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+expect_ok "$T" ipp run "$NIST/PtMeas.prg" --port "$PORT" --expect "$NIST/PtMeas.res" --log client.log
+grep -q "the structure matches" out.txt && grep -q "00210 # Y(0.77900)" out.txt && grep -q "sent: 00080 PtMeas" client.log && ok || bad "ipp run PtMeas: $(tail -3 out.txt)"
+# Error.prg: the specification's 2500 where NIST's server answered 1008 — named, exit 1.
+if "$T" ipp run "$NIST/Error.prg" --port "$PORT" --expect "$NIST/Error.res" -q >out.txt 2>err.txt; then bad "ipp run Error.prg should differ"; else
+  grep -q "tag 00010: expected \[& !1008 %\], got \[& !2500 %\]" out.txt && grep -q "1 tag(s) differ" out.txt && ok || bad "ipp run Error: $(cat out.txt err.txt)"
+fi
+wait $SERVE && grep -q "stopped after 2 session(s)" serve.txt && ok || bad "serve --sessions 2: $(cat serve.txt)"
+expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" ipp run "$NIST/PtMeas.prg" --port 1
+expect_code 2 "$T" serve --port 70000
+expect_ok "$T" serve --help
+grep -q "Without --part each probing meets" out.txt && ok || bad "serve --help"
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <thread>
 
+#include "nist.hpp"
 #include "trueaxis/ippdme/protocol.hpp"
 #include "trueaxis/ippdme/recording.hpp"
 
@@ -21,14 +22,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace ippdme;
-const fs::path kNist = fs::path(TRUEAXIS_TEST_DATA) / "ippdme" / "nist";
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using test::kNist;
+using test::slurp;
 
 // Runs a program as a client does over the wire: the engine's worker on its own thread; each
 // command sent when the previous one completed, but AbortE at once, while the previous command

@@ -36,7 +36,7 @@ class Server {
   unsigned short port() const;  // the port bound
   // Serves until stop(); on the calling thread (plus one worker thread for the machine).
   void run();
-  void stop();  // from any thread
+  void stop();                          // from any thread
   std::size_t sessions_served() const;  // clients connected so far
   bool session_active() const;          // a client is connected
 
