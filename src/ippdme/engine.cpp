@@ -133,6 +133,7 @@ struct PartSurface {
 struct Engine::State {
   EngineOptions o;
   Send send;
+  std::function<void()> flow;  // set before the worker starts (set_flow_control)
   SimulatedCmm cmm;
   std::shared_ptr<PartSurface> part;  // the part world (empty: the nominal world)
 
@@ -607,18 +608,19 @@ void Executor::scan(
   std::vector<Value> bare;
   int in_line = 0;
   const auto format = s_.scan_format;
-  auto flush = [&] {
+  auto flush = [&](bool streaming) {
     if (bare.empty()) return;
+    if (streaming && s_.flow) s_.flow();  // no lock is held while the scan streams
     s_.data(c_.tag, bare);
     bare.clear();
     in_line = 0;
   };
   auto emit = [&](const SimulatedCmm::Point& p) {
     report_point(format, SimulatedCmm::Contact{p.centre, p.normal}, nullptr, &bare);
-    if (++in_line == kPointsPerLine) flush();
+    if (++in_line == kPointsPerLine) flush(true);
   };
   body(emit);
-  flush();
+  flush(false);
 }
 
 void Executor::scan_on_line() {
@@ -1285,6 +1287,11 @@ void Engine::disconnect() {
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
+}
+
+void Engine::set_flow_control(std::function<void()> wait_until_writable) {
+  std::lock_guard lk(s_->m);
+  s_->flow = std::move(wait_until_writable);
 }
 
 void Engine::stop() {

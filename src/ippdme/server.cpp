@@ -48,7 +48,6 @@ struct Server::Impl {
   std::ofstream log;
   std::mutex log_m;
   std::atomic<std::size_t> sessions{0};
-  std::thread::id io_thread;
 
   void write_log(const char* what, std::string_view line) {
     if (!log.is_open()) return;
@@ -59,18 +58,23 @@ struct Server::Impl {
   }
 
   // From the engine, on the io thread (acknowledgements) or the worker (data, completion).
+  // Never blocks: the engine may hold its lock here.
   void send(const std::string& l) {
     write_log("sent", l);
     std::unique_lock lk(m);
     std::shared_ptr<Conn> c = current;
     if (!c || c->closed) return;
-    // A slow reader holds the worker back (the io thread never waits: it must read).
-    if (std::this_thread::get_id() != io_thread)
-      cv.wait(lk, [&] { return c->closed || stopping || c->out_bytes < o.max_buffered; });
-    if (c->closed) return;
     c->out.push_back(l + "\r\n");
     c->out_bytes += l.size() + 2;
     if (!c->writing) asio::post(io, [this, c] { flush(c); });
+  }
+
+  // The engine's flow control: a slow reader holds the scan back (on the worker, no lock held).
+  void wait_writable() {
+    std::unique_lock lk(m);
+    std::shared_ptr<Conn> c = current;
+    if (!c) return;
+    cv.wait(lk, [&] { return c->closed || stopping || c->out_bytes < o.max_buffered; });
   }
 
   void flush(const std::shared_ptr<Conn>& c) {
@@ -165,6 +169,8 @@ struct Server::Impl {
         ++sessions;
         asio::error_code ignore;
         c->sock.set_option(tcp::no_delay(true), ignore);
+        if (o.socket_buffer > 0)
+          c->sock.set_option(asio::socket_base::send_buffer_size(o.socket_buffer), ignore);
         write_log("connected", c->sock.remote_endpoint(ignore).address().to_string());
         read(c);
       }
@@ -181,6 +187,7 @@ Server::Server(ServerOptions options) : p_(std::make_unique<Impl>()) {
   }
   p_->engine =
       std::make_unique<Engine>(p_->o.engine, [this](const std::string& l) { p_->send(l); });
+  p_->engine->set_flow_control([this] { p_->wait_writable(); });
   try {
     const tcp::endpoint ep(asio::ip::make_address(p_->o.host), p_->o.port);
     p_->acceptor.open(ep.protocol());
@@ -209,7 +216,6 @@ bool Server::session_active() const {
 }
 
 void Server::run() {
-  p_->io_thread = std::this_thread::get_id();
   p_->worker = std::thread([this] {
     while (!p_->stopping) p_->engine->execute_next(true);
   });

@@ -201,6 +201,7 @@ TEST(IppServer, AClientLostMidScanLeavesACleanServer) {
 TEST(IppServer, ASlowReaderLosesNoScanPoint) {
   ServerOptions so;
   so.max_buffered = 2048;  // a few lines: the scan must wait for the reader
+  so.socket_buffer = 4096;  // and the kernel may not hide the slowness
   Running r(so);
   Raw raw(r.server.port());
   raw.send("00001 StartSession()\r\n00002 Home()\r\n00003 OnScanReport(X(), Y())\r\n");
@@ -208,10 +209,14 @@ TEST(IppServer, ASlowReaderLosesNoScanPoint) {
   raw.send("00004 ScanOnCircle(0, 0, -50, 30, 0, -50, 0, 0, 1, 720, 0, 0.1)\r\n");
   std::vector<double> angle;
   std::string last;
+  bool status_seen = false;
   for (int i = 0; i < 100000; ++i) {
     const auto l = raw.lines(1);
     ASSERT_EQ(l.size(), 1u);
     last = l[0];
+    // The fast queue is served while the scan waits for this slow reader.
+    if (i == 50) raw.send("E0100 GetErrStatusE()\r\n");
+    if (last == "E0100 # ErrStatus(0)") status_seen = true;
     if (last == "00004 %") break;
     if (last.substr(0, 7) != "00004 #") continue;
     const auto p = parse_response(last);
@@ -221,6 +226,11 @@ TEST(IppServer, ASlowReaderLosesNoScanPoint) {
     if (i % 10 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(2));  // slow
   }
   EXPECT_EQ(last, "00004 %");
+  for (int i = 0; i < 10 && !status_seen; ++i) {
+    const auto l = raw.lines(1);
+    status_seen = !l.empty() && l[0] == "E0100 # ErrStatus(0)";
+  }
+  EXPECT_TRUE(status_seen) << "GetErrStatusE during the held-back scan";
   // Two turns every 0.1°: 7200 points, in order (the angle always advancing).
   EXPECT_GE(angle.size(), 7150u);
   EXPECT_LE(angle.size(), 7250u);

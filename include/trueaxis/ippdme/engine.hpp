@@ -94,6 +94,11 @@ class Engine {
   void disconnect();
   // Wakes a waiting execute_next() for good (server shutdown).
   void stop();
+  // Flow control for streamed scan data: called on the worker, with no lock held, before each
+  // data line of a running scan; it may block until the transport can take more (a slow
+  // reader then holds the scan back). `send` itself must never block: it is also called with
+  // the engine's state locked, and from receive().
+  void set_flow_control(std::function<void()> wait_until_writable);
 
   const SimulatedCmm& cmm() const;
   double machine_time() const;
