@@ -1,10 +1,12 @@
 // The I++ DME server over loopback TCP, against plain loopback TCP in the same run:
-// - scan points streamed: a ScanOnCircle of 7 200 points (X, Y, Z, IJK each) read by a client,
-//   against the same number of bytes sent through a plain loopback socket;
+// - scan points streamed: a ScanOnCircle at 100 mm/s, a point every 0.2° of a Ø100 mm circle
+//   (1 800 points of X, Y, Z, IJK), read by a client, against the same number of bytes sent
+//   through a plain loopback socket;
 // - a command's round trip (Get(X()) through the client library: & # %) against a TCP echo of
 //   one line.
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <asio.hpp>
 #include <memory>
 #include <string>
@@ -34,9 +36,10 @@ struct Served {
   }
 };
 
-// Reads lines from a socket until one equals `last`; returns the bytes read.
+// Reads lines from a socket until one equals `last`; returns the bytes read. Counts the
+// numbers on data lines.
 std::size_t read_until_line(tcp::socket& s, const std::string& last, std::string& buf,
-                            long* data_lines) {
+                            long* numbers) {
   std::size_t total = 0;
   char chunk[1 << 16];
   for (;;) {
@@ -44,7 +47,8 @@ std::size_t read_until_line(tcp::socket& s, const std::string& last, std::string
     if (nl != std::string::npos) {
       const std::string line = buf.substr(0, nl > 0 && buf[nl - 1] == '\r' ? nl - 1 : nl);
       buf.erase(0, nl + 1);
-      if (data_lines && line.size() > 6 && line[6] == '#') ++*data_lines;
+      if (numbers && line.size() > 6 && line[6] == '#')
+        *numbers += 1 + static_cast<long>(std::count(line.begin(), line.end(), ','));
       if (line == last) return total;
       continue;
     }
@@ -65,25 +69,25 @@ void BM_IppScanPointsOverLoopback(benchmark::State& st) {
                                           "00004 SetProp(Tool.ScanPar.Speed(100))\r\n")));
   read_until_line(s, "00004 %", buf, nullptr);
   std::size_t bytes = 0;
-  long lines = 0;
+  long numbers = 0;
   for (auto _ : st) {
     asio::write(s, asio::buffer(std::string(
-                       "00010 ScanOnCircle(0, 0, -50, 50, 0, -50, 0, 0, 1, 360, 0, 0.05)\r\n")));
-    bytes += read_until_line(s, "00010 %", buf, &lines);
+                       "00010 ScanOnCircle(0, 0, -50, 50, 0, -50, 0, 0, 1, 360, 0, 0.2)\r\n")));
+    bytes += read_until_line(s, "00010 %", buf, &numbers);
   }
-  st.counters["points/s"] =
-      benchmark::Counter(static_cast<double>(st.iterations()) * 7200, benchmark::Counter::kIsRate);
+  const double points = static_cast<double>(numbers) / 6;
+  st.counters["points/s"] = benchmark::Counter(points, benchmark::Counter::kIsRate);
+  st.counters["points"] = points / static_cast<double>(st.iterations());
   st.SetBytesProcessed(static_cast<std::int64_t>(bytes));
-  st.counters["lines"] = static_cast<double>(lines) / static_cast<double>(st.iterations());
 }
 BENCHMARK(BM_IppScanPointsOverLoopback)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// The baseline: the bytes of one such scan (7 200 points of six 5-decimal numbers, 16 points a
+// The baseline: the bytes of one such scan (1 800 points of six 5-decimal numbers, 16 points a
 // line) through a plain loopback socket.
 void BM_IppPlainLoopbackStream(benchmark::State& st) {
   asio::io_context io;
   tcp::acceptor acc(io, tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
-  const std::size_t size = 7200 * 6 * 11 + 450 * 8;
+  const std::size_t size = 1800 * 6 * 11 + 113 * 8;
   std::thread sender([&] {
     tcp::socket out(io);
     acc.accept(out);

@@ -21,11 +21,16 @@ struct Bad {
 
 // The parameters of a tool's GoToPar and PtMeasPar blocks (6.3.6, 6.3.7), and the values each
 // has: shared by the command and the response checks.
+// The parameter blocks of a tool (GoToPar, PtMeasPar, and ScanPar of section 6.3.15).
+bool is_block(const std::string& block) {
+  return block == "GoToPar" || block == "PtMeasPar" || block == "ScanPar";
+}
 bool is_parameter(const std::string& block, const std::string& name) {
   static const std::set<std::string, std::less<>> go = {"Speed", "Accel"},
                                                   pt = {"Speed", "Accel", "Approach", "Search",
-                                                        "Retract"};
-  return (block == "GoToPar" ? go : pt).count(name) > 0;
+                                                        "Retract"},
+                                                  scan = {"Speed", "Accel", "Retract"};
+  return (block == "GoToPar" ? go : block == "ScanPar" ? scan : pt).count(name) > 0;
 }
 bool is_parameter_value(const std::string& name) {
   return name == "Act" || name == "Def" || name == "Min" || name == "Max";
@@ -186,8 +191,9 @@ void property(const Value& m, const Value& a, bool set) {
     if (!a.args.empty()) bad(kValue, a, m.text + ": the property ends in ()");
     return;
   }
-  if (p[1] != "GoToPar" && p[1] != "PtMeasPar")
-    bad(kValue, a, fmt::format("{}: {} has no {} (GoToPar or PtMeasPar)", m.text, p[0], p[1]));
+  if (!is_block(p[1]))
+    bad(kValue, a,
+        fmt::format("{}: {} has no {} (GoToPar, PtMeasPar or ScanPar)", m.text, p[0], p[1]));
   if (p.size() == 2) {
     if (set) bad(kArguments, a, m.text + ": set one parameter, e.g. Tool.PtMeasPar.Speed(10)");
     if (!a.args.empty()) bad(kValue, a, m.text + ": the property ends in ()");
@@ -393,7 +399,7 @@ void property_item(const Value& a, bool set_event) {
     if (p[1] == "AvrRadius" && !numbers_only(a, 1)) rbad(a, "AvrRadius has one number");
     return;
   }
-  if (p[1] != "GoToPar" && p[1] != "PtMeasPar") rbad(a, a.text + " is not a property");
+  if (!is_block(p[1])) rbad(a, a.text + " is not a property");
   if (p.size() < 3 || !is_parameter(p[1], p[2]))
     rbad(a, fmt::format("{} has no such parameter", p[1]));
   if (p.size() > 4 ||

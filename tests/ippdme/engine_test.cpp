@@ -232,6 +232,10 @@ TEST(IppEngine, AnErrorStopsWorkUntilClearAllErrorsAndWarningsDoNot) {
   EXPECT_EQ(s("00010 GetProp(Tool.PtMeasPar.Speed(), Tool.PtMeasPar.Speed.Max())")[1],
             "00010 # Tool.PtMeasPar.Speed(50), Tool.PtMeasPar.Speed.Max(50)");
   EXPECT_EQ(s("E0011 GetErrStatusE()")[1], "E0011 # ErrStatus(0)");
+  // The ScanPar block (specification 6.3.15) is set like the others.
+  EXPECT_EQ(s("00013 SetProp(Tool.ScanPar.Speed(40))").size(), 2u);
+  EXPECT_EQ(s("00014 GetProp(Tool.ScanPar.Speed(), Tool.ScanPar.Retract.Def())")[1],
+            "00014 # Tool.ScanPar.Speed(40), Tool.ScanPar.Retract.Def(2)");
   // A line that does not parse gets the parser's error with its tag; one without a tag E0000.
   EXPECT_NE(s("00012 GoTo(X(1),)")[1].find("0502"), std::string::npos);
   EXPECT_EQ(s("garbage").size(), 1u);
