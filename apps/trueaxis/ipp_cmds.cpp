@@ -24,6 +24,12 @@
 namespace trueaxis::cli {
 namespace {
 
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error(path + ": cannot open the file");
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 struct IppCheckArgs {
   std::vector<std::string> files;
   bool quiet = false;
@@ -34,19 +40,11 @@ struct IppCheckArgs {
 int run_ipp_check(const IppCheckArgs& a) {
   long lines = 0, commands = 0, responses = 0, bad = 0;
   for (const auto& path : a.files) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path + ": cannot open the file");
-    const std::string all((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    long number = 0;
-    for (std::size_t at = 0; at < all.size();) {
-      // On the wire lines end in CR LF; in a file LF alone will do.
-      std::size_t end = all.find('\n', at);
-      if (end == std::string::npos) end = all.size();
-      std::string line = all.substr(at, end - at);
-      if (!line.empty() && line.back() == '\r') line.pop_back();
-      at = end + 1;
-      ++number;
-      if (line.empty() || line == "\\\\" || line[0] == ':') continue;
+    std::vector<long> numbers;
+    const auto file = ippdme::recorded_lines(slurp(path), &numbers);
+    for (std::size_t k = 0; k < file.size(); ++k) {
+      const std::string& line = file[k];
+      const long number = numbers[k];
       ++lines;
       std::optional<ippdme::SyntaxError> e;
       const bool response =
@@ -70,12 +68,6 @@ int run_ipp_check(const IppCheckArgs& a) {
     fmt::print("{} lines checked ({} commands, {} responses): {}\n", lines, commands, responses,
                bad ? fmt::format("{} with errors", bad) : std::string("all valid I++ DME"));
   return bad ? 1 : 0;
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(path + ": cannot open the file");
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 struct ServeArgs {
@@ -150,7 +142,8 @@ struct RunArgs {
 };
 
 int run_ipp_run(const RunArgs& a) {
-  const auto program = ippdme::recorded_lines(slurp(a.program));
+  std::vector<long> numbers;
+  const auto program = ippdme::recorded_lines(slurp(a.program), &numbers);
   std::vector<std::string> expected;
   if (!a.expect.empty()) expected = ippdme::recorded_lines(slurp(a.expect));
   ippdme::ClientOptions co;
@@ -159,21 +152,19 @@ int run_ipp_run(const RunArgs& a) {
   co.timeout = a.timeout;
   co.log = a.log;
   ippdme::Client client(co);
-  long number = 0;
   for (std::size_t i = 0; i < program.size(); ++i) {
     const std::string& line = program[i];
-    ++number;
+    // A bad line is sent as it is (the server's answer is part of the test), and named here.
     const auto parsed = ippdme::parse_command(line);
-    if (!parsed)
-      fmt::print(stderr, "{}: line {}: {} (sent as it is)\n", a.program, number,
-                 parsed.error.message());
+    const auto bad = parsed ? ippdme::check(*parsed.value) : std::optional(parsed.error);
+    if (bad)
+      fmt::print(stderr, "{}:{}:{}: error {:04d}: {} (sent as it is)\n", a.program, numbers[i],
+                 bad->column, bad->error, bad->what);
     client.send_line(line);
     // The next command goes when this one completed; an AbortE goes at once, while it runs.
     if (i + 1 < program.size() && program[i + 1].find("AbortE") != std::string::npos) continue;
-    if (line.size() < 5) continue;
-    const auto tag = ippdme::parse_command(line.substr(0, 5) + " X()");
-    if (!tag) continue;
-    client.wait(tag.value->tag);
+    if (const auto tag = ippdme::parse_tag(line); tag && !(tag->event && tag->number == 0))
+      client.wait(*tag);
   }
   // What came back, in order; then what differs from the recording.
   const auto got = client.received();

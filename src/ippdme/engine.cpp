@@ -207,12 +207,19 @@ struct Engine::State {
     r.items = items;
     send(format(r));
   }
-  void error(const Tag& t, int number, const std::string& method) {
+  // `cause` (the method, or what is wrong with a line) becomes the error's third field: a
+  // string, so its quotes become apostrophes and anything unprintable a '?'.
+  void error(const Tag& t, int number, std::string cause) {
     const auto info = error_info(number);
     const int severity = info ? info->severity : 3;
+    for (char& ch : cause)
+      if (ch == '"')
+        ch = '\'';
+      else if (ch < 32 || ch > 126)
+        ch = '?';
     line(t, '!',
          fmt::format("Error({}, {:04d}, \"{}\", \"{}\")", severity, number,
-                     method.empty() ? std::string("Server") : method,
+                     cause.empty() ? std::string("Server") : cause,
                      info ? std::string(info->text) : std::string("Error")));
     if (severity >= 2 && !latched) latched = number;
   }
@@ -1114,15 +1121,8 @@ double Engine::machine_time() const {
 void Engine::receive(std::string_view text) {
   State& s = *s_;
   std::unique_lock lk(s.m);
-  auto tag_of = [&]() -> Tag {
-    if (text.size() >= 5) {
-      if (auto p = parse_command(std::string(text.substr(0, 5)) + " X()")) return p.value->tag;
-    }
-    return Tag{true, 0};
-  };
   if (text.size() > kMaxLine) {
-    const Tag t = tag_of();
-    s.error(t, 8, "Server");
+    s.error(parse_tag(text).value_or(Tag{true, 0}), 8, "line longer than 65536 characters");
     return;
   }
   auto parsed = parse_command(text);
@@ -1132,10 +1132,11 @@ void Engine::receive(std::string_view text) {
   else
     bad = check(*parsed.value);
   if (bad) {
-    const Tag t = parsed ? parsed.value->tag : tag_of();
+    // The cause names the column and the reason, e.g. "column 18: GoTo: X is given twice".
+    const Tag t = parsed ? parsed.value->tag : parse_tag(text).value_or(Tag{true, 0});
     const bool tagged = !(t.event && t.number == 0);
     if (tagged) s.line(t, '&');
-    s.error(t, bad->error, parsed ? parsed.value->method.text : std::string("Server"));
+    s.error(t, bad->error, fmt::format("column {}: {}", bad->column, bad->what));
     if (tagged) s.line(t, '%');
     return;
   }
@@ -1199,10 +1200,7 @@ void Engine::receive(std::string_view text) {
 
 void Engine::refuse_overlong(std::string_view start) {
   std::lock_guard lk(s_->m);
-  Tag t{true, 0};
-  if (start.size() >= 5)
-    if (auto p = parse_command(std::string(start.substr(0, 5)) + " X()")) t = p.value->tag;
-  s_->error(t, 8, "line longer than 65536 characters");
+  s_->error(parse_tag(start).value_or(Tag{true, 0}), 8, "line longer than 65536 characters");
 }
 
 bool Engine::execute_next(bool wait) {
@@ -1242,21 +1240,17 @@ bool Engine::execute_next(bool wait) {
   s.line(c.tag, '%');
   s.running = false;
   finish_abort();
-  // Behind an error the pending transactions are aborted.
-  if (s.latched && s.latched != 6) {
-    for (const auto& q : s.queue) {
-      if (q.method.text == "ClearAllErrors" || q.method.text == "EndSession" ||
-          q.method.text == "GetXtdErrStatus")
-        break;
-      s.error(q.tag, 6, q.method.text);
-      s.line(q.tag, '%');
-    }
-    while (!s.queue.empty()) {
-      const auto& q = s.queue.front().method.text;
-      if (q == "ClearAllErrors" || q == "EndSession" || q == "GetXtdErrStatus") break;
-      s.queue.pop_front();
-    }
+  // Behind an error the pending transactions are aborted, up to one that may run in the error
+  // state.
+  while (s.latched && s.latched != 6 && !s.queue.empty()) {
+    const Command& q = s.queue.front();
+    const std::string& n = q.method.text;
+    if (n == "ClearAllErrors" || n == "EndSession" || n == "GetXtdErrStatus") break;
+    s.error(q.tag, 6, n);
+    s.line(q.tag, '%');
+    s.queue.pop_front();
   }
+  s.cv.notify_all();  // disconnect() waits for the command to end
   return true;
 }
 
@@ -1273,20 +1267,13 @@ void Engine::disconnect() {
     s.daemons.clear();
     if (s.running) s.abort = true;
   }
-  // Wait for a running command to stop (the worker clears `running`).
-  for (;;) {
-    {
-      std::lock_guard lk(s.m);
-      if (!s.running) {
-        s.abort = false;
-        s.abort_tag.reset();
-        s.session = false;
-        s.latched = 0;
-        return;
-      }
-    }
-    std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  }
+  // Wait for a running command to stop (the worker clears `running` and notifies).
+  std::unique_lock lk(s.m);
+  s.cv.wait(lk, [&] { return !s.running; });
+  s.abort = false;
+  s.abort_tag.reset();
+  s.session = false;
+  s.latched = 0;
 }
 
 void Engine::set_flow_control(std::function<void()> wait_until_writable) {

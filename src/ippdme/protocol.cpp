@@ -325,6 +325,17 @@ double Value::number() const {
   return std::strtod(text.c_str(), nullptr);
 }
 
+std::optional<Tag> parse_tag(std::string_view line) {
+  if (line.size() < 5) return std::nullopt;
+  Tag t;
+  t.event = line[0] == 'E';
+  for (std::size_t k = t.event ? 1 : 0; k < 5; ++k)
+    if (line[k] < '0' || line[k] > '9') return std::nullopt;
+  std::from_chars(line.data() + (t.event ? 1 : 0), line.data() + 5, t.number);
+  if (t.number == 0 && !t.event) return std::nullopt;
+  return t;
+}
+
 std::string SyntaxError::message() const {
   return fmt::format("column {}: {} (error {:04d})", column, what, error);
 }

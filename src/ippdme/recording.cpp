@@ -10,17 +10,20 @@
 
 namespace trueaxis::ippdme {
 
-std::vector<std::string> recorded_lines(std::string_view text) {
+std::vector<std::string> recorded_lines(std::string_view text, std::vector<long>* numbers) {
   std::vector<std::string> out;
   std::size_t a = 0;
+  long number = 0;
   while (a < text.size()) {
     std::size_t b = text.find('\n', a);
     if (b == std::string_view::npos) b = text.size();
     std::string_view l = text.substr(a, b - a);
     a = b + 1;
+    ++number;
     if (!l.empty() && l.back() == '\r') l.remove_suffix(1);
     if (l.empty() || l == "\\\\" || l.front() == ':') continue;
     out.emplace_back(l);
+    if (numbers) numbers->push_back(number);
   }
   return out;
 }
@@ -58,9 +61,9 @@ std::map<std::string, std::vector<std::string>> tokens(const std::vector<std::st
         break;
       case Response::Kind::Error: {
         const auto& e = r.items.at(0);
-        const std::string num =
-            e.args.size() > 1 && e.args[1].kind == Value::Kind::Number ? e.args[1].text : "?";
-        t.push_back(fmt::format("!{:04d}", num == "?" ? 0 : std::stoi(num)));
+        t.push_back(e.args.size() > 1 && e.args[1].kind == Value::Kind::Number
+                        ? fmt::format("!{:04.0f}", e.args[1].number())
+                        : std::string("!?"));
         break;
       }
       case Response::Kind::Data:

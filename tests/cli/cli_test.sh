@@ -422,7 +422,7 @@ expect_code 2 "$T" ipp check
 
 # The virtual CMM served over I++ DME: NIST's programs run through 'ipp run' and compared with
 # NIST's recordings; the server stops after the sessions asked for.
-"$T" serve --port 0 --time-scale 0 --sessions 2 >serve.txt 2>&1 &
+"$T" serve --port 0 --time-scale 0 --sessions 3 >serve.txt 2>&1 &
 SERVE=$!
 for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
 PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
@@ -432,7 +432,11 @@ grep -q "the structure matches" out.txt && grep -q "00210 # Y(0.77900)" out.txt 
 if "$T" ipp run "$NIST/Error.prg" --port "$PORT" --expect "$NIST/Error.res" -q >out.txt 2>err.txt; then bad "ipp run Error.prg should differ"; else
   grep -q "tag 00010: expected \[& !1008 %\], got \[& !2500 %\]" out.txt && grep -q "1 tag(s) differ" out.txt && ok || bad "ipp run Error: $(cat out.txt err.txt)"
 fi
-wait $SERVE && grep -q "stopped after 2 session(s)" serve.txt && ok || bad "serve --sessions 2: $(cat serve.txt)"
+# A bad program line is sent as it is (the server answers it) and named with file:line:column.
+printf '00001 StartSession()\r\n\\\\\r\n00002 GoTo(X(1), X(2))\r\n\\\\\r\n09999 EndSession()\r\n' > bad.prg
+expect_ok "$T" ipp run bad.prg --port "$PORT"
+grep -q "bad.prg:3:18: error 0502: GoTo: X is given twice (sent as it is)" err.txt && grep -q '00002 ! Error(3, 0502, "column 18: GoTo: X is given twice"' out.txt && ok || bad "ipp run bad line: $(cat err.txt out.txt)"
+wait $SERVE && grep -q "stopped after 3 session(s)" serve.txt && ok || bad "serve --sessions 3: $(cat serve.txt)"
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" ipp run "$NIST/PtMeas.prg" --port 1
 expect_code 2 "$T" serve --port 70000
 expect_ok "$T" serve --help

@@ -233,11 +233,17 @@ TEST(IppEngine, AnErrorStopsWorkUntilClearAllErrorsAndWarningsDoNot) {
             "00010 # Tool.PtMeasPar.Speed(50), Tool.PtMeasPar.Speed.Max(50)");
   EXPECT_EQ(s("E0011 GetErrStatusE()")[1], "E0011 # ErrStatus(0)");
   // The ScanPar block (specification 6.3.15) is set like the others.
-  EXPECT_EQ(s("00013 SetProp(Tool.ScanPar.Speed(40))").size(), 2u);
-  EXPECT_EQ(s("00014 GetProp(Tool.ScanPar.Speed(), Tool.ScanPar.Retract.Def())")[1],
-            "00014 # Tool.ScanPar.Speed(40), Tool.ScanPar.Retract.Def(2)");
+  EXPECT_EQ(s("00015 SetProp(Tool.ScanPar.Speed(40))").size(), 2u);
+  EXPECT_EQ(s("00016 GetProp(Tool.ScanPar.Speed(), Tool.ScanPar.Retract.Def())")[1],
+            "00016 # Tool.ScanPar.Speed(40), Tool.ScanPar.Retract.Def(2)");
   // A line that does not parse gets the parser's error with its tag; one without a tag E0000.
-  EXPECT_NE(s("00012 GoTo(X(1),)")[1].find("0502"), std::string::npos);
+  EXPECT_EQ(
+      s("00012 GoTo(X(1), X(2))")[1],
+      "00012 ! Error(3, 0502, \"column 18: GoTo: X is given twice\", \"Incorrect arguments\")");
+  // A cause quoting the line stays one valid response line.
+  const auto q = s("00013 SetProp(\"x\")");
+  ASSERT_EQ(q.size(), 3u);
+  EXPECT_TRUE(parse_response(q[1])) << q[1];
   EXPECT_EQ(s("garbage").size(), 1u);
   EXPECT_EQ(s("garbage")[0].substr(0, 8), "E0000 ! ");
 }
@@ -328,6 +334,7 @@ TEST(IppEngine, PartCoordinatesFollowTheSpecificationsEulerAngles) {
 }
 
 TEST(IppEngine, ScansFollowTheNominalSurfaceAndStreamThePointsInTheReportsFormat) {
+  constexpr double kRoundOff = 1e-5;  // the 5-decimal text of two coordinates (mm)
   Session s;
   s("00001 StartSession()");
   s("00002 Home()");
@@ -350,7 +357,7 @@ TEST(IppEngine, ScansFollowTheNominalSurfaceAndStreamThePointsInTheReportsFormat
   EXPECT_LE(n, 95u);
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3d p(all[6 * i], all[6 * i + 1], all[6 * i + 2]);
-    EXPECT_NEAR(std::hypot(p.x(), p.y()), 20, 2e-4) << i;  // on the cylinder to round-off
+    EXPECT_NEAR(std::hypot(p.x(), p.y()), 20, kRoundOff) << i;  // on the cylinder
     EXPECT_NEAR(p.z(), -50, 0.05) << i;
   }
   const Eigen::Vector3d last(all[6 * (n - 1)], all[6 * (n - 1) + 1], 0);

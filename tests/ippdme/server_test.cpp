@@ -25,14 +25,19 @@ using asio::ip::tcp;
 using test::kNist;
 using test::slurp;
 
-// A server on a free loopback port, running on its own thread.
+// Options for a test server: any free port, the machine as fast as it computes.
+ServerOptions quick() {
+  ServerOptions o;
+  o.port = 0;
+  o.engine.time_scale = 0;
+  return o;
+}
+
+// A server running on its own thread.
 struct Running {
   Server server;
   std::thread t;
-  explicit Running(ServerOptions o = {})
-      : server((o.port = 0,
-                o.engine.time_scale = o.engine.time_scale == 1 ? 0 : o.engine.time_scale, o)),
-        t([this] { server.run(); }) {}
+  explicit Running(const ServerOptions& o = quick()) : server(o), t([this] { server.run(); }) {}
   ~Running() {
     server.stop();
     t.join();
@@ -84,15 +89,14 @@ TEST(IppServer, EveryNistProgramOverTcpGivesTheSessionCoresAnswers) {
     const auto name = entry.path().stem().string();
     if (name == "parserCmdErrors" || name == "checkerCmdErrors") continue;
     const auto program = recorded_lines(slurp(entry.path()));
-    ServerOptions so;
+    ServerOptions so = quick();
     so.engine.time_scale = name == "AbortE_TestWhileMoving" ? 0.05 : 0;
     Running r(so);
     Client c(r.client());
     for (std::size_t i = 0; i < program.size(); ++i) {
       c.send_line(program[i]);
       if (i + 1 < program.size() && program[i + 1].find("AbortE") != std::string::npos) continue;
-      c.wait(Tag{program[i][0] == 'E',
-                 std::stoi(program[i].substr(program[i][0] == 'E', 5 - (program[i][0] == 'E')))});
+      c.wait(*parse_tag(program[i]));
     }
     // In process, the same program (the worker on its own thread, as the server runs it).
     std::vector<std::string> in_process;
@@ -180,7 +184,7 @@ TEST(IppServer, GarbageOverlongAndHalfLinesThenANewClientStartsAfresh) {
 }
 
 TEST(IppServer, AClientLostMidScanLeavesACleanServer) {
-  ServerOptions so;
+  ServerOptions so = quick();
   so.engine.time_scale = 0.02;
   Running r(so);
   {
@@ -199,8 +203,8 @@ TEST(IppServer, AClientLostMidScanLeavesACleanServer) {
 }
 
 TEST(IppServer, ASlowReaderLosesNoScanPoint) {
-  ServerOptions so;
-  so.max_buffered = 2048;  // a few lines: the scan must wait for the reader
+  ServerOptions so = quick();
+  so.max_buffered = 2048;   // a few lines: the scan must wait for the reader
   so.socket_buffer = 4096;  // and the kernel may not hide the slowness
   Running r(so);
   Raw raw(r.server.port());
@@ -245,7 +249,7 @@ TEST(IppServer, ASlowReaderLosesNoScanPoint) {
 }
 
 TEST(IppServer, AbortEOverTheWireStopsALongGoToAndTheFastQueueAnswersMeanwhile) {
-  ServerOptions so;
+  ServerOptions so = quick();
   so.engine.time_scale = 0.05;
   Running r(so);
   Client c(r.client());

@@ -94,6 +94,9 @@ struct Parsed {
   explicit operator bool() const { return value.has_value(); }
 };
 
+// The tag a line starts with (its first five characters), if they are one; E0000 included.
+std::optional<Tag> parse_tag(std::string_view line);
+
 // `line` without its CR LF (a trailing CR is an error: the framing belongs to the transport).
 Parsed<Command> parse_command(std::string_view line);
 Parsed<Response> parse_response(std::string_view line);

@@ -17,8 +17,10 @@
 namespace trueaxis::ippdme {
 
 // The protocol lines of a file in NIST's form (or of a plain file: one line per line), without
-// the "\\" and ":" lines, CR LF or LF.
-std::vector<std::string> recorded_lines(std::string_view text);
+// the "\\" and ":" lines, CR LF or LF. `numbers` (if given) receives each one's line number in
+// the file (1-based), for messages.
+std::vector<std::string> recorded_lines(std::string_view text,
+                                        std::vector<long>* numbers = nullptr);
 
 struct StructureDifference {
   std::string tag;       // e.g. "00010"

@@ -26,7 +26,7 @@ struct ServerOptions {
   EngineOptions engine;
   std::string log;  // a session log: every line received and sent, with the time (empty: none)
   std::size_t max_buffered = 4 << 20;  // bytes of responses waiting for a slow client
-  int socket_buffer = 0;  // the sockets' kernel send buffer (bytes; 0: the system's)
+  int socket_buffer = 0;               // the sockets' kernel send buffer (bytes; 0: the system's)
 };
 
 class Server {
