@@ -2,15 +2,22 @@
 # Builds the libFuzzer targets with clang (AddressSanitizer + UBSan) and runs each for a bounded
 # time, seeded from the repository's data. Exits non-zero on any finding (crash, sanitizer
 # report, uncaught exception, leak, time-out or memory blow-up of one input).
-#   bash tests/fuzz/run.sh [SECONDS_PER_TARGET]   (default 30)
+#   bash tests/fuzz/run.sh [SECONDS_PER_TARGET]   (default 30; 0: build only)
+# The build (build-san) also holds the test suite under the same sanitizers: CI builds the
+# targets named in TRUEAXIS_SAN_TARGETS with it (e.g. "trueaxis_tests trueaxis") and runs ctest
+# there, so that the library is compiled once for both.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 seconds=${1:-30}
-build=build-fuzz
+build=build-san
+# -g1: line tables for the sanitizers' stack traces, at a fraction of the compile time of -g.
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
-  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" \
-  -DTRUEAXIS_FUZZ=ON -DTRUEAXIS_PYTHON=OFF -DTRUEAXIS_TESTS=OFF -DTRUEAXIS_BENCHMARKS=OFF >/dev/null
-cmake --build "$build" --target fuzz_csv fuzz_json fuzz_ds fuzz_moody fuzz_ippdme
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -g1 -DNDEBUG" -DTRUEAXIS_WERROR=ON \
+  -DTRUEAXIS_FUZZ=ON -DTRUEAXIS_PYTHON=OFF -DTRUEAXIS_TESTS=ON -DTRUEAXIS_BENCHMARKS=OFF >/dev/null
+# shellcheck disable=SC2086
+cmake --build "$build" --target fuzz_csv fuzz_json fuzz_ds fuzz_moody fuzz_ippdme \
+  ${TRUEAXIS_SAN_TARGETS:-}
+[ "$seconds" = 0 ] && exit 0
 corpus=$build/corpus
 rm -rf "$corpus"; mkdir -p "$corpus"/{csv,json,ds,moody,ippdme}
 cp examples/*.csv "$corpus/csv/"

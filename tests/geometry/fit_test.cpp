@@ -427,10 +427,16 @@ TEST(Fit, ConesAndCylindersMeetAnExtendedPrecisionReference) {
     const double scale = std::max(1.0, p.cwiseAbs().maxCoeff());
     const Eigen::Vector3d ra = ref.a.normalized().cast<double>();
     const Eigen::Vector3d v = f.point - ref.x0.cast<double>();
-    EXPECT_LT((v - ra * ra.dot(v)).norm(), kAgree * scale) << "case " << c;
-    EXPECT_LT((f.direction - ra).norm(), kAgree) << "case " << c;
+    // With residuals, the round-off of a least-squares solution grows with the square of the
+    // Jacobian's condition number (Golub & Van Loan, Matrix Computations: the sensitivity of
+    // the least-squares problem):
+    // the tolerance widens beyond a condition number of 1000 (noisy 20° sectors, where gcc and
+    // clang builds differ by 1.5e-10), still far below the 1e-8 of stopping short.
+    const double agree = kAgree * std::max(1.0, std::pow(f.condition_number / 1000, 2));
+    EXPECT_LT((v - ra * ra.dot(v)).norm(), agree * scale) << "case " << c;
+    EXPECT_LT((f.direction - ra).norm(), agree) << "case " << c;
     if (cone) {
-      EXPECT_LT(std::abs(psi_fit - static_cast<double>(ref.psi)), kAgree) << "case " << c;
+      EXPECT_LT(std::abs(psi_fit - static_cast<double>(ref.psi)), agree) << "case " << c;
     }
   }
   EXPECT_GE(fitted, 40);  // refusals are for 20° sectors of wide cones only
