@@ -264,6 +264,14 @@ const std::map<std::string, Check, std::less<>>& table() {
       if (m.args.empty()) bad(kArguments, m, "ScanUnknownDensity needs Dis(...) and/or Angle(...)");
       axes(m, {}, true, {"Dis", "Angle", "AtNominals", "Hull"});
     };
+    c["ScanOnCurveHint"] = [](const Value& m) {
+      numbers(m, {2});
+      positive(m, 1, "radius");
+    };
+    c["ScanOnCurveDensity"] = [](const Value& m) {
+      if (m.args.empty()) bad(kArguments, m, "ScanOnCurveDensity needs Dis(...) and/or Angle(...)");
+      axes(m, {}, true, {"Dis", "Angle", "AtNominals"});
+    };
     // Later versions' scan along a given curve: Closed(0|1), Format(...), Data(...).
     c["ScanOnCurve"] = [](const Value& m) {
       if (m.args.size() < 3) bad(kArguments, m, "ScanOnCurve takes Closed(), Format() and Data()");

@@ -155,6 +155,10 @@ struct Engine::State {
   double table = 0, head_a = 0, head_b = 0, head_c = 0;  // degrees
   std::set<std::string> locked;
   double unknown_density = 0.5;  // ScanUnknownDensity(Dis()) (mm)
+  double curve_density = 0.5;    // ScanOnCurveDensity(Dis()) (mm)
+  // ScanOnCurveHint's deviation: how far ScanOnCurve may follow the surface off the nominal
+  // curve before it gives up (mm).
+  double curve_deviation = 3;
   // Pacing: machine time against the wall clock.
   std::chrono::steady_clock::time_point wall0;
   double machine0 = 0;
@@ -744,6 +748,7 @@ void Executor::scan_on_curve() {
   const double r = s_.cmm.tip_radius(), push = 0.2;
   std::vector<Eigen::Vector3d> path;
   for (std::size_t i = 0; i < pts.size(); ++i) path.push_back(pts[i] + (r - push) * nrm[i]);
+  if (!(s_.curve_deviation > 0)) throw Fail{509};
   Surface surface = s_.world();
   if (!surface) {
     Eigen::Matrix3Xd P(3, pts.size()), N(3, pts.size());
@@ -763,7 +768,7 @@ void Executor::scan_on_curve() {
     Unlocked u(lk_);
     s_.go(path.front() + (s_.par("PtMeasPar", "Approach") + push) * nrm.front(), go_speed,
           go_accel);
-    end = s_.cmm.along(path, surface, speed, s_.unknown_density, emit);
+    end = s_.cmm.along(path, nrm, surface, speed, push, s_.curve_deviation, s_.curve_density, emit);
     retract_from(nrm.back(), retract);
   });
   ended(end);
@@ -1094,6 +1099,15 @@ void Executor::run() {
   if (n == "ScanUnknownDensity") {
     for (const auto& a : m_.args)
       if (a.is_call("Dis")) s_.unknown_density = a.args.at(0).number();
+    return;
+  }
+  if (n == "ScanOnCurveDensity") {
+    for (const auto& a : m_.args)
+      if (a.is_call("Dis")) s_.curve_density = a.args.at(0).number();
+    return;
+  }
+  if (n == "ScanOnCurveHint") {
+    s_.curve_deviation = m_.args.at(0).number();
     return;
   }
   if (n == "ScanOnLineHint" || n == "ScanOnCircleHint" || n == "ScanUnknownHint") return;

@@ -24,6 +24,10 @@ void SimulatedCmmOptions::validate() const {
   if (!(trigger > 0 && trigger < probe.range))
     throw Error(fmt::format("virtual CMM: trigger deflection {:g} mm must be in (0, {:g})", trigger,
                             probe.range));
+  if (!(point_deflection >= trigger && point_deflection < max_deflection))
+    throw Error(fmt::format(
+        "virtual CMM: the point deflection {:g} mm must lie between trigger and over-push",
+        point_deflection));
   if (!(max_deflection > trigger && max_deflection <= probe.range))
     throw Error("virtual CMM: the over-push deflection must lie between trigger and range");
   if (!(correction_gain > 0 && correction_gain < 0.5 * servo.rate_hz))
@@ -130,7 +134,7 @@ std::optional<SimulatedCmm::Contact> SimulatedCmm::touch(const Eigen::Vector3d& 
     tick(start + d * s, d * speed);
     s += speed * dt;
     const auto r = read(surface);
-    if (r.contact && (r.overtravel || r.deflection.norm() >= o_.trigger)) {
+    if (r.contact && (r.overtravel || r.deflection.norm() >= o_.point_deflection)) {
       const double m = r.deflection.norm();
       const Eigen::Vector3d n = m > 0 ? Eigen::Vector3d(r.deflection / m) : Eigen::Vector3d(-d);
       out = Contact{servo_.position() + r.deflection, n};
@@ -213,33 +217,85 @@ SimulatedCmm::ScanEnd SimulatedCmm::follow(const Surface& surface, const Constra
 }
 
 SimulatedCmm::ScanEnd SimulatedCmm::along(const std::vector<Eigen::Vector3d>& path,
-                                          const Surface& surface, double speed, double step,
+                                          const std::vector<Eigen::Vector3d>& normals,
+                                          const Surface& surface, double speed, double pushing,
+                                          double deviation, double step,
                                           const std::function<void(const Point&)>& emit) {
   const double dt = o_.servo.dt(), a = std::min(2000.0, o_.servo.max_acceleration);
   std::vector<double> begin(path.size(), 0.0);
   for (std::size_t i = 1; i < path.size(); ++i)
     begin[i] = begin[i - 1] + (path[i] - path[i - 1]).norm();
   const double L = begin.back();
-  auto at = [&](double s, Eigen::Vector3d* tangent) {
+  // The path point at arc s, its tangent and the nominal normal there.
+  auto at = [&](double s, Eigen::Vector3d* tangent, Eigen::Vector3d* normal) {
     const auto it = std::upper_bound(begin.begin(), begin.end(), s);
     std::size_t i =
         std::min<std::size_t>(std::max<std::ptrdiff_t>(it - begin.begin(), 1), path.size() - 1);
     const double len = begin[i] - begin[i - 1];
     const double u = len > 0 ? std::clamp((s - begin[i - 1]) / len, 0.0, 1.0) : 0.0;
     *tangent = len > 0 ? Eigen::Vector3d((path[i] - path[i - 1]) / len) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d n = (1 - u) * normals[i - 1] + u * normals[i];
+    *normal = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : normals[i];
     return Eigen::Vector3d(path[i - 1] + u * (path[i] - path[i - 1]));
   };
+  // The speed allowed at each vertex: v²/R within kNormalAcceleration on the polyline's turns
+  // (R from the turning angle over the adjacent segments), then lowered so that the carriage
+  // can brake in time for the slower vertices ahead and stop at the end.
+  constexpr double kNormalAcceleration = 2000, kMinSpeed = 1;  // mm/s², mm/s
+  std::vector<double> limit(path.size(), speed);
+  limit.back() = 0;
+  for (std::size_t i = 1; i + 1 < path.size(); ++i) {
+    const Eigen::Vector3d u = path[i] - path[i - 1], w = path[i + 1] - path[i];
+    const double lu = u.norm(), lw = w.norm();
+    if (!(lu > 0 && lw > 0)) continue;
+    const double turn = std::acos(std::clamp(u.dot(w) / (lu * lw), -1.0, 1.0));
+    if (turn > 1e-9)
+      limit[i] =
+          std::clamp(std::sqrt(kNormalAcceleration * 0.5 * (lu + lw) / turn), kMinSpeed, speed);
+  }
+  for (std::size_t i = path.size() - 1; i-- > 0;)
+    limit[i] = std::min(limit[i],
+                        std::sqrt(limit[i + 1] * limit[i + 1] + 2 * a * (begin[i + 1] - begin[i])));
+  auto allowed = [&](double s) {
+    const auto it = std::upper_bound(begin.begin(), begin.end(), s);
+    const std::size_t j = std::min<std::size_t>(it - begin.begin(), path.size() - 1);
+    return std::sqrt(limit[j] * limit[j] + 2 * a * std::max(0.0, begin[j] - s));
+  };
   double s = 0, v = 0, next = 0;
-  Eigen::Vector3d t;
+  Eigen::Vector3d t, n;
+  // The approach: from where the tip is, along the first normal until pushed by `pushing`.
+  const Eigen::Vector3d p0 = at(0, &t, &n);
+  double c = (servo_.position() - p0).dot(n);  // the normal correction (mm)
+  const double approach_speed = std::min(speed, 10.0);
+  for (long k = 0;; ++k) {
+    c -= approach_speed * dt;
+    tick(p0 + c * n, -approach_speed * n);
+    const auto r = read(surface);
+    if (r.overtravel || r.deflection.norm() > o_.max_deflection) {
+      settle();
+      return ScanEnd::OverPushed;
+    }
+    if (r.contact && r.deflection.dot(n) >= pushing) break;
+    if (c < -deviation || k >= kMaxTicks) {
+      settle();
+      return ScanEnd::Lost;
+    }
+  }
   for (long k = 0; k < kMaxTicks; ++k) {
-    v = std::min({speed, v + a * dt, std::sqrt(2 * a * std::max(0.0, L - s))});
-    const Eigen::Vector3d target = at(s, &t);
+    v = std::min({speed, v + a * dt, allowed(s)});
+    const Eigen::Vector3d target = at(s, &t, &n) + c * n;
     tick(target, t * v);
     s = std::min(L, s + v * dt);
     const auto r = read(surface);
     if (r.overtravel || r.deflection.norm() > o_.max_deflection) {
       settle();
       return ScanEnd::OverPushed;
+    }
+    // Hold the deflection at `pushing` along the nominal normal (none: move in to find it).
+    c += o_.correction_gain * (r.contact ? r.deflection.dot(n) - pushing : -pushing) * dt;
+    if (std::abs(c) > deviation) {
+      settle();
+      return ScanEnd::Lost;
     }
     if (r.contact && s >= next) {
       emit(Point{servo_.position() + r.deflection, r.deflection.normalized(), 0});

@@ -45,7 +45,11 @@ struct SimulatedCmmOptions {
   // Travel of the tip centre without geometric errors (mm, machine coordinates).
   std::array<std::array<double, 2>, 3> travel{{{-500, 500}, {-400, 400}, {-300, 300}}};
   Eigen::Vector3d home = Eigen::Vector3d::Zero();  // where Home() goes (mm)
-  double trigger = 0.005;                          // a touch latches at this deflection (mm)
+  double trigger = 0.005;                          // contact: a move stops at this deflection (mm)
+  // A single point (PtMeas) is read once the deflection reaches this, as a scanning probe
+  // measures points: the deflection's direction, the measured normal, is then well above the
+  // probe's noise (mm).
+  double point_deflection = 0.2;
   double correction_gain = 60;  // scanning: how fast the deflection is held (1/s)
   double max_deflection = 0.8;  // beyond this the probe is over-pushed (error 2001)
   // Throws Error naming the option (the home outside the travel, a trigger outside (0, range)).
@@ -101,10 +105,16 @@ class SimulatedCmm {
                  const std::function<bool(const Point&, double)>& stop,
                  const std::function<void(const Point&)>& emit);
 
-  // Design-value scanning: the tip centre follows the polyline `path` (mm) at `speed`; the
-  // probe reads the surface; a point every `step` mm. Ends early if the probe is over-pushed.
-  ScanEnd along(const std::vector<Eigen::Vector3d>& path, const Surface& surface, double speed,
-                double step, const std::function<void(const Point&)>& emit);
+  // Design-value scanning with active following: the tip centre runs along the polyline
+  // `path` (mm) at `speed`, moved along the nominal surface normals `normals` (one per path
+  // point) as far as it takes to hold `pushing` mm of deflection, as a scanning CMM's normal
+  // correction does, slower on the polyline's turns (v²/R ≤ 2000 mm/s²); a point every `step`
+  // mm. Ends early (Lost) once the correction exceeds
+  // `deviation` mm, or (OverPushed) when the probe is pushed beyond its range.
+  ScanEnd along(const std::vector<Eigen::Vector3d>& path,
+                const std::vector<Eigen::Vector3d>& normals, const Surface& surface, double speed,
+                double pushing, double deviation, double step,
+                const std::function<void(const Point&)>& emit);
 
   // Brings the carriage to rest where it is.
   void settle();
