@@ -56,6 +56,10 @@ std::vector<std::pair<std::string, std::string>> report_meta();
 void refuse_outside(const map::ErrorMap& map, const Eigen::Matrix3Xd& points,
                     const std::string& input, double tolerance = 1e-9);
 
+// "ipp://HOST:PORT" (an I++ DME server) as host and port; throws CLI::ValidationError (exit 2)
+// naming the expected form.
+std::pair<std::string, unsigned short> parse_ipp_address(const std::string& address);
+
 // The default truth file of a simulation: the output's name with "-truth.csv" (probes.csv ->
 // probes-truth.csv), so that simulations never overwrite each other's truth.
 std::string truth_beside(const std::string& output);

@@ -70,6 +70,29 @@ int run_ipp_check(const IppCheckArgs& a) {
   return bad ? 1 : 0;
 }
 
+}  // namespace
+
+std::pair<std::string, unsigned short> parse_ipp_address(const std::string& address) {
+  const std::string scheme = "ipp://";
+  const auto bad = [&] {
+    return CLI::ValidationError(
+        fmt::format("'{}' is not an I++ DME server address: expected ipp://HOST:PORT, e.g. "
+                    "ipp://127.0.0.1:1294",
+                    address));
+  };
+  if (address.rfind(scheme, 0) != 0) throw bad();
+  const std::string rest = address.substr(scheme.size());
+  const auto colon = rest.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == rest.size()) throw bad();
+  const std::string port = rest.substr(colon + 1);
+  if (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos) throw bad();
+  const long p = std::stol(port);
+  if (p < 1 || p > 65535) throw bad();
+  return {rest.substr(0, colon), static_cast<unsigned short>(p)};
+}
+
+namespace {
+
 struct ServeArgs {
   std::string host = "127.0.0.1", machine, part, log;
   int port = 1294;
@@ -100,6 +123,8 @@ int run_serve(const ServeArgs& a) {
   }
   if (!a.part.empty()) {
     e.part = io::read_part(a.part);
+    // Home above the part: the top of the travel.
+    if (!e.cmm.geometry) e.cmm.home = Eigen::Vector3d(0, 0, e.cmm.travel[2][1]);
     if (!a.part_origin.empty()) {
       e.part_origin = Eigen::Vector3d(a.part_origin[0], a.part_origin[1], a.part_origin[2]);
     } else if (e.cmm.geometry) {
@@ -113,6 +138,12 @@ int run_serve(const ServeArgs& a) {
   fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}; Ctrl-C stops\n", a.host, server.port(),
              e.part ? fmt::format("the part of {}", a.part) : std::string("the nominal world"),
              e.cmm.geometry ? fmt::format(" on the machine of {}", a.machine) : std::string());
+  if (e.part)
+    fmt::print(
+        "the part's design origin is at ({:.3f}, {:.3f}, {:.3f}) mm in machine "
+        "coordinates (trueaxis scan --cmm ... --part-origin {:.3f},{:.3f},{:.3f})\n",
+        e.part_origin.x(), e.part_origin.y(), e.part_origin.z(), e.part_origin.x(),
+        e.part_origin.y(), e.part_origin.z());
   std::fflush(stdout);
   std::signal(SIGINT, [](int) { g_interrupted = true; });
   std::signal(SIGTERM, [](int) { g_interrupted = true; });

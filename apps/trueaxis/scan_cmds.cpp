@@ -4,6 +4,8 @@
 #include <CLI/CLI.hpp>
 #include <cmath>
 #include <memory>
+#include <optional>
+#include <tuple>
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
@@ -11,6 +13,7 @@
 #include "trueaxis/io/files.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/scan.hpp"
+#include "trueaxis/ippdme/remote_cmm.hpp"
 #include "trueaxis/report/scan.hpp"
 #include "trueaxis/scan/controller.hpp"
 
@@ -18,7 +21,7 @@ namespace trueaxis::cli {
 namespace {
 
 struct ScanArgs {
-  std::string design, part, machine, output, points, log, corrected, truth, report,
+  std::string design, part, machine, cmm, output, points, log, corrected, truth, report,
       strategy = "error-tolerant";
   scan::ControllerOptions o;
   std::vector<double> part_origin;
@@ -32,27 +35,50 @@ int run_scan(ScanArgs& a) {
   a.o.active = !a.passive;
   a.o.validate();
   const design::Design d = io::read_design(a.design);
-  const sim::Part part = io::read_part(a.part);
+  std::optional<sim::Part> part;
+  if (!a.part.empty()) part = io::read_part(a.part);
   scan::VirtualCmmOptions vo;
   vo.probe.tip_radius = a.o.path.tip_radius;
   vo.probe.noise = a.probe_noise_um * 1e-3;
   vo.probe.seed = a.seed;
   vo.probe.range = std::max(1.0, 3 * a.o.path.pushing);
   if (!a.machine.empty()) vo.geometry = io::read_machine(a.machine);
+  std::optional<Eigen::Vector3d> origin;
   if (!a.part_origin.empty())
-    vo.part_origin = Eigen::Vector3d(a.part_origin[0], a.part_origin[1], a.part_origin[2]);
+    origin = Eigen::Vector3d(a.part_origin[0], a.part_origin[1], a.part_origin[2]);
+  vo.part_origin = origin;
   // Start above the part's first section, clear of it.
   const auto smp = design::sample(d.sections.front(), 1.0);
   const Eigen::Vector3d home = smp.points.col(0) + (a.o.path.tip_radius + 20) * smp.normals.col(0);
-  scan::VirtualCmm cmm(part, vo, home);
+  // The simulated part in process: the CMM itself, or (with --cmm) the truth to compare with.
+  std::optional<scan::VirtualCmm> virt;
+  if (part) virt.emplace(*part, vo, home);
+  std::unique_ptr<ippdme::RemoteCmm> remote;
+  if (!a.cmm.empty()) {
+    ippdme::RemoteCmmOptions ro;
+    std::tie(ro.client.host, ro.client.port) = parse_ipp_address(a.cmm);
+    ro.part_origin = origin;
+    ro.tip_radius = a.o.path.tip_radius;
+    remote = std::make_unique<ippdme::RemoteCmm>(ro);
+    // From wherever the CMM is, up (part +z) to the start's height or above, across, and down.
+    const Eigen::Vector3d at = remote->position();
+    const double z = std::max(at.z(), home.z());
+    remote->move(Eigen::Vector3d(at.x(), at.y(), z), a.o.move_speed);
+    remote->move(Eigen::Vector3d(home.x(), home.y(), z), a.o.move_speed);
+    remote->move(home, a.o.move_speed);
+  }
+  scan::Machine& cmm = remote ? static_cast<scan::Machine&>(*remote) : *virt;
   const auto r = scan::scan(cmm, d, a.o, [&](std::size_t i, std::size_t n) {
     if (!a.quiet)
       fmt::print(stderr, "scanning section {}/{} '{}' ...\n", i + 1, n, d.sections[i].name);
   });
   io::ScanCmm rec{a.o.path.tip_radius, a.probe_noise_um, {}, {}};
-  if (vo.geometry) {
+  if (remote) {
+    rec.machine = a.cmm;
+    rec.part_origin = origin;
+  } else if (vo.geometry) {
     rec.machine = vo.geometry->name.empty() ? a.machine : vo.geometry->name;
-    rec.part_origin = cmm.part_origin();
+    rec.part_origin = virt->part_origin();
   }
   io::write_scan(a.output, r, a.o, rec);
   if (!a.points.empty()) io::write_scan_points(a.points, r);
@@ -67,7 +93,8 @@ int run_scan(ScanArgs& a) {
     Eigen::VectorXd t(static_cast<Eigen::Index>(pts.size()));
     for (std::size_t k = 0; k < pts.size(); ++k) {
       const auto& p = pts[k];
-      const double dist = cmm.distance(d.sections[i], p.surface);
+      if (!virt) break;
+      const double dist = virt->distance(d.sections[i], p.surface);
       t[static_cast<Eigen::Index>(k)] = dist * 1e3;
       worst = std::max(worst, std::abs(dist));
       if (!a.truth.empty())
@@ -76,16 +103,20 @@ int run_scan(ScanArgs& a) {
     }
     truth_um.push_back(std::move(t));
   }
-  if (!a.truth.empty()) io::write_text(a.truth, out);
+  if (!a.truth.empty()) {
+    if (!virt) throw Error("--truth needs --part: the simulated part the points are compared with");
+    io::write_text(a.truth, out);
+  }
   if (!a.report.empty()) {
     // The simulated part's contour of each scanned section (matched by name).
     std::vector<Eigen::Matrix3Xd> true_part;
     for (const auto& ds : d.sections) {
       true_part.emplace_back(3, 0);
-      for (const auto& ps : part.design.sections)
+      if (!part) continue;
+      for (const auto& ps : part->design.sections)
         if (ps.name == ds.name)
-          true_part.back() = ps.space_curve() ? sim::true_space_curve(part, ps).points()
-                                              : sim::true_contour(part, ps).points();
+          true_part.back() = ps.space_curve() ? sim::true_space_curve(*part, ps).points()
+                                              : sim::true_contour(*part, ps).points();
     }
     report::write(
         a.report,
@@ -94,7 +125,16 @@ int run_scan(ScanArgs& a) {
                        4000, report_meta()));
   }
   if (!a.quiet) {
-    if (vo.geometry)
+    if (remote)
+      fmt::print(
+          "scanned through the I++ DME server at {} ({} commands; times below are the "
+          "wall-clock times this client saw, machine time only if the CMM runs in real "
+          "time){}\n",
+          a.cmm, remote->commands(),
+          origin ? fmt::format("; part origin at ({:.1f}, {:.1f}, {:.1f}) mm", origin->x(),
+                               origin->y(), origin->z())
+                 : std::string());
+    else if (vo.geometry)
       fmt::print(
           "CMM with the geometric errors of '{}'; part origin at ({:.1f}, {:.1f}, {:.1f}) mm in "
           "machine coordinates\n",
@@ -133,8 +173,9 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
   c->add_option("--design", a->design, "design.json of the part")
       ->required()
       ->check(CLI::ExistingFile);
-  c->add_option("--part", a->part, "part.json: the simulated real part (trueaxis simulate part)")
-      ->required()
+  c->add_option("--part", a->part,
+                "part.json: the simulated real part (trueaxis simulate part); with --cmm only "
+                "the truth that --truth and the report compare with")
       ->check(CLI::ExistingFile);
   c->add_option("--machine", a->machine,
                 "machine.json: the CMM's 21 geometric errors (trueaxis simulate machine); the "
@@ -142,10 +183,10 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
       ->check(CLI::ExistingFile);
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: where the part's design origin sits in machine coordinates (mm; with "
-                "--machine; default: the part centred in the travel)")
+                "--machine, default: the part centred in the travel; with --cmm, set as the "
+                "server's part coordinate system, default: its current one)")
       ->delimiter(',')
-      ->expected(3)
-      ->needs("--machine");
+      ->expected(3);
   c->add_option("--strategy", a->strategy,
                 "error-tolerant (default), design (stop at a trajectory error) or autonomous "
                 "(slow surface following only)")
@@ -161,6 +202,11 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
   c->add_option("--pushing", a->o.path.pushing, "pushing amount held while scanning (mm)")
       ->capture_default_str();
   c->add_flag("--passive", a->passive, "passive design-value scanning (no pushing correction)");
+  c->add_option("--cmm", a->cmm,
+                "ipp://HOST:PORT: scan with the CMM behind this I++ DME server (e.g. trueaxis "
+                "serve --part part.json) instead of the virtual CMM in process")
+      ->excludes("--machine")
+      ->excludes("--passive");
   c->add_option("--probe-noise", a->probe_noise_um, "probe noise, standard deviation (µm)")
       ->capture_default_str();
   c->add_option("--seed", a->seed, "random seed of the probe noise")->capture_default_str();
@@ -182,6 +228,14 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
              } catch (const Error& e) {
                throw CLI::ValidationError(e.what());
              }
+             if (a->part.empty() && a->cmm.empty())
+               throw CLI::ValidationError(
+                   "--part is needed (the simulated part), unless --cmm names a CMM to scan with");
+             if (!a->part_origin.empty() && a->machine.empty() && a->cmm.empty())
+               throw CLI::ValidationError("--part-origin needs --machine or --cmm");
+             if (!a->cmm.empty() && a->probe_noise_um != 0)
+               throw CLI::ValidationError(
+                   "--probe-noise is the server's with --cmm (trueaxis serve --probe-noise)");
              return run_scan(*a);
            }}};
 }

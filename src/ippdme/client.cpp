@@ -38,7 +38,7 @@ struct Client::Impl {
   std::thread reader;
   mutable std::mutex m;
   std::condition_variable cv;
-  std::map<std::string, std::vector<std::string>> by_tag;  // lines not yet collected
+  std::map<std::string, std::deque<std::string>> by_tag;  // lines not yet collected
   std::vector<std::string> all;
   std::set<std::string> complete_e;  // E tags whose transaction completed (later #: events)
   std::function<void(const std::string&)> event;
@@ -174,19 +174,26 @@ void Client::send_line(const std::string& line) {
   if (ec) throw Error(fmt::format("I++ DME: cannot send to the server: {}", ec.message()));
 }
 
-Transaction Client::wait(const Tag& tag) {
+Transaction Client::wait(const Tag& tag, const OnData& on_data) {
   const std::string t = tag.text();
   Transaction tr;
   tr.tag = tag;
   std::unique_lock lk(p_->m);
   for (;;) {
-    auto& v = p_->by_tag[t];
-    while (!v.empty()) {
-      const std::string l = std::move(v.front());
-      v.erase(v.begin());
+    auto& q = p_->by_tag[t];
+    while (!q.empty()) {
+      const std::string l = std::move(q.front());
+      q.pop_front();
       tr.lines.push_back(l);
       if (const auto r = parse_response(l)) {
-        if (r.value->kind == Response::Kind::Data) tr.data.push_back(*r.value);
+        if (r.value->kind == Response::Kind::Data) {
+          tr.data.push_back(*r.value);
+          if (on_data) {
+            lk.unlock();
+            on_data(*r.value);
+            lk.lock();
+          }
+        }
         if (r.value->kind == Response::Kind::Error) tr.errors.push_back(*r.value);
         if (r.value->kind == Response::Kind::Done) tr.complete = true;
       }
@@ -199,7 +206,7 @@ Transaction Client::wait(const Tag& tag) {
   }
 }
 
-Transaction Client::call(const std::string& command) {
+Tag Client::send(const std::string& command) {
   const auto open = command.find('(');
   const bool fast = is_event_command(command.substr(0, open));
   Tag tag;
@@ -208,7 +215,11 @@ Transaction Client::call(const std::string& command) {
     tag = fast ? Tag{true, 1 + (p_->next_e++ % 9999)} : Tag{false, 1 + (p_->next++ % 99999)};
   }
   send_line(tag.text() + " " + command);
-  return wait(tag);
+  return tag;
+}
+
+Transaction Client::call(const std::string& command, const OnData& on_data) {
+  return wait(send(command), on_data);
 }
 
 }  // namespace trueaxis::ippdme

@@ -438,6 +438,22 @@ expect_ok "$T" ipp run bad.prg --port "$PORT"
 grep -q "bad.prg:3:18: error 0502: GoTo: X is given twice (sent as it is)" err.txt && grep -q '00002 ! Error(3, 0502, "column 18: GoTo: X is given twice"' out.txt && ok || bad "ipp run bad line: $(cat err.txt out.txt)"
 wait $SERVE && grep -q "stopped after 3 session(s)" serve.txt && ok || bad "serve --sessions 3: $(cat serve.txt)"
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" ipp run "$NIST/PtMeas.prg" --port 1
+# The scanning controller over I++ DME: the part served, scanned through the protocol, makes the
+# same decisions as in process (the lines per section without their point counts and times).
+"$T" serve --part part.json --port 0 --time-scale 0 --sessions 1 >serve.txt 2>&1 &
+SERVE=$!
+for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
+PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+flow() { grep -E "^mid\.[0-9]+: " "$1" | sed -E 's/ — [0-9]+ points,/ —/; s/, [0-9.]+ s$//'; }
+"$T" scan --design design.json --part part.json -o scan-here.json >here.txt 2>&1
+expect_ok "$T" scan --design design.json --cmm "ipp://127.0.0.1:$PORT" --part part.json -o scan-ipp.json --truth truth-ipp.csv
+cp out.txt there.txt
+[ -n "$(flow here.txt)" ] && [ "$(flow here.txt)" = "$(flow there.txt)" ] && grep -q "scanned through the I++ DME server at ipp://127.0.0.1:$PORT" there.txt && ok || bad "scan --cmm differs from in process: $(cat here.txt there.txt)"
+wait $SERVE
+expect_code 2 "$T" scan --design design.json --cmm "127.0.0.1:$PORT" -o s.json
+grep -q "expected ipp://HOST:PORT" err.txt && ok || bad "scan --cmm bad address: $(cat err.txt)"
+expect_code 2 "$T" scan --design design.json -o s.json
+expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" scan --design design.json --cmm ipp://127.0.0.1:1 -o s.json
 expect_code 2 "$T" serve --port 70000
 expect_ok "$T" serve --help
 grep -q "Without --part each probing meets" out.txt && ok || bad "serve --help"

@@ -35,12 +35,17 @@ class Client {
   // Connects; throws Error naming host and port when it cannot.
   explicit Client(ClientOptions options);
   ~Client();
+  // Called with each data line of a transaction as it arrives (in the thread that waits), so
+  // that a scan's points can be judged while the probe still moves.
+  using OnData = std::function<void(const Response& data)>;
   // Sends `command` (a method, e.g. "GoTo(X(10))"; a tag is added) and waits until its
   // transaction completes. Throws Error on a timeout or a lost connection.
-  Transaction call(const std::string& command);
+  Transaction call(const std::string& command, const OnData& on_data = {});
+  // Sends `command` with a new tag (an E tag for the fast queue's commands) without waiting.
+  Tag send(const std::string& command);
   // Sends a full line (tag included) without waiting; wait() collects its transaction.
   void send_line(const std::string& line);
-  Transaction wait(const Tag& tag);
+  Transaction wait(const Tag& tag, const OnData& on_data = {});
   // Called for E0000 lines and daemon reports (from the reader thread).
   void on_event(std::function<void(const std::string& line)> f);
   // Every line received so far, in order (for logs and recordings).

@@ -1,0 +1,94 @@
+// trueaxis::ippdme — a CMM driven over I++ DME as the scanning controller's machine: the
+// error-tolerant scanning flow (scan::scan) runs unchanged against any I++ DME server, the
+// virtual CMM of `trueaxis serve` or a real controller.
+//
+// The controller's operations, as I++ DME commands:
+//   move          GoTo, at GoToPar.Speed.
+//   touch         PtMeas along the direction (PtMeasPar: Approach 0, Search, Speed, Retract 1);
+//                 the surface point and normal as the server reports them (OnPtMeasReport with
+//                 IJK). Error 1006 (surface not found): no contact.
+//   scan_path     ScanOnCurve through the design's surface points and normals (the stylus-centre
+//                 path less the tip radius and pushing), ScanOnCurveHint with the largest deviation
+//                 it may follow, the path's mean design speed as ScanPar.Speed. The trajectory
+//                 error ΔL of every streamed point is computed here against the path; the monitor
+//                 judges it as the points arrive, and a stop is an AbortE (then ClearAllErrors).
+//   scan_unknown  PtMeas for the first contact, then ScanInPlaneEndIsSphere in the section's
+//                 plane from it: closed contours end in a sphere around that contact (the server
+//                 ends the scan), open ones after `length` mm of points (AbortE from here).
+// Frame: with `part_origin`, PartCsy is set to the part's design frame (SetCsyTransformation, a
+// translation) and every command and point is in it; without, the server's current coordinate
+// system is used as it is.
+// Time: the wall-clock time since the session started (s), as the client sees it; with
+// `trueaxis serve --time-scale 1` (real time) that is the machine time.
+#pragma once
+
+#include <Eigen/Core>
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "trueaxis/ippdme/client.hpp"
+#include "trueaxis/scan/machine.hpp"
+
+namespace trueaxis::ippdme {
+
+struct RemoteCmmOptions {
+  ClientOptions client;
+  std::optional<Eigen::Vector3d> part_origin;  // machine coordinates of the design origin (mm)
+  // The stylus tip's radius (mm): the scanning path is built with it, and a streamed point's
+  // ball centre is the surface point plus this along its normal.
+  double tip_radius = 1;
+  std::string tool = "Probe1";  // ChangeTool to this at the start ("" keeps the active tool)
+  // Points of the nominal curve sent with ScanOnCurve, this far apart along the path (mm); at
+  // most 1000 points (a path longer than 250 mm gets a wider step), so that the command fits
+  // in one protocol line.
+  double curve_step = 0.25;
+  // ScanOnCurveHint's deviation: how far the server may follow the surface off the path (mm).
+  double follow_deviation = 3;
+  void validate() const;  // throws Error naming the option
+};
+
+class RemoteCmm : public scan::Machine {
+ public:
+  // Connects, starts a session, homes the CMM if it is not, selects the tool, the report formats
+  // and the part frame. Throws Error (naming host and port, or the server's error) when any of
+  // that fails.
+  explicit RemoteCmm(const RemoteCmmOptions& options);
+  ~RemoteCmm() override;  // EndSession (errors ignored)
+  RemoteCmm(const RemoteCmm&) = delete;
+  RemoteCmm& operator=(const RemoteCmm&) = delete;
+
+  double time() const override;
+  Eigen::Vector3d position() const override;
+  void move(const Eigen::Vector3d& to, double speed) override;
+  std::optional<scan::Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
+                                   const Eigen::Vector3d& direction, double distance, double speed,
+                                   double trigger) override;
+  scan::ScanOutcome scan_path(const design::ScanPath& path, const scan::ScanSettings& settings,
+                              const scan::Monitor& monitor) override;
+  scan::ScanOutcome scan_unknown(const design::Plane& plane, const Eigen::Vector3d& start,
+                                 const Eigen::Vector3d& approach, design::Side material,
+                                 bool closed, double length, double speed,
+                                 const scan::ScanSettings& settings) override;
+
+  // The commands sent so far (for logs and tests).
+  long commands() const { return commands_; }
+  Client& client() { return *client_; }
+
+ private:
+  RemoteCmmOptions o_;
+  std::unique_ptr<Client> client_;
+  std::chrono::steady_clock::time_point t0_;
+  double goto_speed_ = -1, scan_speed_ = -1;
+  long commands_ = 0;
+  // Runs a command; errors of severity ≥ 2 are cleared (ClearAllErrors) and returned as the
+  // transaction's, lower ones (warnings such as a clamped value) are dropped.
+  Transaction run(const std::string& command, const Client::OnData& on_data = {});
+  // Runs a command that must succeed; throws Error with the server's error otherwise.
+  Transaction must(const std::string& command);
+  void set_goto_speed(double speed);
+  void set_scan_speed(double speed);
+};
+
+}  // namespace trueaxis::ippdme

@@ -1,0 +1,340 @@
+// The scanning controller's machine over I++ DME: each operation as the protocol's commands.
+#include "trueaxis/ippdme/remote_cmm.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::ippdme {
+namespace {
+
+constexpr int kSurfaceNotFound = 1006;
+constexpr int kCurvePoints = 1000;  // about 58 characters each: within a 65 536-character line
+
+int severity(const Response& e) {
+  return static_cast<int>(e.items.at(0).args.at(0).number());
+}
+int number(const Response& e) {
+  return static_cast<int>(e.items.at(0).args.at(1).number());
+}
+std::string describe(const Response& e) {
+  const auto& a = e.items.at(0).args;
+  return fmt::format("error {:04d} {}", number(e), a.size() > 3 ? a[3].text : std::string());
+}
+
+std::string xyz(const Eigen::Vector3d& p) {
+  return fmt::format("X({:.6f}), Y({:.6f}), Z({:.6f})", p.x(), p.y(), p.z());
+}
+std::string ijk(const Eigen::Vector3d& n) {
+  return fmt::format("IJK({:.9f}, {:.9f}, {:.9f})", n.x(), n.y(), n.z());
+}
+
+// The numbers of one data line (bare scan numbers, or the arguments of X(), IJK(), ...).
+std::vector<double> numbers_of(const Response& d) {
+  std::vector<double> v;
+  for (const auto& it : d.items) {
+    if (it.kind == Value::Kind::Number) v.push_back(it.number());
+    for (const auto& a : it.args)
+      if (a.kind == Value::Kind::Number) v.push_back(a.number());
+  }
+  return v;
+}
+
+// Points of a scan report in the format X(), Y(), Z(), IJK(): six numbers each.
+struct PointStream {
+  std::vector<double> pending;
+  template <class F>
+  void feed(const Response& d, F&& f) {
+    const auto v = numbers_of(d);
+    pending.insert(pending.end(), v.begin(), v.end());
+    std::size_t i = 0;
+    for (; i + 6 <= pending.size(); i += 6)
+      f(Eigen::Vector3d(pending[i], pending[i + 1], pending[i + 2]),
+        Eigen::Vector3d(pending[i + 3], pending[i + 4], pending[i + 5]).normalized());
+    pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(i));
+  }
+};
+
+}  // namespace
+
+void RemoteCmmOptions::validate() const {
+  if (!(tip_radius > 0)) throw Error("I++ DME CMM: the tip radius must be positive (mm)");
+  if (!(curve_step > 0)) throw Error("I++ DME CMM: the curve step must be positive (mm)");
+  if (!(follow_deviation > 0))
+    throw Error("I++ DME CMM: the follow deviation must be positive (mm)");
+}
+
+RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
+  o_.validate();
+  client_ = std::make_unique<Client>(o_.client);
+  t0_ = std::chrono::steady_clock::now();
+  must("StartSession()");
+  const auto homed = must("IsHomed()").numbers();
+  if (homed.empty() || homed[0] == 0) must("Home()");
+  if (!o_.tool.empty()) must(fmt::format("ChangeTool(\"{}\")", o_.tool));
+  must("OnPtMeasReport(X(), Y(), Z(), IJK())");
+  must("OnScanReport(X(), Y(), Z(), IJK())");
+  if (o_.part_origin) {
+    const auto& p = *o_.part_origin;
+    must(fmt::format("SetCsyTransformation(PartCsy, {:.6f}, {:.6f}, {:.6f}, 0, 0, 0)", p.x(), p.y(),
+                     p.z()));
+    must("SetCoordSystem(PartCsy)");
+  }
+}
+
+RemoteCmm::~RemoteCmm() {
+  try {
+    if (client_ && client_->connected()) client_->call("EndSession()");
+  } catch (...) {  // the session ends with the connection anyway
+  }
+}
+
+Transaction RemoteCmm::run(const std::string& command, const Client::OnData& on_data) {
+  ++commands_;
+  auto tr = client_->call(command, on_data);
+  auto& e = tr.errors;
+  e.erase(std::remove_if(e.begin(), e.end(), [](const Response& r) { return severity(r) < 2; }),
+          e.end());
+  if (!e.empty()) client_->call("ClearAllErrors()");
+  return tr;
+}
+
+Transaction RemoteCmm::must(const std::string& command) {
+  auto tr = run(command);
+  if (!tr.errors.empty())
+    throw Error(fmt::format("I++ DME server at {}:{}: {} failed: {}", o_.client.host,
+                            o_.client.port, command.substr(0, command.find('(')),
+                            describe(tr.errors.front())));
+  return tr;
+}
+
+double RemoteCmm::time() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+}
+
+Eigen::Vector3d RemoteCmm::position() const {
+  const auto v = client_->call("Get(X(), Y(), Z())").numbers();
+  if (v.size() < 3) throw Error("I++ DME: Get(X(), Y(), Z()) returned no position");
+  return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+void RemoteCmm::set_goto_speed(double speed) {
+  if (speed == goto_speed_) return;
+  must(fmt::format("SetProp(Tool.GoToPar.Speed({:g}))", speed));
+  goto_speed_ = speed;
+}
+
+void RemoteCmm::set_scan_speed(double speed) {
+  if (speed == scan_speed_) return;
+  must(fmt::format("SetProp(Tool.ScanPar.Speed({:g}))", speed));
+  scan_speed_ = speed;
+}
+
+void RemoteCmm::move(const Eigen::Vector3d& to, double speed) {
+  set_goto_speed(speed);
+  const auto tr = run(fmt::format("GoTo({})", xyz(to)));
+  if (tr.errors.empty()) return;
+  const auto& e = tr.errors.front();
+  if (number(e) == 2504)
+    throw Error(
+        fmt::format("collision: the stylus met the part on the way to ({:.3f}, {:.3f}, "
+                    "{:.3f}) mm (I++ DME {})",
+                    to.x(), to.y(), to.z(), describe(e)));
+  throw Error(fmt::format("I++ DME: GoTo ({:.3f}, {:.3f}, {:.3f}) mm failed: {}", to.x(), to.y(),
+                          to.z(), describe(e)));
+}
+
+std::optional<scan::Touch> RemoteCmm::touch(const design::Plane&, const Eigen::Vector3d& start,
+                                            const Eigen::Vector3d& direction, double distance,
+                                            double speed, double) {
+  // PtMeas starts `Approach` plus the tip radius off its nominal point, along IJK, and searches
+  // `Search` beyond it: with Approach 0 the nominal point is one tip radius ahead of the start.
+  const Eigen::Vector3d d = direction.normalized();
+  const double r = o_.tip_radius;
+  must(
+      fmt::format("SetProp(Tool.PtMeasPar.Approach(0), Tool.PtMeasPar.Search({:g}), "
+                  "Tool.PtMeasPar.Speed({:g}), Tool.PtMeasPar.Retract(1))",
+                  std::max(0.1, distance - r), speed));
+  const auto tr = run(fmt::format("PtMeas({}, {})", xyz(start + r * d), ijk(-d)));
+  const double t = time();
+  if (!tr.errors.empty()) {
+    if (number(tr.errors.front()) == kSurfaceNotFound) return std::nullopt;
+    throw Error(fmt::format("I++ DME: PtMeas failed: {}", describe(tr.errors.front())));
+  }
+  const auto v = tr.numbers();
+  if (v.size() < 6) throw Error("I++ DME: PtMeas reported no point with its normal");
+  return scan::Touch{Eigen::Vector3d(v[0], v[1], v[2]),
+                     Eigen::Vector3d(v[3], v[4], v[5]).normalized(), t};
+}
+
+scan::ScanOutcome RemoteCmm::scan_path(const design::ScanPath& path,
+                                       const scan::ScanSettings& settings,
+                                       const scan::Monitor& monitor) {
+  // The nominal surface curve: the stylus-centre path less its offset along the normals.
+  const double L = path.length();
+  // At most kCurvePoints points, so that the command stays within the protocol's line length.
+  const int n = std::clamp(static_cast<int>(std::ceil(L / o_.curve_step)) + 1, 2, kCurvePoints);
+  std::vector<double> arcs(static_cast<std::size_t>(n));
+  std::string data;
+  for (int i = 0; i < n; ++i) {
+    const double s = L * i / (n - 1);
+    arcs[static_cast<std::size_t>(i)] = s;
+    const auto q = path.at(s);
+    const Eigen::Vector3d p = q.p - path.offset * q.normal;
+    data += fmt::format("{}{:.4f},{:.4f},{:.4f},{:.6f},{:.6f},{:.6f},1", i ? "," : "", p.x(), p.y(),
+                        p.z(), q.normal.x(), q.normal.y(), q.normal.z());
+  }
+  // The straight parts' speed: the server slows down on the curve's turns itself.
+  double fastest = 0;
+  for (const auto& g : path.segments) fastest = std::max(fastest, g.speed);
+  set_scan_speed(fastest);
+  // The server approaches the curve's start from this far outside it, as the controller does.
+  must(fmt::format("SetProp(Tool.PtMeasPar.Approach({:g}))", settings.approach_clearance));
+  must(fmt::format("ScanOnCurveHint({:g}, {:g})", o_.follow_deviation, o_.tip_radius));
+  must(fmt::format("ScanOnCurveDensity(Dis({:g}))", settings.record_spacing));
+
+  scan::ScanOutcome out;
+  bool stopped = false;
+  std::size_t k = 0;  // the station nearest the last point: points arrive in path order
+  PointStream points;
+  auto judge = [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
+    if (stopped) return;
+    const Eigen::Vector3d ball = surface + o_.tip_radius * normal;
+    // The arc of the nearest path point: the best station ahead, refined on its segments.
+    auto dist = [&](std::size_t i) { return (path.at(arcs[i]).p - ball).squaredNorm(); };
+    while (k + 1 < arcs.size() && dist(k + 1) <= dist(k)) ++k;
+    double best = arcs[k], bd = dist(k);
+    for (std::size_t j : {k > 0 ? k - 1 : k, k}) {
+      if (j + 1 >= arcs.size()) continue;
+      for (int m = 1; m < 8; ++m) {
+        const double s = arcs[j] + (arcs[j + 1] - arcs[j]) * m / 8;
+        const double e = (path.at(s).p - ball).squaredNorm();
+        if (e < bd) bd = e, best = s;
+      }
+    }
+    const auto q = path.at(best);
+    scan::Sample smp;
+    smp.t = time();
+    smp.arc = best;
+    smp.surface = surface;
+    smp.normal = normal;
+    smp.delta_l = (ball - q.p).dot(q.normal) - settings.pushing;
+    smp.contact = true;
+    out.stop = smp;
+    out.samples.push_back(smp);
+    if (!monitor(smp)) stopped = true;
+  };
+  const Tag tag =
+      client_->send(fmt::format("ScanOnCurve(Closed({}), Format(X(), Y(), Z(), IJK(), tag), "
+                                "Data({}))",
+                                path.closed ? 1 : 0, data));
+  ++commands_;
+  bool aborted = false;
+  const auto tr = client_->wait(tag, [&](const Response& d) {
+    points.feed(d, judge);
+    if (stopped && !aborted) {
+      client_->send("AbortE()");
+      aborted = true;
+    }
+  });
+  const bool error = std::any_of(tr.errors.begin(), tr.errors.end(),
+                                 [](const Response& e) { return severity(e) >= 2; });
+  if (error || aborted) client_->call("ClearAllErrors()");
+  if (stopped) return out;  // the points after the stop (the server's run-on) were not taken
+  for (const auto& e : tr.errors) {
+    if (severity(e) < 2) continue;
+    out.fault = number(e) == 2001 ? "the probe was pushed beyond its measuring range (I++ DME "
+                                    "error 2001)"
+                : number(e) == 1006
+                    ? fmt::format(
+                          "the surface was lost: more than {:g} mm off "
+                          "the path (I++ DME error 1006)",
+                          o_.follow_deviation)
+                    : fmt::format("the CMM stopped the scan: I++ DME {}", describe(e));
+    return out;
+  }
+  out.completed = true;
+  return out;
+}
+
+scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eigen::Vector3d& start,
+                                          const Eigen::Vector3d& approach, design::Side material,
+                                          bool closed, double length, double speed,
+                                          const scan::ScanSettings& settings) {
+  scan::ScanOutcome out;
+  const Eigen::Vector3d a = approach.normalized(), N = plane.normal.normalized();
+  const auto first =
+      touch(plane, start, a, 2 * (settings.approach_clearance + settings.approach_limit) + 10, 10,
+            settings.pushing);
+  if (!first) {
+    out.fault = "autonomous scan: no surface found on the approach";
+    return out;
+  }
+  // The direction of travel with the material on its `material` side (seen from N).
+  const Eigen::Vector3d nm = first->normal;
+  const Eigen::Vector3d t =
+      material == design::Side::Left ? Eigen::Vector3d(N.cross(nm)) : Eigen::Vector3d(nm.cross(N));
+  const Eigen::Vector3d S = first->surface, D = S + 5 * t;
+  // The end sphere: around the first contact's ball centre (closed), or far off the plane
+  // (open: never met, the scan is stopped here after `length`).
+  const Eigen::Vector3d E =
+      closed ? Eigen::Vector3d(S + o_.tip_radius * nm) : Eigen::Vector3d(S + 1e4 * N);
+  set_scan_speed(speed);
+  must("SetProp(Tool.PtMeasPar.Approach(2), Tool.PtMeasPar.Search(4))");
+  const Tag tag = client_->send(fmt::format(
+      "ScanInPlaneEndIsSphere({:.6f}, {:.6f}, {:.6f}, {:.9f}, {:.9f}, {:.9f}, {:.9f}, {:.9f}, "
+      "{:.9f}, {:.6f}, {:.6f}, {:.6f}, {:g}, {:.6f}, {:.6f}, {:.6f}, {:g})",
+      S.x(), S.y(), S.z(), nm.x(), nm.y(), nm.z(), N.x(), N.y(), N.z(), D.x(), D.y(), D.z(),
+      settings.record_spacing, E.x(), E.y(), E.z(), 2.0));
+  ++commands_;
+  double arc = 0, next = 0;
+  bool done = false, aborted = false;
+  Eigen::Vector3d last = S;
+  PointStream points;
+  auto take = [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
+    if (done) return;
+    arc += (surface - last).norm();
+    last = surface;
+    scan::Sample smp;
+    smp.t = time();
+    smp.arc = arc;
+    smp.surface = surface;
+    smp.normal = normal;
+    smp.contact = true;
+    out.stop = smp;
+    if (arc >= next) {
+      out.samples.push_back(smp);
+      next += settings.record_spacing;
+    }
+    if (!closed && arc >= length) done = true;
+  };
+  const auto tr = client_->wait(tag, [&](const Response& d) {
+    points.feed(d, take);
+    if (done && !aborted) {
+      client_->send("AbortE()");
+      aborted = true;
+    }
+  });
+  const bool error = std::any_of(tr.errors.begin(), tr.errors.end(),
+                                 [](const Response& e) { return severity(e) >= 2; });
+  if (error || aborted) client_->call("ClearAllErrors()");
+  if (done) {
+    out.completed = true;
+    return out;
+  }
+  for (const auto& e : tr.errors) {
+    if (severity(e) < 2) continue;
+    out.fault = fmt::format("autonomous scan: the CMM stopped it: I++ DME {}", describe(e));
+    return out;
+  }
+  out.completed = closed;
+  if (!closed)
+    out.fault = fmt::format("autonomous scan: the CMM ended after {:.1f} mm of the {:g} mm asked",
+                            arc, length);
+  return out;
+}
+
+}  // namespace trueaxis::ippdme

@@ -1,0 +1,181 @@
+// The error-tolerant scanning controller over I++ DME: the same part scanned in process and
+// through the server (loopback TCP) gives the same decisions and points within the probe noise.
+#include "trueaxis/ippdme/remote_cmm.hpp"
+
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "../test_parts.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/ippdme/server.hpp"
+#include "trueaxis/scan/controller.hpp"
+
+namespace trueaxis {
+namespace {
+
+using namespace ippdme;
+
+constexpr double kNoise = 0.5e-3;  // probe noise, standard deviation (mm), on both sides
+// The probe's noise is on its 3-D deflection, whose direction is the measured normal: across
+// it the surface point moves by the tip radius over the deflection times the noise (1 mm over
+// the server's 0.2 mm while it scans). A measured point lies within 5σ of that of the true part
+// (plus the round-off of the protocol's 5 decimals).
+constexpr double kTipRadius = 1, kServerDeflection = 0.2;                                  // mm
+constexpr double kWithinNoise = 5 * kNoise * (1 + kTipRadius / kServerDeflection) + 5e-6;  // mm
+// Corrections fitted from touch points of either run agree within a few σ of the noise.
+constexpr double kSameCorrection = 10 * kNoise;  // mm, °, or factor
+
+const Eigen::Vector3d kHome(50, -20, 40);
+
+struct Running {
+  Server server;
+  std::thread t;
+  explicit Running(const ServerOptions& o) : server(o), t([this] { server.run(); }) {}
+  ~Running() {
+    server.stop();
+    t.join();
+  }
+};
+
+ServerOptions serving(const sim::Part& part) {
+  ServerOptions o;
+  o.port = 0;
+  o.engine.time_scale = 0;
+  o.engine.part = part;
+  o.engine.cmm.home = kHome;
+  o.engine.cmm.probe.noise = kNoise;
+  return o;
+}
+
+RemoteCmmOptions remote(const Running& r) {
+  RemoteCmmOptions o;
+  o.client.port = r.server.port();
+  o.client.timeout = 60;
+  return o;
+}
+
+std::vector<std::string> decisions(const scan::Result& r) {
+  std::vector<std::string> v;
+  for (const auto& e : r.events) v.push_back(e.section + " " + e.mode + " " + e.event);
+  return v;
+}
+
+void expect_same_flow(const scan::Result& here, const scan::Result& there) {
+  ASSERT_EQ(here.ok(), there.ok()) << here.summary() << "\n" << there.summary();
+  EXPECT_EQ(decisions(here), decisions(there));
+  ASSERT_EQ(here.sections.size(), there.sections.size());
+  for (std::size_t i = 0; i < here.sections.size(); ++i) {
+    const auto &a = here.sections[i], &b = there.sections[i];
+    EXPECT_EQ(a.ok, b.ok) << a.name;
+    EXPECT_EQ(a.trajectory_errors, b.trajectory_errors) << a.name;
+    EXPECT_EQ(a.autonomous_count, b.autonomous_count) << a.name;
+    ASSERT_EQ(a.corrections.size(), b.corrections.size()) << a.name;
+    for (std::size_t k = 0; k < a.corrections.size(); ++k) {
+      EXPECT_EQ(a.corrections[k].type, b.corrections[k].type) << a.name;
+      EXPECT_EQ(a.corrections[k].accepted, b.corrections[k].accepted) << a.name;
+      ASSERT_EQ(a.corrections[k].parameters.size(), b.corrections[k].parameters.size());
+      for (std::size_t j = 0; j < a.corrections[k].parameters.size(); ++j)
+        EXPECT_NEAR(a.corrections[k].parameters[j].second, b.corrections[k].parameters[j].second,
+                    kSameCorrection)
+            << a.name << " " << a.corrections[k].parameters[j].first;
+    }
+    // Both record a point about every 0.2 mm of the same contour.
+    EXPECT_NEAR(static_cast<double>(a.points.size()), static_cast<double>(b.points.size()),
+                0.02 * static_cast<double>(a.points.size()) + 5)
+        << a.name;
+  }
+}
+
+// Both runs, and the truth to check the points against.
+struct Both {
+  scan::Result here, there;
+  double worst_there = 0;
+  long commands = 0;
+};
+
+Both scan_both(const sim::Part& part, const design::Design& d) {
+  Both out;
+  scan::VirtualCmmOptions vo;
+  vo.probe.noise = kNoise;
+  scan::VirtualCmm virt(part, vo, kHome);
+  out.here = scan::scan(virt, d, {});
+  Running r(serving(part));
+  RemoteCmm cmm(remote(r));
+  out.there = scan::scan(cmm, d, {});
+  out.commands = cmm.commands();
+  for (std::size_t i = 0; i < out.there.sections.size(); ++i)
+    for (const auto& p : out.there.sections[i].points)
+      out.worst_there =
+          std::max(out.worst_there, std::abs(virt.distance(d.sections[i], p.surface)));
+  return out;
+}
+
+TEST(RemoteCmm, TranslatedPartGetsTheSameCorrectionOverTheProtocol) {
+  const auto d = test::square_and_hole();
+  sim::Part part{d, {}};
+  part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  const auto b = scan_both(part, d);
+  ASSERT_TRUE(b.there.ok()) << b.there.summary();
+  expect_same_flow(b.here, b.there);
+  EXPECT_EQ(b.there.sections[0].corrections.back().type, "translation");
+  EXPECT_LT(b.worst_there, kWithinNoise);
+  EXPECT_GT(b.commands, 20);  // it really went through the protocol
+}
+
+TEST(RemoteCmm, LocalBumpFallsBackToAutonomousScanningOverTheProtocol) {
+  const auto d = test::square_and_hole();
+  sim::Part part{d, {}};
+  part.deviation.bumps = {{"outer", 150, 2.0, 30}};
+  const auto b = scan_both(part, d);
+  ASSERT_TRUE(b.there.ok()) << b.there.summary();
+  expect_same_flow(b.here, b.there);
+  EXPECT_EQ(b.there.sections[0].autonomous_count, 1);
+  EXPECT_LT(b.worst_there, kWithinNoise);
+  // The next part of the batch, scanned over the protocol with the corrected design data, has
+  // no trajectory error.
+  Running r(serving(part));
+  RemoteCmm cmm(remote(r));
+  const auto next = scan::scan(cmm, b.there.design, {});
+  ASSERT_TRUE(next.ok()) << next.summary();
+  for (const auto& s : next.sections) EXPECT_EQ(s.trajectory_errors, 0) << s.name;
+}
+
+TEST(RemoteCmm, CollisionsAndMissedSurfacesAreReportedAsTheControllerExpects) {
+  const auto d = test::square_and_hole();
+  Running r(serving(sim::Part{d, {}}));
+  RemoteCmm cmm(remote(r));
+  EXPECT_NEAR((cmm.position() - kHome).norm(), 0, 1e-3);
+  // Down through the part's outline: a collision, as an Error naming it.
+  const auto& s = d.sections[0];
+  const Eigen::Vector3d on = s.plane.origin;
+  try {
+    cmm.move(Eigen::Vector3d(kHome.x(), kHome.y(), on.z()), 100);
+    cmm.move(Eigen::Vector3d(kHome.x(), 200, on.z()), 100);
+    ADD_FAILURE() << "a move through the part was not refused";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("collision"), std::string::npos) << e.what();
+  }
+  // After the error the session goes on: a touch into empty space finds nothing (1006).
+  cmm.move(kHome, 100);
+  const auto none = cmm.touch(s.plane, kHome, Eigen::Vector3d::UnitZ(), 5, 10, 0.3);
+  EXPECT_FALSE(none.has_value());
+  EXPECT_NEAR((cmm.position() - kHome).norm(), 0, 1e-3);
+}
+
+TEST(RemoteCmm, ABadAddressOrOptionIsNamed) {
+  RemoteCmmOptions o;
+  o.tip_radius = 0;
+  EXPECT_THROW(RemoteCmm{o}, Error);
+  RemoteCmmOptions closed;
+  closed.client.port = 1;  // nothing listens there
+  try {
+    RemoteCmm cmm(closed);
+    ADD_FAILURE() << "connected to a closed port";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("127.0.0.1:1"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace trueaxis
