@@ -266,6 +266,7 @@ const std::map<std::string, Check, std::less<>>& table() {
     };
     c["ScanOnCurveHint"] = [](const Value& m) {
       numbers(m, {2});
+      positive(m, 0, "deviation");
       positive(m, 1, "radius");
     };
     c["ScanOnCurveDensity"] = [](const Value& m) {

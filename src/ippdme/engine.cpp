@@ -748,7 +748,6 @@ void Executor::scan_on_curve() {
   const double r = s_.cmm.tip_radius(), push = 0.2;
   std::vector<Eigen::Vector3d> path;
   for (std::size_t i = 0; i < pts.size(); ++i) path.push_back(pts[i] + (r - push) * nrm[i]);
-  if (!(s_.curve_deviation > 0)) throw Fail{509};
   Surface surface = s_.world();
   if (!surface) {
     Eigen::Matrix3Xd P(3, pts.size()), N(3, pts.size());

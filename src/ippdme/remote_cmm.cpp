@@ -43,21 +43,6 @@ std::vector<double> numbers_of(const Response& d) {
   return v;
 }
 
-// Points of a scan report in the format X(), Y(), Z(), IJK(): six numbers each.
-struct PointStream {
-  std::vector<double> pending;
-  template <class F>
-  void feed(const Response& d, F&& f) {
-    const auto v = numbers_of(d);
-    pending.insert(pending.end(), v.begin(), v.end());
-    std::size_t i = 0;
-    for (; i + 6 <= pending.size(); i += 6)
-      f(Eigen::Vector3d(pending[i], pending[i + 1], pending[i + 2]),
-        Eigen::Vector3d(pending[i + 3], pending[i + 4], pending[i + 5]).normalized());
-    pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(i));
-  }
-};
-
 }  // namespace
 
 void RemoteCmmOptions::validate() const {
@@ -87,18 +72,49 @@ RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
 
 RemoteCmm::~RemoteCmm() {
   try {
-    if (client_ && client_->connected()) client_->call("EndSession()");
+    if (client_ && client_->connected()) call("EndSession()");
   } catch (...) {  // the session ends with the connection anyway
   }
 }
 
-Transaction RemoteCmm::run(const std::string& command, const Client::OnData& on_data) {
+Transaction RemoteCmm::call(const std::string& command) const {
   ++commands_;
-  auto tr = client_->call(command, on_data);
+  return client_->call(command);
+}
+
+Transaction RemoteCmm::run(const std::string& command) {
+  auto tr = call(command);
   auto& e = tr.errors;
   e.erase(std::remove_if(e.begin(), e.end(), [](const Response& r) { return severity(r) < 2; }),
           e.end());
-  if (!e.empty()) client_->call("ClearAllErrors()");
+  if (!e.empty()) call("ClearAllErrors()");
+  return tr;
+}
+
+Transaction RemoteCmm::scan(const std::string& command, const PointSink& take) {
+  ++commands_;
+  const Tag tag = client_->send(command);
+  std::vector<double> pending;  // numbers of a point not complete yet
+  bool stop = false, aborted = false;
+  auto tr = client_->wait(tag, [&](const Response& d) {
+    const auto v = numbers_of(d);
+    pending.insert(pending.end(), v.begin(), v.end());
+    std::size_t i = 0;
+    for (; i + 6 <= pending.size() && !stop; i += 6)
+      stop = !take(Eigen::Vector3d(pending[i], pending[i + 1], pending[i + 2]),
+                   Eigen::Vector3d(pending[i + 3], pending[i + 4], pending[i + 5]).normalized());
+    pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(i));
+    if (stop && !aborted) {
+      ++commands_;
+      client_->send("AbortE()");
+      aborted = true;
+    }
+  });
+  auto& e = tr.errors;
+  e.erase(std::remove_if(e.begin(), e.end(), [](const Response& r) { return severity(r) < 2; }),
+          e.end());
+  if (!e.empty() || aborted) call("ClearAllErrors()");
+  if (aborted) e.clear();  // the 0006 of the stop asked for
   return tr;
 }
 
@@ -116,7 +132,7 @@ double RemoteCmm::time() const {
 }
 
 Eigen::Vector3d RemoteCmm::position() const {
-  const auto v = client_->call("Get(X(), Y(), Z())").numbers();
+  const auto v = call("Get(X(), Y(), Z())").numbers();
   if (v.size() < 3) throw Error("I++ DME: Get(X(), Y(), Z()) returned no position");
   return Eigen::Vector3d(v[0], v[1], v[2]);
 }
@@ -177,12 +193,14 @@ scan::ScanOutcome RemoteCmm::scan_path(const design::ScanPath& path,
   const double L = path.length();
   // At most kCurvePoints points, so that the command stays within the protocol's line length.
   const int n = std::clamp(static_cast<int>(std::ceil(L / o_.curve_step)) + 1, 2, kCurvePoints);
+  // Path stations: their arcs and stylus-centre points, for the nearest-point search below.
   std::vector<double> arcs(static_cast<std::size_t>(n));
+  std::vector<Eigen::Vector3d> centres(arcs.size());
   std::string data;
-  for (int i = 0; i < n; ++i) {
-    const double s = L * i / (n - 1);
-    arcs[static_cast<std::size_t>(i)] = s;
-    const auto q = path.at(s);
+  for (std::size_t i = 0; i < arcs.size(); ++i) {
+    arcs[i] = L * static_cast<double>(i) / static_cast<double>(n - 1);
+    const auto q = path.at(arcs[i]);
+    centres[i] = q.p;
     const Eigen::Vector3d p = q.p - path.offset * q.normal;
     data += fmt::format("{}{:.4f},{:.4f},{:.4f},{:.6f},{:.6f},{:.6f},1", i ? "," : "", p.x(), p.y(),
                         p.z(), q.normal.x(), q.normal.y(), q.normal.z());
@@ -199,59 +217,45 @@ scan::ScanOutcome RemoteCmm::scan_path(const design::ScanPath& path,
   scan::ScanOutcome out;
   bool stopped = false;
   std::size_t k = 0;  // the station nearest the last point: points arrive in path order
-  PointStream points;
-  auto judge = [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
-    if (stopped) return;
-    const Eigen::Vector3d ball = surface + o_.tip_radius * normal;
-    // The arc of the nearest path point: the best station ahead, refined on its segments.
-    auto dist = [&](std::size_t i) { return (path.at(arcs[i]).p - ball).squaredNorm(); };
-    while (k + 1 < arcs.size() && dist(k + 1) <= dist(k)) ++k;
-    double best = arcs[k], bd = dist(k);
-    for (std::size_t j : {k > 0 ? k - 1 : k, k}) {
-      if (j + 1 >= arcs.size()) continue;
-      for (int m = 1; m < 8; ++m) {
-        const double s = arcs[j] + (arcs[j + 1] - arcs[j]) * m / 8;
-        const double e = (path.at(s).p - ball).squaredNorm();
-        if (e < bd) bd = e, best = s;
-      }
-    }
-    const auto q = path.at(best);
-    scan::Sample smp;
-    smp.t = time();
-    smp.arc = best;
-    smp.surface = surface;
-    smp.normal = normal;
-    smp.delta_l = (ball - q.p).dot(q.normal) - settings.pushing;
-    smp.contact = true;
-    out.stop = smp;
-    out.samples.push_back(smp);
-    if (!monitor(smp)) stopped = true;
-  };
-  const Tag tag =
-      client_->send(fmt::format("ScanOnCurve(Closed({}), Format(X(), Y(), Z(), IJK(), tag), "
-                                "Data({}))",
-                                path.closed ? 1 : 0, data));
-  ++commands_;
-  bool aborted = false;
-  const auto tr = client_->wait(tag, [&](const Response& d) {
-    points.feed(d, judge);
-    if (stopped && !aborted) {
-      client_->send("AbortE()");
-      aborted = true;
-    }
-  });
-  const bool error = std::any_of(tr.errors.begin(), tr.errors.end(),
-                                 [](const Response& e) { return severity(e) >= 2; });
-  if (error || aborted) client_->call("ClearAllErrors()");
+  const auto tr =
+      scan(fmt::format("ScanOnCurve(Closed({}), Format(X(), Y(), Z(), IJK(), tag), Data({}))",
+                       path.closed ? 1 : 0, data),
+           [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
+             const Eigen::Vector3d ball = surface + o_.tip_radius * normal;
+             // The arc of the nearest path point: the best station ahead, refined on its segments.
+             auto dist = [&](std::size_t i) { return (centres[i] - ball).squaredNorm(); };
+             while (k + 1 < arcs.size() && dist(k + 1) <= dist(k)) ++k;
+             double best = arcs[k], bd = dist(k);
+             for (std::size_t j : {k > 0 ? k - 1 : k, k}) {
+               if (j + 1 >= arcs.size()) continue;
+               for (int m = 1; m < 8; ++m) {
+                 const double s = arcs[j] + (arcs[j + 1] - arcs[j]) * m / 8;
+                 const double e = (path.at(s).p - ball).squaredNorm();
+                 if (e < bd) bd = e, best = s;
+               }
+             }
+             const auto q = path.at(best);
+             scan::Sample smp;
+             smp.t = time();
+             smp.arc = best;
+             smp.surface = surface;
+             smp.normal = normal;
+             smp.delta_l = (ball - q.p).dot(q.normal) - settings.pushing;
+             smp.contact = true;
+             out.stop = smp;
+             out.samples.push_back(smp);
+             stopped = !monitor(smp);
+             return !stopped;
+           });
   if (stopped) return out;  // the points after the stop (the server's run-on) were not taken
-  for (const auto& e : tr.errors) {
-    if (severity(e) < 2) continue;
+  if (!tr.errors.empty()) {
+    const auto& e = tr.errors.front();
     out.fault = number(e) == 2001 ? "the probe was pushed beyond its measuring range (I++ DME "
                                     "error 2001)"
-                : number(e) == 1006
+                : number(e) == kSurfaceNotFound
                     ? fmt::format(
-                          "the surface was lost: more than {:g} mm off "
-                          "the path (I++ DME error 1006)",
+                          "the surface was lost: more than {:g} mm off the path (I++ DME "
+                          "error 1006)",
                           o_.follow_deviation)
                     : fmt::format("the CMM stopped the scan: I++ DME {}", describe(e));
     return out;
@@ -284,50 +288,38 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
       closed ? Eigen::Vector3d(S + o_.tip_radius * nm) : Eigen::Vector3d(S + 1e4 * N);
   set_scan_speed(speed);
   must("SetProp(Tool.PtMeasPar.Approach(2), Tool.PtMeasPar.Search(4))");
-  const Tag tag = client_->send(fmt::format(
-      "ScanInPlaneEndIsSphere({:.6f}, {:.6f}, {:.6f}, {:.9f}, {:.9f}, {:.9f}, {:.9f}, {:.9f}, "
-      "{:.9f}, {:.6f}, {:.6f}, {:.6f}, {:g}, {:.6f}, {:.6f}, {:.6f}, {:g})",
-      S.x(), S.y(), S.z(), nm.x(), nm.y(), nm.z(), N.x(), N.y(), N.z(), D.x(), D.y(), D.z(),
-      settings.record_spacing, E.x(), E.y(), E.z(), 2.0));
-  ++commands_;
   double arc = 0, next = 0;
-  bool done = false, aborted = false;
+  bool done = false;
   Eigen::Vector3d last = S;
-  PointStream points;
-  auto take = [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
-    if (done) return;
-    arc += (surface - last).norm();
-    last = surface;
-    scan::Sample smp;
-    smp.t = time();
-    smp.arc = arc;
-    smp.surface = surface;
-    smp.normal = normal;
-    smp.contact = true;
-    out.stop = smp;
-    if (arc >= next) {
-      out.samples.push_back(smp);
-      next += settings.record_spacing;
-    }
-    if (!closed && arc >= length) done = true;
-  };
-  const auto tr = client_->wait(tag, [&](const Response& d) {
-    points.feed(d, take);
-    if (done && !aborted) {
-      client_->send("AbortE()");
-      aborted = true;
-    }
-  });
-  const bool error = std::any_of(tr.errors.begin(), tr.errors.end(),
-                                 [](const Response& e) { return severity(e) >= 2; });
-  if (error || aborted) client_->call("ClearAllErrors()");
+  const auto tr = scan(
+      fmt::format("ScanInPlaneEndIsSphere({:.6f}, {:.6f}, {:.6f}, {:.9f}, {:.9f}, {:.9f}, {:.9f}, "
+                  "{:.9f}, {:.9f}, {:.6f}, {:.6f}, {:.6f}, {:g}, {:.6f}, {:.6f}, {:.6f}, {:g})",
+                  S.x(), S.y(), S.z(), nm.x(), nm.y(), nm.z(), N.x(), N.y(), N.z(), D.x(), D.y(),
+                  D.z(), settings.record_spacing, E.x(), E.y(), E.z(), 2.0),
+      [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
+        arc += (surface - last).norm();
+        last = surface;
+        scan::Sample smp;
+        smp.t = time();
+        smp.arc = arc;
+        smp.surface = surface;
+        smp.normal = normal;
+        smp.contact = true;
+        out.stop = smp;
+        if (arc >= next) {
+          out.samples.push_back(smp);
+          next += settings.record_spacing;
+        }
+        done = !closed && arc >= length;
+        return !done;
+      });
   if (done) {
     out.completed = true;
     return out;
   }
-  for (const auto& e : tr.errors) {
-    if (severity(e) < 2) continue;
-    out.fault = fmt::format("autonomous scan: the CMM stopped it: I++ DME {}", describe(e));
+  if (!tr.errors.empty()) {
+    out.fault =
+        fmt::format("autonomous scan: the CMM stopped it: I++ DME {}", describe(tr.errors.front()));
     return out;
   }
   out.completed = closed;

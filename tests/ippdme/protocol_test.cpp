@@ -259,6 +259,16 @@ TEST(IppProtocol, SyntaxCornersWithTheirColumns) {
   EXPECT_EQ(err("00001 GoTo(X(1e1234))").error, 509);
   EXPECT_EQ(err("00001 GoTo(X(1),)").error, 502);
   EXPECT_EQ(err("00001 GoTo(X(1)").error, 502);
+  // ScanOnCurve's hint and density: a deviation that is not positive is named at its column.
+  EXPECT_EQ(first_error("00001 ScanOnCurveHint(0.01, 0.5)").error, -1);
+  const auto dev = first_error("00001 ScanOnCurveHint(0, 0.5)");
+  EXPECT_EQ(dev.error, 509);
+  EXPECT_EQ(dev.column, 23u);
+  EXPECT_NE(dev.what.find("deviation must be positive"), std::string::npos) << dev.what;
+  EXPECT_EQ(first_error("00001 ScanOnCurveHint(1)").error, 502);
+  EXPECT_EQ(first_error("00001 ScanOnCurveDensity(Dis(1), Angle(10), AtNominals(0))").error, -1);
+  EXPECT_EQ(first_error("00001 ScanOnCurveDensity()").error, 502);
+  EXPECT_EQ(first_error("00001 ScanOnCurveDensity(Speed(1))").error, 502);
   // Spaces where the grammar allows them, kept as written.
   const std::string spaced = "00002 GoTo ( X( 1.5 ) ,Y(-2)  , Z(.5e+2 ))";
   const auto ok = ippdme::parse_command(spaced);

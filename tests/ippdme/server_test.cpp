@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "nist.hpp"
+#include "serving.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/ippdme/client.hpp"
 #include "trueaxis/ippdme/recording.hpp"
@@ -23,32 +24,9 @@ namespace fs = std::filesystem;
 using namespace ippdme;
 using asio::ip::tcp;
 using test::kNist;
+using test::quick;
+using test::Running;
 using test::slurp;
-
-// Options for a test server: any free port, the machine as fast as it computes.
-ServerOptions quick() {
-  ServerOptions o;
-  o.port = 0;
-  o.engine.time_scale = 0;
-  return o;
-}
-
-// A server running on its own thread.
-struct Running {
-  Server server;
-  std::thread t;
-  explicit Running(const ServerOptions& o = quick()) : server(o), t([this] { server.run(); }) {}
-  ~Running() {
-    server.stop();
-    t.join();
-  }
-  ClientOptions client() const {
-    ClientOptions c;
-    c.port = server.port();
-    c.timeout = 30;
-    return c;
-  }
-};
 
 // A raw connection for what a well-behaved client would not do.
 struct Raw {

@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -72,7 +73,7 @@ class RemoteCmm : public scan::Machine {
                                  bool closed, double length, double speed,
                                  const scan::ScanSettings& settings) override;
 
-  // The commands sent so far (for logs and tests).
+  // The commands sent so far, AbortE and ClearAllErrors included (for logs and tests).
   long commands() const { return commands_; }
   Client& client() { return *client_; }
 
@@ -81,12 +82,20 @@ class RemoteCmm : public scan::Machine {
   std::unique_ptr<Client> client_;
   std::chrono::steady_clock::time_point t0_;
   double goto_speed_ = -1, scan_speed_ = -1;
-  long commands_ = 0;
+  mutable long commands_ = 0;
+  // Every command goes through call(), which counts it.
+  Transaction call(const std::string& command) const;
   // Runs a command; errors of severity ≥ 2 are cleared (ClearAllErrors) and returned as the
   // transaction's, lower ones (warnings such as a clamped value) are dropped.
-  Transaction run(const std::string& command, const Client::OnData& on_data = {});
+  Transaction run(const std::string& command);
   // Runs a command that must succeed; throws Error with the server's error otherwise.
   Transaction must(const std::string& command);
+  // Runs a scan command (points reported as X(), Y(), Z(), IJK()), passing each point to `take`
+  // as it arrives; when `take` returns false the scan is stopped (AbortE) and its points after
+  // that are not passed on. Errors as run() gives them, less the stop's own 0006.
+  using PointSink =
+      std::function<bool(const Eigen::Vector3d& surface, const Eigen::Vector3d& normal)>;
+  Transaction scan(const std::string& command, const PointSink& take);
   void set_goto_speed(double speed);
   void set_scan_speed(double speed);
 };
