@@ -28,6 +28,10 @@ void SimulatedCmmOptions::validate() const {
     throw Error(fmt::format(
         "virtual CMM: the point deflection {:g} mm must lie between trigger and over-push",
         point_deflection));
+  if (!(min_scan_deflection >= trigger && min_scan_deflection < max_deflection))
+    throw Error(fmt::format(
+        "virtual CMM: the least scan deflection {:g} mm must lie between trigger and over-push",
+        min_scan_deflection));
   if (!(max_deflection > trigger && max_deflection <= probe.range))
     throw Error("virtual CMM: the over-push deflection must lie between trigger and range");
   if (!(correction_gain > 0 && correction_gain < 0.5 * servo.rate_hz))
@@ -202,7 +206,7 @@ SimulatedCmm::ScanEnd SimulatedCmm::follow(const Surface& surface, const Constra
     const Point pt{servo_.position() + r.deflection, r.deflection.normalized(), 0};
     arc += (pt.centre - last).norm();
     last = pt.centre;
-    if (arc >= next) {
+    if (arc >= next && r.deflection.norm() >= o_.min_scan_deflection) {
       emit(pt);
       next += step;
     }
@@ -297,7 +301,7 @@ SimulatedCmm::ScanEnd SimulatedCmm::along(const std::vector<Eigen::Vector3d>& pa
       settle();
       return ScanEnd::Lost;
     }
-    if (r.contact && s >= next) {
+    if (r.contact && s >= next && r.deflection.norm() >= o_.min_scan_deflection) {
       emit(Point{servo_.position() + r.deflection, r.deflection.normalized(), 0});
       next += step;
     }

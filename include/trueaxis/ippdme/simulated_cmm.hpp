@@ -50,6 +50,10 @@ struct SimulatedCmmOptions {
   // measures points: the deflection's direction, the measured normal, is then well above the
   // probe's noise (mm).
   double point_deflection = 0.2;
+  // A scan reports a point only while the deflection is at least this: below, its direction
+  // (the measured normal) drowns in the probe's noise, as where the probe nearly lifts off at a
+  // sharp corner (mm).
+  double min_scan_deflection = 0.1;
   double correction_gain = 60;  // scanning: how fast the deflection is held (1/s)
   double max_deflection = 0.8;  // beyond this the probe is over-pushed (error 2001)
   // Throws Error naming the option (the home outside the travel, a trigger outside (0, range)).
