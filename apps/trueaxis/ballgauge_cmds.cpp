@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "commands.hpp"
+#include "progress.hpp"
 #include "trueaxis/ballgauge/ballgauge.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/ballgauge/parametric.hpp"
@@ -15,6 +16,8 @@
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/space.hpp"
+#include "trueaxis/ippdme/ballgauge.hpp"
+#include "trueaxis/ippdme/remote_cmm.hpp"
 #include "trueaxis/map/error_map.hpp"
 #include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
@@ -173,7 +176,7 @@ struct SimArgs {
   MachineSource machine;
   std::string gauge = "gauge.json", measurements = "measurements.json",
               truth = "ballgauge-truth.csv";
-  std::string alignment = "321", lengths;
+  std::string alignment = "321", lengths, balls, cmm;
   int sections = 3, repeats = 3;
   double length_noise_um = -1;
   std::vector<double> origin{150, 120, 60};
@@ -183,6 +186,8 @@ struct SimArgs {
 };
 
 int run_simulate(const SimArgs& a) {
+  std::pair<std::string, unsigned short> address;
+  if (!a.cmm.empty()) address = parse_ipp_address(a.cmm);  // a usage error before any work
   const sim::Machine m = a.machine.load();
   if (a.origin.size() != 3) throw Error("--origin needs x,y,z (mm)");
   const auto g = sim::frame_gauge();
@@ -193,7 +198,38 @@ int run_simulate(const SimArgs& a) {
   if (a.alignment == "ls") poses.front().alignment = ballgauge::Alignment::LeastSquares;
   sim::BallGaugeOptions o = a.o;
   o.noise = a.noise_um * 1e-3;
-  const auto c = sim::simulate_ballgauge(m, g, poses, o);
+  if (!a.balls.empty()) {
+    io::write_balls(a.balls, sim::gauge_balls(g, poses));
+    if (!a.quiet)
+      fmt::print("wrote {}: where the gauge's balls stand (trueaxis serve --balls {})\n", a.balls,
+                 a.balls);
+  }
+  sim::BallGaugeCampaign c;
+  long commands = 0;
+  if (a.cmm.empty()) {
+    c = sim::simulate_ballgauge(m, g, poses, o);
+  } else {
+    // Measured on the CMM: PtMeas on every ball where the poses put it, with the CMM's probe.
+    ippdme::RemoteCmmOptions ro;
+    std::tie(ro.client.host, ro.client.port) = address;
+    ro.tip_radius = 0;  // the server's
+    ippdme::RemoteCmm cmm(ro);
+    o.tip_radius = cmm.tip_radius();
+    const double total =
+        static_cast<double>(o.points_per_ball) * static_cast<double>(g.balls.size() * poses.size());
+    double done = 0;
+    cli::Progress progress("probing the gauge", a.quiet);
+    auto probe = ippdme::ball_probe(cmm, o.tip_radius, sim::gauge_balls(g, poses));
+    c = sim::measure_ballgauge(g, poses, o,
+                               [&](const Eigen::Vector3d& X, double reach, const Eigen::Vector3d& d,
+                                   const std::string& w) {
+                                 const Eigen::Vector3d p = probe(X, reach, d, w);
+                                 progress.update(++done / total);
+                                 return p;
+                               });
+    progress.done();
+    commands = cmm.commands();
+  }
   io::write_gauge(a.gauge, g);
   io::write_measurements(a.measurements, c.placements);
   // Truth: every probed ball's true centre and the machine's error there.
@@ -218,6 +254,19 @@ int run_simulate(const SimArgs& a) {
     vc.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
   io::write_csv(a.truth, {"placement", "ball", "x", "y", "z", "ex_um", "ey_um", "ez_um"},
                 {&vc[0], &vc[1], &vc[2], &vc[3], &vc[4], &vc[5], &vc[6], &vc[7]});
+  if (!a.cmm.empty()) {
+    if (!a.quiet)
+      fmt::print(
+          "measured {} placements of a {}-ball frame gauge through the I++ DME server at {} ({} "
+          "points per ball, tip radius {} mm, {} commands): wrote {} and {}; {} holds where "
+          "the balls should be and the errors of {} there (the truth if the server runs that "
+          "machine)\n",
+          c.placements.size(), g.balls.size(), a.cmm, o.points_per_ball, o.tip_radius, commands,
+          a.gauge, a.measurements, a.truth,
+          a.machine.path.empty() ? fmt::format("the random machine of seed {}", a.machine.seed)
+                                 : a.machine.path);
+    return 0;
+  }
   if (!a.lengths.empty()) {
     // Gauge blocks in the box of the mapped ball centres (ISO 10360-2 style, held out).
     sim::GaugeBlockOptions go;
@@ -378,6 +427,17 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       ->capture_default_str();
   c->add_option("--length-noise", sa->length_noise_um,
                 "probing noise of the gauge-block measurements, um (default: --noise)");
+  c->add_option("--balls", sa->balls,
+                "also write where the gauge's balls stand over all its placements (true "
+                "centres, diameter) to this CSV, for trueaxis serve --balls");
+  c->add_option("--cmm", sa->cmm,
+                "measure the gauge on a CMM over I++ DME instead (ipp://HOST:PORT, e.g. trueaxis "
+                "serve --machine machine.json --balls balls.csv): PtMeas on each ball where the "
+                "placements put it, with the CMM's probe and its noise")
+      ->excludes("--noise")
+      ->excludes("--tip-radius")
+      ->excludes("--seed")
+      ->excludes("--lengths");
   c->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
   out.push_back({c, [sa] { return run_simulate(*sa); }});
   return out;

@@ -12,6 +12,7 @@
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/ballgauge.hpp"
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/ippdme/client.hpp"
@@ -94,7 +95,7 @@ std::pair<std::string, unsigned short> parse_ipp_address(const std::string& addr
 namespace {
 
 struct ServeArgs {
-  std::string host = "127.0.0.1", machine, part, log;
+  std::string host = "127.0.0.1", machine, part, log, balls;
   int port = 1294;
   std::vector<double> part_origin;
   double time_scale = 1, tip_radius = 1, probe_noise_um = 0;
@@ -134,9 +135,17 @@ int run_serve(const ServeArgs& a) {
       e.part_origin = scan::VirtualCmm(*e.part, vo).part_origin();
     }
   }
+  if (!a.balls.empty()) {
+    e.balls = io::read_balls(a.balls);
+    // Home above the balls when no machine says where (with one, its top corner).
+    if (!e.cmm.geometry) e.cmm.home = Eigen::Vector3d(0, 0, e.cmm.travel[2][1]);
+  }
   ippdme::Server server(o);
+  std::string world = e.part ? fmt::format("the part of {}", a.part) : std::string();
+  if (!e.balls.empty())
+    world += fmt::format("{}{} balls of {}", world.empty() ? "" : " and ", e.balls.size(), a.balls);
   fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}; Ctrl-C stops\n", a.host, server.port(),
-             e.part ? fmt::format("the part of {}", a.part) : std::string("the nominal world"),
+             world.empty() ? std::string("the nominal world") : world,
              e.cmm.geometry ? fmt::format(" on the machine of {}", a.machine) : std::string());
   if (e.part)
     fmt::print(
@@ -221,7 +230,8 @@ std::vector<Command> add_serve_command(CLI::App& app) {
       "CMM controllers: measuring software or 'trueaxis ipp run' connects over TCP and moves, "
       "probes and scans it. One session at a time. Without --part each probing meets the "
       "surface its command describes (a plane through a PtMeas point, the circle of a "
-      "ScanOnCircle); with --part the simulated part's sections.\n"
+      "ScanOnCircle); with --part the simulated part's sections, with --balls the balls of a "
+      "gauge.\n"
       "Example: trueaxis serve --machine machine.json --part part.json --log session.log");
   c->add_option("--host", a->host, "address to listen on")->capture_default_str();
   c->add_option("--port", a->port, "TCP port (0: any free one, printed)")
@@ -232,6 +242,10 @@ std::vector<Command> add_serve_command(CLI::App& app) {
                 "machine); the measured points carry them")
       ->check(CLI::ExistingFile);
   c->add_option("--part", a->part, "part.json: the simulated part (trueaxis simulate part)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--balls", a->balls,
+                "balls.csv: balls standing in the machine (x,y,z,diameter in mm, machine "
+                "coordinates), e.g. a ball gauge (trueaxis simulate ballgauge --balls)")
       ->check(CLI::ExistingFile);
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: the part's design origin in machine coordinates (mm; default: the "

@@ -221,6 +221,33 @@ void write_lengths(const std::string& path,
             {&cols[0], &cols[1], &cols[2], &cols[3], &cols[4], &cols[5], &cols[6]});
 }
 
+std::vector<sim::Ball> read_balls(const std::string& path) {
+  const CsvTable t = CsvTable::read(path);
+  const int c[4] = {t.require("x"), t.require("y"), t.require("z"), t.require("diameter")};
+  if (t.rows() == 0) throw Error(fmt::format("{}: no balls", path));
+  std::vector<sim::Ball> out(t.rows());
+  for (std::size_t i = 0; i < t.rows(); ++i) {
+    const auto r = static_cast<Eigen::Index>(i);
+    for (int k = 0; k < 3; ++k) out[i].centre[k] = t.column(c[k])[r];
+    const double d = t.column(c[3])[r];
+    if (!(d > 0))
+      throw Error(fmt::format("{}ball diameter {} mm: must be > 0", t.where(r, c[3]), d));
+    out[i].radius = d / 2;
+  }
+  return out;
+}
+
+void write_balls(const std::string& path, const std::vector<sim::Ball>& balls) {
+  const auto n = static_cast<Eigen::Index>(balls.size());
+  std::vector<Eigen::VectorXd> cols(4, Eigen::VectorXd(n));
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const auto& b = balls[static_cast<std::size_t>(i)];
+    for (int k = 0; k < 3; ++k) cols[static_cast<std::size_t>(k)][i] = b.centre[k];
+    cols[3][i] = 2 * b.radius;
+  }
+  write_csv(path, {"x", "y", "z", "diameter"}, {&cols[0], &cols[1], &cols[2], &cols[3]});
+}
+
 void write_length_verification(const std::string& path,
                                const std::vector<ballgauge::LengthVerification>& results,
                                const ballgauge::Mpe* mpe) {

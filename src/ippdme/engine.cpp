@@ -128,6 +128,27 @@ struct PartSurface {
   }
 };
 
+// Balls standing in the machine (machine coordinates): the nearest one's surface, for balls
+// within reach of the tip.
+struct BallSurface {
+  std::vector<sim::Ball> balls;
+  double reach;  // mm beyond a ball's surface within which it is reported
+  std::optional<Nearest> operator()(const Eigen::Vector3d& x) const {
+    std::optional<Nearest> best;
+    for (const auto& b : balls) {
+      const Eigen::Vector3d v = x - b.centre;
+      const double rho = v.norm(), dist = rho - b.radius;
+      if (dist > reach || rho < 1e-9 || (best && dist >= best->distance)) continue;
+      Nearest n;
+      n.normal = v / rho;
+      n.point = b.centre + b.radius * n.normal;
+      n.distance = dist;
+      best = n;
+    }
+    return best;
+  }
+};
+
 }  // namespace
 
 struct Engine::State {
@@ -135,7 +156,8 @@ struct Engine::State {
   Send send;
   std::function<void()> flow;  // set before the worker starts (set_flow_control)
   SimulatedCmm cmm;
-  std::shared_ptr<PartSurface> part;  // the part world (empty: the nominal world)
+  std::shared_ptr<PartSurface> part;   // the part world (empty: the nominal world)
+  std::shared_ptr<BallSurface> balls;  // balls on the table (empty: none)
 
   std::mutex m;  // guards everything below (the CMM belongs to the worker)
   std::condition_variable cv;
@@ -189,6 +211,12 @@ struct Engine::State {
       ps->origin = o.part_origin;
       ps->reach = cmm.tip_radius();
       part = std::move(ps);
+    }
+    if (!o.balls.empty()) {
+      for (const auto& b : o.balls)
+        if (!b.centre.allFinite() || !(b.radius > 0) || !std::isfinite(b.radius))
+          throw Error("I++ DME server: a ball needs a finite centre and a positive radius");
+      balls = std::make_shared<BallSurface>(BallSurface{o.balls, cmm.tip_radius() + 5});
     }
     cmm.set_hook([this] { return on_tick(); });
   }
@@ -419,9 +447,16 @@ struct Engine::State {
 
   // ---- motion (called with the lock released) --------------------------------------------
   Surface world() const {
-    if (!part) return {};
+    if (!part && !balls) return {};
     auto ps = part;
-    return [ps](const Eigen::Vector3d& x) { return (*ps)(x); };
+    auto bs = balls;
+    if (!bs) return [ps](const Eigen::Vector3d& x) { return (*ps)(x); };
+    if (!ps) return [bs](const Eigen::Vector3d& x) { return (*bs)(x); };
+    return [ps, bs](const Eigen::Vector3d& x) {
+      auto a = (*ps)(x), b = (*bs)(x);
+      if (a && b) return std::abs(a->distance) <= std::abs(b->distance) ? a : b;
+      return a ? a : b;
+    };
   }
   void go(const Eigen::Vector3d& x, double speed, double accel) {
     if (!cmm.within_travel(x)) throw Fail{2500};
@@ -599,7 +634,7 @@ void Executor::goto_() {
   need_session();
   need_homed();
   const auto t = s_.target(m_);
-  if (t.r && *t.r != s_.table && s_.part) throw Fail{506};
+  if (t.r && *t.r != s_.table && (s_.part || s_.balls)) throw Fail{506};
   if (!s_.cmm.within_travel(t.x)) throw Fail{2500};
   const double speed = s_.par("GoToPar", "Speed"), accel = s_.par("GoToPar", "Accel");
   s_.user_enabled = false;
@@ -887,7 +922,7 @@ void Executor::part_handling() {
     auto flat = [&](Eigen::Vector3d a) { return unit(a - a.dot(z) * z); };
     const Eigen::Vector3d p = flat(s_.dir_to_machine(vec(v, 0))), q = flat(vec(v, 3));
     const double turn = std::atan2(p.cross(q).dot(z), p.dot(q));
-    if (s_.part && std::abs(turn) > 1e-9) throw Fail{506};
+    if ((s_.part || s_.balls) && std::abs(turn) > 1e-9) throw Fail{506};
     std::vector<Value> out = {number(q.x()), number(q.y()), number(q.z())};
     if (v.size() == 14) {
       const Eigen::Vector3d p2 = Eigen::AngleAxisd(turn, z) * flat(s_.dir_to_machine(vec(v, 6)));
@@ -907,7 +942,7 @@ void Executor::part_handling() {
   };
   if (name_ == "CenterPart") {
     const double d = off_axis(vec(v, 0));
-    if (d >= v[3] && s_.part) throw Fail{506};
+    if (d >= v[3] && (s_.part || s_.balls)) throw Fail{506};
     s_.data(c_.tag, {call("CenterPart", {number(d < v[3] ? 1 : 0)})});
     return;
   }
@@ -918,13 +953,13 @@ void Executor::part_handling() {
   };
   if (name_ == "TiltPart") {
     const bool ok = tilt_ok(vec(v, 0), v[3]);
-    if (!ok && s_.part) throw Fail{506};
+    if (!ok && (s_.part || s_.balls)) throw Fail{506};
     s_.data(c_.tag, {call("TiltPart", {number(ok ? 1 : 0)})});
     return;
   }
   const Eigen::Vector3d p1 = vec(v, 0), p2 = vec(v, 3);
   const bool ok = off_axis(p1) < v[6] && off_axis(p2) < v[6] && tilt_ok(p2 - p1, v[6]);
-  if (!ok && s_.part) throw Fail{506};
+  if (!ok && (s_.part || s_.balls)) throw Fail{506};
   s_.data(c_.tag, {call("TiltCenterPart", {number(ok ? 1 : 0)})});
 }
 

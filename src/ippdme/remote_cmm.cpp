@@ -46,7 +46,8 @@ std::vector<double> numbers_of(const Response& d) {
 }  // namespace
 
 void RemoteCmmOptions::validate() const {
-  if (!(tip_radius > 0)) throw Error("I++ DME CMM: the tip radius must be positive (mm)");
+  if (!(tip_radius >= 0) || !std::isfinite(tip_radius))
+    throw Error("I++ DME CMM: the tip radius must be positive (mm), or 0 for the server's");
   if (!(curve_step > 0)) throw Error("I++ DME CMM: the curve step must be positive (mm)");
   if (!(follow_deviation > 0))
     throw Error("I++ DME CMM: the follow deviation must be positive (mm)");
@@ -60,6 +61,11 @@ RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
   const auto homed = must("IsHomed()").numbers();
   if (homed.empty() || homed[0] == 0) must("Home()");
   if (!o_.tool.empty()) must(fmt::format("ChangeTool(\"{}\")", o_.tool));
+  if (o_.tip_radius == 0) {
+    o_.tip_radius = tool_radius();
+    if (!(o_.tip_radius > 0))
+      throw Error("I++ DME CMM: the server's tool has no tip radius (GetProp(Tool.AvrRadius()))");
+  }
   must("OnPtMeasReport(X(), Y(), Z(), IJK())");
   must("OnScanReport(X(), Y(), Z(), IJK())");
   if (o_.part_origin) {
@@ -137,6 +143,12 @@ Eigen::Vector3d RemoteCmm::position() const {
   return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
+double RemoteCmm::tool_radius() {
+  const auto v = must("GetProp(Tool.AvrRadius())").numbers();
+  if (v.empty() || !(v[0] >= 0)) throw Error("I++ DME: GetProp(Tool.AvrRadius()) gave no radius");
+  return v[0];
+}
+
 void RemoteCmm::set_goto_speed(double speed) {
   if (speed == goto_speed_) return;
   must(fmt::format("SetProp(Tool.GoToPar.Speed({:g}))", speed));
@@ -169,11 +181,15 @@ std::optional<scan::Touch> RemoteCmm::touch(const design::Plane&, const Eigen::V
   // PtMeas starts `Approach` plus the tip radius off its nominal point, along IJK, and searches
   // `Search` beyond it: with Approach 0 the nominal point is one tip radius ahead of the start.
   const Eigen::Vector3d d = direction.normalized();
-  const double r = o_.tip_radius;
-  must(
-      fmt::format("SetProp(Tool.PtMeasPar.Approach(0), Tool.PtMeasPar.Search({:g}), "
-                  "Tool.PtMeasPar.Speed({:g}), Tool.PtMeasPar.Retract(1))",
-                  std::max(0.1, distance - r), speed));
+  const double r = o_.tip_radius, search = std::max(0.1, distance - r);
+  if (search != touch_search_ || speed != touch_speed_) {
+    must(
+        fmt::format("SetProp(Tool.PtMeasPar.Approach(0), Tool.PtMeasPar.Search({:g}), "
+                    "Tool.PtMeasPar.Speed({:g}), Tool.PtMeasPar.Retract(1))",
+                    search, speed));
+    touch_search_ = search;
+    touch_speed_ = speed;
+  }
   const auto tr = run(fmt::format("PtMeas({}, {})", xyz(start + r * d), ijk(-d)));
   const double t = time();
   if (!tr.errors.empty()) {
@@ -211,6 +227,7 @@ scan::ScanOutcome RemoteCmm::scan_path(const design::ScanPath& path,
   set_scan_speed(fastest);
   // The server approaches the curve's start from this far outside it, as the controller does.
   must(fmt::format("SetProp(Tool.PtMeasPar.Approach({:g}))", settings.approach_clearance));
+  touch_search_ = -1;  // touch() sets its PtMeasPar again
   must(fmt::format("ScanOnCurveHint({:g}, {:g})", o_.follow_deviation, o_.tip_radius));
   must(fmt::format("ScanOnCurveDensity(Dis({:g}))", settings.record_spacing));
 
@@ -288,6 +305,7 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
       closed ? Eigen::Vector3d(S + o_.tip_radius * nm) : Eigen::Vector3d(S + 1e4 * N);
   set_scan_speed(speed);
   must("SetProp(Tool.PtMeasPar.Approach(2), Tool.PtMeasPar.Search(4))");
+  touch_search_ = -1;
   double arc = 0, next = 0;
   bool done = false;
   Eigen::Vector3d last = S;

@@ -79,15 +79,13 @@ void BallGaugeOptions::validate() const {
     throw Error("ball gauge simulation: tip radius and noise must be >= 0");
 }
 
-BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
-                                     const std::vector<GaugePose>& poses,
-                                     const BallGaugeOptions& o) {
+BallGaugeCampaign measure_ballgauge(const ballgauge::Gauge& gauge,
+                                    const std::vector<GaugePose>& poses, const BallGaugeOptions& o,
+                                    const BallProbe& probe) {
   o.validate();
   gauge.validate();
   const auto dirs = directions(o.points_per_ball);
   const double reach = gauge.ball_diameter / 2 + o.tip_radius;
-  std::mt19937_64 rng(o.seed);
-  std::normal_distribution<double> N(0.0, 1.0);
   BallGaugeCampaign c;
   for (const auto& pose : poses) {
     ballgauge::Placement pl;
@@ -100,19 +98,15 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
     std::vector<Eigen::Vector3d> truth;
     for (int b : balls) {
       if (b < 0 || b >= static_cast<int>(gauge.balls.size()))
-        throw Error(fmt::format("ball gauge simulation: no ball {}", b));
+        throw Error(fmt::format("ball gauge campaign: no ball {}", b));
       const Eigen::Vector3d X =
           pose.rotation * gauge.balls[static_cast<std::size_t>(b)] + pose.translation;
       ballgauge::BallPoints bp;
       bp.index = b;
       bp.points.resize(3, static_cast<Eigen::Index>(dirs.size()));
-      for (std::size_t k = 0; k < dirs.size(); ++k) {
-        const Eigen::Vector3d P = X + reach * dirs[k];
-        const Eigen::Vector3d cmd = command_to_reach(
-            machine, P, fmt::format("ball gauge simulation: {} ball {}", pose.name, b));
-        bp.points.col(static_cast<Eigen::Index>(k)) =
-            cmd + machine.offset + o.noise * Eigen::Vector3d(N(rng), N(rng), N(rng));
-      }
+      const std::string what = fmt::format("{} ball {}", pose.name, b);
+      for (std::size_t k = 0; k < dirs.size(); ++k)
+        bp.points.col(static_cast<Eigen::Index>(k)) = probe(X, reach, dirs[k], what);
       pl.balls.push_back(std::move(bp));
       truth.push_back(X);
     }
@@ -120,6 +114,45 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
     c.true_centres.push_back(std::move(truth));
   }
   return c;
+}
+
+BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
+                                     const std::vector<GaugePose>& poses,
+                                     const BallGaugeOptions& o) {
+  o.validate();
+  std::mt19937_64 rng(o.seed);
+  std::normal_distribution<double> N(0.0, 1.0);
+  return measure_ballgauge(
+      gauge, poses, o,
+      [&](const Eigen::Vector3d& X, double reach, const Eigen::Vector3d& d,
+          const std::string& what) {
+        const Eigen::Vector3d cmd = command_to_reach(
+            machine, X + reach * d, fmt::format("ball gauge simulation: {}", what));
+        // Drawn z first, as GCC evaluated the three draws of earlier versions: the same seed
+        // gives the same campaign as before.
+        const double nz = N(rng), ny = N(rng), nx = N(rng);
+        return Eigen::Vector3d(cmd + machine.offset + o.noise * Eigen::Vector3d(nx, ny, nz));
+      });
+}
+
+std::vector<Ball> gauge_balls(const ballgauge::Gauge& gauge, const std::vector<GaugePose>& poses) {
+  gauge.validate();
+  std::vector<Ball> out;
+  for (const auto& pose : poses) {
+    std::vector<int> balls = pose.balls;
+    if (balls.empty())
+      for (int i = 0; i < static_cast<int>(gauge.balls.size()); ++i) balls.push_back(i);
+    for (int b : balls) {
+      if (b < 0 || b >= static_cast<int>(gauge.balls.size()))
+        throw Error(fmt::format("ball gauge: no ball {}", b));
+      const Eigen::Vector3d X =
+          pose.rotation * gauge.balls[static_cast<std::size_t>(b)] + pose.translation;
+      const bool seen = std::any_of(out.begin(), out.end(),
+                                    [&](const Ball& q) { return (q.centre - X).norm() <= 1e-6; });
+      if (!seen) out.push_back({X, gauge.ball_diameter / 2});
+    }
+  }
+  return out;
 }
 
 void BallGaugeCampaign::bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const {

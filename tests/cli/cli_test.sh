@@ -454,6 +454,29 @@ expect_code 2 "$T" scan --design design.json --cmm "127.0.0.1:$PORT" -o s.json
 grep -q "expected ipp://HOST:PORT" err.txt && ok || bad "scan --cmm bad address: $(cat err.txt)"
 expect_code 2 "$T" scan --design design.json -o s.json
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" scan --design design.json --cmm ipp://127.0.0.1:1 -o s.json
+# A ball gauge measured through the server with PtMeas gives the map simulated in process (both
+# without noise: the same to a few nm); the placements' balls stand in the server's world.
+expect_ok "$T" simulate ballgauge --machine machine.json --sections 2 --tip-radius 1 --gauge bgi-gauge.json --measurements bgi-here.json --truth bgi-truth.csv --balls bgi-balls.csv
+head -1 bgi-balls.csv | grep -qx "x,y,z,diameter" && [ "$(wc -l < bgi-balls.csv)" -eq 61 ] && ok || bad "simulate ballgauge --balls: $(head -2 bgi-balls.csv)"
+"$T" serve --machine machine.json --balls bgi-balls.csv --port 0 --time-scale 0 --sessions 1 >serve.txt 2>&1 &
+SERVE=$!
+for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
+PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+expect_code 2 "$T" simulate ballgauge --cmm "ipp://127.0.0.1:$PORT" --noise 0.5
+expect_code 2 "$T" simulate ballgauge --cmm "127.0.0.1:$PORT"
+expect_ok "$T" simulate ballgauge --machine machine.json --sections 2 --cmm "ipp://127.0.0.1:$PORT" --gauge bgi-gauge.json --measurements bgi-there.json --truth bgi-truth.csv
+grep -q "measured 2 placements of a 40-ball frame gauge through the I++ DME server at ipp://127.0.0.1:$PORT" out.txt && grep -q "60 balls of bgi-balls.csv" serve.txt && ok || bad "simulate ballgauge --cmm: $(cat out.txt serve.txt)"
+wait $SERVE
+expect_ok "$T" ballgauge --gauge bgi-gauge.json --measurements bgi-here.json -o bgi-here-map.json
+expect_ok "$T" ballgauge --gauge bgi-gauge.json --measurements bgi-there.json -o bgi-there-map.json
+python3 -c "
+import json, sys
+a = json.load(open('bgi-here-map.json'))['points']; b = json.load(open('bgi-there-map.json'))['points']
+d = max(abs(p['error'][k] - q['error'][k]) for p, q in zip(a, b) for k in range(3))
+big = max(abs(v) for p in a for v in p['error'])
+sys.exit(0 if len(a) == len(b) == 60 and d < 0.05 and big > 2 else 1)" && ok || bad "the ball-gauge map through I++ DME differs from the one in process"
+printf 'x,y,z,diameter\n1,2,3,-25\n' > bad-balls.csv
+expect_err "bad-balls.csv:2:7: ball diameter -25 mm: must be > 0" "$T" serve --balls bad-balls.csv --port 0
 expect_code 2 "$T" serve --port 70000
 expect_ok "$T" serve --help
 grep -q "Without --part each probing meets" out.txt && ok || bad "serve --help"

@@ -79,3 +79,25 @@ TEST(BallGaugeIo, BadFilesNameFileLineAndColumn) {
                 .find("ball index 1e+10 is out of range"),
             std::string::npos);
 }
+
+TEST(BallGaugeIo, BallsRoundTripAndBadFilesAreLocated) {
+  const std::vector<sim::Ball> balls{{{150, 120, 60}, 12.5}, {{230.25, 120, 60}, 12.5}};
+  const std::string p = test::temp_file("balls.csv", "");
+  io::write_balls(p, balls);
+  const auto back = io::read_balls(p);
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[1].centre, balls[1].centre);
+  EXPECT_EQ(back[1].radius, 12.5);
+  auto err = [](const std::string& t) {
+    const std::string p = test::temp_file("balls.csv", t);
+    return test::error_of([&] { io::read_balls(p); });
+  };
+  EXPECT_NE(err("x,y,z,diameter\n1,2,3,25\n4,5,6,0\n").find("balls.csv:3:7: ball diameter 0 mm"),
+            std::string::npos)
+      << err("x,y,z,diameter\n1,2,3,25\n4,5,6,0\n");
+  EXPECT_NE(err("x,y,z\n1,2,3\n").find("balls.csv:1:"), std::string::npos);
+  EXPECT_NE(err("x,y,z\n1,2,3\n").find("diameter"), std::string::npos);
+  EXPECT_NE(err("x,y,z,diameter\n").find("no balls"), std::string::npos);
+  EXPECT_NE(err("x,y,z,diameter\n1,2,abc,25\n").find("balls.csv:2:5:"), std::string::npos)
+      << err("x,y,z,diameter\n1,2,abc,25\n");
+}

@@ -15,6 +15,8 @@
 // model.json (parametric model): a machine.json (io/machine.hpp: usable by every machine command)
 //   plus "identification": degree, basis centre and half span (mm), the Chebyshev parameters
 //   (mm, rad), their covariance, residual and sigma (µm).
+// balls.csv: columns x,y,z (a ball's true centre, mm, machine coordinates) and diameter (mm):
+//   where a gauge's balls stand in the machine (`trueaxis serve --balls`).
 // Errors name file:line:col.
 #pragma once
 
@@ -24,6 +26,7 @@
 #include "trueaxis/ballgauge/ballgauge.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/ballgauge/parametric.hpp"
+#include "trueaxis/sim/cmm.hpp"
 
 namespace trueaxis::io {
 
@@ -46,6 +49,10 @@ void write_lengths(const std::string& path,
 void write_length_verification(const std::string& path,
                                const std::vector<ballgauge::LengthVerification>& results,
                                const ballgauge::Mpe* mpe = nullptr);
+
+// Refuses an empty file and non-positive diameters at their file:line:col.
+std::vector<sim::Ball> read_balls(const std::string& path);
+void write_balls(const std::string& path, const std::vector<sim::Ball>& balls);
 
 void write_parametric(const std::string& path, const ballgauge::ParametricResult& result);
 ballgauge::ParametricResult read_parametric(const std::string& path);

@@ -33,9 +33,10 @@
 //   `table_centre`).
 //
 // The world the probe meets: with a part (sections of a simulated part, placed at
-// `part_origin`) the probe meets its sections; without one, each command meets the surface it
-// describes (the nominal world: PtMeas meets the plane through its point normal to its
-// direction, ScanOnCircle the cone of its circle, ScanOnCurve its curve).
+// `part_origin`) the probe meets its sections, and with balls (a ball gauge standing on the
+// table) their spheres; with neither, each command meets the surface it describes (the nominal
+// world: PtMeas meets the plane through its point normal to its direction, ScanOnCircle the cone of
+// its circle, ScanOnCurve its curve).
 //
 // Threads: receive() may run on a reader thread while execute_next() runs on a worker thread;
 // `send` is called from both and must be thread-safe.
@@ -51,6 +52,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "trueaxis/ippdme/protocol.hpp"
 #include "trueaxis/ippdme/simulated_cmm.hpp"
@@ -63,7 +65,8 @@ inline constexpr int kPointsPerLine = 16;
 struct EngineOptions {
   SimulatedCmmOptions cmm;
   std::optional<sim::Part> part;  // the simulated part (none: the nominal world)
-  Eigen::Vector3d part_origin = Eigen::Vector3d::Zero();   // its design origin (machine, mm)
+  Eigen::Vector3d part_origin = Eigen::Vector3d::Zero();  // its design origin (machine, mm)
+  std::vector<sim::Ball> balls;  // spheres the probe meets, with or without a part
   Eigen::Vector3d table_centre = Eigen::Vector3d::Zero();  // on the rotary table's axis (mm)
   // Machine time against the wall clock: 1 runs in real time, 0 as fast as the simulation goes
   // (for tests and batch runs), 0.1 ten times faster than real time.

@@ -38,7 +38,8 @@ struct RemoteCmmOptions {
   ClientOptions client;
   std::optional<Eigen::Vector3d> part_origin;  // machine coordinates of the design origin (mm)
   // The stylus tip's radius (mm): the scanning path is built with it, and a streamed point's
-  // ball centre is the surface point plus this along its normal.
+  // ball centre is the surface point plus this along its normal. 0: the active tool's, as the
+  // server reports it (GetProp(Tool.AvrRadius())).
   double tip_radius = 1;
   std::string tool = "Probe1";  // ChangeTool to this at the start ("" keeps the active tool)
   // Points of the nominal curve sent with ScanOnCurve, this far apart along the path (mm); at
@@ -73,6 +74,11 @@ class RemoteCmm : public scan::Machine {
                                  bool closed, double length, double speed,
                                  const scan::ScanSettings& settings) override;
 
+  // The active tool's mean tip radius as the server knows it (GetProp(Tool.AvrRadius()), mm).
+  double tool_radius();
+  // The tip radius in use (options.tip_radius, or the server's when that was 0), mm.
+  double tip_radius() const { return o_.tip_radius; }
+
   // The commands sent so far, AbortE and ClearAllErrors included (for logs and tests).
   long commands() const { return commands_; }
   Client& client() { return *client_; }
@@ -82,6 +88,7 @@ class RemoteCmm : public scan::Machine {
   std::unique_ptr<Client> client_;
   std::chrono::steady_clock::time_point t0_;
   double goto_speed_ = -1, scan_speed_ = -1;
+  double touch_search_ = -1, touch_speed_ = -1;  // PtMeasPar as last set by touch()
   mutable long commands_ = 0;
   // Every command goes through call(), which counts it.
   Transaction call(const std::string& command) const;

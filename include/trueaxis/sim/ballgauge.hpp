@@ -9,11 +9,13 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "trueaxis/ballgauge/ballgauge.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/sim/cmm.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::sim {
@@ -57,6 +59,27 @@ std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections
 BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
                                      const std::vector<GaugePose>& poses,
                                      const BallGaugeOptions& options);
+
+// One probing of a ball: the stylus-tip centre as the CMM reads it (mm, machine frame) when the
+// tip touches the ball of true centre `centre` where the unit `direction` leaves it (the tip
+// centre then nominally at centre + reach·direction, reach = ball radius + tip radius). `what`
+// names the ball for messages. Throws Error when the probing fails.
+using BallProbe =
+    std::function<Eigen::Vector3d(const Eigen::Vector3d& centre, double reach,
+                                  const Eigen::Vector3d& direction, const std::string& what)>;
+
+// The same campaign with any probe (e.g. a CMM over I++ DME): each pose's balls in order, each
+// probed at options.points_per_ball directions over its upper hemisphere (the pole, then rings
+// at 40° and 75° from it, in order round each ring). options.noise and seed are not used: the
+// probe's readings are what they are.
+BallGaugeCampaign measure_ballgauge(const ballgauge::Gauge& gauge,
+                                    const std::vector<GaugePose>& poses,
+                                    const BallGaugeOptions& options, const BallProbe& probe);
+
+// Where the gauge's balls stand over all its poses (true centres, machine frame): each ball once,
+// those that two poses share (within 1e-6 mm) merged. For a server's world (EngineOptions::balls)
+// and for moving around the gauge.
+std::vector<Ball> gauge_balls(const ballgauge::Gauge& gauge, const std::vector<GaugePose>& poses);
 
 // Gauge blocks (or any calibrated lengths) measured on the virtual CMM, ISO 10360-2 style: seven
 // positions through the centre of the box [lo, hi] (true positions, mm) — along x, y, z and the

@@ -126,6 +126,13 @@ class SpaceCurve {
   Eigen::VectorXd arc_;
 };
 
+// A ball standing in the machine's volume, such as one of a ball gauge's: its true centre (mm,
+// machine coordinates) and radius (mm).
+struct Ball {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double radius = 0;
+};
+
 struct ProbeOptions {
   double tip_radius = 1.0;  // ball radius (mm)
   double range = 1.0;       // measuring range of the deflection (mm)
