@@ -107,10 +107,12 @@ const std::map<std::string, ScanForm, std::less<>>& scan_forms() {
       {"ScanOnLineHint", {{2}, -1, -1, -1}},
       {"ScanOnCircle", {{12}, -1, -1, -1}},
       {"ScanOnCircleHint", {{2}, -1, -1, -1}},
+      // 1.4.3 adds the scanning plane's normal (Ni, Nj, Nk) to the in-plane scans and the
+      // number of reachings n to the sphere ends.
       {"ScanInPlaneEndIsSphere", {{17, 21}, 9, 13, -1}},
-      {"ScanInPlaneEndIsPlane", {{20}, 9, -1, 16}},
-      {"ScanInPlaneEndIsCyl", {{21}, 9, 16, 17}},
-      {"ScanInCylEndIsSphere", {{23}, 15, 19, -1}},
+      {"ScanInPlaneEndIsPlane", {{20, 23}, 9, -1, 16}},
+      {"ScanInPlaneEndIsCyl", {{21, 24}, 9, 16, 17}},
+      {"ScanInCylEndIsSphere", {{23, 24}, 15, 19, -1}},
       {"ScanInCylEndIsPlane", {{26}, 15, -1, 22}},
   };
   return f;

@@ -169,6 +169,10 @@ struct Engine::State {
   int latched = 0;  // the error that stops further work (severity ≥ 2), 0: none
   std::vector<ToolDef> tools;
   std::size_t active = 0;
+  // UnDefTool: the server does not know which tool is loaded (specification 6.3.2.14; e.g. at
+  // start with EngineOptions::tool "UnDefTool"); everything that needs the tool answers 1503
+  // until a ChangeTool or SetTool succeeds.
+  bool tool_undefined = false;
   std::optional<std::size_t> found;  // FindTool's; none: UnDefTool
   std::map<std::string, Csy> csys;
   std::string csy = "MachineCsy";
@@ -193,6 +197,13 @@ struct Engine::State {
     tools.push_back(make_tool("NoTool", "2", true, false, servo));
     tools.push_back(make_tool("Probe1", "3", true, true, servo));
     active = 3;
+    if (o.tool == "UnDefTool") {
+      tool_undefined = true;
+    } else {
+      const auto t = tool_index(o.tool);
+      if (!t) throw Error(fmt::format("I++ DME server: no tool '{}' to start with", o.tool));
+      active = *t;
+    }
     for (const char* c : {"MachineCsy", "MoveableMachineCsy", "MultipleArmCsy", "PartCsy",
                           "JogDisplayCsy", "JogMoveCsy", "SensorCsy"})
       csys[c] = Csy{};
@@ -323,6 +334,7 @@ struct Engine::State {
       if (!found) throw Fail{1503};
       return tools[*found];
     }
+    if (tool_undefined) throw Fail{1503};
     return tool();
   }
   static std::vector<std::string> split(const std::string& s) {
@@ -335,7 +347,13 @@ struct Engine::State {
       a = b + 1;
     }
   }
+  // A tool that cannot measure (NoTool) has no PtMeasPar to read or set: 0507, as NIST's checker
+  // answers.
+  static void need_block(const ToolDef& t, const std::vector<std::string>& p) {
+    if (p.size() >= 2 && p[1] == "PtMeasPar" && !t.measures) throw Fail{507};
+  }
   Param& param(ToolDef& t, const std::vector<std::string>& p) {
+    need_block(t, p);
     if (p.size() < 3 || !t.blocks.count(p[1]) || !t.blocks[p[1]].count(p[2])) throw Fail{510};
     return t.blocks[p[1]][p[2]];
   }
@@ -389,6 +407,7 @@ struct Engine::State {
       }
       return;
     }
+    need_block(t, p);
     if (!t.blocks.count(p[1])) throw Fail{510};
     if (p.size() == 2) {
       for (const auto& [b, names] : blocks()) {
@@ -514,9 +533,19 @@ class Executor {
   void need_homed() {
     if (!s_.homed) throw Fail{507};
   }
+  // The tool must be known (else 1503) and measure: NoTool only moves (0507, as NIST's checker
+  // answers).
   void need_probe() {
-    if (!s_.tool().measures) throw Fail{2002};
+    need_tool();
+    if (!s_.tool().measures) throw Fail{507};
   }
+  void need_tool() {
+    if (s_.tool_undefined) throw Fail{1503};
+  }
+  // The arguments of a measuring command, checked before anything moves as NIST's command
+  // checker does: a zero direction 1010, a point outside the travel 0504, coinciding points or a
+  // circle's radius off its plane 0502.
+  void check_arguments();
   // A measuring command: a session, a homed machine and a tool that measures.
   void need_measuring() {
     need_session();
@@ -633,6 +662,7 @@ void Executor::ptmeas() {
 void Executor::goto_() {
   need_session();
   need_homed();
+  need_tool();
   const auto t = s_.target(m_);
   if (t.r && *t.r != s_.table && (s_.part || s_.balls)) throw Fail{506};
   if (!s_.cmm.within_travel(t.x)) throw Fail{2500};
@@ -669,8 +699,70 @@ void Executor::scan(
   flush(false);
 }
 
+namespace {
+
+// Where an unknown-contour scan's arguments stand, per form (argument count): its direction
+// vectors, the points that must lie in the travel, the start and direction points, and the
+// cylinder's point and axis (−1: none).
+struct ScanLayout {
+  std::vector<std::size_t> dirs, points;
+  std::size_t start = 0, direction = 0;
+  int cylinder = -1;
+};
+const ScanLayout* scan_layout(const std::string& name, std::size_t count) {
+  static const std::map<std::pair<std::string, std::size_t>, ScanLayout> layouts = {
+      {{"ScanInPlaneEndIsSphere", 17}, {{3, 14}, {0, 6, 10}, 0, 6}},
+      {{"ScanInPlaneEndIsSphere", 21}, {{3, 6, 18}, {0, 9, 13}, 0, 9}},
+      {{"ScanInPlaneEndIsPlane", 20}, {{3, 13, 17}, {0, 6}, 0, 6}},
+      {{"ScanInPlaneEndIsPlane", 23}, {{3, 6, 16, 20}, {0, 9}, 0, 9}},
+      {{"ScanInPlaneEndIsCyl", 21}, {{3, 13, 18}, {0, 6}, 0, 6}},
+      {{"ScanInPlaneEndIsCyl", 24}, {{3, 6, 16, 21}, {0, 9}, 0, 9}},
+      {{"ScanInCylEndIsSphere", 23}, {{3, 9, 20}, {6, 12, 16}, 6, 12, 0}},
+      {{"ScanInCylEndIsSphere", 24}, {{3, 9, 21}, {6, 12, 16}, 6, 12, 0}},
+      {{"ScanInCylEndIsPlane", 26}, {{3, 9, 19, 23}, {6, 12}, 6, 12, 0}},
+  };
+  const auto it = layouts.find({name, count});
+  return it == layouts.end() ? nullptr : &it->second;
+}
+
+}  // namespace
+
+void Executor::check_arguments() {
+  const auto v = numbers(m_);
+  auto zero = [&](std::size_t i) { return !(vec(v, i).norm() > 1e-12); };
+  auto outside = [&](std::size_t i) { return !s_.cmm.within_travel(s_.to_machine(vec(v, i))); };
+  if (name_ == "ScanOnLine") {
+    if (zero(6)) throw Fail{1010};
+    if (!((vec(v, 3) - vec(v, 0)).norm() > 0)) throw Fail{502};
+    if (outside(0) || outside(3)) throw Fail{504};
+    return;
+  }
+  if (name_ == "ScanOnCircle") {
+    if (zero(6)) throw Fail{1010};
+    const Eigen::Vector3d r = vec(v, 3) - vec(v, 0);
+    if (!(r.norm() > 0)) throw Fail{502};
+    if (std::abs(r.normalized().dot(vec(v, 6).normalized())) > 1e-3) throw Fail{502};
+    if (outside(3)) throw Fail{504};
+    return;
+  }
+  const ScanLayout* l = scan_layout(name_, v.size());
+  if (!l) return;
+  for (std::size_t d : l->dirs)
+    if (zero(d)) throw Fail{1010};
+  for (std::size_t p : l->points)
+    if (outside(p)) throw Fail{504};
+  const Eigen::Vector3d S = vec(v, l->start);
+  if (!((vec(v, l->direction) - S).norm() > 0)) throw Fail{502};
+  if (l->cylinder >= 0) {
+    const auto c = static_cast<std::size_t>(l->cylinder);
+    const Eigen::Vector3d a = vec(v, c + 3).normalized(), w = S - vec(v, c);
+    if ((w - w.dot(a) * a).norm() < 1e-9) throw Fail{502};
+  }
+}
+
 void Executor::scan_on_line() {
   need_measuring();
+  check_arguments();
   const auto v = numbers(m_);
   const Eigen::Vector3d S = s_.to_machine(vec(v, 0)), E = s_.to_machine(vec(v, 3));
   const Eigen::Vector3d n = unit(s_.dir_to_machine(vec(v, 6)));
@@ -702,6 +794,7 @@ void Executor::scan_on_line() {
 
 void Executor::scan_on_circle() {
   need_measuring();
+  check_arguments();
   const auto v = numbers(m_);
   const Eigen::Vector3d C = s_.to_machine(vec(v, 0)), S = s_.to_machine(vec(v, 3));
   const Eigen::Vector3d ax = unit(s_.dir_to_machine(vec(v, 6)));
@@ -811,8 +904,23 @@ void Executor::scan_on_curve() {
 // ScanInPlaneEndIs{Sphere,Plane,Cyl} and ScanInCylEndIs{Sphere,Plane}.
 void Executor::scan_unknown() {
   need_measuring();
-  const auto v = numbers(m_);
+  check_arguments();
+  auto v = numbers(m_);
   const bool in_cyl = name_.rfind("ScanInCyl", 0) == 0;
+  const bool ends_in_sphere = name_.find("EndIsSphere") != std::string::npos;
+  // The forms before 1.4.3 (NIST's): an in-plane scan's plane is the one through the start
+  // point's surface direction and the direction point, and a sphere end counts once. Brought to
+  // the 1.4.3 layout here.
+  if (!in_cyl && v.size() == (ends_in_sphere                     ? 17u
+                              : name_ == "ScanInPlaneEndIsPlane" ? 20u
+                                                                 : 21u)) {
+    const Eigen::Vector3d N = vec(v, 3).cross(vec(v, 6) - vec(v, 0));
+    if (!(N.norm() > 1e-9)) throw Fail{502};
+    const Eigen::Vector3d u = N.normalized();
+    v.insert(v.begin() + 6, {u.x(), u.y(), u.z()});
+    if (ends_in_sphere) v.insert(v.begin() + 17, 1.0);
+  }
+  if (in_cyl && ends_in_sphere && v.size() == 23) v.insert(v.begin() + 20, 1.0);
   const std::size_t o = in_cyl ? 6 : 0;  // the cylinder's axis comes first
   const Eigen::Vector3d S = s_.to_machine(vec(v, o)), Sn = unit(s_.dir_to_machine(vec(v, o + 3)));
   Eigen::Vector3d N = Eigen::Vector3d::Zero(), A0 = Eigen::Vector3d::Zero(), Ad = N;
@@ -878,14 +986,20 @@ void Executor::scan_unknown() {
       w -= w.dot(En) * En;
       return w.norm() - size;
     };
-    double prev = measure(c.centre), prev_d = 1e300;
+    // The stop criteria are judged on the scanned points (the surface points reported), as the
+    // specification words them: the ball centre less the tip radius along the measured normal.
+    const double tip = s_.cmm.tip_radius();
+    auto scanned = [&](const Eigen::Vector3d& centre, const Eigen::Vector3d& normal) {
+      return measure(centre - tip * normal);
+    };
+    double prev = scanned(c.centre, c.normal), prev_d = 1e300;
     bool armed = kind == Plane ? false : prev > 0;
     int count = 0;
     const Eigen::Vector3d diag = s_.cmm.travel_high() - s_.cmm.travel_low();
     end = s_.cmm.follow(
         surface, con, D - S, speed, 0.2, step, 4 * diag.norm(),
         [&](const SimulatedCmm::Point& p, double arc) {
-          const double d = measure(p.centre);
+          const double d = scanned(p.centre, p.normal);
           bool stop = false;
           if (kind == Plane) {
             armed = armed || arc > start_gap;
@@ -958,6 +1072,7 @@ void Executor::part_handling() {
     return;
   }
   const Eigen::Vector3d p1 = vec(v, 0), p2 = vec(v, 3);
+  unit(p2 - p1);  // the axis through the two points: 1010 when they coincide
   const bool ok = off_axis(p1) < v[6] && off_axis(p2) < v[6] && tilt_ok(p2 - p1, v[6]);
   if (!ok && (s_.part || s_.balls)) throw Fail{506};
   s_.data(c_.tag, {call("TiltCenterPart", {number(ok ? 1 : 0)})});
@@ -998,7 +1113,7 @@ void Executor::run() {
     return s_.data(tag, {call("GetMachineClass", {string("CartCMMWithRotaryTable")})});
   if (n == "GetErrorInfo") {
     const auto info = error_info(static_cast<int>(m_.args.at(0).number()));
-    if (!info) throw Fail{509};
+    if (!info) throw Fail{504};
     return s_.data(tag, {string(std::string(info->text))});
   }
   if (n == "StopDaemon") {
@@ -1059,14 +1174,18 @@ void Executor::run() {
     return;
   }
   if (n == "ChangeTool" || n == "SetTool") {
-    const auto i = s_.tool_index(m_.args.at(0).text);
-    if (!i) throw Fail{1502};
+    const std::string& want = m_.args.at(0).text;
+    if (want == "UnDefTool") throw Fail{1503};
+    const auto i = s_.tool_index(want);
+    if (!i) throw Fail{1502};  // an unknown name changes nothing
+    s_.tool_undefined = false;
     s_.active = *i;
     s_.tool().reset();
     s_.locked.clear();
     return;
   }
   if (n == "GetChangeToolAction") {
+    if (m_.args.at(0).text == "UnDefTool") throw Fail{1503};
     if (!s_.tool_index(m_.args.at(0).text)) throw Fail{1502};
     const Eigen::Vector3d x = s_.to_csy(s_.cmm.position());
     return s_.data(
@@ -1074,7 +1193,11 @@ void Executor::run() {
                                         call("Y", {fixed(x.y())}), call("Z", {fixed(x.z())})})});
   }
   if (n == "AlignTool") {
+    need_homed();
     const auto v = numbers(m_);
+    // The vectors must be unit vectors (NIST's checker: 0502).
+    for (std::size_t i = 0; i + 3 <= (v.size() == 8 ? 6u : 3u); i += 3)
+      if (std::abs(vec(v, i).norm() - 1) > 1e-4) throw Fail{502};
     const Eigen::Vector3d a = unit(vec(v, 0));
     s_.tool().alignment = s_.dir_to_machine(a);
     s_.head_a = std::acos(std::clamp(s_.tool().alignment.z(), -1.0, 1.0)) / kDeg;
@@ -1123,7 +1246,7 @@ void Executor::run() {
   }
   if (n == "ReQualify") {
     need_homed();
-    need_probe();
+    need_probe();  // 1503 with UnDefTool, 0507 with NoTool
     return;
   }
   if (n == "ScanOnLine") return scan_on_line();
@@ -1205,6 +1328,7 @@ void Engine::receive(std::string_view text) {
     }
     s.abort_tag = c.tag;
     s.abort = true;
+    s.daemons.clear();  // a daemon is a transaction too: AbortE ends it
     s.cv.notify_all();
     return;
   }
@@ -1231,6 +1355,15 @@ void Engine::receive(std::string_view text) {
         else
           d.items.push_back(a.text);
       }
+      // Time at least 0.1 s and a positive distance (6.3.2.7), one daemon at a time (0515, as
+      // NIST's checker: stop it before starting another).
+      for (const auto& a : c.method.args)
+        if ((a.is_call("Time") && !(a.args.at(0).number() >= 0.1)) ||
+            (a.is_call("Dis") && !(a.args.at(0).number() > 0)))
+          throw Fail{510};
+      if (std::any_of(s.daemons.begin(), s.daemons.end(),
+                      [&](const Daemon& e) { return !(e.tag == d.tag); }))
+        throw Fail{515};
       s.daemons.erase(std::remove_if(s.daemons.begin(), s.daemons.end(),
                                      [&](const Daemon& e) { return e.tag == d.tag; }),
                       s.daemons.end());

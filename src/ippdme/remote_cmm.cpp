@@ -299,10 +299,9 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
   const Eigen::Vector3d t =
       material == design::Side::Left ? Eigen::Vector3d(N.cross(nm)) : Eigen::Vector3d(nm.cross(N));
   const Eigen::Vector3d S = first->surface, D = S + 5 * t;
-  // The end sphere: around the first contact's ball centre (closed), or far off the plane
-  // (open: never met, the scan is stopped here after `length`).
-  const Eigen::Vector3d E =
-      closed ? Eigen::Vector3d(S + o_.tip_radius * nm) : Eigen::Vector3d(S + 1e4 * N);
+  // The end sphere, which the scanned (surface) points enter: around the first contact
+  // (closed), or far off the plane (open: never met, the scan is stopped here after `length`).
+  const Eigen::Vector3d E = closed ? S : Eigen::Vector3d(S + 1e4 * N);
   set_scan_speed(speed);
   must("SetProp(Tool.PtMeasPar.Approach(2), Tool.PtMeasPar.Search(4))");
   touch_search_ = -1;
@@ -310,10 +309,12 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
   bool done = false;
   Eigen::Vector3d last = S;
   const auto tr = scan(
+      // The 1.4.3 form: S, Si, the scanning plane's normal N, D, StepW, E, Dia, n, Ei.
       fmt::format("ScanInPlaneEndIsSphere({:.6f}, {:.6f}, {:.6f}, {:.9f}, {:.9f}, {:.9f}, {:.9f}, "
-                  "{:.9f}, {:.9f}, {:.6f}, {:.6f}, {:.6f}, {:g}, {:.6f}, {:.6f}, {:.6f}, {:g})",
+                  "{:.9f}, {:.9f}, {:.6f}, {:.6f}, {:.6f}, {:g}, {:.6f}, {:.6f}, {:.6f}, {:g}, 1, "
+                  "{:.9f}, {:.9f}, {:.9f})",
                   S.x(), S.y(), S.z(), nm.x(), nm.y(), nm.z(), N.x(), N.y(), N.z(), D.x(), D.y(),
-                  D.z(), settings.record_spacing, E.x(), E.y(), E.z(), 2.0),
+                  D.z(), settings.record_spacing, E.x(), E.y(), E.z(), 2.0, nm.x(), nm.y(), nm.z()),
       [&](const Eigen::Vector3d& surface, const Eigen::Vector3d& normal) {
         arc += (surface - last).norm();
         last = surface;

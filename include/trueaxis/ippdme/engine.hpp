@@ -72,6 +72,9 @@ struct EngineOptions {
   // (for tests and batch runs), 0.1 ten times faster than real time.
   double time_scale = 1;
   std::string version = "1.4.3";  // GetDMEVersion
+  // The tool active at start: Probe1, RefTool, NoTool, or UnDefTool (no tool known, as NIST's
+  // command checker starts: everything that needs a tool answers 1503 until ChangeTool).
+  std::string tool = "Probe1";
 };
 
 class Engine {
