@@ -16,7 +16,9 @@
 // - Tools: BaseTool, RefTool, NoTool, UnDefTool and Probe1 (the ball of the probe options);
 //   FindTool/FoundTool, ChangeTool, SetTool, EnumTools, GetChangeToolAction, AlignTool; the
 //   GoToPar, PtMeasPar and ScanPar blocks with Act/Def/Min/Max, values outside clamped with
-//   warning 0504; GetProp, SetProp, EnumProp, EnumAllProp.
+//   warning 0504; GetProp, SetProp, EnumProp, EnumAllProp. With no tool known (UnDefTool, e.g.
+//   at start with EngineOptions::tool) whatever needs the tool answers 1503; NoTool moves but
+//   may not measure nor use PtMeasPar (0507), as NIST's command checker answers.
 // - Coordinate systems: MachineCsy, MoveableMachineCsy, MultipleArmCsy and PartCsy, each with
 //   the transformation SetCsyTransformation gives (x_csy = M(θ, ψ, φ)·(x_machine − X0), the
 //   specification's Euler angles); JogDisplayCsy, JogMoveCsy and SensorCsy are kept.
@@ -26,8 +28,14 @@
 //   in NIST's recordings report; IJK: the measured normal; ER: the tip radius; Q, R,
 //   Tool.A/B/C); the scans ScanOnLine,
 //   ScanOnCircle, ScanOnCurve and the unknown-contour scans ScanInPlaneEndIsSphere/Plane/Cyl and
-//   ScanInCylEndIsSphere/Plane (both argument forms), their hints and OnScanReport; scan data
-//   as bare numbers, up to kPointsPerLine points per line, streamed while the scan runs.
+//   ScanInCylEndIsSphere/Plane (both argument forms: NIST's, and 1.4.3's with the scanning
+//   plane's normal and the number of crossings), their hints and OnScanReport; scan data
+//   as bare numbers, up to kPointsPerLine points per line, streamed while the scan runs. Their
+//   arguments are checked before anything moves: a zero direction 1010, a scan point beyond the
+//   travel 0504, coinciding points or a circle's radius off its plane 0502. The stop criteria
+//   are judged on the scanned (surface) points.
+// - Daemons: OnMoveReportE with Time at least 0.1 s and a positive Dis (else 0510), one at a
+//   time (0515); AbortE ends it.
 // - Rotary-table part handling: AlignPart (one vector pair), CenterPart, TiltPart and
 //   TiltCenterPart answer from the geometry (the table's axis is the machine's Z axis through
 //   `table_centre`).
