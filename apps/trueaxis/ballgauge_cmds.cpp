@@ -219,7 +219,7 @@ int run_simulate(const SimArgs& a) {
         static_cast<double>(o.points_per_ball) * static_cast<double>(g.balls.size() * poses.size());
     double done = 0;
     cli::Progress progress("probing the gauge", a.quiet);
-    auto probe = ippdme::ball_probe(cmm, o.tip_radius, sim::gauge_balls(g, poses));
+    auto probe = ippdme::ball_probe(cmm, sim::gauge_balls(g, poses));
     c = sim::measure_ballgauge(g, poses, o,
                                [&](const Eigen::Vector3d& X, double reach, const Eigen::Vector3d& d,
                                    const std::string& w) {

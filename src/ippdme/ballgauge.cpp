@@ -42,8 +42,7 @@ struct Prober {
   double r;
   std::vector<sim::Ball> obstacles;
   BallProbingOptions o;
-  std::optional<Eigen::Vector3d> at;    // where the tip is (after the first call)
-  std::vector<Eigen::Vector3d> shifts;  // detours()
+  std::optional<Eigen::Vector3d> at;  // where the tip is (after the first call)
 
   bool clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
     const double margin = r + o.clearance / 2;
@@ -57,6 +56,7 @@ struct Prober {
     const Eigen::Vector3d from = at ? *at : cmm.position();
     std::vector<Eigen::Vector3d> via;
     if (!clear(from, to)) {
+      static const std::vector<Eigen::Vector3d> shifts = detours();
       const auto s = std::find_if(shifts.begin(), shifts.end(), [&](const Eigen::Vector3d& d) {
         return clear(from, from + d) && clear(from + d, to + d) && clear(to + d, to);
       });
@@ -103,13 +103,11 @@ void BallProbingOptions::validate() const {
     throw Error("ball probing: speeds must be positive (mm/s)");
 }
 
-sim::BallProbe ball_probe(RemoteCmm& cmm, double tip_radius, std::vector<sim::Ball> obstacles,
+sim::BallProbe ball_probe(RemoteCmm& cmm, std::vector<sim::Ball> obstacles,
                           const BallProbingOptions& options) {
   options.validate();
-  if (!(tip_radius >= 0) || !std::isfinite(tip_radius))
-    throw Error("ball probing: the tip radius must be >= 0 mm");
   auto p = std::make_shared<Prober>(
-      Prober{cmm, tip_radius, std::move(obstacles), options, std::nullopt, detours()});
+      Prober{cmm, cmm.tip_radius(), std::move(obstacles), options, std::nullopt});
   return [p](const Eigen::Vector3d& centre, double reach, const Eigen::Vector3d& direction,
              const std::string& what) { return (*p)(centre, reach, direction, what); };
 }

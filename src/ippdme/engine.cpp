@@ -908,12 +908,11 @@ void Executor::scan_unknown() {
   auto v = numbers(m_);
   const bool in_cyl = name_.rfind("ScanInCyl", 0) == 0;
   const bool ends_in_sphere = name_.find("EndIsSphere") != std::string::npos;
-  // The forms before 1.4.3 (NIST's): an in-plane scan's plane is the one through the start
-  // point's surface direction and the direction point, and a sphere end counts once. Brought to
-  // the 1.4.3 layout here.
-  if (!in_cyl && v.size() == (ends_in_sphere                     ? 17u
-                              : name_ == "ScanInPlaneEndIsPlane" ? 20u
-                                                                 : 21u)) {
+  // The forms before 1.4.3 (NIST's; their direction point follows the start direction, at
+  // argument 6): an in-plane scan's plane is the one through the start point's surface direction
+  // and the direction point, and a sphere end counts once. Brought to the 1.4.3 layout here.
+  const ScanLayout* l = scan_layout(name_, v.size());
+  if (!in_cyl && l && l->direction == 6) {
     const Eigen::Vector3d N = vec(v, 3).cross(vec(v, 6) - vec(v, 0));
     if (!(N.norm() > 1e-9)) throw Fail{502};
     const Eigen::Vector3d u = N.normalized();

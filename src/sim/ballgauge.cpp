@@ -38,6 +38,23 @@ Eigen::Vector3d command_to_reach(const Machine& machine, const Eigen::Vector3d& 
   return cmd;
 }
 
+// The balls a pose probes (its list, else all) with their true centres; Error for an index the
+// gauge does not have.
+std::vector<std::pair<int, Eigen::Vector3d>> placed_balls(const ballgauge::Gauge& gauge,
+                                                          const GaugePose& pose) {
+  std::vector<int> balls = pose.balls;
+  if (balls.empty())
+    for (int i = 0; i < static_cast<int>(gauge.balls.size()); ++i) balls.push_back(i);
+  std::vector<std::pair<int, Eigen::Vector3d>> out;
+  for (int b : balls) {
+    if (b < 0 || b >= static_cast<int>(gauge.balls.size()))
+      throw Error(fmt::format("ball gauge: {} has no ball {}", pose.name, b));
+    out.emplace_back(b,
+                     pose.rotation * gauge.balls[static_cast<std::size_t>(b)] + pose.translation);
+  }
+  return out;
+}
+
 }  // namespace
 
 ballgauge::Gauge frame_gauge(int nx, int ny, int nz, double pitch, double ball_diameter) {
@@ -92,15 +109,8 @@ BallGaugeCampaign measure_ballgauge(const ballgauge::Gauge& gauge,
     pl.name = pose.name;
     pl.alignment = pose.alignment;
     pl.tip_radius = o.tip_radius;
-    std::vector<int> balls = pose.balls;
-    if (balls.empty())
-      for (int i = 0; i < static_cast<int>(gauge.balls.size()); ++i) balls.push_back(i);
     std::vector<Eigen::Vector3d> truth;
-    for (int b : balls) {
-      if (b < 0 || b >= static_cast<int>(gauge.balls.size()))
-        throw Error(fmt::format("ball gauge campaign: no ball {}", b));
-      const Eigen::Vector3d X =
-          pose.rotation * gauge.balls[static_cast<std::size_t>(b)] + pose.translation;
+    for (const auto& [b, X] : placed_balls(gauge, pose)) {
       ballgauge::BallPoints bp;
       bp.index = b;
       bp.points.resize(3, static_cast<Eigen::Index>(dirs.size()));
@@ -138,20 +148,13 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
 std::vector<Ball> gauge_balls(const ballgauge::Gauge& gauge, const std::vector<GaugePose>& poses) {
   gauge.validate();
   std::vector<Ball> out;
-  for (const auto& pose : poses) {
-    std::vector<int> balls = pose.balls;
-    if (balls.empty())
-      for (int i = 0; i < static_cast<int>(gauge.balls.size()); ++i) balls.push_back(i);
-    for (int b : balls) {
-      if (b < 0 || b >= static_cast<int>(gauge.balls.size()))
-        throw Error(fmt::format("ball gauge: no ball {}", b));
-      const Eigen::Vector3d X =
-          pose.rotation * gauge.balls[static_cast<std::size_t>(b)] + pose.translation;
-      const bool seen = std::any_of(out.begin(), out.end(),
-                                    [&](const Ball& q) { return (q.centre - X).norm() <= 1e-6; });
+  for (const auto& pose : poses)
+    for (const auto& [b, X] : placed_balls(gauge, pose)) {
+      const bool seen = std::any_of(out.begin(), out.end(), [&, &X = X](const Ball& q) {
+        return (q.centre - X).norm() <= 1e-6;
+      });
       if (!seen) out.push_back({X, gauge.ball_diameter / 2});
     }
-  }
   return out;
 }
 

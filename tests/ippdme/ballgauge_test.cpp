@@ -67,8 +67,8 @@ ballgauge::Result through_server(const Campaign& c, double noise, long* commands
   const double r = cmm.tip_radius();
   EXPECT_EQ(r, kTipRadius);
   EXPECT_EQ(cmm.tool_radius(), kTipRadius);
-  const auto campaign = sim::measure_ballgauge(
-      c.gauge, c.poses, c.options, ball_probe(cmm, r, sim::gauge_balls(c.gauge, c.poses)));
+  const auto campaign = sim::measure_ballgauge(c.gauge, c.poses, c.options,
+                                               ball_probe(cmm, sim::gauge_balls(c.gauge, c.poses)));
   if (commands) *commands = cmm.commands();
   return ballgauge::calibrate(c.gauge, campaign.placements);
 }
@@ -149,7 +149,7 @@ TEST(BallGaugeOverIpp, AGaugeNotWhereItsPoseSaysIsNamed) {
   RemoteCmm cmm(ro);
   const auto err = test::error_of([&] {
     sim::measure_ballgauge(c.gauge, c.poses, c.options,
-                           ball_probe(cmm, kTipRadius, sim::gauge_balls(c.gauge, c.poses)));
+                           ball_probe(cmm, sim::gauge_balls(c.gauge, c.poses)));
   });
   EXPECT_NE(err.find("section 1 ball 0: no surface within 3 mm"), std::string::npos) << err;
 }

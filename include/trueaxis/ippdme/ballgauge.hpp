@@ -30,10 +30,11 @@ struct BallProbingOptions {
   void validate() const;    // throws Error naming the option
 };
 
-// The probe; `tip_radius` is the CMM's (RemoteCmm::tool_radius()). A probing that meets no
-// surface, or a move the server refuses (a collision, the travel), throws Error naming the ball.
-// Throws Error for no way round the obstacles between two probings.
-sim::BallProbe ball_probe(RemoteCmm& cmm, double tip_radius, std::vector<sim::Ball> obstacles,
+// The probe, with the CMM's tip radius (RemoteCmm::tip_radius(): construct it with tip_radius 0
+// to take the server's). A probing that meets no surface, or a move the server refuses (a
+// collision, the travel), throws Error naming the ball. Throws Error for no way round the
+// obstacles between two probings.
+sim::BallProbe ball_probe(RemoteCmm& cmm, std::vector<sim::Ball> obstacles,
                           const BallProbingOptions& options = {});
 
 }  // namespace trueaxis::ippdme
