@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <vector>
 
@@ -13,10 +14,14 @@ namespace trueaxis::geometry {
 Line fit_line(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
   if (x.size() != y.size() || x.size() < 2) throw Error("fit_line: need at least two points");
   const double mx = x.mean(), my = y.mean();
-  const Eigen::ArrayXd dx = x.array() - mx;
-  const double sxx = dx.square().sum();
+  double sxx = 0, sxy = 0;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double dx = x[i] - mx;
+    sxx += dx * dx;
+    sxy += dx * (y[i] - my);
+  }
   if (!(sxx > 0)) throw Error("fit_line: all x are equal");
-  const double slope = (dx * (y.array() - my)).sum() / sxx;
+  const double slope = sxy / sxx;
   return {my - slope * mx, slope};
 }
 
@@ -25,8 +30,14 @@ Eigen::VectorXd residuals(const Eigen::VectorXd& x, const Eigen::VectorXd& y, co
 }
 
 double ls_straightness(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
-  const Eigen::VectorXd r = residuals(x, y, fit_line(x, y));
-  return r.maxCoeff() - r.minCoeff();
+  const Line l = fit_line(x, y);
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double r = y[i] - l.intercept - l.slope * x[i];
+    lo = std::min(lo, r);
+    hi = std::max(hi, r);
+  }
+  return hi - lo;
 }
 
 namespace {
@@ -39,23 +50,29 @@ double cross(const P& o, const P& a, const P& b) {
   return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
 }
 
-// Andrew's monotone chain on points sorted by (x, y). Returns the hull counter-clockwise
-// without repeating the first point; collinear points dropped.
-std::vector<P> hull_sorted(const std::vector<P>& p) {
-  const std::size_t n = p.size();
-  if (n < 3) return p;
-  std::vector<P> h(2 * n);
+// Andrew's monotone chain on points sorted by (x, y), given as point(i) for i < n. Returns the
+// hull counter-clockwise without repeating the first point; collinear points dropped. The work
+// array is left uninitialised: a profile's hull has few vertices, so few of its pages are touched.
+template <class Point>
+std::vector<P> hull_sorted(std::size_t n, Point point) {
+  if (n < 3) {
+    std::vector<P> h;
+    for (std::size_t i = 0; i < n; ++i) h.push_back(point(i));
+    return h;
+  }
+  const auto h = std::make_unique_for_overwrite<P[]>(2 * n);
   std::size_t k = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
+    const P q = point(i);
+    while (k >= 2 && cross(h[k - 2], h[k - 1], q) <= 0) --k;
+    h[k++] = q;
   }
   for (std::size_t i = n - 1, t = k + 1; i-- > 0;) {
-    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
-    h[k++] = p[i];
+    const P q = point(i);
+    while (k >= t && cross(h[k - 2], h[k - 1], q) <= 0) --k;
+    h[k++] = q;
   }
-  h.resize(k - 1);
-  return h;
+  return std::vector<P>(h.get(), h.get() + (k - 1));
 }
 
 }  // namespace
@@ -64,16 +81,29 @@ MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
   if (x.size() != y.size() || x.size() < 2) throw Error("min_zone: need at least two points");
   // Work about the centroid: widths are tiny compared with lengths.
   const double cx = x.mean(), cy = y.mean();
-  std::vector<P> p(static_cast<std::size_t>(x.size()));
-  for (Eigen::Index i = 0; i < x.size(); ++i)
-    p[static_cast<std::size_t>(i)] = {x[i] - cx, y[i] - cy};
+  const std::size_t n = static_cast<std::size_t>(x.size());
   auto less = [](const P& a, const P& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
-  if (!std::is_sorted(p.begin(), p.end(), less)) std::sort(p.begin(), p.end(), less);
-  const std::vector<P> h = hull_sorted(p);
+  std::vector<P> p;  // a sorted copy, only when x is not strictly increasing (a profile is)
+  bool increasing = true;
+  for (Eigen::Index i = 1; i < x.size() && increasing; ++i) increasing = x[i - 1] < x[i];
+  if (!increasing) {
+    p.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto e = static_cast<Eigen::Index>(i);
+      p[i] = {x[e] - cx, y[e] - cy};
+    }
+    std::sort(p.begin(), p.end(), less);
+  }
+  const std::vector<P> h = increasing ? hull_sorted(n,
+                                                    [&](std::size_t i) {
+                                                      const auto e = static_cast<Eigen::Index>(i);
+                                                      return P{x[e] - cx, y[e] - cy};
+                                                    })
+                                      : hull_sorted(n, [&](std::size_t i) { return p[i]; });
   const std::size_t m = h.size();
   if (m < 3) {
     // All points collinear: zero width along the line through them.
-    const P a = p.front(), b = p.back();
+    const P a = h.front(), b = h.back();
     const double slope = b.x != a.x ? (b.y - a.y) / (b.x - a.x) : 0.0;
     return {0.0, {cy + a.y - slope * (a.x) - slope * cx, slope}};
   }

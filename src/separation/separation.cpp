@@ -6,11 +6,15 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <memory>
+#include <mutex>
 #include <numeric>
 #include <span>
+#include <tuple>
 
-#include "sequential_lsq.hpp"
+#include "banded_lsq.hpp"
+#include "design.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/straightness.hpp"
 
@@ -114,32 +118,8 @@ void Options::validate() const {
 
 // ---------------------------------------------------------------------------------------------
 // Design of the least-squares problem, shared by the solver and the layout analysis.
-namespace {
+namespace detail {
 
-struct Design {
-  long n = 0;           // stations
-  int N = 0;            // probes
-  std::vector<long> p;  // offsets in steps (p[0] = 0)
-  std::vector<long> q;  // p - pmin: position index offsets (>= 0)
-  long span = 0;        // max q
-  long Q = 0;           // number of workpiece positions: n + span
-  bool pitch = false;   // θ modelled (>= 3 probes or angle channel)
-  bool angle = false;
-  bool parabola_free = false;  // parabola fixed by a pin + the guide-quadratic gauge afterwards
-  double wa = 0;               // weight of angle rows (relative to probe rows)
-  int nvars = 0;
-  std::vector<char> pinned;
-  std::vector<double> pin_value;
-
-  int w(long pos) const { return static_cast<int>(pos); }
-  int g(long K) const { return static_cast<int>(Q + K); }
-  int t(long K) const { return static_cast<int>(Q + n + K); }  // θ scaled by h (mm)
-  int o(int i) const { return static_cast<int>(Q + n * (pitch ? 2 : 1) + i); }
-  int oa() const { return o(N); }
-};
-
-// Weights of the zero difference e = Σ z_i·o_i of a three-probe layout: z_A = 1 and z annihilates
-// constants and the offsets (for 0, l, 2l: z = 1, −2, 1).
 Eigen::Vector3d zero_difference_weights(const std::vector<long>& p) {
   if (p.size() != 3) throw Error("a zero difference is defined for three-probe layouts only");
   const double sb = static_cast<double>(p[1]), sc = static_cast<double>(p[2]);
@@ -204,37 +184,14 @@ Design make_design(const std::vector<long>& p, long n, bool angle, std::optional
   return D;
 }
 
-// Rows of station K: probes then angle. Coefficients on free ids; pinned values moved to rhs.
-template <class Emit>
-void station_rows(const Design& D, long K, const double* m, double angle_mm, Emit&& emit) {
-  // At most four unknowns per row (w, g, theta, offset); a fixed buffer, no allocation.
-  std::array<std::pair<int, double>, 4> buf;
-  std::size_t used = 0;
-  auto add = [&](int id, double v, double& rhs) {
-    if (D.pinned[static_cast<std::size_t>(id)])
-      rhs -= v * D.pin_value[static_cast<std::size_t>(id)];
-    else
-      buf[used++] = {id, v};
-  };
-  const auto c = [&] { return std::span<const std::pair<int, double>>(buf.data(), used); };
-  for (int i = 0; i < D.N; ++i) {
-    used = 0;
-    double rhs = m ? m[i] : 0.0;
-    add(D.w(K + D.q[static_cast<std::size_t>(i)]), 1.0, rhs);
-    add(D.g(K), 1.0, rhs);
-    if (D.pitch && D.p[static_cast<std::size_t>(i)] != 0)
-      add(D.t(K), static_cast<double>(D.p[static_cast<std::size_t>(i)]), rhs);
-    add(D.o(i), 1.0, rhs);
-    emit(c(), rhs);
-  }
-  if (D.angle) {
-    used = 0;
-    double rhs = D.wa * angle_mm;
-    add(D.t(K), D.wa, rhs);
-    add(D.oa(), D.wa, rhs);
-    emit(c(), rhs);
-  }
-}
+}  // namespace detail
+
+namespace {
+
+using detail::Design;
+using detail::make_design;
+using detail::station_rows;
+using detail::zero_difference_weights;
 
 long gcd_of_steps(const std::vector<long>& q) {
   long d = 0;
@@ -250,8 +207,40 @@ std::string steps_text(const std::vector<long>& p) {
 
 }  // namespace
 
+namespace {
+
+LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angle_channel,
+                                       bool zero_difference_known, long stations);
+
+}  // namespace
+
 LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel,
                               bool zero_difference_known, long stations) {
+  if (steps.empty()) throw Error("analyze_layout: no probes");
+  // The analysis looks at a fixed stretch of stations; a layout seen before with at least that
+  // many stations gets the same answer, so it is kept (an SVD costs a few milliseconds).
+  const long pmin = *std::min_element(steps.begin(), steps.end());
+  const long pmax = *std::max_element(steps.begin(), steps.end());
+  const long na = std::max<long>(64, 8 * (pmax - pmin) + 16);
+  if (stations < na)
+    return analyze_layout_uncached(steps, angle_channel, zero_difference_known, stations);
+  static std::mutex mutex;
+  static std::map<std::tuple<std::vector<long>, bool, bool>, LayoutAnalysis> cache;
+  const auto key = std::make_tuple(steps, angle_channel, zero_difference_known);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = cache.find(key); it != cache.end()) return it->second;
+  }
+  LayoutAnalysis a = analyze_layout_uncached(steps, angle_channel, zero_difference_known, stations);
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (cache.size() < 256) cache.emplace(key, a);
+  return a;
+}
+
+namespace {
+
+LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angle_channel,
+                                       bool zero_difference_known, long stations) {
   LayoutAnalysis a;
   a.steps = steps;
   const long pmin = *std::min_element(steps.begin(), steps.end());
@@ -323,6 +312,8 @@ LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel
   return a;
 }
 
+}  // namespace
+
 // ---------------------------------------------------------------------------------------------
 namespace {
 
@@ -337,7 +328,7 @@ struct Raw {
 // Everything the uncertainty propagation needs from a least-squares solve.
 struct LsqState {
   Design D;
-  std::unique_ptr<detail::SequentialLsq> engine;
+  std::unique_ptr<detail::BandedLsq> engine;
   Eigen::VectorXd zdiag;
   double h = 0;
   double ssr = 0;
@@ -362,37 +353,21 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   st.D = make_design(p, n, angle, e, wa);
   st.h = h;
   const Design& D = st.D;
-  std::vector<int> globals;
-  for (int i = 0; i < D.N + (angle ? 1 : 0); ++i)
-    if (!D.pinned[static_cast<std::size_t>(D.o(i))]) globals.push_back(D.o(i));
-  // One pass: factor the system with right-hand side (readings − A·v). Iterative refinement
-  // (same factorisation, residual right-hand side) removes the error the long chain's
-  // conditioning puts into a single QR pass (~1e-3 relative at a million stations otherwise).
-  std::vector<double> m(static_cast<std::size_t>(D.N));
-  std::vector<int> elim;
-  st.engine = std::make_unique<detail::SequentialLsq>(D.nvars, globals);
-  auto pass = [&](const Eigen::VectorXd& v) {
-    detail::SequentialLsq* E = st.engine.get();
-    E->reset();
-    for (long K = 0; K < n; ++K) {
-      for (int i = 0; i < D.N; ++i) m[static_cast<std::size_t>(i)] = data.readings(K, i) - mu[i];
-      station_rows(D, K, m.data(), angle ? (data.angle[K] - mu_a) * h : 0.0,
-                   [&](const auto& c, double rhs) {
-                     double r = rhs;
-                     for (const auto& [id, coef] : c) r -= coef * v[id];
-                     E->add_row(c, r);
-                   });
-      elim.clear();
-      for (int id : {D.g(K), D.pitch ? D.t(K) : -1, D.w(K)})
-        if (id >= 0 && !D.pinned[static_cast<std::size_t>(id)]) elim.push_back(id);
-      E->eliminate(elim);
-    }
-    E->finish();
-  };
+  // Iterative refinement: each pass factorises the system with right-hand side b − A·v and
+  // corrects v. A single pass carries the error the long chain's conditioning puts into any
+  // backward-stable solve (~1e-4 relative at a million stations); a second one removes it.
+  st.engine = std::make_unique<detail::BandedLsq>(D);
+  Eigen::VectorXd angle_mm;
+  if (angle) angle_mm = (data.angle.array() - mu_a) * h;
   Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
-  double ssr0 = 0;
+  for (int id = 0; id < D.nvars; ++id)
+    if (D.pinned[static_cast<std::size_t>(id)]) v[id] = D.pin_value[static_cast<std::size_t>(id)];
+  double ssr0 = 0, last = 0;
   for (int iter = 0; iter < 4; ++iter) {
-    pass(v);
+    if (iter == 0)
+      st.engine->factor(data.readings, mu, angle_mm, v);
+    else
+      st.engine->refactor_rhs(data.readings, mu, angle_mm, v);
     if (iter == 0) {
       if (st.engine->min_pivot_ratio() < 1e-10) {
         const LayoutAnalysis a = analyze_layout(p, angle, opt.zero_difference.has_value(), n);
@@ -403,14 +378,18 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
     }
     const Eigen::VectorXd dv = st.engine->solve();
     v += dv;
-    if (dv.cwiseAbs().maxCoeff() <= 1e-14 * std::max(1e-300, v.cwiseAbs().maxCoeff())) break;
+    // Refinement converges linearly: the next correction is about (this one)²/(the last one).
+    // Stop when that is below round-off; a pass beyond it would only see the residual's own
+    // rounding.
+    const double size = std::max(1e-300, v.cwiseAbs().maxCoeff());
+    const double now = dv.cwiseAbs().maxCoeff();
+    const double next = iter == 0 ? now : now * (now / std::max(1e-300, last));
+    if (now <= 1e-14 * size || next <= 1e-14 * size) break;
+    last = now;
   }
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
-  auto value = [&](int id) {
-    return D.pinned[static_cast<std::size_t>(id)] ? D.pin_value[static_cast<std::size_t>(id)]
-                                                  : v[id];
-  };
+  auto value = [&](int id) { return v[id]; };
   const long pmin = *std::min_element(p.begin(), p.end());
   Raw r;
   r.xw.resize(D.Q);
@@ -481,31 +460,39 @@ Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
   const long n = d.x.size();  // stations K = 0..n-1
   if (n < 4) throw Error(fmt::format("three-point needs at least 4 stations, got {}", n));
   const double l = d.step();
-  Eigen::VectorXd dA = d.readings.col(0).array() - d.readings(0, 0);
-  Eigen::VectorXd dB = d.readings.col(1).array() - d.readings(0, 1);
-  Eigen::VectorXd dC = d.readings.col(2).array() - d.readings(0, 2);
-  // Eq. 12 run from X_0 = 0, X_1 = α with the constant β: X_K = K·α + K(K−1)/2·β + C_K (eq. 15).
+  const double* A = d.readings.col(0).data();
+  const double* B = d.readings.col(1).data();
+  const double* C = d.readings.col(2).data();
+  const double a0 = A[0], b0 = B[0], c0 = C[0];
+  // Eq. 12 run from X_0 = 0, X_1 = α with the constant β: X_K = K·α + K(K−1)/2·β + C_K (eq. 15),
+  // with D_K = m(K) − m(0) per probe formed on the fly. Returns b = −Σ_{K≥2} a_K·X_K with
+  // a_K = (K, K(K−1)/2), for the fit below.
+  Eigen::VectorXd X(n);
   auto recurrence = [&](double alpha, double beta) {
-    Eigen::VectorXd X = Eigen::VectorXd::Zero(n);
+    X[0] = 0;
     X[1] = alpha;
-    for (long K = 0; K + 2 < n; ++K)
-      X[K + 2] = 2 * X[K + 1] - X[K] - 2 * dA[K + 1] + dA[K + 2] + 2 * dB[K] - dC[K] + beta;
-    return X;
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    for (long K = 0; K + 2 < n; ++K) {
+      X[K + 2] = 2 * X[K + 1] - X[K] - 2 * (A[K + 1] - a0) + (A[K + 2] - a0) + 2 * (B[K] - b0) -
+                 (C[K] - c0) + beta;
+      const double k = static_cast<double>(K + 2);
+      b[0] -= k * X[K + 2];
+      b[1] -= k * (k - 1) / 2 * X[K + 2];
+    }
+    return b;
   };
   // α, β (or α alone when β is known) minimising Σ_{K=2}^{n−1} (X_K + K·α + K(K−1)/2·β)²: the
   // 2×2 normal equations whose closed form is the seed's eqs. 16–17.
   const bool beta_known = zero_difference.has_value();
-  auto fit = [&](const Eigen::VectorXd& X) {
-    Eigen::Matrix2d M = Eigen::Matrix2d::Zero();
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    for (long K = 2; K < n; ++K) {
-      const double k = static_cast<double>(K);
-      const Eigen::Vector2d a(k, k * (k - 1) / 2);
-      M += a * a.transpose();
-      b -= a * X[K];
-    }
-    if (beta_known) return Eigen::Vector2d(b[0] / M(0, 0), 0.0);
-    return Eigen::Vector2d(M.ldlt().solve(b));
+  Eigen::Matrix2d Mn = Eigen::Matrix2d::Zero();
+  for (long K = 2; K < n; ++K) {
+    const double k = static_cast<double>(K);
+    const Eigen::Vector2d a(k, k * (k - 1) / 2);
+    Mn += a * a.transpose();
+  }
+  auto fit = [&](const Eigen::Vector2d& b) {
+    if (beta_known) return Eigen::Vector2d(b[0] / Mn(0, 0), 0.0);
+    return Eigen::Vector2d(Mn.ldlt().solve(b));
   };
   // β = 2Y_1 − Y_2 = e − (D_0A − 2D_0B + D_0C) when the zero difference e is known.
   const double beta0 =
@@ -515,21 +502,21 @@ Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
   // (1e9 mm at a million stations), so the first fit is used to rerun the recurrence near its
   // final size and the second fit corrects the small remainder.
   const Eigen::Vector2d ab1 = fit(recurrence(0.0, beta0));
-  Eigen::VectorXd X = recurrence(ab1[0], beta0 + ab1[1]);
-  const Eigen::Vector2d ab2 = fit(X);
+  const Eigen::Vector2d ab2 = fit(recurrence(ab1[0], beta0 + ab1[1]));
+  Raw r;
+  r.w.resize(n);
   for (long K = 0; K < n; ++K) {
     const double k = static_cast<double>(K);
     X[K] += k * ab2[0] + k * (k - 1) / 2 * ab2[1];
+    r.w[K] = (A[K] - a0) - X[K];  // eq. 13
   }
-  Raw r;
-  r.xg = d.x;
-  r.g = X;
-  r.xw = d.x;
-  r.w = dA - r.g;  // eq. 13
   r.xt = d.x.head(n - 1);
   r.theta.resize(n - 1);
   for (long K = 0; K + 1 < n; ++K)
-    r.theta[K] = (dB[K] - r.w[K + 1] - r.g[K] + r.w[1]) / l;  // eq. 14
+    r.theta[K] = ((B[K] - b0) - r.w[K + 1] - X[K] + r.w[1]) / l;  // eq. 14
+  r.xg = d.x;
+  r.g = std::move(X);
+  r.xw = d.x;
   r.parabola_free = !zero_difference.has_value();
   return r;
 }
@@ -544,19 +531,48 @@ Scale scale_of(const Eigen::VectorXd& x) {
   return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
 }
 
-// Functional φ with φᵀg = coefficient of t² in the LS fit of g by {1, t, t²}.
-Eigen::VectorXd quad_functional(const Eigen::VectorXd& x, const Scale& s) {
-  const Eigen::Index n = x.size();
-  Eigen::MatrixXd T(n, 3);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double t = (x[i] - s.xc) / s.L;
-    T(i, 0) = 1;
-    T(i, 1) = t;
-    T(i, 2) = t * t;
+// Coefficients e of the functional φ_K = e_0 + e_1·t_K + e_2·t_K² with φᵀg = the coefficient of t²
+// in the LS fit of g by {1, t, t²} (t = (x − x_c)/L): e = G⁻¹·(0, 0, 1), G = TᵀT from the moments
+// of t.
+Eigen::Vector3d quad_coefficients(const Eigen::VectorXd& x, const Scale& s) {
+  double m[5] = {0, 0, 0, 0, 0};
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double t = (x[i] - s.xc) / s.L, t2 = t * t;
+    m[0] += 1;
+    m[1] += t;
+    m[2] += t2;
+    m[3] += t2 * t;
+    m[4] += t2 * t2;
   }
-  const Eigen::Matrix3d G = T.transpose() * T;
-  const Eigen::Vector3d e3 = G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
-  return T * e3;
+  Eigen::Matrix3d G;
+  G << m[0], m[1], m[2], m[1], m[2], m[3], m[2], m[3], m[4];
+  return G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
+}
+
+Eigen::VectorXd quad_functional(const Eigen::VectorXd& x, const Scale& s) {
+  const Eigen::Vector3d e = quad_coefficients(x, s);
+  Eigen::VectorXd phi(x.size());
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double t = (x[i] - s.xc) / s.L;
+    phi[i] = e[0] + t * (e[1] + t * e[2]);
+  }
+  return phi;
+}
+
+// φᵀg without forming φ.
+double quad_coefficient_of(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Scale& s) {
+  const Eigen::Vector3d e = quad_coefficients(x, s);
+  double c = 0;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double t = (x[i] - s.xc) / s.L;
+    c += (e[0] + t * (e[1] + t * e[2])) * g[i];
+  }
+  return c;
+}
+
+// Subtracts a line in place.
+void subtract_line(const Eigen::VectorXd& x, Eigen::VectorXd& y, const geometry::Line& l) {
+  y.array() -= l.intercept + l.slope * x.array();
 }
 
 // Orthonormal basis of {1, x} on a grid.
@@ -578,7 +594,7 @@ Eigen::VectorXd project_out(const Eigen::MatrixXd& B, const Eigen::VectorXd& v) 
 void apply_reference(Raw& r, Reference ref) {
   const Scale s = scale_of(r.xg);
   if (r.parabola_free) {
-    const double c = quad_functional(r.xg, s).dot(r.g);
+    const double c = quad_coefficient_of(r.xg, r.g, s);
     auto t2 = [&](double x) {
       const double t = (x - s.xc) / s.L;
       return t * t;
@@ -589,11 +605,11 @@ void apply_reference(Raw& r, Reference ref) {
       r.theta[i] -= 2 * c * (r.xt[i] - s.xc) / (s.L * s.L);
   }
   if (ref == Reference::MinZone) {
-    r.w = geometry::residuals(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
-    r.g = geometry::residuals(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
+    subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
+    subtract_line(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
   } else {
-    r.w = geometry::residuals(r.xw, r.w, geometry::fit_line(r.xw, r.w));
-    r.g = geometry::residuals(r.xg, r.g, geometry::fit_line(r.xg, r.g));
+    subtract_line(r.xw, r.w, geometry::fit_line(r.xw, r.w));
+    subtract_line(r.xg, r.g, geometry::fit_line(r.xg, r.g));
   }
   if (r.theta.size()) r.theta.array() -= r.theta.mean();
 }
@@ -604,13 +620,20 @@ Eigen::VectorXd propagate(const LsqState& st, const std::vector<int>& ids, doubl
   const Eigen::MatrixXd ZV = st.engine->solve_normal(V);
   const Eigen::MatrixXd VZV = V.transpose() * ZV;
   Eigen::VectorXd var(static_cast<Eigen::Index>(ids.size()));
+  const Eigen::Index k = V.cols();
   for (std::size_t i = 0; i < ids.size(); ++i) {
     const int id = ids[i];
     const bool pinned = st.D.pinned[static_cast<std::size_t>(id)] != 0;
-    const Eigen::RowVectorXd u = U.row(static_cast<Eigen::Index>(i));
-    double v = u * VZV * u.transpose();
-    if (!pinned) v += scale * scale * st.zdiag[id] - 2 * scale * u.dot(ZV.row(id));
-    var[static_cast<Eigen::Index>(i)] = std::max(0.0, v);
+    const Eigen::Index row = static_cast<Eigen::Index>(i);
+    double v = 0, uz = 0;
+    for (Eigen::Index a = 0; a < k; ++a) {
+      double t = 0;
+      for (Eigen::Index b = 0; b < k; ++b) t += VZV(a, b) * U(row, b);
+      v += U(row, a) * t;
+      uz += U(row, a) * ZV(id, a);
+    }
+    if (!pinned) v += scale * scale * st.zdiag[id] - 2 * scale * uz;
+    var[row] = std::max(0.0, v);
   }
   return var;
 }
@@ -783,11 +806,11 @@ Result separate(const ProbeData& data, const Options& opt) {
     raw.w = geometry::gaussian_filter(raw.w, h, opt.filter_cutoff);
     raw.g = geometry::gaussian_filter(raw.g, h, opt.filter_cutoff);
   }
-  res.workpiece = {raw.xw, raw.w, uw};
-  res.guide = {raw.xg, raw.g, ug};
-  if (raw.theta.size()) res.pitch = Profile{raw.xt, raw.theta, ut};
   res.workpiece_straightness = straightness_of(raw.xw, raw.w);
   res.guide_straightness = straightness_of(raw.xg, raw.g);
+  res.workpiece = {std::move(raw.xw), std::move(raw.w), std::move(uw)};
+  res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
+  if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
   return res;
 }
 

@@ -1,0 +1,449 @@
+#include "banded_lsq.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace trueaxis::separation::detail {
+
+BandedLsq::BandedLsq(const Design& design) : D_(design) {
+  const Design& D = D_;
+  L_ = D.pitch ? 2 : 1;
+  M_ = D.N + (D.angle ? 1 : 0);
+  nb_ = static_cast<int>(D.span) + 1;
+  for (int i = 0; i < M_; ++i)
+    if (!D.pinned[static_cast<std::size_t>(D.o(i))]) globals_.push_back(D.o(i));
+  G_ = static_cast<int>(globals_.size());
+  m_ = nb_ + G_;
+  auto global_col = [&](int id) {
+    const auto it = std::find(globals_.begin(), globals_.end(), id);
+    return it == globals_.end() ? -1 : nb_ + static_cast<int>(it - globals_.begin());
+  };
+  // One station's rows over [g, θ] and over the window [w(K..K+span), globals].
+  Eigen::MatrixXd Aloc = Eigen::MatrixXd::Zero(M_, L_), Awin = Eigen::MatrixXd::Zero(M_, m_);
+  for (int i = 0; i < D.N; ++i) {
+    Aloc(i, 0) = 1;
+    if (D.pitch) Aloc(i, 1) = static_cast<double>(D.p[static_cast<std::size_t>(i)]);
+    Awin(i, D.q[static_cast<std::size_t>(i)]) = 1;
+    if (const int c = global_col(D.o(i)); c >= 0) Awin(i, c) = 1;
+  }
+  if (D.angle) {
+    Aloc(D.N, 1) = D.wa;
+    if (const int c = global_col(D.oa()); c >= 0) Awin(D.N, c) = D.wa;
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Aloc);
+  Qt_ = Eigen::MatrixXd(qr.householderQ()).transpose();
+  Rloc_ = (Qt_ * Aloc).topRows(L_).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd T = Qt_ * Awin;
+  Cloc_ = T.topRows(L_);
+  Cred_ = T.bottomRows(M_ - L_);
+  scale_ = std::max({1.0, Aloc.cwiseAbs().maxCoeff(), Awin.cwiseAbs().maxCoeff()});
+  for (long j = 0; j < D.Q; ++j)
+    if (D.pinned[static_cast<std::size_t>(D.w(j))]) pinned_w_.push_back(j);
+  rows_ = D.n * M_;
+  unknowns_ = static_cast<long>(std::count(D.pinned.begin(), D.pinned.end(), 0));
+}
+
+int BandedLsq::id_of(long K, int c) const {
+  if (c >= nb_) return globals_[static_cast<std::size_t>(c - nb_)];
+  return K + c < D_.Q ? D_.w(K + c) : -1;
+}
+
+bool BandedLsq::active(int id) const {
+  return id >= 0 && !D_.pinned[static_cast<std::size_t>(id)];
+}
+
+namespace {
+
+// Right-hand side of station K's rows, b − A·v, transformed by the constant Qᵀ (row-major qt).
+inline void station_rhs(const Design& D, long K, const Eigen::MatrixXd& readings, const double* mu,
+                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
+                        const double* offsets, const double* qt, int M, double* b, double* bt) {
+  const double gK = v[D.g(K)], tK = D.pitch ? v[D.t(K)] : 0.0;
+  for (int i = 0; i < D.N; ++i)
+    b[i] = readings(K, i) - mu[i] - v[D.w(K + D.q[static_cast<std::size_t>(i)])] - gK -
+           static_cast<double>(D.p[static_cast<std::size_t>(i)]) * tK - offsets[i];
+  if (D.angle) b[D.N] = D.wa * (angle_mm[K] - tK - offsets[D.N]);
+  for (int r = 0; r < M; ++r) {
+    double acc = 0;
+    for (int c = 0; c < M; ++c) acc += qt[r * M + c] * b[c];
+    bt[r] = acc;
+  }
+}
+
+}  // namespace
+
+void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                       const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+  const Design& D = D_;
+  const long n = D.n;
+  const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
+  rw_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(s));
+  bloc_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(L));
+  // The rotations depend on the coefficients only, so later right-hand sides can reuse them
+  // (iterative refinement) if they fit in a modest amount of memory.
+  const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
+  keep_rotations_ =
+      per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
+  rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
+  std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
+  std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M)),
+      row(static_cast<std::size_t>(s));
+  // Row-major copies of the constant coefficients.
+  qt_.resize(static_cast<std::size_t>(M * M));
+  std::vector<double> cred(static_cast<std::size_t>(nred * m));
+  for (int r = 0; r < M; ++r)
+    for (int c = 0; c < M; ++c) qt_[static_cast<std::size_t>(r * M + c)] = Qt_(r, c);
+  for (int r = 0; r < nred; ++r)
+    for (int c = 0; c < m; ++c) cred[static_cast<std::size_t>(r * m + c)] = Cred_(r, c);
+  std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
+  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
+  ssr_ = 0;
+  min_pivot_ = 1;
+  std::size_t next_pin = 0;  // first pinned position not below K
+  for (long K = 0; K < n; ++K) {
+    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), qt_.data(), M, b.data(),
+                bt.data());
+    double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+    for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
+    while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
+    const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
+    double* rot =
+        keep_rotations_ ? rot_.data() + static_cast<std::size_t>(K) * per_station : nullptr;
+    for (int r = 0; r < nred; ++r) {
+      // A reduced row: fold it into the window by Givens rotations.
+      const double* cr = cred.data() + static_cast<std::size_t>(r * m);
+      std::copy(cr, cr + m, row.begin());
+      row[static_cast<std::size_t>(m)] = bt[static_cast<std::size_t>(L + r)];
+      if (pin_in_band)
+        for (std::size_t k = next_pin; k < pinned_w_.size() && pinned_w_[k] <= K + nb - 1; ++k)
+          row[static_cast<std::size_t>(pinned_w_[k] - K)] = 0;
+      for (int j = 0; j < m; ++j) {
+        const double bj = row[static_cast<std::size_t>(j)];
+        double cs = 1, sn = 0;
+        if (bj != 0) {
+          double* Wj = W.data() + static_cast<std::size_t>(j * s);
+          const double a = Wj[j];
+          const double rr = std::sqrt(a * a + bj * bj);
+          cs = a / rr;
+          sn = bj / rr;
+          Wj[j] = rr;
+          for (int k = j + 1; k <= m; ++k) {
+            const double wk = Wj[k], xk = row[static_cast<std::size_t>(k)];
+            Wj[k] = cs * wk + sn * xk;
+            row[static_cast<std::size_t>(k)] = cs * xk - sn * wk;
+          }
+        }
+        if (rot) {
+          rot[2 * (r * m + j)] = cs;
+          rot[2 * (r * m + j) + 1] = sn;
+        }
+      }
+      ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
+    }
+    // No later row touches w(K): its row of R leaves the window, which slides by one position.
+    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    std::copy(W.begin(), W.begin() + s, out);
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))])
+      min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
+    for (int t = 0; t < m; ++t) {
+      double* dst = W.data() + static_cast<std::size_t>(t * s);
+      if (t == nb - 1) {
+        std::fill(dst, dst + s, 0.0);
+        continue;
+      }
+      const double* src = t < nb - 1 ? dst + s : dst;
+      for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
+      dst[nb - 1] = 0;
+      if (src != dst) std::copy(src + nb, src + s, dst + nb);
+    }
+  }
+  final_ = W;
+  for (int c = 0; c < m; ++c)
+    if (active(id_of(n, c)))
+      min_pivot_ =
+          std::min(min_pivot_, std::abs(final_[static_cast<std::size_t>(c * s + c)]) / scale_);
+}
+
+void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                             const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+  if (!keep_rotations_) {
+    factor(readings, mu, angle_mm, v);
+    return;
+  }
+  // The same rotations applied to the new right-hand side only: the window's last column.
+  const Design& D = D_;
+  const long n = D.n;
+  const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
+  const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
+  std::vector<double> wr(static_cast<std::size_t>(m), 0.0);
+  std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M));
+  std::vector<double> off(static_cast<std::size_t>(M));
+  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
+  ssr_ = 0;
+  for (long K = 0; K < n; ++K) {
+    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), qt_.data(), M, b.data(),
+                bt.data());
+    double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+    for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
+    const double* rot = rot_.data() + static_cast<std::size_t>(K) * per_station;
+    for (int r = 0; r < nred; ++r) {
+      double x = bt[static_cast<std::size_t>(L + r)];
+      for (int j = 0; j < m; ++j) {
+        const double cs = rot[2 * (r * m + j)], sn = rot[2 * (r * m + j) + 1];
+        const double w = wr[static_cast<std::size_t>(j)];
+        wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
+        x = cs * x - sn * w;
+      }
+      ssr_ += x * x;
+    }
+    rw_[static_cast<std::size_t>(K) * static_cast<std::size_t>(s) + static_cast<std::size_t>(m)] =
+        wr[0];
+    for (int t = 0; t + 1 < nb; ++t)
+      wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
+    wr[static_cast<std::size_t>(nb) - 1] = 0;
+  }
+  for (int c = 0; c < m; ++c)
+    final_[static_cast<std::size_t>(c * s + m)] = wr[static_cast<std::size_t>(c)];
+}
+
+void BandedLsq::solve_final(Eigen::VectorXd& x) const {
+  const int m = m_, s = m_ + 1;
+  std::vector<double> xc(static_cast<std::size_t>(m), 0.0);
+  for (int c = m - 1; c >= 0; --c) {
+    const int id = id_of(D_.n, c);
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(id) || F[c] == 0) continue;
+    double acc = F[m];
+    for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
+    xc[static_cast<std::size_t>(c)] = acc / F[c];
+    x[id] = xc[static_cast<std::size_t>(c)];
+  }
+}
+
+Eigen::VectorXd BandedLsq::solve() const {
+  const Design& D = D_;
+  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(D.nvars);
+  solve_final(x);
+  std::vector<double> xg(static_cast<std::size_t>(G_));
+  for (int k = 0; k < G_; ++k)
+    xg[static_cast<std::size_t>(k)] = x[globals_[static_cast<std::size_t>(k)]];
+  double* xw = x.data();  // w(pos) is unknown number pos
+  for (long K = D.n - 1; K >= 0; --K) {
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
+      double acc = R[m];
+      for (int j = 1; j < nb; ++j) acc -= R[j] * xw[K + j];
+      for (int k = 0; k < G_; ++k) acc -= R[nb + k] * xg[static_cast<std::size_t>(k)];
+      xw[K] = acc * (1 / R[0]);  // the reciprocal is off the back-substitution's dependency chain
+    }
+    // Local equations: Rloc·[g θ] = bloc − Cloc·(window).
+    double u[2];
+    const double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+    for (int l = 0; l < L; ++l) {
+      double acc = bl[l];
+      for (int j = 0; j < nb; ++j) acc -= Cloc_(l, j) * xw[K + j];
+      for (int k = 0; k < G_; ++k) acc -= Cloc_(l, nb + k) * xg[static_cast<std::size_t>(k)];
+      u[l] = acc;
+    }
+    if (L == 2) {
+      const double th = u[1] / Rloc_(1, 1);
+      x[D.t(K)] = th;
+      x[D.g(K)] = (u[0] - Rloc_(0, 1) * th) / Rloc_(0, 0);
+    } else {
+      x[D.g(K)] = u[0] / Rloc_(0, 0);
+    }
+  }
+  return x;
+}
+
+Eigen::MatrixXd BandedLsq::solve_normal(const Eigen::MatrixXd& V) const {
+  const Design& D = D_;
+  const int m = m_, s = m_ + 1, L = L_;
+  const int k = static_cast<int>(V.cols());
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  // Row-major work arrays: one unknown's k values are adjacent.
+  RowMajor acc = V, y = RowMajor::Zero(D.nvars, k), z = RowMajor::Zero(D.nvars, k);
+  auto rowp = [k](RowMajor& A, int id) { return A.data() + static_cast<std::ptrdiff_t>(id) * k; };
+  auto local_id = [&](long K, int l) { return l == 0 ? D.g(K) : D.t(K); };
+  std::vector<int> ids(static_cast<std::size_t>(m));
+  auto window_ids = [&](long K) {
+    for (int c = 0; c < m; ++c) ids[static_cast<std::size_t>(c)] = id_of(K, c);
+  };
+  std::vector<double> ylv(static_cast<std::size_t>(L * k));
+  auto yl = [&](int l, int j) -> double& { return ylv[static_cast<std::size_t>(l * k + j)]; };
+  // Forward: Rᵀ y = V in elimination order (g, θ, w per station, then the final window).
+  for (long K = 0; K < D.n; ++K) {
+    window_ids(K);
+    for (int l = 0; l < L; ++l) {
+      const double* a = rowp(acc, local_id(K, l));
+      for (int j = 0; j < k; ++j) {
+        double v = a[j];
+        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * yl(i, j);
+        yl(l, j) = v / Rloc_(l, l);
+      }
+      std::copy_n(&yl(l, 0), k, rowp(y, local_id(K, l)));
+    }
+    for (int c = 0; c < m; ++c) {
+      const int id = ids[static_cast<std::size_t>(c)];
+      if (id < 0) continue;
+      double* a = rowp(acc, id);
+      for (int l = 0; l < L; ++l)
+        for (int j = 0; j < k; ++j) a[j] -= Cloc_(l, c) * yl(l, j);
+    }
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    if (D.pinned[static_cast<std::size_t>(D.w(K))] || R[0] == 0) continue;
+    double* yw = rowp(y, D.w(K));
+    const double* aw = rowp(acc, D.w(K));
+    for (int j = 0; j < k; ++j) yw[j] = aw[j] / R[0];
+    for (int c = 1; c < m; ++c) {
+      const int id = ids[static_cast<std::size_t>(c)];
+      if (id < 0) continue;
+      double* a = rowp(acc, id);
+      for (int j = 0; j < k; ++j) a[j] -= R[c] * yw[j];
+    }
+  }
+  window_ids(D.n);
+  for (int c = 0; c < m; ++c) {
+    const int id = ids[static_cast<std::size_t>(c)];
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(id) || F[c] == 0) continue;
+    double* yc = rowp(y, id);
+    const double* ac = rowp(acc, id);
+    for (int j = 0; j < k; ++j) yc[j] = ac[j] / F[c];
+    for (int i = c + 1; i < m; ++i) {
+      const int jd = ids[static_cast<std::size_t>(i)];
+      if (jd < 0) continue;
+      double* a = rowp(acc, jd);
+      for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
+    }
+  }
+  // Backward: R z = y.
+  for (int c = m - 1; c >= 0; --c) {
+    const int id = ids[static_cast<std::size_t>(c)];
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(id) || F[c] == 0) continue;
+    double* zc = rowp(z, id);
+    const double* yc = rowp(y, id);
+    for (int j = 0; j < k; ++j) {
+      double a = yc[j];
+      for (int i = c + 1; i < m; ++i)
+        if (const int jd = ids[static_cast<std::size_t>(i)]; jd >= 0) a -= F[i] * rowp(z, jd)[j];
+      zc[j] = a / F[c];
+    }
+  }
+  for (long K = D.n - 1; K >= 0; --K) {
+    window_ids(K);
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
+      double* zw = rowp(z, D.w(K));
+      const double* yw = rowp(y, D.w(K));
+      for (int j = 0; j < k; ++j) {
+        double a = yw[j];
+        for (int c = 1; c < m; ++c)
+          if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0) a -= R[c] * rowp(z, id)[j];
+        zw[j] = a / R[0];
+      }
+    }
+    for (int l = L - 1; l >= 0; --l) {
+      double* zl = rowp(z, local_id(K, l));
+      const double* yl = rowp(y, local_id(K, l));
+      for (int j = 0; j < k; ++j) {
+        double a = yl[j];
+        for (int c = 0; c < m; ++c)
+          if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0)
+            a -= Cloc_(l, c) * rowp(z, id)[j];
+        for (int i = l + 1; i < L; ++i) a -= Rloc_(l, i) * rowp(z, local_id(K, i))[j];
+        zl[j] = a / Rloc_(l, l);
+      }
+    }
+  }
+  return z;
+}
+
+Eigen::VectorXd BandedLsq::covariance_diagonal() const {
+  // Backward selected inversion. For w(K)'s row [d, r] over the window [w(K+1..K+span),
+  // globals] with covariance Z: Z_K,window = −(Z rᵀ)/d and Z_KK = 1/d² − r·Z_K,window/d. The local
+  // unknowns x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc,
+  // with F the covariance over the full window [w(K..K+span), globals].
+  const Design& D = D_;
+  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
+  Eigen::VectorXd diag = Eigen::VectorXd::Zero(D.nvars);
+  std::vector<double> F(static_cast<std::size_t>(m * m), 0.0);
+  auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
+  {
+    // The final window's covariance (inactive columns 0).
+    std::vector<int> act;
+    for (int c = 0; c < m; ++c)
+      if (active(id_of(D.n, c)) && final_[static_cast<std::size_t>(c * s + c)] != 0)
+        act.push_back(c);
+    const int na = static_cast<int>(act.size());
+    Eigen::MatrixXd Rf = Eigen::MatrixXd::Zero(na, na);
+    for (int a = 0; a < na; ++a)
+      for (int b = a; b < na; ++b)
+        Rf(a, b) = final_[static_cast<std::size_t>(act[static_cast<std::size_t>(a)] * s +
+                                                   act[static_cast<std::size_t>(b)])];
+    const Eigen::MatrixXd Ri =
+        Rf.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(na, na));
+    const Eigen::MatrixXd Zf = Ri * Ri.transpose();
+    for (int a = 0; a < na; ++a)
+      for (int b = 0; b < na; ++b)
+        f(act[static_cast<std::size_t>(a)], act[static_cast<std::size_t>(b)]) = Zf(a, b);
+    for (int c = 0; c < m; ++c)
+      if (const int id = id_of(D.n, c); id >= 0) diag[id] = f(c, c);
+  }
+  const Eigen::MatrixXd RlocInv =
+      Rloc_.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(L, L));
+  const Eigen::MatrixXd P = RlocInv * Cloc_;
+  const Eigen::VectorXd S = (RlocInv * RlocInv.transpose()).diagonal();
+  // Z: covariance over [w(K+1..K+span), globals] (size m − 1): F without its band column span.
+  const int mw = m - 1;
+  std::vector<double> Z(static_cast<std::size_t>(mw * mw)), zk(static_cast<std::size_t>(mw)),
+      pf(static_cast<std::size_t>(m));
+  auto drop_last_band = [&] {
+    for (int a = 0, ia = 0; a < m; ++a) {
+      if (a == nb - 1) continue;
+      for (int b = 0, ib = 0; b < m; ++b) {
+        if (b == nb - 1) continue;
+        Z[static_cast<std::size_t>(ia * mw + ib++)] = f(a, b);
+      }
+      ++ia;
+    }
+  };
+  drop_last_band();
+  for (long K = D.n - 1; K >= 0; --K) {
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    double zkk = 0;
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
+      double rz = 0;
+      for (int a = 0; a < mw; ++a) {
+        double v = 0;
+        for (int b = 0; b < mw; ++b) v += Z[static_cast<std::size_t>(a * mw + b)] * R[b + 1];
+        zk[static_cast<std::size_t>(a)] = -v / R[0];
+        rz += R[a + 1] * zk[static_cast<std::size_t>(a)];
+      }
+      zkk = 1 / (R[0] * R[0]) - rz / R[0];
+    } else {
+      std::fill(zk.begin(), zk.end(), 0.0);
+    }
+    diag[D.w(K)] = zkk;
+    f(0, 0) = zkk;
+    for (int a = 0; a < mw; ++a) {
+      f(0, a + 1) = f(a + 1, 0) = zk[static_cast<std::size_t>(a)];
+      for (int b = 0; b < mw; ++b) f(a + 1, b + 1) = Z[static_cast<std::size_t>(a * mw + b)];
+    }
+    for (int l = 0; l < L; ++l) {
+      double v = S[l];
+      for (int a = 0; a < m; ++a) {
+        double t = 0;
+        for (int b = 0; b < m; ++b) t += f(a, b) * P(l, b);
+        v += P(l, a) * t;
+      }
+      diag[l == 0 ? D.g(K) : D.t(K)] = v;
+    }
+    drop_last_band();
+  }
+  return diag;
+}
+
+}  // namespace trueaxis::separation::detail
