@@ -59,12 +59,6 @@ def sparse_lsq(m):
     def w(j):
         return 3 * j if j < n else 3 * n + (j - n)
 
-    def g(K):
-        return 3 * K + 1
-
-    def t(K):
-        return 3 * K + 2
-
     o1 = 3 * n + 2
     nv = o1 + 1
     pinned = {w(0), w(Q // 2), w(Q - 1)}

@@ -31,7 +31,7 @@ BandedLsq::BandedLsq(const Design& design) : D_(design) {
     if (const int c = global_col(D.oa()); c >= 0) Awin(D.N, c) = D.wa;
   }
   const Eigen::HouseholderQR<Eigen::MatrixXd> qr(Aloc);
-  Qt_ = Eigen::MatrixXd(qr.householderQ()).transpose();
+  Qt_ = Eigen::MatrixXd(qr.householderQ()).transpose();  // row-major: read row by row below
   Rloc_ = (Qt_ * Aloc).topRows(L_).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd T = Qt_ * Awin;
   Cloc_ = T.topRows(L_);
@@ -88,20 +88,13 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M)),
       row(static_cast<std::size_t>(s));
-  // Row-major copies of the constant coefficients.
-  qt_.resize(static_cast<std::size_t>(M * M));
-  std::vector<double> cred(static_cast<std::size_t>(nred * m));
-  for (int r = 0; r < M; ++r)
-    for (int c = 0; c < M; ++c) qt_[static_cast<std::size_t>(r * M + c)] = Qt_(r, c);
-  for (int r = 0; r < nred; ++r)
-    for (int c = 0; c < m; ++c) cred[static_cast<std::size_t>(r * m + c)] = Cred_(r, c);
   std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
   ssr_ = 0;
   min_pivot_ = 1;
   std::size_t next_pin = 0;  // first pinned position not below K
   for (long K = 0; K < n; ++K) {
-    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), qt_.data(), M, b.data(),
+    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
                 bt.data());
     double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
     for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
@@ -111,7 +104,7 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
         keep_rotations_ ? rot_.data() + static_cast<std::size_t>(K) * per_station : nullptr;
     for (int r = 0; r < nred; ++r) {
       // A reduced row: fold it into the window by Givens rotations.
-      const double* cr = cred.data() + static_cast<std::size_t>(r * m);
+      const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
       std::copy(cr, cr + m, row.begin());
       row[static_cast<std::size_t>(m)] = bt[static_cast<std::size_t>(L + r)];
       if (pin_in_band)
@@ -181,7 +174,7 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
   ssr_ = 0;
   for (long K = 0; K < n; ++K) {
-    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), qt_.data(), M, b.data(),
+    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
                 bt.data());
     double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
     for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
@@ -261,60 +254,68 @@ Eigen::MatrixXd BandedLsq::solve_normal(const Eigen::MatrixXd& V) const {
   const Design& D = D_;
   const int m = m_, s = m_ + 1, L = L_;
   const int k = static_cast<int>(V.cols());
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  // Row-major work arrays: one unknown's k values are adjacent.
-  RowMajor acc = V, y = RowMajor::Zero(D.nvars, k), z = RowMajor::Zero(D.nvars, k);
-  auto rowp = [k](RowMajor& A, int id) { return A.data() + static_cast<std::ptrdiff_t>(id) * k; };
+  // One row-major array, one unknown's k values adjacent, solved in place: Rᵀ y = V overwrites
+  // V (an unknown's row is final once its own step is reached; later steps only change later
+  // unknowns), then R z = y overwrites y from the last unknown back.
+  RowMajor z = V;
+  auto rowp = [&z, k](int id) { return z.data() + static_cast<std::ptrdiff_t>(id) * k; };
   auto local_id = [&](long K, int l) { return l == 0 ? D.g(K) : D.t(K); };
   std::vector<int> ids(static_cast<std::size_t>(m));
   auto window_ids = [&](long K) {
     for (int c = 0; c < m; ++c) ids[static_cast<std::size_t>(c)] = id_of(K, c);
   };
-  std::vector<double> ylv(static_cast<std::size_t>(L * k));
-  auto yl = [&](int l, int j) -> double& { return ylv[static_cast<std::size_t>(l * k + j)]; };
-  // Forward: Rᵀ y = V in elimination order (g, θ, w per station, then the final window).
+  // Unknowns without a pivot (pinned, or not fixed by the data) have no row of R: 0.
+  for (int i = 0; i < M_; ++i)
+    if (D.pinned[static_cast<std::size_t>(D.o(i))]) std::fill_n(rowp(D.o(i)), k, 0.0);
+  // Forward, in elimination order: g, θ, w per station, then the final window.
   for (long K = 0; K < D.n; ++K) {
     window_ids(K);
     for (int l = 0; l < L; ++l) {
-      const double* a = rowp(acc, local_id(K, l));
+      double* yl = rowp(local_id(K, l));
       for (int j = 0; j < k; ++j) {
-        double v = a[j];
-        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * yl(i, j);
-        yl(l, j) = v / Rloc_(l, l);
+        double v = yl[j];
+        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * rowp(local_id(K, i))[j];
+        yl[j] = v / Rloc_(l, l);
       }
-      std::copy_n(&yl(l, 0), k, rowp(y, local_id(K, l)));
     }
     for (int c = 0; c < m; ++c) {
       const int id = ids[static_cast<std::size_t>(c)];
       if (id < 0) continue;
-      double* a = rowp(acc, id);
-      for (int l = 0; l < L; ++l)
-        for (int j = 0; j < k; ++j) a[j] -= Cloc_(l, c) * yl(l, j);
+      double* a = rowp(id);
+      for (int l = 0; l < L; ++l) {
+        const double* yl = rowp(local_id(K, l));
+        for (int j = 0; j < k; ++j) a[j] -= Cloc_(l, c) * yl[j];
+      }
     }
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
-    if (D.pinned[static_cast<std::size_t>(D.w(K))] || R[0] == 0) continue;
-    double* yw = rowp(y, D.w(K));
-    const double* aw = rowp(acc, D.w(K));
-    for (int j = 0; j < k; ++j) yw[j] = aw[j] / R[0];
+    double* yw = rowp(D.w(K));
+    if (D.pinned[static_cast<std::size_t>(D.w(K))] || R[0] == 0) {
+      std::fill_n(yw, k, 0.0);
+      continue;
+    }
+    for (int j = 0; j < k; ++j) yw[j] /= R[0];
     for (int c = 1; c < m; ++c) {
       const int id = ids[static_cast<std::size_t>(c)];
       if (id < 0) continue;
-      double* a = rowp(acc, id);
+      double* a = rowp(id);
       for (int j = 0; j < k; ++j) a[j] -= R[c] * yw[j];
     }
   }
   window_ids(D.n);
   for (int c = 0; c < m; ++c) {
     const int id = ids[static_cast<std::size_t>(c)];
+    if (id < 0) continue;
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(id) || F[c] == 0) continue;
-    double* yc = rowp(y, id);
-    const double* ac = rowp(acc, id);
-    for (int j = 0; j < k; ++j) yc[j] = ac[j] / F[c];
+    double* yc = rowp(id);
+    if (!active(id) || F[c] == 0) {
+      std::fill_n(yc, k, 0.0);
+      continue;
+    }
+    for (int j = 0; j < k; ++j) yc[j] /= F[c];
     for (int i = c + 1; i < m; ++i) {
       const int jd = ids[static_cast<std::size_t>(i)];
       if (jd < 0) continue;
-      double* a = rowp(acc, jd);
+      double* a = rowp(jd);
       for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
     }
   }
@@ -323,12 +324,11 @@ Eigen::MatrixXd BandedLsq::solve_normal(const Eigen::MatrixXd& V) const {
     const int id = ids[static_cast<std::size_t>(c)];
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
     if (!active(id) || F[c] == 0) continue;
-    double* zc = rowp(z, id);
-    const double* yc = rowp(y, id);
+    double* zc = rowp(id);
     for (int j = 0; j < k; ++j) {
-      double a = yc[j];
+      double a = zc[j];
       for (int i = c + 1; i < m; ++i)
-        if (const int jd = ids[static_cast<std::size_t>(i)]; jd >= 0) a -= F[i] * rowp(z, jd)[j];
+        if (const int jd = ids[static_cast<std::size_t>(i)]; jd >= 0) a -= F[i] * rowp(jd)[j];
       zc[j] = a / F[c];
     }
   }
@@ -336,24 +336,22 @@ Eigen::MatrixXd BandedLsq::solve_normal(const Eigen::MatrixXd& V) const {
     window_ids(K);
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
-      double* zw = rowp(z, D.w(K));
-      const double* yw = rowp(y, D.w(K));
+      double* zw = rowp(D.w(K));
       for (int j = 0; j < k; ++j) {
-        double a = yw[j];
+        double a = zw[j];
         for (int c = 1; c < m; ++c)
-          if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0) a -= R[c] * rowp(z, id)[j];
+          if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0) a -= R[c] * rowp(id)[j];
         zw[j] = a / R[0];
       }
     }
     for (int l = L - 1; l >= 0; --l) {
-      double* zl = rowp(z, local_id(K, l));
-      const double* yl = rowp(y, local_id(K, l));
+      double* zl = rowp(local_id(K, l));
       for (int j = 0; j < k; ++j) {
-        double a = yl[j];
+        double a = zl[j];
         for (int c = 0; c < m; ++c)
           if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0)
-            a -= Cloc_(l, c) * rowp(z, id)[j];
-        for (int i = l + 1; i < L; ++i) a -= Rloc_(l, i) * rowp(z, local_id(K, i))[j];
+            a -= Cloc_(l, c) * rowp(id)[j];
+        for (int i = l + 1; i < L; ++i) a -= Rloc_(l, i) * rowp(local_id(K, i))[j];
         zl[j] = a / Rloc_(l, l);
       }
     }

@@ -61,16 +61,17 @@ class BandedLsq {
   void solve_final(Eigen::VectorXd& x) const;
 
   const Design& D_;
-  int L_ = 0;                   // local unknowns per station: g (and θ)
-  int M_ = 0;                   // rows per station
-  int nb_ = 0;                  // band width: span + 1
-  int G_ = 0;                   // free globals
-  int m_ = 0;                   // window columns: nb + G
-  std::vector<int> globals_;    // their ids
-  Eigen::MatrixXd Qt_;          // M × M: the constant row transform
+  int L_ = 0;                 // local unknowns per station: g (and θ)
+  int M_ = 0;                 // rows per station
+  int nb_ = 0;                // band width: span + 1
+  int G_ = 0;                 // free globals
+  int m_ = 0;                 // window columns: nb + G
+  std::vector<int> globals_;  // their ids
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  RowMajor Qt_;                 // M × M: the constant row transform
   Eigen::MatrixXd Rloc_;        // L × L, upper triangular
   Eigen::MatrixXd Cloc_;        // L × m: local equations over the window columns
-  Eigen::MatrixXd Cred_;        // (M − L) × m: reduced rows over the window columns
+  RowMajor Cred_;               // (M − L) × m: reduced rows over the window columns
   std::vector<long> pinned_w_;  // pinned workpiece positions, ascending
 
   // Factorisation: per station, w(K)'s row of R over the window (m values + rhs) and the local
@@ -78,7 +79,6 @@ class BandedLsq {
   std::vector<double> rw_;     // n × (m + 1)
   std::vector<double> bloc_;   // n × L
   std::vector<double> final_;  // m × (m + 1)
-  std::vector<double> qt_;     // Qt_, row-major
   // The Givens rotations (cos, sin) per station, reduced row and window column.
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{256} << 20;
   bool keep_rotations_ = false;

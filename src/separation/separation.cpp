@@ -205,40 +205,6 @@ std::string steps_text(const std::vector<long>& p) {
   return s;
 }
 
-}  // namespace
-
-namespace {
-
-LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angle_channel,
-                                       bool zero_difference_known, long stations);
-
-}  // namespace
-
-LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel,
-                              bool zero_difference_known, long stations) {
-  if (steps.empty()) throw Error("analyze_layout: no probes");
-  // The analysis looks at a fixed stretch of stations; a layout seen before with at least that
-  // many stations gets the same answer, so it is kept (an SVD costs a few milliseconds).
-  const long pmin = *std::min_element(steps.begin(), steps.end());
-  const long pmax = *std::max_element(steps.begin(), steps.end());
-  const long na = std::max<long>(64, 8 * (pmax - pmin) + 16);
-  if (stations < na)
-    return analyze_layout_uncached(steps, angle_channel, zero_difference_known, stations);
-  static std::mutex mutex;
-  static std::map<std::tuple<std::vector<long>, bool, bool>, LayoutAnalysis> cache;
-  const auto key = std::make_tuple(steps, angle_channel, zero_difference_known);
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (const auto it = cache.find(key); it != cache.end()) return it->second;
-  }
-  LayoutAnalysis a = analyze_layout_uncached(steps, angle_channel, zero_difference_known, stations);
-  const std::lock_guard<std::mutex> lock(mutex);
-  if (cache.size() < 256) cache.emplace(key, a);
-  return a;
-}
-
-namespace {
-
 LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angle_channel,
                                        bool zero_difference_known, long stations) {
   LayoutAnalysis a;
@@ -313,6 +279,29 @@ LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angl
 }
 
 }  // namespace
+
+LayoutAnalysis analyze_layout(const std::vector<long>& steps, bool angle_channel,
+                              bool zero_difference_known, long stations) {
+  if (steps.empty()) throw Error("analyze_layout: no probes");
+  // The analysis looks at a fixed stretch of stations; a layout seen before with at least that
+  // many stations gets the same answer, so it is kept (an SVD costs a few milliseconds).
+  const long pmin = *std::min_element(steps.begin(), steps.end());
+  const long pmax = *std::max_element(steps.begin(), steps.end());
+  const long na = std::max<long>(64, 8 * (pmax - pmin) + 16);
+  if (stations < na)
+    return analyze_layout_uncached(steps, angle_channel, zero_difference_known, stations);
+  static std::mutex mutex;
+  static std::map<std::tuple<std::vector<long>, bool, bool>, LayoutAnalysis> cache;
+  const auto key = std::make_tuple(steps, angle_channel, zero_difference_known);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (const auto it = cache.find(key); it != cache.end()) return it->second;
+  }
+  LayoutAnalysis a = analyze_layout_uncached(steps, angle_channel, zero_difference_known, stations);
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (cache.size() < 256) cache.emplace(key, a);
+  return a;
+}
 
 // ---------------------------------------------------------------------------------------------
 namespace {
