@@ -28,11 +28,14 @@ const sim::StraightnessCampaign& campaign(int probes, bool angle) {
   return it->second;
 }
 
-void run(benchmark::State& st, separation::Method m, int probes, bool angle, bool unc) {
+// unc: uncertainties with a given sigma; gain: the options' default (no sigma), which for the
+// recurrences reports the layout's noise gain from the least-squares covariance.
+void run(benchmark::State& st, separation::Method m, int probes, bool angle, bool unc,
+         bool gain = false) {
   const auto& c = campaign(probes, angle);
   separation::Options o;
   o.method = m;
-  o.compute_uncertainty = unc;
+  o.compute_uncertainty = unc || gain;
   if (unc) o.sigma = 1e-5;
   for (auto _ : st) benchmark::DoNotOptimize(separation::separate(c.data, o));
   st.SetItemsProcessed(st.iterations() * c.data.x.size());
@@ -56,6 +59,11 @@ BENCHMARK(BM_MemcpyReadings)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(run, two_point, separation::Method::TwoPoint, 2, false, false)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(run, three_point, separation::Method::ThreePoint, 3, false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, two_point_noise_gain, separation::Method::TwoPoint, 2, false, false, true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, three_point_noise_gain, separation::Method::ThreePoint, 3, false, false,
+                  true)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(run, lsq_3probes, separation::Method::Lsq, 3, false, false)
     ->Unit(benchmark::kMillisecond);

@@ -73,7 +73,8 @@ inline void station_rhs(const Design& D, long K, const Eigen::MatrixXd& readings
 }  // namespace
 
 void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                       const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+                       const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
+                       bool keep_rotations) {
   const Design& D = D_;
   const long n = D.n;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
@@ -82,8 +83,8 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   // The rotations depend on the coefficients only, so later right-hand sides can reuse them
   // (iterative refinement) if they fit in a modest amount of memory.
   const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
-  keep_rotations_ =
-      per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
+  keep_rotations_ = keep_rotations && per_station * static_cast<std::size_t>(n) * sizeof(double) <=
+                                          kRotationBudgetBytes;
   rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M)),
@@ -250,113 +251,130 @@ Eigen::VectorXd BandedLsq::solve() const {
   return x;
 }
 
-Eigen::MatrixXd BandedLsq::solve_normal(const Eigen::MatrixXd& V) const {
+void BandedLsq::solve_normal_in_place(RowMajor& z) const {
+  // The column count as a compile-time constant for the usual few, so the inner loops unroll.
+  switch (z.cols()) {
+    case 1:
+      return solve_normal_impl<1>(z);
+    case 2:
+      return solve_normal_impl<2>(z);
+    case 3:
+      return solve_normal_impl<3>(z);
+    case 4:
+      return solve_normal_impl<4>(z);
+    case 5:
+      return solve_normal_impl<5>(z);
+    case 6:
+      return solve_normal_impl<6>(z);
+    default:
+      return solve_normal_impl<0>(z);
+  }
+}
+
+template <int Cols>
+void BandedLsq::solve_normal_impl(RowMajor& z) const {
   const Design& D = D_;
   const int m = m_, s = m_ + 1, L = L_;
-  const int k = static_cast<int>(V.cols());
-  // One row-major array, one unknown's k values adjacent, solved in place: Rᵀ y = V overwrites
-  // V (an unknown's row is final once its own step is reached; later steps only change later
-  // unknowns), then R z = y overwrites y from the last unknown back.
-  RowMajor z = V;
-  auto rowp = [&z, k](int id) { return z.data() + static_cast<std::ptrdiff_t>(id) * k; };
-  auto local_id = [&](long K, int l) { return l == 0 ? D.g(K) : D.t(K); };
-  std::vector<int> ids(static_cast<std::size_t>(m));
-  auto window_ids = [&](long K) {
-    for (int c = 0; c < m; ++c) ids[static_cast<std::size_t>(c)] = id_of(K, c);
+  const int k = Cols > 0 ? Cols : static_cast<int>(z.cols());
+  // In place: Rᵀ y = V overwrites V (an unknown's row is final once its own step is reached;
+  // later steps only change later unknowns), then R z = y overwrites y from the last unknown
+  // back. Per station the rows involved are addressed by pointer: the window's (null where the
+  // band runs past the grid) and the station's own g, θ.
+  auto rowp = [&z, k](long id) { return z.data() + id * k; };
+  std::vector<double*> win(static_cast<std::size_t>(m));
+  auto set_window = [&](long K) {
+    for (int c = 0; c < m; ++c) {
+      const int id = id_of(K, c);
+      win[static_cast<std::size_t>(c)] = id >= 0 ? rowp(id) : nullptr;
+    }
   };
+  std::vector<double> acc(static_cast<std::size_t>(k));
   // Unknowns without a pivot (pinned, or not fixed by the data) have no row of R: 0.
   for (int i = 0; i < M_; ++i)
     if (D.pinned[static_cast<std::size_t>(D.o(i))]) std::fill_n(rowp(D.o(i)), k, 0.0);
   // Forward, in elimination order: g, θ, w per station, then the final window.
   for (long K = 0; K < D.n; ++K) {
-    window_ids(K);
-    for (int l = 0; l < L; ++l) {
-      double* yl = rowp(local_id(K, l));
+    set_window(K);
+    double* yl[2] = {rowp(D.g(K)), L == 2 ? rowp(D.t(K)) : nullptr};
+    for (int l = 0; l < L; ++l)
       for (int j = 0; j < k; ++j) {
-        double v = yl[j];
-        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * rowp(local_id(K, i))[j];
-        yl[j] = v / Rloc_(l, l);
+        double v = yl[l][j];
+        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * yl[i][j];
+        yl[l][j] = v / Rloc_(l, l);
       }
-    }
     for (int c = 0; c < m; ++c) {
-      const int id = ids[static_cast<std::size_t>(c)];
-      if (id < 0) continue;
-      double* a = rowp(id);
+      double* a = win[static_cast<std::size_t>(c)];
+      if (!a) continue;
       for (int l = 0; l < L; ++l) {
-        const double* yl = rowp(local_id(K, l));
-        for (int j = 0; j < k; ++j) a[j] -= Cloc_(l, c) * yl[j];
+        const double cl = Cloc_(l, c);
+        for (int j = 0; j < k; ++j) a[j] -= cl * yl[l][j];
       }
     }
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
-    double* yw = rowp(D.w(K));
+    double* yw = win[0];
     if (D.pinned[static_cast<std::size_t>(D.w(K))] || R[0] == 0) {
       std::fill_n(yw, k, 0.0);
       continue;
     }
     for (int j = 0; j < k; ++j) yw[j] /= R[0];
     for (int c = 1; c < m; ++c) {
-      const int id = ids[static_cast<std::size_t>(c)];
-      if (id < 0) continue;
-      double* a = rowp(id);
-      for (int j = 0; j < k; ++j) a[j] -= R[c] * yw[j];
+      double* a = win[static_cast<std::size_t>(c)];
+      if (!a) continue;
+      const double rc = R[c];
+      for (int j = 0; j < k; ++j) a[j] -= rc * yw[j];
     }
   }
-  window_ids(D.n);
+  set_window(D.n);
   for (int c = 0; c < m; ++c) {
-    const int id = ids[static_cast<std::size_t>(c)];
-    if (id < 0) continue;
+    double* yc = win[static_cast<std::size_t>(c)];
+    if (!yc) continue;
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    double* yc = rowp(id);
-    if (!active(id) || F[c] == 0) {
+    if (!active(id_of(D.n, c)) || F[c] == 0) {
       std::fill_n(yc, k, 0.0);
       continue;
     }
     for (int j = 0; j < k; ++j) yc[j] /= F[c];
     for (int i = c + 1; i < m; ++i) {
-      const int jd = ids[static_cast<std::size_t>(i)];
-      if (jd < 0) continue;
-      double* a = rowp(jd);
+      double* a = win[static_cast<std::size_t>(i)];
+      if (!a) continue;
       for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
     }
   }
   // Backward: R z = y.
   for (int c = m - 1; c >= 0; --c) {
-    const int id = ids[static_cast<std::size_t>(c)];
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(id) || F[c] == 0) continue;
-    double* zc = rowp(id);
-    for (int j = 0; j < k; ++j) {
-      double a = zc[j];
-      for (int i = c + 1; i < m; ++i)
-        if (const int jd = ids[static_cast<std::size_t>(i)]; jd >= 0) a -= F[i] * rowp(jd)[j];
-      zc[j] = a / F[c];
-    }
+    if (!active(id_of(D.n, c)) || F[c] == 0) continue;
+    double* zc = win[static_cast<std::size_t>(c)];
+    for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zc[j];
+    for (int i = c + 1; i < m; ++i)
+      if (const double* zi = win[static_cast<std::size_t>(i)])
+        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= F[i] * zi[j];
+    for (int j = 0; j < k; ++j) zc[j] = acc[static_cast<std::size_t>(j)] / F[c];
   }
   for (long K = D.n - 1; K >= 0; --K) {
-    window_ids(K);
+    set_window(K);
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
-      double* zw = rowp(D.w(K));
-      for (int j = 0; j < k; ++j) {
-        double a = zw[j];
-        for (int c = 1; c < m; ++c)
-          if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0) a -= R[c] * rowp(id)[j];
-        zw[j] = a / R[0];
-      }
+      double* zw = win[0];
+      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zw[j];
+      for (int c = 1; c < m; ++c)
+        if (const double* zc = win[static_cast<std::size_t>(c)])
+          for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
+      for (int j = 0; j < k; ++j) zw[j] = acc[static_cast<std::size_t>(j)] / R[0];
     }
+    double* zl[2] = {rowp(D.g(K)), L == 2 ? rowp(D.t(K)) : nullptr};
     for (int l = L - 1; l >= 0; --l) {
-      double* zl = rowp(local_id(K, l));
-      for (int j = 0; j < k; ++j) {
-        double a = zl[j];
-        for (int c = 0; c < m; ++c)
-          if (const int id = ids[static_cast<std::size_t>(c)]; id >= 0)
-            a -= Cloc_(l, c) * rowp(id)[j];
-        for (int i = l + 1; i < L; ++i) a -= Rloc_(l, i) * rowp(local_id(K, i))[j];
-        zl[j] = a / Rloc_(l, l);
-      }
+      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zl[l][j];
+      for (int c = 0; c < m; ++c)
+        if (const double* zc = win[static_cast<std::size_t>(c)]) {
+          const double cl = Cloc_(l, c);
+          for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= cl * zc[j];
+        }
+      for (int i = l + 1; i < L; ++i)
+        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= Rloc_(l, i) * zl[i][j];
+      for (int j = 0; j < k; ++j) zl[l][j] = acc[static_cast<std::size_t>(j)] / Rloc_(l, l);
     }
   }
-  return z;
 }
 
 Eigen::VectorXd BandedLsq::covariance_diagonal() const {

@@ -34,8 +34,11 @@ class BandedLsq {
   // Factorises the system for the right-hand side b − A·v: b holds, per station, the probe
   // readings minus `mu` (n × N) and, with an angle channel, wa·angle_mm[K]. v holds a value for
   // every unknown (pinned ones at their pin values). Afterwards solve() gives the correction to v.
+  // With keep_rotations false the rotations are not stored (a single factorisation, for the
+  // covariance only: refactor_rhs then factorises again).
   void factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-              const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+              const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
+              bool keep_rotations = true);
 
   // The same for a new v, reusing the last factorisation's rotations when they were kept (the
   // coefficients do not change): only the right-hand side is transformed.
@@ -52,22 +55,25 @@ class BandedLsq {
   Eigen::VectorXd solve() const;
   // diag((AᵀA)⁻¹) over the free unknowns (pinned 0).
   Eigen::VectorXd covariance_diagonal() const;
-  // (AᵀA)⁻¹ V for V with one row per unknown (rows of pinned unknowns ignored, returned 0).
-  Eigen::MatrixXd solve_normal(const Eigen::MatrixXd& V) const;
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  // Overwrites V (one row per unknown, a few columns) with (AᵀA)⁻¹ V; rows of pinned unknowns
+  // are ignored and returned 0. Row-major, so one unknown's values are adjacent.
+  void solve_normal_in_place(RowMajor& V) const;
 
  private:
   int id_of(long K, int c) const;  // unknown at window column c when the window starts at w(K)
   bool active(int id) const;       // a free unknown that exists
   void solve_final(Eigen::VectorXd& x) const;
+  template <int Cols>  // 0: any
+  void solve_normal_impl(RowMajor& z) const;
 
   const Design& D_;
-  int L_ = 0;                 // local unknowns per station: g (and θ)
-  int M_ = 0;                 // rows per station
-  int nb_ = 0;                // band width: span + 1
-  int G_ = 0;                 // free globals
-  int m_ = 0;                 // window columns: nb + G
-  std::vector<int> globals_;  // their ids
-  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  int L_ = 0;                   // local unknowns per station: g (and θ)
+  int M_ = 0;                   // rows per station
+  int nb_ = 0;                  // band width: span + 1
+  int G_ = 0;                   // free globals
+  int m_ = 0;                   // window columns: nb + G
+  std::vector<int> globals_;    // their ids
   RowMajor Qt_;                 // M × M: the constant row transform
   Eigen::MatrixXd Rloc_;        // L × L, upper triangular
   Eigen::MatrixXd Cloc_;        // L × m: local equations over the window columns

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <future>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -318,13 +319,14 @@ struct Raw {
 struct LsqState {
   Design D;
   std::unique_ptr<detail::BandedLsq> engine;
-  Eigen::VectorXd zdiag;
   double h = 0;
   double ssr = 0;
   long dof = 0;
 };
 
-Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
+// With `values` false only the factorisation is made (for the covariance and the residual of
+// another method's solution): no solve, no refinement, and an empty result.
+Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st, bool values) {
   const long n = data.x.size();
   const double h = data.step();
   std::vector<long> p;
@@ -354,7 +356,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   double ssr0 = 0, last = 0;
   for (int iter = 0; iter < 4; ++iter) {
     if (iter == 0)
-      st.engine->factor(data.readings, mu, angle_mm, v);
+      st.engine->factor(data.readings, mu, angle_mm, v, /*keep_rotations=*/values);
     else
       st.engine->refactor_rhs(data.readings, mu, angle_mm, v);
     if (iter == 0) {
@@ -364,6 +366,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
                                  : a.message);
       }
       ssr0 = st.engine->ssr();
+      if (!values) break;
     }
     const Eigen::VectorXd dv = st.engine->solve();
     v += dv;
@@ -378,6 +381,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   }
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
+  if (!values) return {};
   auto value = [&](int id) { return v[id]; };
   const long pmin = *std::min_element(p.begin(), p.end());
   Raw r;
@@ -603,93 +607,115 @@ void apply_reference(Raw& r, Reference ref) {
   if (r.theta.size()) r.theta.array() -= r.theta.mean();
 }
 
-// Variance of y = scale·v[id] − U·(Vᵀ v) for each reported point (unit-weight covariance).
-Eigen::VectorXd propagate(const LsqState& st, const std::vector<int>& ids, double scale,
-                          const Eigen::MatrixXd& U, const Eigen::MatrixXd& V) {
-  const Eigen::MatrixXd ZV = st.engine->solve_normal(V);
-  const Eigen::MatrixXd VZV = V.transpose() * ZV;
-  Eigen::VectorXd var(static_cast<Eigen::Index>(ids.size()));
-  const Eigen::Index k = V.cols();
-  for (std::size_t i = 0; i < ids.size(); ++i) {
-    const int id = ids[i];
-    const bool pinned = st.D.pinned[static_cast<std::size_t>(id)] != 0;
-    const Eigen::Index row = static_cast<Eigen::Index>(i);
-    double v = 0, uz = 0;
-    for (Eigen::Index a = 0; a < k; ++a) {
-      double t = 0;
-      for (Eigen::Index b = 0; b < k; ++b) t += VZV(a, b) * U(row, b);
-      v += U(row, a) * t;
-      uz += U(row, a) * ZV(id, a);
-    }
-    if (!pinned) v += scale * scale * st.zdiag[id] - 2 * scale * uz;
-    var[row] = std::max(0.0, v);
-  }
-  return var;
-}
-
 // Uncertainties (unit weight) of the reported w, g, θ under the ls reference, on the grids of
 // `r` (which may be a leading subset of the lsq grids, as for the seed's own methods).
+//
+// Each reported value is y = scale·v[id] − U·(Vᵀv): the unknown less its reference (line, and
+// parabola gauge), with V's columns the functionals that define the reference. So, with
+// Z = (AᵀA)⁻¹, var(y) = scale²·Z_id,id − 2·scale·U·(ZV)_id + U·(VᵀZV)·Uᵀ. The three profiles'
+// functionals share one V (the parabola's column is common), so one solve gives ZV for all:
+// columns [w line (2), g line (2), parabola, pitch mean].
 void uncertainties(const LsqState& st, const Raw& r, Eigen::VectorXd& uw, Eigen::VectorXd& ug,
                    Eigen::VectorXd& ut) {
   const Design& D = st.D;
-  const int nv = D.nvars;
   const Scale s = scale_of(r.xg);
   const bool par = r.parabola_free;
+  const bool pitch = r.theta.size() && D.pitch;
+  constexpr int kW0 = 0, kG0 = 2;
+  int k = 4;
+  const int kPhi = par ? k++ : -1;
+  const int kT = pitch ? k++ : -1;
+  const Eigen::Index mw = r.xw.size(), mg = r.xg.size(), mt = pitch ? r.xt.size() : 0;
   Eigen::VectorXd phi;
   if (par) phi = quad_functional(r.xg, s);
-  auto free_row = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] ? 0.0 : 1.0; };
-  // Workpiece.
-  {
-    const Eigen::Index m = r.xw.size();
-    std::vector<int> ids;
-    for (Eigen::Index j = 0; j < m; ++j) ids.push_back(D.w(j));
-    const Eigen::MatrixXd B = line_basis(r.xw);
-    Eigen::MatrixXd U(m, par ? 3 : 2), V = Eigen::MatrixXd::Zero(nv, par ? 3 : 2);
-    U.leftCols(2) = B;
-    for (Eigen::Index j = 0; j < m; ++j)
-      for (int k = 0; k < 2; ++k)
-        V(ids[static_cast<std::size_t>(j)], k) =
-            B(j, k) * free_row(ids[static_cast<std::size_t>(j)]);
-    if (par) {
-      Eigen::VectorXd t2(m);
-      for (Eigen::Index j = 0; j < m; ++j) t2[j] = std::pow((r.xw[j] - s.xc) / s.L, 2);
-      U.col(2) = -project_out(B, t2);
-      for (long K = 0; K < D.n; ++K) V(D.g(K), 2) = phi[K] * free_row(D.g(K));
+  const Eigen::MatrixXd Bw = line_basis(r.xw), Bg = line_basis(r.xg);
+  // V's nonzero entries (unknown, column, value), in closed form; pinned unknowns' rows are 0.
+  auto for_each_v = [&](auto&& fn) {
+    auto put = [&](int id, int c, double value) {
+      if (!D.pinned[static_cast<std::size_t>(id)]) fn(id, c, value);
+    };
+    for (Eigen::Index j = 0; j < mw; ++j)
+      for (int c = 0; c < 2; ++c) put(D.w(j), kW0 + c, Bw(j, c));
+    for (Eigen::Index K = 0; K < mg; ++K) {
+      for (int c = 0; c < 2; ++c) put(D.g(K), kG0 + c, Bg(K, c));
+      if (par) put(D.g(K), kPhi, phi[K]);
     }
-    uw = propagate(st, ids, 1.0, U, V);
+    for (Eigen::Index K = 0; K < mt; ++K) put(D.t(K), kT, 1.0);
+  };
+  // diag(Z) by the selected inversion, on a second core for long runs: it and the solve below
+  // only read the factorisation.
+  constexpr long kThreadedStations = 20000;
+  std::future<Eigen::VectorXd> diag_task =
+      std::async(D.n >= kThreadedStations ? std::launch::async : std::launch::deferred,
+                 [&st] { return st.engine->covariance_diagonal(); });
+  detail::BandedLsq::RowMajor Z = detail::BandedLsq::RowMajor::Zero(D.nvars, k);
+  for_each_v([&](int id, int c, double value) { Z(id, c) = value; });
+  st.engine->solve_normal_in_place(Z);                // now ZV
+  Eigen::MatrixXd VZV = Eigen::MatrixXd::Zero(k, k);  // symmetric: row c is Σ V(id, c)·ZV(id, ·)
+  for_each_v([&](int id, int c, double value) {
+    const double* zr = Z.data() + static_cast<std::ptrdiff_t>(id) * k;
+    for (int b = 0; b < k; ++b) VZV(b, c) += value * zr[b];
+  });
+
+  const Eigen::VectorXd zdiag = diag_task.get();
+  // var for one profile: its unknowns, U (one row per point) and the V columns U refers to.
+  auto variance = [&](Eigen::Index m, auto&& id_of, const Eigen::MatrixXd& U,
+                      std::initializer_list<int> cols_list, double scale) {
+    const std::vector<int> cols(cols_list);
+    const int nc = static_cast<int>(cols.size());
+    Eigen::MatrixXd S(nc, nc);
+    for (int a = 0; a < nc; ++a)
+      for (int b = 0; b < nc; ++b)
+        S(a, b) = VZV(cols[static_cast<std::size_t>(a)], cols[static_cast<std::size_t>(b)]);
+    Eigen::VectorXd var(m);
+    for (Eigen::Index i = 0; i < m; ++i) {
+      const int id = id_of(i);
+      double v = 0, uz = 0;
+      for (int a = 0; a < nc; ++a) {
+        double t = 0;
+        for (int b = 0; b < nc; ++b) t += S(a, b) * U(i, b);
+        v += U(i, a) * t;
+        uz += U(i, a) * Z(id, cols[static_cast<std::size_t>(a)]);
+      }
+      if (!D.pinned[static_cast<std::size_t>(id)]) v += scale * scale * zdiag[id] - 2 * scale * uz;
+      var[i] = std::max(0.0, v);
+    }
+    return var;
+  };
+  // Workpiece: its line, and the parabola the gauge moves into it.
+  {
+    Eigen::MatrixXd U(mw, par ? 3 : 2);
+    U.leftCols(2) = Bw;
+    if (par) {
+      Eigen::VectorXd t2 = ((r.xw.array() - s.xc) / s.L).square();
+      U.col(2) = -project_out(Bw, t2);
+    }
+    auto id = [&](Eigen::Index j) { return D.w(j); };
+    uw = par ? variance(mw, id, U, {kW0, kW0 + 1, kPhi}, 1.0)
+             : variance(mw, id, U, {kW0, kW0 + 1}, 1.0);
   }
   // Guide.
   {
-    const Eigen::Index m = r.xg.size();
-    std::vector<int> ids;
-    for (Eigen::Index K = 0; K < m; ++K) ids.push_back(D.g(K));
-    const Eigen::MatrixXd B = line_basis(r.xg);
-    Eigen::MatrixXd U(m, par ? 3 : 2), V = Eigen::MatrixXd::Zero(nv, par ? 3 : 2);
-    U.leftCols(2) = B;
-    for (Eigen::Index K = 0; K < m; ++K)
-      for (int k = 0; k < 2; ++k) V(D.g(K), k) = B(K, k) * free_row(D.g(K));
+    Eigen::MatrixXd U(mg, par ? 3 : 2);
+    U.leftCols(2) = Bg;
     if (par) {
-      Eigen::VectorXd t2(m);
-      for (Eigen::Index K = 0; K < m; ++K) t2[K] = std::pow((r.xg[K] - s.xc) / s.L, 2);
-      U.col(2) = project_out(B, t2);
-      for (long K = 0; K < D.n; ++K) V(D.g(K), 2) = phi[K] * free_row(D.g(K));
+      Eigen::VectorXd t2 = ((r.xg.array() - s.xc) / s.L).square();
+      U.col(2) = project_out(Bg, t2);
     }
-    ug = propagate(st, ids, 1.0, U, V);
+    auto id = [&](Eigen::Index K) { return D.g(K); };
+    ug = par ? variance(mg, id, U, {kG0, kG0 + 1, kPhi}, 1.0)
+             : variance(mg, id, U, {kG0, kG0 + 1}, 1.0);
   }
-  // Pitch (θ scaled by h in the design).
-  if (r.theta.size() && D.pitch) {
-    const Eigen::Index m = r.xt.size();
-    std::vector<int> ids;
-    for (Eigen::Index K = 0; K < m; ++K) ids.push_back(D.t(K));
-    Eigen::MatrixXd U(m, par ? 2 : 1), V = Eigen::MatrixXd::Zero(nv, par ? 2 : 1);
-    U.col(0).setConstant(1.0 / (st.h * static_cast<double>(m)));
-    for (Eigen::Index K = 0; K < m; ++K) V(D.t(K), 0) = free_row(D.t(K));
+  // Pitch (θ scaled by h in the design): about its mean, and the parabola's slope.
+  if (pitch) {
+    Eigen::MatrixXd U(mt, par ? 2 : 1);
+    U.col(0).setConstant(1.0 / (st.h * static_cast<double>(mt)));
     if (par) {
       Eigen::VectorXd lin = (r.xt.array() - s.xc) * (2.0 / (s.L * s.L));
       U.col(1) = lin.array() - lin.mean();
-      for (long K = 0; K < D.n; ++K) V(D.g(K), 1) = phi[K] * free_row(D.g(K));
     }
-    ut = propagate(st, ids, 1.0 / st.h, U, V);
+    auto id = [&](Eigen::Index K) { return D.t(K); };
+    ut = par ? variance(mt, id, U, {kT, kPhi}, 1.0 / st.h) : variance(mt, id, U, {kT}, 1.0 / st.h);
   }
 }
 
@@ -736,7 +762,7 @@ Result separate(const ProbeData& data, const Options& opt) {
   const bool want_unc = unc_possible && (opt.method == Method::Lsq || opt.sigma.has_value());
   LsqState st;
   if (opt.method == Method::Lsq || unc_possible) {
-    Raw lsq = solve_lsq(data, opt, st);
+    Raw lsq = solve_lsq(data, opt, st, opt.method == Method::Lsq);
     if (opt.method == Method::Lsq) raw = std::move(lsq);
   }
   res.dof = st.engine ? st.dof : 0;
@@ -774,7 +800,6 @@ Result separate(const ProbeData& data, const Options& opt) {
       res.sigma = std::sqrt(s2);
       res.sigma_estimated = true;
     }
-    st.zdiag = st.engine->covariance_diagonal();
     uncertainties(st, raw, uw, ug, ut);
     if (res.sigma) {
       uw = (uw * s2).cwiseSqrt();
