@@ -32,20 +32,59 @@ struct Points {
   bool single = false;
 };
 
-Points points_in(const InArray& a, const char* what) {
-  Points p;
-  if (a.ndim() == 1 && a.shape(0) == 3) {
-    p.single = true;
-  } else if (a.ndim() != 2 || a.shape(1) != 3) {
+// Checks the shape (n, 3) or (3,); returns n (1 for a single point).
+Eigen::Index point_count(const InArray& a, const char* what) {
+  if (a.ndim() == 1 && a.shape(0) == 3) return 1;
+  if (a.ndim() != 2 || a.shape(1) != 3) {
     std::string shape;
     for (py::ssize_t d = 0; d < a.ndim(); ++d)
       shape += fmt::format("{}{}", d ? ", " : "", a.shape(d));
     throw Error(fmt::format("{} must have shape (n, 3) or (3,), not ({})", what, shape));
   }
-  const Eigen::Index n = p.single ? 1 : static_cast<Eigen::Index>(a.shape(0));
+  return static_cast<Eigen::Index>(a.shape(0));
+}
+
+Points points_in(const InArray& a, const char* what) {
+  Points p;
+  const Eigen::Index n = point_count(a, what);
+  p.single = a.ndim() == 1;
   p.xyz = Eigen::Map<const Eigen::Matrix3Xd>(a.data(), 3, n);
   if (!p.xyz.allFinite()) throw Error(fmt::format("{} contain NaN or infinite values", what));
   return p;
+}
+
+// For in-place work on a copy: `fn` is called, with the GIL released, on a 3 × n view of a copy
+// of a's points, and the copy is returned. The copy goes to `out` if given (a C-ordered float64
+// array of a's shape, which may be the input itself: then nothing is copied), else to a new
+// array. One copy at most (the input is changed only when it is `out`).
+template <class Fn>
+py::array_t<double> on_copy(const InArray& a, const char* what, const py::object& out_arg,
+                            Fn&& fn) {
+  const Eigen::Index n = point_count(a, what);
+  const std::vector<py::ssize_t> shape(a.shape(), a.shape() + a.ndim());
+  py::array_t<double> out;
+  if (out_arg.is_none()) {
+    out = py::array_t<double>(shape);
+  } else {
+    if (!py::isinstance<py::array_t<double>>(out_arg))
+      throw Error("out must be a numpy array of float64");
+    out = py::reinterpret_borrow<py::array_t<double>>(out_arg);
+    if (!(out.flags() & py::array::c_style) || !out.writeable())
+      throw Error("out must be a writeable, C-ordered (row-major) array");
+    if (std::vector<py::ssize_t>(out.shape(), out.shape() + out.ndim()) != shape)
+      throw Error(fmt::format("out must have the shape of {}", what));
+  }
+  Eigen::Map<Eigen::Matrix3Xd> xyz(out.mutable_data(), 3, n);
+  bool finite = true;
+  {
+    py::gil_scoped_release release;
+    if (xyz.data() != a.data())
+      std::memcpy(xyz.data(), a.data(), sizeof(double) * static_cast<std::size_t>(3 * n));
+    finite = xyz.allFinite();
+    if (finite) fn(xyz);
+  }
+  if (!finite) throw Error(fmt::format("{} contain NaN or infinite values", what));
+  return out;
 }
 
 py::array_t<double> points_out(const Eigen::Matrix3Xd& m, bool single, double scale = 1.0) {
@@ -425,35 +464,31 @@ at the nearest face with clamp=True; never extrapolated.)doc")
       .def(
           "compensate",
           [](const map::ErrorMap& mp, const InArray& points, const std::string& interpolation,
-             bool clamp, int iterations) {
-            Points p = points_in(points, "points");
+             bool clamp, int iterations, const py::object& out) {
             map::CompensateOptions o;
             o.eval = eval_options(interpolation, clamp);
             o.iterations = iterations;
-            {
-              py::gil_scoped_release release;
-              map::compensate(mp, p.xyz, o);
-            }
-            return points_out(p.xyz, p.single);
+            return on_copy(points, "commands", out,
+                           [&](Eigen::Map<Eigen::Matrix3Xd> c) { map::compensate(mp, c, o); });
           },
           py::arg("commands"), py::kw_only(), py::arg("interpolation") = "linear",
-          py::arg("clamp") = false, py::arg("iterations") = 2,
+          py::arg("clamp") = false, py::arg("iterations") = 2, py::arg("out") = py::none(),
           "Compensated commands (mm): for wanted tool positions c, the commands c' with "
-          "c' + e(c') = c (fixed-point iteration).")
+          "c' + e(c') = c (fixed-point iteration), in parallel with the GIL released. out: as "
+          "for correct.")
       .def(
           "correct",
           [](const map::ErrorMap& mp, const InArray& points, const std::string& interpolation,
-             bool clamp) {
-            Points p = points_in(points, "points");
+             bool clamp, const py::object& out) {
             const auto o = eval_options(interpolation, clamp);
-            {
-              py::gil_scoped_release release;
-              map::correct(mp, p.xyz, o);
-            }
-            return points_out(p.xyz, p.single);
+            return on_copy(points, "points", out,
+                           [&](Eigen::Map<Eigen::Matrix3Xd> p) { map::correct(mp, p, o); });
           },
           py::arg("points"), py::kw_only(), py::arg("interpolation") = "linear",
-          py::arg("clamp") = false, "Corrected measured points x − e(x) (mm).")
+          py::arg("clamp") = false, py::arg("out") = py::none(),
+          "Corrected measured points x − e(x) (mm), in parallel with the GIL released. out: an "
+          "array of the points' shape (float64, C order) to write them to, e.g. the points "
+          "themselves to correct in place without a copy; returned.")
       .def("__repr__", [](const map::ErrorMap& mp) {
         return fmt::format("<trueaxis.ErrorMap {} x {} x {} nodes{}>", mp.size(0), mp.size(1),
                            mp.size(2), mp.uncertainty.cols() ? " with uncertainty" : "");

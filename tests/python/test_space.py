@@ -114,6 +114,35 @@ def test_error_map_interpolates_compensates_and_corrects_a_linear_field():
     c = em.compensate(inner, iterations=5)
     np.testing.assert_allclose(c + em.evaluate(c) * 1e-3, inner, atol=1e-12)
     assert c.shape == inner.shape and em.compensate(inner[0]).shape == (3,)
+    # The input is not changed; a single point, a Fortran-ordered and an integer array are taken.
+    before = p.copy()
+    em.correct(p)
+    np.testing.assert_array_equal(p, before)
+    np.testing.assert_allclose(em.correct(p[7]), p[7] - want[7] * 1e-3, atol=1e-12)
+    np.testing.assert_allclose(em.correct(np.asfortranarray(p)), p - want * 1e-3, atol=1e-12)
+    q = np.array([[100, 50, 20], [300, 200, 100]])
+    np.testing.assert_allclose(em.correct(q), q - (q @ A.T + b) * 1e-3, atol=1e-12)
+    # out=: written and returned; the points themselves for an in-place correction.
+    buf = np.empty_like(p)
+    assert em.correct(p, out=buf) is buf
+    np.testing.assert_allclose(buf, p - want * 1e-3, atol=1e-12)
+    r = p.copy()
+    em.correct(r, out=r)
+    np.testing.assert_allclose(r, p - want * 1e-3, atol=1e-12)
+    c2 = inner.copy()
+    em.compensate(c2, iterations=5, out=c2)
+    np.testing.assert_allclose(c2, c, atol=1e-15)
+    with pytest.raises(trueaxis.Error, match="out must have the shape"):
+        em.correct(p, out=np.empty((3, 3)))
+    with pytest.raises(trueaxis.Error, match="C-ordered"):
+        em.correct(p, out=np.empty_like(p, order="F"))
+    with pytest.raises(trueaxis.Error, match="float64"):
+        em.correct(p, out=np.empty(p.shape, dtype=np.float32))
+    for bad in (np.nan, np.inf):
+        with pytest.raises(trueaxis.Error, match="points contain NaN"):
+            em.correct([[1.0, 2.0, bad]])
+        with pytest.raises(trueaxis.Error, match="commands contain NaN"):
+            em.compensate([[1.0, 2.0, bad]])
 
 
 def test_error_map_refuses_outside_and_bad_shapes():
