@@ -9,6 +9,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numeric>
 #include <random>
 
 #include "../test_util.hpp"
@@ -312,6 +313,54 @@ TEST(Fit, EveryElementReachesTheLeastSquaresMinimum) {
     EXPECT_LT((b.linear() * f.direction - g.direction).norm(), 1e-11) << "psi " << psi;
     EXPECT_NEAR(f.apex_angle, g.apex_angle, 1e-11);
     EXPECT_NEAR(f.distance, g.distance, 1e-11 * scale);
+  }
+}
+
+// Large clouds pick their start on a subsample: the result must not depend on which points it
+// holds. 10^5 points on a cylinder and on a cone in scan order (ten heights per step round, so
+// every 10th point lies at one height and would make a degenerate subsample), fitted as given,
+// shuffled, and in a second frame: the same element to round-off, on the simulated axis.
+TEST(Fit, LargeCloudsGiveTheSameFitWhateverTheirOrder) {
+  std::mt19937_64 rng(23);
+  const Eigen::Isometry3d a = tilted();
+  Eigen::Isometry3d b = Eigen::Isometry3d::Identity();
+  b.linear() =
+      Eigen::AngleAxisd(0.8, Eigen::Vector3d(0.2, -1, 0.5).normalized()).toRotationMatrix();
+  b.translation() = Eigen::Vector3d(12, -40, 300);
+  constexpr double kScale = 100;  // mm, the part's size
+  constexpr int kPoints = 100000;
+  // A Ø40 cylinder along z of `a`, 50 mm long, over 4 rad, in the same scan order as cone_points.
+  auto cylinder_points = [&] {
+    std::normal_distribution<double> noise(0, 2e-3);
+    Eigen::Matrix3Xd p(3, kPoints);
+    for (int i = 0; i < kPoints; ++i) {
+      const double z = 50.0 * (i % 10) / 9.0, t = 4.0 * (i / 10) / ((kPoints - 1) / 10);
+      const double r = 20 + noise(rng);
+      p.col(i) = a * Eigen::Vector3d(r * std::cos(t), r * std::sin(t), z);
+    }
+    return p;
+  };
+  for (double psi : {0.0, 0.3}) {
+    const Eigen::Matrix3Xd p =
+        psi > 0 ? cone_points(a, psi, 40, 90, 4.0, 2e-3, rng, kPoints) : cylinder_points();
+    const Element el = psi > 0 ? Element::Cone : Element::Cylinder;
+    std::vector<Eigen::Index> order(static_cast<std::size_t>(p.cols()));
+    std::iota(order.begin(), order.end(), 0);
+    std::shuffle(order.begin(), order.end(), rng);
+    const Eigen::Matrix3Xd shuffled = p(Eigen::all, order);
+    const geometry::Fit f = geometry::fit(el, p);
+    const geometry::Fit g = geometry::fit(el, shuffled);
+    const geometry::Fit h = geometry::fit(el, b * p);
+    EXPECT_LT(distance_to_line(g.point, f.point, f.direction), 1e-11 * kScale) << "psi " << psi;
+    EXPECT_LT(angle_up_to_sign(f.direction, g.direction), 1e-11) << "psi " << psi;
+    EXPECT_LT(distance_to_line(h.point, b * f.point, b.linear() * f.direction), 1e-11 * kScale);
+    EXPECT_LT(angle_up_to_sign(b.linear() * f.direction, h.direction), 1e-11);
+    EXPECT_NEAR(f.apex_angle, g.apex_angle, 1e-11);
+    EXPECT_NEAR(f.diameter, g.diameter, 1e-11 * kScale);
+    // The simulated axis, z of the frame `a`: within 5 standard uncertainties.
+    ASSERT_TRUE(f.has_uncertainty);
+    EXPECT_LT(angle_up_to_sign(f.direction, a.linear().col(2)), 5 * f.u_direction.norm())
+        << "psi " << psi;
   }
 }
 
