@@ -113,12 +113,24 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
     b.head(J.rows()) = -r;
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
     const Eigen::VectorXd dx = qr.solve(b);
+    // The step's size against what the data resolve: the tolerance is never below what
+    // round-off in the residuals lets the solution resolve (their error over the smallest
+    // singular value of the Jacobian).
+    const double step = dx.template lpNorm<Eigen::Infinity>();
+    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
+        qr.matrixR().topLeftCorner(k, k).template triangularView<Eigen::Upper>());
+    const double smallest = svd.singularValues()[k - 1];
+    const double floor =
+        smallest > 0 ? roundoff * std::sqrt(static_cast<double>(J.rows())) / smallest : 0;
+    const double tol = std::max(step_tol, floor);
     // Along the step, shorten it while the cost rises: in a curved valley (a small patch of a
-    // wide cone) the full step overshoots where a fraction of it still descends.
+    // wide cone) the full step overshoots where a fraction of it still descends. Not a step
+    // below the resolution (see below).
+    const bool resolved = lambda > 0 || step > tol;
     State trial = update(st, dx);
     eval(trial, rt, nullptr);
     double ct = rt.squaredNorm(), fraction = 1;
-    for (; !(std::isfinite(ct) && ct <= cost) && fraction > 1e-3;) {
+    for (; resolved && !(std::isfinite(ct) && ct <= cost) && fraction > 1e-3;) {
       fraction /= 2;
       trial = update(st, fraction * dx);
       eval(trial, rt, nullptr);
@@ -128,18 +140,9 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
       // Stop where the Gauss–Newton step (zero at a stationary point, whatever fraction of it
       // was taken) is at the tolerance and so is what is left to go: in a flat valley (a
       // cone's apex against its angle, a short patch) the iteration converges linearly, the
-      // steps shrinking by a ratio ρ close to 1 and leaving step·ρ/(1 − ρ) still to go. The
-      // tolerance is never below what round-off in the residuals lets the solution resolve
-      // (their error over the smallest singular value of the Jacobian).
-      const double step = dx.template lpNorm<Eigen::Infinity>();
+      // steps shrinking by a ratio ρ close to 1 and leaving step·ρ/(1 − ρ) still to go.
       const double ratio = previous > 0 ? step / previous : 1;
       const double left = ratio < 1 ? step * ratio / (1 - ratio) : HUGE_VAL;
-      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
-          qr.matrixR().topLeftCorner(k, k).template triangularView<Eigen::Upper>());
-      const double smallest = svd.singularValues()[k - 1];
-      const double floor =
-          smallest > 0 ? roundoff * std::sqrt(static_cast<double>(J.rows())) / smallest : 0;
-      const double tol = std::max(step_tol, floor);
       const bool done = step <= tol && (left <= tol || ct == cost);
       st = trial;
       cost = ct;
@@ -151,6 +154,11 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
         out.converged = true;
         break;
       }
+    } else if (!resolved) {
+      // The full Gauss–Newton step is below what the data resolve and does not lower the cost:
+      // at the minimum to round-off. (Damping it further would only repeat that.)
+      out.converged = true;
+      break;
     } else {
       lambda = lambda > 0 ? lambda * 10 : 1e-8;
       if (lambda > 1e12) {  // no descent left: at the minimum to round-off
@@ -186,32 +194,28 @@ using VecXL = Eigen::Matrix<Ld, Eigen::Dynamic, 1>;
 using MatXL = Eigen::Matrix<Ld, Eigen::Dynamic, Eigen::Dynamic>;
 
 // Newton's method in 80-bit arithmetic from a state near the minimum: `grad(state, g)` returns
-// ½Σr² and its gradient g with respect to a local correction, `move(state, dx)` applies one; `h`
-// holds the central-difference steps for the Hessian. Steps that lower the cost, or that leave it
-// the same to round-off and lower the gradient, are taken; at most 12. `settled` (if given) says
-// whether the last Newton step was below `settle`: the state is a minimum to that tolerance.
-template <class State, class Grad, class Move>
-State newton_polish(State s, Grad&& grad, Move&& move, const VecXL& h, Ld stop, Ld settle = 0,
+// ½Σr² and its gradient g with respect to a local correction, `hessian(state, H)` fills its
+// Hessian (with the residuals' curvature), `move(state, dx)` applies a correction. Steps that lower
+// the cost, or that leave it the same to round-off and lower the gradient, are taken; at most 12.
+// `settled` (if given) says whether the last Newton step was below `settle`: the state is a
+// minimum to that tolerance.
+template <class State, class Grad, class Hessian, class Move>
+State newton_polish(State s, Grad&& grad, Hessian&& hessian, Move&& move, Ld stop, Ld settle = 0,
                     bool* settled = nullptr) {
-  const Eigen::Index k = h.size();
-  VecXL g, gp, gm, gt;
+  VecXL g, gt;
   Ld cost = grad(s, g);
+  const Eigen::Index k = g.size();
   if (settled) *settled = false;
   for (int it = 0; it < 12; ++it) {
     MatXL H(k, k);
-    for (Eigen::Index j = 0; j < k; ++j) {
-      VecXL e = VecXL::Zero(k);
-      e[j] = h[j];
-      grad(move(s, e), gp);
-      grad(move(s, -e), gm);
-      H.col(j) = (gp - gm) / (2 * h[j]);
-    }
+    hessian(s, H);
     H = ((H + H.transpose()) / 2).eval();
     const Eigen::LDLT<MatXL> ldlt(H);
     if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;  // not near a minimum
     VecXL dx = -ldlt.solve(g);
     if (!dx.allFinite()) break;
     if (settled) *settled = dx.cwiseAbs().maxCoeff() <= settle;
+    if (dx.cwiseAbs().maxCoeff() <= stop) break;  // nothing left to take
     bool better = false;
     for (int half = 0; half < 8 && !better; ++half, dx /= 2) {
       const State t = move(s, dx);
@@ -229,6 +233,22 @@ State newton_polish(State s, Grad&& grad, Move&& move, const VecXL& h, Ld stop, 
   return s;
 }
 
+// The Hessian by central differences of the exact gradient, steps h (one per parameter).
+template <class State, class Grad, class Move>
+auto central_hessian(Grad& grad, Move& move, const VecXL& h) {
+  return [&grad, &move, h](const State& s, MatXL& H) {
+    const Eigen::Index k = h.size();
+    VecXL gp, gm;
+    for (Eigen::Index j = 0; j < k; ++j) {
+      VecXL e = VecXL::Zero(k);
+      e[j] = h[j];
+      grad(move(s, e), gp);
+      grad(move(s, -e), gm);
+      H.col(j) = (gp - gm) / (2 * h[j]);
+    }
+  };
+}
+
 // A circle (centre c, radius r) or a sphere, in centred coordinates q (2 × n or 3 × n).
 template <int D>
 struct RoundL {
@@ -236,18 +256,51 @@ struct RoundL {
   Ld r;
 };
 
+// ½Σ(ρᵢ − r)², ρᵢ = |qᵢ − c|, and its gradient.
 template <int D>
 Ld round_gradient(const Eigen::Matrix<double, D, Eigen::Dynamic>& q, const RoundL<D>& s, VecXL& g) {
-  g = VecXL::Zero(D + 1);
-  Ld cost = 0;
+  using VecL = Eigen::Matrix<Ld, D, 1>;
+  VecL gc = VecL::Zero();
+  Ld cost = 0, gr = 0;
   for (Eigen::Index i = 0; i < q.cols(); ++i) {
-    const Eigen::Matrix<Ld, D, 1> d = q.col(i).template cast<Ld>() - s.c;
+    const VecL d = q.col(i).template cast<Ld>() - s.c;
     const Ld rho = d.norm(), res = rho - s.r;
     cost += res * res;
-    g.template head<D>() -= res * d / rho;
-    g[D] -= res;
+    gc -= res * d / rho;
+    gr -= res;
   }
+  g.resize(D + 1);
+  g << gc, gr;
   return cost / 2;
+}
+
+// Its Hessian in closed form, one pass where central differences take 2·(D + 1): with
+// uᵢ = (qᵢ − c)/ρᵢ and resᵢ = ρᵢ − r, H_cc = Σ uᵢuᵢᵀ + resᵢ(I − uᵢuᵢᵀ)/ρᵢ, H_cr = Σ uᵢ, H_rr = n.
+// In double precision: the Hessian only scales Newton's step, so its rounding changes the step
+// by ~1e-16 of itself, while the gradient (which decides where the step ends) stays 80-bit.
+template <int D>
+void round_hessian(const Eigen::Matrix<double, D, Eigen::Dynamic>& q, const RoundL<D>& s,
+                   MatXL& H) {
+  using Vec = Eigen::Matrix<double, D, 1>;
+  using Mat = Eigen::Matrix<double, D, D>;
+  const Vec c = s.c.template cast<double>();
+  const double r = static_cast<double>(s.r);
+  Mat Hcc = Mat::Zero();
+  Vec Hcr = Vec::Zero();
+  for (Eigen::Index i = 0; i < q.cols(); ++i) {
+    const Vec d = q.col(i) - c;
+    const double rho = d.norm();
+    const Vec u = d / rho;
+    const double w = (rho - r) / rho;
+    Hcc.noalias() += (1 - w) * (u * u.transpose());
+    Hcc.diagonal().array() += w;
+    Hcr += u;
+  }
+  H.resize(D + 1, D + 1);
+  H.template topLeftCorner<D, D>() = Hcc.template cast<Ld>();
+  H.template topRightCorner<D, 1>() = Hcr.template cast<Ld>();
+  H.template bottomLeftCorner<1, D>() = Hcr.transpose().template cast<Ld>();
+  H(D, D) = static_cast<Ld>(q.cols());
 }
 
 // Polishes a circle or sphere fit (centre and radius in the coordinates of q) in place.
@@ -255,14 +308,14 @@ template <int D>
 void polish_round(const Eigen::Matrix<double, D, Eigen::Dynamic>& q,
                   Eigen::Matrix<double, D, 1>& centre, double& radius) {
   const Ld size = std::max<Ld>(1, q.cwiseAbs().maxCoeff());
-  const VecXL h = VecXL::Constant(D + 1, 1e-7L * size);
   const RoundL<D> s = newton_polish(
       RoundL<D>{centre.template cast<Ld>(), radius},
       [&](const RoundL<D>& x, VecXL& g) { return round_gradient<D>(q, x, g); },
+      [&](const RoundL<D>& x, MatXL& H) { round_hessian<D>(q, x, H); },
       [](const RoundL<D>& x, const VecXL& dx) {
         return RoundL<D>{x.c + dx.template head<D>(), x.r + dx[D]};
       },
-      h, 1e-16L * size);
+      1e-16L * size);
   centre = s.c.template cast<double>();
   radius = static_cast<double>(s.r);
 }
@@ -421,11 +474,11 @@ AxisState polish_axis(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid
   VecXL h(cone ? 6 : 5);  // ~1e-7 of the size (mm) or of a radian
   h << 1e-7L * extent, 1e-7L * extent, 1e-7L, 1e-7L, 1e-7L * extent;
   if (cone) h[5] = 1e-7L;
+  auto grad = [&](const AxisStateL& x, VecXL& g) { return axis_gradient(p, x, cone, g); };
+  auto move = [&](const AxisStateL& x, const VecXL& dx) { return move_axis_l(x, dx, c, cone); };
   const AxisStateL s = newton_polish(
-      AxisStateL{s0.x0.cast<Ld>(), basis(s0.a).cast<Ld>(), s0.r, s0.psi},
-      [&](const AxisStateL& x, VecXL& g) { return axis_gradient(p, x, cone, g); },
-      [&](const AxisStateL& x, const VecXL& dx) { return move_axis_l(x, dx, c, cone); }, h,
-      1e-16L * extent, 1e-10L * extent, settled);
+      AxisStateL{s0.x0.cast<Ld>(), basis(s0.a).cast<Ld>(), s0.r, s0.psi}, grad,
+      central_hessian<AxisStateL>(grad, move, h), move, 1e-16L * extent, 1e-10L * extent, settled);
   AxisState out = s0;
   out.x0 = s.x0.cast<double>();
   out.a = s.R.col(2).cast<double>().normalized();
