@@ -64,7 +64,13 @@ void BM_CylinderFit(benchmark::State& st) {
 }  // namespace
 
 BENCHMARK(BM_PlaneFit)->Arg(25)->Arg(100)->Unit(benchmark::kMicrosecond)->UseRealTime();
-BENCHMARK(BM_SphereFit)->Arg(25)->Arg(100)->Unit(benchmark::kMicrosecond)->UseRealTime();
+BENCHMARK(BM_SphereFit)
+    ->Arg(25)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Arg(100000)
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
 // A large scan: a cylinder against a sphere fit of as many points (target: ≤ 10×).
 BENCHMARK(BM_SphereFit)->Arg(1000000)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_CylinderFit)->Arg(1000000)->Unit(benchmark::kMillisecond)->UseRealTime();

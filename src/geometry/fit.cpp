@@ -90,6 +90,7 @@ struct Refined {
 };
 
 constexpr int kMaxIterations = 500;
+constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // Cylinders and cones: above twice this many points, the start values compete on a subsample of
 // about this size (see fit()).
 constexpr Eigen::Index kStartPoints = 10000;
@@ -117,16 +118,23 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
     // round-off in the residuals lets the solution resolve (their error over the smallest
     // singular value of the Jacobian).
     const double step = dx.template lpNorm<Eigen::Infinity>();
-    const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
-        qr.matrixR().topLeftCorner(k, k).template triangularView<Eigen::Upper>());
-    const double smallest = svd.singularValues()[k - 1];
-    const double floor =
-        smallest > 0 ? roundoff * std::sqrt(static_cast<double>(J.rows())) / smallest : 0;
-    const double tol = std::max(step_tol, floor);
+    auto tolerance = [&] {
+      const Eigen::JacobiSVD<Eigen::MatrixXd> svd(
+          qr.matrixR().topLeftCorner(k, k).template triangularView<Eigen::Upper>());
+      const double smallest = svd.singularValues()[k - 1];
+      const double floor =
+          smallest > 0 ? roundoff * std::sqrt(static_cast<double>(J.rows())) / smallest : 0;
+      return std::max(step_tol, floor);
+    };
+    // An undamped step the data cannot resolve: below the tolerance, or promising a decrease of
+    // the cost (‖J·dx‖², the linear model's) below the cost's own rounding. If it does not lower
+    // the cost, the minimum is reached to round-off: no shortening, no damping.
+    const bool resolved =
+        lambda > 0 ||
+        ((J * dx).squaredNorm() > 16 * kEpsilon * std::sqrt(static_cast<double>(J.rows())) * cost &&
+         step > tolerance());
     // Along the step, shorten it while the cost rises: in a curved valley (a small patch of a
-    // wide cone) the full step overshoots where a fraction of it still descends. Not a step
-    // below the resolution (see below).
-    const bool resolved = lambda > 0 || step > tol;
+    // wide cone) the full step overshoots where a fraction of it still descends.
     State trial = update(st, dx);
     eval(trial, rt, nullptr);
     double ct = rt.squaredNorm(), fraction = 1;
@@ -143,6 +151,7 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
       // steps shrinking by a ratio ρ close to 1 and leaving step·ρ/(1 − ρ) still to go.
       const double ratio = previous > 0 ? step / previous : 1;
       const double left = ratio < 1 ? step * ratio / (1 - ratio) : HUGE_VAL;
+      const double tol = tolerance();
       const bool done = step <= tol && (left <= tol || ct == cost);
       st = trial;
       cost = ct;
@@ -155,8 +164,6 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
         break;
       }
     } else if (!resolved) {
-      // The full Gauss–Newton step is below what the data resolve and does not lower the cost:
-      // at the minimum to round-off. (Damping it further would only repeat that.)
       out.converged = true;
       break;
     } else {
