@@ -100,18 +100,33 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
   Eigen::VectorXd r, rt;
   Eigen::MatrixXd J;
   eval(st, r, &J);
+  const Eigen::Index m = J.rows(), k = J.cols();
   double cost = r.squaredNorm(), lambda = 0, previous = 0;
   Refined out;
+  // The damped problem min ‖[J; √λ·D]·dx + [r; 0]‖ is solved through J = Q·R: it is then
+  // min ‖[R; √λ·D]·dx + [Qᵀr; 0]‖, a 2k × k problem (column-pivoted, so a rank-deficient J gives
+  // a basic solution as before). J is factorised in place once per accepted step; a rejected
+  // step only changes λ, so only the small problem is solved again.
+  Eigen::MatrixXd R(k, k);
+  Eigen::VectorXd qtr(k), colnorm(k);
+  auto factorise = [&] {
+    for (Eigen::Index j = 0; j < k; ++j) colnorm[j] = std::max(J.col(j).norm(), 1e-300);
+    Eigen::HouseholderQR<Eigen::Ref<Eigen::MatrixXd>> qr(J);  // overwrites J
+    R = qr.matrixQR().topRows(k).template triangularView<Eigen::Upper>();
+    Eigen::VectorXd t = -r;
+    t.applyOnTheLeft(qr.householderQ().transpose());
+    qtr = t.head(k);
+  };
+  factorise();
+  Eigen::MatrixXd A(2 * k, k);
+  Eigen::VectorXd b(2 * k);
   for (int it = 0; it < kMaxIterations; ++it) {
-    const Eigen::Index k = J.cols();
-    Eigen::MatrixXd A(J.rows() + k, k);
-    Eigen::VectorXd b = Eigen::VectorXd::Zero(J.rows() + k);
-    A.topRows(J.rows()) = J;
+    A.topRows(k) = R;
     A.bottomRows(k).setZero();
     if (lambda > 0)
-      for (Eigen::Index j = 0; j < k; ++j)
-        A(J.rows() + j, j) = std::sqrt(lambda) * std::max(J.col(j).norm(), 1e-300);
-    b.head(J.rows()) = -r;
+      for (Eigen::Index j = 0; j < k; ++j) A(k + j, j) = std::sqrt(lambda) * colnorm[j];
+    b.head(k) = qtr;
+    b.tail(k).setZero();
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
     const Eigen::VectorXd dx = qr.solve(b);
     // The step's size against what the data resolve: the tolerance is never below what
@@ -123,7 +138,7 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
           qr.matrixR().topLeftCorner(k, k).template triangularView<Eigen::Upper>());
       const double smallest = svd.singularValues()[k - 1];
       const double floor =
-          smallest > 0 ? roundoff * std::sqrt(static_cast<double>(J.rows())) / smallest : 0;
+          smallest > 0 ? roundoff * std::sqrt(static_cast<double>(m)) / smallest : 0;
       return std::max(step_tol, floor);
     };
     // An undamped step the data cannot resolve: below the tolerance, or promising a decrease of
@@ -131,7 +146,7 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
     // the cost, the minimum is reached to round-off: no shortening, no damping.
     const bool resolved =
         lambda > 0 ||
-        ((J * dx).squaredNorm() > 16 * kEpsilon * std::sqrt(static_cast<double>(J.rows())) * cost &&
+        ((R * dx).squaredNorm() > 16 * kEpsilon * std::sqrt(static_cast<double>(m)) * cost &&
          step > tolerance());
     // Along the step, shorten it while the cost rises: in a curved valley (a small patch of a
     // wide cone) the full step overshoots where a fraction of it still descends.
@@ -158,11 +173,12 @@ Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double 
       previous = step;
       ++out.steps;
       lambda = lambda > 1e-12 ? lambda / 10 : 0;
-      eval(st, r, &J);
       if (done) {
         out.converged = true;
         break;
       }
+      eval(st, r, &J);
+      factorise();
     } else if (!resolved) {
       out.converged = true;
       break;
@@ -629,8 +645,12 @@ void propagate(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, Report&& repo
   Eigen::VectorXd scale = J.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < k; ++j)
     if (!(scale[j] > 0)) scale[j] = 1;
-  const Eigen::MatrixXd Js = J * scale.cwiseInverse().asDiagonal();
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Js, Eigen::ComputeThinV);
+  // The SVD of J·S⁻¹ from that of R·S⁻¹ (J = Q·R): the same singular values and V, from a k × k
+  // matrix instead of the tall one.
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
+  const Eigen::MatrixXd R = qr.matrixQR().topRows(std::min(m, k)).triangularView<Eigen::Upper>();
+  const Eigen::MatrixXd Rs = R * scale.cwiseInverse().asDiagonal();
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Rs, Eigen::ComputeThinV);
   const Eigen::VectorXd& sv = svd.singularValues();
   f.condition_number = sv[k - 1] > 0 ? sv[0] / sv[k - 1] : std::numeric_limits<double>::infinity();
   f.dof = m - k;
