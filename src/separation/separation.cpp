@@ -614,13 +614,14 @@ void apply_reference(Raw& r, Reference ref) {
 // parabola gauge), with V's columns the functionals that define the reference. So, with
 // Z = (AᵀA)⁻¹, var(y) = scale²·Z_id,id − 2·scale·U·(ZV)_id + U·(VᵀZV)·Uᵀ. The three profiles'
 // functionals share one V (the parabola's column is common), so one solve gives ZV for all:
-// columns [w line (2), g line (2), parabola, pitch mean].
-void uncertainties(const LsqState& st, const Raw& r, Eigen::VectorXd& uw, Eigen::VectorXd& ug,
-                   Eigen::VectorXd& ut) {
+// columns [w line (2), g line (2), parabola, pitch mean]. With `with_pitch` false (only the
+// noise gain is wanted, which is about the profiles) the pitch is left out and `ut` empty.
+void uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
+                   Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
   const Design& D = st.D;
   const Scale s = scale_of(r.xg);
   const bool par = r.parabola_free;
-  const bool pitch = r.theta.size() && D.pitch;
+  const bool pitch = with_pitch && r.theta.size() && D.pitch;
   constexpr int kW0 = 0, kG0 = 2;
   int k = 4;
   const int kPhi = par ? k++ : -1;
@@ -800,7 +801,7 @@ Result separate(const ProbeData& data, const Options& opt) {
       res.sigma = std::sqrt(s2);
       res.sigma_estimated = true;
     }
-    uncertainties(st, raw, uw, ug, ut);
+    uncertainties(st, raw, res.sigma.has_value(), uw, ug, ut);
     if (res.sigma) {
       uw = (uw * s2).cwiseSqrt();
       ug = (ug * s2).cwiseSqrt();
