@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <string>
+#include <vector>
 
 namespace trueaxis::map {
 
@@ -45,7 +46,8 @@ struct EvalOptions {
   double tolerance = 1e-9;  // mm: how far outside the grid still counts as on it
 };
 
-// A prepared evaluator (precomputes the per-axis lookup; cheap to copy). The map must outlive it.
+// A prepared evaluator (precomputes the per-axis lookup and cubic slopes; cheap to copy). The
+// map must outlive it.
 class Interpolator {
  public:
   Interpolator(const ErrorMap& map, EvalOptions options = {});
@@ -61,6 +63,7 @@ class Interpolator {
     Eigen::Index n = 0;
     double x0 = 0, inv_h = 0;  // uniform axes: direct cell lookup
     bool uniform = false;
+    std::vector<double> slope;          // cubic: per node, its three-point slope's 3 coefficients
     Eigen::Index cell(double v) const;  // i with x[i] <= v <= x[i+1], v already clamped
   };
   Eigen::Vector3d eval(const Eigen::Vector3d& p) const;
