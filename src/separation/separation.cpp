@@ -652,7 +652,7 @@ void uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen::Vec
   detail::BandedLsq::RowMajor Z = detail::BandedLsq::RowMajor::Zero(D.nvars, k);
   for_each_v([&](int id, int c, double value) { Z(id, c) = value; });
   st.engine->solve_normal_in_place(Z);                // now ZV
-  Eigen::MatrixXd VZV = Eigen::MatrixXd::Zero(k, k);  // symmetric: row c is Σ V(id, c)·ZV(id, ·)
+  Eigen::MatrixXd VZV = Eigen::MatrixXd::Zero(k, k);  // column c: Σ V(id, c)·ZV(id, ·); symmetric
   for_each_v([&](int id, int c, double value) {
     const double* zr = Z.data() + static_cast<std::ptrdiff_t>(id) * k;
     for (int b = 0; b < k; ++b) VZV(b, c) += value * zr[b];
