@@ -280,7 +280,7 @@ void BandedLsq::solve_normal_impl(RowMajor& z) const {
   // later steps only change later unknowns), then R z = y overwrites y from the last unknown
   // back. Per station the rows involved are addressed by pointer: the window's (null where the
   // band runs past the grid) and the station's own g, θ.
-  auto rowp = [&z, k](long id) { return z.data() + id * k; };
+  auto rowp = [&](long id) { return z.data() + id * k; };
   std::vector<double*> win(static_cast<std::size_t>(m));
   auto set_window = [&](long K) {
     for (int c = 0; c < m; ++c) {
