@@ -727,8 +727,7 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
   const double step_tol = 1e-13 * extent;
   // Residuals carry the round-off of the coordinates they are computed from: centred ones for
   // circles and spheres, the raw ones (less the axis point) for cylinders and cones.
-  constexpr double kEps = std::numeric_limits<double>::epsilon();
-  const double roundoff = 4 * kEps * p.cwiseAbs().maxCoeff();
+  const double roundoff = 4 * kEpsilon * p.cwiseAbs().maxCoeff();
   switch (element) {
     case Element::Line: {
       f.point = s.centroid;
@@ -829,7 +828,7 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       auto update = [](const SphereState& x, const Eigen::VectorXd& dx) {
         return SphereState{x.c + dx.head<3>(), x.r + dx[3]};
       };
-      const Refined it = refine(st, eval, update, step_tol, 4 * kEps * extent);
+      const Refined it = refine(st, eval, update, step_tol, 4 * kEpsilon * extent);
       if (!it.converged) not_converged(element);
       f.iterations = it.steps;
       polish_round<3>(q, st.c, st.r);

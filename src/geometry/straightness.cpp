@@ -26,7 +26,13 @@ Line fit_line(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
 }
 
 Eigen::VectorXd residuals(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Line& l) {
-  return (y.array() - l.intercept - l.slope * x.array()).matrix();
+  Eigen::VectorXd r = y;
+  subtract_line(x, r, l);
+  return r;
+}
+
+void subtract_line(const Eigen::VectorXd& x, Eigen::VectorXd& y, const Line& l) {
+  y.array() -= l.intercept + l.slope * x.array();
 }
 
 double ls_straightness(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {

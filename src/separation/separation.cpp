@@ -382,22 +382,21 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st, bool valu
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
   if (!values) return {};
-  auto value = [&](int id) { return v[id]; };
   const long pmin = *std::min_element(p.begin(), p.end());
   Raw r;
   r.xw.resize(D.Q);
   r.w.resize(D.Q);
   for (long j = 0; j < D.Q; ++j) {
     r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
-    r.w[j] = value(D.w(j));
+    r.w[j] = v[D.w(j)];
   }
   r.xg = data.x;
   r.g.resize(n);
-  for (long K = 0; K < n; ++K) r.g[K] = value(D.g(K));
+  for (long K = 0; K < n; ++K) r.g[K] = v[D.g(K)];
   if (D.pitch) {
     r.xt = data.x;
     r.theta.resize(n);
-    for (long K = 0; K < n; ++K) r.theta[K] = value(D.t(K)) / h;
+    for (long K = 0; K < n; ++K) r.theta[K] = v[D.t(K)] / h;
   }
   r.parabola_free = D.parabola_free;
   return r;
@@ -542,13 +541,16 @@ Eigen::Vector3d quad_coefficients(const Eigen::VectorXd& x, const Scale& s) {
   return G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
 }
 
+// φ_K at x given its coefficients e.
+double quad_at(const Eigen::Vector3d& e, const Scale& s, double x) {
+  const double t = (x - s.xc) / s.L;
+  return e[0] + t * (e[1] + t * e[2]);
+}
+
 Eigen::VectorXd quad_functional(const Eigen::VectorXd& x, const Scale& s) {
   const Eigen::Vector3d e = quad_coefficients(x, s);
   Eigen::VectorXd phi(x.size());
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    const double t = (x[i] - s.xc) / s.L;
-    phi[i] = e[0] + t * (e[1] + t * e[2]);
-  }
+  for (Eigen::Index i = 0; i < x.size(); ++i) phi[i] = quad_at(e, s, x[i]);
   return phi;
 }
 
@@ -556,16 +558,8 @@ Eigen::VectorXd quad_functional(const Eigen::VectorXd& x, const Scale& s) {
 double quad_coefficient_of(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Scale& s) {
   const Eigen::Vector3d e = quad_coefficients(x, s);
   double c = 0;
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    const double t = (x[i] - s.xc) / s.L;
-    c += (e[0] + t * (e[1] + t * e[2])) * g[i];
-  }
+  for (Eigen::Index i = 0; i < x.size(); ++i) c += quad_at(e, s, x[i]) * g[i];
   return c;
-}
-
-// Subtracts a line in place.
-void subtract_line(const Eigen::VectorXd& x, Eigen::VectorXd& y, const geometry::Line& l) {
-  y.array() -= l.intercept + l.slope * x.array();
 }
 
 // Orthonormal basis of {1, x} on a grid.
@@ -598,11 +592,11 @@ void apply_reference(Raw& r, Reference ref) {
       r.theta[i] -= 2 * c * (r.xt[i] - s.xc) / (s.L * s.L);
   }
   if (ref == Reference::MinZone) {
-    subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
-    subtract_line(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
+    geometry::subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
+    geometry::subtract_line(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
   } else {
-    subtract_line(r.xw, r.w, geometry::fit_line(r.xw, r.w));
-    subtract_line(r.xg, r.g, geometry::fit_line(r.xg, r.g));
+    geometry::subtract_line(r.xw, r.w, geometry::fit_line(r.xw, r.w));
+    geometry::subtract_line(r.xg, r.g, geometry::fit_line(r.xg, r.g));
   }
   if (r.theta.size()) r.theta.array() -= r.theta.mean();
 }

@@ -51,6 +51,10 @@ TEST(Straightness, MinZoneMiddleLineCentresTheZone) {
   const Eigen::VectorXd r = residuals(x, y, z.middle);
   EXPECT_NEAR(r.maxCoeff(), -r.minCoeff(), 1e-12);
   EXPECT_LE(z.width, ls_straightness(x, y) + 1e-15);  // min zone never exceeds the LS value
+  // The in-place form gives the same residuals, to the bit.
+  Eigen::VectorXd yr = y;
+  subtract_line(x, yr, z.middle);
+  EXPECT_EQ(yr, r);
 }
 
 TEST(Straightness, LineHasZeroStraightness) {

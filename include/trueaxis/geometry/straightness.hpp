@@ -21,6 +21,8 @@ Line fit_line(const Eigen::VectorXd& x, const Eigen::VectorXd& y);
 
 // Residuals y - line(x).
 Eigen::VectorXd residuals(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Line& line);
+// The same in place: y -= line(x) (no copy of a long profile).
+void subtract_line(const Eigen::VectorXd& x, Eigen::VectorXd& y, const Line& line);
 
 // Peak-to-valley of the residuals about the least-squares line.
 double ls_straightness(const Eigen::VectorXd& x, const Eigen::VectorXd& y);
