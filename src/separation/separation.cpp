@@ -547,34 +547,12 @@ double quad_at(const Eigen::Vector3d& e, const Scale& s, double x) {
   return e[0] + t * (e[1] + t * e[2]);
 }
 
-Eigen::VectorXd quad_functional(const Eigen::VectorXd& x, const Scale& s) {
-  const Eigen::Vector3d e = quad_coefficients(x, s);
-  Eigen::VectorXd phi(x.size());
-  for (Eigen::Index i = 0; i < x.size(); ++i) phi[i] = quad_at(e, s, x[i]);
-  return phi;
-}
-
 // φᵀg without forming φ.
 double quad_coefficient_of(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Scale& s) {
   const Eigen::Vector3d e = quad_coefficients(x, s);
   double c = 0;
   for (Eigen::Index i = 0; i < x.size(); ++i) c += quad_at(e, s, x[i]) * g[i];
   return c;
-}
-
-// Orthonormal basis of {1, x} on a grid.
-Eigen::MatrixXd line_basis(const Eigen::VectorXd& x) {
-  Eigen::MatrixXd B(x.size(), 2);
-  B.col(0).setOnes();
-  B.col(1) = x.array() - x.mean();
-  B.col(0) /= B.col(0).norm();
-  const double nn = B.col(1).norm();
-  B.col(1) /= nn > 0 ? nn : 1.0;
-  return B;
-}
-
-Eigen::VectorXd project_out(const Eigen::MatrixXd& B, const Eigen::VectorXd& v) {
-  return v - B * (B.transpose() * v);
 }
 
 // Applies the ls / min-zone reference in place (parabola gauge first, if free).
@@ -601,41 +579,154 @@ void apply_reference(Raw& r, Reference ref) {
   if (r.theta.size()) r.theta.array() -= r.theta.mean();
 }
 
-// Uncertainties (unit weight) of the reported w, g, θ under the ls reference, on the grids of
-// `r` (which may be a leading subset of the lsq grids, as for the seed's own methods).
-//
-// Each reported value is y = scale·v[id] − U·(Vᵀv): the unknown less its reference (line, and
-// parabola gauge), with V's columns the functionals that define the reference. So, with
-// Z = (AᵀA)⁻¹, var(y) = scale²·Z_id,id − 2·scale·U·(ZV)_id + U·(VᵀZV)·Uᵀ. The three profiles'
-// functionals share one V (the parabola's column is common), so one solve gives ZV for all:
-// columns [w line (2), g line (2), parabola, pitch mean]. With `with_pitch` false (only the
-// noise gain is wanted, which is about the profiles) the pitch is left out and `ut` empty.
-void uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
-                   Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
-  const Design& D = st.D;
-  const Scale s = scale_of(r.xg);
-  const bool par = r.parabola_free;
-  const bool pitch = with_pitch && r.theta.size() && D.pitch;
-  constexpr int kW0 = 0, kG0 = 2;
-  int k = 4;
-  const int kPhi = par ? k++ : -1;
-  const int kT = pitch ? k++ : -1;
-  const Eigen::Index mw = r.xw.size(), mg = r.xg.size(), mt = pitch ? r.xt.size() : 0;
-  Eigen::VectorXd phi;
-  if (par) phi = quad_functional(r.xg, s);
-  const Eigen::MatrixXd Bw = line_basis(r.xw), Bg = line_basis(r.xg);
-  // V's nonzero entries (unknown, column, value), in closed form; pinned unknowns' rows are 0.
-  auto for_each_v = [&](auto&& fn) {
-    auto put = [&](int id, int c, double value) {
-      if (!D.pinned[static_cast<std::size_t>(id)]) fn(id, c, value);
-    };
-    for (Eigen::Index j = 0; j < mw; ++j)
-      for (int c = 0; c < 2; ++c) put(D.w(j), kW0 + c, Bw(j, c));
-    for (Eigen::Index K = 0; K < mg; ++K) {
-      for (int c = 0; c < 2; ++c) put(D.g(K), kG0 + c, Bg(K, c));
-      if (par) put(D.g(K), kPhi, phi[K]);
+// The ls reference as linear algebra. Each reported value is y = scale·x_u − U_i·(Vᵀx): the raw
+// unknown x_u less its reference (line, and the parabola gauge), with V's columns the functionals
+// that define the reference: [w line (2), g line (2), parabola, pitch mean]. With Z the
+// covariance of the raw unknowns (per unit reading variance),
+//   var(y) = scale²·Z_uu − 2·scale·U_i·(ZV)_u + U_i·(VᵀZV)·U_iᵀ.
+// The three profiles share one V (the parabola's column is common). With `with_pitch` false
+// (only the noise gain is wanted, which is about the profiles) the pitch is left out. U's and V's
+// rows are formed in closed form from each point's x (no n-long matrices); a profile's U has up
+// to 3 columns, padded with zeros.
+struct ReferenceAlgebra {
+  static constexpr int kW0 = 0, kG0 = 2, kMaxCols = 6;
+  using Row = Eigen::Matrix<double, kMaxCols, 1>;  // a row of V or ZV
+  using Cols = std::array<int, 3>;                 // the V columns a profile's U refers to
+
+  // The orthonormal basis of {1, x} on a grid: (1/√m, (x − x̄)/‖x − x̄‖).
+  struct Line {
+    double b0 = 1, mean = 0, inv = 1;
+    explicit Line(const Eigen::VectorXd& x) {
+      const double m = static_cast<double>(x.size());
+      b0 = 1 / std::sqrt(m);
+      mean = x.mean();
+      const double nn = (x.array() - mean).matrix().norm();
+      inv = nn > 0 ? 1 / nn : 1.0;
     }
-    for (Eigen::Index K = 0; K < mt; ++K) put(D.t(K), kT, 1.0);
+    double b1(double x) const { return (x - mean) * inv; }
+  };
+
+  const Raw& r;
+  Scale s;
+  Line lw, lg;
+  bool par = false, pitch = false;
+  int k = 4, kPhi = -1, kT = -1;
+  Eigen::Index mw = 0, mg = 0, mt = 0;
+  double h = 1;
+  Eigen::Vector3d e = Eigen::Vector3d::Zero();  // the parabola functional's coefficients
+  double pw0 = 0, pw1 = 0, pg0 = 0, pg1 = 0;    // t² on each grid's line basis
+  double lin_mean = 0;                          // mean of the parabola's slope on the θ grid
+  Cols cw{}, cg{}, ct{};
+
+  ReferenceAlgebra(const Raw& raw, bool with_pitch, bool has_pitch_unknowns, double step)
+      : r(raw), s(scale_of(raw.xg)), lw(raw.xw), lg(raw.xg), par(raw.parabola_free), h(step) {
+    pitch = with_pitch && r.theta.size() && has_pitch_unknowns;
+    if (par) kPhi = k++;
+    if (pitch) kT = k++;
+    mw = r.xw.size();
+    mg = r.xg.size();
+    mt = pitch ? r.xt.size() : 0;
+    cw = {kW0, kW0 + 1, par ? kPhi : 0};
+    cg = {kG0, kG0 + 1, par ? kPhi : 0};
+    ct = {pitch ? kT : 0, par ? kPhi : 0, 0};
+    if (par) {
+      e = quad_coefficients(r.xg, s);
+      for (Eigen::Index j = 0; j < mw; ++j) {
+        pw0 += t2(r.xw[j]);
+        pw1 += lw.b1(r.xw[j]) * t2(r.xw[j]);
+      }
+      pw0 *= lw.b0;
+      for (Eigen::Index K = 0; K < mg; ++K) {
+        pg0 += t2(r.xg[K]);
+        pg1 += lg.b1(r.xg[K]) * t2(r.xg[K]);
+      }
+      pg0 *= lg.b0;
+      for (Eigen::Index K = 0; K < mt; ++K) lin_mean += lin(r.xt[K]);
+      if (mt) lin_mean /= static_cast<double>(mt);
+    }
+  }
+  double t2(double x) const {
+    const double t = (x - s.xc) / s.L;
+    return t * t;
+  }
+  double lin(double x) const { return (x - s.xc) * (2.0 / (s.L * s.L)); }
+
+  // U's rows. Workpiece: its line, and the parabola the gauge moves into it (t² less its line).
+  Eigen::Vector3d uw(Eigen::Index j) const {
+    const double x = r.xw[j], b1 = lw.b1(x);
+    return {lw.b0, b1, par ? -(t2(x) - lw.b0 * pw0 - b1 * pw1) : 0.0};
+  }
+  Eigen::Vector3d ug(Eigen::Index K) const {
+    const double x = r.xg[K], b1 = lg.b1(x);
+    return {lg.b0, b1, par ? t2(x) - lg.b0 * pg0 - b1 * pg1 : 0.0};
+  }
+  // Pitch (its unknown is θ·h): about its mean, and the parabola's slope about its mean.
+  Eigen::Vector3d ut(Eigen::Index K) const {
+    return {1.0 / (h * static_cast<double>(mt)), par ? lin(r.xt[K]) - lin_mean : 0.0, 0.0};
+  }
+  // V's rows on each profile (zero beyond the profile's grid).
+  Row vw(Eigen::Index j) const {
+    Row v = Row::Zero();
+    if (j >= 0 && j < mw) {
+      v[kW0] = lw.b0;
+      v[kW0 + 1] = lw.b1(r.xw[j]);
+    }
+    return v;
+  }
+  Row vg(Eigen::Index K) const {
+    Row v = Row::Zero();
+    if (K >= 0 && K < mg) {
+      v[kG0] = lg.b0;
+      v[kG0 + 1] = lg.b1(r.xg[K]);
+      if (par) v[kPhi] = quad_at(e, s, r.xg[K]);
+    }
+    return v;
+  }
+  Row vt(Eigen::Index K) const {
+    Row v = Row::Zero();
+    if (pitch && K >= 0 && K < mt) v[kT] = 1.0;
+    return v;
+  }
+
+  // VᵀZV restricted to a profile's columns (padding columns have zero U).
+  static Eigen::Matrix3d restrict(const Eigen::MatrixXd& VZV, const Cols& c) {
+    Eigen::Matrix3d S;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        S(a, b) = VZV(c[static_cast<std::size_t>(a)], c[static_cast<std::size_t>(b)]);
+    return S;
+  }
+
+  // var(y_i) from Z_uu (`zd`) and the row (ZV)_u (`zv`, all k columns; null when x_u is pinned,
+  // which then also ignores zd).
+  static double point_variance(const Eigen::Vector3d& u, const Cols& c, const Eigen::Matrix3d& S,
+                               double zd, const double* zv, double scale) {
+    double v = u.dot(S * u);
+    if (zv) {
+      const double uz = u[0] * zv[c[0]] + u[1] * zv[c[1]] + u[2] * zv[c[2]];
+      v += scale * scale * zd - 2 * scale * uz;
+    }
+    return std::max(0.0, v);
+  }
+};
+
+// Uncertainties (unit weight) of the reported w, g, θ under the ls reference from the
+// least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
+void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
+                       Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
+  using Row = ReferenceAlgebra::Row;
+  const Design& D = st.D;
+  const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
+  const int k = ra.k;
+  auto free = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] == 0; };
+  // V's nonzero rows as fn(unknown, row); pinned unknowns' rows are zero.
+  auto for_each_v = [&](auto&& fn) {
+    for (Eigen::Index j = 0; j < ra.mw; ++j)
+      if (free(D.w(j))) fn(D.w(j), ra.vw(j));
+    for (Eigen::Index K = 0; K < ra.mg; ++K)
+      if (free(D.g(K))) fn(D.g(K), ra.vg(K));
+    for (Eigen::Index K = 0; K < ra.mt; ++K)
+      if (free(D.t(K))) fn(D.t(K), ra.vt(K));
   };
   // diag(Z) by the selected inversion, on a second core for long runs: it and the solve below
   // only read the factorisation.
@@ -643,74 +734,148 @@ void uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen::Vec
   std::future<Eigen::VectorXd> diag_task =
       std::async(D.n >= kThreadedStations ? std::launch::async : std::launch::deferred,
                  [&st] { return st.engine->covariance_diagonal(); });
-  detail::BandedLsq::RowMajor Z = detail::BandedLsq::RowMajor::Zero(D.nvars, k);
-  for_each_v([&](int id, int c, double value) { Z(id, c) = value; });
-  st.engine->solve_normal_in_place(Z);                // now ZV
-  Eigen::MatrixXd VZV = Eigen::MatrixXd::Zero(k, k);  // column c: Σ V(id, c)·ZV(id, ·); symmetric
-  for_each_v([&](int id, int c, double value) {
-    const double* zr = Z.data() + static_cast<std::ptrdiff_t>(id) * k;
-    for (int b = 0; b < k; ++b) VZV(b, c) += value * zr[b];
-  });
-
+  detail::BandedLsq::RowMajor Z(D.nvars, k);
+  Z.setZero();
+  for_each_v([&](int id, const Row& v) { Z.row(id) = v.head(k).transpose(); });
+  st.engine->solve_normal_in_place(Z);  // now ZV
+  Eigen::MatrixXd VZV = Eigen::MatrixXd::Zero(k, k);
+  for_each_v([&](int id, const Row& v) { VZV.noalias() += v.head(k) * Z.row(id); });
   const Eigen::VectorXd zdiag = diag_task.get();
-  // var for one profile: its unknowns, U (one row per point) and the V columns U refers to.
-  auto variance = [&](Eigen::Index m, auto&& id_of, const Eigen::MatrixXd& U,
-                      std::initializer_list<int> cols_list, double scale) {
-    const std::vector<int> cols(cols_list);
-    const int nc = static_cast<int>(cols.size());
-    Eigen::MatrixXd S(nc, nc);
-    for (int a = 0; a < nc; ++a)
-      for (int b = 0; b < nc; ++b)
-        S(a, b) = VZV(cols[static_cast<std::size_t>(a)], cols[static_cast<std::size_t>(b)]);
+  auto variance = [&](Eigen::Index m, auto&& id_of, auto&& u_of, const ReferenceAlgebra::Cols& c,
+                      double scale) {
+    const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV, c);
     Eigen::VectorXd var(m);
     for (Eigen::Index i = 0; i < m; ++i) {
       const int id = id_of(i);
-      double v = 0, uz = 0;
-      for (int a = 0; a < nc; ++a) {
-        double t = 0;
-        for (int b = 0; b < nc; ++b) t += S(a, b) * U(i, b);
-        v += U(i, a) * t;
-        uz += U(i, a) * Z(id, cols[static_cast<std::size_t>(a)]);
-      }
-      if (!D.pinned[static_cast<std::size_t>(id)]) v += scale * scale * zdiag[id] - 2 * scale * uz;
-      var[i] = std::max(0.0, v);
+      const bool f = free(id);
+      var[i] = ReferenceAlgebra::point_variance(
+          u_of(i), c, S, f ? zdiag[id] : 0.0,
+          f ? Z.data() + static_cast<std::ptrdiff_t>(id) * k : nullptr, scale);
     }
     return var;
   };
-  // Workpiece: its line, and the parabola the gauge moves into it.
-  {
-    Eigen::MatrixXd U(mw, par ? 3 : 2);
-    U.leftCols(2) = Bw;
-    if (par) {
-      Eigen::VectorXd t2 = ((r.xw.array() - s.xc) / s.L).square();
-      U.col(2) = -project_out(Bw, t2);
+  uw = variance(
+      ra.mw, [&](Eigen::Index j) { return D.w(j); }, [&](Eigen::Index j) { return ra.uw(j); },
+      ra.cw, 1.0);
+  ug = variance(
+      ra.mg, [&](Eigen::Index K) { return D.g(K); }, [&](Eigen::Index K) { return ra.ug(K); },
+      ra.cg, 1.0);
+  if (ra.pitch)
+    ut = variance(
+        ra.mt, [&](Eigen::Index K) { return D.t(K); }, [&](Eigen::Index K) { return ra.ut(K); },
+        ra.ct, 1.0 / st.h);
+}
+
+// Uncertainties (unit weight) of the two- and three-point results by exact propagation of every
+// reading through the recurrence. T, the map from readings to the raw unknowns, is taken with the
+// gauge X_0 = X_1 = 0 and without the first-reading offsets: it differs from the method's own map
+// only by lines (and, for three-point, a parabola) that the reference removes, so the reported
+// values, and their variances, are the same. Z = T·Tᵀ:
+// - diag(Z) in closed form (sums of squared integer coefficients);
+// - ZV = T·(TᵀV): the adjoint recurrence backwards, then the recurrence forwards, k columns at
+//   once; VᵀZV = (TᵀV)ᵀ(TᵀV) is summed in the backward pass.
+// O(n·k) work and one n × k array, where the least-squares covariance needs a banded
+// factorisation, a selected inversion and a solve over all 3n unknowns.
+void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, bool with_pitch,
+                              Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
+  using Row = ReferenceAlgebra::Row;
+  const long n = d.x.size();
+  const ReferenceAlgebra ra(r, with_pitch, true, d.step());
+  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> G;  // Σ z·zᵀ
+  G.setZero();
+  auto gram = [&](const Row& z) { G.noalias() += z * z.transpose(); };
+  auto restricted = [&](const ReferenceAlgebra::Cols& c) {
+    return ReferenceAlgebra::restrict(G.topLeftCorner(ra.k, ra.k), c);
+  };
+  std::vector<Row, Eigen::aligned_allocator<Row>> back;  // the adjoint state per station
+  uw.resize(ra.mw);
+  ug.resize(ra.mg);
+  ut.resize(ra.mt);
+
+  if (method == Method::TwoPoint) {
+    // w_0 = 0, w_{K+1} = w_K + B_K − A_K (K < n); g_K = A_K − w_K. Var w_j = 2j, var g_K = 1 + 2K.
+    // Adjoint: w̄_j = vw_j − vg_j + w̄_{j+1}; z_B[K] = w̄_{K+1}, z_A[K] = vg_K − w̄_{K+1}.
+    back.resize(static_cast<std::size_t>(n + 1));
+    Row wb = Row::Zero();
+    for (long j = n; j >= 1; --j) {
+      wb += ra.vw(j) - ra.vg(j);
+      back[static_cast<std::size_t>(j)] = wb;
+      gram(wb);                 // z_B[j − 1]
+      gram(ra.vg(j - 1) - wb);  // z_A[j − 1]
     }
-    auto id = [&](Eigen::Index j) { return D.w(j); };
-    uw = par ? variance(mw, id, U, {kW0, kW0 + 1, kPhi}, 1.0)
-             : variance(mw, id, U, {kW0, kW0 + 1}, 1.0);
+    const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg);
+    Row Y = Row::Zero();  // (T z) at w_j
+    for (long j = 0; j <= n; ++j) {
+      uw[j] = ReferenceAlgebra::point_variance(ra.uw(j), ra.cw, Sw, 2.0 * static_cast<double>(j),
+                                               Y.data(), 1.0);
+      if (j == n) break;
+      const Row zB = back[static_cast<std::size_t>(j + 1)];
+      const Row zA = ra.vg(j) - zB;
+      const Row gz = zA - Y;
+      ug[j] = ReferenceAlgebra::point_variance(ra.ug(j), ra.cg, Sg,
+                                               1.0 + 2.0 * static_cast<double>(j), gz.data(), 1.0);
+      Y += zB - zA;
+    }
+    return;
   }
-  // Guide.
+
+  // Three-point: X_0 = X_1 = 0, X_{K+2} = 2X_{K+1} − X_K + r_K with
+  // r_K = −2A_{K+1} + A_{K+2} + 2B_K − C_K; w_K = A_K − X_K, g_K = X_K and the pitch unknown
+  // (θ·h) t_K = B_K − A_{K+1} + X_{K+1} − X_K.
+  // Adjoint: X̄_K = λ_K + 2X̄_{K+1} − X̄_{K+2} (K ≥ 2) with λ_K = −vw_K + vg_K + vt_{K−1} − vt_K;
+  // r̄_K = X̄_{K+2}; z_A[i] = vw_i − vt_{i−1} − 2r̄_{i−1} + r̄_{i−2}, z_B[i] = vt_i + 2r̄_i,
+  // z_C[i] = −r̄_i.
+  back.assign(static_cast<std::size_t>(std::max<long>(n - 2, 0)), Row::Zero());  // r̄_0..r̄_{n−3}
+  auto rb = [&](long K) -> Row {
+    return K >= 0 && K + 2 < n ? back[static_cast<std::size_t>(K)] : Row(Row::Zero());
+  };
+  auto zA = [&](long i) -> Row { return ra.vw(i) - ra.vt(i - 1) - 2 * rb(i - 1) + rb(i - 2); };
+  auto zB = [&](long i) -> Row { return ra.vt(i) + 2 * rb(i); };
   {
-    Eigen::MatrixXd U(mg, par ? 3 : 2);
-    U.leftCols(2) = Bg;
-    if (par) {
-      Eigen::VectorXd t2 = ((r.xg.array() - s.xc) / s.L).square();
-      U.col(2) = project_out(Bg, t2);
+    Row x1 = Row::Zero(), x2 = Row::Zero();  // X̄_{K+1}, X̄_{K+2}
+    for (long K = n - 1; K >= 2; --K) {
+      const Row x = ra.vg(K) - ra.vw(K) + ra.vt(K - 1) - ra.vt(K) + 2 * x1 - x2;
+      back[static_cast<std::size_t>(K - 2)] = x;
+      x2 = x1;
+      x1 = x;
     }
-    auto id = [&](Eigen::Index K) { return D.g(K); };
-    ug = par ? variance(mg, id, U, {kG0, kG0 + 1, kPhi}, 1.0)
-             : variance(mg, id, U, {kG0, kG0 + 1}, 1.0);
   }
-  // Pitch (θ scaled by h in the design): about its mean, and the parabola's slope.
-  if (pitch) {
-    Eigen::MatrixXd U(mt, par ? 2 : 1);
-    U.col(0).setConstant(1.0 / (st.h * static_cast<double>(mt)));
-    if (par) {
-      Eigen::VectorXd lin = (r.xt.array() - s.xc) * (2.0 / (s.L * s.L));
-      U.col(1) = lin.array() - lin.mean();
+  for (long i = 0; i < n; ++i) {
+    gram(zA(i));
+    gram(zB(i));
+    gram(rb(i));  // z_C = −r̄: the sign does not matter here
+  }
+  const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg),
+                        St = ra.pitch ? restricted(ra.ct) : Eigen::Matrix3d::Zero();
+  // Var X_K = the sum of its squared reading coefficients: B_j 2(K−1−j) and C_j −(K−1−j)
+  // (j ≤ K−2), A_1 −2(K−1), A_i −(K−1−i) (2 ≤ i ≤ K), for K ≥ 2. Var w_K = var X_K − 1 (the
+  // coefficient of A_K in X_K is 1), var t_K = 6K + 4 (K ≥ 1).
+  auto s2 = [](double m) { return m * (m + 1) * (2 * m + 1) / 6; };
+  auto var_x = [&](long K) {
+    if (K < 2) return 0.0;
+    const double q = static_cast<double>(K);
+    return 5 * s2(q - 1) + 1 + s2(q - 3) + 4 * (q - 1) * (q - 1);
+  };
+  Row y0 = Row::Zero(), y1 = Row::Zero();  // (T z) at X_K, X_{K+1}
+  Row a0 = zA(0), a1 = zA(1);              // z_A[K], z_A[K+1]
+  for (long K = 0; K < n; ++K) {
+    const Row a2 = zA(K + 2);
+    const Row w = a0 - y0;
+    uw[K] = ReferenceAlgebra::point_variance(ra.uw(K), ra.cw, Sw, K < 2 ? 1.0 : var_x(K) - 1,
+                                             w.data(), 1.0);
+    ug[K] = ReferenceAlgebra::point_variance(ra.ug(K), ra.cg, Sg, var_x(K), y0.data(), 1.0);
+    const Row b = zB(K);
+    if (K < ra.mt) {
+      const Row t = b - a1 + y1 - y0;
+      ut[K] = ReferenceAlgebra::point_variance(ra.ut(K), ra.ct, St,
+                                               K == 0 ? 2.0 : 6.0 * static_cast<double>(K) + 4,
+                                               t.data(), 1.0 / ra.h);
     }
-    auto id = [&](Eigen::Index K) { return D.t(K); };
-    ut = par ? variance(mt, id, U, {kT, kPhi}, 1.0 / st.h) : variance(mt, id, U, {kT}, 1.0 / st.h);
+    const Row y2 = K + 2 < n ? Row(2 * y1 - y0 - 2 * a1 + a2 + 2 * b + rb(K)) : Row(Row::Zero());
+    y0 = y1;
+    y1 = y2;
+    a0 = a1;
+    a1 = a2;
   }
 }
 
@@ -748,15 +913,14 @@ Result separate(const ProbeData& data, const Options& opt) {
     case Method::Lsq:
       break;
   }
-  // The least-squares solve gives the Lsq answer, and the covariance for every method: for the
-  // seed's layouts the system is square, so A and B are its exact solution.
-  // Without redundancy (A, B) the noise level cannot be estimated, so their uncertainty needs a
-  // given sigma.
+  // The least-squares solve gives the Lsq answer and its covariance. The recurrences (A, B)
+  // propagate each reading exactly through their own equations. Without redundancy (A, B) the
+  // noise level cannot be estimated, so their uncertainty needs a given sigma.
   const bool unc_possible =
       opt.compute_uncertainty && opt.filter_cutoff == 0 && opt.reference != Reference::Seed;
   const bool want_unc = unc_possible && (opt.method == Method::Lsq || opt.sigma.has_value());
   LsqState st;
-  if (opt.method == Method::Lsq || unc_possible) {
+  if (opt.method == Method::Lsq) {
     Raw lsq = solve_lsq(data, opt, st, opt.method == Method::Lsq);
     if (opt.method == Method::Lsq) raw = std::move(lsq);
   }
@@ -783,7 +947,7 @@ Result separate(const ProbeData& data, const Options& opt) {
   }
 
   Eigen::VectorXd uw, ug, ut;
-  if (unc_possible && st.engine) {
+  if (unc_possible) {
     double s2 = 0;
     if (want_unc && opt.sigma) {
       s2 = (*opt.sigma) * (*opt.sigma);
@@ -795,7 +959,10 @@ Result separate(const ProbeData& data, const Options& opt) {
       res.sigma = std::sqrt(s2);
       res.sigma_estimated = true;
     }
-    uncertainties(st, raw, res.sigma.has_value(), uw, ug, ut);
+    if (opt.method == Method::Lsq)
+      lsq_uncertainties(st, raw, res.sigma.has_value(), uw, ug, ut);
+    else
+      recurrence_uncertainties(data, opt.method, raw, res.sigma.has_value(), uw, ug, ut);
     if (res.sigma) {
       uw = (uw * s2).cwiseSqrt();
       ug = (ug * s2).cwiseSqrt();
