@@ -46,7 +46,8 @@ void bind_fit(py::module_& m) {
           d["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
         }
         if (zone) d["zone"] = f.zone;
-        d["residuals"] = f.residuals;
+        // Moved into the array (no copy of n doubles).
+        d["residuals"] = py::cast(std::move(f.residuals), py::return_value_policy::move);
         if (f.has_uncertainty) {
           py::dict u;
           u[where] = Eigen::Vector3d(f.u_point);

@@ -222,6 +222,8 @@ using MatXL = Eigen::Matrix<Ld, Eigen::Dynamic, Eigen::Dynamic>;
 // the cost, or that leave it the same to round-off and lower the gradient, are taken; at most 12.
 // `settled` (if given) says whether the last Newton step was below `settle`: the state is a
 // minimum to that tolerance.
+constexpr Ld kReuseHessian = 1e6L;  // steps below this many `stop`s keep the Hessian
+
 template <class State, class Grad, class Hessian, class Move>
 State newton_polish(State s, Grad&& grad, Hessian&& hessian, Move&& move, Ld stop, Ld settle = 0,
                     bool* settled = nullptr) {
@@ -229,12 +231,16 @@ State newton_polish(State s, Grad&& grad, Hessian&& hessian, Move&& move, Ld sto
   Ld cost = grad(s, g);
   const Eigen::Index k = g.size();
   if (settled) *settled = false;
+  Eigen::LDLT<MatXL> ldlt;
+  bool reuse = false;  // keep the last Hessian (see below)
   for (int it = 0; it < 12; ++it) {
-    MatXL H(k, k);
-    hessian(s, H);
-    H = ((H + H.transpose()) / 2).eval();
-    const Eigen::LDLT<MatXL> ldlt(H);
-    if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;  // not near a minimum
+    if (!reuse) {
+      MatXL H(k, k);
+      hessian(s, H);
+      H = ((H + H.transpose()) / 2).eval();
+      ldlt.compute(H);
+      if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) break;  // not near a minimum
+    }
     VecXL dx = -ldlt.solve(g);
     if (!dx.allFinite()) break;
     if (settled) *settled = dx.cwiseAbs().maxCoeff() <= settle;
@@ -252,6 +258,10 @@ State newton_polish(State s, Grad&& grad, Hessian&& hessian, Move&& move, Ld sto
       }
     }
     if (!better || dx.cwiseAbs().maxCoeff() * 2 <= stop) break;
+    // After a full step this close to the minimum the Hessian changes by a relative ~|dx|/size,
+    // so the next step with the old one is off by that fraction of an already tiny step: the
+    // iteration still ends where the (exact) gradient vanishes, without another Hessian.
+    reuse = dx.cwiseAbs().maxCoeff() <= kReuseHessian * stop;
   }
   return s;
 }
@@ -289,7 +299,7 @@ Ld round_gradient(const Eigen::Matrix<double, D, Eigen::Dynamic>& q, const Round
     const VecL d = q.col(i).template cast<Ld>() - s.c;
     const Ld rho = d.norm(), res = rho - s.r;
     cost += res * res;
-    gc -= res * d / rho;
+    gc -= (res / rho) * d;  // one x87 division per point, not one per coordinate
     gr -= res;
   }
   g.resize(D + 1);
@@ -428,10 +438,11 @@ T axis_residual(T x, T y, T z, T r0, T C, T S, T Tn, bool cone, T* d) {
   const T rho = sqrt(x * x + y * y);  // not hypot: mm-scale values cannot overflow; 3-5x cheaper
   const T gap = rho - r0 - z * Tn;    // radial gap at the point's axial position
   if (d) {
-    d[0] = -C * x / rho;
-    d[1] = -C * y / rho;
-    d[2] = C * (-x * z / rho - Tn * x);
-    d[3] = C * (-y * z / rho - Tn * y);
+    const T xr = x / rho, yr = y / rho;  // two divisions (x87 ones are slow in the 80-bit pass)
+    d[0] = -C * xr;
+    d[1] = -C * yr;
+    d[2] = C * (-xr * z - Tn * x);
+    d[3] = C * (-yr * z - Tn * y);
     d[4] = -C;
     if (cone) d[5] = -z / C - gap * S;
   }
@@ -639,23 +650,23 @@ Reported reported(const Eigen::Vector3d& point, const Eigen::Vector3d& direction
 // correction dx) and the map dx -> reported quantities: standard uncertainties
 // u = sqrt(diag(G C Gᵀ)) with C = s²(JᵀJ)⁻¹, s² = |r|²/(m − k), G by central differences;
 // and the condition number of J with unit columns.
+//
+// This form takes the triangle R of J = Q·R (or any R with RᵀR = JᵀJ), the squared residual norm
+// and the number of residuals m: the SVD of J·S⁻¹ is that of R·S⁻¹ (the same singular values and
+// V) and the column norms of J are those of R.
 template <class Report>
-void propagate(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, Report&& report, Fit& f) {
-  const Eigen::Index m = J.rows(), k = J.cols();
-  Eigen::VectorXd scale = J.colwise().norm().transpose();
+void propagate_r(const Eigen::MatrixXd& R, double ssr, Eigen::Index m, Report&& report, Fit& f) {
+  const Eigen::Index k = R.cols();
+  Eigen::VectorXd scale = R.colwise().norm().transpose();
   for (Eigen::Index j = 0; j < k; ++j)
     if (!(scale[j] > 0)) scale[j] = 1;
-  // The SVD of J·S⁻¹ from that of R·S⁻¹ (J = Q·R): the same singular values and V, from a k × k
-  // matrix instead of the tall one.
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
-  const Eigen::MatrixXd R = qr.matrixQR().topRows(std::min(m, k)).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd Rs = R * scale.cwiseInverse().asDiagonal();
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(Rs, Eigen::ComputeThinV);
   const Eigen::VectorXd& sv = svd.singularValues();
   f.condition_number = sv[k - 1] > 0 ? sv[0] / sv[k - 1] : std::numeric_limits<double>::infinity();
   f.dof = m - k;
   if (m <= k || !(sv[k - 1] > 0)) return;
-  const double s2 = r.squaredNorm() / static_cast<double>(m - k);
+  const double s2 = ssr / static_cast<double>(m - k);
   const Eigen::MatrixXd W =
       scale.cwiseInverse().asDiagonal() * svd.matrixV() * sv.cwiseInverse().asDiagonal();
   const Eigen::MatrixXd C = s2 * W * W.transpose();
@@ -676,6 +687,15 @@ void propagate(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, Report&& repo
   f.u_distance = u[7];
   f.u_apex_angle = u[8];
   f.has_uncertainty = true;
+}
+
+template <class Report>
+void propagate(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, Report&& report, Fit& f) {
+  const Eigen::Index m = J.rows(), k = J.cols();
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(J);
+  Eigen::MatrixXd R = Eigen::MatrixXd::Zero(k, k);
+  R.topRows(std::min(m, k)) = qr.matrixQR().topRows(std::min(m, k)).triangularView<Eigen::Upper>();
+  propagate_r(R, r.squaredNorm(), m, std::forward<Report>(report), f);
 }
 
 // A plane through c with normal R.col(2), perturbed by dx = (tilt a, tilt b, offset d): its
@@ -806,15 +826,21 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
     }
     case Element::Sphere: {
       const Eigen::Index n = p.cols();
-      Eigen::MatrixXd A(n, 4);
-      Eigen::VectorXd b(n);
       const Eigen::Matrix3Xd q = p.colwise() - s.centroid;  // centred for conditioning
+      // The algebraic start |q − c|² = r² is linear in (c, r² − |c|²). With centred points
+      // (Σq = 0) its normal equations split: (Σ q·qᵀ)·c = ½·Σ q·|q|², r² = |c|² + Σ|q|²/n.
+      Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d v = Eigen::Vector3d::Zero();
+      double qq = 0;
       for (Eigen::Index i = 0; i < n; ++i) {
-        A.row(i) << 2 * q(0, i), 2 * q(1, i), 2 * q(2, i), 1;
-        b[i] = q.col(i).squaredNorm();
+        const Eigen::Vector3d x = q.col(i);
+        const double x2 = x.squaredNorm();
+        M.noalias() += x * x.transpose();
+        v += x2 * x;
+        qq += x2;
       }
-      const Eigen::Vector4d a = A.colPivHouseholderQr().solve(b);
-      SphereState st{a.head<3>(), std::sqrt(std::max(0.0, a[3] + a.head<3>().squaredNorm()))};
+      const Eigen::Vector3d c0 = M.ldlt().solve(v / 2);
+      SphereState st{c0, std::sqrt(c0.squaredNorm() + qq / static_cast<double>(n))};
       auto eval = [&](const SphereState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
         r.resize(n);
         if (J) J->resize(n, 4);
@@ -828,22 +854,85 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       auto update = [](const SphereState& x, const Eigen::VectorXd& dx) {
         return SphereState{x.c + dx.head<3>(), x.r + dx[3]};
       };
-      const Refined it = refine(st, eval, update, step_tol, 4 * kEpsilon * extent);
-      if (!it.converged) not_converged(element);
-      f.iterations = it.steps;
+      // JᵀJ, Jᵀr and Σr² in one pass, without forming J.
+      using Mat4 = Eigen::Matrix4d;
+      using Vec4 = Eigen::Vector4d;
+      auto normal = [&](const SphereState& x, Mat4& JtJ, Vec4& Jtr) {
+        JtJ.setZero();
+        Jtr.setZero();
+        double cost = 0;
+        for (Eigen::Index i = 0; i < n; ++i) {
+          const Eigen::Vector3d d = q.col(i) - x.c;
+          const double rho = d.norm(), res = rho - x.r, inv = -1 / rho;
+          const Vec4 j(d.x() * inv, d.y() * inv, d.z() * inv, -1);
+          JtJ.noalias() += j * j.transpose();
+          Jtr += res * j;
+          cost += res * res;
+        }
+        return cost;
+      };
+      // Gauss–Newton on the normal equations while they are well conditioned (a sphere, or a
+      // cap that is not too shallow) and the steps shrink: the 80-bit Newton polish below then
+      // settles the last digits. A cap too shallow for that, or a start that does not
+      // converge, goes through Levenberg–Marquardt on the QR of J as before.
+      constexpr double kNormalConditionLimit = 1e12;  // of JᵀJ, i.e. 1e6 for J
+      constexpr int kFastSteps = 30;
+      constexpr double kFastTolerance = 1e-9;  // of the extent
+      Mat4 JtJ;
+      Vec4 Jtr;
+      double cost = normal(st, JtJ, Jtr);
+      bool fast = false;
+      int steps = 0;
+      for (; steps < kFastSteps; ++steps) {
+        const Eigen::SelfAdjointEigenSolver<Mat4> es(JtJ, Eigen::EigenvaluesOnly);
+        const Vec4 ev = es.eigenvalues();
+        if (!(ev[0] > 0) || !(ev[3] < kNormalConditionLimit * ev[0])) break;
+        const Vec4 dx = -JtJ.ldlt().solve(Jtr);
+        // Close enough for the 80-bit Newton polish, which converges quadratically from here
+        // (and where the double-precision cost may no longer tell such a step from none).
+        if (dx.cwiseAbs().maxCoeff() <= kFastTolerance * extent) {
+          fast = true;
+          break;
+        }
+        const SphereState trial = update(st, dx);
+        Mat4 JtJ2;
+        Vec4 Jtr2;
+        const double ct = normal(trial, JtJ2, Jtr2);
+        if (!(std::isfinite(ct) && ct <= cost)) break;  // no plain descent: leave it to LM
+        st = trial;
+        cost = ct;
+        JtJ = JtJ2;
+        Jtr = Jtr2;
+      }
+      if (fast) {
+        f.iterations = steps;
+      } else {
+        const Refined it = refine(st, eval, update, step_tol, 4 * kEpsilon * extent);
+        if (!it.converged) not_converged(element);
+        f.iterations = steps + it.steps;
+      }
       polish_round<3>(q, st.c, st.r);
       f.point = s.centroid + st.c;
       f.diameter = 2 * std::abs(st.r);
-      Eigen::VectorXd r;
-      Eigen::MatrixXd J;
-      eval(st, r, &J);
-      propagate(
-          J, r,
-          [&](const Eigen::VectorXd& dx) {
-            const SphereState t = update(st, dx);
-            return reported(s.centroid + t.c, Eigen::Vector3d::Zero(), 2 * std::abs(t.r));
-          },
-          f);
+      auto report = [&](const Eigen::VectorXd& dx) {
+        const SphereState t = update(st, dx);
+        return reported(s.centroid + t.c, Eigen::Vector3d::Zero(), 2 * std::abs(t.r));
+      };
+      // The uncertainty from the normal equations' Cholesky factor where they are well
+      // conditioned (R with RᵀR = JᵀJ), else from the QR of J.
+      cost = normal(st, JtJ, Jtr);
+      const Eigen::SelfAdjointEigenSolver<Mat4> es(JtJ, Eigen::EigenvaluesOnly);
+      const Eigen::LLT<Mat4> llt(JtJ);
+      if (es.eigenvalues()[0] > 0 &&
+          es.eigenvalues()[3] < kNormalConditionLimit * es.eigenvalues()[0] &&
+          llt.info() == Eigen::Success) {
+        propagate_r(Eigen::MatrixXd(llt.matrixU()), cost, n, report, f);
+      } else {
+        Eigen::VectorXd r;
+        Eigen::MatrixXd J;
+        eval(st, r, &J);
+        propagate(J, r, report, f);
+      }
       judge_size(f, "diameter", f.diameter);
       break;
     }
