@@ -31,9 +31,28 @@ struct Pca {
   Eigen::Vector3d spread;  // singular values of the centred points
 };
 
-Pca pca(const Eigen::Matrix3Xd& p) {
+// With `exact_axes` false (the axes are only start values, or unused) the spreads and axes come
+// from the 3 × 3 scatter matrix in one pass when the cloud is far from flat: its eigenvalues are
+// the squared singular values, and only a spread near the degeneracy threshold needs the SVD's
+// accuracy (an SVD of the 3 × n points costs ~40 passes over them).
+Pca pca(const Eigen::Matrix3Xd& p, bool exact_axes = true) {
   Pca r;
   r.centroid = p.rowwise().mean();
+  if (!exact_axes) {
+    Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+    for (Eigen::Index i = 0; i < p.cols(); ++i) {
+      const Eigen::Vector3d x = p.col(i) - r.centroid;
+      M.noalias() += x * x.transpose();
+    }
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(M);
+    const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+    constexpr double kScatterSpreadRatio = 1e-4;  // far above kDegenerate: safe to decide here
+    if (es.info() == Eigen::Success && ev[0] > kScatterSpreadRatio * kScatterSpreadRatio * ev[2]) {
+      r.spread = ev.reverse().cwiseSqrt();
+      r.axes = es.eigenvectors().rowwise().reverse();
+      return r;
+    }
+  }
   const Eigen::Matrix3Xd c = p.colwise() - r.centroid;
   const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(c, Eigen::ComputeFullU);
   r.axes = svd.matrixU();
@@ -510,9 +529,41 @@ AxisState polish_axis(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid
   if (cone) h[5] = 1e-7L;
   auto grad = [&](const AxisStateL& x, VecXL& g) { return axis_gradient(p, x, cone, g); };
   auto move = [&](const AxisStateL& x, const VecXL& dx) { return move_axis_l(x, dx, c, cone); };
-  const AxisStateL s = newton_polish(
-      AxisStateL{s0.x0.cast<Ld>(), basis(s0.a).cast<Ld>(), s0.r, s0.psi}, grad,
-      central_hessian<AxisStateL>(grad, move, h), move, 1e-16L * extent, 1e-10L * extent, settled);
+  auto central = central_hessian<AxisStateL>(grad, move, h);
+  // The Hessian is JᵀJ + Σ resᵢ·∇²resᵢ. The second term is left out (Gauss–Newton, one pass in
+  // double) when it cannot matter: it is about max|res|/size of JᵀJ's scale, and it must stay a
+  // small fraction of JᵀJ's smallest eigenvalue too, so that each Newton step still gains
+  // ~3 digits. Otherwise (large form error, a flat valley) it comes from central differences of
+  // the exact gradient, 2k gradient passes in 80-bit arithmetic.
+  constexpr double kLeftOutCurvature = 1e-3;
+  const int k = cone ? 6 : 5;
+  auto hessian = [&](const AxisStateL& x, MatXL& H) {
+    const Eigen::Matrix3d R = x.R.cast<double>();
+    const Eigen::Vector3d x0 = x.x0.cast<double>();
+    const double psi = static_cast<double>(x.psi), r0 = static_cast<double>(x.r);
+    const double C = std::cos(psi), S = std::sin(psi), T = std::tan(psi);
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> d = Eigen::Matrix<double, 6, 1>::Zero();
+    double worst = 0;
+    for (Eigen::Index i = 0; i < p.cols(); ++i) {
+      const Eigen::Vector3d q = R.transpose() * (p.col(i) - x0);
+      const double res = axis_residual(q[0], q[1], q[2], r0, C, S, T, cone, d.data());
+      A.noalias() += d * d.transpose();
+      worst = std::max(worst, std::abs(res));
+    }
+    const Eigen::VectorXd scale = A.diagonal().head(k).cwiseSqrt().cwiseMax(1e-300);
+    const Eigen::MatrixXd As = scale.cwiseInverse().asDiagonal() * A.topLeftCorner(k, k) *
+                               scale.cwiseInverse().asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(As, Eigen::EigenvaluesOnly);
+    const double lo = es.eigenvalues()[0], hi = es.eigenvalues()[k - 1];
+    if (lo > 0 && worst / extent * (hi / lo) <= kLeftOutCurvature)
+      H = A.topLeftCorner(k, k).cast<Ld>();
+    else
+      central(x, H);
+  };
+  const AxisStateL s =
+      newton_polish(AxisStateL{s0.x0.cast<Ld>(), basis(s0.a).cast<Ld>(), s0.r, s0.psi}, grad,
+                    hessian, move, 1e-16L * extent, 1e-10L * extent, settled);
   AxisState out = s0;
   out.x0 = s.x0.cast<double>();
   out.a = s.R.col(2).cast<double>().normalized();
@@ -606,6 +657,8 @@ Element element_from_string(const std::string& s) {
 }
 
 Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& p) {
+  if (f.element == Element::Sphere)  // without a copy of the points
+    return ((p.colwise() - f.point).colwise().norm().array() - f.diameter / 2).matrix().transpose();
   const Eigen::Matrix3Xd d = p.colwise() - f.point;
   switch (f.element) {
     case Element::Line:
@@ -618,7 +671,7 @@ Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& p) {
       return (inplane.colwise().norm().array() - f.diameter / 2).matrix().transpose();
     }
     case Element::Sphere:
-      return (d.colwise().norm().array() - f.diameter / 2).matrix().transpose();
+      break;  // above
     case Element::Cylinder: {
       const Eigen::Matrix3Xd radial = d - f.direction * (f.direction.transpose() * d);
       return (radial.colwise().norm().array() - f.diameter / 2).matrix().transpose();
@@ -739,7 +792,9 @@ void judge_size(Fit& f, const char* what, double size) {
 
 Fit fit(Element element, const Eigen::Matrix3Xd& p) {
   check_points(element, p);
-  const Pca s = pca(p);
+  // A sphere uses only the centroid and the spreads, a cylinder or cone the axes as start values.
+  const Pca s = pca(
+      p, !(element == Element::Sphere || element == Element::Cylinder || element == Element::Cone));
   check(element, p, s);
   Fit f;
   f.element = element;
