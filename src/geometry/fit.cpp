@@ -235,14 +235,14 @@ using Mat3L = Eigen::Matrix<Ld, 3, 3>;
 using VecXL = Eigen::Matrix<Ld, Eigen::Dynamic, 1>;
 using MatXL = Eigen::Matrix<Ld, Eigen::Dynamic, Eigen::Dynamic>;
 
+constexpr Ld kReuseHessian = 1e6L;
+
 // Newton's method in 80-bit arithmetic from a state near the minimum: `grad(state, g)` returns
 // ½Σr² and its gradient g with respect to a local correction, `hessian(state, H)` fills its
 // Hessian (with the residuals' curvature), `move(state, dx)` applies a correction. Steps that lower
 // the cost, or that leave it the same to round-off and lower the gradient, are taken; at most 12.
 // `settled` (if given) says whether the last Newton step was below `settle`: the state is a
-// minimum to that tolerance.
-constexpr Ld kReuseHessian = 1e6L;  // steps below this many `stop`s keep the Hessian
-
+// minimum to that tolerance. Steps below kReuseHessian `stop`s keep the Hessian for the next one.
 template <class State, class Grad, class Hessian, class Move>
 State newton_polish(State s, Grad&& grad, Hessian&& hessian, Move&& move, Ld stop, Ld settle = 0,
                     bool* settled = nullptr) {
@@ -884,13 +884,13 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       const Eigen::Matrix3Xd q = p.colwise() - s.centroid;  // centred for conditioning
       // The algebraic start |q − c|² = r² is linear in (c, r² − |c|²). With centred points
       // (Σq = 0) its normal equations split: (Σ q·qᵀ)·c = ½·Σ q·|q|², r² = |c|² + Σ|q|²/n.
-      Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+      // Σ q·qᵀ is the scatter matrix the principal axes came from.
+      const Eigen::Matrix3d M = s.axes * s.spread.cwiseAbs2().asDiagonal() * s.axes.transpose();
       Eigen::Vector3d v = Eigen::Vector3d::Zero();
       double qq = 0;
       for (Eigen::Index i = 0; i < n; ++i) {
         const Eigen::Vector3d x = q.col(i);
         const double x2 = x.squaredNorm();
-        M.noalias() += x * x.transpose();
         v += x2 * x;
         qq += x2;
       }
@@ -931,6 +931,11 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       // settles the last digits. A cap too shallow for that, or a start that does not
       // converge, goes through Levenberg–Marquardt on the QR of J as before.
       constexpr double kNormalConditionLimit = 1e12;  // of JᵀJ, i.e. 1e6 for J
+      auto well_conditioned = [&](const Mat4& A) {
+        const Eigen::SelfAdjointEigenSolver<Mat4> es(A, Eigen::EigenvaluesOnly);
+        const Vec4& ev = es.eigenvalues();
+        return ev[0] > 0 && ev[3] < kNormalConditionLimit * ev[0];
+      };
       constexpr int kFastSteps = 30;
       constexpr double kFastTolerance = 1e-9;  // of the extent
       Mat4 JtJ;
@@ -939,9 +944,7 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       bool fast = false;
       int steps = 0;
       for (; steps < kFastSteps; ++steps) {
-        const Eigen::SelfAdjointEigenSolver<Mat4> es(JtJ, Eigen::EigenvaluesOnly);
-        const Vec4 ev = es.eigenvalues();
-        if (!(ev[0] > 0) || !(ev[3] < kNormalConditionLimit * ev[0])) break;
+        if (!well_conditioned(JtJ)) break;
         const Vec4 dx = -JtJ.ldlt().solve(Jtr);
         // Close enough for the 80-bit Newton polish, which converges quadratically from here
         // (and where the double-precision cost may no longer tell such a step from none).
@@ -976,11 +979,8 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       // The uncertainty from the normal equations' Cholesky factor where they are well
       // conditioned (R with RᵀR = JᵀJ), else from the QR of J.
       cost = normal(st, JtJ, Jtr);
-      const Eigen::SelfAdjointEigenSolver<Mat4> es(JtJ, Eigen::EigenvaluesOnly);
       const Eigen::LLT<Mat4> llt(JtJ);
-      if (es.eigenvalues()[0] > 0 &&
-          es.eigenvalues()[3] < kNormalConditionLimit * es.eigenvalues()[0] &&
-          llt.info() == Eigen::Success) {
+      if (well_conditioned(JtJ) && llt.info() == Eigen::Success) {
         propagate_r(Eigen::MatrixXd(llt.matrixU()), cost, n, report, f);
       } else {
         Eigen::VectorXd r;

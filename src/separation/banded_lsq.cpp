@@ -73,8 +73,7 @@ inline void station_rhs(const Design& D, long K, const Eigen::MatrixXd& readings
 }  // namespace
 
 void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                       const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
-                       bool keep_rotations) {
+                       const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   const Design& D = D_;
   const long n = D.n;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
@@ -83,8 +82,8 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   // The rotations depend on the coefficients only, so later right-hand sides can reuse them
   // (iterative refinement) if they fit in a modest amount of memory.
   const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
-  keep_rotations_ = keep_rotations && per_station * static_cast<std::size_t>(n) * sizeof(double) <=
-                                          kRotationBudgetBytes;
+  keep_rotations_ =
+      per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
   rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M)),

@@ -34,11 +34,8 @@ class BandedLsq {
   // Factorises the system for the right-hand side b − A·v: b holds, per station, the probe
   // readings minus `mu` (n × N) and, with an angle channel, wa·angle_mm[K]. v holds a value for
   // every unknown (pinned ones at their pin values). Afterwards solve() gives the correction to v.
-  // With keep_rotations false the rotations are not stored (a single factorisation, for the
-  // covariance only: refactor_rhs then factorises again).
   void factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-              const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
-              bool keep_rotations = true);
+              const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
 
   // The same for a new v, reusing the last factorisation's rotations when they were kept (the
   // coefficients do not change): only the right-hand side is transformed.

@@ -324,9 +324,7 @@ struct LsqState {
   long dof = 0;
 };
 
-// With `values` false only the factorisation is made (for the covariance and the residual of
-// another method's solution): no solve, no refinement, and an empty result.
-Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st, bool values) {
+Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   const long n = data.x.size();
   const double h = data.step();
   std::vector<long> p;
@@ -356,7 +354,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st, bool valu
   double ssr0 = 0, last = 0;
   for (int iter = 0; iter < 4; ++iter) {
     if (iter == 0)
-      st.engine->factor(data.readings, mu, angle_mm, v, /*keep_rotations=*/values);
+      st.engine->factor(data.readings, mu, angle_mm, v);
     else
       st.engine->refactor_rhs(data.readings, mu, angle_mm, v);
     if (iter == 0) {
@@ -366,7 +364,6 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st, bool valu
                                  : a.message);
       }
       ssr0 = st.engine->ssr();
-      if (!values) break;
     }
     const Eigen::VectorXd dv = st.engine->solve();
     v += dv;
@@ -381,7 +378,6 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st, bool valu
   }
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
-  if (!values) return {};
   const long pmin = *std::min_element(p.begin(), p.end());
   Raw r;
   r.xw.resize(D.Q);
@@ -773,7 +769,8 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
 // values, and their variances, are the same. Z = T·Tᵀ:
 // - diag(Z) in closed form (sums of squared integer coefficients);
 // - ZV = T·(TᵀV): the adjoint recurrence backwards, then the recurrence forwards, k columns at
-//   once; VᵀZV = (TᵀV)ᵀ(TᵀV) is summed in the backward pass.
+//   once; VᵀZV = (TᵀV)ᵀ(TᵀV), the Gram matrix of the adjoint vectors, is summed in the backward
+//   pass.
 // O(n·k) work and one n × k array, where the least-squares covariance needs a banded
 // factorisation, a selected inversion and a solve over all 3n unknowns.
 void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, bool with_pitch,
@@ -832,18 +829,21 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   auto zA = [&](long i) -> Row { return ra.vw(i) - ra.vt(i - 1) - 2 * rb(i - 1) + rb(i - 2); };
   auto zB = [&](long i) -> Row { return ra.vt(i) + 2 * rb(i); };
   {
-    Row x1 = Row::Zero(), x2 = Row::Zero();  // X̄_{K+1}, X̄_{K+2}
+    // Each z is summed into the Gram matrix as soon as the r̄ it needs are known: z_B and z_C at
+    // K − 2 with r̄_{K−2}, z_A at K with r̄_{K−1} and r̄_{K−2}; the first two z_A and the last
+    // two z_B (no r̄ of their own) after the loop.
+    Row x1 = Row::Zero(), x2 = Row::Zero();  // X̄_{K+1} = r̄_{K−1}, X̄_{K+2}
     for (long K = n - 1; K >= 2; --K) {
       const Row x = ra.vg(K) - ra.vw(K) + ra.vt(K - 1) - ra.vt(K) + 2 * x1 - x2;
       back[static_cast<std::size_t>(K - 2)] = x;
+      gram(ra.vt(K - 2) + 2 * x);                  // z_B[K − 2]
+      gram(x);                                     // z_C[K − 2] = −r̄: sign irrelevant here
+      gram(ra.vw(K) - ra.vt(K - 1) - 2 * x1 + x);  // z_A[K]
       x2 = x1;
       x1 = x;
     }
-  }
-  for (long i = 0; i < n; ++i) {
-    gram(zA(i));
-    gram(zB(i));
-    gram(rb(i));  // z_C = −r̄: the sign does not matter here
+    for (long i : {0L, 1L}) gram(zA(i));
+    for (long i : {n - 2, n - 1}) gram(zB(i));
   }
   const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg),
                         St = ra.pitch ? restricted(ra.ct) : Eigen::Matrix3d::Zero();
@@ -920,10 +920,7 @@ Result separate(const ProbeData& data, const Options& opt) {
       opt.compute_uncertainty && opt.filter_cutoff == 0 && opt.reference != Reference::Seed;
   const bool want_unc = unc_possible && (opt.method == Method::Lsq || opt.sigma.has_value());
   LsqState st;
-  if (opt.method == Method::Lsq) {
-    Raw lsq = solve_lsq(data, opt, st, opt.method == Method::Lsq);
-    if (opt.method == Method::Lsq) raw = std::move(lsq);
-  }
+  if (opt.method == Method::Lsq) raw = solve_lsq(data, opt, st);
   res.dof = st.engine ? st.dof : 0;
 
   if (opt.reference == Reference::Seed) {
