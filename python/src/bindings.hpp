@@ -16,5 +16,7 @@ void bind_fit(pybind11::module_& m);
 void bind_ballgauge(pybind11::module_& m);
 // Error-tolerant scanning on the virtual CMM (scan.cpp).
 void bind_scan(pybind11::module_& m);
+// Positioning accuracy by ISO 230-2 / VDI 3441 and virtual laser runs (positioning.cpp).
+void bind_positioning(pybind11::module_& m);
 
 }  // namespace trueaxis::python

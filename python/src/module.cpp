@@ -180,4 +180,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
   trueaxis::python::bind_fit(m);
   trueaxis::python::bind_ballgauge(m);
   trueaxis::python::bind_scan(m);
+  trueaxis::python::bind_positioning(m);
 }

@@ -138,6 +138,21 @@ expect_ok "$T" simulate guideway5d --layout gw.json --axis y --positions 50 --no
 head -1 gw-sim.csv | grep -qx "s,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy" && head -1 gw-truth.csv | grep -qx "s,horizontal_um,vertical_um,pitch_urad,yaw_urad,roll_urad" && ok || bad "simulate guideway5d headers"
 expect_ok "$T" guideway --layout gw.json --input gw-sim.csv --output gw-sim.json --sigma 0.05 --report gw.html
 grep -q "roll (εz)" gw.html && grep -q "uPlot" gw.html && ok || bad "guideway --report"
+# Positioning (ISO 230-2): simulated runs, the evaluation, tolerances, located errors.
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 -o pos.csv
+head -1 pos.csv | grep -qx "target_mm,cycle,direction,deviation_um" && head -1 pos-truth.csv | grep -qx "target_mm,geometric_um,up_um,down_um" && ok || bad "simulate positioning headers"
+[ "$(wc -l <pos.csv)" -eq $((16 * 2 * 5 + 1)) ] && ok || bad "simulate positioning: 16 targets x 2 directions x 5 cycles"
+expect_ok "$T" positioning --input pos.csv --output pos.json --tolerance A=100
+grep -q '"standard": "ISO 230-2:2014"' pos.json && grep -q '"pass": true' pos.json && grep -q "reversal B" out.txt && ok || bad "positioning result"
+expect_err "out of tolerance: B = " "$T" positioning --input pos.csv --output pos-bad.json --tolerance B=0.5 -q
+grep -q '"pass": false' pos-bad.json && ok || bad "positioning writes its result when out of tolerance"
+"$T" positioning --input pos.csv --tolerance X=1 >out.txt 2>err.txt; [ $? -eq 2 ] && grep -q "unknown parameter 'X'" err.txt && ok || bad "unknown tolerance name is a usage error (exit 2)"
+printf 'target_mm,cycle,direction,deviation_um\n0,1,+,1\n0,1,up,2\n' > pos-dup.csv
+expect_err "pos-dup.csv:3:1: cycle 1 '+' at target 0 mm was already read on line 2" "$T" positioning --input pos-dup.csv
+grep -v '^200,3,-' pos.csv > pos-gap.csv
+expect_err "pos-gap.csv: no '-' reading at target 200 mm in cycle 3" "$T" positioning --input pos-gap.csv
+expect_ok "$T" positioning --input pos-gap.csv --allow-incomplete --output pos-gap.json
+grep -q "incomplete cycles" pos-gap.json && ok || bad "--allow-incomplete warns"
 # Quadrant currents: the layout needs the QPD's gain (printed by the simulator).
 expect_ok "$T" simulate guideway5d --layout gw.json --currents --spot-radius 2 --positions 20 -o gw-cur.csv --truth gw-cur-truth.csv
 gain=$(grep -o '"gain_um": [0-9.]*' out.txt | grep -o '[0-9.]*$')

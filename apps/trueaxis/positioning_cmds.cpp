@@ -1,0 +1,260 @@
+// trueaxis CLI — positioning accuracy of a linear axis by ISO 230-2: 'positioning' and
+// 'simulate positioning'.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "commands.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/csv.hpp"
+#include "trueaxis/io/positioning.hpp"
+#include "trueaxis/positioning/positioning.hpp"
+#include "trueaxis/sim/machine.hpp"
+#include "trueaxis/sim/positioning.hpp"
+
+namespace trueaxis::cli {
+namespace {
+
+double parse_number(std::string_view s, const std::string& what) {
+  while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+  while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+  if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+  double v = 0;
+  const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
+  if (s.empty() || r.ec != std::errc() || r.ptr != s.data() + s.size() || !std::isfinite(v))
+    throw CLI::ValidationError(what, fmt::format("'{}' is not a number", s));
+  return v;
+}
+
+struct PositioningArgs {
+  std::string input, output = "positioning.json", standard = "iso230-2";
+  std::vector<std::string> tolerances;
+  positioning::Options o;
+  double expansion_ppm = 11.5;
+  bool no_temperature = false, quiet = false;
+};
+
+int run_positioning(const PositioningArgs& a) {
+  std::vector<std::pair<std::string, double>> tol;
+  for (const auto& t : a.tolerances) {
+    const auto eq = t.find('=');
+    if (eq == std::string::npos)
+      throw CLI::ValidationError("--tolerance", fmt::format("'{}': use NAME=um, e.g. A=10", t));
+    const std::string name = t.substr(0, eq);
+    const auto& names = positioning::parameter_names();
+    if (std::find(names.begin(), names.end(), name) == names.end()) {
+      std::string known;
+      for (const auto& n : names) known += (known.empty() ? "" : ", ") + n;
+      throw CLI::ValidationError("--tolerance",
+                                 fmt::format("unknown parameter '{}' (known: {})", name, known));
+    }
+    const double v = parse_number(std::string_view(t).substr(eq + 1), "--tolerance");
+    if (!(v > 0)) throw CLI::ValidationError("--tolerance", fmt::format("{}: must be > 0 um", t));
+    tol.emplace_back(name, v * 1e-3);
+  }
+  const io::PositioningRuns runs = io::read_runs(a.input);
+  positioning::Options o = a.o;
+  o.expansion_coefficient = a.expansion_ppm * 1e-6;
+  o.correct_temperature = !a.no_temperature;
+  positioning::Result r;
+  try {
+    r = positioning::evaluate(runs.readings, o);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", a.input, e.what()));
+  }
+  const bool vdi = a.standard == "vdi3441";
+  const auto verdicts = positioning::check(r, tol);
+  io::write_positioning_result(
+      a.output, r, vdi ? positioning::Standard::Vdi3441 : positioning::Standard::Iso230_2,
+      verdicts);
+  bool pass = true;
+  std::string failed;
+  for (const auto& v : verdicts) {
+    if (v.pass) continue;
+    pass = false;
+    failed += fmt::format("{}{} {} (tolerance {:g} um)", failed.empty() ? "" : "; ", v.name,
+                          std::isnan(v.value) ? std::string("is not defined by these runs")
+                                              : fmt::format("= {:.2f} um", v.value * 1e3),
+                          v.limit * 1e3);
+  }
+  if (!a.quiet) {
+    fmt::print("{}", r.summary(vdi));
+    if (!verdicts.empty()) fmt::print("  tolerances: {}\n", pass ? "all met" : "NOT MET");
+    fmt::print("wrote {}\n", a.output);
+  }
+  if (!pass) {
+    std::fprintf(stderr, "trueaxis positioning: out of tolerance: %s\n", failed.c_str());
+    return 1;
+  }
+  return 0;
+}
+
+// "0:50:800" (start:step:end, end included) or "0,50,120".
+std::vector<double> parse_targets(const std::string& s) {
+  std::vector<double> t;
+  if (s.find(':') != std::string::npos) {
+    std::vector<double> p;
+    std::size_t b = 0;
+    while (true) {
+      const std::size_t e = s.find(':', b);
+      p.push_back(parse_number(std::string_view(s).substr(b, e == std::string::npos ? e : e - b),
+                               "--targets"));
+      if (e == std::string::npos) break;
+      b = e + 1;
+    }
+    if (p.size() != 3 || !(p[1] > 0) || !(p[2] > p[0]))
+      throw CLI::ValidationError("--targets",
+                                 "use START:STEP:END with STEP > 0 and END > START, e.g. 0:50:800");
+    const double n = std::floor((p[2] - p[0]) / p[1] + 1e-9);
+    if (n > 10000) throw CLI::ValidationError("--targets", "more than 10000 targets");
+    for (int i = 0; i <= static_cast<int>(n); ++i) t.push_back(p[0] + i * p[1]);
+  } else {
+    std::size_t b = 0;
+    while (true) {
+      const std::size_t e = s.find(',', b);
+      t.push_back(parse_number(std::string_view(s).substr(b, e == std::string::npos ? e : e - b),
+                               "--targets"));
+      if (e == std::string::npos) break;
+      b = e + 1;
+    }
+  }
+  return t;
+}
+
+struct SimArgs {
+  MachineSource machine;
+  std::string axis = "x", targets, output = "runs.csv", truth, temperature;
+  std::vector<double> at;
+  sim::PositioningRunOptions o;
+  double backlash_um = 0, noise_um = 0, drift_um = 0, growth_um_per_m = 0, expansion_ppm = 11.5;
+  bool quiet = false;
+};
+
+int run_simulate(const SimArgs& a) {
+  const sim::Machine m = a.machine.load();
+  sim::PositioningRunOptions o = a.o;
+  o.axis = a.axis == "x" ? 0 : a.axis == "y" ? 1 : 2;
+  const auto& range = m.range[static_cast<std::size_t>(o.axis)];
+  o.targets = a.targets.empty() ? parse_targets(fmt::format("{:g}:{:g}:{:g}", range[0],
+                                                            (range[1] - range[0]) / 16, range[1]))
+                                : parse_targets(a.targets);
+  if (!a.at.empty()) {
+    if (a.at.size() != 3) throw CLI::ValidationError("--at", "give three numbers x,y,z (mm)");
+    for (int k = 0; k < 3; ++k)
+      if (k != o.axis) o.at[k] = a.at[static_cast<std::size_t>(k)];
+  }
+  o.backlash = a.backlash_um * 1e-3;
+  o.noise = a.noise_um * 1e-3;
+  o.drift = a.drift_um * 1e-3;
+  o.growth = a.growth_um_per_m * 1e-3;
+  o.expansion_coefficient = a.expansion_ppm * 1e-6;
+  if (!a.temperature.empty()) {
+    const auto c = a.temperature.find(':');
+    o.temperature_start =
+        parse_number(std::string_view(a.temperature).substr(0, c), "--temperature");
+    o.temperature_end =
+        c == std::string::npos
+            ? o.temperature_start
+            : parse_number(std::string_view(a.temperature).substr(c + 1), "--temperature");
+  }
+  const sim::PositioningRun run = sim::simulate_positioning(m, o);
+  io::write_runs(a.output, run.readings);
+  const std::string truth = a.truth.empty() ? truth_beside(a.output) : a.truth;
+  const Eigen::VectorXd g = run.geometric * 1e3, up = run.up * 1e3, down = run.down * 1e3;
+  io::write_csv(truth, {"target_mm", "geometric_um", "up_um", "down_um"},
+                {&run.targets, &g, &up, &down});
+  if (!a.quiet)
+    fmt::print("simulated {} cycles over {} targets along {} of {}: wrote {} and {}\n", o.cycles,
+               o.targets.size(), a.axis, m.name.empty() ? "the virtual machine" : m.name, a.output,
+               truth);
+  return 0;
+}
+
+}  // namespace
+
+std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate) {
+  auto sa = std::make_shared<SimArgs>();
+  auto* sc = simulate.add_subcommand(
+      "positioning",
+      "Virtual laser-interferometer runs on one axis of a virtual machine, in the standard test "
+      "cycle of ISO 230-2 (targets up, then down, every cycle), with backlash, drift, thermal "
+      "growth and noise. Writes the runs CSV that 'trueaxis positioning' reads and the truth "
+      "(target_mm, geometric_um: the machine's error from the first target; up_um, down_um: the "
+      "noise-free mean deviation of each direction at 20 C).\nExample: trueaxis simulate "
+      "positioning --axis x --targets 0:50:800 --cycles 5 --backlash 3 --noise 0.5 -o runs.csv");
+  sa->machine.add_options(sc);
+  sc->add_option("--axis", sa->axis, "the axis under test")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  sc->add_option("--targets", sa->targets,
+                 "target positions, mm: START:STEP:END or a list 0,55,103 (default: 17 over the "
+                 "axis range)");
+  sc->add_option("--cycles", sa->o.cycles, "cycles (ISO 230-2: 5)")->capture_default_str();
+  sc->add_option("--at", sa->at, "the other axes' coordinates x,y,z, mm (default: mid-range)")
+      ->delimiter(',');
+  sc->add_option("--backlash", sa->backlash_um, "lost motion on reversal, um")
+      ->capture_default_str();
+  sc->add_option("--noise", sa->noise_um, "reading noise, um (standard deviation)")
+      ->capture_default_str();
+  sc->add_option("--drift", sa->drift_um, "zero drift over the whole test, um")
+      ->capture_default_str();
+  sc->add_option("--growth", sa->growth_um_per_m,
+                 "thermal growth of the axis reached at the end of the test, um per metre "
+                 "(not in the readings' temperatures)")
+      ->capture_default_str();
+  sc->add_option("--temperature", sa->temperature,
+                 "material temperature T0:T1, C, ramping over the test: the axis expands with it "
+                 "and the readings carry it (material_temp_c)");
+  sc->add_option("--expansion", sa->expansion_ppm, "expansion coefficient of the axis, ppm/K")
+      ->capture_default_str();
+  sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
+  sc->add_option("--output,-o", sa->output, "runs CSV to write")->capture_default_str();
+  sc->add_option("--truth", sa->truth, "truth CSV; default: the output's name with -truth");
+  sc->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
+
+  auto a = std::make_shared<PositioningArgs>();
+  auto* c = app.add_subcommand(
+      "positioning",
+      "Accuracy and repeatability of positioning of a linear axis from bidirectional laser runs, "
+      "by ISO 230-2:2014 (A, E, M, R, B and their one-direction forms) or VDI/DGQ 3441 (P, Pa, "
+      "Ps, U).\nruns.csv: target_mm,cycle,direction,deviation_um (direction '+' for an approach "
+      "moving in +, '-' for one moving in -; deviation = actual - target), optional "
+      "material_temp_c (then deviations are corrected to 20 C for the axis' expansion) and "
+      "air_temp_c (recorded). Rows in any order.\nParameters the runs cannot define (one "
+      "direction only, a single cycle) are written as null and named, never guessed.\nExit "
+      "status 1 when a parameter exceeds its --tolerance (the result is still written).\n"
+      "Example: trueaxis positioning --input runs.csv --tolerance A=12,R=4 --output "
+      "positioning.json");
+  c->add_option("--input,-i", a->input, "runs CSV")->required()->check(CLI::ExistingFile);
+  c->add_option("--output,-o", a->output, "result JSON (um)")->capture_default_str();
+  c->add_option("--standard", a->standard, "iso230-2 (ISO 230-2:2014) or vdi3441 (VDI/DGQ 3441)")
+      ->check(CLI::IsMember({"iso230-2", "vdi3441"}))
+      ->capture_default_str();
+  c->add_option("--tolerance", a->tolerances,
+                "NAME=um, e.g. A=12,R=4,B=3: check parameters (A, A_up, A_down, E, E_up, E_down, "
+                "M, R, R_up, R_down, B, B_mean, P, Pa, Ps, U)")
+      ->delimiter(',');
+  c->add_option("--expansion", a->expansion_ppm,
+                "expansion coefficient of the axis for the correction to 20 C, ppm/K (steel "
+                "11.5, cast iron 10.5, aluminium 23)")
+      ->capture_default_str();
+  c->add_option("--datum", a->o.datum,
+                "position where the laser was zeroed, mm (the expansion correction is zero "
+                "there; default: the lowest target)");
+  c->add_flag("--no-temperature-correction", a->no_temperature,
+              "keep the deviations as read although material temperatures are given");
+  c->add_flag("--allow-incomplete", a->o.allow_incomplete,
+              "evaluate targets that miss readings in some cycles with the readings they have");
+  c->add_option("--target-tolerance", a->o.target_tolerance,
+                "readings whose targets differ by less than this are one target, mm")
+      ->capture_default_str();
+  c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+
+  return {{sc, [sa] { return run_simulate(*sa); }}, {c, [a] { return run_positioning(*a); }}};
+}
+
+}  // namespace trueaxis::cli

@@ -1,0 +1,50 @@
+// trueaxis::io — positioning runs (laser interferometer, ISO 230-2) and their evaluation.
+//
+// runs.csv: a header row naming the columns (any order, case-insensitive), then one reading per
+// line; blank lines and lines starting with '#' are skipped.
+//   target_mm        commanded target position (mm)
+//   cycle            cycle number, an integer from 1
+//   direction        '+' (approach moving in the positive direction; also "up") or '-' ("down")
+//   deviation_um     actual − target (µm), the laser's reading minus the commanded position
+//   material_temp_c  optional: the machine's (material) temperature (°C) at the reading
+//   air_temp_c       optional: the air temperature (°C), recorded only
+// Rows may come in any order. Unknown columns, missing fields, non-numbers, cycles that are not
+// positive integers, unknown directions, implausible temperatures (outside −50 .. 100 °C) and
+// the same target, cycle and direction twice are refused with "file:line:col: why".
+//
+// positioning.json (µm): {"kind": "positioning", "standard": "ISO 230-2:2014" | "VDI/DGQ 3441",
+//   "A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down", "B", "B_mean"
+//   (ISO), or "P", "Pa", "Ps", "Ps_mean", "U", "U_mean" (VDI) — null where not defined;
+//   "cycles", "directions": ["+", "-"], "targets": [{"position" (mm), "n_up", "n_down",
+//   "mean_up", "mean_down", "s_up", "s_down", "B", "R" (ISO) or "U", "Ps" (VDI), ...}],
+//   "temperature": {"material": [min, max] | null, "air": [min, max] | null, "corrected": bool,
+//   "expansion_coefficient", "datum_mm", "max_correction_um"}, "tolerances": {name: {"limit",
+//   "value", "pass"}}, "pass": bool | null, "warnings": [...]}.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "trueaxis/positioning/positioning.hpp"
+
+namespace trueaxis::io {
+
+struct PositioningRuns {
+  std::vector<positioning::Reading> readings;
+  std::vector<std::size_t> lines;  // 1-based line of each reading
+  bool has_material = false, has_air = false;
+};
+
+// Parses `text` (`path` names it in messages).
+PositioningRuns parse_runs(std::string text, const std::string& path);
+PositioningRuns read_runs(const std::string& path);
+
+// Writes readings in the runs.csv form above (temperature columns when any reading has one).
+void write_runs(const std::string& path, const std::vector<positioning::Reading>& readings);
+
+void write_positioning_result(const std::string& path, const positioning::Result& result,
+                              positioning::Standard standard,
+                              const std::vector<positioning::Verdict>& verdicts = {});
+
+}  // namespace trueaxis::io

@@ -1,0 +1,306 @@
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <map>
+#include <tuple>
+
+#include "fast_text.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/json.hpp"
+#include "trueaxis/io/positioning.hpp"
+
+namespace trueaxis::io {
+namespace {
+
+using positioning::Direction;
+using positioning::Reading;
+using ojson = nlohmann::ordered_json;
+
+enum Column { kTarget, kCycle, kDirection, kDeviation, kMaterial, kAir, kColumns };
+constexpr const char* kNames[kColumns] = {"target_mm",    "cycle",           "direction",
+                                          "deviation_um", "material_temp_c", "air_temp_c"};
+// Larger than any travel (mm) or positioning deviation (µm) of a machine tool or CMM.
+constexpr double kMaxTarget = 1e6, kMaxDeviation = 1e6;
+constexpr double kMinTemperature = -50, kMaxTemperature = 100;
+
+bool is_space(char c) {
+  return c == ' ' || c == '\t';
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+// Fields of one line: [begin, end) offsets, trimmed.
+std::vector<std::pair<std::size_t, std::size_t>> split(std::string_view l) {
+  std::vector<std::pair<std::size_t, std::size_t>> f;
+  std::size_t b = 0;
+  while (true) {
+    std::size_t e = l.find(',', b);
+    const std::size_t stop = e == std::string_view::npos ? l.size() : e;
+    std::size_t x = b, y = stop;
+    while (x < y && is_space(l[x])) ++x;
+    while (y > x && is_space(l[y - 1])) --y;
+    f.emplace_back(x, y);
+    if (e == std::string_view::npos) break;
+    b = e + 1;
+  }
+  return f;
+}
+
+}  // namespace
+
+PositioningRuns parse_runs(std::string text, const std::string& path) {
+  detail::normalize_text(text);
+  const std::string_view all(text);
+  PositioningRuns out;
+  int col_of[kColumns];
+  std::fill(std::begin(col_of), std::end(col_of), -1);
+  std::size_t ncol = 0, header_line = 0;
+  std::map<std::tuple<long long, int, int>, std::size_t> seen;  // (target in 0.1 µm, cycle, dir)
+  std::size_t pos = 0, line = 0;
+  while (pos < all.size()) {
+    const std::size_t nl = all.find('\n', pos);
+    const std::size_t end = nl == std::string_view::npos ? all.size() : nl;
+    const std::string_view l = all.substr(pos, end - pos);
+    pos = nl == std::string_view::npos ? all.size() : nl + 1;
+    ++line;
+    std::size_t first = 0;
+    while (first < l.size() && is_space(l[first])) ++first;
+    if (first == l.size() || l[first] == '#') continue;
+    auto fail = [&](std::size_t col0, const std::string& what) {
+      throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));
+    };
+    const auto fields = split(l);
+    if (header_line == 0) {
+      header_line = line;
+      ncol = fields.size();
+      for (std::size_t c = 0; c < fields.size(); ++c) {
+        const auto [b, e] = fields[c];
+        const std::string name = lower(l.substr(b, e - b));
+        int which = -1;
+        for (int k = 0; k < kColumns; ++k)
+          if (name == kNames[k]) which = k;
+        if (which < 0)
+          fail(b, fmt::format("unknown column '{}' (target_mm, cycle, direction, deviation_um, "
+                              "material_temp_c, air_temp_c)",
+                              detail::quote_cut(l.substr(b, e - b))));
+        if (col_of[which] >= 0) fail(b, fmt::format("column '{}' appears twice", kNames[which]));
+        col_of[which] = static_cast<int>(c);
+      }
+      for (int k = 0; k < kDeviation + 1; ++k)
+        if (col_of[k] < 0)
+          fail(0, fmt::format("the header has no '{}' column (target_mm, cycle, direction and "
+                              "deviation_um are needed)",
+                              kNames[k]));
+      out.has_material = col_of[kMaterial] >= 0;
+      out.has_air = col_of[kAir] >= 0;
+      continue;
+    }
+    if (fields.size() != ncol)
+      fail(fields.size() < ncol ? l.size() : fields[ncol].first - 1,
+           fmt::format("{} fields, the header has {} columns", fields.size(), ncol));
+    Reading r;
+    auto number = [&](int k, double limit) {
+      const auto [b, e] = fields[static_cast<std::size_t>(col_of[k])];
+      if (b == e) fail(b, fmt::format("empty field in column '{}'", kNames[k]));
+      const char* s = l.data() + b;
+      const char* se = l.data() + e;
+      if (*s == '+') ++s;
+      double v = 0;
+      const auto res = std::from_chars(s, se, v);
+      if (res.ec != std::errc() || res.ptr != se || !std::isfinite(v))
+        fail(b, fmt::format("'{}' is not a number (column '{}')",
+                            detail::quote_cut(l.substr(b, e - b)), kNames[k]));
+      if (std::abs(v) > limit)
+        fail(b, fmt::format("{:g} is out of range in column '{}' (its size must be at most {:g})",
+                            v, kNames[k], limit));
+      return v;
+    };
+    r.target = number(kTarget, kMaxTarget);
+    r.deviation = number(kDeviation, kMaxDeviation) * 1e-3;
+    {
+      const auto [b, e] = fields[static_cast<std::size_t>(col_of[kCycle])];
+      int c = 0;
+      const auto res = std::from_chars(l.data() + b, l.data() + e, c);
+      if (b == e || res.ec != std::errc() || res.ptr != l.data() + e || c < 1)
+        fail(b, fmt::format("cycle '{}' is not a whole number from 1",
+                            detail::quote_cut(l.substr(b, e - b))));
+      r.cycle = c;
+    }
+    {
+      const auto [b, e] = fields[static_cast<std::size_t>(col_of[kDirection])];
+      const std::string d = lower(l.substr(b, e - b));
+      if (d == "+" || d == "up")
+        r.direction = Direction::Up;
+      else if (d == "-" || d == "down")
+        r.direction = Direction::Down;
+      else
+        fail(b, fmt::format("direction '{}': use '+' (approach moving in +) or '-'",
+                            detail::quote_cut(l.substr(b, e - b))));
+    }
+    for (int k : {kMaterial, kAir}) {
+      if (col_of[k] < 0) continue;
+      const double t = number(k, 1e6);
+      if (t < kMinTemperature || t > kMaxTemperature)
+        fail(fields[static_cast<std::size_t>(col_of[k])].first,
+             fmt::format("{:g} is not a plausible temperature in degrees Celsius (column '{}')", t,
+                         kNames[k]));
+      (k == kMaterial ? r.material_temperature : r.air_temperature) = t;
+    }
+    const auto key = std::make_tuple(std::llround(r.target * 1e4), r.cycle,
+                                     r.direction == Direction::Up ? 0 : 1);
+    const auto [it, fresh] = seen.emplace(key, line);
+    if (!fresh)
+      fail(fields[static_cast<std::size_t>(col_of[kTarget])].first,
+           fmt::format("cycle {} '{}' at target {:g} mm was already read on line {}", r.cycle,
+                       r.direction == Direction::Up ? '+' : '-', r.target, it->second));
+    out.readings.push_back(r);
+    out.lines.push_back(line);
+  }
+  if (header_line == 0)
+    throw Error(
+        fmt::format("{}: no header (expected target_mm,cycle,direction,deviation_um)", path));
+  if (out.readings.empty())
+    throw Error(fmt::format("{}:{}:1: no readings after the header", path, header_line));
+  return out;
+}
+
+PositioningRuns read_runs(const std::string& path) {
+  return parse_runs(detail::read_text(path), path);
+}
+
+void write_runs(const std::string& path, const std::vector<Reading>& readings) {
+  bool material = false, air = false;
+  for (const auto& r : readings) {
+    material = material || !std::isnan(r.material_temperature);
+    air = air || !std::isnan(r.air_temperature);
+  }
+  std::string s = "target_mm,cycle,direction,deviation_um";
+  if (material) s += ",material_temp_c";
+  if (air) s += ",air_temp_c";
+  s += '\n';
+  char buf[32];
+  auto num = [&](double v) {
+    char* e = detail::write_number(buf, v);
+    s.append(buf, e);
+  };
+  for (const auto& r : readings) {
+    num(r.target);
+    s += fmt::format(",{},{},", r.cycle, r.direction == Direction::Up ? '+' : '-');
+    num(r.deviation * 1e3);
+    if (material) {
+      s += ',';
+      num(r.material_temperature);
+    }
+    if (air) {
+      s += ',';
+      num(r.air_temperature);
+    }
+    s += '\n';
+  }
+  detail::OutFile f(path);
+  f.write(s);
+  f.close();
+}
+
+namespace {
+
+ojson um(double mm) {
+  return std::isnan(mm) ? ojson(nullptr) : ojson(mm * 1e3);
+}
+
+ojson range(double lo, double hi) {
+  return std::isnan(lo) ? ojson(nullptr) : ojson::array({lo, hi});
+}
+
+}  // namespace
+
+void write_positioning_result(const std::string& path, const positioning::Result& r,
+                              positioning::Standard standard,
+                              const std::vector<positioning::Verdict>& verdicts) {
+  const bool vdi = standard == positioning::Standard::Vdi3441;
+  ojson j;
+  j["kind"] = "positioning";
+  j["standard"] = vdi ? "VDI/DGQ 3441" : "ISO 230-2:2014";
+  j["units"] = "um";
+  if (vdi) {
+    const auto& v = r.vdi;
+    j["P"] = um(v.P);
+    j["Pa"] = um(v.Pa);
+    j["Ps"] = um(v.Ps);
+    j["Ps_mean"] = um(v.Ps_mean);
+    j["U"] = um(v.U);
+    j["U_mean"] = um(v.U_mean);
+  } else {
+    const auto& p = r.iso;
+    j["A"] = um(p.A);
+    j["A_up"] = um(p.A_up);
+    j["A_down"] = um(p.A_down);
+    j["E"] = um(p.E);
+    j["E_up"] = um(p.E_up);
+    j["E_down"] = um(p.E_down);
+    j["M"] = um(p.M);
+    j["R"] = um(p.R);
+    j["R_up"] = um(p.R_up);
+    j["R_down"] = um(p.R_down);
+    j["B"] = um(p.B);
+    j["B_mean"] = um(p.B_mean);
+  }
+  j["cycles"] = r.cycles;
+  ojson dirs = ojson::array();
+  if (r.has_up) dirs.push_back("+");
+  if (r.has_down) dirs.push_back("-");
+  j["directions"] = dirs;
+  ojson targets = ojson::array();
+  for (const auto& t : r.targets) {
+    ojson o;
+    o["position"] = t.position;
+    o["n_up"] = t.n_up;
+    o["n_down"] = t.n_down;
+    o["mean_up"] = um(t.mean_up);
+    o["mean_down"] = um(t.mean_down);
+    o["s_up"] = um(t.s_up);
+    o["s_down"] = um(t.s_down);
+    o["mean"] = um(t.mean);
+    if (vdi) {
+      o["U"] = um(t.U);
+      o["Ps"] = um(t.Ps);
+    } else {
+      o["B"] = um(t.B);
+      o["R"] = um(t.R);
+      o["R_up"] = um(t.R_up);
+      o["R_down"] = um(t.R_down);
+    }
+    targets.push_back(o);
+  }
+  j["targets"] = targets;
+  ojson temp;
+  temp["material"] = range(r.material_min, r.material_max);
+  temp["air"] = range(r.air_min, r.air_max);
+  temp["corrected"] = r.temperature_corrected;
+  if (r.temperature_corrected) {
+    temp["reference"] = r.reference_temperature;
+    temp["expansion_coefficient"] = r.expansion_coefficient;
+    temp["datum_mm"] = r.datum;
+    temp["max_correction_um"] = r.max_correction * 1e3;
+  }
+  j["temperature"] = temp;
+  ojson tol = ojson::object();
+  bool pass = true;
+  for (const auto& v : verdicts) {
+    tol[v.name] = {{"limit", v.limit * 1e3}, {"value", um(v.value)}, {"pass", v.pass}};
+    pass = pass && v.pass;
+  }
+  j["tolerances"] = tol;
+  j["pass"] = verdicts.empty() ? ojson(nullptr) : ojson(pass);
+  j["warnings"] = r.warnings;
+  write_json(path, j);
+}
+
+}  // namespace trueaxis::io

@@ -1,0 +1,116 @@
+// runs.csv: what is read, what is refused (file:line:col), and the result JSON's keys.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "../test_util.hpp"
+#include "trueaxis/io/positioning.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+std::string runs_error(const std::string& text) {
+  return test::error_of([&] { io::parse_runs(text, "runs.csv"); });
+}
+
+}  // namespace
+
+TEST(PositioningIo, ReadsRunsInAnyColumnOrder) {
+  const auto r = io::parse_runs(
+      "# laser run, X axis\r\n"
+      "Cycle, direction, target_mm, deviation_um, material_temp_c, air_temp_c\r\n"
+      "1, +, 0, 0.5, 20.5, 20.1\r\n"
+      "\r\n"
+      "1, down, 50, -1.25, 20.6, 20.2\r\n",
+      "runs.csv");
+  ASSERT_EQ(r.readings.size(), 2u);
+  EXPECT_TRUE(r.has_material);
+  EXPECT_TRUE(r.has_air);
+  EXPECT_EQ(r.lines[1], 5u);
+  EXPECT_EQ(r.readings[0].direction, positioning::Direction::Up);
+  EXPECT_EQ(r.readings[1].direction, positioning::Direction::Down);
+  EXPECT_DOUBLE_EQ(r.readings[1].target, 50);
+  EXPECT_DOUBLE_EQ(r.readings[1].deviation, -1.25e-3);
+  EXPECT_DOUBLE_EQ(r.readings[1].material_temperature, 20.6);
+  EXPECT_DOUBLE_EQ(r.readings[0].air_temperature, 20.1);
+}
+
+TEST(PositioningIo, BadRunsNameFileLineAndColumn) {
+  const std::string h = "target_mm,cycle,direction,deviation_um\n";
+  EXPECT_EQ(runs_error(""),
+            "runs.csv: no header (expected target_mm,cycle,direction,deviation_um)");
+  EXPECT_EQ(runs_error(h), "runs.csv:1:1: no readings after the header");
+  EXPECT_EQ(runs_error("target_mm,cycle,dir,deviation_um\n"),
+            "runs.csv:1:17: unknown column 'dir' (target_mm, cycle, direction, deviation_um, "
+            "material_temp_c, air_temp_c)");
+  EXPECT_EQ(runs_error("target_mm,cycle,direction\n0,1,+\n"),
+            "runs.csv:1:1: the header has no 'deviation_um' column (target_mm, cycle, direction "
+            "and deviation_um are needed)");
+  EXPECT_EQ(runs_error("target_mm,cycle,cycle,deviation_um\n"),
+            "runs.csv:1:17: column 'cycle' appears twice");
+  EXPECT_EQ(runs_error(h + "0,1,+\n"), "runs.csv:2:6: 3 fields, the header has 4 columns");
+  EXPECT_EQ(runs_error(h + "0,1,+,1,2\n"), "runs.csv:2:8: 5 fields, the header has 4 columns");
+  EXPECT_EQ(runs_error(h + "0,1,x,1\n"),
+            "runs.csv:2:5: direction 'x': use '+' (approach moving in +) or '-'");
+  EXPECT_EQ(runs_error(h + "0,1.5,+,1\n"),
+            "runs.csv:2:3: cycle '1.5' is not a whole number from 1");
+  EXPECT_EQ(runs_error(h + "0,0,+,1\n"), "runs.csv:2:3: cycle '0' is not a whole number from 1");
+  EXPECT_EQ(runs_error(h + "0,1,+,abc\n"),
+            "runs.csv:2:7: 'abc' is not a number (column 'deviation_um')");
+  EXPECT_EQ(runs_error(h + "0,1,+,nan\n"),
+            "runs.csv:2:7: 'nan' is not a number (column 'deviation_um')");
+  EXPECT_EQ(runs_error(h + "0,1,+,\n"), "runs.csv:2:7: empty field in column 'deviation_um'");
+  EXPECT_EQ(runs_error(h + "2e6,1,+,1\n"),
+            "runs.csv:2:1: 2e+06 is out of range in column 'target_mm' (its size must be at most "
+            "1e+06)");
+  EXPECT_EQ(runs_error(h + "0,1,+,1\n\n10,1,+,1\n0,1,+,2\n"),
+            "runs.csv:5:1: cycle 1 '+' at target 0 mm was already read on line 2");
+  EXPECT_EQ(runs_error("target_mm,cycle,direction,deviation_um,material_temp_c\n0,1,+,1,200\n"),
+            "runs.csv:2:9: 200 is not a plausible temperature in degrees Celsius (column "
+            "'material_temp_c')");
+}
+
+TEST(PositioningIo, RoundTripAndResultKeys) {
+  std::vector<positioning::Reading> rs;
+  for (int c = 1; c <= 2; ++c)
+    for (double p : {0.0, 100.0, 200.0}) {
+      rs.push_back({p, c, positioning::Direction::Up, 1e-3 * (p / 100 + c), 20.25});
+      rs.push_back({p, c, positioning::Direction::Down, -1e-3 * (p / 100 + c), 20.5});
+    }
+  const std::string dir = test::temp_dir();
+  io::write_runs(dir + "/runs.csv", rs);
+  const auto back = io::read_runs(dir + "/runs.csv");
+  ASSERT_EQ(back.readings.size(), rs.size());
+  for (std::size_t k = 0; k < rs.size(); ++k) {
+    EXPECT_EQ(back.readings[k].target, rs[k].target);
+    EXPECT_EQ(back.readings[k].deviation, rs[k].deviation);  // shortest exact form
+    EXPECT_EQ(back.readings[k].cycle, rs[k].cycle);
+    EXPECT_EQ(back.readings[k].direction, rs[k].direction);
+    EXPECT_EQ(back.readings[k].material_temperature, rs[k].material_temperature);
+  }
+  const auto r = positioning::evaluate(back.readings);
+  const auto v = positioning::check(r, {{"A", 1.0}});
+  io::write_positioning_result(dir + "/p.json", r, positioning::Standard::Iso230_2, v);
+  std::ifstream f(dir + "/p.json");
+  const auto j = nlohmann::json::parse(f);
+  for (const char* k : {"A", "A_up", "A_down", "E", "E_up", "E_down", "M", "R", "R_up", "R_down",
+                        "B", "B_mean", "targets", "standard", "cycles", "pass"})
+    EXPECT_TRUE(j.contains(k)) << k;
+  EXPECT_EQ(j["standard"], "ISO 230-2:2014");
+  EXPECT_EQ(j["kind"], "positioning");
+  EXPECT_EQ(j["targets"].size(), 3u);
+  for (const char* k : {"position", "mean_up", "mean_down", "s_up", "s_down", "B", "R"})
+    EXPECT_TRUE(j["targets"][0].contains(k)) << k;
+  EXPECT_NEAR(j["E"].get<double>(), r.iso.E * 1e3, 1e-9);
+  EXPECT_TRUE(j["temperature"]["corrected"].get<bool>());
+  EXPECT_TRUE(j["pass"].get<bool>());
+  io::write_positioning_result(dir + "/v.json", r, positioning::Standard::Vdi3441);
+  std::ifstream g(dir + "/v.json");
+  const auto jv = nlohmann::json::parse(g);
+  EXPECT_EQ(jv["standard"], "VDI/DGQ 3441");
+  EXPECT_NEAR(jv["P"].get<double>(), r.vdi.P * 1e3, 1e-9);
+  EXPECT_TRUE(jv["pass"].is_null());
+}
