@@ -1,4 +1,5 @@
-// libFuzzer target: the CSV readers (probes, points, spots, lengths) on arbitrary bytes.
+// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs) on
+// arbitrary bytes.
 #include <cstdint>
 
 #include "fuzz_util.hpp"
@@ -6,6 +7,7 @@
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/probes.hpp"
 #include "trueaxis/separation/separation.hpp"
 
@@ -28,6 +30,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   });
   fuzz::expect_only_trueaxis_errors([&] { io::read_points(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_lengths(p); });
+  fuzz::expect_only_trueaxis_errors([&] {
+    positioning::Options o;
+    o.allow_incomplete = true;
+    positioning::evaluate(io::read_runs(p).readings, o);
+  });
   fuzz::expect_only_trueaxis_errors([&] {
     io::GuidewayLayout layout;
     for (const char* name : {"a", "b", "c"}) {
