@@ -13,6 +13,7 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/files.hpp"
+#include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/probes.hpp"
 #include "trueaxis/io/results.hpp"
 #include "trueaxis/io/surface.hpp"
@@ -20,6 +21,7 @@
 #include "trueaxis/report/fit.hpp"
 #include "trueaxis/report/guideway.hpp"
 #include "trueaxis/report/html.hpp"
+#include "trueaxis/report/positioning.hpp"
 #include "trueaxis/report/surface.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
@@ -152,6 +154,10 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
   } else if (kind == "guideway") {
     title = "trueaxis guideway report";
     section = report::guideway_section(name, io::read_guideway_result(input));
+  } else if (kind == "positioning") {
+    title = "trueaxis positioning report";
+    const io::PositioningFile f = io::read_positioning_result(input);
+    section = report::positioning_section(name, f.result, f.standard, f.verdicts);
   } else if (kind == "ballgauge map") {
     title = "trueaxis ball-gauge map";
     section = report::ballgauge_section(name, io::read_ballgauge_map(input));
@@ -343,9 +349,10 @@ int main(int argc, char** argv) {
   bool rquiet = false;
   auto* rep = app.add_subcommand(
       "report", "Write an HTML report (interactive plots, works offline) of a result JSON");
-  rep->add_option("result", rin,
-                  "any result JSON trueaxis writes (separate, surface, space, guideway, "
-                  "ballgauge, verify-lengths, fit)")
+  rep->add_option(
+         "result", rin,
+         "any result JSON trueaxis writes (separate, surface, space, guideway, positioning, "
+         "ballgauge, verify-lengths, fit)")
       ->required()
       ->check(CLI::ExistingFile);
   rep->add_option("--output,-o", rout, "HTML file to write")->capture_default_str();

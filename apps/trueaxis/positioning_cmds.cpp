@@ -6,6 +6,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 
 #include "commands.hpp"
@@ -13,6 +14,7 @@
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/positioning.hpp"
 #include "trueaxis/positioning/positioning.hpp"
+#include "trueaxis/report/positioning.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/positioning.hpp"
 
@@ -31,7 +33,7 @@ double parse_number(std::string_view s, const std::string& what) {
 }
 
 struct PositioningArgs {
-  std::string input, output = "positioning.json", standard = "iso230-2";
+  std::string input, output = "positioning.json", standard = "iso230-2", report;
   std::vector<std::string> tolerances;
   positioning::Options o;
   double expansion_ppm = 11.5;
@@ -68,9 +70,14 @@ int run_positioning(const PositioningArgs& a) {
   }
   const bool vdi = a.standard == "vdi3441";
   const auto verdicts = positioning::check(r, tol);
-  io::write_positioning_result(
-      a.output, r, vdi ? positioning::Standard::Vdi3441 : positioning::Standard::Iso230_2,
-      verdicts);
+  const auto standard = vdi ? positioning::Standard::Vdi3441 : positioning::Standard::Iso230_2;
+  io::write_positioning_result(a.output, r, standard, verdicts);
+  if (!a.report.empty())
+    report::write(a.report, report::render("trueaxis positioning report",
+                                           {report::positioning_section(
+                                               std::filesystem::path(a.input).filename().string(),
+                                               r, standard, verdicts)},
+                                           4000, cli::report_meta()));
   bool pass = true;
   std::string failed;
   for (const auto& v : verdicts) {
@@ -84,7 +91,7 @@ int run_positioning(const PositioningArgs& a) {
   if (!a.quiet) {
     fmt::print("{}", r.summary(vdi));
     if (!verdicts.empty()) fmt::print("  tolerances: {}\n", pass ? "all met" : "NOT MET");
-    fmt::print("wrote {}\n", a.output);
+    fmt::print("wrote {}{}\n", a.output, a.report.empty() ? "" : " and " + a.report);
   }
   if (!pass) {
     std::fprintf(stderr, "trueaxis positioning: out of tolerance: %s\n", failed.c_str());
@@ -231,6 +238,10 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       "positioning.json");
   c->add_option("--input,-i", a->input, "runs CSV")->required()->check(CLI::ExistingFile);
   c->add_option("--output,-o", a->output, "result JSON (um)")->capture_default_str();
+  c->add_option("--report", a->report,
+                "HTML report: the standard's plot (mean deviations with +-2s), every reading, "
+                "the parameters and tolerances");
+  add_meta_option(c);
   c->add_option("--standard", a->standard, "iso230-2 (ISO 230-2:2014) or vdi3441 (VDI/DGQ 3441)")
       ->check(CLI::IsMember({"iso230-2", "vdi3441"}))
       ->capture_default_str();

@@ -300,7 +300,144 @@ void write_positioning_result(const std::string& path, const positioning::Result
   j["tolerances"] = tol;
   j["pass"] = verdicts.empty() ? ojson(nullptr) : ojson(pass);
   j["warnings"] = r.warnings;
+  ojson tm = ojson::array(), cy = ojson::array(), dv = ojson::array();
+  std::string dirs_s;
+  for (const auto& x : r.readings) {
+    tm.push_back(x.target);
+    cy.push_back(x.cycle);
+    dirs_s += x.direction == Direction::Up ? '+' : '-';
+    dv.push_back(x.deviation * 1e3);
+  }
+  j["readings"] = {{"target_mm", tm}, {"cycle", cy}, {"direction", dirs_s}, {"deviation_um", dv}};
   write_json(path, j);
+}
+
+PositioningFile read_positioning_result(const std::string& path) {
+  using ptr = JsonFile::pointer;
+  const JsonFile f = JsonFile::read(path);
+  PositioningFile out;
+  positioning::Result& r = out.result;
+  const ptr root;
+  if (!f.has(root / "standard")) f.fail(root, "'standard' is missing");
+  const std::string standard = f.string(root / "standard");
+  if (standard == "VDI/DGQ 3441")
+    out.standard = positioning::Standard::Vdi3441;
+  else if (standard != "ISO 230-2:2014")
+    f.fail(root / "standard", fmt::format("unknown standard '{}'", standard));
+  // A parameter in µm or null (NaN).
+  auto um_or_nan = [&](const ptr& p) {
+    if (!f.has(p) || f.root()[p].is_null()) return positioning::kNaN;
+    return f.number(p) * 1e-3;
+  };
+  // A count: a whole number 0 .. 10^6.
+  auto count = [&](const ptr& q) {
+    const double x = f.number(q);
+    if (!(x >= 0 && x <= 1e6) || x != std::floor(x)) f.fail(q, "expected a whole number 0 .. 1e6");
+    return static_cast<int>(x);
+  };
+  auto& p = r.iso;
+  auto& v = r.vdi;
+  const std::pair<const char*, double*> params[] = {
+      {"A", &p.A},       {"A_up", &p.A_up},     {"A_down", &p.A_down}, {"E", &p.E},
+      {"E_up", &p.E_up}, {"E_down", &p.E_down}, {"M", &p.M},           {"R", &p.R},
+      {"R_up", &p.R_up}, {"R_down", &p.R_down}, {"B", &p.B},           {"B_mean", &p.B_mean},
+      {"P", &v.P},       {"Pa", &v.Pa},         {"Ps", &v.Ps},         {"Ps_mean", &v.Ps_mean},
+      {"U", &v.U},       {"U_mean", &v.U_mean}};
+  for (const auto& [name, dst] : params) *dst = um_or_nan(root / name);
+  if (f.has(root / "cycles")) r.cycles = count(root / "cycles");
+  const ptr ts = root / "targets";
+  if (!f.has(ts)) f.fail(root, "'targets' is missing");
+  const auto& arr = f.array(ts);
+  if (arr.empty()) f.fail(ts, "no targets");
+  for (std::size_t i = 0; i < arr.size(); ++i) {
+    const ptr t = ts / i;
+    f.object(t);
+    positioning::Target x;
+    if (!f.has(t / "position")) f.fail(t, "'position' is missing");
+    x.position = f.number(t / "position");
+    if (f.has(t / "n_up")) x.n_up = count(t / "n_up");
+    if (f.has(t / "n_down")) x.n_down = count(t / "n_down");
+    x.mean_up = um_or_nan(t / "mean_up");
+    x.mean_down = um_or_nan(t / "mean_down");
+    x.s_up = um_or_nan(t / "s_up");
+    x.s_down = um_or_nan(t / "s_down");
+    x.mean = um_or_nan(t / "mean");
+    x.B = um_or_nan(t / "B");
+    x.R = um_or_nan(t / "R");
+    x.R_up = um_or_nan(t / "R_up");
+    x.R_down = um_or_nan(t / "R_down");
+    x.U = um_or_nan(t / "U");
+    x.Ps = um_or_nan(t / "Ps");
+    if (i > 0 && !(x.position > r.targets.back().position))
+      f.fail(t / "position", "target positions must increase");
+    r.has_up = r.has_up || x.n_up > 0;
+    r.has_down = r.has_down || x.n_down > 0;
+    r.targets.push_back(x);
+  }
+  if (f.has(root / "warnings")) {
+    const auto& w = f.array(root / "warnings");
+    for (std::size_t i = 0; i < w.size(); ++i)
+      r.warnings.push_back(f.string(root / "warnings" / i));
+  }
+  const ptr tp = root / "temperature";
+  if (f.has(tp)) {
+    f.object(tp);
+    for (const char* which : {"material", "air"}) {
+      const ptr q = tp / which;
+      if (!f.has(q) || f.root()[q].is_null()) continue;
+      const Eigen::VectorXd mm = f.numbers(q);
+      if (mm.size() != 2) f.fail(q, "expected [min, max]");
+      (which[0] == 'm' ? r.material_min : r.air_min) = mm[0];
+      (which[0] == 'm' ? r.material_max : r.air_max) = mm[1];
+    }
+    if (f.has(tp / "corrected") && f.root()[tp / "corrected"].is_boolean())
+      r.temperature_corrected = f.root()[tp / "corrected"].get<bool>();
+    if (r.temperature_corrected) {
+      r.reference_temperature = f.has(tp / "reference") ? f.number(tp / "reference") : 20.0;
+      if (f.has(tp / "expansion_coefficient"))
+        r.expansion_coefficient = f.number(tp / "expansion_coefficient");
+      if (f.has(tp / "datum_mm")) r.datum = f.number(tp / "datum_mm");
+      if (f.has(tp / "max_correction_um"))
+        r.max_correction = f.number(tp / "max_correction_um") * 1e-3;
+    }
+  }
+  const ptr tol = root / "tolerances";
+  if (f.has(tol)) {
+    for (const auto& [name, value] : f.object(tol).items()) {
+      positioning::Verdict vd;
+      vd.name = name;
+      vd.limit = f.number(tol / name / "limit") * 1e-3;
+      vd.value = um_or_nan(tol / name / "value");
+      const ptr ps = tol / name / "pass";
+      if (!f.has(ps) || !f.root()[ps].is_boolean())
+        f.fail(tol / name, "'pass' must be true or false");
+      vd.pass = f.root()[ps].get<bool>();
+      out.verdicts.push_back(vd);
+    }
+  }
+  const ptr rd = root / "readings";
+  if (f.has(rd)) {
+    const Eigen::VectorXd t = f.numbers(rd / "target_mm"), c = f.numbers(rd / "cycle"),
+                          d = f.numbers(rd / "deviation_um", 1e-3);
+    const std::string dirs = f.string(rd / "direction");
+    const auto n = static_cast<std::size_t>(t.size());
+    if (static_cast<std::size_t>(c.size()) != n || static_cast<std::size_t>(d.size()) != n ||
+        dirs.size() != n)
+      f.fail(rd, "target_mm, cycle, direction and deviation_um need one entry per reading");
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto i = static_cast<Eigen::Index>(k);
+      if (dirs[k] != '+' && dirs[k] != '-') f.fail(rd / "direction", "directions are '+' or '-'");
+      if (!(c[i] >= 1 && c[i] <= 1e6) || c[i] != std::floor(c[i]))
+        f.fail(rd / "cycle" / k, "cycles are whole numbers from 1");
+      positioning::Reading x;
+      x.target = t[i];
+      x.cycle = static_cast<int>(c[i]);
+      x.direction = dirs[k] == '+' ? Direction::Up : Direction::Down;
+      x.deviation = d[i];
+      r.readings.push_back(x);
+    }
+  }
+  return out;
 }
 
 }  // namespace trueaxis::io

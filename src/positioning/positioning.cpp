@@ -109,7 +109,7 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
   };
 
   // Temperature correction to the reference temperature.
-  res.deviations.resize(nr);
+  res.readings = readings;
   const bool correct = with_material == nr && o.correct_temperature;
   const double datum = std::isnan(o.datum) ? positions.front() : o.datum;
   for (std::size_t k = 0; k < nr; ++k) {
@@ -121,7 +121,7 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
       x -= c;
       res.max_correction = std::max(res.max_correction, std::abs(c));
     }
-    res.deviations[k] = x;
+    res.readings[k].deviation = x;
     auto widen = [](double& lo, double& hi, double v) {
       if (std::isnan(v)) return;
       lo = std::isnan(lo) ? v : std::min(lo, v);
@@ -149,7 +149,7 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
     if (!fresh)
       throw Error(fmt::format("readings {} and {} are both cycle {}, '{}' at target {} mm",
                               it->second + 1, k + 1, r.cycle, sign(r.direction), positions[i]));
-    x[i][static_cast<std::size_t>(d)].push_back(res.deviations[k]);
+    x[i][static_cast<std::size_t>(d)].push_back(res.readings[k].deviation);
     cycles_dir[d].insert(r.cycle);
   }
   std::set<int> all_cycles = cycles_dir[0];

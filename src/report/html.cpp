@@ -271,6 +271,10 @@ svg.ta-fig{max-width:100%;height:auto}
       std::string series = "[{label:" + js_string(p.x_label) + "}";
       std::string bands = "[";
       int col = 0, si = 1;
+      // Scatter plots pad the x range, so that markers at the ends (several at one x, as
+      // repeated readings at the last target) are drawn whole.
+      const bool scatter =
+          std::any_of(p.series.begin(), p.series.end(), [](const Series& q) { return q.points; });
       for (const auto& s2 : p.series) {
         const std::string color = s2.color.empty() ? kPalette[col++ % 6] : s2.color;
         data += ',';
@@ -300,8 +304,9 @@ svg.ta-fig{max-width:100%;height:auto}
       series += "]";
       bands += "]";
       script += fmt::format(
-          "TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{},log:{}}});\n", id, data,
-          series, bands, js_string(p.x_label), js_string(p.y_label), p.log_y ? "true" : "false");
+          "TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{},log:{},pts:{}}});\n", id,
+          data, series, bands, js_string(p.x_label), js_string(p.y_label),
+          p.log_y ? "true" : "false", scatter ? "true" : "false");
     }
     if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty() || !s.planes.empty()) {
       h += "<div class=\"figs\">";
@@ -334,7 +339,8 @@ svg.ta-fig{max-width:100%;height:auto}
     var el=document.getElementById(p.el);
     var w=Math.max(400,Math.min(1060,(document.body.clientWidth||900)-20));
     var opts={width:w,height:300,series:p.series,bands:p.bands,
-      scales:{x:{time:false},y:p.log?{distr:3}:{}},
+      scales:{x:p.pts?{time:false,range:function(u,mn,mx){var d=(mx-mn)*0.03||1;return [mn-d,mx+d];}}:{time:false},
+              y:p.log?{distr:3}:{}},
       axes:[{label:p.xl},{label:p.yl,size:70}],
       cursor:{drag:{x:true,y:false}}};
     new uPlot(opts,p.data,el);

@@ -8,6 +8,7 @@
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/probes.hpp"
 #include "trueaxis/io/space.hpp"
 #include "trueaxis/io/surface.hpp"
@@ -20,7 +21,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 11) {
+    switch (data[0] % 12) {
       case 0:
         io::read_machine(p);
         break;
@@ -53,8 +54,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 9:
         io::read_design(p);
         break;
-      default:
+      case 10:
         io::read_part(p);
+        break;
+      default:
+        io::read_positioning_result(p);
         break;
     }
   });

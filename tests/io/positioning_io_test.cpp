@@ -114,3 +114,55 @@ TEST(PositioningIo, RoundTripAndResultKeys) {
   EXPECT_NEAR(jv["P"].get<double>(), r.vdi.P * 1e3, 1e-9);
   EXPECT_TRUE(jv["pass"].is_null());
 }
+
+TEST(PositioningIo, ResultReadsBackForTheReport) {
+  std::vector<positioning::Reading> rs;
+  for (int c = 1; c <= 3; ++c)
+    for (double p : {0.0, 100.0, 200.0}) {
+      rs.push_back({p, c, positioning::Direction::Up, 1e-3 * (p / 100 + 0.3 * c), 20.5 + 0.1 * c});
+      rs.push_back(
+          {p, c, positioning::Direction::Down, -1e-3 * (p / 50 - 0.2 * c), 20.5 + 0.1 * c});
+    }
+  const auto r = positioning::evaluate(rs);
+  const auto verdicts = positioning::check(r, {{"A", 5e-3}, {"B", 1e-3}});
+  const std::string dir = test::temp_dir();
+  for (auto standard : {positioning::Standard::Iso230_2, positioning::Standard::Vdi3441}) {
+    io::write_positioning_result(dir + "/p.json", r, standard, verdicts);
+    const auto f = io::read_positioning_result(dir + "/p.json");
+    EXPECT_EQ(f.standard, standard);
+    const bool vdi = standard == positioning::Standard::Vdi3441;
+    for (const auto& name : positioning::parameter_names()) {
+      const bool iso_name = name != "P" && name != "Pa" && name != "Ps" && name != "U";
+      const double back = positioning::parameter(f.result, name);
+      if (iso_name == vdi)
+        EXPECT_TRUE(std::isnan(back)) << name;  // the other standard's parameters are not written
+      else
+        EXPECT_NEAR(back, positioning::parameter(r, name), 1e-15) << name;
+    }
+    ASSERT_EQ(f.result.targets.size(), 3u);
+    EXPECT_NEAR(f.result.targets[2].mean_down, r.targets[2].mean_down, 1e-15);
+    EXPECT_NEAR(f.result.targets[1].s_up, r.targets[1].s_up, 1e-15);
+    ASSERT_EQ(f.result.readings.size(), rs.size());
+    EXPECT_EQ(f.result.readings[5].direction, positioning::Direction::Down);
+    EXPECT_NEAR(f.result.readings[5].deviation, r.readings[5].deviation, 1e-15);
+    EXPECT_TRUE(f.result.temperature_corrected);
+    EXPECT_DOUBLE_EQ(f.result.material_max, 20.8);
+    ASSERT_EQ(f.verdicts.size(), 2u);
+    EXPECT_EQ(f.verdicts[1].name, "B");
+    EXPECT_EQ(f.verdicts[1].pass, verdicts[1].pass);
+    EXPECT_EQ(f.result.warnings, r.warnings);
+  }
+  const std::string bad = test::temp_file(
+      "bad.json", "{\"kind\": \"positioning\",\n \"standard\": \"ISO 9999\", \"targets\": []}");
+  EXPECT_EQ(test::error_of([&] { io::read_positioning_result(bad); }),
+            bad + ":2:14: unknown standard 'ISO 9999'");
+  const std::string empty = test::temp_file(
+      "empty.json", "{\"kind\": \"positioning\", \"standard\": \"VDI/DGQ 3441\", \"targets\": []}");
+  EXPECT_NE(test::error_of([&] { io::read_positioning_result(empty); }).find("no targets"),
+            std::string::npos);
+  const std::string cyc = test::temp_file(
+      "cyc.json",
+      "{\"standard\": \"VDI/DGQ 3441\", \"cycles\": 2.5, \"targets\": [{\"position\": 0}]}");
+  EXPECT_NE(test::error_of([&] { io::read_positioning_result(cyc); }).find("whole number"),
+            std::string::npos);
+}

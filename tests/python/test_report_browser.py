@@ -51,9 +51,10 @@ def test_demo_report_renders_every_plot(tmp_path):
     # The scanning scenario: two parts of a batch, each section drawn in its plane.
     assert dom.count("in its plane: deviations from the design") == 4 * 2  # caption, label
     assert "Error-tolerant scanning, part 2 of a batch" in dom
+    assert "Positioning accuracy of the X axis (ISO 230-2)" in dom
     for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt",
                  "layout.json", "spots.csv", "ipp_simple.stp", "design.json", "part1.json",
-                 "scan1.json", "scan2.json", "design-corrected.json"):
+                 "scan1.json", "scan2.json", "design-corrected.json", "runs.csv"):
         assert (report.parent / name).stat().st_size > 0, name
 
 
@@ -117,3 +118,22 @@ def test_scan_report_renders(tmp_path):
     assert "trajectory error: scan stopped" in dom  # the stops marked on the ΔL plots
     assert "every decision of the flow" in dom and "design_overwritten" in dom
     assert "virtual CMM" in dom and "JP 6484108 B2" in dom
+
+
+def test_positioning_report_renders(tmp_path):
+    runs, out, h, h2 = (str(tmp_path / n) for n in ("runs.csv", "p.json", "p.html", "p2.html"))
+    subprocess.run([TRUEAXIS, "simulate", "positioning", "--targets", "0:50:800", "--backlash", "3",
+                    "--noise", "0.4", "--temperature", "21:22", "-o", runs, "-q"], check=True)
+    rc = subprocess.run([TRUEAXIS, "positioning", "-i", runs, "-o", out, "--report", h,
+                         "--tolerance", "A=50,B=1", "--meta", "axis=X", "-q"],
+                        capture_output=True, text=True)
+    assert rc.returncode == 1  # B is out of tolerance; the report is written all the same
+    subprocess.run([TRUEAXIS, "report", out, "-o", h2, "-q"], check=True)
+    for page in (h, h2):
+        dom = dump_dom(page, tmp_path)
+        assert 'data-script-errors="' not in dom
+        # The standard's plot (means with ±2s) and every reading.
+        assert 'data-plots-total="2"' in dom and 'data-plots-rendered="2"' in dom
+        assert "mean deviations with ±2s" in dom and "every reading" in dom
+        assert ">FAIL<" in dom and ">pass<" in dom  # B and A against their tolerances
+        assert "ISO 230-2:2014" in dom and "corrected to 20 °C" in dom

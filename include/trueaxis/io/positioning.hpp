@@ -19,7 +19,9 @@
 //   "mean_up", "mean_down", "s_up", "s_down", "B", "R" (ISO) or "U", "Ps" (VDI), ...}],
 //   "temperature": {"material": [min, max] | null, "air": [min, max] | null, "corrected": bool,
 //   "expansion_coefficient", "datum_mm", "max_correction_um"}, "tolerances": {name: {"limit",
-//   "value", "pass"}}, "pass": bool | null, "warnings": [...]}.
+//   "value", "pass"}}, "pass": bool | null, "warnings": [...], "readings": {"target_mm": [...],
+//   "cycle": [...], "direction": "+-..." (one character per reading), "deviation_um": [...]
+//   (as evaluated: corrected to 20 °C when "corrected")}}.
 #pragma once
 
 #include <cstddef>
@@ -46,5 +48,15 @@ void write_runs(const std::string& path, const std::vector<positioning::Reading>
 void write_positioning_result(const std::string& path, const positioning::Result& result,
                               positioning::Standard standard,
                               const std::vector<positioning::Verdict>& verdicts = {});
+
+// A positioning.json read back (for 'trueaxis report'): the parameters of its standard (the
+// other standard's are NaN), the targets, readings, warnings and verdicts. Errors name
+// file:line:col.
+struct PositioningFile {
+  positioning::Result result;
+  positioning::Standard standard = positioning::Standard::Iso230_2;
+  std::vector<positioning::Verdict> verdicts;
+};
+PositioningFile read_positioning_result(const std::string& path);
 
 }  // namespace trueaxis::io

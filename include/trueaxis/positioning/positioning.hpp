@@ -112,8 +112,9 @@ struct Result {
   double datum = kNaN;                  // mm, when corrected
   double reference_temperature = kNaN;  // °C, when corrected
   double max_correction = 0;
-  // The corrected deviations in the order of the input (mm).
-  std::vector<double> deviations;
+  // The readings as evaluated, in the order of the input: deviations corrected to the reference
+  // temperature when temperature_corrected (mm).
+  std::vector<Reading> readings;
   // Departures from the standard's test conditions and what could not be evaluated, in words.
   std::vector<std::string> warnings;
 

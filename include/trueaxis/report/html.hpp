@@ -127,6 +127,11 @@ inline constexpr const char* kIso230 =
 inline constexpr const char* kIso230_2 =
     "ISO 230-2:2014, Test code for machine tools, Part 2: positioning accuracy and "
     "repeatability.";
+inline constexpr const char* kVdi3441 =
+    "VDI/DGQ 3441:1977, Statistical testing of the operational and positional accuracy of machine "
+    "tools: basis (positional uncertainty P, deviation Pa, scatter Ps, reversal span U).";
+inline constexpr const char* kIso1 =
+    "ISO 1:2022, Geometrical product specifications: standard reference temperature (20 °C).";
 inline constexpr const char* kOya =
     "M. Oya, H. Hokari, H. Tamura, A method of improving the accuracy of the three-coordinate "
     "measuring machine (2nd report: calibration method using the three-dimensional standard), "
