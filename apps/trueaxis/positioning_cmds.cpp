@@ -10,7 +10,9 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "trueaxis/compensation/table.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/controller.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/positioning.hpp"
 #include "trueaxis/positioning/positioning.hpp"
@@ -134,7 +136,8 @@ std::vector<double> parse_targets(const std::string& s) {
 
 struct SimArgs {
   MachineSource machine;
-  std::string axis = "x", targets, output = "runs.csv", truth, temperature;
+  std::string axis = "x", targets, output = "runs.csv", truth, temperature, compensation;
+  int comp_type = 1;
   std::vector<double> at;
   sim::PositioningRunOptions o;
   double backlash_um = 0, noise_um = 0, drift_um = 0, growth_um_per_m = 0, expansion_ppm = 11.5;
@@ -168,6 +171,13 @@ int run_simulate(const SimArgs& a) {
             ? o.temperature_start
             : parse_number(std::string_view(a.temperature).substr(c + 1), "--temperature");
   }
+  compensation::AxisTable table;
+  if (!a.compensation.empty()) {
+    table = io::read_linuxcnc(a.compensation, a.comp_type);
+    o.compensation = [&table](double p, positioning::Direction d) {
+      return table.correction(p, d);
+    };
+  }
   const sim::PositioningRun run = sim::simulate_positioning(m, o);
   io::write_runs(a.output, run.readings);
   const std::string truth = a.truth.empty() ? truth_beside(a.output) : a.truth;
@@ -175,9 +185,9 @@ int run_simulate(const SimArgs& a) {
   io::write_csv(truth, {"target_mm", "geometric_um", "up_um", "down_um"},
                 {&run.targets, &g, &up, &down});
   if (!a.quiet)
-    fmt::print("simulated {} cycles over {} targets along {} of {}: wrote {} and {}\n", o.cycles,
-               o.targets.size(), a.axis, m.name.empty() ? "the virtual machine" : m.name, a.output,
-               truth);
+    fmt::print("simulated {} cycles over {} targets along {} of {}{}: wrote {} and {}\n", o.cycles,
+               o.targets.size(), a.axis, m.name.empty() ? "the virtual machine" : m.name,
+               a.compensation.empty() ? "" : " compensated by " + a.compensation, a.output, truth);
   return 0;
 }
 
@@ -217,6 +227,13 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
                  "material temperature T0:T1, C, ramping over the test: the axis expands with it "
                  "and the readings carry it (material_temp_c)");
   sc->add_option("--expansion", sa->expansion_ppm, "expansion coefficient of the axis, ppm/K")
+      ->capture_default_str();
+  sc->add_option("--compensation", sa->compensation,
+                 "run the axis compensated by this LinuxCNC table (forward or reverse trim by "
+                 "the direction of approach, interpolated linearly)")
+      ->check(CLI::ExistingFile);
+  sc->add_option("--comp-type", sa->comp_type, "the table's COMP_FILE_TYPE (0 or 1)")
+      ->check(CLI::IsMember({0, 1}))
       ->capture_default_str();
   sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
   sc->add_option("--output,-o", sa->output, "runs CSV to write")->capture_default_str();

@@ -8,8 +8,10 @@
 #include "commands.hpp"
 #include "progress.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/controller.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/space.hpp"
 #include "trueaxis/map/error_map.hpp"
 #include "trueaxis/report/surface.hpp"
@@ -104,13 +106,37 @@ int run_compensate(const CompensateArgs& a) {
 }
 
 struct ExportArgs {
-  std::string space, output, axis = "x";
+  std::string space, positioning, output, axis = "x";
   std::vector<double> at;
   int type = 1;
-  bool quiet = false;
+  bool unidirectional = false, quiet = false;
 };
 
 int run_export_linuxcnc(const ExportArgs& a) {
+  if (a.space.empty() == a.positioning.empty())
+    throw CLI::ValidationError("give --space FILE or --positioning FILE (one of them)");
+  if (!a.positioning.empty()) {
+    if (!a.at.empty()) throw CLI::ValidationError("--at belongs to --space");
+    const io::PositioningFile f = io::read_positioning_result(a.positioning);
+    compensation::AxisTable t;
+    try {
+      t = compensation::from_positioning(f.result, !a.unidirectional);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", a.positioning, e.what()));
+    }
+    const int n = io::write_linuxcnc(a.output, t, a.type);
+    if (!a.quiet)
+      fmt::print(
+          "wrote {} ({} points, type {}: {}, {}). In the INI file: [JOINT_n] COMP_FILE = {}, "
+          "COMP_FILE_TYPE = {}{}\n",
+          a.output, n, a.type, a.type == 0 ? "actual positions" : "trims",
+          t.bidirectional() ? "forward and reverse differ by the measured reversal"
+                            : "the same in both directions",
+          a.output, a.type,
+          t.bidirectional() ? " and BACKLASH = 0 (the table holds the reversal)" : "");
+    return 0;
+  }
+  if (a.unidirectional) throw CLI::ValidationError("--unidirectional belongs to --positioning");
   const map::ErrorMap m = io::read_error_map(a.space);
   const int axis = a.axis == "x" ? 0 : a.axis == "y" ? 1 : 2;
   Eigen::Vector3d at;
@@ -193,9 +219,18 @@ std::vector<Command> add_space_commands(CLI::App& app) {
   auto ea = std::make_shared<ExportArgs>();
   c = ex->add_subcommand(
       "linuxcnc",
-      "LinuxCNC per-joint compensation file: lines 'nominal forward reverse' along one axis.\n"
-      "Example: trueaxis export linuxcnc --space space.json --axis x --output x.comp");
-  c->add_option("--space", ea->space, "space JSON")->required()->check(CLI::ExistingFile);
+      "LinuxCNC per-joint compensation file: lines 'nominal forward reverse' along one axis, "
+      "from an error space (the grid line through --at) or from a positioning result (forward "
+      "and reverse differ by the measured reversal; --unidirectional for one table for both "
+      "directions).\n"
+      "Examples: trueaxis export linuxcnc --space space.json --axis x --output x.comp\n"
+      "          trueaxis export linuxcnc --positioning positioning.json --output x.comp");
+  c->add_option("--space", ea->space, "space JSON")->check(CLI::ExistingFile);
+  c->add_option("--positioning", ea->positioning, "positioning JSON ('trueaxis positioning')")
+      ->check(CLI::ExistingFile);
+  c->add_flag("--unidirectional", ea->unidirectional,
+              "with --positioning: the bidirectional mean in both columns (leaves the reversal "
+              "to the controller's backlash setting)");
   c->add_option("--axis", ea->axis, "the joint's axis")
       ->check(CLI::IsMember({"x", "y", "z"}))
       ->capture_default_str();

@@ -3,6 +3,7 @@
 #include "fast_text.hpp"
 #include "grid_json.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/controller.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/io/space.hpp"
@@ -223,26 +224,13 @@ void write_map_csv(const std::string& path, const map::ErrorMap& m) {
 int write_linuxcnc(const std::string& path, const map::ErrorMap& m, int axis,
                    const Eigen::Vector3d& at, int type) {
   if (axis < 0 || axis > 2) throw Error("the axis must be x, y or z");
-  if (type != 0 && type != 1) throw Error("the LinuxCNC compensation type must be 0 or 1");
-  const Eigen::VectorXd& nodes = m.axes[static_cast<std::size_t>(axis)];
-  if (nodes.size() > 256)
+  const auto n = m.axes[static_cast<std::size_t>(axis)].size();
+  if (n > kLinuxCncMaxPoints)
     throw Error(
-        fmt::format("LinuxCNC accepts at most 256 compensation points; the map has {} "
+        fmt::format("LinuxCNC accepts at most {} compensation points; the map has {} "
                     "nodes along the axis",
-                    nodes.size()));
-  const map::Interpolator f(m);
-  std::string text;
-  for (Eigen::Index i = 0; i < nodes.size(); ++i) {
-    Eigen::Vector3d p = at;
-    p[axis] = nodes[i];
-    const double e = f(p)[axis];  // refuses an `at` outside the grid
-    const double value = type == 0 ? nodes[i] + e : -e;
-    text += fmt::format("{:.6f} {:.6f} {:.6f}\n", nodes[i], value, value);
-  }
-  detail::OutFile out(path);
-  out.write(text);
-  out.close();
-  return static_cast<int>(nodes.size());
+                    kLinuxCncMaxPoints, n));
+  return write_linuxcnc(path, compensation::from_map(m, axis, at), type);
 }
 
 }  // namespace trueaxis::io

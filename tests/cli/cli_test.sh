@@ -153,6 +153,14 @@ grep -v '^200,3,-' pos.csv > pos-gap.csv
 expect_err "pos-gap.csv: no '-' reading at target 200 mm in cycle 3" "$T" positioning --input pos-gap.csv
 expect_ok "$T" positioning --input pos-gap.csv --allow-incomplete --output pos-gap.json
 grep -q "incomplete cycles" pos-gap.json && ok || bad "--allow-incomplete warns"
+# A LinuxCNC table from the positioning result, read back by the simulator: the reversal goes.
+expect_ok "$T" export linuxcnc --positioning pos.json -o pos.comp
+[ "$(wc -l <pos.comp)" -eq 16 ] && grep -q "BACKLASH = 0" out.txt && ok || bad "export linuxcnc --positioning"
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 --seed 2 --compensation pos.comp -o pos-after.csv
+expect_ok "$T" positioning --input pos-after.csv --output pos-after.json --tolerance B=1.5
+expect_err "give --space FILE or --positioning FILE" "$T" export linuxcnc -o x.comp
+printf '0 0 0\n10 0\n' > bad.comp
+expect_err "bad.comp:2:5: expected three numbers" "$T" simulate positioning --compensation bad.comp -o o.csv
 # Quadrant currents: the layout needs the QPD's gain (printed by the simulator).
 expect_ok "$T" simulate guideway5d --layout gw.json --currents --spot-radius 2 --positions 20 -o gw-cur.csv --truth gw-cur-truth.csv
 gain=$(grep -o '"gain_um": [0-9.]*' out.txt | grep -o '[0-9.]*$')

@@ -1,0 +1,136 @@
+// Compensation tables from positioning runs: LinuxCNC files round-trip and respect LinuxCNC's
+// limits, and compensating the virtual machine with them removes what the runs measured — the
+// bidirectional table the reversal too, the unidirectional one not.
+#include "trueaxis/compensation/table.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "../test_util.hpp"
+#include "trueaxis/io/controller.hpp"
+#include "trueaxis/positioning/positioning.hpp"
+#include "trueaxis/sim/machine.hpp"
+#include "trueaxis/sim/positioning.hpp"
+
+using namespace trueaxis;
+using positioning::Direction;
+
+namespace {
+
+constexpr double kFileResolution = 0.5e-6;  // mm: LinuxCNC files carry 6 decimals
+
+std::string comp_error(const std::string& text, int type = 1) {
+  return test::error_of([&] { io::parse_linuxcnc(text, "x.comp", type); });
+}
+
+}  // namespace
+
+TEST(CompensationTable, InterpolatesAndHoldsTheEnds) {
+  compensation::AxisTable t{{0, 100, 300}, {1e-3, 3e-3, -1e-3}, {2e-3, 2e-3, 2e-3}};
+  EXPECT_DOUBLE_EQ(t.correction(50, Direction::Up), 2e-3);
+  EXPECT_DOUBLE_EQ(t.correction(200, Direction::Up), 1e-3);
+  EXPECT_DOUBLE_EQ(t.correction(-10, Direction::Up), 1e-3);
+  EXPECT_DOUBLE_EQ(t.correction(400, Direction::Up), -1e-3);
+  EXPECT_DOUBLE_EQ(t.correction(150, Direction::Down), 2e-3);
+  EXPECT_TRUE(t.bidirectional());
+  t.position[2] = 100;
+  EXPECT_NE(test::error_of([&] { t.validate(); }).find("must increase"), std::string::npos);
+}
+
+TEST(CompensationTable, LinuxCncRoundTripsAndRefusesWhatLinuxCncWouldNotRead) {
+  const compensation::AxisTable t{{0, 50, 100.5}, {1.25e-3, -2e-3, 0}, {3.5e-3, 0.1e-3, -4e-3}};
+  const std::string dir = test::temp_dir();
+  for (int type : {0, 1}) {
+    const std::string p = dir + "/x" + std::to_string(type) + ".comp";
+    EXPECT_EQ(io::write_linuxcnc(p, t, type), 3);
+    const auto back = io::read_linuxcnc(p, type);
+    ASSERT_EQ(back.position.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) {
+      EXPECT_NEAR(back.position[i], t.position[i], kFileResolution);
+      EXPECT_NEAR(back.forward[i], t.forward[i], kFileResolution);
+      EXPECT_NEAR(back.reverse[i], t.reverse[i], kFileResolution);
+    }
+  }
+  // Type 0 holds actual positions: nominal − trim.
+  EXPECT_EQ(comp_error("0 -0.001 0.002\n10 9.999 10.003\n", 0), "(no error)");
+  const auto a = io::parse_linuxcnc("0 -0.001 0.002\n10 9.999 10.003\n", "x.comp", 0);
+  EXPECT_NEAR(a.forward[0], 1e-3, 1e-15);
+  EXPECT_NEAR(a.reverse[1], -3e-3, 1e-12);
+  EXPECT_EQ(comp_error("0 0 0\n10 0\n"),
+            "x.comp:2:5: expected three numbers 'nominal forward reverse' (LinuxCNC stops reading "
+            "at such a line), found 2");
+  EXPECT_EQ(comp_error("0 0 0\n10 0 x1\n"), "x.comp:2:6: 'x1' is not a number");
+  EXPECT_EQ(comp_error("0 0 0\n10 0 0 0\n"), "x.comp:2:8: more than three numbers on a line");
+  EXPECT_EQ(comp_error("0 0 0\n0 0 0\n"),
+            "x.comp:2:1: nominal 0 does not increase (LinuxCNC needs ascending nominals)");
+  EXPECT_EQ(comp_error("0 0 0\n\n10 0 0\n"),
+            "x.comp:2:1: blank line: LinuxCNC stops reading here and would ignore the lines after "
+            "it");
+  EXPECT_EQ(comp_error("0 0 0\n10 0 0\n\n\n"), "(no error)");
+  EXPECT_EQ(comp_error("0 0 0\n"), "x.comp: a compensation table needs at least two lines");
+  EXPECT_EQ(comp_error("0 0 0\n1 0 0\n", 2), "the LinuxCNC compensation type must be 0 or 1");
+  std::string many;
+  for (int i = 0; i <= io::kLinuxCncMaxPoints; ++i) many += std::to_string(i) + " 0 0\n";
+  EXPECT_EQ(comp_error(many),
+            "x.comp:257:1: more than 256 lines: LinuxCNC takes at most 256 per joint");
+  compensation::AxisTable big;
+  for (int i = 0; i <= io::kLinuxCncMaxPoints; ++i) {
+    big.position.push_back(i);
+    big.forward.push_back(0);
+    big.reverse.push_back(0);
+  }
+  EXPECT_NE(test::error_of([&] {
+              io::write_linuxcnc(dir + "/big.comp", big, 1);
+            }).find("at most 256 compensation points"),
+            std::string::npos);
+}
+
+// The virtual machine's X axis with 4 µm of backlash, measured, compensated through a LinuxCNC
+// file and measured again.
+TEST(CompensationTable, CompensatingTheVirtualMachineRemovesWhatWasMeasured) {
+  sim::MachineOptions mo;
+  mo.seed = 12;
+  mo.positioning = 40e-6;  // tens of µm over the axis: far above the noise
+  const sim::Machine m = sim::random_machine(mo);
+  sim::PositioningRunOptions o;
+  for (int i = 0; i <= 16; ++i) o.targets.push_back(50.0 * i);
+  o.backlash = 4e-3;
+  o.noise = 0.3e-3;
+  o.seed = 3;
+  const auto before = positioning::evaluate(sim::simulate_positioning(m, o).readings);
+  ASSERT_GT(before.iso.E, 10e-3);
+  const std::string dir = test::temp_dir();
+  auto rerun = [&](bool bidirectional) {
+    io::write_linuxcnc(dir + "/x.comp", compensation::from_positioning(before, bidirectional), 1);
+    const auto table = io::read_linuxcnc(dir + "/x.comp", 1);
+    sim::PositioningRunOptions c = o;
+    c.seed = 4;  // a new run: new noise
+    c.compensation = [&](double p, Direction d) { return table.correction(p, d); };
+    return positioning::evaluate(sim::simulate_positioning(m, c).readings);
+  };
+  const auto bi = rerun(true);
+  const auto uni = rerun(false);
+  // After the bidirectional table, each mean deviation is the difference of two means of 5
+  // noisy readings (σ·√(2/5)) plus the machine's change between nodes 50 mm apart, which the
+  // linear interpolation does not see at the nodes themselves: E is at the noise level.
+  const double sigma_mean = o.noise * std::sqrt(2.0 / 5);
+  EXPECT_LT(bi.iso.E, 2 * 4.5 * sigma_mean);
+  EXPECT_NEAR(bi.iso.B_mean, 0, 4.5 * sigma_mean / std::sqrt(17.0));
+  // The unidirectional table leaves the reversal: B̄ stays at −backlash, and E holds it.
+  EXPECT_NEAR(uni.iso.B_mean, -o.backlash, 4.5 * sigma_mean / std::sqrt(17.0));
+  EXPECT_GT(uni.iso.E, o.backlash - 2 * 4.5 * sigma_mean);
+  EXPECT_LT(uni.iso.M, 2 * 4.5 * sigma_mean);  // the mean bidirectional deviation is removed
+  // Accuracy before and after.
+  EXPECT_LT(bi.iso.A, before.iso.A / 3);
+  // One direction only: a bidirectional table is refused, a unidirectional one made.
+  std::vector<positioning::Reading> up;
+  for (const auto& r : sim::simulate_positioning(m, o).readings)
+    if (r.direction == Direction::Up) up.push_back(r);
+  const auto one = positioning::evaluate(up);
+  EXPECT_NE(test::error_of([&] {
+              compensation::from_positioning(one, true);
+            }).find("has no mean deviation for '-' approaches"),
+            std::string::npos);
+  EXPECT_NO_THROW(compensation::from_positioning(one, false));
+}
