@@ -1,9 +1,10 @@
-// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs) on
-// arbitrary bytes.
+// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs) and the
+// LinuxCNC compensation file on arbitrary bytes.
 #include <cstdint>
 
 #include "fuzz_util.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/controller.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/machine.hpp"
@@ -30,6 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   });
   fuzz::expect_only_trueaxis_errors([&] { io::read_points(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_lengths(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_linuxcnc(p, 0); });
   fuzz::expect_only_trueaxis_errors([&] {
     positioning::Options o;
     o.allow_incomplete = true;
