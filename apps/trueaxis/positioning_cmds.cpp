@@ -136,7 +136,8 @@ std::vector<double> parse_targets(const std::string& s) {
 
 struct SimArgs {
   MachineSource machine;
-  std::string axis = "x", targets, output = "runs.csv", truth, temperature, compensation;
+  std::string axis = "x", targets, output = "runs.csv", truth, temperature, compensation,
+              comp_format = "linuxcnc";
   int comp_type = 1;
   std::vector<double> at;
   sim::PositioningRunOptions o;
@@ -173,7 +174,8 @@ int run_simulate(const SimArgs& a) {
   }
   compensation::AxisTable table;
   if (!a.compensation.empty()) {
-    table = io::read_linuxcnc(a.compensation, a.comp_type);
+    table = a.comp_format == "sinumerik" ? io::read_sinumerik(a.compensation)
+                                         : io::read_linuxcnc(a.compensation, a.comp_type);
     o.compensation = [&table](double p, positioning::Direction d) {
       return table.correction(p, d);
     };
@@ -229,10 +231,14 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
   sc->add_option("--expansion", sa->expansion_ppm, "expansion coefficient of the axis, ppm/K")
       ->capture_default_str();
   sc->add_option("--compensation", sa->compensation,
-                 "run the axis compensated by this LinuxCNC table (forward or reverse trim by "
-                 "the direction of approach, interpolated linearly)")
+                 "run the axis compensated by this table (LinuxCNC: forward or reverse trim by "
+                 "the direction of approach; interpolated linearly)")
       ->check(CLI::ExistingFile);
-  sc->add_option("--comp-type", sa->comp_type, "the table's COMP_FILE_TYPE (0 or 1)")
+  sc->add_option("--comp-format", sa->comp_format,
+                 "the table's format: linuxcnc (COMP_FILE) or sinumerik (LEC part program)")
+      ->check(CLI::IsMember({"linuxcnc", "sinumerik"}))
+      ->capture_default_str();
+  sc->add_option("--comp-type", sa->comp_type, "a LinuxCNC table's COMP_FILE_TYPE (0 or 1)")
       ->check(CLI::IsMember({0, 1}))
       ->capture_default_str();
   sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();

@@ -157,6 +157,38 @@ int run_export_linuxcnc(const ExportArgs& a) {
   return 0;
 }
 
+struct SinumerikArgs {
+  std::string positioning, output;
+  io::SinumerikOptions o;
+  bool quiet = false;
+};
+
+int run_export_sinumerik(const SinumerikArgs& a) {
+  const io::PositioningFile f = io::read_positioning_result(a.positioning);
+  compensation::AxisTable t;
+  try {
+    t = compensation::from_positioning(f.result, false);
+  } catch (const Error& e) {
+    throw Error(fmt::format("{}: {}", a.positioning, e.what()));
+  }
+  const int n = io::write_sinumerik(a.output, t, a.o);
+  if (!a.quiet) {
+    fmt::print("wrote {} ({} points, {}, measuring system {})\n", a.output, n, a.o.axis,
+               a.o.encoder);
+    const double b = f.result.iso.B_mean;
+    if (!std::isnan(b))
+      fmt::print(
+          "mean reversal {:.4f} mm: set MD32450 $MA_BACKLASH[{}] to {:.4f} (lost motion is "
+          "positive there; the LEC table holds the mean of both directions)\n",
+          b, a.o.encoder, -b);
+    fmt::print(
+        "MD38000 $MA_MM_ENC_COMP_MAX_POINTS must be at least {}; MD32700 $MA_ENC_COMP_ENABLE[{}] "
+        "= 1 activates it once the axis is referenced\n",
+        n, a.o.encoder);
+  }
+  return 0;
+}
+
 }  // namespace
 
 std::vector<Command> add_space_commands(CLI::App& app) {
@@ -244,6 +276,32 @@ std::vector<Command> add_space_commands(CLI::App& app) {
   c->add_option("--output,-o", ea->output, "compensation file to write")->required();
   c->add_flag("--quiet,-q", ea->quiet, "print nothing on success");
   out.push_back({c, [ea] { return run_export_linuxcnc(*ea); }});
+
+  auto sn = std::make_shared<SinumerikArgs>();
+  c = ex->add_subcommand(
+      "sinumerik",
+      "Siemens Sinumerik leadscrew error compensation (LEC) as a part program: "
+      "$AA_ENC_COMP[e,N,AX] values (mm, the measured error: a positive value moves the axis in "
+      "the negative direction) at equidistant points, with _STEP, _MIN, _MAX and "
+      "_IS_MODULO = 0, from a positioning result. One curve for both directions (the "
+      "bidirectional mean); the mean reversal is printed for MD32450 BACKLASH.\n"
+      "Example: trueaxis export sinumerik --positioning positioning.json --axis X1 -o x_lec.mpf");
+  c->add_option("--positioning", sn->positioning, "positioning JSON ('trueaxis positioning')")
+      ->required()
+      ->check(CLI::ExistingFile);
+  c->add_option("--axis", sn->o.axis, "machine axis name")->capture_default_str();
+  c->add_option("--encoder", sn->o.encoder, "measuring system (0: first, 1: second)")
+      ->check(CLI::IsMember({0, 1}))
+      ->capture_default_str();
+  c->add_option("--step", sn->o.step,
+                "distance between interpolation points, mm (default: the mean target spacing); "
+                "the table is interpolated linearly onto them");
+  c->add_option("--max-points", sn->o.max_points,
+                "MD38000 $MA_MM_ENC_COMP_MAX_POINTS as set on the machine")
+      ->capture_default_str();
+  c->add_option("--output,-o", sn->output, "part program to write")->required();
+  c->add_flag("--quiet,-q", sn->quiet, "print nothing on success");
+  out.push_back({c, [sn] { return run_export_sinumerik(*sn); }});
 
   auto csv_space = std::make_shared<std::string>(), csv_out = std::make_shared<std::string>();
   c = ex->add_subcommand("csv",

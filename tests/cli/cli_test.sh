@@ -159,6 +159,10 @@ expect_ok "$T" export linuxcnc --positioning pos.json -o pos.comp
 expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 --seed 2 --compensation pos.comp -o pos-after.csv
 expect_ok "$T" positioning --input pos-after.csv --output pos-after.json --tolerance B=1.5
 expect_err "give --space FILE or --positioning FILE" "$T" export linuxcnc -o x.comp
+expect_ok "$T" export sinumerik --positioning pos.json --axis Y1 --step 20 -o pos_lec.mpf
+head -2 pos_lec.mpf | tail -1 | grep -qx "CHANDATA(1)" && grep -q '^\$AA_ENC_COMP\[0,30,Y1\]=' pos_lec.mpf && grep -q "MD32450" out.txt && ok || bad "export sinumerik"
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --backlash 2 --noise 0.3 --seed 2 --compensation pos_lec.mpf --comp-format sinumerik -o pos-lec.csv
+expect_err "exceed MD38000" "$T" export sinumerik --positioning pos.json --step 0.1 --max-points 200 -o o.mpf
 printf '0 0 0\n10 0\n' > bad.comp
 expect_err "bad.comp:2:5: expected three numbers" "$T" simulate positioning --compensation bad.comp -o o.csv
 # Quadrant currents: the layout needs the QPD's gain (printed by the simulator).

@@ -134,3 +134,69 @@ TEST(CompensationTable, CompensatingTheVirtualMachineRemovesWhatWasMeasured) {
             std::string::npos);
   EXPECT_NO_THROW(compensation::from_positioning(one, false));
 }
+
+TEST(CompensationTable, SinumerikLecRoundTripsResamplesAndRefuses) {
+  const std::string dir = test::temp_dir();
+  // Equidistant targets: the values come back as written (6 decimals).
+  const compensation::AxisTable t{
+      {-200, -100, 0, 100}, {3e-3, -1e-3, 0, 2.5e-3}, {3e-3, -1e-3, 0, 2.5e-3}};
+  io::SinumerikOptions o;
+  o.axis = "X1";
+  EXPECT_EQ(io::write_sinumerik(dir + "/x.mpf", t, o), 4);
+  std::string axis;
+  const auto back = io::read_sinumerik(dir + "/x.mpf", &axis);
+  EXPECT_EQ(axis, "X1");
+  ASSERT_EQ(back.position.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(back.position[i], t.position[i], 1e-9);
+    EXPECT_NEAR(back.forward[i], t.forward[i], kFileResolution);
+  }
+  // Non-uniform targets are interpolated linearly onto the step.
+  const compensation::AxisTable u{{0, 30, 100}, {0, 3e-3, -4e-3}, {0, 3e-3, -4e-3}};
+  o.step = 10;
+  EXPECT_EQ(io::write_sinumerik(dir + "/u.mpf", u, o), 11);
+  const auto ub = io::read_sinumerik(dir + "/u.mpf");
+  EXPECT_NEAR(ub.forward[2], 2e-3, kFileResolution);  // 20 mm: 2/3 of the way to 3 µm
+  EXPECT_NEAR(ub.forward[10], -4e-3, kFileResolution);
+  EXPECT_NEAR(ub.forward[5], 3e-3 - 7e-3 * 20 / 70, kFileResolution);
+  // What the controller would refuse or what the table cannot hold.
+  const compensation::AxisTable bi{{0, 10}, {1e-3, 1e-3}, {2e-3, 2e-3}};
+  EXPECT_NE(test::error_of([&] {
+              io::write_sinumerik(dir + "/b.mpf", bi);
+            }).find("one curve for both directions"),
+            std::string::npos);
+  o.step = 0.01;
+  o.max_points = 200;
+  EXPECT_NE(test::error_of([&] {
+              io::write_sinumerik(dir + "/m.mpf", u, o);
+            }).find("exceed MD38000 $MA_MM_ENC_COMP_MAX_POINTS = 200"),
+            std::string::npos);
+  auto err = [](const std::string& text) {
+    return test::error_of([&] { io::parse_sinumerik(text, "x.mpf"); });
+  };
+  const std::string tail =
+      "$AA_ENC_COMP_STEP[0,X1]=1.0\n$AA_ENC_COMP_MIN[0,X1]=0\n$AA_ENC_COMP_MAX[0,X1]=1.0\nM17\n";
+  EXPECT_EQ(err("%_N_AX_EEC_INI\nCHANDATA(1)\n$AA_ENC_COMP[0,0,X1]=0.003 ; +3 um\n"
+                "$AA_ENC_COMP[0,1,X1]=-0.001\n" +
+                tail),
+            "(no error)");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0.003\n$AA_ENC_COMP[0,2,X1]=0\n" + tail),
+            "x.mpf: interpolation point 1 is missing");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0.003\n$AA_ENC_COMP[0,1,X1]=abc\n" + tail),
+            "x.mpf:2:22: 'abc' is not a number");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0.003\n$AA_ENC_COMP[0,1,Y1]=0\n" + tail),
+            "x.mpf:2:14: this file is for measuring system 0 of axis X1");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0.003\n$AA_ENC_COMP[0,0,X1]=0\n" + tail),
+            "x.mpf:2:1: interpolation point 0 is given twice");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0\n$AA_ENC_COMP[0,1,X1]=0\nG01 X10\n" + tail),
+            "x.mpf:3:1: 'G01 X10': expected $AA_ENC_COMP... = value");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0\n$AA_ENC_COMP[0,1,X1]=0\n" + tail + "X1=0\n"),
+            "x.mpf:7:1: text after M17 (the end of the program)");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0\n$AA_ENC_COMP[0,1,X1]=0\n$AA_ENC_COMP_STEP[0,X1]=2.0\n"
+                "$AA_ENC_COMP_MIN[0,X1]=0\n$AA_ENC_COMP_MAX[0,X1]=1.0\n"),
+            "x.mpf: 2 points of 2 mm from 0 mm end at 2 mm, not at $AA_ENC_COMP_MAX = 1 mm");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0\n$AA_ENC_COMP[0,1,X1]=0\n$AA_ENC_COMP_IS_MODULO[0,X1]=1\n"),
+            "x.mpf:3:30: modulo tables (rotary axes) are not read");
+  EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0\n"),
+            "x.mpf: a compensation table needs at least two points");
+}

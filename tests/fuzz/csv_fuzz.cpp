@@ -1,5 +1,5 @@
 // libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs) and the
-// LinuxCNC compensation file on arbitrary bytes.
+// LinuxCNC and Sinumerik compensation tables on arbitrary bytes.
 #include <cstdint>
 
 #include "fuzz_util.hpp"
@@ -32,6 +32,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expect_only_trueaxis_errors([&] { io::read_points(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_lengths(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_linuxcnc(p, 0); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_sinumerik(p); });
   fuzz::expect_only_trueaxis_errors([&] {
     positioning::Options o;
     o.allow_incomplete = true;
