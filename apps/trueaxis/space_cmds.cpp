@@ -158,18 +158,38 @@ int run_export_linuxcnc(const ExportArgs& a) {
 }
 
 struct SinumerikArgs {
-  std::string positioning, output;
+  std::string positioning, space, output, line_axis = "x";
+  std::vector<double> at;
   io::SinumerikOptions o;
   bool quiet = false;
 };
 
 int run_export_sinumerik(const SinumerikArgs& a) {
-  const io::PositioningFile f = io::read_positioning_result(a.positioning);
+  if (a.space.empty() == a.positioning.empty())
+    throw CLI::ValidationError("give --space FILE or --positioning FILE (one of them)");
   compensation::AxisTable t;
-  try {
-    t = compensation::from_positioning(f.result, false);
-  } catch (const Error& e) {
-    throw Error(fmt::format("{}: {}", a.positioning, e.what()));
+  io::PositioningFile f;
+  if (!a.positioning.empty()) {
+    if (!a.at.empty()) throw CLI::ValidationError("--at belongs to --space");
+    f = io::read_positioning_result(a.positioning);
+    try {
+      t = compensation::from_positioning(f.result, false);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", a.positioning, e.what()));
+    }
+  } else {
+    const map::ErrorMap m = io::read_error_map(a.space);
+    const int axis = a.line_axis == "x" ? 0 : a.line_axis == "y" ? 1 : 2;
+    Eigen::Vector3d at;
+    for (int k = 0; k < 3; ++k) {
+      const auto& x = m.axes[static_cast<std::size_t>(k)];
+      at[k] = 0.5 * (x[0] + x[x.size() - 1]);
+    }
+    if (!a.at.empty()) {
+      if (a.at.size() != 3) throw Error("--at needs x,y,z (the axis' own coordinate is ignored)");
+      at = {a.at[0], a.at[1], a.at[2]};
+    }
+    t = compensation::from_map(m, axis, at);
   }
   const int n = io::write_sinumerik(a.output, t, a.o);
   if (!a.quiet) {
@@ -283,12 +303,19 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "Siemens Sinumerik leadscrew error compensation (LEC) as a part program: "
       "$AA_ENC_COMP[e,N,AX] values (mm, the measured error: a positive value moves the axis in "
       "the negative direction) at equidistant points, with _STEP, _MIN, _MAX and "
-      "_IS_MODULO = 0, from a positioning result. One curve for both directions (the "
-      "bidirectional mean); the mean reversal is printed for MD32450 BACKLASH.\n"
+      "_IS_MODULO = 0, from a positioning result or an error space. One curve for both "
+      "directions (the bidirectional mean); the mean reversal is printed for MD32450 "
+      "BACKLASH.\n"
       "Example: trueaxis export sinumerik --positioning positioning.json --axis X1 -o x_lec.mpf");
   c->add_option("--positioning", sn->positioning, "positioning JSON ('trueaxis positioning')")
-      ->required()
       ->check(CLI::ExistingFile);
+  c->add_option("--space", sn->space, "or a space JSON: the error along --line through --at")
+      ->check(CLI::ExistingFile);
+  c->add_option("--line", sn->line_axis, "with --space: the axis of the grid line")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  c->add_option("--at", sn->at, "with --space: the line's other coordinates x,y,z, mm")
+      ->delimiter(',');
   c->add_option("--axis", sn->o.axis, "machine axis name")->capture_default_str();
   c->add_option("--encoder", sn->o.encoder, "measuring system (0: first, 1: second)")
       ->check(CLI::IsMember({0, 1}))

@@ -95,6 +95,8 @@ expect_err "outside.csv:3:1: point 2 (10.000, 20.000, 999.000) mm is outside the
 expect_ok "$T" compensate --space space.json -i outside.csv -o o.csv --clamp
 expect_ok "$T" export linuxcnc --space space.json --axis y --type 0 -o y.comp
 [ "$(wc -l <y.comp)" -eq 5 ] && awk 'NF != 3 { exit 1 } NR > 1 && $1 <= prev { exit 1 } { prev = $1 }' y.comp && ok || bad "y.comp: triplets, increasing"
+expect_ok "$T" export sinumerik --space space.json --line y --axis Y1 -o y_lec.mpf
+[ "$(grep -c '^\$AA_ENC_COMP\[0,[0-9]*,Y1\]=' y_lec.mpf)" -eq 5 ] && ok || bad "export sinumerik --space: one value per grid node"
 expect_ok "$T" export csv --space space.json -o table.csv
 echo '{"spacing": 50, "noise": 1}' > badplan.json
 expect_err "badplan.json:1:26: unknown key 'noise'" "$T" space --machine small.json --plan badplan.json -o o.json
