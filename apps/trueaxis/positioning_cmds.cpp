@@ -102,35 +102,29 @@ int run_positioning(const PositioningArgs& a) {
   return 0;
 }
 
+// The numbers of `s` separated by `sep`.
+std::vector<double> split_numbers(const std::string& s, char sep, const std::string& what) {
+  std::vector<double> v;
+  for (std::size_t b = 0;;) {
+    const std::size_t e = s.find(sep, b);
+    v.push_back(
+        parse_number(std::string_view(s).substr(b, e == std::string::npos ? e : e - b), what));
+    if (e == std::string::npos) return v;
+    b = e + 1;
+  }
+}
+
 // "0:50:800" (start:step:end, end included) or "0,50,120".
 std::vector<double> parse_targets(const std::string& s) {
+  if (s.find(':') == std::string::npos) return split_numbers(s, ',', "--targets");
+  const std::vector<double> p = split_numbers(s, ':', "--targets");
+  if (p.size() != 3 || !(p[1] > 0) || !(p[2] > p[0]))
+    throw CLI::ValidationError("--targets",
+                               "use START:STEP:END with STEP > 0 and END > START, e.g. 0:50:800");
+  const double n = std::floor((p[2] - p[0]) / p[1] + 1e-9);
+  if (n > 10000) throw CLI::ValidationError("--targets", "more than 10000 targets");
   std::vector<double> t;
-  if (s.find(':') != std::string::npos) {
-    std::vector<double> p;
-    std::size_t b = 0;
-    while (true) {
-      const std::size_t e = s.find(':', b);
-      p.push_back(parse_number(std::string_view(s).substr(b, e == std::string::npos ? e : e - b),
-                               "--targets"));
-      if (e == std::string::npos) break;
-      b = e + 1;
-    }
-    if (p.size() != 3 || !(p[1] > 0) || !(p[2] > p[0]))
-      throw CLI::ValidationError("--targets",
-                                 "use START:STEP:END with STEP > 0 and END > START, e.g. 0:50:800");
-    const double n = std::floor((p[2] - p[0]) / p[1] + 1e-9);
-    if (n > 10000) throw CLI::ValidationError("--targets", "more than 10000 targets");
-    for (int i = 0; i <= static_cast<int>(n); ++i) t.push_back(p[0] + i * p[1]);
-  } else {
-    std::size_t b = 0;
-    while (true) {
-      const std::size_t e = s.find(',', b);
-      t.push_back(parse_number(std::string_view(s).substr(b, e == std::string::npos ? e : e - b),
-                               "--targets"));
-      if (e == std::string::npos) break;
-      b = e + 1;
-    }
-  }
+  for (int i = 0; i <= static_cast<int>(n); ++i) t.push_back(p[0] + i * p[1]);
   return t;
 }
 

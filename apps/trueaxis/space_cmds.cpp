@@ -105,6 +105,21 @@ int run_compensate(const CompensateArgs& a) {
   return 0;
 }
 
+// The grid line of an export: --at x,y,z (the axis' own coordinate is ignored), by default the
+// line through the grid's centre.
+Eigen::Vector3d line_at(const map::ErrorMap& m, const std::vector<double>& given) {
+  if (!given.empty()) {
+    if (given.size() != 3) throw Error("--at needs x,y,z (the axis' own coordinate is ignored)");
+    return {given[0], given[1], given[2]};
+  }
+  Eigen::Vector3d at;
+  for (int k = 0; k < 3; ++k) {
+    const auto& x = m.axes[static_cast<std::size_t>(k)];
+    at[k] = 0.5 * (x[0] + x[x.size() - 1]);
+  }
+  return at;
+}
+
 struct ExportArgs {
   std::string space, positioning, output, axis = "x";
   std::vector<double> at;
@@ -139,16 +154,7 @@ int run_export_linuxcnc(const ExportArgs& a) {
   if (a.unidirectional) throw CLI::ValidationError("--unidirectional belongs to --positioning");
   const map::ErrorMap m = io::read_error_map(a.space);
   const int axis = a.axis == "x" ? 0 : a.axis == "y" ? 1 : 2;
-  Eigen::Vector3d at;
-  for (int k = 0; k < 3; ++k) {
-    const auto& x = m.axes[static_cast<std::size_t>(k)];
-    at[k] = 0.5 * (x[0] + x[x.size() - 1]);  // default: the line through the grid's centre
-  }
-  if (!a.at.empty()) {
-    if (a.at.size() != 3) throw Error("--at needs x,y,z (the axis' own coordinate is ignored)");
-    at = {a.at[0], a.at[1], a.at[2]};
-  }
-  const int n = io::write_linuxcnc(a.output, m, axis, at, a.type);
+  const int n = io::write_linuxcnc(a.output, m, axis, line_at(m, a.at), a.type);
   if (!a.quiet)
     fmt::print(
         "wrote {} ({} points, type {}: {}). In the INI file: [JOINT_n] COMP_FILE = {} and "
@@ -180,16 +186,7 @@ int run_export_sinumerik(const SinumerikArgs& a) {
   } else {
     const map::ErrorMap m = io::read_error_map(a.space);
     const int axis = a.line_axis == "x" ? 0 : a.line_axis == "y" ? 1 : 2;
-    Eigen::Vector3d at;
-    for (int k = 0; k < 3; ++k) {
-      const auto& x = m.axes[static_cast<std::size_t>(k)];
-      at[k] = 0.5 * (x[0] + x[x.size() - 1]);
-    }
-    if (!a.at.empty()) {
-      if (a.at.size() != 3) throw Error("--at needs x,y,z (the axis' own coordinate is ignored)");
-      at = {a.at[0], a.at[1], a.at[2]};
-    }
-    t = compensation::from_map(m, axis, at);
+    t = compensation::from_map(m, axis, line_at(m, a.at));
   }
   const int n = io::write_sinumerik(a.output, t, a.o);
   if (!a.quiet) {

@@ -1,6 +1,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -215,6 +216,37 @@ ojson um(double mm) {
   return std::isnan(mm) ? ojson(nullptr) : ojson(mm * 1e3);
 }
 
+// The axis parameters as (name in the file, value, belongs to VDI 3441), for writing and reading.
+template <class R>
+auto parameter_fields(R& r) {
+  auto& p = r.iso;
+  auto& v = r.vdi;
+  using D = decltype(&p.A);
+  struct Field {
+    const char* name;
+    D value;
+    bool vdi;
+  };
+  return std::array<Field, 18>{{{"A", &p.A, false},
+                                {"A_up", &p.A_up, false},
+                                {"A_down", &p.A_down, false},
+                                {"E", &p.E, false},
+                                {"E_up", &p.E_up, false},
+                                {"E_down", &p.E_down, false},
+                                {"M", &p.M, false},
+                                {"R", &p.R, false},
+                                {"R_up", &p.R_up, false},
+                                {"R_down", &p.R_down, false},
+                                {"B", &p.B, false},
+                                {"B_mean", &p.B_mean, false},
+                                {"P", &v.P, true},
+                                {"Pa", &v.Pa, true},
+                                {"Ps", &v.Ps, true},
+                                {"Ps_mean", &v.Ps_mean, true},
+                                {"U", &v.U, true},
+                                {"U_mean", &v.U_mean, true}}};
+}
+
 ojson range(double lo, double hi) {
   return std::isnan(lo) ? ojson(nullptr) : ojson::array({lo, hi});
 }
@@ -229,29 +261,8 @@ void write_positioning_result(const std::string& path, const positioning::Result
   j["kind"] = "positioning";
   j["standard"] = vdi ? "VDI/DGQ 3441" : "ISO 230-2:2014";
   j["units"] = "um";
-  if (vdi) {
-    const auto& v = r.vdi;
-    j["P"] = um(v.P);
-    j["Pa"] = um(v.Pa);
-    j["Ps"] = um(v.Ps);
-    j["Ps_mean"] = um(v.Ps_mean);
-    j["U"] = um(v.U);
-    j["U_mean"] = um(v.U_mean);
-  } else {
-    const auto& p = r.iso;
-    j["A"] = um(p.A);
-    j["A_up"] = um(p.A_up);
-    j["A_down"] = um(p.A_down);
-    j["E"] = um(p.E);
-    j["E_up"] = um(p.E_up);
-    j["E_down"] = um(p.E_down);
-    j["M"] = um(p.M);
-    j["R"] = um(p.R);
-    j["R_up"] = um(p.R_up);
-    j["R_down"] = um(p.R_down);
-    j["B"] = um(p.B);
-    j["B_mean"] = um(p.B_mean);
-  }
+  for (const auto& [name, value, of_vdi] : parameter_fields(r))
+    if (of_vdi == vdi) j[name] = um(*value);
   j["cycles"] = r.cycles;
   ojson dirs = ojson::array();
   if (r.has_up) dirs.push_back("+");
@@ -335,15 +346,7 @@ PositioningFile read_positioning_result(const std::string& path) {
     if (!(x >= 0 && x <= 1e6) || x != std::floor(x)) f.fail(q, "expected a whole number 0 .. 1e6");
     return static_cast<int>(x);
   };
-  auto& p = r.iso;
-  auto& v = r.vdi;
-  const std::pair<const char*, double*> params[] = {
-      {"A", &p.A},       {"A_up", &p.A_up},     {"A_down", &p.A_down}, {"E", &p.E},
-      {"E_up", &p.E_up}, {"E_down", &p.E_down}, {"M", &p.M},           {"R", &p.R},
-      {"R_up", &p.R_up}, {"R_down", &p.R_down}, {"B", &p.B},           {"B_mean", &p.B_mean},
-      {"P", &v.P},       {"Pa", &v.Pa},         {"Ps", &v.Ps},         {"Ps_mean", &v.Ps_mean},
-      {"U", &v.U},       {"U_mean", &v.U_mean}};
-  for (const auto& [name, dst] : params) *dst = um_or_nan(root / name);
+  for (const auto& field : parameter_fields(r)) *field.value = um_or_nan(root / field.name);
   if (f.has(root / "cycles")) r.cycles = count(root / "cycles");
   const ptr ts = root / "targets";
   if (!f.has(ts)) f.fail(root, "'targets' is missing");
