@@ -34,8 +34,12 @@ double parse_number(std::string_view s, const std::string& what) {
   return v;
 }
 
+std::vector<double> parse_targets(const std::string& s);
+
 struct PositioningArgs {
-  std::string input, output = "positioning.json", standard = "iso230-2", report;
+  std::string input, log, log_targets, output = "positioning.json", standard = "iso230-2", report;
+  positioning::LogOptions lo;
+  double dwell_tolerance_um = 2;
   std::vector<std::string> tolerances;
   positioning::Options o;
   double expansion_ppm = 11.5;
@@ -60,7 +64,37 @@ int run_positioning(const PositioningArgs& a) {
     if (!(v > 0)) throw CLI::ValidationError("--tolerance", fmt::format("{}: must be > 0 um", t));
     tol.emplace_back(name, v * 1e-3);
   }
-  const io::PositioningRuns runs = io::read_runs(a.input);
+  if (a.input.empty() == a.log.empty())
+    throw CLI::ValidationError("give --input runs.csv or --log log.csv (one of them)");
+  if (!a.log.empty() && a.log_targets.empty())
+    throw CLI::ValidationError("--log needs --targets (the positions the axis stopped at)");
+  io::PositioningRuns runs;
+  std::string source = a.input;
+  if (!a.log.empty()) {
+    source = a.log;
+    positioning::LogOptions lo = a.lo;
+    lo.dwell_tolerance = a.dwell_tolerance_um * 1e-3;
+    const positioning::Log log = io::read_log(a.log);
+    const std::vector<double> targets = parse_targets(a.log_targets);
+    positioning::LogReadings found;
+    try {
+      found = positioning::readings_from_log(log, targets, lo);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", a.log, e.what()));
+    }
+    if (!a.quiet) {
+      fmt::print("{}: {} stops, {} at targets", a.log, found.stops, found.readings.size());
+      fmt::print("{}\n",
+                 found.ignored.empty() ? "" : fmt::format(", {} not used:", found.ignored.size()));
+      for (const auto& why : found.ignored) fmt::print("  {}\n", why);
+    }
+    if (found.readings.empty())
+      throw Error(fmt::format("{}: no stop of {:g} s within {:g} um lies at a target", a.log,
+                              lo.dwell_time, a.dwell_tolerance_um));
+    runs.readings = std::move(found.readings);
+  } else {
+    runs = io::read_runs(a.input);
+  }
   positioning::Options o = a.o;
   o.expansion_coefficient = a.expansion_ppm * 1e-6;
   o.correct_temperature = !a.no_temperature;
@@ -68,7 +102,7 @@ int run_positioning(const PositioningArgs& a) {
   try {
     r = positioning::evaluate(runs.readings, o);
   } catch (const Error& e) {
-    throw Error(fmt::format("{}: {}", a.input, e.what()));
+    throw Error(fmt::format("{}: {}", source, e.what()));
   }
   const bool vdi = a.standard == "vdi3441";
   const auto verdicts = positioning::check(r, tol);
@@ -77,8 +111,8 @@ int run_positioning(const PositioningArgs& a) {
   if (!a.report.empty())
     report::write(a.report, report::render("trueaxis positioning report",
                                            {report::positioning_section(
-                                               std::filesystem::path(a.input).filename().string(),
-                                               r, standard, verdicts)},
+                                               std::filesystem::path(source).filename().string(), r,
+                                               standard, verdicts)},
                                            4000, cli::report_meta()));
   bool pass = true;
   std::string failed;
@@ -130,7 +164,7 @@ std::vector<double> parse_targets(const std::string& s) {
 
 struct SimArgs {
   MachineSource machine;
-  std::string axis = "x", targets, output = "runs.csv", truth, temperature, compensation,
+  std::string axis = "x", targets, output = "runs.csv", truth, temperature, compensation, log,
               comp_format = "linuxcnc";
   int comp_type = 1;
   std::vector<double> at;
@@ -174,7 +208,14 @@ int run_simulate(const SimArgs& a) {
       return table.correction(p, d);
     };
   }
-  const sim::PositioningRun run = sim::simulate_positioning(m, o);
+  sim::PositioningRun run;
+  if (a.log.empty()) {
+    run = sim::simulate_positioning(m, o);
+  } else {
+    auto sl = sim::simulate_positioning_log(m, o);
+    io::write_log(a.log, sl.log);
+    run = std::move(sl.run);
+  }
   io::write_runs(a.output, run.readings);
   const std::string truth = a.truth.empty() ? truth_beside(a.output) : a.truth;
   const Eigen::VectorXd g = run.geometric * 1e3, up = run.up * 1e3, down = run.down * 1e3;
@@ -235,6 +276,9 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
   sc->add_option("--comp-type", sa->comp_type, "a LinuxCNC table's COMP_FILE_TYPE (0 or 1)")
       ->check(CLI::IsMember({0, 1}))
       ->capture_default_str();
+  sc->add_option("--log", sa->log,
+                 "also write the runs as an interferometer log (time_s, reading_mm; 10 samples "
+                 "per second, 1000 mm/min, 3 s stops, 5 mm overrun)");
   sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
   sc->add_option("--output,-o", sa->output, "runs CSV to write")->capture_default_str();
   sc->add_option("--truth", sa->truth, "truth CSV; default: the output's name with -truth");
@@ -253,7 +297,20 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       "status 1 when a parameter exceeds its --tolerance (the result is still written).\n"
       "Example: trueaxis positioning --input runs.csv --tolerance A=12,R=4 --output "
       "positioning.json");
-  c->add_option("--input,-i", a->input, "runs CSV")->required()->check(CLI::ExistingFile);
+  c->add_option("--input,-i", a->input, "runs CSV")->check(CLI::ExistingFile);
+  c->add_option("--log", a->log,
+                "or an interferometer log (time_s, reading_mm): the readings are the stops at "
+                "--targets, found by dwell")
+      ->check(CLI::ExistingFile);
+  c->add_option("--targets", a->log_targets, "with --log: START:STEP:END or a list, mm");
+  c->add_option("--dwell", a->lo.dwell_time, "with --log: the shortest stop, s")
+      ->capture_default_str();
+  c->add_option("--dwell-tolerance", a->dwell_tolerance_um,
+                "with --log: the reading's range during a stop, um")
+      ->capture_default_str();
+  c->add_option("--capture", a->lo.capture,
+                "with --log: a stop this close to a target is at it, mm (default: a quarter of "
+                "the target spacing, at most 0.5)");
   c->add_option("--output,-o", a->output, "result JSON (um)")->capture_default_str();
   c->add_option("--report", a->report,
                 "HTML report: the standard's plot (mean deviations with +-2s), every reading, "

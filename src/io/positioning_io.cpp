@@ -10,6 +10,7 @@
 
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/io/positioning.hpp"
 
@@ -170,6 +171,33 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
   if (out.readings.empty())
     throw Error(fmt::format("{}:{}:1: no readings after the header", path, header_line));
   return out;
+}
+
+positioning::Log read_log(const std::string& path) {
+  const CsvTable t = CsvTable::read(path);
+  const int ct = t.require("time_s"), cr = t.require("reading_mm");
+  if (t.cols() != 2)
+    throw Error(fmt::format("{}:1:1: a log has two columns, time_s and reading_mm ({} found)", path,
+                            t.cols()));
+  if (t.rows() < 2) throw Error(fmt::format("{}: a log needs at least two samples", path));
+  positioning::Log log;
+  const Eigen::VectorXd &tv = t.column(ct), &rv = t.column(cr);
+  for (Eigen::Index i = 0; i < tv.size(); ++i) {
+    if (i > 0 && !(tv[i] > tv[i - 1]))
+      throw Error(fmt::format("{}time {:g} s does not increase (previous sample: {:g} s)",
+                              t.where(static_cast<long>(i), ct), tv[i], tv[i - 1]));
+    log.time.push_back(tv[i]);
+    log.reading.push_back(rv[i]);
+  }
+  return log;
+}
+
+void write_log(const std::string& path, const positioning::Log& log) {
+  const Eigen::VectorXd t = Eigen::Map<const Eigen::VectorXd>(
+      log.time.data(), static_cast<Eigen::Index>(log.time.size()));
+  const Eigen::VectorXd r = Eigen::Map<const Eigen::VectorXd>(
+      log.reading.data(), static_cast<Eigen::Index>(log.reading.size()));
+  write_csv(path, {"time_s", "reading_mm"}, {&t, &r});
 }
 
 PositioningRuns read_runs(const std::string& path) {

@@ -374,3 +374,90 @@ std::string Result::summary(bool vdi) const {
 }
 
 }  // namespace trueaxis::positioning
+
+namespace trueaxis::positioning {
+
+void LogOptions::validate() const {
+  if (!(dwell_time > 0) || !std::isfinite(dwell_time))
+    throw Error(fmt::format("the dwell time must be positive (got {:g} s)", dwell_time));
+  if (!(dwell_tolerance > 0) || !std::isfinite(dwell_tolerance))
+    throw Error(fmt::format("the dwell tolerance must be positive (got {:g} mm)", dwell_tolerance));
+  if (!std::isnan(capture) && (!(capture > 0) || !std::isfinite(capture)))
+    throw Error(fmt::format("the capture distance must be positive (got {:g} mm)", capture));
+}
+
+LogReadings readings_from_log(const Log& log, const std::vector<double>& targets,
+                              const LogOptions& o) {
+  o.validate();
+  const std::size_t n = log.time.size();
+  if (log.reading.size() != n) throw Error("the log needs one reading per time");
+  if (targets.empty()) throw Error("no targets to find in the log");
+  double spacing = INFINITY;
+  for (std::size_t i = 0; i < targets.size(); ++i) {
+    if (!std::isfinite(targets[i])) throw Error("targets must be finite");
+    if (i > 0) {
+      if (!(targets[i] > targets[i - 1])) throw Error("targets must be strictly increasing");
+      spacing = std::min(spacing, targets[i] - targets[i - 1]);
+    }
+  }
+  const double capture =
+      std::isnan(o.capture) ? std::min(std::isfinite(spacing) ? spacing / 4 : 0.5, 0.5) : o.capture;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(log.time[k]) || !std::isfinite(log.reading[k]))
+      throw Error(fmt::format("log sample {}: time and reading must be finite", k + 1));
+    if (k > 0 && !(log.time[k] > log.time[k - 1]))
+      throw Error(fmt::format("log sample {}: time {:g} s does not increase", k + 1, log.time[k]));
+  }
+  LogReadings out;
+  std::map<std::pair<std::size_t, int>, int> visits;
+  std::size_t k = 0;
+  while (k < n) {
+    // The longest run from k whose range stays within the tolerance.
+    double lo = log.reading[k], hi = lo;
+    std::size_t e = k + 1;
+    while (e < n) {
+      const double v = log.reading[e];
+      if (std::max(hi, v) - std::min(lo, v) > o.dwell_tolerance) break;
+      lo = std::min(lo, v);
+      hi = std::max(hi, v);
+      ++e;
+    }
+    if (log.time[e - 1] - log.time[k] < o.dwell_time) {
+      ++k;
+      continue;
+    }
+    ++out.stops;
+    // The settled second half of the stop.
+    double sum = 0;
+    const std::size_t half = k + (e - k) / 2;
+    for (std::size_t q = half; q < e; ++q) sum += log.reading[q];
+    const double value = sum / static_cast<double>(e - half);
+    const double t0 = log.time[k];
+    // The motion into the stop.
+    std::size_t q = k;
+    while (q > 0 && std::abs(log.reading[q - 1] - value) <= 10 * o.dwell_tolerance) --q;
+    const auto near = std::lower_bound(targets.begin(), targets.end(), value);
+    std::size_t ti = static_cast<std::size_t>(near - targets.begin());
+    if (ti == targets.size() || (ti > 0 && value - targets[ti - 1] < targets[ti] - value)) --ti;
+    if (std::abs(value - targets[ti]) > capture) {
+      out.ignored.push_back(fmt::format("stop at {:.4f} mm from {:.1f} s: no target within {:g} mm",
+                                        value, t0, capture));
+    } else if (q == 0) {
+      out.ignored.push_back(fmt::format(
+          "stop at {:.4f} mm from {:.1f} s: the log starts there (no approach to tell the "
+          "direction)",
+          value, t0));
+    } else {
+      Reading r;
+      r.target = targets[ti];
+      r.direction = log.reading[q - 1] < value ? Direction::Up : Direction::Down;
+      r.cycle = ++visits[{ti, r.direction == Direction::Up ? 0 : 1}];
+      r.deviation = value - targets[ti];
+      out.readings.push_back(r);
+    }
+    k = e;
+  }
+  return out;
+}
+
+}  // namespace trueaxis::positioning

@@ -109,3 +109,51 @@ PositioningRun simulate_positioning(const Machine& m, const PositioningRunOption
 }
 
 }  // namespace trueaxis::sim
+
+namespace trueaxis::sim {
+
+PositioningLog simulate_positioning_log(const Machine& m, const PositioningRunOptions& o,
+                                        const LogSimOptions& lo) {
+  if (!(lo.rate > 0) || !(lo.feed > 0) || !(lo.dwell > 0) || !(lo.overrun >= 0) ||
+      !(lo.sample_noise >= 0) || !std::isfinite(lo.rate + lo.feed + lo.dwell + lo.overrun))
+    throw Error("the log needs a positive rate, feed and dwell and an overrun >= 0");
+  PositioningLog out;
+  out.run = simulate_positioning(m, o);
+  std::mt19937_64 rng(o.seed + 0x9e3779b97f4a7c15ULL);
+  std::normal_distribution<double> N(0.0, 1.0);
+  const double dt = 1.0 / lo.rate, speed = lo.feed / 60.0;  // s, mm/s
+  double t = 0, x = o.targets.front() - lo.overrun;
+  auto sample = [&](double value) {
+    out.log.time.push_back(t);
+    out.log.reading.push_back(value + lo.sample_noise * N(rng));
+    t += dt;
+  };
+  auto move_to = [&](double to) {
+    const double dist = std::abs(to - x);
+    const auto steps = static_cast<long>(std::ceil(dist / (speed * dt)));
+    for (long s = 1; s < steps; ++s)
+      sample(x + (to - x) * static_cast<double>(s) / static_cast<double>(steps));
+    x = to;
+  };
+  auto stop_at = [&](double value) {
+    const auto samples = static_cast<long>(std::ceil(lo.dwell * lo.rate)) + 1;
+    for (long s = 0; s < samples; ++s) sample(value);
+  };
+  stop_at(x);  // at rest before the first approach
+  const std::size_t nt = o.targets.size();
+  std::size_t k = 0;
+  for (int cycle = 1; cycle <= o.cycles; ++cycle) {
+    for (int d = 0; d < 2; ++d) {
+      for (std::size_t q = 0; q < nt; ++q) {
+        const auto& r = out.run.readings[k++];
+        const double actual = r.target + r.deviation;
+        move_to(actual);
+        stop_at(actual);
+      }
+      move_to(d == 0 ? o.targets.back() + lo.overrun : o.targets.front() - lo.overrun);
+    }
+  }
+  return out;
+}
+
+}  // namespace trueaxis::sim

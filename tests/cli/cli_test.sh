@@ -155,6 +155,14 @@ grep -v '^200,3,-' pos.csv > pos-gap.csv
 expect_err "pos-gap.csv: no '-' reading at target 200 mm in cycle 3" "$T" positioning --input pos-gap.csv
 expect_ok "$T" positioning --input pos-gap.csv --allow-incomplete --output pos-gap.json
 grep -q "incomplete cycles" pos-gap.json && ok || bad "--allow-incomplete warns"
+# The same runs as an interferometer log: the stops at the targets give the same evaluation.
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 -o pos2.csv --log pos-log.csv
+head -1 pos-log.csv | grep -qx "time_s,reading_mm" && ok || bad "simulate positioning --log header"
+expect_ok "$T" positioning --log pos-log.csv --targets 0:40:600 --output pos-log.json
+grep -q "161 stops, 160 at targets, 1 not used" out.txt && ok || bad "stops found in the log: $(head -1 out.txt)"
+[ "$(grep -o '"E": [0-9.]*' pos-log.json | cut -c1-12)" = "$(grep -o '"E": [0-9.]*' pos.json | cut -c1-12)" ] && ok || bad "the log gives the runs' E"
+expect_err "give --input runs.csv or --log log.csv" "$T" positioning --output o.json
+expect_err "--log needs --targets" "$T" positioning --log pos-log.csv
 # A LinuxCNC table from the positioning result, read back by the simulator: the reversal goes.
 expect_ok "$T" export linuxcnc --positioning pos.json -o pos.comp
 [ "$(wc -l <pos.comp)" -eq 16 ] && grep -q "BACKLASH = 0" out.txt && ok || bad "export linuxcnc --positioning"

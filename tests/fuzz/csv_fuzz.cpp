@@ -34,6 +34,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expect_only_trueaxis_errors([&] { io::read_linuxcnc(p, 0); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_sinumerik(p); });
   fuzz::expect_only_trueaxis_errors([&] {
+    const auto log = io::read_log(p);
+    if (log.time.size() <= 20000) positioning::readings_from_log(log, {0, 10, 20, 50});
+  });
+  fuzz::expect_only_trueaxis_errors([&] {
     positioning::Options o;
     o.allow_incomplete = true;
     positioning::evaluate(io::read_runs(p).readings, o);

@@ -27,6 +27,7 @@ printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy\n0,1,2,3,4,5,6\n10,1,2,3,4,5,6\n' > "$co
 printf 'target_mm,cycle,direction,deviation_um,material_temp_c\n0,1,+,1,20.5\n50,1,+,2,20.5\n50,1,-,3,20.6\n0,1,-,0.5,20.6\n0,2,+,1.2,20.7\n' > "$corpus/csv/runs.csv"
 printf '0.000000 0.001380 -0.001723\n50.000000 0.002275 -0.000580\n' > "$corpus/csv/x.comp"
 printf '%%_N_AX_EEC_INI\nCHANDATA(1)\n$AA_ENC_COMP[0,0,X1]=0.003 ; 3 um\n$AA_ENC_COMP[0,1,X1]=-0.001\n$AA_ENC_COMP_STEP[0,X1]=1.0\n$AA_ENC_COMP_MIN[0,X1]=0\n$AA_ENC_COMP_MAX[0,X1]=1.0\n$AA_ENC_COMP_IS_MODULO[0,X1]=0\nM17\n' > "$corpus/csv/x_lec.mpf"
+printf 'time_s,reading_mm\n0,-5\n0.5,-5\n1,-5\n1.5,-2\n2,0.001\n2.5,0.001\n3,0.001\n3.5,0.0012\n4,5\n' > "$corpus/csv/log.csv"
 # JSON: the first byte picks the reader (see json_fuzz.cpp).
 for f in examples/*.json; do
   for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/json/$(basename "$f").$r"; done

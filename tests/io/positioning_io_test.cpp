@@ -166,3 +166,24 @@ TEST(PositioningIo, ResultReadsBackForTheReport) {
   EXPECT_NE(test::error_of([&] { io::read_positioning_result(cyc); }).find("whole number"),
             std::string::npos);
 }
+
+TEST(PositioningIo, LogReadsAndRefuses) {
+  const auto log =
+      io::read_log(test::temp_file("log.csv", "time_s,reading_mm\n0,0.001\n0.1,0.002\n0.2,0.5\n"));
+  ASSERT_EQ(log.time.size(), 3u);
+  EXPECT_DOUBLE_EQ(log.reading[2], 0.5);
+  const std::string back = test::temp_dir() + "/back.csv";
+  io::write_log(back, log);
+  EXPECT_EQ(io::read_log(back).reading, log.reading);
+  auto err = [](const std::string& text) {
+    const std::string p = test::temp_file("bad.csv", text);
+    const std::string e = test::error_of([&] { io::read_log(p); });
+    return e.substr(e.find("bad.csv"));
+  };
+  EXPECT_EQ(err("time_s,reading_mm\n0,1\n0,2\n"),
+            "bad.csv:3:1: time 0 s does not increase (previous sample: 0 s)");
+  EXPECT_EQ(err("time_s,reading_mm,x\n0,1,2\n1,2,3\n"),
+            "bad.csv:1:1: a log has two columns, time_s and reading_mm (3 found)");
+  EXPECT_EQ(err("time_s,reading_mm\n0,1\n"), "bad.csv: a log needs at least two samples");
+  EXPECT_NE(err("time,reading_mm\n0,1\n1,2\n").find("time_s"), std::string::npos);
+}

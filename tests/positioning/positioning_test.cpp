@@ -267,3 +267,58 @@ TEST(Positioning, SimulatorRefusesBadOptions) {
   EXPECT_NE(test::error_of([&] { sim::simulate_positioning(m, o); }).find("both"),
             std::string::npos);
 }
+
+// An interferometer log of the standard test cycle (overrun before each reversal, no stop
+// there): the stops at the targets give back the run's readings — target, cycle, direction and
+// deviation — and the stop at rest before the first approach is named and not used.
+TEST(Positioning, TargetsFoundByDwellInALog) {
+  sim::MachineOptions mo;
+  mo.seed = 6;
+  const sim::Machine m = sim::random_machine(mo);
+  sim::PositioningRunOptions o;
+  o.targets = {0, 55, 103, 160, 240, 300};  // uneven spacing, as ISO 230-2 recommends
+  o.cycles = 3;
+  o.backlash = 2e-3;
+  o.noise = 0.4e-3;
+  const auto sl = sim::simulate_positioning_log(m, o);
+  const auto found = positioning::readings_from_log(sl.log, o.targets);
+  EXPECT_EQ(found.stops, 37);
+  ASSERT_EQ(found.ignored.size(), 1u);
+  EXPECT_NE(found.ignored[0].find("no target within 0.5 mm"), std::string::npos);
+  ASSERT_EQ(found.readings.size(), sl.run.readings.size());
+  for (std::size_t k = 0; k < found.readings.size(); ++k) {
+    const auto &a = found.readings[k], &b = sl.run.readings[k];
+    EXPECT_EQ(a.target, b.target);
+    EXPECT_EQ(a.cycle, b.cycle);
+    EXPECT_EQ(a.direction, b.direction);
+    EXPECT_NEAR(a.deviation, b.deviation, 1e-12);
+  }
+  // Sample noise of 0.2 µm on a 10 Hz log: each stop's value averages 16 samples.
+  sim::LogSimOptions lo;
+  lo.sample_noise = 0.2e-3;
+  const auto noisy = sim::simulate_positioning_log(m, o, lo);
+  const auto fn = positioning::readings_from_log(noisy.log, o.targets);
+  ASSERT_EQ(fn.readings.size(), noisy.run.readings.size());
+  for (std::size_t k = 0; k < fn.readings.size(); ++k)
+    EXPECT_NEAR(fn.readings[k].deviation, noisy.run.readings[k].deviation, 4.5 * 0.2e-3 / 4);
+  // Malformed logs and targets.
+  positioning::Log bad = sl.log;
+  bad.time[5] = bad.time[4];
+  EXPECT_NE(test::error_of([&] {
+              positioning::readings_from_log(bad, o.targets);
+            }).find("log sample 6: time"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([&] {
+              positioning::readings_from_log(sl.log, {0, 55, 55});
+            }).find("strictly increasing"),
+            std::string::npos);
+  positioning::LogOptions lopt;
+  lopt.dwell_time = 0;
+  EXPECT_NE(test::error_of([&] {
+              positioning::readings_from_log(sl.log, o.targets, lopt);
+            }).find("dwell time must be positive"),
+            std::string::npos);
+  // Stops longer than the log's dwells are not stops: nothing is found.
+  lopt.dwell_time = 10;
+  EXPECT_EQ(positioning::readings_from_log(sl.log, o.targets, lopt).stops, 0);
+}

@@ -42,6 +42,11 @@ struct PositioningRuns {
 PositioningRuns parse_runs(std::string text, const std::string& path);
 PositioningRuns read_runs(const std::string& path);
 
+// An interferometer log: CSV with columns time_s (s, strictly increasing) and reading_mm (the
+// laser's reading, mm); errors name file:line:col.
+positioning::Log read_log(const std::string& path);
+void write_log(const std::string& path, const positioning::Log& log);
+
 // Writes readings in the runs.csv form above (temperature columns when any reading has one).
 void write_runs(const std::string& path, const std::vector<positioning::Reading>& readings);
 

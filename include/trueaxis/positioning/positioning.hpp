@@ -148,4 +148,37 @@ std::vector<Verdict> check(const Result& result,
 // names the first missing target, cycle and direction).
 Result evaluate(const std::vector<Reading>& readings, const Options& options = {});
 
+// A plain interferometer log: the laser's reading (the actual position of the axis, mm) sampled
+// over time while the machine runs its test cycle, stopping (dwelling) at each target.
+struct Log {
+  std::vector<double> time;     // s, strictly increasing
+  std::vector<double> reading;  // mm
+};
+
+struct LogOptions {
+  double dwell_time = 1.0;        // s: a stop must last this long to count
+  double dwell_tolerance = 2e-3;  // mm: the reading's range during a stop
+  double capture = kNaN;          // mm: a stop this close to a target is at it; NaN: a quarter of
+                                  // the smallest target spacing, at most 0.5 mm
+  void validate() const;          // throws Error
+};
+
+struct LogReadings {
+  std::vector<Reading> readings;     // one per stop at a target, in time order
+  int stops = 0;                     // stops found
+  std::vector<std::string> ignored;  // stops not used, with the time and why
+};
+
+// Target detection by dwell. A stop is a maximal run of samples whose readings stay within
+// dwell_tolerance for at least dwell_time; its value is the mean of the second half of its
+// samples (the settled part). A stop within
+// `capture` of a target is a reading at that target with deviation value − target; its direction
+// is that of the motion into it (the last sample before the stop that is farther than
+// 10 × dwell_tolerance from its value lies below it: '+', above: '-'), so an overrun before a
+// reversal is recognised. Stops elsewhere (home, the overrun) and a stop at the start of the log
+// (no motion into it) are listed in `ignored`. The k-th stop at a target in one direction is
+// cycle k. Throws Error when `targets` is not strictly increasing or the log is malformed.
+LogReadings readings_from_log(const Log& log, const std::vector<double>& targets,
+                              const LogOptions& options = {});
+
 }  // namespace trueaxis::positioning

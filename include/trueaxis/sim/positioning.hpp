@@ -56,4 +56,23 @@ struct PositioningRun {
 
 PositioningRun simulate_positioning(const Machine& machine, const PositioningRunOptions& options);
 
+// The same runs as an interferometer log: the laser's reading sampled at `rate` while the axis
+// moves at `feed` between stops of `dwell` seconds at the targets, overrunning by `overrun` mm
+// beyond the end targets before each reversal (no stop there), the log starting at rest at the
+// lower overrun point. The reading at a stop is target + the run's deviation, plus sample noise.
+struct LogSimOptions {
+  double rate = 10;         // samples per second
+  double feed = 1000;       // mm/min
+  double dwell = 3;         // s
+  double overrun = 5;       // mm
+  double sample_noise = 0;  // mm, on every sample
+};
+struct PositioningLog {
+  positioning::Log log;
+  PositioningRun run;  // the readings the stops hold, in time order, and the truth
+};
+PositioningLog simulate_positioning_log(const Machine& machine,
+                                        const PositioningRunOptions& options,
+                                        const LogSimOptions& log_options = {});
+
 }  // namespace trueaxis::sim
