@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 
 #include "trueaxis/error.hpp"
@@ -33,6 +34,12 @@ inline std::string temp_file(const std::string& name, const std::string& content
   const std::string p = temp_dir() + "/" + name;
   std::ofstream(p) << content;
   return p;
+}
+
+// The whole content of the file at `path` ("" when it cannot be read).
+inline std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 }  // namespace trueaxis::test

@@ -1,8 +1,10 @@
-// trueaxis CLI — error space and compensation: 'space', 'compensate', 'export linuxcnc|csv'.
+// trueaxis CLI — error space and compensation: 'space', 'compensate', 'export
+// linuxcnc|sinumerik|heidenhain|fanuc|csv'.
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
 #include <chrono>
+#include <cmath>
 #include <memory>
 
 #include "commands.hpp"
@@ -206,6 +208,85 @@ int run_export_sinumerik(const SinumerikArgs& a) {
   return 0;
 }
 
+// The table of --positioning (bidirectional unless asked otherwise) or of --space's grid line.
+compensation::AxisTable table_from(const std::string& positioning, const std::string& space,
+                                   const std::string& line_axis, const std::vector<double>& at,
+                                   bool bidirectional, io::PositioningFile* file) {
+  if (space.empty() == positioning.empty())
+    throw CLI::ValidationError("give --space FILE or --positioning FILE (one of them)");
+  if (!positioning.empty()) {
+    if (!at.empty()) throw CLI::ValidationError("--at belongs to --space");
+    *file = io::read_positioning_result(positioning);
+    try {
+      return compensation::from_positioning(file->result, bidirectional);
+    } catch (const Error& e) {
+      throw Error(fmt::format("{}: {}", positioning, e.what()));
+    }
+  }
+  const map::ErrorMap m = io::read_error_map(space);
+  const int axis = line_axis == "x" ? 0 : line_axis == "y" ? 1 : 2;
+  return compensation::from_map(m, axis, line_at(m, at));
+}
+
+struct HeidenhainArgs {
+  std::string positioning, space, output, line_axis = "x";
+  std::vector<double> at;
+  io::HeidenhainOptions o;
+  bool unidirectional = false, quiet = false;
+};
+
+int run_export_heidenhain(const HeidenhainArgs& a) {
+  if (a.unidirectional && a.positioning.empty())
+    throw CLI::ValidationError("--unidirectional belongs to --positioning");
+  io::PositioningFile f;
+  const compensation::AxisTable t =
+      table_from(a.positioning, a.space, a.line_axis, a.at, !a.unidirectional, &f);
+  const int n = io::write_heidenhain(a.output, t, a.o);
+  if (!a.quiet)
+    fmt::print(
+        "wrote {} ({} points; column {}: the compensation for traverse in +, mm; BACKLASH: {}). "
+        "Enter the table in the {} column of the *.CMA file and activate its line{}\n",
+        a.output, n, a.o.axis,
+        t.bidirectional() ? "forward - reverse, the measured reversal at each point"
+                          : "0, the same in both directions",
+        a.o.axis, t.bidirectional() ? "; the axis' own backlash setting must then be 0" : "");
+  return 0;
+}
+
+struct FanucArgs {
+  std::string positioning, space, output, line_axis = "x";
+  std::vector<double> at;
+  io::FanucOptions o;
+  bool quiet = false;
+};
+
+int run_export_fanuc(const FanucArgs& a) {
+  io::PositioningFile f;
+  const compensation::AxisTable t =
+      table_from(a.positioning, a.space, a.line_axis, a.at, false, &f);
+  const io::FanucTable ft = io::write_fanuc(a.output, t, a.o);
+  if (!a.quiet) {
+    const double ref = std::isnan(a.o.reference) ? t.position.front() : a.o.reference;
+    fmt::print(
+        "wrote {}: axis {} ({}), points {} to {}, reference position ({:g} mm of the table) at "
+        "point {}, interval {:g} mm, magnification {}\n"
+        "parameters: 3620 = {}, 3621 = {}, 3622 = {}, 3623 = {}, 3624 = {:g}\n",
+        a.output, a.o.axis_number, a.o.axis_name, ft.negative_number, ft.positive_number, ref,
+        ft.reference_number, ft.interval, ft.magnification, ft.reference_number, ft.negative_number,
+        ft.positive_number, ft.magnification, ft.interval);
+    const double b = f.result.iso.B_mean;
+    if (!std::isnan(b))
+      fmt::print(
+          "mean reversal {:.4f} mm: set parameter 1851 (backlash compensation) of axis {} to {} "
+          "detection units (the table holds the mean of both directions)\n",
+          b, a.o.axis_number, std::lround(-b / a.o.detection_unit));
+    fmt::print(
+        "the compensation is zero at the reference position: reference the axis (G28) after "
+        "loading, and turn the control off and on after changing 3620 to 3624\n");
+  }
+  return 0;
+}
+
 }  // namespace
 
 std::vector<Command> add_space_commands(CLI::App& app) {
@@ -263,7 +344,10 @@ std::vector<Command> add_space_commands(CLI::App& app) {
   c->add_flag("--quiet,-q", ca->quiet, "print nothing on success");
   out.push_back({c, [ca] { return run_compensate(*ca); }});
 
-  auto* ex = app.add_subcommand("export", "Export an error space for a controller");
+  auto* ex = app.add_subcommand(
+      "export",
+      "Compensation tables for controllers (LinuxCNC, Sinumerik, HEIDENHAIN, FANUC) from a "
+      "positioning result or an error space, or an error space as CSV");
   ex->require_subcommand(1);
   auto ea = std::make_shared<ExportArgs>();
   c = ex->add_subcommand(
@@ -326,6 +410,82 @@ std::vector<Command> add_space_commands(CLI::App& app) {
   c->add_option("--output,-o", sn->output, "part program to write")->required();
   c->add_flag("--quiet,-q", sn->quiet, "print nothing on success");
   out.push_back({c, [sn] { return run_export_sinumerik(*sn); }});
+
+  auto hh = std::make_shared<HeidenhainArgs>();
+  c = ex->add_subcommand(
+      "heidenhain",
+      "HEIDENHAIN nonlinear axis error compensation: a compensation value table (*.COM: NR, "
+      "AXISPOS in mm from the machine datum, the axis' column with the compensation for "
+      "traverse in +, mm, and BACKLASH = forward - reverse, positive for lost motion), at most "
+      "256 points, from a positioning result (both directions; --unidirectional for the mean) or "
+      "an error space.\n"
+      "Example: trueaxis export heidenhain --positioning positioning.json --axis X -o X.COM");
+  c->add_option("--positioning", hh->positioning, "positioning JSON ('trueaxis positioning')")
+      ->check(CLI::ExistingFile);
+  c->add_option("--space", hh->space, "or a space JSON: the error along --line through --at")
+      ->check(CLI::ExistingFile);
+  c->add_option("--line", hh->line_axis, "with --space: the axis of the grid line")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  c->add_option("--at", hh->at, "with --space: the line's other coordinates x,y,z, mm")
+      ->delimiter(',');
+  c->add_flag("--unidirectional", hh->unidirectional,
+              "with --positioning: the bidirectional mean, BACKLASH 0 (the reversal left to the "
+              "axis' backlash setting)");
+  c->add_option("--axis", hh->o.axis, "the axis' column name (as in CfgAxes/axisList)")
+      ->capture_default_str();
+  c->add_option("--name", hh->o.name, "table name in the BEGIN line (default: the file's name)");
+  c->add_option("--output,-o", hh->output, "table to write (*.COM)")->required();
+  c->add_flag("--quiet,-q", hh->quiet, "print nothing on success");
+  out.push_back({c, [hh] { return run_export_heidenhain(*hh); }});
+
+  auto fa = std::make_shared<FanucArgs>();
+  c = ex->add_subcommand(
+      "fanuc",
+      "FANUC pitch error compensation: the parameters 3620 (reference point number), 3621/3622 "
+      "(farthest points), 3623 (magnification), 3624 (interval, mm) and the incremental value of "
+      "every point (N10000 + point, detection units, -128..127), as FANUC tape data. One curve "
+      "for both directions, zero at the reference position; the mean reversal is printed for "
+      "parameter 1851.\n"
+      "Example: trueaxis export fanuc --positioning positioning.json --axis-number 1 "
+      "--reference 800 -o x-pitch.txt");
+  c->add_option("--positioning", fa->positioning, "positioning JSON ('trueaxis positioning')")
+      ->check(CLI::ExistingFile);
+  c->add_option("--space", fa->space, "or a space JSON: the error along --line through --at")
+      ->check(CLI::ExistingFile);
+  c->add_option("--line", fa->line_axis, "with --space: the axis of the grid line")
+      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->capture_default_str();
+  c->add_option("--at", fa->at, "with --space: the line's other coordinates x,y,z, mm")
+      ->delimiter(',');
+  c->add_option("--axis-number", fa->o.axis_number, "the axis' number in the parameters (A1...)")
+      ->check(CLI::Range(1, 32))
+      ->capture_default_str();
+  c->add_option("--axis", fa->o.axis_name, "the axis' name (for the file's comment)")
+      ->capture_default_str();
+  c->add_option("--reference", fa->o.reference,
+                "where the reference position lies, mm in the table's coordinates (default: the "
+                "lowest point)");
+  c->add_option("--interval", fa->o.interval,
+                "distance between points, mm (default: the mean target spacing); the table is "
+                "interpolated linearly onto them");
+  c->add_option("--first-number", fa->o.first_number,
+                "the farthest negative point's number (3621); other axes' points must not overlap")
+      ->capture_default_str();
+  c->add_option("--max-number", fa->o.max_number, "the control's highest point number")
+      ->capture_default_str();
+  c->add_option("--magnification", fa->o.magnification,
+                "parameter 3623, 1..100 (default 0: the smallest that fits)")
+      ->check(CLI::Range(0, 100))
+      ->capture_default_str();
+  c->add_option("--detection-unit", fa->o.detection_unit,
+                "the axis' detection unit, mm (IS-B: 0.001)")
+      ->capture_default_str();
+  c->add_option("--max-feedrate", fa->o.max_feedrate,
+                "the axis' maximum feedrate, mm/min: the interval must be at least this / 7500");
+  c->add_option("--output,-o", fa->output, "file to write")->required();
+  c->add_flag("--quiet,-q", fa->quiet, "print nothing on success");
+  out.push_back({c, [fa] { return run_export_fanuc(*fa); }});
 
   auto csv_space = std::make_shared<std::string>(), csv_out = std::make_shared<std::string>();
   c = ex->add_subcommand("csv",

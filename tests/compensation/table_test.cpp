@@ -3,6 +3,7 @@
 // bidirectional table the reversal too, the unidirectional one not.
 #include "trueaxis/compensation/table.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -199,4 +200,211 @@ TEST(CompensationTable, SinumerikLecRoundTripsResamplesAndRefuses) {
             "x.mpf:3:30: modulo tables (rotary axes) are not read");
   EXPECT_EQ(err("$AA_ENC_COMP[0,0,X1]=0\n"),
             "x.mpf: a compensation table needs at least two points");
+}
+
+TEST(CompensationTable, HeidenhainComTableRoundTripsBothDirectionsAndRefuses) {
+  const std::string dir = test::temp_dir();
+  // Forward and reverse differ: the BACKLASH column carries forward − reverse.
+  const compensation::AxisTable t{
+      {-90, -40, 10, 60}, {3e-3, -1.5e-3, 0, 2.5e-3}, {1e-3, -3.5e-3, -2e-3, 0.5e-3}};
+  io::HeidenhainOptions o;
+  o.axis = "y";
+  EXPECT_EQ(io::write_heidenhain(dir + "/y.com", t, o), 4);
+  const std::string text = test::read_file(dir + "/y.com");
+  EXPECT_EQ(text.substr(0, text.find('\n')), "BEGIN Y.COM MM");
+  EXPECT_NE(text.find("\n1     -40.0000        -0.0015         +0.0020\n"), std::string::npos)
+      << text;
+  std::string axis;
+  const auto back = io::read_heidenhain(dir + "/y.com", &axis);
+  EXPECT_EQ(axis, "Y");
+  ASSERT_EQ(back.position.size(), 4u);
+  for (std::size_t i = 0; i < 4; ++i) {
+    EXPECT_NEAR(back.position[i], t.position[i], 1e-12);
+    EXPECT_NEAR(back.forward[i], t.forward[i], 0.5e-7);
+    EXPECT_NEAR(back.reverse[i], t.reverse[i], 1e-7);
+  }
+  // The controller's limit: 256 points per table.
+  compensation::AxisTable big;
+  for (int i = 0; i < 257; ++i) {
+    big.position.push_back(i);
+    big.forward.push_back(0);
+    big.reverse.push_back(0);
+  }
+  EXPECT_NE(test::error_of([&] {
+              io::write_heidenhain(dir + "/big.com", big);
+            }).find("at most 256 points; the table has 257"),
+            std::string::npos);
+  o.axis = "AXISPOS";
+  EXPECT_NE(test::error_of([&] { io::write_heidenhain(dir + "/b.com", t, o); }).find("not an axis"),
+            std::string::npos);
+  auto err = [](const std::string& s, std::string axis = "") {
+    return test::error_of([&] { io::parse_heidenhain(s, "x.com", &axis); });
+  };
+  const std::string head = "BEGIN X.COM MM\nNR    AXISPOS   X        BACKLASH\n";
+  EXPECT_EQ(err(head + "0 0 +0.001 0\n1 50 -0.002 +0.001\n[END]\n"), "(no error)");
+  // Two axis columns (sag of Z and pitch of Y over the same positions): say which one.
+  const std::string two = "BEGIN YZ.COM MM\nNR AXISPOS Y Z\n0 0 0 0\n1 50 0.001 0.002\n[END]\n";
+  EXPECT_EQ(err(two), "x.com:2:14: the table compensates several axes (Y, Z): say which to read");
+  std::string z = "Z";
+  EXPECT_NEAR(io::parse_heidenhain(two, "x.com", &z).forward[1], 0.002, 1e-15);
+  EXPECT_NEAR(
+      io::parse_heidenhain("BEGIN X.COM INCH\nNR AXISPOS X\n0 0 0\n1 2 0.0001\n[END]\n", "x.com")
+          .forward[1],
+      0.00254, 1e-15);
+  EXPECT_EQ(err("NR AXISPOS X\n"),
+            "x.com:1:1: 'NR AXISPOS X': expected 'BEGIN NAME.COM MM' (a HEIDENHAIN table)");
+  EXPECT_EQ(err("BEGIN X.COM MM\nNR X\n"),
+            "x.com:2:1: the column names need NR and AXISPOS (a compensation value table)");
+  EXPECT_EQ(err(head + "0 0 +0.001 0\n2 50 -0.002 0\n[END]\n"),
+            "x.com:4:1: NR 2: the points are numbered 0, 1, 2, ... (expected 1)");
+  EXPECT_EQ(err(head + "0 0 +0.001 0\n1 0 -0.002 0\n[END]\n"),
+            "x.com:4:3: AXISPOS 0 does not increase");
+  EXPECT_EQ(err(head + "0 0 +0.001\n"), "x.com:3:11: 3 fields, the table has 4 columns");
+  EXPECT_EQ(err(head + "0 0 +0.00l 0\n"), "x.com:3:5: '+0.00l' is not a number");
+  EXPECT_EQ(err(head + "0 0 +0.001 0\n1 50 -0.002 0\n"),
+            "x.com: no [END] line (the table is cut short)");
+  EXPECT_EQ(err(head + "0 0 +0.001 0\n1 50 -0.002 0\n[END]\nNR\n"), "x.com:6:1: text after [END]");
+  EXPECT_EQ(err("BEGIN X.COM FEET\n"), "x.com:1:13: unit 'FEET': MM or INCH");
+  EXPECT_EQ(err(head + "0 0 +0.001 0\n[END]\n"),
+            "x.com: a compensation table needs at least two points");
+  std::string text257 = head;
+  for (int i = 0; i < 257; ++i) text257 += fmt::format("{} {} 0 0\n", i, i);
+  EXPECT_EQ(err(text257 + "[END]\n"),
+            "x.com:259:1: more than 256 points: the control takes at most 256");
+}
+
+TEST(CompensationTable, FanucPitchErrorDataReproducesTheManualsExample) {
+  // FANUC's parameter manual (pitch error compensation, example 1): stroke -400 .. +800 mm,
+  // interval 50 mm, reference position at 0 with point number 40: the farthest points are 33
+  // (40 - 400/50 + 1) and 56 (40 + 800/50).
+  const std::string dir = test::temp_dir();
+  compensation::AxisTable stroke{{-400, 800}, {0, 0}, {0, 0}};
+  io::FanucOptions o;
+  o.reference = 0;
+  o.interval = 50;
+  o.first_number = 33;
+  io::FanucTable ft = io::write_fanuc(dir + "/s.txt", stroke, o);
+  EXPECT_EQ(ft.reference_number, 40);
+  EXPECT_EQ(ft.negative_number, 33);
+  EXPECT_EQ(ft.positive_number, 56);
+  // Its compensation values at points 33 .. 48 over -400 .. +400 mm: the absolute compensation
+  // they add up to, written as a table, gives them back exactly.
+  const std::vector<int> manual = {2, 1, 1, -2, 0, -1, 0, -1, 2, 1, 0, -1, -1, -2, 0, 1};
+  compensation::AxisTable t;
+  for (int n = 32; n <= 48; ++n) {
+    int a = 0;  // detection units (um), zero at point 40
+    for (int k = 41; k <= n; ++k) a += manual[static_cast<std::size_t>(k - 33)];
+    for (int k = n + 1; k <= 40; ++k) a -= manual[static_cast<std::size_t>(k - 33)];
+    t.position.push_back((n - 40) * 50.0);
+    t.forward.push_back(a * 1e-3);
+  }
+  t.reverse = t.forward;
+  ft = io::write_fanuc(dir + "/x.txt", t, o);
+  EXPECT_EQ(ft.magnification, 1);
+  EXPECT_EQ(ft.values, manual);
+  const std::string text = test::read_file(dir + "/x.txt");
+  EXPECT_NE(text.find("\nN3620A1P40\nN3621A1P33\nN3622A1P48\nN3623A1P1\nN3624A1P50.0\nN10033P2\n"),
+            std::string::npos)
+      << text;
+  io::FanucTable raw;
+  const auto back = io::read_fanuc(dir + "/x.txt", o, &raw);
+  EXPECT_EQ(raw.values, manual);
+  ASSERT_EQ(back.position.size(), t.position.size());
+  for (std::size_t i = 0; i < t.position.size(); ++i) {
+    EXPECT_DOUBLE_EQ(back.position[i], t.position[i]);
+    EXPECT_NEAR(back.forward[i], t.forward[i], 1e-12);
+  }
+}
+
+TEST(CompensationTable, FanucChoosesTheMagnificationAndRefusesWhatTheControlWould) {
+  const std::string dir = test::temp_dir();
+  // 0.3 mm between points 10 mm apart: 300 detection units, more than 127: magnification 3.
+  const compensation::AxisTable steep{{0, 10, 20, 30}, {0, 0.3, 0.1, 0.2}, {0, 0.3, 0.1, 0.2}};
+  io::FanucOptions o;
+  io::FanucTable ft = io::write_fanuc(dir + "/f.txt", steep, o);
+  EXPECT_EQ(ft.magnification, 3);
+  const auto back = io::read_fanuc(dir + "/f.txt", o);
+  for (std::size_t i = 1; i < back.position.size(); ++i)
+    EXPECT_NEAR(back.forward[i], steep.forward[i - 1], 1.5e-3 + 1e-12);  // half of 3 units
+  const compensation::AxisTable bi{{0, 10}, {1e-3, 1e-3}, {2e-3, 2e-3}};
+  EXPECT_NE(test::error_of([&] { io::write_fanuc(dir + "/b.txt", bi); }).find("parameter 1851"),
+            std::string::npos);
+  o.max_feedrate = 30000;  // mm/min: the interval must be at least 4 mm
+  o.interval = 2;
+  EXPECT_NE(test::error_of([&] {
+              io::write_fanuc(dir + "/b.txt", steep, o);
+            }).find("below the control's minimum, the maximum feedrate / 7500 = 4 mm"),
+            std::string::npos);
+  o = {};
+  o.interval = 0.01;
+  EXPECT_NE(test::error_of([&] {
+              io::write_fanuc(dir + "/b.txt", steep, o);
+            }).find("beyond the control's highest point number 1023"),
+            std::string::npos);
+  o = {};
+  const compensation::AxisTable cliff{{0, 10}, {0, 20}, {0, 20}};  // 20 mm over 10 mm
+  EXPECT_NE(test::error_of([&] {
+              io::write_fanuc(dir + "/b.txt", cliff, o);
+            }).find("even at magnification 100"),
+            std::string::npos);
+  o.magnification = 2;
+  EXPECT_NE(test::error_of([&] {
+              io::write_fanuc(dir + "/b.txt", steep, o);
+            }).find("at magnification 2 a point's value leaves -128..127"),
+            std::string::npos);
+  auto err = [](const std::string& s) {
+    return test::error_of([&] { io::parse_fanuc(s, "f.txt"); });
+  };
+  const std::string p = "%\nN3620A1P1\nN3621A1P0\nN3622A1P2\nN3623A1P1\nN3624A1P10.0\n";
+  EXPECT_EQ(err(p + "N10000P1\nN10001P-2\nN10002P3\n%\n"), "(no error)");
+  EXPECT_EQ(err(p + "N10000P1\nN10002P3\n%\n"), "f.txt: point 1 (N10001) has no value");
+  EXPECT_EQ(err(p + "N10000P1\nN10001P200\nN10002P3\n%\n"),
+            "f.txt:8:8: point value 200: a whole number from -128 to 127");
+  EXPECT_EQ(err(p + "N10000P1\nN10000P2\n%\n"), "f.txt:8:1: point 0 is given twice");
+  EXPECT_EQ(err(p + "N10000P1 (FIRST\n"), "f.txt:7:10: a comment '(' is not closed on its line");
+  EXPECT_EQ(err(p + "X10\n"), "f.txt:7:1: expected 'N'");
+  EXPECT_EQ(err(p + "N3625P10\n"), "f.txt:7:1: parameter 3625 needs an axis address (A1, A2, ...)");
+  EXPECT_EQ(err(p + "N10000P1\nN10001P1\nN10002P1\n%\nN1P1\n"),
+            "f.txt:11:1: text after the closing '%'");
+  EXPECT_EQ(err("%\nN3620A1P1\nN10000P1\n%\n"), "f.txt: parameter 3621 for axis 1 is missing");
+  EXPECT_EQ(err("%\nN3620A1P1\nN3621A1P2\nN3622A1P3\nN3624A1P10.0\n%\n"),
+            "f.txt: the points must satisfy 3621 <= 3620 <= 3622 with 3621 < 3622 (got 2, 1, 3)");
+  EXPECT_EQ(err("%\nN3620A1P1.5\n"), "f.txt:2:9: parameter 3620: a whole number from 0");
+}
+
+TEST(CompensationTable, HeidenhainAndFanucTablesCompensateTheVirtualMachine) {
+  sim::MachineOptions mo;
+  mo.seed = 21;
+  mo.positioning = 40e-6;
+  const sim::Machine m = sim::random_machine(mo);
+  sim::PositioningRunOptions o;
+  for (int i = 0; i <= 16; ++i) o.targets.push_back(50.0 * i);
+  o.backlash = 4e-3;
+  o.noise = 0.3e-3;
+  o.seed = 7;
+  const auto before = positioning::evaluate(sim::simulate_positioning(m, o).readings);
+  ASSERT_GT(before.iso.E, 10e-3);
+  const std::string dir = test::temp_dir();
+  auto rerun = [&](const compensation::AxisTable& table) {
+    sim::PositioningRunOptions c = o;
+    c.seed = 8;
+    c.compensation = [&](double p, Direction d) { return table.correction(p, d); };
+    return positioning::evaluate(sim::simulate_positioning(m, c).readings);
+  };
+  const double sigma_mean = o.noise * std::sqrt(2.0 / 5);
+  // HEIDENHAIN: both directions in one table (the BACKLASH column): the reversal goes too.
+  io::write_heidenhain(dir + "/x.com", compensation::from_positioning(before, true));
+  const auto heidenhain = rerun(io::read_heidenhain(dir + "/x.com"));
+  EXPECT_LT(heidenhain.iso.E, 2 * 4.5 * sigma_mean);
+  EXPECT_NEAR(heidenhain.iso.B_mean, 0, 4.5 * sigma_mean / std::sqrt(17.0));
+  // FANUC: one curve, whole micrometres, zero at the reference position (the first target):
+  // the mean bidirectional deviation goes, the reversal stays for parameter 1851.
+  io::FanucOptions fo;
+  io::write_fanuc(dir + "/x.txt", compensation::from_positioning(before, false), fo);
+  fo.reference = 0;
+  const auto fanuc = rerun(io::read_fanuc(dir + "/x.txt", fo));
+  const double rounding = 0.5e-3;  // mm: half a detection unit on each side of a difference
+  EXPECT_LT(fanuc.iso.M, 2 * 4.5 * sigma_mean + 2 * rounding);
+  EXPECT_NEAR(fanuc.iso.B_mean, -o.backlash, 4.5 * sigma_mean / std::sqrt(17.0));
+  EXPECT_LT(fanuc.iso.A, before.iso.A / 2);
 }
