@@ -13,16 +13,19 @@
 #include "trueaxis/ballgauge/ballgauge.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/ballgauge/parametric.hpp"
+#include "trueaxis/compensation/table.hpp"
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/guideway/guideway.hpp"
 #include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/controller.hpp"
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/files.hpp"
 #include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/renishaw.hpp"
 #include "trueaxis/io/scan.hpp"
 #include "trueaxis/io/space.hpp"
 #include "trueaxis/io/surface.hpp"
@@ -286,10 +289,34 @@ int run_demo(const DemoOptions& o) {
       hi = std::max({hi, run.up[i], run.down[i]});
       lo = std::min({lo, run.up[i], run.down[i]});
     }
+    // Renishaw's software writes deviations with its material compensation applied: the
+    // evaluation's readings, corrected to 20 °C.
+    io::write_rtl((dir / "runs.rtl").string(), pr.readings, {{"Axis", "X"}});
     say(
         fmt::format("positioning: X, 17 targets x 5 cycles, ISO 230-2: A {:.2f} um, E {:.2f} um "
-                    "(noise-free truth {:.2f}), B mean {:.2f} um (backlash 3) -> runs.csv",
+                    "(noise-free truth {:.2f}), B mean {:.2f} um (backlash 3) -> runs.csv, "
+                    "runs.rtl",
                     pr.iso.A * 1e3, pr.iso.E * 1e3, (hi - lo) * 1e3, pr.iso.B_mean * 1e3));
+    // Compensation tables for the controllers, and the axis rerun with the HEIDENHAIN one (both
+    // directions) to show what it removes.
+    const auto both = compensation::from_positioning(pr, true);
+    const auto mean = compensation::from_positioning(pr, false);
+    io::write_linuxcnc((dir / "x-positioning.comp").string(), both, 1);
+    io::write_heidenhain((dir / "X.COM").string(), both);
+    io::write_fanuc((dir / "x-pitch.txt").string(), mean);
+    io::SinumerikOptions so;
+    io::write_sinumerik((dir / "x_lec.mpf").string(), mean, so);
+    sim::PositioningRunOptions pc = po;
+    pc.seed = po.seed + 1;
+    const auto com = io::read_heidenhain((dir / "X.COM").string());
+    pc.compensation = [&com](double p, positioning::Direction d) { return com.correction(p, d); };
+    const auto after = positioning::evaluate(sim::simulate_positioning(machine, pc).readings);
+    say(fmt::format(
+        "positioning: compensated with X.COM (HEIDENHAIN), a new run: A {:.2f} -> {:.2f} um, E "
+        "{:.2f} -> {:.2f} um, B mean {:.2f} -> {:.2f} um (tables: x-positioning.comp, X.COM, "
+        "x-pitch.txt, x_lec.mpf)",
+        pr.iso.A * 1e3, after.iso.A * 1e3, pr.iso.E * 1e3, after.iso.E * 1e3, pr.iso.B_mean * 1e3,
+        after.iso.B_mean * 1e3));
     auto ps = report::positioning_section("Positioning accuracy of the X axis (ISO 230-2)", pr,
                                           positioning::Standard::Iso230_2);
     ps.intro_html =
@@ -299,9 +326,16 @@ int run_demo(const DemoOptions& o) {
             "noise, and an axis warming from {:.1f} to {:.1f} °C whose expansion the evaluation "
             "corrects to 20 °C. The noise-free truth gives E = {:.2f} µm and B̄ = −3 µm; the "
             "evaluation finds E = {:.2f} µm and B̄ = {:.2f} µm. Try <code>trueaxis positioning "
-            "--input runs.csv --tolerance A=20,R=6 --report positioning.html</code>.</p>",
+            "--input runs.csv --tolerance A=20,R=6 --report positioning.html</code> (or "
+            "<code>--input runs.rtl</code>, the same runs as Renishaw's .rtl file).</p>"
+            "<p>Compensation tables from this result: LinuxCNC (<code>x-positioning.comp</code>) "
+            "and HEIDENHAIN (<code>X.COM</code>) carry both directions, Sinumerik LEC "
+            "(<code>x_lec.mpf</code>) and FANUC pitch error data (<code>x-pitch.txt</code>) the "
+            "mean of both. The axis compensated with <code>X.COM</code> and measured again: A "
+            "{:.2f} → {:.2f} µm, E {:.2f} → {:.2f} µm, B̄ {:.2f} → {:.2f} µm.</p>",
             po.noise * 1e3, po.temperature_start, po.temperature_end, (hi - lo) * 1e3,
-            pr.iso.E * 1e3, pr.iso.B_mean * 1e3) +
+            pr.iso.E * 1e3, pr.iso.B_mean * 1e3, pr.iso.A * 1e3, after.iso.A * 1e3, pr.iso.E * 1e3,
+            after.iso.E * 1e3, pr.iso.B_mean * 1e3, after.iso.B_mean * 1e3) +
         ps.intro_html;
     sections.push_back(std::move(ps));
   }

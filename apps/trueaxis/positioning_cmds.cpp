@@ -3,10 +3,12 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 #include "commands.hpp"
@@ -15,6 +17,7 @@
 #include "trueaxis/io/controller.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/positioning.hpp"
+#include "trueaxis/io/renishaw.hpp"
 #include "trueaxis/positioning/positioning.hpp"
 #include "trueaxis/report/positioning.hpp"
 #include "trueaxis/sim/machine.hpp"
@@ -36,8 +39,25 @@ double parse_number(std::string_view s, const std::string& what) {
 
 std::vector<double> parse_targets(const std::string& s);
 
+bool ends_with_rtl(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext == ".rtl";
+}
+
+// A Renishaw .rtl file: by its extension, or by its first line ("HEADER::").
+bool is_rtl(const std::string& path) {
+  if (ends_with_rtl(path)) return true;
+  std::ifstream in(path, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return io::looks_like_rtl(head);
+}
+
 struct PositioningArgs {
-  std::string input, log, log_targets, output = "positioning.json", standard = "iso230-2", report;
+  std::string input, log, log_targets, output = "positioning.json", standard = "iso230-2", report,
+                                       run_directions = "order";
   positioning::LogOptions lo;
   double dwell_tolerance_um = 2;
   std::vector<std::string> tolerances;
@@ -69,6 +89,7 @@ int run_positioning(const PositioningArgs& a) {
   if (!a.log.empty() && a.log_targets.empty())
     throw CLI::ValidationError("--log needs --targets (the positions the axis stopped at)");
   io::PositioningRuns runs;
+  std::vector<std::string> source_warnings;
   std::string source = a.input;
   if (!a.log.empty()) {
     source = a.log;
@@ -92,7 +113,24 @@ int run_positioning(const PositioningArgs& a) {
       throw Error(fmt::format("{}: no stop of {:g} s within {:g} um lies at a target", a.log,
                               lo.dwell_time, a.dwell_tolerance_um));
     runs.readings = std::move(found.readings);
+  } else if (is_rtl(a.input)) {
+    io::RtlOptions ro;
+    ro.directions = a.run_directions == "+-"   ? io::RunDirections::UpDown
+                    : a.run_directions == "-+" ? io::RunDirections::DownUp
+                    : a.run_directions == "+"  ? io::RunDirections::AllUp
+                    : a.run_directions == "-"  ? io::RunDirections::AllDown
+                                               : io::RunDirections::FromOrder;
+    io::RtlFile rtl = io::read_rtl(a.input, ro);
+    if (!a.quiet)
+      fmt::print("{}: Renishaw .rtl, {} targets, {} runs, {} readings\n", a.input,
+                 rtl.targets.size(), rtl.run_count, rtl.runs.readings.size());
+    source_warnings = std::move(rtl.warnings);
+    for (const auto& w : source_warnings)
+      std::fprintf(stderr, "trueaxis positioning: warning: %s\n", w.c_str());
+    runs = std::move(rtl.runs);
   } else {
+    if (a.run_directions != "order")
+      throw CLI::ValidationError("--run-directions belongs to a Renishaw .rtl input");
     runs = io::read_runs(a.input);
   }
   positioning::Options o = a.o;
@@ -104,6 +142,7 @@ int run_positioning(const PositioningArgs& a) {
   } catch (const Error& e) {
     throw Error(fmt::format("{}: {}", source, e.what()));
   }
+  r.warnings.insert(r.warnings.begin(), source_warnings.begin(), source_warnings.end());
   const bool vdi = a.standard == "vdi3441";
   const auto verdicts = positioning::check(r, tol);
   const auto standard = vdi ? positioning::Standard::Vdi3441 : positioning::Standard::Iso230_2;
@@ -167,6 +206,7 @@ struct SimArgs {
   std::string axis = "x", targets, output = "runs.csv", truth, temperature, compensation, log,
               comp_format = "linuxcnc";
   int comp_type = 1;
+  io::FanucOptions fanuc;
   std::vector<double> at;
   sim::PositioningRunOptions o;
   double backlash_um = 0, noise_um = 0, drift_um = 0, growth_um_per_m = 0, expansion_ppm = 11.5;
@@ -202,8 +242,17 @@ int run_simulate(const SimArgs& a) {
   }
   compensation::AxisTable table;
   if (!a.compensation.empty()) {
-    table = a.comp_format == "sinumerik" ? io::read_sinumerik(a.compensation)
-                                         : io::read_linuxcnc(a.compensation, a.comp_type);
+    if (a.comp_format == "sinumerik") {
+      table = io::read_sinumerik(a.compensation);
+    } else if (a.comp_format == "heidenhain") {
+      table = io::read_heidenhain(a.compensation);
+    } else if (a.comp_format == "fanuc") {
+      io::FanucOptions fo = a.fanuc;
+      if (std::isnan(fo.reference)) fo.reference = o.targets.front();
+      table = io::read_fanuc(a.compensation, fo);
+    } else {
+      table = io::read_linuxcnc(a.compensation, a.comp_type);
+    }
     o.compensation = [&table](double p, positioning::Direction d) {
       return table.correction(p, d);
     };
@@ -216,7 +265,25 @@ int run_simulate(const SimArgs& a) {
     io::write_log(a.log, sl.log);
     run = std::move(sl.run);
   }
-  io::write_runs(a.output, run.readings);
+  if (ends_with_rtl(a.output)) {
+    std::string ax = a.axis;
+    for (char& ch : ax) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
+    // An .rtl file carries deviations with the laser software's material compensation applied
+    // and no temperatures: correct them to 20 C as that software would, with the axis'
+    // expansion coefficient about the laser's datum (the first target).
+    std::vector<positioning::Reading> readings = run.readings;
+    if (!std::isnan(o.temperature_start)) {
+      positioning::Options eo;
+      eo.expansion_coefficient = o.expansion_coefficient;
+      eo.datum = o.targets.front();
+      eo.allow_incomplete = true;
+      readings = positioning::evaluate(run.readings, eo).readings;
+    }
+    io::write_rtl(a.output, readings,
+                  {{"Machine", m.name.empty() ? "virtual machine" : m.name}, {"Axis", ax}});
+  } else {
+    io::write_runs(a.output, run.readings);
+  }
   const std::string truth = a.truth.empty() ? truth_beside(a.output) : a.truth;
   const Eigen::VectorXd g = run.geometric * 1e3, up = run.up * 1e3, down = run.down * 1e3;
   io::write_csv(truth, {"target_mm", "geometric_um", "up_um", "down_um"},
@@ -270,8 +337,18 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
                  "the direction of approach; interpolated linearly)")
       ->check(CLI::ExistingFile);
   sc->add_option("--comp-format", sa->comp_format,
-                 "the table's format: linuxcnc (COMP_FILE) or sinumerik (LEC part program)")
-      ->check(CLI::IsMember({"linuxcnc", "sinumerik"}))
+                 "the table's format: linuxcnc (COMP_FILE), sinumerik (LEC part program), "
+                 "heidenhain (*.COM table) or fanuc (pitch error data)")
+      ->check(CLI::IsMember({"linuxcnc", "sinumerik", "heidenhain", "fanuc"}))
+      ->capture_default_str();
+  sc->add_option("--comp-reference", sa->fanuc.reference,
+                 "a FANUC table's reference position on the axis, mm (default: the first "
+                 "target, where 'export fanuc' puts it by default)");
+  sc->add_option("--comp-axis-number", sa->fanuc.axis_number,
+                 "which axis' parameters of a FANUC file to read (A1, A2, ...)")
+      ->capture_default_str();
+  sc->add_option("--comp-detection-unit", sa->fanuc.detection_unit,
+                 "a FANUC axis' detection unit, mm")
       ->capture_default_str();
   sc->add_option("--comp-type", sa->comp_type, "a LinuxCNC table's COMP_FILE_TYPE (0 or 1)")
       ->check(CLI::IsMember({0, 1}))
@@ -280,7 +357,9 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
                  "also write the runs as an interferometer log (time_s, reading_mm; 10 samples "
                  "per second, 1000 mm/min, 3 s stops, 5 mm overrun)");
   sc->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
-  sc->add_option("--output,-o", sa->output, "runs CSV to write")->capture_default_str();
+  sc->add_option("--output,-o", sa->output,
+                 "runs CSV to write (a name ending in .rtl: Renishaw's .rtl text file)")
+      ->capture_default_str();
   sc->add_option("--truth", sa->truth, "truth CSV; default: the output's name with -truth");
   sc->add_flag("--quiet,-q", sa->quiet, "print nothing on success");
 
@@ -292,12 +371,22 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       "Ps, U).\nruns.csv: target_mm,cycle,direction,deviation_um (direction '+' for an approach "
       "moving in +, '-' for one moving in -; deviation = actual - target), optional "
       "material_temp_c (then deviations are corrected to 20 C for the axis' expansion) and "
-      "air_temp_c (recorded). Rows in any order.\nParameters the runs cannot define (one "
+      "air_temp_c (recorded). Rows in any order. Renishaw's .rtl files are read too (each "
+      "run's direction from the order it lists its targets, or --run-directions).\nParameters the "
+      "runs cannot define (one "
       "direction only, a single cycle) are written as null and named, never guessed.\nExit "
       "status 1 when a parameter exceeds its --tolerance (the result is still written).\n"
       "Example: trueaxis positioning --input runs.csv --tolerance A=12,R=4 --output "
       "positioning.json");
-  c->add_option("--input,-i", a->input, "runs CSV")->check(CLI::ExistingFile);
+  c->add_option("--input,-i", a->input,
+                "runs CSV, or a Renishaw .rtl file (laser software's export: targets in mm, "
+                "deviations in um)")
+      ->check(CLI::ExistingFile);
+  c->add_option("--run-directions", a->run_directions,
+                "with an .rtl file: how its runs went. order: from the order each run lists its "
+                "targets (default); +-: odd runs '+', even '-'; -+; + or -: all one way")
+      ->check(CLI::IsMember({"order", "+-", "-+", "+", "-"}))
+      ->capture_default_str();
   c->add_option("--log", a->log,
                 "or an interferometer log (time_s, reading_mm): the readings are the stops at "
                 "--targets, found by dwell")

@@ -6,7 +6,10 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <cctype>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <utility>
@@ -14,6 +17,7 @@
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/positioning.hpp"
+#include "trueaxis/io/renishaw.hpp"
 #include "trueaxis/sim/positioning.hpp"
 
 namespace py = pybind11;
@@ -34,9 +38,39 @@ Eigen::VectorXd column(const std::vector<positioning::Target>& t, double positio
   return v;
 }
 
-// Readings from a runs.csv path or a dict of equally long sequences named like its columns.
-std::vector<positioning::Reading> readings_in(const py::object& runs) {
-  if (py::isinstance<py::str>(runs)) return io::read_runs(py::cast<std::string>(runs)).readings;
+// Readings from a runs.csv or Renishaw .rtl path, or a dict of equally long sequences named like
+// runs.csv's columns. An .rtl file's warnings go to `warnings`.
+std::vector<positioning::Reading> readings_in(const py::object& runs,
+                                              const std::string& run_directions,
+                                              std::vector<std::string>* warnings) {
+  if (py::isinstance<py::str>(runs)) {
+    const auto path = py::cast<std::string>(runs);
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    std::ifstream in(path, std::ios::binary);
+    std::string head(4096, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    if (ext == ".rtl" || io::looks_like_rtl(head)) {
+      io::RtlOptions o;
+      if (run_directions == "+-")
+        o.directions = io::RunDirections::UpDown;
+      else if (run_directions == "-+")
+        o.directions = io::RunDirections::DownUp;
+      else if (run_directions == "+")
+        o.directions = io::RunDirections::AllUp;
+      else if (run_directions == "-")
+        o.directions = io::RunDirections::AllDown;
+      else if (run_directions != "order")
+        throw Error(fmt::format("run_directions '{}': use 'order', '+-', '-+', '+' or '-'",
+                                run_directions));
+      auto f = io::read_rtl(path, o);
+      *warnings = std::move(f.warnings);
+      return std::move(f.runs.readings);
+    }
+    if (run_directions != "order") throw Error("run_directions belongs to a Renishaw .rtl file");
+    return io::read_runs(path).readings;
+  }
   if (!py::isinstance<py::dict>(runs))
     throw Error(
         "runs: give a runs.csv path or a dict with target_mm, cycle, direction, "
@@ -87,10 +121,11 @@ std::vector<positioning::Reading> readings_in(const py::object& runs) {
 py::dict evaluate(const py::object& runs, const std::string& standard,
                   const std::map<std::string, double>& tolerances, double expansion,
                   std::optional<double> datum, bool temperature_correction, bool allow_incomplete,
-                  const std::string& output) {
+                  const std::string& output, const std::string& run_directions) {
   if (standard != "iso230-2" && standard != "vdi3441")
     throw Error(fmt::format("standard '{}': use 'iso230-2' or 'vdi3441'", standard));
-  const auto readings = readings_in(runs);
+  std::vector<std::string> source_warnings;
+  const auto readings = readings_in(runs, run_directions, &source_warnings);
   positioning::Options o;
   o.expansion_coefficient = expansion * 1e-6;
   if (datum) o.datum = *datum;
@@ -101,6 +136,7 @@ py::dict evaluate(const py::object& runs, const std::string& standard,
     py::gil_scoped_release release;
     r = positioning::evaluate(readings, o);
   }
+  r.warnings.insert(r.warnings.begin(), source_warnings.begin(), source_warnings.end());
   std::vector<std::pair<std::string, double>> tol;
   for (const auto& [k, v] : tolerances) tol.emplace_back(k, v * 1e-3);
   const auto verdicts = positioning::check(r, tol);
@@ -153,10 +189,12 @@ void bind_positioning(py::module_& m) {
         py::arg("tolerances") = std::map<std::string, double>{}, py::arg("expansion") = 11.5,
         py::arg("datum") = py::none(), py::arg("temperature_correction") = true,
         py::arg("allow_incomplete") = false, py::arg("output") = "",
+        py::arg("run_directions") = "order",
         R"doc(Accuracy and repeatability of positioning of a linear axis by ISO 230-2:2014 or
 VDI/DGQ 3441.
 
-runs: a runs.csv path, or a dict of sequences target_mm, cycle, direction ('+'/'-'),
+runs: a runs.csv path, a Renishaw .rtl file (each run's direction from the order it lists its
+targets, or run_directions '+-' for odd runs '+', '-+', '+' or '-'), or a dict of sequences target_mm, cycle, direction ('+'/'-'),
 deviation_um (actual - target), optionally material_temp_c (then deviations are corrected to
 20 C with `expansion` in ppm/K about `datum` mm, default the lowest target) and air_temp_c.
 tolerances: {'A': 12, 'R': 4, ...} in µm. output: also write positioning.json.

@@ -173,6 +173,39 @@ expect_ok "$T" export sinumerik --positioning pos.json --axis Y1 --step 20 -o po
 head -2 pos_lec.mpf | tail -1 | grep -qx "CHANDATA(1)" && grep -q '^\$AA_ENC_COMP\[0,30,Y1\]=' pos_lec.mpf && grep -q "MD32450" out.txt && ok || bad "export sinumerik"
 expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --backlash 2 --noise 0.3 --seed 2 --compensation pos_lec.mpf --comp-format sinumerik -o pos-lec.csv
 expect_err "exceed MD38000" "$T" export sinumerik --positioning pos.json --step 0.1 --max-points 200 -o o.mpf
+# Renishaw's .rtl file: written by the simulator, read by positioning with the CSV's result.
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 -o pos.rtl
+head -1 pos.rtl | tr -d '\r' | grep -qx "HEADER::" && ok || bad "simulate positioning -o pos.rtl writes an .rtl file"
+expect_ok "$T" positioning --input pos.rtl --output pos-rtl.json
+grep -q "Renishaw .rtl, 16 targets, 10 runs, 160 readings" out.txt && ok || bad "positioning reads the .rtl: $(head -1 out.txt)"
+[ "$(grep -o '"E": [0-9.]*' pos-rtl.json | cut -c1-10)" = "$(grep -o '"E": [0-9.]*' pos.json | cut -c1-10)" ] && ok || bad "the .rtl gives the CSV's E"
+tr -d '\r' < pos.rtl | awk '/^Run Target Data:/{print; d=1; next} d{print | "sort -n -k1,1 -k2,2"; next} {print}' > pos-sorted.rtl
+expect_ok "$T" positioning --input pos-sorted.rtl --output pos-sorted.json
+grep -q "every run lists its targets in increasing order" err.txt && grep -q '"B": null' pos-sorted.json && ok || bad "a sorted .rtl is named as one-direction"
+expect_ok "$T" positioning --input pos-sorted.rtl --run-directions +- --output pos-sorted.json
+[ "$(grep -o '"E": [0-9.]*' pos-sorted.json | cut -c1-10)" = "$(grep -o '"E": [0-9.]*' pos.json | cut -c1-10)" ] && ok || bad "--run-directions +- reads a sorted .rtl"
+# A warming axis: the .rtl carries deviations corrected to 20 C (no temperatures), as laser
+# software writes them; the CSV carries the temperatures and is corrected on evaluation.
+for f in warm.csv warm.rtl; do
+  expect_ok "$T" simulate positioning --axis x --targets 0:50:800 --backlash 2 --noise 0.3 --temperature 21:22.5 -o $f
+  expect_ok "$T" positioning --input $f --output $f.json
+done
+[ "$(grep -o '"E": [0-9.]*' warm.rtl.json | cut -c1-10)" = "$(grep -o '"E": [0-9.]*' warm.csv.json | cut -c1-10)" ] && ok || bad "the .rtl of a warming axis is corrected to 20 C"
+sed 's/^Target-count : 16/Target-count : 17/' pos.rtl > pos-bad.rtl
+expect_err "pos-bad.rtl:8:1: Target-count is 17 (line 7) but the Targets list has 16" "$T" positioning --input pos-bad.rtl
+expect_err "belongs to a Renishaw .rtl input" "$T" positioning --input pos.csv --run-directions +-
+# HEIDENHAIN: both directions in one *.COM table; the virtual axis rerun with it.
+expect_ok "$T" export heidenhain --positioning pos.json --axis Y -o Y.COM
+head -2 Y.COM | tr -s ' ' | grep -qx "NR AXISPOS Y BACKLASH" && tail -1 Y.COM | grep -qx "\[END\]" && [ "$(wc -l <Y.COM)" -eq 19 ] && ok || bad "export heidenhain"
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 --seed 2 --compensation Y.COM --comp-format heidenhain -o pos-hh.csv
+expect_ok "$T" positioning --input pos-hh.csv --output pos-hh.json --tolerance B=1.5,E=2.5
+# FANUC: pitch error data with parameters 3620-3624 for axis 2; backlash for 1851 printed.
+expect_ok "$T" export fanuc --positioning pos.json --axis-number 2 --axis Y -o y-pitch.txt
+grep -qx "N3620A2P0" y-pitch.txt && grep -qx "N3624A2P40.0" y-pitch.txt && grep -q "parameter 1851" out.txt && ok || bad "export fanuc"
+expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 --seed 2 --compensation y-pitch.txt --comp-format fanuc --comp-axis-number 2 -o pos-fanuc.csv
+expect_ok "$T" positioning --input pos-fanuc.csv --output pos-fanuc.json --tolerance M=2.5
+expect_err "parameter 3620 for axis 1 is missing" "$T" simulate positioning --axis y --compensation y-pitch.txt --comp-format fanuc -o o.csv
+expect_err "below the control's minimum" "$T" export fanuc --positioning pos.json --interval 2 --max-feedrate 30000 -o o.txt
 printf '0 0 0\n10 0\n' > bad.comp
 expect_err "bad.comp:2:5: expected three numbers" "$T" simulate positioning --compensation bad.comp -o o.csv
 # Quadrant currents: the layout needs the QPD's gain (printed by the simulator).

@@ -1,5 +1,6 @@
-// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs) and the
-// LinuxCNC and Sinumerik compensation tables on arbitrary bytes.
+// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs), Renishaw
+// .rtl files and the LinuxCNC, Sinumerik, HEIDENHAIN and FANUC compensation tables on arbitrary
+// bytes.
 #include <cstdint>
 
 #include "fuzz_util.hpp"
@@ -10,6 +11,7 @@
 #include "trueaxis/io/machine.hpp"
 #include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/renishaw.hpp"
 #include "trueaxis/separation/separation.hpp"
 
 using namespace trueaxis;
@@ -33,6 +35,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expect_only_trueaxis_errors([&] { io::read_lengths(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_linuxcnc(p, 0); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_sinumerik(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_heidenhain(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_fanuc(p); });
+  fuzz::expect_only_trueaxis_errors([&] {
+    positioning::Options o;
+    o.allow_incomplete = true;
+    positioning::evaluate(io::read_rtl(p).runs.readings, o);
+  });
+  fuzz::expect_only_trueaxis_errors([&] {
+    io::RtlOptions ro;
+    ro.directions = io::RunDirections::UpDown;
+    io::read_rtl(p, ro);
+  });
   fuzz::expect_only_trueaxis_errors([&] {
     const auto log = io::read_log(p);
     if (log.time.size() <= 20000) positioning::readings_from_log(log, {0, 10, 20, 50});

@@ -27,6 +27,9 @@ printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy\n0,1,2,3,4,5,6\n10,1,2,3,4,5,6\n' > "$co
 printf 'target_mm,cycle,direction,deviation_um,material_temp_c\n0,1,+,1,20.5\n50,1,+,2,20.5\n50,1,-,3,20.6\n0,1,-,0.5,20.6\n0,2,+,1.2,20.7\n' > "$corpus/csv/runs.csv"
 printf '0.000000 0.001380 -0.001723\n50.000000 0.002275 -0.000580\n' > "$corpus/csv/x.comp"
 printf '%%_N_AX_EEC_INI\nCHANDATA(1)\n$AA_ENC_COMP[0,0,X1]=0.003 ; 3 um\n$AA_ENC_COMP[0,1,X1]=-0.001\n$AA_ENC_COMP_STEP[0,X1]=1.0\n$AA_ENC_COMP_MIN[0,X1]=0\n$AA_ENC_COMP_MAX[0,X1]=1.0\n$AA_ENC_COMP_IS_MODULO[0,X1]=0\nM17\n' > "$corpus/csv/x_lec.mpf"
+printf 'BEGIN X.COM MM\nNR    AXISPOS         X               BACKLASH\n0     +0.0000         +0.0010         +0.0021\n1     +40.0000        +0.0011         -0.0019\n[END]\n' > "$corpus/csv/X.COM"
+printf '%%\n(PITCH ERROR)\nN3620A1P1\nN3621A1P0\nN3622A1P2\nN3623A1P1\nN3624A1P10.0\nN10000P1\nN10001P-2\nN10002P3\n%%\n' > "$corpus/csv/pitch.txt"
+printf 'HEADER::\r\nFile type : RTL\r\nTARGET DATA::\r\nFiletype : Linear\r\nTarget-count : 3\r\nTargets :\r\n 0.0 50.0 100.0\r\nRUNS::\r\nRun-count : 2\r\nDEVIATIONS::\r\nRun Target Data:\r\n1  1  0.5\r\n1  2  1.0\r\n1  3  1.5\r\n2  3  -0.5\r\n2  2  -1.0\r\n2  1  -1.5\r\n' > "$corpus/csv/runs.rtl"
 printf 'time_s,reading_mm\n0,-5\n0.5,-5\n1,-5\n1.5,-2\n2,0.001\n2.5,0.001\n3,0.001\n3.5,0.0012\n4,5\n' > "$corpus/csv/log.csv"
 # JSON: the first byte picks the reader (see json_fuzz.cpp).
 for f in examples/*.json; do

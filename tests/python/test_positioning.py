@@ -105,3 +105,63 @@ def test_binding_simulation_and_one_direction():
     assert any("only '+' approaches" in w for w in u["warnings"])
     with pytest.raises(trueaxis.Error, match="direction 'x'"):
         trueaxis.positioning(dict(runs, direction=["x"] * len(runs["direction"])))
+
+
+def rtl_as_csv(rtl_path, csv_path):
+    """An independent reading of a Renishaw .rtl file: targets from TARGET DATA, each run's
+    direction from the order it visits its targets, the k-th run of a direction is cycle k."""
+    section, targets, collecting, data, rows = None, [], False, False, []
+    for line in open(rtl_path, encoding="utf-8").read().splitlines():
+        s = line.strip()
+        if s.endswith("::"):
+            section, collecting, data = s[:-2], False, False
+        elif section == "TARGET DATA":
+            if s.lower().startswith("targets"):
+                collecting = True
+            elif collecting and s and (s[0].isdigit() or s[0] in "+-."):
+                targets += [float(v) for v in s.split()]
+            else:
+                collecting = False
+        elif section == "DEVIATIONS":
+            if s.lower().startswith("run target data"):
+                data = True
+            elif data and s:
+                run, target, dev = s.split()
+                rows.append((int(run), targets[int(target) - 1], float(dev)))
+    cycles = {"+": 0, "-": 0}
+    out = ["target_mm,cycle,direction,deviation_um"]
+    for run in sorted({r for r, _, _ in rows}):
+        pos = [t for r, t, _ in rows if r == run]
+        d = "+" if pos[1] > pos[0] else "-"
+        cycles[d] += 1
+        out += [f"{t},{cycles[d]},{d},{v}" for r, t, v in rows if r == run]
+    open(csv_path, "w").write("\n".join(out) + "\n")
+
+
+def test_renishaw_rtl_agrees_with_numpy(tmp_path):
+    rtl, csv, out = (str(tmp_path / n) for n in ("runs.rtl", "runs.csv", "p.json"))
+    subprocess.run([TRUEAXIS, "simulate", "positioning", "--machine-seed", "5", "--axis", "x",
+                    "--targets", "0:45:720", "--cycles", "5", "--backlash", "2", "--noise", "0.5",
+                    "--seed", "4", "-o", rtl, "-q"], check=True)
+    assert open(rtl, encoding="utf-8").readline().strip() == "HEADER::"
+    subprocess.run([TRUEAXIS, "positioning", "-i", rtl, "-o", out, "-q"], check=True)
+    rtl_as_csv(rtl, csv)
+    expected = iso_by_numpy(csv)
+    got = json.load(open(out))
+    for k in ("A", "E", "M", "R", "B", "B_mean", "A_up", "R_down"):
+        assert got[k] == pytest.approx(expected[k], abs=1e-9), k
+    # The binding reads the same file; a sorted file's runs can be given their directions.
+    p = trueaxis.positioning(rtl)
+    assert p["A"] == pytest.approx(got["A"], abs=1e-12) and p["warnings"] == got["warnings"]
+    lines = open(rtl, encoding="utf-8").read().splitlines()
+    start = lines.index("Run Target Data:") + 1
+    data = sorted(lines[start:], key=lambda l: tuple(int(v) for v in l.split()[:2]))
+    sorted_rtl = str(tmp_path / "sorted.rtl")
+    open(sorted_rtl, "w").write("\n".join(lines[:start] + data) + "\n")
+    one_way = trueaxis.positioning(sorted_rtl)
+    assert one_way["B"] is None
+    assert any("every run lists its targets in increasing order" in w for w in one_way["warnings"])
+    both = trueaxis.positioning(sorted_rtl, run_directions="+-")
+    assert both["A"] == pytest.approx(got["A"], abs=1e-12)
+    with pytest.raises(trueaxis.Error, match="run_directions belongs"):
+        trueaxis.positioning(csv, run_directions="+-")

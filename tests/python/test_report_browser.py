@@ -6,6 +6,8 @@ import subprocess
 
 import pytest
 
+import trueaxis
+
 TRUEAXIS = os.environ.get("TRUEAXIS", "trueaxis")
 
 
@@ -54,8 +56,17 @@ def test_demo_report_renders_every_plot(tmp_path):
     assert "Positioning accuracy of the X axis (ISO 230-2)" in dom
     for name in ("machine.json", "space.json", "x.comp", "surface-moody-lsq.json", "moody/Config.txt",
                  "layout.json", "spots.csv", "ipp_simple.stp", "design.json", "part1.json",
-                 "scan1.json", "scan2.json", "design-corrected.json", "runs.csv"):
+                 "scan1.json", "scan2.json", "design-corrected.json", "runs.csv", "runs.rtl",
+                 "x-positioning.comp", "X.COM", "x-pitch.txt", "x_lec.mpf"):
         assert (report.parent / name).stat().st_size > 0, name
+    # The positioning runs as Renishaw's .rtl file give the CSV's evaluation; the axis
+    # compensated with the HEIDENHAIN table is measured again in the report.
+    rtl = trueaxis.positioning(str(report.parent / "runs.rtl"))
+    csv = trueaxis.positioning(str(report.parent / "runs.csv"))
+    assert rtl["A"] == pytest.approx(csv["A"], abs=1e-3) and rtl["B_mean"] < -2
+    after = re.search(r"compensated with <code>X.COM</code> and measured again: A "
+                      r"([0-9.]+) → ([0-9.]+) µm", dom)
+    assert after and float(after.group(2)) < float(after.group(1)) / 2
 
 
 def test_report_command_renders(tmp_path):
