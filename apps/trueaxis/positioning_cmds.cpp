@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include "commands.hpp"
@@ -43,16 +42,6 @@ bool ends_with_rtl(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
   for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext == ".rtl";
-}
-
-// A Renishaw .rtl file: by its extension, or by its first line ("HEADER::").
-bool is_rtl(const std::string& path) {
-  if (ends_with_rtl(path)) return true;
-  std::ifstream in(path, std::ios::binary);
-  std::string head(4096, '\0');
-  in.read(head.data(), static_cast<std::streamsize>(head.size()));
-  head.resize(static_cast<std::size_t>(in.gcount()));
-  return io::looks_like_rtl(head);
 }
 
 struct PositioningArgs {
@@ -113,13 +102,9 @@ int run_positioning(const PositioningArgs& a) {
       throw Error(fmt::format("{}: no stop of {:g} s within {:g} um lies at a target", a.log,
                               lo.dwell_time, a.dwell_tolerance_um));
     runs.readings = std::move(found.readings);
-  } else if (is_rtl(a.input)) {
+  } else if (io::is_rtl_file(a.input)) {
     io::RtlOptions ro;
-    ro.directions = a.run_directions == "+-"   ? io::RunDirections::UpDown
-                    : a.run_directions == "-+" ? io::RunDirections::DownUp
-                    : a.run_directions == "+"  ? io::RunDirections::AllUp
-                    : a.run_directions == "-"  ? io::RunDirections::AllDown
-                                               : io::RunDirections::FromOrder;
+    ro.directions = io::run_directions_from(a.run_directions);
     io::RtlFile rtl = io::read_rtl(a.input, ro);
     if (!a.quiet)
       fmt::print("{}: Renishaw .rtl, {} targets, {} runs, {} readings\n", a.input,

@@ -6,10 +6,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
-#include <cctype>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <map>
 #include <optional>
 #include <utility>
@@ -45,25 +42,9 @@ std::vector<positioning::Reading> readings_in(const py::object& runs,
                                               std::vector<std::string>* warnings) {
   if (py::isinstance<py::str>(runs)) {
     const auto path = py::cast<std::string>(runs);
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    std::ifstream in(path, std::ios::binary);
-    std::string head(4096, '\0');
-    in.read(head.data(), static_cast<std::streamsize>(head.size()));
-    head.resize(static_cast<std::size_t>(in.gcount()));
-    if (ext == ".rtl" || io::looks_like_rtl(head)) {
+    if (io::is_rtl_file(path)) {
       io::RtlOptions o;
-      if (run_directions == "+-")
-        o.directions = io::RunDirections::UpDown;
-      else if (run_directions == "-+")
-        o.directions = io::RunDirections::DownUp;
-      else if (run_directions == "+")
-        o.directions = io::RunDirections::AllUp;
-      else if (run_directions == "-")
-        o.directions = io::RunDirections::AllDown;
-      else if (run_directions != "order")
-        throw Error(fmt::format("run_directions '{}': use 'order', '+-', '-+', '+' or '-'",
-                                run_directions));
+      o.directions = io::run_directions_from(run_directions);
       auto f = io::read_rtl(path, o);
       *warnings = std::move(f.warnings);
       return std::move(f.runs.readings);
@@ -73,7 +54,7 @@ std::vector<positioning::Reading> readings_in(const py::object& runs,
   }
   if (!py::isinstance<py::dict>(runs))
     throw Error(
-        "runs: give a runs.csv path or a dict with target_mm, cycle, direction, "
+        "runs: give a runs.csv or .rtl path, or a dict with target_mm, cycle, direction, "
         "deviation_um (and optionally material_temp_c, air_temp_c)");
   const auto d = py::cast<py::dict>(runs);
   for (auto kv : d) {

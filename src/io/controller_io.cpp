@@ -148,26 +148,20 @@ compensation::AxisTable parse_sinumerik(std::string text, const std::string& pat
   std::string axis;
   int encoder = -1;
   bool ended = false, modulo_seen = false;
-  std::size_t pos = 0, line = 0;
-  while (pos < text.size()) {
-    const std::size_t nl = text.find('\n', pos);
-    const std::size_t end = nl == std::string::npos ? text.size() : nl;
-    std::string_view l(text.data() + pos, end - pos);
-    pos = end + 1;
-    ++line;
+  detail::for_each_line(text, [&](std::size_t line, std::string_view l) {
     auto fail = [&](std::size_t col0, const std::string& what) {
-      throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));
+      detail::fail_at(path, line, col0, what);
     };
     if (const auto sc = l.find(';'); sc != std::string_view::npos) l = l.substr(0, sc);
     std::size_t b = l.find_first_not_of(" \t");
-    if (b == std::string_view::npos) continue;
+    if (b == std::string_view::npos) return;
     const std::size_t e = l.find_last_not_of(" \t") + 1;
     const std::string_view s = l.substr(b, e - b);
     if (ended) fail(b, "text after M17 (the end of the program)");
-    if (s.substr(0, 3) == "%_N" || s == "CHANDATA(1)") continue;
+    if (s.substr(0, 3) == "%_N" || s == "CHANDATA(1)") return;
     if (s == "M17" || s == "M30") {
       ended = true;
-      continue;
+      return;
     }
     const std::string_view prefix = "$AA_ENC_COMP";
     if (s.substr(0, prefix.size()) != prefix)
@@ -240,7 +234,7 @@ compensation::AxisTable parse_sinumerik(std::string text, const std::string& pat
     } else {
       fail(b, fmt::format("unknown variable '{}'", detail::quote_cut(name)));
     }
-  }
+  });
   (void)modulo_seen;
   if (values.size() < 2)
     throw Error(fmt::format("{}: a compensation table needs at least two points", path));
@@ -274,15 +268,8 @@ compensation::AxisTable read_sinumerik(const std::string& path, std::string* axi
 namespace trueaxis::io {
 namespace {
 
-std::string upper(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  return out;
-}
-
-bool is_blank(char c) {
-  return c == ' ' || c == '\t';
-}
+using detail::is_blank;
+using detail::upper;
 
 // Whitespace-separated fields of a line with their offsets.
 std::vector<std::pair<std::string_view, std::size_t>> fields_of(std::string_view l) {
@@ -361,18 +348,12 @@ compensation::AxisTable parse_heidenhain(std::string text, const std::string& pa
   std::size_t c_nr = 0, c_pos = 0, c_axis = 0, ncols = 0;
   std::size_t c_back = std::string::npos;
   std::string axis = axis_io ? upper(*axis_io) : std::string();
-  std::size_t pos = 0, line = 0;
-  while (pos < text.size()) {
-    const std::size_t nl = text.find('\n', pos);
-    const std::size_t end = nl == std::string::npos ? text.size() : nl;
-    const std::string_view l(text.data() + pos, end - pos);
-    pos = end + 1;
-    ++line;
+  detail::for_each_line(text, [&](std::size_t line, std::string_view l) {
     auto fail = [&](std::size_t col0, const std::string& what) {
-      throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));
+      detail::fail_at(path, line, col0, what);
     };
     const auto f = fields_of(l);
-    if (f.empty()) continue;
+    if (f.empty()) return;
     if (stage == 3) fail(f[0].second, "text after [END]");
     if (stage == 0) {
       if (upper(f[0].first) != "BEGIN" || f.size() < 2 || f.size() > 3)
@@ -384,7 +365,7 @@ compensation::AxisTable parse_heidenhain(std::string text, const std::string& pa
       else if (u != "MM")
         fail(f[2].second, fmt::format("unit '{}': MM or INCH", detail::quote_cut(f[2].first)));
       stage = 1;
-      continue;
+      return;
     }
     if (stage == 1) {
       ncols = f.size();
@@ -426,12 +407,12 @@ compensation::AxisTable parse_heidenhain(std::string text, const std::string& pa
         c_axis = *it;
       }
       stage = 2;
-      continue;
+      return;
     }
     if (upper(f[0].first) == "[END]") {
       if (f.size() > 1) fail(f[1].second, "text after [END]");
       stage = 3;
-      continue;
+      return;
     }
     if (f.size() != ncols)
       fail(f.size() > ncols ? f[ncols].second : l.size(),
@@ -457,7 +438,7 @@ compensation::AxisTable parse_heidenhain(std::string text, const std::string& pa
     t.position.push_back(p);
     t.forward.push_back(v[2] * unit);
     t.reverse.push_back((v[2] - v[3]) * unit);
-  }
+  });
   if (stage < 2)
     throw Error(fmt::format("{}: not a HEIDENHAIN table (no BEGIN line and column names)", path));
   if (stage == 2) throw Error(fmt::format("{}: no [END] line (the table is cut short)", path));
@@ -580,16 +561,11 @@ compensation::AxisTable parse_fanuc(std::string text, const std::string& path,
   std::map<int, double> param;                        // this axis' 3620..3624
   std::map<int, std::pair<int, std::size_t>> points;  // number -> value, line
   int percent = 0;
-  std::size_t pos = 0, line = 0;
-  while (pos < text.size()) {
-    const std::size_t nl = text.find('\n', pos);
-    const std::size_t end = nl == std::string::npos ? text.size() : nl;
-    std::string l(text.data() + pos, end - pos);
-    pos = end + 1;
-    ++line;
+  detail::for_each_line(text, [&](std::size_t line, std::string_view text_line) {
     auto fail = [&](std::size_t col0, const std::string& what) {
-      throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));
+      detail::fail_at(path, line, col0, what);
     };
+    std::string l(text_line);
     // Comments in parentheses are blanked out (columns stay where they were).
     for (std::size_t c = 0; c < l.size(); ++c) {
       if (l[c] != '(') continue;
@@ -599,11 +575,11 @@ compensation::AxisTable parse_fanuc(std::string text, const std::string& path,
       c = close;
     }
     const std::size_t b = l.find_first_not_of(" \t;");
-    if (b == std::string::npos) continue;
+    if (b == std::string::npos) return;
     if (l[b] == '%') {
       if (l.find_first_not_of(" \t;", b + 1) != std::string::npos) fail(b + 1, "text after '%'");
       if (++percent > 2) fail(b, "a third '%': the data ends at the second");
-      continue;
+      return;
     }
     if (percent == 2) fail(b, "text after the closing '%'");
     // N<number>[A<axis>]P<value>, optionally ending with ';'.
@@ -649,7 +625,7 @@ compensation::AxisTable parse_fanuc(std::string text, const std::string& path,
     } else if (!has_axis) {
       fail(b, fmt::format("parameter {} needs an axis address (A1, A2, ...)", number));
     }
-  }
+  });
   for (int p : {3620, 3621, 3622, 3624})
     if (!param.count(p))
       throw Error(fmt::format("{}: parameter {} for axis {} is missing", path, p, axis_number));

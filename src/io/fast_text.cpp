@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <exception>
 #include <filesystem>
 #include <thread>
@@ -66,6 +67,28 @@ void normalize_text(std::string& text) {
     }
   }
   text.resize(out);
+}
+
+std::string lower(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string upper(std::string_view s) {
+  std::string out(s);
+  for (char& c : out) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return out;
+}
+
+std::string_view trim(std::string_view s) {
+  while (!s.empty() && is_blank(s.front())) s.remove_prefix(1);
+  while (!s.empty() && is_blank(s.back())) s.remove_suffix(1);
+  return s;
+}
+
+void fail_at(const std::string& path, std::size_t line, std::size_t col0, const std::string& what) {
+  throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));
 }
 
 std::string quote_cut(std::string_view s, std::size_t max) {

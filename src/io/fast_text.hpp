@@ -31,6 +31,32 @@ void normalize_text(std::string& text);
 // in an error message.
 std::string quote_cut(std::string_view s, std::size_t max = 40);
 
+// Text helpers of the line-oriented readers: a space or tab; lower and upper case (ASCII); `s`
+// without leading and trailing spaces and tabs.
+inline bool is_blank(char c) {
+  return c == ' ' || c == '\t';
+}
+std::string lower(std::string_view s);
+std::string upper(std::string_view s);
+std::string_view trim(std::string_view s);
+
+// Throws Error("path:line:col: what") (col0 is 0-based, the message's column 1-based).
+[[noreturn]] void fail_at(const std::string& path, std::size_t line, std::size_t col0,
+                          const std::string& what);
+
+// Calls fn(line, text) for every line of `text` (split at '\n', as normalize_text leaves it;
+// line numbers from 1).
+template <class Fn>
+void for_each_line(std::string_view text, Fn&& fn) {
+  std::size_t pos = 0, line = 0;
+  while (pos < text.size()) {
+    const std::size_t nl = text.find('\n', pos);
+    const std::size_t end = nl == std::string_view::npos ? text.size() : nl;
+    fn(++line, text.substr(pos, end - pos));
+    pos = end + 1;
+  }
+}
+
 // Number of worker threads for `n` items of work (1 for small jobs).
 int workers_for(std::size_t n);
 

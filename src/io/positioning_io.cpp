@@ -28,15 +28,8 @@ constexpr const char* kNames[kColumns] = {"target_mm",    "cycle",           "di
 constexpr double kMaxTarget = 1e6, kMaxDeviation = 1e6;
 constexpr double kMinTemperature = -50, kMaxTemperature = 100;
 
-bool is_space(char c) {
-  return c == ' ' || c == '\t';
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
+using detail::lower;
+using detail::is_blank;
 
 // Fields of one line: [begin, end) offsets, trimmed.
 std::vector<std::pair<std::size_t, std::size_t>> split(std::string_view l) {
@@ -46,8 +39,8 @@ std::vector<std::pair<std::size_t, std::size_t>> split(std::string_view l) {
     std::size_t e = l.find(',', b);
     const std::size_t stop = e == std::string_view::npos ? l.size() : e;
     std::size_t x = b, y = stop;
-    while (x < y && is_space(l[x])) ++x;
-    while (y > x && is_space(l[y - 1])) --y;
+    while (x < y && is_blank(l[x])) ++x;
+    while (y > x && is_blank(l[y - 1])) --y;
     f.emplace_back(x, y);
     if (e == std::string_view::npos) break;
     b = e + 1;
@@ -73,7 +66,7 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
     pos = nl == std::string_view::npos ? all.size() : nl + 1;
     ++line;
     std::size_t first = 0;
-    while (first < l.size() && is_space(l[first])) ++first;
+    while (first < l.size() && is_blank(l[first])) ++first;
     if (first == l.size() || l[first] == '#') continue;
     auto fail = [&](std::size_t col0, const std::string& what) {
       throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));

@@ -4,6 +4,8 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <set>
@@ -23,21 +25,9 @@ using positioning::Reading;
 constexpr double kMaxTarget = 1e6, kMaxDeviation = 1e6;
 constexpr long kMaxCount = 100000;
 
-bool is_space(char c) {
-  return c == ' ' || c == '\t';
-}
-
-std::string lower(std::string_view s) {
-  std::string out(s);
-  for (char& c : out) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return out;
-}
-
-std::string_view trim(std::string_view s) {
-  while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-  while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-  return s;
-}
+using detail::is_blank;
+using detail::lower;
+using detail::trim;
 
 // "NAME::" with NAME of letters, digits, spaces and '-', starting with a letter.
 std::optional<std::string> section_name(std::string_view s) {
@@ -79,32 +69,46 @@ bool looks_like_rtl(const std::string& text) {
   return false;
 }
 
+bool is_rtl_file(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".rtl") return true;
+  std::ifstream in(path, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  return looks_like_rtl(head);
+}
+
+RunDirections run_directions_from(const std::string& name) {
+  if (name == "order") return RunDirections::FromOrder;
+  if (name == "+-") return RunDirections::UpDown;
+  if (name == "-+") return RunDirections::DownUp;
+  if (name == "+") return RunDirections::AllUp;
+  if (name == "-") return RunDirections::AllDown;
+  throw Error(fmt::format("run directions '{}': use 'order', '+-', '-+', '+' or '-'", name));
+}
+
 RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& options) {
   detail::normalize_text(text);
   RtlFile f;
   std::string section;
   bool collecting_targets = false, in_data = false, have_data_key = false;
   long target_count = -1, run_count = -1;
-  std::size_t targets_line = 0, count_line = 0, runs_line = 0;
+  std::size_t targets_line = 0, count_line = 0;
   std::vector<Entry> entries;
   std::vector<std::size_t> target_lines;
-  std::size_t pos = 0, line = 0;
-  while (pos < text.size()) {
-    const std::size_t nl = text.find('\n', pos);
-    const std::size_t end = nl == std::string::npos ? text.size() : nl;
-    const std::string_view l(text.data() + pos, end - pos);
-    pos = end + 1;
-    ++line;
-    auto fail = [&](std::size_t col0, const std::string& what) -> void {
-      throw Error(fmt::format("{}:{}:{}: {}", path, line, col0 + 1, what));
+  detail::for_each_line(text, [&](std::size_t line, std::string_view l) {
+    auto fail = [&](std::size_t col0, const std::string& what) {
+      detail::fail_at(path, line, col0, what);
     };
     const std::size_t b = l.find_first_not_of(" \t");
-    if (b == std::string_view::npos) continue;
+    if (b == std::string_view::npos) return;
     const std::string_view s = trim(l);
     if (const auto name = section_name(s)) {
       section = *name;
       collecting_targets = in_data = false;
-      continue;
+      return;
     }
     if (section.empty())
       fail(b, fmt::format("'{}': expected a section line such as 'HEADER::' (is this a "
@@ -115,10 +119,10 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
       std::vector<std::pair<double, std::size_t>> v;
       std::size_t c = from;
       while (true) {
-        while (c < to && is_space(l[c])) ++c;
+        while (c < to && is_blank(l[c])) ++c;
         if (c >= to) break;
         std::size_t e = c;
-        while (e < to && !is_space(l[e])) ++e;
+        while (e < to && !is_blank(l[e])) ++e;
         const char* nb = l.data() + c;
         if (*nb == '+') ++nb;
         double x = 0;
@@ -154,7 +158,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
           f.targets.push_back(x);
           target_lines.push_back(line);
         }
-        continue;
+        return;
       }
       if (!keyed)
         fail(b, fmt::format("'{}': expected 'Key : value' or target positions (mm)",
@@ -190,17 +194,16 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         }
         f.fields.emplace_back(std::string(trim(l.substr(b, colon - b))), std::string(value));
       }
-      continue;
+      return;
     }
     if (section == "RUNS") {
       if (!keyed) fail(b, fmt::format("'{}': expected 'Key : value'", detail::quote_cut(s)));
       if (key == "run-count") {
         run_count = count_value(value, vcol == std::string_view::npos ? colon : vcol, "Run-count");
-        runs_line = line;
       } else {
         f.fields.emplace_back(std::string(trim(l.substr(b, colon - b))), std::string(value));
       }
-      continue;
+      return;
     }
     if (section == "DEVIATIONS") {
       if (in_data && starts_numeric(s)) {
@@ -221,7 +224,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         if (std::abs(v[2].first) > kMaxDeviation)
           fail(v[2].second, fmt::format("deviation {:g} um is out of range", v[2].first));
         entries.push_back({run, target, v[2].first, line});
-        continue;
+        return;
       }
       if (!keyed)
         fail(b, fmt::format("'{}': expected 'Run Target Data:' and lines 'run target deviation'",
@@ -234,11 +237,11 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         in_data = false;
         f.fields.emplace_back(std::string(trim(l.substr(b, colon - b))), std::string(value));
       }
-      continue;
+      return;
     }
     // HEADER, USER-TEXT and sections this reader does not interpret: keep what is keyed.
     if (keyed) f.fields.emplace_back(std::string(trim(l.substr(b, colon - b))), std::string(value));
-  }
+  });
 
   auto missing = [&](const char* what, const char* where) {
     throw Error(
@@ -343,7 +346,6 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
       f.runs.lines.push_back(e->line);
     }
   }
-  (void)runs_line;
   return f;
 }
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 
 #include "../test_util.hpp"
 #include "trueaxis/io/controller.hpp"
@@ -23,6 +24,38 @@ constexpr double kFileResolution = 0.5e-6;  // mm: LinuxCNC files carry 6 decima
 
 std::string comp_error(const std::string& text, int type = 1) {
   return test::error_of([&] { io::parse_linuxcnc(text, "x.comp", type); });
+}
+
+// The virtual machine's X axis with tens of µm of positioning error (far above the noise),
+// measured with 17 targets, 4 µm of backlash and 0.3 µm of noise.
+struct MeasuredAxis {
+  sim::Machine machine;
+  sim::PositioningRunOptions runs;
+  positioning::Result before;
+
+  // The axis compensated by `table`, measured again with new noise.
+  positioning::Result rerun(const compensation::AxisTable& table, std::uint64_t seed) const {
+    sim::PositioningRunOptions c = runs;
+    c.seed = seed;
+    c.compensation = [&](double p, Direction d) { return table.correction(p, d); };
+    return positioning::evaluate(sim::simulate_positioning(machine, c).readings);
+  }
+  // The standard deviation of a mean of 5 readings after compensation: the difference of two
+  // such means (the table's and the new run's).
+  double sigma_mean() const { return runs.noise * std::sqrt(2.0 / 5); }
+};
+
+MeasuredAxis measured_axis(std::uint64_t machine_seed, std::uint64_t run_seed) {
+  sim::MachineOptions mo;
+  mo.seed = machine_seed;
+  mo.positioning = 40e-6;
+  MeasuredAxis a{sim::random_machine(mo), {}, {}};
+  for (int i = 0; i <= 16; ++i) a.runs.targets.push_back(50.0 * i);
+  a.runs.backlash = 4e-3;
+  a.runs.noise = 0.3e-3;
+  a.runs.seed = run_seed;
+  a.before = positioning::evaluate(sim::simulate_positioning(a.machine, a.runs).readings);
+  return a;
 }
 
 }  // namespace
@@ -90,32 +123,22 @@ TEST(CompensationTable, LinuxCncRoundTripsAndRefusesWhatLinuxCncWouldNotRead) {
 // The virtual machine's X axis with 4 µm of backlash, measured, compensated through a LinuxCNC
 // file and measured again.
 TEST(CompensationTable, CompensatingTheVirtualMachineRemovesWhatWasMeasured) {
-  sim::MachineOptions mo;
-  mo.seed = 12;
-  mo.positioning = 40e-6;  // tens of µm over the axis: far above the noise
-  const sim::Machine m = sim::random_machine(mo);
-  sim::PositioningRunOptions o;
-  for (int i = 0; i <= 16; ++i) o.targets.push_back(50.0 * i);
-  o.backlash = 4e-3;
-  o.noise = 0.3e-3;
-  o.seed = 3;
-  const auto before = positioning::evaluate(sim::simulate_positioning(m, o).readings);
+  const MeasuredAxis ax = measured_axis(12, 3);
+  const auto& before = ax.before;
+  const auto& o = ax.runs;
+  const auto& m = ax.machine;
   ASSERT_GT(before.iso.E, 10e-3);
   const std::string dir = test::temp_dir();
   auto rerun = [&](bool bidirectional) {
     io::write_linuxcnc(dir + "/x.comp", compensation::from_positioning(before, bidirectional), 1);
-    const auto table = io::read_linuxcnc(dir + "/x.comp", 1);
-    sim::PositioningRunOptions c = o;
-    c.seed = 4;  // a new run: new noise
-    c.compensation = [&](double p, Direction d) { return table.correction(p, d); };
-    return positioning::evaluate(sim::simulate_positioning(m, c).readings);
+    return ax.rerun(io::read_linuxcnc(dir + "/x.comp", 1), 4);
   };
   const auto bi = rerun(true);
   const auto uni = rerun(false);
   // After the bidirectional table, each mean deviation is the difference of two means of 5
   // noisy readings (σ·√(2/5)) plus the machine's change between nodes 50 mm apart, which the
   // linear interpolation does not see at the nodes themselves: E is at the noise level.
-  const double sigma_mean = o.noise * std::sqrt(2.0 / 5);
+  const double sigma_mean = ax.sigma_mean();
   EXPECT_LT(bi.iso.E, 2 * 4.5 * sigma_mean);
   EXPECT_NEAR(bi.iso.B_mean, 0, 4.5 * sigma_mean / std::sqrt(17.0));
   // The unidirectional table leaves the reversal: B̄ stays at −backlash, and E holds it.
@@ -373,25 +396,12 @@ TEST(CompensationTable, FanucChoosesTheMagnificationAndRefusesWhatTheControlWoul
 }
 
 TEST(CompensationTable, HeidenhainAndFanucTablesCompensateTheVirtualMachine) {
-  sim::MachineOptions mo;
-  mo.seed = 21;
-  mo.positioning = 40e-6;
-  const sim::Machine m = sim::random_machine(mo);
-  sim::PositioningRunOptions o;
-  for (int i = 0; i <= 16; ++i) o.targets.push_back(50.0 * i);
-  o.backlash = 4e-3;
-  o.noise = 0.3e-3;
-  o.seed = 7;
-  const auto before = positioning::evaluate(sim::simulate_positioning(m, o).readings);
+  const MeasuredAxis ax = measured_axis(21, 7);
+  const auto& before = ax.before;
   ASSERT_GT(before.iso.E, 10e-3);
   const std::string dir = test::temp_dir();
-  auto rerun = [&](const compensation::AxisTable& table) {
-    sim::PositioningRunOptions c = o;
-    c.seed = 8;
-    c.compensation = [&](double p, Direction d) { return table.correction(p, d); };
-    return positioning::evaluate(sim::simulate_positioning(m, c).readings);
-  };
-  const double sigma_mean = o.noise * std::sqrt(2.0 / 5);
+  auto rerun = [&](const compensation::AxisTable& table) { return ax.rerun(table, 8); };
+  const double sigma_mean = ax.sigma_mean();
   // HEIDENHAIN: both directions in one table (the BACKLASH column): the reversal goes too.
   io::write_heidenhain(dir + "/x.com", compensation::from_positioning(before, true));
   const auto heidenhain = rerun(io::read_heidenhain(dir + "/x.com"));
@@ -405,6 +415,6 @@ TEST(CompensationTable, HeidenhainAndFanucTablesCompensateTheVirtualMachine) {
   const auto fanuc = rerun(io::read_fanuc(dir + "/x.txt", fo));
   const double rounding = 0.5e-3;  // mm: half a detection unit on each side of a difference
   EXPECT_LT(fanuc.iso.M, 2 * 4.5 * sigma_mean + 2 * rounding);
-  EXPECT_NEAR(fanuc.iso.B_mean, -o.backlash, 4.5 * sigma_mean / std::sqrt(17.0));
+  EXPECT_NEAR(fanuc.iso.B_mean, -ax.runs.backlash, 4.5 * sigma_mean / std::sqrt(17.0));
   EXPECT_LT(fanuc.iso.A, before.iso.A / 2);
 }

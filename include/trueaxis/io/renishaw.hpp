@@ -61,6 +61,11 @@ RtlFile read_rtl(const std::string& path, const RtlOptions& options = {});
 
 // True when `text` starts (after blank lines) with a "NAME::" section line.
 bool looks_like_rtl(const std::string& text);
+// True when the file at `path` is named *.rtl (any case) or its text looks like one.
+bool is_rtl_file(const std::string& path);
+
+// "order", "+-", "-+", "+" or "-" (as the CLI and Python take it). Throws Error otherwise.
+RunDirections run_directions_from(const std::string& name);
 
 // Writes readings as an .rtl file: the runs in time order of the ISO 230-2 test cycle (cycle c
 // in '+' is run 2c − 1, listing its targets increasing; in '-' run 2c, listing them decreasing;
