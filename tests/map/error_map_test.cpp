@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <vector>
 
+#include "../../src/map/tricubic.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::map {
@@ -142,7 +144,8 @@ TEST(ErrorMap, OutsideTheGridIsRefusedOrClampedNeverExtrapolated) {
     evaluate(m, p);
     FAIL() << "should refuse";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("point 3 (900.000, 0.000, 100.000) mm is outside"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("point 3 (900.000, 0.000, 100.000) mm is outside"),
+              std::string::npos)
         << e.what();
   }
   const Eigen::Matrix3Xd c = evaluate(m, p, {Interpolation::Linear, Outside::Clamp});
@@ -209,3 +212,24 @@ TEST(ErrorMap, MalformedMapsAreRefused) {
 
 }  // namespace
 }  // namespace trueaxis::map
+
+// The tricubic node sum with AVX2 and FMA (where the processor has them) equals the portable one
+// to round-off: FMA rounds once where the portable code rounds twice.
+TEST(ErrorMap, TricubicSumKernelsAgree) {
+  const auto avx2 = trueaxis::map::detail::tricubic_sum_avx2();
+  if (!avx2) GTEST_SKIP() << "this processor has no AVX2 and FMA: only the portable sum runs";
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<double> table(12 * 4 * 4 * 2);
+  for (double& x : table) x = u(rng) * 1e-2;  // mm, errors of tens of µm
+  for (int trial = 0; trial < 100; ++trial) {
+    double coef[3][16], t[3], a[3], b[3];
+    for (auto& c : coef)
+      for (double& x : c) x = u(rng);
+    for (double& x : t) x = 0.5 * (u(rng) + 1);  // the local coordinate, 0 .. 1
+    const double* poly[3] = {coef[0], coef[1], coef[2]};
+    trueaxis::map::detail::tricubic_sum_portable(table.data(), 24, 96, poly, t, a);
+    avx2(table.data(), 24, 96, poly, t, b);
+    for (int q = 0; q < 3; ++q) EXPECT_NEAR(a[q], b[q], 1e-14);
+  }
+}

@@ -63,7 +63,13 @@ class Interpolator {
     Eigen::Index n = 0;
     double x0 = 0, inv_h = 0;  // uniform axes: direct cell lookup
     bool uniform = false;
-    std::vector<double> slope;          // cubic: per node, its three-point slope's 3 coefficients
+    std::vector<double> slope;  // cubic: per node, its three-point slope's 3 coefficients
+    // Cubic: per cell i, the first of its (up to) 4 nodes and the weights of those nodes as
+    // cubic polynomials in the local coordinate t: poly[16 i + 4 p + q] is the t^p coefficient
+    // of node q's weight (made once per axis, so a point's weights are three Horner steps).
+    std::vector<Eigen::Index> base;
+    std::vector<double> poly;
+    int count = 0;                      // nodes per weight set: min(n, 4)
     Eigen::Index cell(double v) const;  // i with x[i] <= v <= x[i+1], v already clamped
   };
   Eigen::Vector3d eval(const Eigen::Vector3d& p) const;
