@@ -267,6 +267,15 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
     }
   }
   if (entries.empty()) throw Error(fmt::format("{}: the file has no readings", path));
+  // A RUNS:: or TARGET DATA:: section after the readings: their numbers checked now.
+  for (const Entry& e : entries) {
+    if (e.run > run_count)
+      throw Error(fmt::format("{}:{}:1: run {} is beyond the file's Run-count {}", path, e.line,
+                              e.run, run_count));
+    if (e.target > target_count)
+      throw Error(fmt::format("{}:{}:1: target {} is beyond the file's Target-count {}", path,
+                              e.line, e.target, target_count));
+  }
   f.run_count = static_cast<int>(run_count);
 
   // Readings per run in file order, each (run, target) once.

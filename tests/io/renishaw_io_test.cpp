@@ -213,6 +213,14 @@ TEST(RenishawRtl, BadFilesNameFileLineAndColumn) {
             "deviation'");
   EXPECT_EQ(rtl_error(edited("Run Target Data:", "Run Target Data: 1")),
             "x.rtl:20:18: the readings start on the next line");
+  // Sections in another order: the readings' numbers are checked against the counts that come
+  // after them.
+  std::string runs_last = kRtl;
+  const std::string runs = "RUNS::\r\nRun-count : 4\r\n";
+  runs_last.erase(runs_last.find(runs), runs.size());
+  EXPECT_EQ(rtl_error(runs_last + "RUNS::\r\nRun-count : 4\r\n"), "(no error)");
+  EXPECT_EQ(rtl_error(runs_last + "RUNS::\r\nRun-count : 3\r\n"),
+            "x.rtl:37:1: run 4 is beyond the file's Run-count 3");
   EXPECT_EQ(rtl_error(edited("   0.0000  100", "   0.0000 @100")),
             "x.rtl:9:11: '@100.0000' is not a number");
 }
