@@ -38,12 +38,6 @@ double parse_number(std::string_view s, const std::string& what) {
 
 std::vector<double> parse_targets(const std::string& s);
 
-bool ends_with_rtl(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext == ".rtl";
-}
-
 struct PositioningArgs {
   std::string input, log, log_targets, output = "positioning.json", standard = "iso230-2", report,
                                        run_directions = "order";
@@ -250,7 +244,7 @@ int run_simulate(const SimArgs& a) {
     io::write_log(a.log, sl.log);
     run = std::move(sl.run);
   }
-  if (ends_with_rtl(a.output)) {
+  if (io::has_rtl_name(a.output)) {
     std::string ax = a.axis;
     for (char& ch : ax) ch = static_cast<char>(std::toupper(static_cast<unsigned char>(ch)));
     // An .rtl file carries deviations with the laser software's material compensation applied

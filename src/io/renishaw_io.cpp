@@ -69,10 +69,12 @@ bool looks_like_rtl(const std::string& text) {
   return false;
 }
 
+bool has_rtl_name(const std::string& path) {
+  return lower(std::filesystem::path(path).extension().string()) == ".rtl";
+}
+
 bool is_rtl_file(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".rtl") return true;
+  if (has_rtl_name(path)) return true;
   std::ifstream in(path, std::ios::binary);
   std::string head(4096, '\0');
   in.read(head.data(), static_cast<std::streamsize>(head.size()));

@@ -304,7 +304,8 @@ void for_columns(const ErrorMap& map, const Eigen::Ref<const Eigen::Matrix3Xd>& 
     if (i >= 0) refuse(map, p, i);
 }
 
-// for_columns in blocks: fn(cols, n) with up to B consecutive columns, all checked.
+// for_columns in blocks: fn(cols, n) with up to B consecutive columns, all checked. (for_columns
+// stays its own loop: routing `correct` through blocks of one or four cost it 8 %.)
 template <int B, class Fn>
 void for_column_blocks(const ErrorMap& map, const Eigen::Ref<const Eigen::Matrix3Xd>& p,
                        const EvalOptions& o, Fn&& fn) {

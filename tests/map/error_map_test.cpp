@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -213,23 +214,36 @@ TEST(ErrorMap, MalformedMapsAreRefused) {
 }  // namespace
 }  // namespace trueaxis::map
 
-// The tricubic node sum with AVX2 and FMA (where the processor has them) equals the portable one
-// to round-off: FMA rounds once where the portable code rounds twice.
-TEST(ErrorMap, TricubicSumKernelsAgree) {
+// The tricubic node sum, SSE2 and (where the processor has them) AVX2 with FMA, against the plain
+// triple sum of its definition: equal to round-off (FMA rounds once where the others round
+// twice, and the vector versions add in another order).
+TEST(ErrorMap, TricubicSumKernelsAgreeWithTheDefinition) {
   const auto avx2 = trueaxis::map::detail::tricubic_sum_avx2();
-  if (!avx2) GTEST_SKIP() << "this processor has no AVX2 and FMA: only the portable sum runs";
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<double> table(12 * 4 * 4 * 2);
   for (double& x : table) x = u(rng) * 1e-2;  // mm, errors of tens of µm
   for (int trial = 0; trial < 100; ++trial) {
-    double coef[3][16], t[3], a[3], b[3];
+    double coef[3][16], t[3], w[3][4], a[3], b[3];
     for (auto& c : coef)
       for (double& x : c) x = u(rng);
     for (double& x : t) x = 0.5 * (u(rng) + 1);  // the local coordinate, 0 .. 1
+    for (int ax = 0; ax < 3; ++ax)
+      for (int q = 0; q < 4; ++q) {
+        w[ax][q] = 0;
+        for (int p = 0; p < 4; ++p) w[ax][q] += coef[ax][4 * p + q] * std::pow(t[ax], p);
+      }
+    double want[3] = {0, 0, 0};
+    for (int k = 0; k < 4; ++k)
+      for (int j = 0; j < 4; ++j)
+        for (int i = 0; i < 4; ++i)
+          for (int q = 0; q < 3; ++q)
+            want[q] += w[0][i] * w[1][j] * w[2][k] * table[96 * k + 24 * j + 3 * i + q];
     const double* poly[3] = {coef[0], coef[1], coef[2]};
     trueaxis::map::detail::tricubic_sum_portable(table.data(), 24, 96, poly, t, a);
+    for (int q = 0; q < 3; ++q) EXPECT_NEAR(a[q], want[q], 1e-14);
+    if (!avx2) continue;  // this processor has no AVX2 and FMA: the SSE2 sum is the one used
     avx2(table.data(), 24, 96, poly, t, b);
-    for (int q = 0; q < 3; ++q) EXPECT_NEAR(a[q], b[q], 1e-14);
+    for (int q = 0; q < 3; ++q) EXPECT_NEAR(b[q], want[q], 1e-14);
   }
 }

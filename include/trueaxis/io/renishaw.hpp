@@ -61,7 +61,9 @@ RtlFile read_rtl(const std::string& path, const RtlOptions& options = {});
 
 // True when `text` starts (after blank lines) with a "NAME::" section line.
 bool looks_like_rtl(const std::string& text);
-// True when the file at `path` is named *.rtl (any case) or its text looks like one.
+// True when `path` is named *.rtl (any case).
+bool has_rtl_name(const std::string& path);
+// True when the file at `path` has such a name or its text looks like an .rtl file.
 bool is_rtl_file(const std::string& path);
 
 // "order", "+-", "-+", "+" or "-" (as the CLI and Python take it). Throws Error otherwise.
