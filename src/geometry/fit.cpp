@@ -10,6 +10,7 @@
 #include <memory>
 #include <random>
 
+#include "sphere_kernels.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/flatness.hpp"
 #include "trueaxis/geometry/straightness.hpp"
@@ -29,21 +30,32 @@ struct Pca {
   Eigen::Vector3d centroid;
   Eigen::Matrix3d axes;    // columns: principal directions, largest spread first
   Eigen::Vector3d spread;  // singular values of the centred points
+  double extent = 0;       // mm: the largest distance of a point from the centroid
 };
 
 // With `exact_axes` false (the axes are only start values, or unused) the spreads and axes come
 // from the 3 × 3 scatter matrix in one pass when the cloud is far from flat: its eigenvalues are
 // the squared singular values, and only a spread near the degeneracy threshold needs the SVD's
 // accuracy (an SVD of the 3 × n points costs ~40 passes over them).
-Pca pca(const Eigen::Matrix3Xd& p, bool exact_axes = true) {
+Pca pca(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid, bool exact_axes = true) {
   Pca r;
-  r.centroid = p.rowwise().mean();
+  r.centroid = centroid;
   if (!exact_axes) {
-    Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+    double xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0, far = 0;
+    const double cx = centroid.x(), cy = centroid.y(), cz = centroid.z();
     for (Eigen::Index i = 0; i < p.cols(); ++i) {
-      const Eigen::Vector3d x = p.col(i) - r.centroid;
-      M.noalias() += x * x.transpose();
+      const double x = p(0, i) - cx, y = p(1, i) - cy, z = p(2, i) - cz;
+      xx += x * x;
+      xy += x * y;
+      xz += x * z;
+      yy += y * y;
+      yz += y * z;
+      zz += z * z;
+      far = std::max(far, x * x + y * y + z * z);
     }
+    r.extent = std::sqrt(far);
+    Eigen::Matrix3d M;
+    M << xx, xy, xz, xy, yy, yz, xz, yz, zz;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(M);
     const Eigen::Vector3d ev = es.eigenvalues();  // ascending
     constexpr double kScatterSpreadRatio = 1e-4;  // far above kDegenerate: safe to decide here
@@ -54,6 +66,7 @@ Pca pca(const Eigen::Matrix3Xd& p, bool exact_axes = true) {
     }
   }
   const Eigen::Matrix3Xd c = p.colwise() - r.centroid;
+  r.extent = std::sqrt(c.colwise().squaredNorm().maxCoeff());
   const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(c, Eigen::ComputeFullU);
   r.axes = svd.matrixU();
   r.spread = svd.singularValues();
@@ -72,16 +85,37 @@ Eigen::Matrix3d basis(const Eigen::Vector3d& w) {
   return b;
 }
 
-// Before anything touches the points: a count, and coordinates a machine can have.
-void check_points(Element e, const Eigen::Matrix3Xd& p) {
-  if (p.cols() == 0) throw Error(fmt::format("{} fit: no points", to_string(e)));
-  if (!p.allFinite()) throw Error(fmt::format("{} fit: coordinates must be finite", to_string(e)));
-  const double biggest = p.cwiseAbs().maxCoeff();
-  if (biggest > kMaxCoordinate)
+// Before anything touches the points: a count, and coordinates a machine can have. The same
+// pass gives their centroid and largest absolute coordinate.
+struct Scanned {
+  Eigen::Vector3d centroid;
+  double largest = 0;  // mm
+};
+
+Scanned check_points(Element e, const Eigen::Matrix3Xd& p) {
+  const Eigen::Index n = p.cols();
+  if (n == 0) throw Error(fmt::format("{} fit: no points", to_string(e)));
+  double sx = 0, sy = 0, sz = 0, largest = 0;
+  bool ok = true;  // every coordinate finite and within kMaxCoordinate (NaN compares false)
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const double x = p(0, i), y = p(1, i), z = p(2, i);
+    sx += x;
+    sy += y;
+    sz += z;
+    const double ax = std::abs(x), ay = std::abs(y), az = std::abs(z);
+    ok &= (ax <= kMaxCoordinate) & (ay <= kMaxCoordinate) & (az <= kMaxCoordinate);
+    largest = std::max(largest, std::max(ax, std::max(ay, az)));
+  }
+  if (!ok) {
+    if (!p.allFinite())
+      throw Error(fmt::format("{} fit: coordinates must be finite", to_string(e)));
     throw Error(
         fmt::format("{} fit: a coordinate of {:g} mm is beyond any machine (at most "
                     "{:g} mm)",
-                    to_string(e), biggest, kMaxCoordinate));
+                    to_string(e), p.cwiseAbs().maxCoeff(), kMaxCoordinate));
+  }
+  const double inv = 1 / static_cast<double>(n);
+  return {Eigen::Vector3d(sx * inv, sy * inv, sz * inv), largest};
 }
 
 void check(Element e, const Eigen::Matrix3Xd& p, const Pca& s) {
@@ -113,6 +147,17 @@ constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // Cylinders and cones: above twice this many points, the start values compete on a subsample of
 // about this size (see fit()).
 constexpr Eigen::Index kStartPoints = 10000;
+
+// Gauss–Newton on the normal equations (spheres, and axis fits on large clouds): used while JᵀJ's
+// condition number is below this (1e6 for J), for at most kFastSteps steps, until a step is
+// below kFastTolerance of the extent, from where the extended-precision polish converges
+// quadratically.
+constexpr double kNormalConditionLimit = 1e12;
+constexpr int kFastSteps = 30;
+constexpr double kFastTolerance = 1e-9;
+// Uncertainties from the Cholesky factor of JᵀJ below this scaled condition number of JᵀJ
+// (their relative rounding is then below ~1e-8), else from the QR of J.
+constexpr double kCholeskyUncertaintyLimit = 1e8;
 
 template <class State, class Eval, class Update>
 Refined refine(State& st, Eval&& eval, Update&& update, double step_tol, double roundoff) {
@@ -355,7 +400,8 @@ void round_hessian(const Eigen::Matrix<double, D, Eigen::Dynamic>& q, const Roun
   H(D, D) = static_cast<Ld>(q.cols());
 }
 
-// Polishes a circle or sphere fit (centre and radius in the coordinates of q) in place.
+// Polishes a circle fit (D = 2, centre and radius in the coordinates of q) in place; spheres use
+// polish_sphere below, whose passes are vectorised.
 template <int D>
 void polish_round(const Eigen::Matrix<double, D, Eigen::Dynamic>& q,
                   Eigen::Matrix<double, D, 1>& centre, double& radius) {
@@ -369,6 +415,30 @@ void polish_round(const Eigen::Matrix<double, D, Eigen::Dynamic>& q,
       },
       1e-16L * size);
   centre = s.c.template cast<double>();
+  radius = static_cast<double>(s.r);
+}
+
+// Polishes a sphere fit (centre and radius in the coordinates of q, whose largest absolute
+// coordinate is `largest`) in place.
+void polish_sphere(const detail::Coords& q, const detail::SphereKernels& kernels, double largest,
+                   Eigen::Vector3d& centre, double& radius) {
+  const RoundL<3> s = newton_polish(
+      RoundL<3>{centre.cast<Ld>(), radius},
+      [&](const RoundL<3>& x, VecXL& g) {
+        g.resize(4);
+        return kernels.gradient(q, x.c.data(), x.r, g.data());
+      },
+      [&](const RoundL<3>& x, MatXL& H) {
+        const Eigen::Vector3d c = x.c.cast<double>();
+        Eigen::Matrix4d h;  // symmetric: the kernel's row-major layout reads the same
+        kernels.hessian(q, c.data(), static_cast<double>(x.r), h.data());
+        H = h.cast<Ld>();
+      },
+      [](const RoundL<3>& x, const VecXL& dx) {
+        return RoundL<3>{x.c + dx.head<3>(), x.r + dx[3]};
+      },
+      1e-16L * std::max(1.0, largest));
+  centre = s.c.cast<double>();
   radius = static_cast<double>(s.r);
 }
 
@@ -482,6 +552,39 @@ void axis_eval(const Eigen::Matrix3Xd& p, const AxisState& s, bool cone, Eigen::
     if (J)
       for (int j = 0; j < k; ++j) (*J)(i, j) = d[j];
   }
+}
+
+// JᵀJ, Jᵀr (k = 5 for a cylinder, 6 for a cone) and Σr² of the axis residuals at s, in one pass
+// without forming J or a rotated copy of the points.
+double axis_normal(const Eigen::Matrix3Xd& p, const AxisState& s, bool cone, Eigen::MatrixXd& JtJ,
+                   Eigen::VectorXd& Jtr) {
+  const Eigen::Matrix3d R = basis(s.a);
+  const double C = std::cos(s.psi), S = std::sin(s.psi), T = std::tan(s.psi);
+  Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero(), d;
+  d.setZero();
+  double cost = 0;
+  for (Eigen::Index i = 0; i < p.cols(); ++i) {
+    const Eigen::Vector3d q = R.transpose() * (p.col(i) - s.x0);
+    const double res = axis_residual(q[0], q[1], q[2], s.r, C, S, T, cone, d.data());
+    A.noalias() += d * d.transpose();
+    b += res * d;
+    cost += res * res;
+  }
+  const int k = cone ? 6 : 5;
+  JtJ = A.topLeftCorner(k, k);
+  Jtr = b.head(k);
+  return cost;
+}
+
+// The condition number of a normal matrix with its diagonal scaled to 1 (that of JᵀJ for the
+// Jacobian's columns scaled to unit length), infinite where it is not positive definite.
+double scaled_condition(const Eigen::MatrixXd& A) {
+  const Eigen::VectorXd s = A.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(s.asDiagonal() * A * s.asDiagonal(),
+                                                          Eigen::EigenvaluesOnly);
+  const Eigen::VectorXd& ev = es.eigenvalues();
+  return ev[0] > 0 ? ev[ev.size() - 1] / ev[0] : std::numeric_limits<double>::infinity();
 }
 
 // ---- polishing an axis fit in extended precision (see newton_polish) ----------------------
@@ -791,18 +894,19 @@ void judge_size(Fit& f, const char* what, double size) {
 }  // namespace
 
 Fit fit(Element element, const Eigen::Matrix3Xd& p) {
-  check_points(element, p);
+  const Scanned scanned = check_points(element, p);
   // A sphere uses only the centroid and the spreads, a cylinder or cone the axes as start values.
   const Pca s = pca(
-      p, !(element == Element::Sphere || element == Element::Cylinder || element == Element::Cone));
+      p, scanned.centroid,
+      !(element == Element::Sphere || element == Element::Cylinder || element == Element::Cone));
   check(element, p, s);
   Fit f;
   f.element = element;
-  const double extent = std::max(1.0, (p.colwise() - s.centroid).colwise().norm().maxCoeff());
+  const double extent = std::max(1.0, s.extent);
   const double step_tol = 1e-13 * extent;
   // Residuals carry the round-off of the coordinates they are computed from: centred ones for
   // circles and spheres, the raw ones (less the axis point) for cylinders and cones.
-  const double roundoff = 4 * kEpsilon * p.cwiseAbs().maxCoeff();
+  const double roundoff = 4 * kEpsilon * scanned.largest;
   switch (element) {
     case Element::Line: {
       f.point = s.centroid;
@@ -881,26 +985,32 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
     }
     case Element::Sphere: {
       const Eigen::Index n = p.cols();
-      const Eigen::Matrix3Xd q = p.colwise() - s.centroid;  // centred for conditioning
-      // The algebraic start |q − c|² = r² is linear in (c, r² − |c|²). With centred points
-      // (Σq = 0) its normal equations split: (Σ q·qᵀ)·c = ½·Σ q·|q|², r² = |c|² + Σ|q|²/n.
-      // Σ q·qᵀ is the scatter matrix the principal axes came from.
-      const Eigen::Matrix3d M = s.axes * s.spread.cwiseAbs2().asDiagonal() * s.axes.transpose();
+      // Centred for conditioning, and stored by coordinate (x, y and z each contiguous) for the
+      // vectorised passes below. The same pass sums the algebraic start's moments: with
+      // centred points (Σq = 0) the normal equations of |q − c|² = r² (linear in c and
+      // r² − |c|²) split into (Σ q·qᵀ)·c = ½·Σ q·|q|², r² = |c|² + Σ|q|²/n, and Σ q·qᵀ is the
+      // scatter matrix the principal axes came from.
+      Eigen::MatrixX3d Q(n, 3);
       Eigen::Vector3d v = Eigen::Vector3d::Zero();
-      double qq = 0;
+      double qq = 0, largest = 0;
       for (Eigen::Index i = 0; i < n; ++i) {
-        const Eigen::Vector3d x = q.col(i);
+        const Eigen::Vector3d x = p.col(i) - s.centroid;
+        Q.row(i) = x.transpose();
         const double x2 = x.squaredNorm();
         v += x2 * x;
         qq += x2;
+        largest = std::max(largest, x.cwiseAbs().maxCoeff());
       }
+      const detail::Coords qc{Q.col(0).data(), Q.col(1).data(), Q.col(2).data(), n};
+      const detail::SphereKernels& kernels = detail::sphere_kernels();
+      const Eigen::Matrix3d M = s.axes * s.spread.cwiseAbs2().asDiagonal() * s.axes.transpose();
       const Eigen::Vector3d c0 = M.ldlt().solve(v / 2);
       SphereState st{c0, std::sqrt(c0.squaredNorm() + qq / static_cast<double>(n))};
       auto eval = [&](const SphereState& x, Eigen::VectorXd& r, Eigen::MatrixXd* J) {
         r.resize(n);
         if (J) J->resize(n, 4);
         for (Eigen::Index i = 0; i < n; ++i) {
-          const Eigen::Vector3d d = q.col(i) - x.c;
+          const Eigen::Vector3d d = Q.row(i).transpose() - x.c;
           const double rho = d.norm();
           r[i] = rho - x.r;
           if (J) J->row(i) << -d.x() / rho, -d.y() / rho, -d.z() / rho, -1;
@@ -913,31 +1023,17 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       using Mat4 = Eigen::Matrix4d;
       using Vec4 = Eigen::Vector4d;
       auto normal = [&](const SphereState& x, Mat4& JtJ, Vec4& Jtr) {
-        JtJ.setZero();
-        Jtr.setZero();
-        double cost = 0;
-        for (Eigen::Index i = 0; i < n; ++i) {
-          const Eigen::Vector3d d = q.col(i) - x.c;
-          const double rho = d.norm(), res = rho - x.r, inv = -1 / rho;
-          const Vec4 j(d.x() * inv, d.y() * inv, d.z() * inv, -1);
-          JtJ.noalias() += j * j.transpose();
-          Jtr += res * j;
-          cost += res * res;
-        }
-        return cost;
+        return kernels.normal(qc, x.c.data(), x.r, JtJ.data(), Jtr.data());  // JᵀJ symmetric
       };
       // Gauss–Newton on the normal equations while they are well conditioned (a sphere, or a
       // cap that is not too shallow) and the steps shrink: the 80-bit Newton polish below then
       // settles the last digits. A cap too shallow for that, or a start that does not
       // converge, goes through Levenberg–Marquardt on the QR of J as before.
-      constexpr double kNormalConditionLimit = 1e12;  // of JᵀJ, i.e. 1e6 for J
       auto well_conditioned = [&](const Mat4& A) {
         const Eigen::SelfAdjointEigenSolver<Mat4> es(A, Eigen::EigenvaluesOnly);
         const Vec4& ev = es.eigenvalues();
         return ev[0] > 0 && ev[3] < kNormalConditionLimit * ev[0];
       };
-      constexpr int kFastSteps = 30;
-      constexpr double kFastTolerance = 1e-9;  // of the extent
       Mat4 JtJ;
       Vec4 Jtr;
       double cost = normal(st, JtJ, Jtr);
@@ -969,7 +1065,7 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
         if (!it.converged) not_converged(element);
         f.iterations = steps + it.steps;
       }
-      polish_round<3>(q, st.c, st.r);
+      polish_sphere(qc, kernels, largest, st.c, st.r);
       f.point = s.centroid + st.c;
       f.diameter = 2 * std::abs(st.r);
       auto report = [&](const Eigen::VectorXd& dx) {
@@ -1049,9 +1145,43 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
         }
       }
       if (stride > 1 && std::isfinite(best)) {
-        const Refined it = refine(found, eval, update, step_tol, roundoff);
-        converged = it.converged;
-        f.iterations += it.steps;
+        // On all the points, from the subsample's minimum (close to theirs): Gauss–Newton on
+        // the normal equations, one pass per step without forming J, while they are well
+        // conditioned and the cost falls, until the step is small enough for the extended-
+        // precision polish below; otherwise Levenberg–Marquardt on the QR of J.
+        Eigen::MatrixXd JtJ;
+        Eigen::VectorXd Jtr;
+        double cost = axis_normal(p, found, cone, JtJ, Jtr);
+        bool fast = false;
+        for (int step = 0; step < kFastSteps; ++step) {
+          if (!(scaled_condition(JtJ) < kNormalConditionLimit)) break;
+          const Eigen::VectorXd dx = -JtJ.ldlt().solve(Jtr);
+          // Tilts and ψ are radians: a tilt moves the ends of the cloud by about extent·tilt.
+          const double size =
+              std::max({std::abs(dx[0]), std::abs(dx[1]), std::abs(dx[4]), extent * std::abs(dx[2]),
+                        extent * std::abs(dx[3]), cone ? extent * std::abs(dx[5]) : 0.0});
+          if (!(size > kFastTolerance * extent)) {
+            fast = size <= kFastTolerance * extent;  // false for a NaN step
+            break;
+          }
+          const AxisState trial = update(found, dx);
+          Eigen::MatrixXd JtJ2;
+          Eigen::VectorXd Jtr2;
+          const double ct = axis_normal(p, trial, cone, JtJ2, Jtr2);
+          if (!(std::isfinite(ct) && ct <= cost)) break;  // no plain descent: leave it to LM
+          found = trial;
+          cost = ct;
+          JtJ = std::move(JtJ2);
+          Jtr = std::move(Jtr2);
+          ++f.iterations;
+        }
+        if (fast) {
+          converged = true;
+        } else {
+          const Refined it = refine(found, eval, update, step_tol, roundoff);
+          converged = it.converged;
+          f.iterations += it.steps;
+        }
       }
       if (!std::isfinite(best))
         throw Error(fmt::format("{} fit: no start value converged (are the points on a {}?)",
@@ -1076,11 +1206,22 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       f.diameter = v[6];
       f.distance = v[7];
       f.apex_angle = v[8];
-      Eigen::VectorXd r;
-      Eigen::MatrixXd J;
-      eval(found, r, &J);
-      propagate(
-          J, r, [&](const Eigen::VectorXd& dx) { return report(move_axis(found, dx)); }, f);
+      // The uncertainty from the normal equations' Cholesky factor where they are well
+      // conditioned enough for it (R with RᵀR = JᵀJ, so its rounding is that of JᵀJ), else
+      // from the QR of J.
+      auto moved = [&](const Eigen::VectorXd& dx) { return report(move_axis(found, dx)); };
+      Eigen::MatrixXd JtJ;
+      Eigen::VectorXd Jtr;
+      const double cost = axis_normal(p, found, cone, JtJ, Jtr);
+      const Eigen::LLT<Eigen::MatrixXd> llt(JtJ);
+      if (scaled_condition(JtJ) < kCholeskyUncertaintyLimit && llt.info() == Eigen::Success) {
+        propagate_r(Eigen::MatrixXd(llt.matrixU()), cost, p.cols(), moved, f);
+      } else {
+        Eigen::VectorXd r;
+        Eigen::MatrixXd J;
+        eval(found, r, &J);
+        propagate(J, r, moved, f);
+      }
       if (!cone) judge_size(f, "diameter", f.diameter);
       if (cone && f.has_uncertainty && f.u_apex_angle > f.apex_angle)
         f.warnings.push_back(fmt::format(
@@ -1155,8 +1296,7 @@ Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& p) {
   if (element != Element::Line && element != Element::Plane && element != Element::Circle)
     throw Error(fmt::format("minimum-zone fits are available for line, plane and circle, not {}",
                             to_string(element)));
-  check_points(element, p);
-  const Pca s = pca(p);
+  const Pca s = pca(p, check_points(element, p).centroid);
   check(element, p, s);
   Fit f;
   f.element = element;
