@@ -79,3 +79,53 @@ TEST(Straightness, GaussianFilterTransmitsHalfAtCutoff) {
   Eigen::VectorXd c = Eigen::VectorXd::Constant(n, 2.5);
   EXPECT_NEAR((gaussian_filter(c, dx, cutoff).array() - 2.5).abs().maxCoeff(), 0, 1e-12);
 }
+
+// Long profiles go through a prefilter that drops points which cannot be hull vertices (when a
+// sample says enough of them drop). The same points in reverse order (not increasing: sorted,
+// then the plain monotone chain) must give the same zone: white noise, noise on a form, steps,
+// isolated spikes up and down, a smooth curve (where the sample turns the prefilter off) and a
+// straight line with noise at round-off level.
+TEST(Straightness, MinZoneOfALongProfileEqualsThePlainHulls) {
+  std::mt19937_64 rng(8);
+  std::normal_distribution<double> N(0, 1);
+  std::uniform_real_distribution<double> U(0, 1);
+  const int n = 20011;  // not a whole number of blocks
+  for (int kind = 0; kind < 6; ++kind) {
+    Eigen::VectorXd x(n), y(n);
+    for (int i = 0; i < n; ++i) {
+      const double t = static_cast<double>(i) / (n - 1);
+      x[i] = 12.5 + 0.01 * i;
+      switch (kind) {
+        case 0:
+          y[i] = 1e-3 * N(rng);
+          break;
+        case 1:
+          y[i] = 5e-3 * std::sin(7 * t) + 4e-3 * t * t + 1e-4 * N(rng);
+          break;
+        case 2:
+          y[i] = (i > n / 3 ? 2e-3 : 0) - (i > 2 * n / 3 ? 5e-3 : 0) + 1e-4 * N(rng);
+          break;
+        case 3:
+          y[i] = 1e-4 * N(rng) + (U(rng) < 1e-3 ? (U(rng) < 0.5 ? 1 : -1) * 1e-2 * U(rng) : 0);
+          break;
+        case 4:
+          y[i] = 3e-3 * std::sin(3 * t) + 2e-3 * t * t * t;
+          break;
+        case 5:
+          y[i] = 1e-6 * x[i] + 1e-15 * N(rng);
+          break;
+      }
+    }
+    const MinZone a = min_zone(x, y), b = min_zone(x.reverse().eval(), y.reverse().eval());
+    EXPECT_NEAR(a.width, b.width, kRoundOff * std::max(1e-3, b.width)) << "kind " << kind;
+    EXPECT_NEAR(a.middle.slope, b.middle.slope, kRoundOff) << "kind " << kind;
+    EXPECT_NEAR(a.middle.intercept, b.middle.intercept, kRoundOff * 100) << "kind " << kind;
+    // And the zone holds every point: a hull vertex wrongly dropped would stick out of it.
+    const double c = 1 / std::hypot(1.0, a.middle.slope);
+    double worst = 0;
+    for (int i = 0; i < n; ++i)
+      worst = std::max(
+          worst, std::abs(y[i] - a.middle.intercept - a.middle.slope * x[i]) * c - a.width / 2);
+    EXPECT_LT(worst, kRoundOff * std::max(1e-3, a.width)) << "kind " << kind;
+  }
+}
