@@ -122,6 +122,15 @@ TA_AVX2_INLINE double lanes(__m256d v) {
   return (a[0] + a[1]) + (a[2] + a[3]);
 }
 
+// The four points' offsets d from the centre c and their lengths ρ (in double precision).
+TA_AVX2_INLINE __m256d distance(const Four& p, __m256d cx, __m256d cy, __m256d cz, __m256d& dx,
+                                __m256d& dy, __m256d& dz) {
+  dx = _mm256_sub_pd(p.x, cx);
+  dy = _mm256_sub_pd(p.y, cy);
+  dz = _mm256_sub_pd(p.z, cz);
+  return _mm256_sqrt_pd(_mm256_fmadd_pd(dx, dx, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dz, dz))));
+}
+
 TA_AVX2 double normal_avx2(const Coords& q, const double c[3], double r, double JtJ[16],
                            double Jtr[4]) {
   const __m256d cx = _mm256_set1_pd(c[0]), cy = _mm256_set1_pd(c[1]), cz = _mm256_set1_pd(c[2]);
@@ -130,10 +139,8 @@ TA_AVX2 double normal_avx2(const Coords& q, const double c[3], double r, double 
   __m256d s0 = a00, s1 = a00, s2 = a00, b0 = a00, b1 = a00, b2 = a00, sr = a00, cost = a00;
   for (Eigen::Index i = 0; i < q.n; i += 4) {
     const Four p = load_four(q, i);
-    const __m256d dx = _mm256_sub_pd(p.x, cx), dy = _mm256_sub_pd(p.y, cy),
-                  dz = _mm256_sub_pd(p.z, cz);
-    const __m256d rho =
-        _mm256_sqrt_pd(_mm256_fmadd_pd(dx, dx, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dz, dz))));
+    __m256d dx, dy, dz;
+    const __m256d rho = distance(p, cx, cy, cz, dx, dy, dz);
     const __m256d inv = _mm256_and_pd(_mm256_div_pd(minus_one, rho), p.keep);
     const __m256d res = _mm256_and_pd(_mm256_sub_pd(rho, rr), p.keep);
     const __m256d j0 = _mm256_mul_pd(dx, inv), j1 = _mm256_mul_pd(dy, inv),
@@ -257,10 +264,8 @@ TA_AVX2 void hessian_avx2(const Coords& q, const double c[3], double r, double H
   __m256d diag = h00, u0 = h00, u1 = h00, u2 = h00;
   for (Eigen::Index i = 0; i < q.n; i += 4) {
     const Four p = load_four(q, i);
-    const __m256d dx = _mm256_sub_pd(p.x, cx), dy = _mm256_sub_pd(p.y, cy),
-                  dz = _mm256_sub_pd(p.z, cz);
-    const __m256d rho =
-        _mm256_sqrt_pd(_mm256_fmadd_pd(dx, dx, _mm256_fmadd_pd(dy, dy, _mm256_mul_pd(dz, dz))));
+    __m256d dx, dy, dz;
+    const __m256d rho = distance(p, cx, cy, cz, dx, dy, dz);
     const __m256d inv = _mm256_and_pd(_mm256_div_pd(one, rho), p.keep);
     const __m256d ux = _mm256_mul_pd(dx, inv), uy = _mm256_mul_pd(dy, inv),
                   uz = _mm256_mul_pd(dz, inv), k = _mm256_mul_pd(rr, inv);
