@@ -92,20 +92,30 @@ std::vector<P> hull_sorted(std::size_t n, Point point) {
   return hull_chains(n, point, keep, keep);
 }
 
+// One chain of points sorted by x, as a polyline in increasing x: the lower (upper) hull.
+std::vector<P> chain(const std::vector<P>& v, bool upper) {
+  std::vector<P> h;
+  for (const P& q : v) {
+    while (h.size() >= 2 && (upper ? -1 : 1) * cross(h[h.size() - 2], h.back(), q) <= 0)
+      h.pop_back();
+    h.push_back(q);
+  }
+  return h;
+}
+
 // The hull of a profile (x strictly increasing), point(i) for i < n. On noisy data the monotone
 // chain's pops are unpredictable branches (~7 ns a point), so most points are ruled out first by
-// a test that is cheap and, on such data, predictable: in blocks of kBlock points, a point
-// strictly below the chord between the highest points of the blocks either side of its own lies
-// inside the hull, and so does one strictly above the chord between their lowest points for the
-// lower chain. The first and last blocks are kept whole. A smooth profile (many points on its
-// hull, and no mispredicted pops) gains nothing from the test: a sample of blocks decides.
+// a test that is cheap and predictable: the hull of the highest points of blocks of kBlock
+// points is made of points of the set, so a point strictly below it lies inside the hull and is
+// no vertex of the upper chain; likewise above the hull of the blocks' lowest points for the
+// lower chain. What is left is a few points near each hull vertex.
 template <class Point>
 std::vector<P> hull_profile(std::size_t n, Point point) {
-  constexpr std::size_t kBlock = 64, kSampleBlocks = 16;
+  constexpr std::size_t kBlock = 64;
   const std::size_t nb = (n + kBlock - 1) / kBlock;
-  if (nb < 4 * kSampleBlocks) return hull_sorted(n, point);
+  if (nb < 8) return hull_sorted(n, point);
   std::vector<P> top(nb), bottom(nb);
-  auto extremes = [&](std::size_t b) {
+  for (std::size_t b = 0; b < nb; ++b) {
     const std::size_t end = std::min(n, (b + 1) * kBlock);
     std::size_t hi = b * kBlock, lo = hi;
     double yhi = point(hi).y, ylo = yhi;
@@ -118,38 +128,50 @@ std::vector<P> hull_profile(std::size_t n, Point point) {
     }
     top[b] = point(hi);
     bottom[b] = point(lo);
+  }
+  const std::vector<P> roof = chain(top, true), floor = chain(bottom, false);
+  // Whole blocks first: the roof is concave, so over a block's x range it is lowest at one of
+  // the ends; a block whose highest point lies below both (by more than the interpolation's
+  // rounding) lies below the roof, and likewise above the convex floor.
+  std::vector<unsigned char> under(nb, 0), over(nb, 0);
+  auto height = [](const std::vector<P>& c, std::size_t& j, double x) {
+    while (x > c[j + 1].x) ++j;
+    return c[j].y + (c[j + 1].y - c[j].y) * ((x - c[j].x) / (c[j + 1].x - c[j].x));
   };
-  auto skip_lower = [&](std::size_t b, const P& q) {
-    return cross(bottom[b - 1], bottom[b + 1], q) > 0;  // above the neighbours' lowest points
-  };
-  auto skip_upper = [&](std::size_t b, const P& q) {
-    return cross(top[b - 1], top[b + 1], q) < 0;  // below the neighbours' highest points
-  };
-  // The sample: every (nb / kSampleBlocks)-th inner block with its neighbours.
-  std::size_t kept = 0, seen = 0;
-  for (std::size_t s = 0; s < kSampleBlocks; ++s) {
-    const std::size_t b = 1 + s * (nb - 2) / kSampleBlocks;
-    for (std::size_t c = b - 1; c <= b + 1; ++c) extremes(c);
-    for (std::size_t i = b * kBlock; i < (b + 1) * kBlock; ++i, ++seen) {
-      const P q = point(i);
-      kept += !skip_lower(b, q) + !skip_upper(b, q);
+  constexpr double kRounding = 16 * std::numeric_limits<double>::epsilon();
+  std::size_t ja = 0, jb = 0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    const double xa = point(b * kBlock).x, xb = point(std::min(n, (b + 1) * kBlock) - 1).x;
+    if (xa > roof.front().x && xb < roof.back().x) {
+      const double ha = height(roof, ja, xa);
+      std::size_t j = ja;
+      const double hb = height(roof, j, xb);
+      const double margin = kRounding * (std::abs(ha) + std::abs(hb) + std::abs(top[b].y));
+      under[b] = top[b].y < std::min(ha, hb) - margin;
+    }
+    if (xa > floor.front().x && xb < floor.back().x) {
+      const double ha = height(floor, jb, xa);
+      std::size_t j = jb;
+      const double hb = height(floor, j, xb);
+      const double margin = kRounding * (std::abs(ha) + std::abs(hb) + std::abs(bottom[b].y));
+      over[b] = bottom[b].y > std::max(ha, hb) + margin;
     }
   }
-  if (2 * kept > seen) return hull_sorted(n, point);  // more than a quarter per chain survive
-  for (std::size_t b = 0; b < nb; ++b) extremes(b);
-  auto inner_block = [nb](std::size_t i) {
-    const std::size_t b = i / kBlock;
-    return b > 0 && b + 1 < nb ? b : 0;
-  };
+  // Segment pointers: the lower chain visits x increasing, the upper one decreasing.
+  std::size_t jl = 0, ju = roof.size() - 2;
   return hull_chains(
       n, point,
       [&](std::size_t i, const P& q) {
-        const std::size_t b = inner_block(i);
-        return b && skip_lower(b, q);
+        if (over[i / kBlock]) return true;
+        if (q.x <= floor.front().x || q.x >= floor.back().x) return false;
+        while (q.x > floor[jl + 1].x) ++jl;
+        return cross(floor[jl], floor[jl + 1], q) > 0;  // strictly above the floor
       },
       [&](std::size_t i, const P& q) {
-        const std::size_t b = inner_block(i);
-        return b && skip_upper(b, q);
+        if (under[i / kBlock]) return true;
+        if (q.x <= roof.front().x || q.x >= roof.back().x) return false;
+        while (q.x < roof[ju].x) --ju;
+        return cross(roof[ju], roof[ju + 1], q) < 0;  // strictly below the roof
       });
 }
 
@@ -157,13 +179,15 @@ std::vector<P> hull_profile(std::size_t n, Point point) {
 
 MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
   if (x.size() != y.size() || x.size() < 2) throw Error("min_zone: need at least two points");
-  // Work about the centroid: widths are tiny compared with lengths.
-  const double cx = x.mean(), cy = y.mean();
   const std::size_t n = static_cast<std::size_t>(x.size());
   auto less = [](const P& a, const P& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
   std::vector<P> p;  // a sorted copy, only when x is not strictly increasing (a profile is)
-  bool increasing = true;
-  for (Eigen::Index i = 1; i < x.size() && increasing; ++i) increasing = x[i - 1] < x[i];
+  // One vectorised pass (NaN compares false: not increasing).
+  const bool increasing = ((x.tail(x.size() - 1) - x.head(x.size() - 1)).array() > 0).all();
+  // Work about a point within the data (widths are tiny compared with lengths): a profile's
+  // mid-range and first height, which costs no pass; otherwise the centroid.
+  const double cx = increasing ? 0.5 * (x[0] + x[x.size() - 1]) : x.mean();
+  const double cy = increasing ? y[0] : y.mean();
   if (!increasing) {
     p.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
