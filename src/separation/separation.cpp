@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <future>
+#include <limits>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -80,15 +81,33 @@ void ProbeData::validate() const {
         fmt::format("{} probe offsets for {} probe columns", offsets.size(), readings.cols()));
   if (angle.size() != 0 && angle.size() != n)
     throw Error(fmt::format("angle channel has {} values for {} stations", angle.size(), n));
-  if (!x.allFinite() || !readings.allFinite() || !angle.allFinite())
-    throw Error("non-finite value (NaN or Inf) in the data");
+  // One vectorised pass per array decides; only a failure looks for the first offender.
+  auto finite = [](const double* v, Eigen::Index m) {
+    // v·0 is NaN for a NaN or an infinity, else 0; Eigen's sum keeps several vector
+    // accumulators, so the pass runs at memory speed.
+    return (Eigen::Map<const Eigen::ArrayXd>(v, m) * 0.0).sum() == 0;
+  };
+  bool all_finite = finite(x.data(), n) && finite(angle.data(), angle.size());
+  for (Eigen::Index j = 0; j < readings.cols() && all_finite; ++j)
+    all_finite = finite(readings.col(j).data(), n);
+  if (!all_finite) throw Error("non-finite value (NaN or Inf) in the data");
   const double h = step();
   if (!(h > 0)) throw Error("station positions must increase");
+  const double tolerance = kStepTolerance * h + 1e-12;
+  const double* xp = x.data();
+  double smallest = h, worst = 0;  // the steps are finite here
+#pragma omp simd reduction(min : smallest) reduction(max : worst)
   for (Eigen::Index k = 1; k < n; ++k) {
+    const double d = xp[k] - xp[k - 1];
+    smallest = std::min(smallest, d);
+    worst = std::max(worst, std::abs(d - h));
+  }
+  const bool uneven = !(smallest > 0) || worst > tolerance;
+  for (Eigen::Index k = 1; k < n && uneven; ++k) {
     const double d = x[k] - x[k - 1];
     if (!(d > 0))
       throw Error(fmt::format("station {} does not increase (x = {} after {})", k, x[k], x[k - 1]));
-    if (std::abs(d - h) > kStepTolerance * h + 1e-12)
+    if (std::abs(d - h) > tolerance)
       throw Error(fmt::format("uneven step at station {}: {} mm instead of {} mm", k, d, h));
   }
   if (offsets[0] != 0) throw Error("the first probe offset must be 0 (offsets are from probe A)");
@@ -519,22 +538,31 @@ Scale scale_of(const Eigen::VectorXd& x) {
   return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
 }
 
+// A profile's sums in the parabola's coordinate t = (x − x_c)/L: Σtᵏ (k ≤ 4) and Σtᵏ·y (k ≤ 2).
+struct Moments {
+  double t[5] = {0, 0, 0, 0, 0}, ty[3] = {0, 0, 0};
+};
+
 // Coefficients e of the functional φ_K = e_0 + e_1·t_K + e_2·t_K² with φᵀg = the coefficient of t²
 // in the LS fit of g by {1, t, t²} (t = (x − x_c)/L): e = G⁻¹·(0, 0, 1), G = TᵀT from the moments
 // of t.
+Eigen::Vector3d quad_coefficients_from(const Moments& m) {
+  Eigen::Matrix3d G;
+  G << m.t[0], m.t[1], m.t[2], m.t[1], m.t[2], m.t[3], m.t[2], m.t[3], m.t[4];
+  return G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
+}
+
 Eigen::Vector3d quad_coefficients(const Eigen::VectorXd& x, const Scale& s) {
-  double m[5] = {0, 0, 0, 0, 0};
+  Moments m;
   for (Eigen::Index i = 0; i < x.size(); ++i) {
     const double t = (x[i] - s.xc) / s.L, t2 = t * t;
-    m[0] += 1;
-    m[1] += t;
-    m[2] += t2;
-    m[3] += t2 * t;
-    m[4] += t2 * t2;
+    m.t[1] += t;
+    m.t[2] += t2;
+    m.t[3] += t2 * t;
+    m.t[4] += t2 * t2;
   }
-  Eigen::Matrix3d G;
-  G << m[0], m[1], m[2], m[1], m[2], m[3], m[2], m[3], m[4];
-  return G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
+  m.t[0] = static_cast<double>(x.size());
+  return quad_coefficients_from(m);
 }
 
 // φ_K at x given its coefficients e.
@@ -551,9 +579,90 @@ double quad_coefficient_of(const Eigen::VectorXd& x, const Eigen::VectorXd& g, c
   return c;
 }
 
+Moments moments_of(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Scale& s) {
+  Moments m;
+  const double inv = 1 / s.L;
+  double t1 = 0, t2s = 0, t3 = 0, t4 = 0, y0 = 0, y1 = 0, y2 = 0;
+  const double *xp = x.data(), *yp = y.data();
+#pragma omp simd reduction(+ : t1, t2s, t3, t4, y0, y1, y2)
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double t = (xp[i] - s.xc) * inv, t2 = t * t, v = yp[i];
+    t1 += t;
+    t2s += t2;
+    t3 += t2 * t;
+    t4 += t2 * t2;
+    y0 += v;
+    y1 += t * v;
+    y2 += t2 * v;
+  }
+  m.t[0] = static_cast<double>(x.size());
+  m.t[1] = t1;
+  m.t[2] = t2s;
+  m.t[3] = t3;
+  m.t[4] = t4;
+  m.ty[0] = y0;
+  m.ty[1] = y1;
+  m.ty[2] = y2;
+  return m;
+}
+
+// y ← y + a·t² less the least-squares line of that sum (found from the moments: the line of y
+// plus a times the line of t²), in one pass that also returns the range of the result: the
+// least-squares straightness of the profile as referenced.
+double add_parabola_less_line(const Eigen::VectorXd& x, Eigen::VectorXd& y, const Moments& m,
+                              double a, const Scale& s) {
+  const double n = m.t[0], sy = m.ty[0] + a * m.t[2], sty = m.ty[1] + a * m.t[3];
+  const double stt = m.t[2] - m.t[1] * m.t[1] / n;
+  if (!(stt > 0)) throw Error("least-squares line: all x are equal");
+  const double slope = (sty - m.t[1] * sy / n) / stt, icpt = (sy - slope * m.t[1]) / n;
+  const double inv = 1 / s.L;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  const double* xp = x.data();
+  double* yp = y.data();
+#pragma omp simd reduction(min : lo) reduction(max : hi)
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double t = (xp[i] - s.xc) * inv;
+    const double v = yp[i] + (a * t - slope) * t - icpt;
+    yp[i] = v;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  return hi - lo;
+}
+
+// The least-squares straightness of the workpiece and guide as referenced, where apply_reference
+// found it on the way (the ls reference); NaN otherwise.
+struct LsWidths {
+  double w = std::numeric_limits<double>::quiet_NaN(), g = w;
+};
+
 // Applies the ls / min-zone reference in place (parabola gauge first, if free).
-void apply_reference(Raw& r, Reference ref) {
+LsWidths apply_reference(Raw& r, Reference ref) {
   const Scale s = scale_of(r.xg);
+  LsWidths widths;
+  if (ref != Reference::MinZone) {
+    // Parabola gauge and line in two passes per profile: one for the sums, one for the update.
+    const Moments mg = moments_of(r.xg, r.g, s), mw = moments_of(r.xw, r.w, s);
+    double c = 0;
+    if (r.parabola_free) {
+      const Eigen::Vector3d e = quad_coefficients_from(mg);
+      c = e[0] * mg.ty[0] + e[1] * mg.ty[1] + e[2] * mg.ty[2];
+    }
+    widths.w = add_parabola_less_line(r.xw, r.w, mw, c, s);
+    widths.g = add_parabola_less_line(r.xg, r.g, mg, -c, s);
+    if (r.theta.size()) {
+      // θ less the parabola's slope, about its mean.
+      const double k = 2 * c / (s.L * s.L);
+      double st = 0, sx = 0;
+      for (Eigen::Index i = 0; i < r.theta.size(); ++i) {
+        st += r.theta[i];
+        sx += r.xt[i] - s.xc;
+      }
+      const double mean = (st - k * sx) / static_cast<double>(r.theta.size());
+      for (Eigen::Index i = 0; i < r.theta.size(); ++i) r.theta[i] -= k * (r.xt[i] - s.xc) + mean;
+    }
+    return widths;
+  }
   if (r.parabola_free) {
     const double c = quad_coefficient_of(r.xg, r.g, s);
     auto t2 = [&](double x) {
@@ -565,14 +674,10 @@ void apply_reference(Raw& r, Reference ref) {
     for (Eigen::Index i = 0; i < r.theta.size(); ++i)
       r.theta[i] -= 2 * c * (r.xt[i] - s.xc) / (s.L * s.L);
   }
-  if (ref == Reference::MinZone) {
-    geometry::subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
-    geometry::subtract_line(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
-  } else {
-    geometry::subtract_line(r.xw, r.w, geometry::fit_line(r.xw, r.w));
-    geometry::subtract_line(r.xg, r.g, geometry::fit_line(r.xg, r.g));
-  }
+  geometry::subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
+  geometry::subtract_line(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
   if (r.theta.size()) r.theta.array() -= r.theta.mean();
+  return widths;
 }
 
 // The ls reference as linear algebra. Each reported value is y = scale·x_u − U_i·(Vᵀx): the raw
@@ -879,8 +984,9 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   }
 }
 
-Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v) {
-  return {geometry::ls_straightness(x, v), geometry::min_zone(x, v).width};
+// `ls`: the least-squares straightness when already known (not NaN).
+Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v, double ls) {
+  return {std::isnan(ls) ? geometry::ls_straightness(x, v) : ls, geometry::min_zone(x, v).width};
 }
 
 }  // namespace
@@ -923,6 +1029,7 @@ Result separate(const ProbeData& data, const Options& opt) {
   if (opt.method == Method::Lsq) raw = solve_lsq(data, opt, st);
   res.dof = st.engine ? st.dof : 0;
 
+  LsWidths widths;  // NaN unless the reference found them
   if (opt.reference == Reference::Seed) {
     res.gauge =
         "patent (JPH0464003B2): X_0 = Y_0 = 0, alpha = X_1 and beta = 2Y_1 - Y_2 minimise sum of "
@@ -930,7 +1037,7 @@ Result separate(const ProbeData& data, const Options& opt) {
         "pitch relative to the first station";
     if (opt.zero_difference) res.gauge += "; beta from the known zero difference";
   } else {
-    apply_reference(raw, opt.reference);
+    widths = apply_reference(raw, opt.reference);
     res.gauge = opt.reference == Reference::MinZone
                     ? "workpiece and guide relative to the middle lines of their minimum zones"
                     : "workpiece and guide are residuals from their own least-squares lines";
@@ -978,9 +1085,10 @@ Result separate(const ProbeData& data, const Options& opt) {
   if (opt.filter_cutoff > 0) {
     raw.w = geometry::gaussian_filter(raw.w, h, opt.filter_cutoff);
     raw.g = geometry::gaussian_filter(raw.g, h, opt.filter_cutoff);
+    widths = {};  // the filtered profiles' own
   }
-  res.workpiece_straightness = straightness_of(raw.xw, raw.w);
-  res.guide_straightness = straightness_of(raw.xg, raw.g);
+  res.workpiece_straightness = straightness_of(raw.xw, raw.w, widths.w);
+  res.guide_straightness = straightness_of(raw.xg, raw.g, widths.g);
   res.workpiece = {std::move(raw.xw), std::move(raw.w), std::move(uw)};
   res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
   if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
