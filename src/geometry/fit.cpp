@@ -1026,7 +1026,7 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
         return kernels.normal(qc, x.c.data(), x.r, JtJ.data(), Jtr.data());  // JᵀJ symmetric
       };
       // Gauss–Newton on the normal equations while they are well conditioned (a sphere, or a
-      // cap that is not too shallow) and the steps shrink: the 80-bit Newton polish below then
+      // cap that is not too shallow) and the steps shrink: the extended-precision polish below then
       // settles the last digits. A cap too shallow for that, or a start that does not
       // converge, goes through Levenberg–Marquardt on the QR of J as before.
       auto well_conditioned = [&](const Mat4& A) {
