@@ -57,7 +57,7 @@ double cross(const P& o, const P& a, const P& b) {
 }
 
 // Andrew's monotone chain on points sorted by (x, y), given as point(i) for i < n, skipping the
-// points for which skip_lower(i) (skip_upper(i)) says they cannot be vertices of the lower
+// points for which skip_lower(i, point(i)) (skip_upper) says they cannot be vertices of the lower
 // (upper) chain; the first and last points must not be skipped. Returns the hull
 // counter-clockwise without repeating the first point; collinear points dropped. The work array
 // is left uninitialised: a profile's hull has few vertices, so few of its pages are touched.
@@ -88,8 +88,8 @@ std::vector<P> hull_sorted(std::size_t n, Point point) {
     for (std::size_t i = 0; i < n; ++i) h.push_back(point(i));
     return h;
   }
-  const auto keep = [](std::size_t, const P&) { return false; };
-  return hull_chains(n, point, keep, keep);
+  const auto skip_none = [](std::size_t, const P&) { return false; };
+  return hull_chains(n, point, skip_none, skip_none);
 }
 
 // One chain of points sorted by x, as a polyline in increasing x: the lower (upper) hull.

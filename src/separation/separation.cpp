@@ -571,14 +571,6 @@ double quad_at(const Eigen::Vector3d& e, const Scale& s, double x) {
   return e[0] + t * (e[1] + t * e[2]);
 }
 
-// φᵀg without forming φ.
-double quad_coefficient_of(const Eigen::VectorXd& x, const Eigen::VectorXd& g, const Scale& s) {
-  const Eigen::Vector3d e = quad_coefficients(x, s);
-  double c = 0;
-  for (Eigen::Index i = 0; i < x.size(); ++i) c += quad_at(e, s, x[i]) * g[i];
-  return c;
-}
-
 Moments moments_of(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Scale& s) {
   Moments m;
   const double inv = 1 / s.L;
@@ -640,14 +632,18 @@ struct LsWidths {
 LsWidths apply_reference(Raw& r, Reference ref) {
   const Scale s = scale_of(r.xg);
   LsWidths widths;
+  // The parabola gauge: c = φᵀg, the guide's t² coefficient, from the guide's sums (which the
+  // ls reference needs anyway).
+  Moments mg;
+  if (r.parabola_free || ref != Reference::MinZone) mg = moments_of(r.xg, r.g, s);
+  double c = 0;
+  if (r.parabola_free) {
+    const Eigen::Vector3d e = quad_coefficients_from(mg);
+    c = e[0] * mg.ty[0] + e[1] * mg.ty[1] + e[2] * mg.ty[2];
+  }
   if (ref != Reference::MinZone) {
     // Parabola gauge and line in two passes per profile: one for the sums, one for the update.
-    const Moments mg = moments_of(r.xg, r.g, s), mw = moments_of(r.xw, r.w, s);
-    double c = 0;
-    if (r.parabola_free) {
-      const Eigen::Vector3d e = quad_coefficients_from(mg);
-      c = e[0] * mg.ty[0] + e[1] * mg.ty[1] + e[2] * mg.ty[2];
-    }
+    const Moments mw = moments_of(r.xw, r.w, s);
     widths.w = add_parabola_less_line(r.xw, r.w, mw, c, s);
     widths.g = add_parabola_less_line(r.xg, r.g, mg, -c, s);
     if (r.theta.size()) {
@@ -664,7 +660,6 @@ LsWidths apply_reference(Raw& r, Reference ref) {
     return widths;
   }
   if (r.parabola_free) {
-    const double c = quad_coefficient_of(r.xg, r.g, s);
     auto t2 = [&](double x) {
       const double t = (x - s.xc) / s.L;
       return t * t;
