@@ -1,7 +1,9 @@
 #include "banded_lsq.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 namespace trueaxis::separation::detail {
 
@@ -77,14 +79,21 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   const Design& D = D_;
   const long n = D.n;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
-  rw_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(s));
+  rw_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
+  qb_.resize(static_cast<std::size_t>(n));
   bloc_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(L));
   // The rotations depend on the coefficients only, so later right-hand sides can reuse them
-  // (iterative refinement) if they fit in a modest amount of memory.
+  // (iterative refinement) if they fit in a modest amount of memory. Only those that change
+  // something are stored, with a mask of their columns per reduced row when the window is narrow
+  // enough (most are identities where the row is already zero): the buffer is reserved for all,
+  // but memory is only committed where written.
+  masked_ = m <= 64;
   const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
   keep_rotations_ =
       per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
   rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
+  rot_mask_.resize(keep_rotations_ && masked_ ? static_cast<std::size_t>(n * nred) : 0);
+  double* rot = rot_.data();
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M)),
       row(static_cast<std::size_t>(s));
@@ -100,9 +109,8 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
     for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
     while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
     const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
-    double* rot =
-        keep_rotations_ ? rot_.data() + static_cast<std::size_t>(K) * per_station : nullptr;
     for (int r = 0; r < nred; ++r) {
+      std::uint64_t mask = 0;
       // A reduced row: fold it into the window by Givens rotations.
       const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
       std::copy(cr, cr + m, row.begin());
@@ -116,26 +124,35 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
         if (bj != 0) {
           double* Wj = W.data() + static_cast<std::size_t>(j * s);
           const double a = Wj[j];
-          const double rr = std::sqrt(a * a + bj * bj);
-          cs = a / rr;
-          sn = bj / rr;
-          Wj[j] = rr;
+          if (a == 0) {  // an empty row of the window: the row takes its place
+            cs = 0;
+            sn = bj > 0 ? 1 : -1;
+            Wj[j] = std::abs(bj);
+          } else {
+            const double rr = std::sqrt(a * a + bj * bj);
+            cs = a / rr;
+            sn = bj / rr;
+            Wj[j] = rr;
+          }
           for (int k = j + 1; k <= m; ++k) {
             const double wk = Wj[k], xk = row[static_cast<std::size_t>(k)];
             Wj[k] = cs * wk + sn * xk;
             row[static_cast<std::size_t>(k)] = cs * xk - sn * wk;
           }
         }
-        if (rot) {
-          rot[2 * (r * m + j)] = cs;
-          rot[2 * (r * m + j) + 1] = sn;
+        if (keep_rotations_ && (bj != 0 || !masked_)) {
+          *rot++ = cs;
+          *rot++ = sn;
+          mask |= std::uint64_t{1} << (j & 63);
         }
       }
+      if (keep_rotations_ && masked_) rot_mask_[static_cast<std::size_t>(K * nred + r)] = mask;
       ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
     }
     // No later row touches w(K): its row of R leaves the window, which slides by one position.
-    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
-    std::copy(W.begin(), W.begin() + s, out);
+    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+    std::copy(W.begin(), W.begin() + m, out);
+    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
     if (!D.pinned[static_cast<std::size_t>(D.w(K))])
       min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
     for (int t = 0; t < m; ++t) {
@@ -167,30 +184,36 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
   const Design& D = D_;
   const long n = D.n;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
-  const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
   std::vector<double> wr(static_cast<std::size_t>(m), 0.0);
   std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M));
   std::vector<double> off(static_cast<std::size_t>(M));
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
+  const double* rot = rot_.data();
   ssr_ = 0;
   for (long K = 0; K < n; ++K) {
     station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
                 bt.data());
     double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
     for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
-    const double* rot = rot_.data() + static_cast<std::size_t>(K) * per_station;
     for (int r = 0; r < nred; ++r) {
       double x = bt[static_cast<std::size_t>(L + r)];
-      for (int j = 0; j < m; ++j) {
-        const double cs = rot[2 * (r * m + j)], sn = rot[2 * (r * m + j) + 1];
+      auto apply = [&](int j) {
+        const double cs = rot[0], sn = rot[1];
+        rot += 2;
         const double w = wr[static_cast<std::size_t>(j)];
         wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
         x = cs * x - sn * w;
+      };
+      if (masked_) {
+        for (std::uint64_t mask = rot_mask_[static_cast<std::size_t>(K * nred + r)]; mask != 0;
+             mask &= mask - 1)
+          apply(std::countr_zero(mask));
+      } else {
+        for (int j = 0; j < m; ++j) apply(j);
       }
       ssr_ += x * x;
     }
-    rw_[static_cast<std::size_t>(K) * static_cast<std::size_t>(s) + static_cast<std::size_t>(m)] =
-        wr[0];
+    qb_[static_cast<std::size_t>(K)] = wr[0];
     for (int t = 0; t + 1 < nb; ++t)
       wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
     wr[static_cast<std::size_t>(nb) - 1] = 0;
@@ -199,55 +222,65 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
     final_[static_cast<std::size_t>(c * s + m)] = wr[static_cast<std::size_t>(c)];
 }
 
-void BandedLsq::solve_final(Eigen::VectorXd& x) const {
-  const int m = m_, s = m_ + 1;
+BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
+  const Design& D = D_;
+  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
+  Update u;
+  auto add = [&](int id, double dx) {
+    u.max_correction = std::max(u.max_correction, std::abs(dx));
+    v[id] += dx;
+    u.max_value = std::max(u.max_value, std::abs(v[id]));
+  };
+  // The final window [w(n..n+span), globals] by back-substitution (inactive columns 0).
   std::vector<double> xc(static_cast<std::size_t>(m), 0.0);
   for (int c = m - 1; c >= 0; --c) {
-    const int id = id_of(D_.n, c);
+    const int id = id_of(D.n, c);
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
     if (!active(id) || F[c] == 0) continue;
     double acc = F[m];
     for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
     xc[static_cast<std::size_t>(c)] = acc / F[c];
-    x[id] = xc[static_cast<std::size_t>(c)];
+    add(id, xc[static_cast<std::size_t>(c)]);
   }
-}
-
-Eigen::VectorXd BandedLsq::solve() const {
-  const Design& D = D_;
-  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(D.nvars);
-  solve_final(x);
-  std::vector<double> xg(static_cast<std::size_t>(G_));
-  for (int k = 0; k < G_; ++k)
-    xg[static_cast<std::size_t>(k)] = x[globals_[static_cast<std::size_t>(k)]];
-  double* xw = x.data();  // w(pos) is unknown number pos
+  const double* xg = xc.data() + nb;  // the globals' corrections
+  // The workpiece corrections the back-substitution still needs, w(K..K+span), in a ring
+  // indexed by position modulo a power of two: no vector of corrections.
+  std::size_t ring_size = 1;
+  while (ring_size < static_cast<std::size_t>(nb)) ring_size *= 2;
+  const std::size_t mask = ring_size - 1;
+  std::vector<double> ring(ring_size, 0.0);
+  for (int c = 0; c < nb; ++c)
+    ring[static_cast<std::size_t>(D.n + c) & mask] = xc[static_cast<std::size_t>(c)];
+  auto dw = [&](long pos) { return ring[static_cast<std::size_t>(pos) & mask]; };
   for (long K = D.n - 1; K >= 0; --K) {
-    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+    double dwk = 0;
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
-      double acc = R[m];
-      for (int j = 1; j < nb; ++j) acc -= R[j] * xw[K + j];
-      for (int k = 0; k < G_; ++k) acc -= R[nb + k] * xg[static_cast<std::size_t>(k)];
-      xw[K] = acc * (1 / R[0]);  // the reciprocal is off the back-substitution's dependency chain
+      double acc = qb_[static_cast<std::size_t>(K)];
+      for (int j = 1; j < nb; ++j) acc -= R[j] * dw(K + j);
+      for (int k = 0; k < G_; ++k) acc -= R[nb + k] * xg[k];
+      dwk = acc * (1 / R[0]);  // the reciprocal is off the back-substitution's dependency chain
+      add(D.w(K), dwk);
     }
+    ring[static_cast<std::size_t>(K) & mask] = dwk;
     // Local equations: Rloc·[g θ] = bloc − Cloc·(window).
-    double u[2];
+    double rl[2];
     const double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
     for (int l = 0; l < L; ++l) {
       double acc = bl[l];
-      for (int j = 0; j < nb; ++j) acc -= Cloc_(l, j) * xw[K + j];
-      for (int k = 0; k < G_; ++k) acc -= Cloc_(l, nb + k) * xg[static_cast<std::size_t>(k)];
-      u[l] = acc;
+      for (int j = 0; j < nb; ++j) acc -= Cloc_(l, j) * dw(K + j);
+      for (int k = 0; k < G_; ++k) acc -= Cloc_(l, nb + k) * xg[k];
+      rl[l] = acc;
     }
     if (L == 2) {
-      const double th = u[1] / Rloc_(1, 1);
-      x[D.t(K)] = th;
-      x[D.g(K)] = (u[0] - Rloc_(0, 1) * th) / Rloc_(0, 0);
+      const double th = rl[1] / Rloc_(1, 1);
+      add(D.t(K), th);
+      add(D.g(K), (rl[0] - Rloc_(0, 1) * th) / Rloc_(0, 0));
     } else {
-      x[D.g(K)] = u[0] / Rloc_(0, 0);
+      add(D.g(K), rl[0] / Rloc_(0, 0));
     }
   }
-  return x;
+  return u;
 }
 
 void BandedLsq::solve_normal_in_place(RowMajor& z) const {
@@ -309,7 +342,7 @@ void BandedLsq::solve_normal_impl(RowMajor& z) const {
         for (int j = 0; j < k; ++j) a[j] -= cl * yl[l][j];
       }
     }
-    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double* yw = win[0];
     if (D.pinned[static_cast<std::size_t>(D.w(K))] || R[0] == 0) {
       std::fill_n(yw, k, 0.0);
@@ -352,7 +385,7 @@ void BandedLsq::solve_normal_impl(RowMajor& z) const {
   }
   for (long K = D.n - 1; K >= 0; --K) {
     set_window(K);
-    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
       double* zw = win[0];
       for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zw[j];
@@ -427,7 +460,7 @@ Eigen::VectorXd BandedLsq::covariance_diagonal() const {
   };
   drop_last_band();
   for (long K = D.n - 1; K >= 0; --K) {
-    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(s);
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double zkk = 0;
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
       double rz = 0;

@@ -20,11 +20,35 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cstdint>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "design.hpp"
 
 namespace trueaxis::separation::detail {
+
+// A vector whose resize leaves new elements uninitialised: large buffers that are written before
+// they are read cost no zeroing pass, and pages never written are never committed.
+template <class T>
+struct DefaultInitAllocator : std::allocator<T> {
+  template <class U>
+  struct rebind {
+    using other = DefaultInitAllocator<U>;
+  };
+  using std::allocator<T>::allocator;
+  template <class U>
+  void construct(U* p) noexcept {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
+};
+template <class T>
+using Uninitialized = std::vector<T, DefaultInitAllocator<T>>;
 
 class BandedLsq {
  public:
@@ -48,8 +72,14 @@ class BandedLsq {
   // Smallest |R_ii| relative to the coefficients' scale (small: a mode the data do not fix).
   double min_pivot_ratio() const { return min_pivot_; }
 
-  // Least-squares correction (pinned unknowns 0).
-  Eigen::VectorXd solve() const;
+  // Adds the least-squares correction to v (pinned unknowns unchanged), without a vector of
+  // corrections. Returns the largest |correction| and the largest |v| after the update, both over
+  // the free unknowns.
+  struct Update {
+    double max_correction = 0;
+    double max_value = 0;
+  };
+  Update solve_add(Eigen::VectorXd& v) const;
   // diag((AᵀA)⁻¹) over the free unknowns (pinned 0).
   Eigen::VectorXd covariance_diagonal() const;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -60,8 +90,7 @@ class BandedLsq {
  private:
   int id_of(long K, int c) const;  // unknown at window column c when the window starts at w(K)
   bool active(int id) const;       // a free unknown that exists
-  void solve_final(Eigen::VectorXd& x) const;
-  template <int Cols>  // 0: any
+  template <int Cols>              // 0: any
   void solve_normal_impl(RowMajor& z) const;
 
   const Design& D_;
@@ -77,15 +106,21 @@ class BandedLsq {
   RowMajor Cred_;               // (M − L) × m: reduced rows over the window columns
   std::vector<long> pinned_w_;  // pinned workpiece positions, ascending
 
-  // Factorisation: per station, w(K)'s row of R over the window (m values + rhs) and the local
-  // equations' right-hand sides; the final window over [w(n..n+span), globals].
-  std::vector<double> rw_;     // n × (m + 1)
-  std::vector<double> bloc_;   // n × L
-  std::vector<double> final_;  // m × (m + 1)
-  // The Givens rotations (cos, sin) per station, reduced row and window column.
+  // Factorisation: per station, w(K)'s row of R over the window (m values, the same for every
+  // right-hand side), its transformed right-hand side and the local equations' right-hand sides;
+  // the final window over [w(n..n+span), globals] with its right-hand side.
+  Uninitialized<double> rw_;    // n × m
+  Uninitialized<double> qb_;    // n
+  Uninitialized<double> bloc_;  // n × L
+  std::vector<double> final_;   // m × (m + 1)
+  // The Givens rotations (cos, sin) in the order applied: per station and reduced row, those
+  // whose row entry was nonzero, with a mask of their window columns (masked_), or all of them
+  // (windows wider than 64 columns).
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{256} << 20;
   bool keep_rotations_ = false;
-  std::vector<double> rot_;
+  bool masked_ = true;
+  Uninitialized<double> rot_;
+  Uninitialized<std::uint64_t> rot_mask_;
   double ssr_ = 0;
   long rows_ = 0, unknowns_ = 0;
   double min_pivot_ = 1;

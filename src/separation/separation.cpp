@@ -368,8 +368,12 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   Eigen::VectorXd angle_mm;
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
   Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
+  double pin_size = 0;  // the largest pinned |value|: the refinement never changes those
   for (int id = 0; id < D.nvars; ++id)
-    if (D.pinned[static_cast<std::size_t>(id)]) v[id] = D.pin_value[static_cast<std::size_t>(id)];
+    if (D.pinned[static_cast<std::size_t>(id)]) {
+      v[id] = D.pin_value[static_cast<std::size_t>(id)];
+      pin_size = std::max(pin_size, std::abs(v[id]));
+    }
   double ssr0 = 0, last = 0;
   for (int iter = 0; iter < 4; ++iter) {
     if (iter == 0)
@@ -384,13 +388,12 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
       }
       ssr0 = st.engine->ssr();
     }
-    const Eigen::VectorXd dv = st.engine->solve();
-    v += dv;
+    const detail::BandedLsq::Update up = st.engine->solve_add(v);
     // Refinement converges linearly: the next correction is about (this one)²/(the last one).
     // Stop when that is below round-off; a pass beyond it would only see the residual's own
     // rounding.
-    const double size = std::max(1e-300, v.cwiseAbs().maxCoeff());
-    const double now = dv.cwiseAbs().maxCoeff();
+    const double size = std::max({1e-300, up.max_value, pin_size});
+    const double now = up.max_correction;
     const double next = iter == 0 ? now : now * (now / std::max(1e-300, last));
     if (now <= 1e-14 * size || next <= 1e-14 * size) break;
     last = now;
