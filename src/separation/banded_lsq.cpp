@@ -56,19 +56,42 @@ bool BandedLsq::active(int id) const {
 
 namespace {
 
-// Right-hand side of station K's rows, b − A·v, transformed by the constant Qᵀ (row-major qt).
-inline void station_rhs(const Design& D, long K, const Eigen::MatrixXd& readings, const double* mu,
-                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
-                        const double* offsets, const double* qt, int M, double* b, double* bt) {
-  const double gK = v[D.g(K)], tK = D.pitch ? v[D.t(K)] : 0.0;
-  for (int i = 0; i < D.N; ++i)
-    b[i] = readings(K, i) - mu[i] - v[D.w(K + D.q[static_cast<std::size_t>(i)])] - gK -
-           static_cast<double>(D.p[static_cast<std::size_t>(i)]) * tK - offsets[i];
-  if (D.angle) b[D.N] = D.wa * (angle_mm[K] - tK - offsets[D.N]);
+constexpr int kBlock = 256;  // stations whose right-hand sides are formed together
+
+// Right-hand sides b − A·v of stations [K0, K0 + B), transformed by the constant Qᵀ (row-major
+// qt): bt[r·B + k] is row r (the L local ones first) of station K0 + k. Formed channel by channel
+// over the block, contiguous in the station, so the loops vectorise; b is scratch of M·B.
+void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings, const double* mu,
+               const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v, const double* off,
+               const double* qt, int M, double* b, double* bt) {
+  const double* g = v.data() + D.g(K0);
+  const double* t = D.pitch ? v.data() + D.t(K0) : nullptr;
+  for (int i = 0; i < D.N; ++i) {
+    const double* rd = readings.col(i).data() + K0;
+    const double* w = v.data() + D.w(K0 + D.q[static_cast<std::size_t>(i)]);
+    const double mi = mu[i], oi = off[i];
+    const double pi = static_cast<double>(D.p[static_cast<std::size_t>(i)]);
+    double* bi = b + static_cast<std::ptrdiff_t>(i) * B;
+    if (t)
+      for (int k = 0; k < B; ++k) bi[k] = rd[k] - mi - w[k] - g[k] - pi * t[k] - oi;
+    else
+      for (int k = 0; k < B; ++k) bi[k] = rd[k] - mi - w[k] - g[k] - oi;
+  }
+  if (D.angle) {
+    const double* an = angle_mm.data() + K0;
+    const double oa = off[D.N], wa = D.wa;
+    double* bi = b + static_cast<std::ptrdiff_t>(D.N) * B;
+    for (int k = 0; k < B; ++k) bi[k] = wa * (an[k] - t[k] - oa);
+  }
   for (int r = 0; r < M; ++r) {
-    double acc = 0;
-    for (int c = 0; c < M; ++c) acc += qt[r * M + c] * b[c];
-    bt[r] = acc;
+    double* o = bt + static_cast<std::ptrdiff_t>(r) * B;
+    const double q0 = qt[r * M];
+    for (int k = 0; k < B; ++k) o[k] = q0 * b[k];
+    for (int c = 1; c < M; ++c) {
+      const double qc = qt[r * M + c];
+      const double* bc = b + static_cast<std::ptrdiff_t>(c) * B;
+      for (int k = 0; k < B; ++k) o[k] += qc * bc[k];
+    }
   }
 }
 
@@ -76,9 +99,30 @@ inline void station_rhs(const Design& D, long K, const Eigen::MatrixXd& readings
 
 void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+  // The window width as a compile-time constant for the usual narrow windows, so the per-station
+  // loops unroll and the window's small copies are moves, not library calls.
+  switch (m_) {
+    case 2:
+      return factor_impl<2>(readings, mu, angle_mm, v);
+    case 3:
+      return factor_impl<3>(readings, mu, angle_mm, v);
+    case 4:
+      return factor_impl<4>(readings, mu, angle_mm, v);
+    case 5:
+      return factor_impl<5>(readings, mu, angle_mm, v);
+    case 6:
+      return factor_impl<6>(readings, mu, angle_mm, v);
+    default:
+      return factor_impl<0>(readings, mu, angle_mm, v);
+  }
+}
+
+template <int Width>
+void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                            const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   const Design& D = D_;
   const long n = D.n;
-  const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
+  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
   rw_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
   qb_.resize(static_cast<std::size_t>(n));
   bloc_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(L));
@@ -88,42 +132,56 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   // enough (most are identities where the row is already zero): the buffer is reserved for all,
   // but memory is only committed where written.
   masked_ = m <= 64;
+  mask_bytes_ = (m + 7) / 8;  // the mask's low bytes: one for windows up to 8 columns
   const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
   keep_rotations_ =
       per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
   rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
-  rot_mask_.resize(keep_rotations_ && masked_ ? static_cast<std::size_t>(n * nred) : 0);
+  rot_mask_.resize(keep_rotations_ && masked_
+                       ? static_cast<std::size_t>(n * nred) * static_cast<std::size_t>(mask_bytes_)
+                       : 0);
+  unsigned char* mask_out = rot_mask_.data();
   double* rot = rot_.data();
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
-  std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M)),
-      row(static_cast<std::size_t>(s));
+  std::vector<double> row(static_cast<std::size_t>(s));
+  std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
+      bt(static_cast<std::size_t>(M * kBlock));
   std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
   ssr_ = 0;
   min_pivot_ = 1;
   std::size_t next_pin = 0;  // first pinned position not below K
-  for (long K = 0; K < n; ++K) {
-    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
-                bt.data());
-    double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
-    for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
-    while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
-    const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
-    for (int r = 0; r < nred; ++r) {
-      std::uint64_t mask = 0;
-      // A reduced row: fold it into the window by Givens rotations.
-      const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
-      std::copy(cr, cr + m, row.begin());
-      row[static_cast<std::size_t>(m)] = bt[static_cast<std::size_t>(L + r)];
-      if (pin_in_band)
-        for (std::size_t k = next_pin; k < pinned_w_.size() && pinned_w_[k] <= K + nb - 1; ++k)
-          row[static_cast<std::size_t>(pinned_w_[k] - K)] = 0;
-      for (int j = 0; j < m; ++j) {
-        const double bj = row[static_cast<std::size_t>(j)];
-        double cs = 1, sn = 0;
-        if (bj != 0) {
+  for (long K0 = 0; K0 < n; K0 += kBlock) {
+    const int B = static_cast<int>(std::min<long>(kBlock, n - K0));
+    block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
+              bt.data());
+    for (int k = 0; k < B; ++k) {
+      const long K = K0 + k;
+      double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+      for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
+      while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
+      const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
+      for (int r = 0; r < nred; ++r) {
+        // A reduced row: fold it into the window by Givens rotations.
+        std::uint64_t mask = 0;
+        const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
+        for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
+        row[static_cast<std::size_t>(m)] = bt[static_cast<std::size_t>((L + r) * B + k)];
+        if (pin_in_band)
+          for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
+            row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
+        for (int j = 0; j < m; ++j) {
+          const double bj = row[static_cast<std::size_t>(j)];
+          if (bj == 0) {
+            if (keep_rotations_ && !masked_) {
+              *rot++ = 1;
+              *rot++ = 0;
+            }
+            continue;
+          }
           double* Wj = W.data() + static_cast<std::size_t>(j * s);
           const double a = Wj[j];
+          double cs, sn;
           if (a == 0) {  // an empty row of the window: the row takes its place
             cs = 0;
             sn = bj > 0 ? 1 : -1;
@@ -134,40 +192,43 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
             sn = bj / rr;
             Wj[j] = rr;
           }
-          for (int k = j + 1; k <= m; ++k) {
-            const double wk = Wj[k], xk = row[static_cast<std::size_t>(k)];
-            Wj[k] = cs * wk + sn * xk;
-            row[static_cast<std::size_t>(k)] = cs * xk - sn * wk;
+          for (int c = j + 1; c <= m; ++c) {
+            const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
+            Wj[c] = cs * wc + sn * xc;
+            row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
+          }
+          if (keep_rotations_) {
+            *rot++ = cs;
+            *rot++ = sn;
+            mask |= std::uint64_t{1} << (j & 63);
           }
         }
-        if (keep_rotations_ && (bj != 0 || !masked_)) {
-          *rot++ = cs;
-          *rot++ = sn;
-          mask |= std::uint64_t{1} << (j & 63);
+        if (keep_rotations_ && masked_)
+          for (int i = 0; i < mask_bytes_; ++i)
+            *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
+        ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
+      }
+      // No later row touches w(K): its row of R leaves the window, which slides by one position.
+      double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+      for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
+      qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
+      if (!D.pinned[static_cast<std::size_t>(D.w(K))])
+        min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
+      for (int t = 0; t < m; ++t) {
+        double* dst = W.data() + static_cast<std::size_t>(t * s);
+        if (t == nb - 1) {
+          for (int c = 0; c < s; ++c) dst[c] = 0;
+          continue;
         }
+        const double* src = t < nb - 1 ? dst + s : dst;
+        for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
+        dst[nb - 1] = 0;
+        if (src != dst)
+          for (int c = nb; c < s; ++c) dst[c] = src[c];
       }
-      if (keep_rotations_ && masked_) rot_mask_[static_cast<std::size_t>(K * nred + r)] = mask;
-      ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
-    }
-    // No later row touches w(K): its row of R leaves the window, which slides by one position.
-    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-    std::copy(W.begin(), W.begin() + m, out);
-    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-    if (!D.pinned[static_cast<std::size_t>(D.w(K))])
-      min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
-    for (int t = 0; t < m; ++t) {
-      double* dst = W.data() + static_cast<std::size_t>(t * s);
-      if (t == nb - 1) {
-        std::fill(dst, dst + s, 0.0);
-        continue;
-      }
-      const double* src = t < nb - 1 ? dst + s : dst;
-      for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
-      dst[nb - 1] = 0;
-      if (src != dst) std::copy(src + nb, src + s, dst + nb);
     }
   }
-  final_ = W;
+  final_.assign(W.begin(), W.end());
   for (int c = 0; c < m; ++c)
     if (active(id_of(n, c)))
       min_pivot_ =
@@ -185,38 +246,45 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
   const long n = D.n;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
   std::vector<double> wr(static_cast<std::size_t>(m), 0.0);
-  std::vector<double> b(static_cast<std::size_t>(M)), bt(static_cast<std::size_t>(M));
+  std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
+      bt(static_cast<std::size_t>(M * kBlock));
   std::vector<double> off(static_cast<std::size_t>(M));
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
   const double* rot = rot_.data();
+  const unsigned char* mask_in = rot_mask_.data();
   ssr_ = 0;
-  for (long K = 0; K < n; ++K) {
-    station_rhs(D, K, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
-                bt.data());
-    double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
-    for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l)];
-    for (int r = 0; r < nred; ++r) {
-      double x = bt[static_cast<std::size_t>(L + r)];
-      auto apply = [&](int j) {
-        const double cs = rot[0], sn = rot[1];
-        rot += 2;
-        const double w = wr[static_cast<std::size_t>(j)];
-        wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
-        x = cs * x - sn * w;
-      };
-      if (masked_) {
-        for (std::uint64_t mask = rot_mask_[static_cast<std::size_t>(K * nred + r)]; mask != 0;
-             mask &= mask - 1)
-          apply(std::countr_zero(mask));
-      } else {
-        for (int j = 0; j < m; ++j) apply(j);
+  for (long K0 = 0; K0 < n; K0 += kBlock) {
+    const int B = static_cast<int>(std::min<long>(kBlock, n - K0));
+    block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
+              bt.data());
+    for (int k = 0; k < B; ++k) {
+      const long K = K0 + k;
+      double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+      for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
+      for (int r = 0; r < nred; ++r) {
+        double x = bt[static_cast<std::size_t>((L + r) * B + k)];
+        auto apply = [&](int j) {
+          const double cs = rot[0], sn = rot[1];
+          rot += 2;
+          const double w = wr[static_cast<std::size_t>(j)];
+          wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
+          x = cs * x - sn * w;
+        };
+        if (masked_) {
+          std::uint64_t mask = 0;
+          for (int i = 0; i < mask_bytes_; ++i)
+            mask |= static_cast<std::uint64_t>(*mask_in++) << (8 * i);
+          for (; mask != 0; mask &= mask - 1) apply(std::countr_zero(mask));
+        } else {
+          for (int j = 0; j < m; ++j) apply(j);
+        }
+        ssr_ += x * x;
       }
-      ssr_ += x * x;
+      qb_[static_cast<std::size_t>(K)] = wr[0];
+      for (int t = 0; t + 1 < nb; ++t)
+        wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
+      wr[static_cast<std::size_t>(nb) - 1] = 0;
     }
-    qb_[static_cast<std::size_t>(K)] = wr[0];
-    for (int t = 0; t + 1 < nb; ++t)
-      wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
-    wr[static_cast<std::size_t>(nb) - 1] = 0;
   }
   for (int c = 0; c < m; ++c)
     final_[static_cast<std::size_t>(c * s + m)] = wr[static_cast<std::size_t>(c)];

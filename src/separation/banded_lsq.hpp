@@ -88,6 +88,9 @@ class BandedLsq {
   void solve_normal_in_place(RowMajor& V) const;
 
  private:
+  template <int Width>  // window width, 0: any
+  void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                   const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
   int id_of(long K, int c) const;  // unknown at window column c when the window starts at w(K)
   bool active(int id) const;       // a free unknown that exists
   template <int Cols>              // 0: any
@@ -119,8 +122,9 @@ class BandedLsq {
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{256} << 20;
   bool keep_rotations_ = false;
   bool masked_ = true;
+  int mask_bytes_ = 1;
   Uninitialized<double> rot_;
-  Uninitialized<std::uint64_t> rot_mask_;
+  Uninitialized<unsigned char> rot_mask_;  // per station and reduced row: mask_bytes_ bytes
   double ssr_ = 0;
   long rows_ = 0, unknowns_ = 0;
   double min_pivot_ = 1;

@@ -26,8 +26,14 @@ struct Design {
   bool parabola_free = false;  // parabola fixed by a pin + the guide-quadratic gauge afterwards
   double wa = 0;               // weight of angle rows (relative to probe rows)
   int nvars = 0;
-  std::vector<char> pinned;
-  std::vector<double> pin_value;
+  std::vector<char> pinned;                  // per unknown
+  std::vector<std::pair<int, double>> pins;  // the few pinned unknowns and their values
+
+  double pin_value(int id) const {
+    for (const auto& [i, value] : pins)
+      if (i == id) return value;
+    return 0.0;
+  }
 
   int w(long pos) const { return static_cast<int>(pos); }
   int g(long K) const { return static_cast<int>(Q + K); }
@@ -54,7 +60,7 @@ void station_rows(const Design& D, long K, const double* m, double angle_mm, Emi
   std::size_t used = 0;
   auto add = [&](int id, double v, double& rhs) {
     if (D.pinned[static_cast<std::size_t>(id)])
-      rhs -= v * D.pin_value[static_cast<std::size_t>(id)];
+      rhs -= v * D.pin_value(id);
     else
       buf[used++] = {id, v};
   };

@@ -161,10 +161,9 @@ Design make_design(const std::vector<long>& p, long n, bool angle, std::optional
   D.wa = wa;
   D.nvars = static_cast<int>(D.Q + n * (D.pitch ? 2 : 1) + D.N + (angle ? 1 : 0));
   D.pinned.assign(static_cast<std::size_t>(D.nvars), 0);
-  D.pin_value.assign(static_cast<std::size_t>(D.nvars), 0.0);
   auto pin = [&](int id, double v) {
     D.pinned[static_cast<std::size_t>(id)] = 1;
-    D.pin_value[static_cast<std::size_t>(id)] = v;
+    D.pins.emplace_back(id, v);
   };
   // Line: fix the workpiece at its first and last positions. Pinning far-apart points keeps the
   // pinned solution as small as the profile itself (adjacent pins would tilt it by n times the
@@ -253,7 +252,7 @@ LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angl
   for (std::size_t r = 0; r < rows.size(); ++r)
     for (const auto& [id, v] : rows[r])
       A(static_cast<Eigen::Index>(r), col[static_cast<std::size_t>(id)]) += v;
-  Eigen::BDCSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
+  const Eigen::BDCSVD<Eigen::MatrixXd> svd(A);  // singular values only
   const Eigen::VectorXd sv = svd.singularValues();
   const double tol = 1e-9 * std::max(1.0, sv.size() ? sv[0] : 1.0);
   long rank = 0;
@@ -369,11 +368,10 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
   Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
   double pin_size = 0;  // the largest pinned |value|: the refinement never changes those
-  for (int id = 0; id < D.nvars; ++id)
-    if (D.pinned[static_cast<std::size_t>(id)]) {
-      v[id] = D.pin_value[static_cast<std::size_t>(id)];
-      pin_size = std::max(pin_size, std::abs(v[id]));
-    }
+  for (const auto& [id, value] : D.pins) {
+    v[id] = value;
+    pin_size = std::max(pin_size, std::abs(value));
+  }
   double ssr0 = 0, last = 0;
   for (int iter = 0; iter < 4; ++iter) {
     if (iter == 0)
