@@ -97,6 +97,29 @@ void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings,
 
 }  // namespace
 
+template <class Fn>
+void BandedLsq::for_each_station(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                                 const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
+                                 Fn&& fn) {
+  const Design& D = D_;
+  const int L = L_, M = M_;
+  std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
+      bt(static_cast<std::size_t>(M * kBlock));
+  std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
+  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
+  for (long K0 = 0; K0 < D.n; K0 += kBlock) {
+    const int B = static_cast<int>(std::min<long>(kBlock, D.n - K0));
+    block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
+              bt.data());
+    for (int k = 0; k < B; ++k) {
+      const long K = K0 + k;
+      double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+      for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
+      fn(K, [&](int r) { return bt[static_cast<std::size_t>((L + r) * B + k)]; });
+    }
+  }
+}
+
 void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   // The window width as a compile-time constant for the usual narrow windows, so the per-station
@@ -122,7 +145,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
                             const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   const Design& D = D_;
   const long n = D.n;
-  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
+  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, nred = M_ - L_;
   rw_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
   qb_.resize(static_cast<std::size_t>(n));
   bloc_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(L));
@@ -144,90 +167,78 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
   double* rot = rot_.data();
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> row(static_cast<std::size_t>(s));
-  std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
-      bt(static_cast<std::size_t>(M * kBlock));
-  std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
-  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
   ssr_ = 0;
   min_pivot_ = 1;
   std::size_t next_pin = 0;  // first pinned position not below K
-  for (long K0 = 0; K0 < n; K0 += kBlock) {
-    const int B = static_cast<int>(std::min<long>(kBlock, n - K0));
-    block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
-              bt.data());
-    for (int k = 0; k < B; ++k) {
-      const long K = K0 + k;
-      double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
-      for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
-      while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
-      const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
-      for (int r = 0; r < nred; ++r) {
-        // A reduced row: fold it into the window by Givens rotations.
-        std::uint64_t mask = 0;
-        const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
-        for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
-        row[static_cast<std::size_t>(m)] = bt[static_cast<std::size_t>((L + r) * B + k)];
-        if (pin_in_band)
-          for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
-            row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
-        for (int j = 0; j < m; ++j) {
-          const double bj = row[static_cast<std::size_t>(j)];
-          if (bj == 0) {
-            if (keep_rotations_ && !masked_) {
-              *rot++ = 1;
-              *rot++ = 0;
-            }
-            continue;
+  for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) {
+    while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
+    const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
+    for (int r = 0; r < nred; ++r) {
+      // A reduced row: fold it into the window by Givens rotations.
+      std::uint64_t mask = 0;
+      const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
+      for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
+      row[static_cast<std::size_t>(m)] = reduced(r);
+      if (pin_in_band)
+        for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
+          row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
+      for (int j = 0; j < m; ++j) {
+        const double bj = row[static_cast<std::size_t>(j)];
+        if (bj == 0) {
+          if (keep_rotations_ && !masked_) {
+            *rot++ = 1;
+            *rot++ = 0;
           }
-          double* Wj = W.data() + static_cast<std::size_t>(j * s);
-          const double a = Wj[j];
-          double cs, sn;
-          if (a == 0) {  // an empty row of the window: the row takes its place
-            cs = 0;
-            sn = bj > 0 ? 1 : -1;
-            Wj[j] = std::abs(bj);
-          } else {
-            const double rr = std::sqrt(a * a + bj * bj);
-            cs = a / rr;
-            sn = bj / rr;
-            Wj[j] = rr;
-          }
-          for (int c = j + 1; c <= m; ++c) {
-            const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
-            Wj[c] = cs * wc + sn * xc;
-            row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
-          }
-          if (keep_rotations_) {
-            *rot++ = cs;
-            *rot++ = sn;
-            mask |= std::uint64_t{1} << (j & 63);
-          }
-        }
-        if (keep_rotations_ && masked_)
-          for (int i = 0; i < mask_bytes_; ++i)
-            *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
-        ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
-      }
-      // No later row touches w(K): its row of R leaves the window, which slides by one position.
-      double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-      for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
-      qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-      if (!D.pinned[static_cast<std::size_t>(D.w(K))])
-        min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
-      for (int t = 0; t < m; ++t) {
-        double* dst = W.data() + static_cast<std::size_t>(t * s);
-        if (t == nb - 1) {
-          for (int c = 0; c < s; ++c) dst[c] = 0;
           continue;
         }
-        const double* src = t < nb - 1 ? dst + s : dst;
-        for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
-        dst[nb - 1] = 0;
-        if (src != dst)
-          for (int c = nb; c < s; ++c) dst[c] = src[c];
+        double* Wj = W.data() + static_cast<std::size_t>(j * s);
+        const double a = Wj[j];
+        double cs, sn;
+        if (a == 0) {  // an empty row of the window: the row takes its place
+          cs = 0;
+          sn = bj > 0 ? 1 : -1;
+          Wj[j] = std::abs(bj);
+        } else {
+          const double rr = std::sqrt(a * a + bj * bj);
+          cs = a / rr;
+          sn = bj / rr;
+          Wj[j] = rr;
+        }
+        for (int c = j + 1; c <= m; ++c) {
+          const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
+          Wj[c] = cs * wc + sn * xc;
+          row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
+        }
+        if (keep_rotations_) {
+          *rot++ = cs;
+          *rot++ = sn;
+          mask |= std::uint64_t{1} << (j & 63);
+        }
       }
+      if (keep_rotations_ && masked_)
+        for (int i = 0; i < mask_bytes_; ++i)
+          *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
+      ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
     }
-  }
+    // No later row touches w(K): its row of R leaves the window, which slides by one position.
+    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+    for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
+    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))])
+      min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
+    for (int t = 0; t < m; ++t) {
+      double* dst = W.data() + static_cast<std::size_t>(t * s);
+      if (t == nb - 1) {
+        for (int c = 0; c < s; ++c) dst[c] = 0;
+        continue;
+      }
+      const double* src = t < nb - 1 ? dst + s : dst;
+      for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
+      dst[nb - 1] = 0;
+      if (src != dst)
+        for (int c = nb; c < s; ++c) dst[c] = src[c];
+    }
+  });
   final_.assign(W.begin(), W.end());
   for (int c = 0; c < m; ++c)
     if (active(id_of(n, c)))
@@ -242,50 +253,36 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
     return;
   }
   // The same rotations applied to the new right-hand side only: the window's last column.
-  const Design& D = D_;
-  const long n = D.n;
-  const int m = m_, s = m_ + 1, nb = nb_, L = L_, M = M_, nred = M_ - L_;
+  const int m = m_, s = m_ + 1, nb = nb_, nred = M_ - L_;
   std::vector<double> wr(static_cast<std::size_t>(m), 0.0);
-  std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
-      bt(static_cast<std::size_t>(M * kBlock));
-  std::vector<double> off(static_cast<std::size_t>(M));
-  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
   const double* rot = rot_.data();
   const unsigned char* mask_in = rot_mask_.data();
   ssr_ = 0;
-  for (long K0 = 0; K0 < n; K0 += kBlock) {
-    const int B = static_cast<int>(std::min<long>(kBlock, n - K0));
-    block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
-              bt.data());
-    for (int k = 0; k < B; ++k) {
-      const long K = K0 + k;
-      double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
-      for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
-      for (int r = 0; r < nred; ++r) {
-        double x = bt[static_cast<std::size_t>((L + r) * B + k)];
-        auto apply = [&](int j) {
-          const double cs = rot[0], sn = rot[1];
-          rot += 2;
-          const double w = wr[static_cast<std::size_t>(j)];
-          wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
-          x = cs * x - sn * w;
-        };
-        if (masked_) {
-          std::uint64_t mask = 0;
-          for (int i = 0; i < mask_bytes_; ++i)
-            mask |= static_cast<std::uint64_t>(*mask_in++) << (8 * i);
-          for (; mask != 0; mask &= mask - 1) apply(std::countr_zero(mask));
-        } else {
-          for (int j = 0; j < m; ++j) apply(j);
-        }
-        ssr_ += x * x;
+  for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) {
+    for (int r = 0; r < nred; ++r) {
+      double x = reduced(r);
+      auto apply = [&](int j) {
+        const double cs = rot[0], sn = rot[1];
+        rot += 2;
+        const double w = wr[static_cast<std::size_t>(j)];
+        wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
+        x = cs * x - sn * w;
+      };
+      if (masked_) {
+        std::uint64_t mask = 0;
+        for (int i = 0; i < mask_bytes_; ++i)
+          mask |= static_cast<std::uint64_t>(*mask_in++) << (8 * i);
+        for (; mask != 0; mask &= mask - 1) apply(std::countr_zero(mask));
+      } else {
+        for (int j = 0; j < m; ++j) apply(j);
       }
-      qb_[static_cast<std::size_t>(K)] = wr[0];
-      for (int t = 0; t + 1 < nb; ++t)
-        wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
-      wr[static_cast<std::size_t>(nb) - 1] = 0;
+      ssr_ += x * x;
     }
-  }
+    qb_[static_cast<std::size_t>(K)] = wr[0];
+    for (int t = 0; t + 1 < nb; ++t)
+      wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
+    wr[static_cast<std::size_t>(nb) - 1] = 0;
+  });
   for (int c = 0; c < m; ++c)
     final_[static_cast<std::size_t>(c * s + m)] = wr[static_cast<std::size_t>(c)];
 }

@@ -88,6 +88,11 @@ class BandedLsq {
   void solve_normal_in_place(RowMajor& V) const;
 
  private:
+  // Forms the right-hand sides b − A·v block by block, stores each station's local ones and
+  // calls fn(K, reduced) in station order, reduced(r) giving its reduced right-hand side r.
+  template <class Fn>
+  void for_each_station(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v, Fn&& fn);
   template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                    const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
