@@ -4,6 +4,9 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <optional>
+
+#include "prefault.hpp"
 
 namespace trueaxis::separation::detail {
 
@@ -170,7 +173,22 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
   ssr_ = 0;
   min_pivot_ = 1;
   std::size_t next_pin = 0;  // first pinned position not below K
+  // After the first block, when the rotations kept per station are known, the pages the rest of
+  // the factorisation will write are committed on another core.
+  std::optional<Prefault> prefault;
+  auto start_prefault = [&] {
+    const auto used = static_cast<std::size_t>(rot - rot_.data());
+    const std::size_t expect = std::min(
+        rot_.size(), used / static_cast<std::size_t>(kBlock) * static_cast<std::size_t>(n) * 9 / 8);
+    prefault.emplace(
+        std::vector<Prefault::Region>{{rw_.data(), rw_.size() * sizeof(double)},
+                                      {qb_.data(), qb_.size() * sizeof(double)},
+                                      {bloc_.data(), bloc_.size() * sizeof(double)},
+                                      {rot, (expect > used ? expect - used : 0) * sizeof(double)},
+                                      {rot_mask_.data(), rot_mask_.size()}});
+  };
   for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) {
+    if (K == kBlock) start_prefault();
     while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
     const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
     for (int r = 0; r < nred; ++r) {

@@ -17,6 +17,7 @@
 
 #include "banded_lsq.hpp"
 #include "design.hpp"
+#include "prefault.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/straightness.hpp"
 
@@ -363,6 +364,24 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   // Iterative refinement: each pass factorises the system with right-hand side b − A·v and
   // corrects v. A single pass carries the error the long chain's conditioning puts into any
   // backward-stable solve (~1e-4 relative at a million stations); a second one removes it.
+  // The profiles' arrays are filled at the end; their pages are committed on another core
+  // meanwhile.
+  Raw r;
+  r.xw.resize(D.Q);
+  r.w.resize(D.Q);
+  r.xg.resize(n);
+  r.g.resize(n);
+  if (D.pitch) {
+    r.xt.resize(n);
+    r.theta.resize(n);
+  }
+  const detail::Prefault prefault(
+      {{r.w.data(), sizeof(double) * static_cast<std::size_t>(D.Q)},
+       {r.g.data(), sizeof(double) * static_cast<std::size_t>(n)},
+       {r.theta.data(), sizeof(double) * static_cast<std::size_t>(r.theta.size())},
+       {r.xw.data(), sizeof(double) * static_cast<std::size_t>(D.Q)},
+       {r.xg.data(), sizeof(double) * static_cast<std::size_t>(n)},
+       {r.xt.data(), sizeof(double) * static_cast<std::size_t>(r.xt.size())}});
   st.engine = std::make_unique<detail::BandedLsq>(D);
   Eigen::VectorXd angle_mm;
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
@@ -399,19 +418,14 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
   const long pmin = *std::min_element(p.begin(), p.end());
-  Raw r;
-  r.xw.resize(D.Q);
-  r.w.resize(D.Q);
   for (long j = 0; j < D.Q; ++j) {
     r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
     r.w[j] = v[D.w(j)];
   }
   r.xg = data.x;
-  r.g.resize(n);
   for (long K = 0; K < n; ++K) r.g[K] = v[D.g(K)];
   if (D.pitch) {
     r.xt = data.x;
-    r.theta.resize(n);
     for (long K = 0; K < n; ++K) r.theta[K] = v[D.t(K)] / h;
   }
   r.parabola_free = D.parabola_free;
@@ -439,11 +453,33 @@ void require_offsets(const ProbeData& d, std::initializer_list<long> want, const
     throw Error(fmt::format("method {} does not use an angle channel; use --method lsq", method));
 }
 
-Raw two_point(const ProbeData& d) {
+// The arrays a recurrence fills for n stations, and their regions for Prefault.
+Raw recurrence_arrays(Method m, long n) {
+  Raw r;
+  const long nw = m == Method::TwoPoint ? n + 1 : n;
+  r.xw.resize(nw);
+  r.w.resize(nw);
+  r.xg.resize(n);
+  r.g.resize(n);
+  if (m == Method::ThreePoint && n > 0) {
+    r.xt.resize(n - 1);
+    r.theta.resize(n - 1);
+  }
+  return r;
+}
+
+std::vector<detail::Prefault::Region> regions_of(const Raw& r) {
+  std::vector<detail::Prefault::Region> out;
+  for (const Eigen::VectorXd* v : {&r.g, &r.w, &r.theta, &r.xw, &r.xg, &r.xt})
+    out.push_back({v->data(), sizeof(double) * static_cast<std::size_t>(v->size())});
+  return out;
+}
+
+// Fills r (sized by recurrence_arrays).
+void two_point(const ProbeData& d, Raw& r) {
   require_offsets(d, {0, 1}, "two-point");
   const long n = d.x.size();
   const double h = d.step();
-  Raw r;
   r.xw = Eigen::VectorXd::LinSpaced(n + 1, d.x[0], d.x[0] + static_cast<double>(n) * h);
   r.w = Eigen::VectorXd::Zero(n + 1);
   r.xg = d.x;
@@ -455,7 +491,6 @@ Raw two_point(const ProbeData& d) {
     if (K + 1 <= n) r.w[K + 1] = r.w[K] + (mB[K] - mB[0]) - (mA[K] - mA[0]);
     r.g[K] = mA[K] - mA[0] - r.w[K];
   }
-  return r;
 }
 
 }  // namespace
@@ -463,7 +498,8 @@ Raw two_point(const ProbeData& d) {
 // The seed's three-point recurrence (JPH0464003B2 eqs. 12–17), exposed for the "seed" reference.
 namespace {
 
-Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
+// Fills r (sized by recurrence_arrays).
+void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw& r) {
   require_offsets(d, {0, 1, 2}, "three-point");
   const long n = d.x.size();  // stations K = 0..n-1
   if (n < 4) throw Error(fmt::format("three-point needs at least 4 stations, got {}", n));
@@ -475,7 +511,7 @@ Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
   // Eq. 12 run from X_0 = 0, X_1 = α with the constant β: X_K = K·α + K(K−1)/2·β + C_K (eq. 15),
   // with D_K = m(K) − m(0) per probe formed on the fly. Returns b = −Σ_{K≥2} a_K·X_K with
   // a_K = (K, K(K−1)/2), for the fit below.
-  Eigen::VectorXd X(n);
+  Eigen::VectorXd& X = r.g;  // the guide is X itself (eq. 13)
   auto recurrence = [&](double alpha, double beta) {
     X[0] = 0;
     X[1] = alpha;
@@ -511,22 +547,17 @@ Raw three_point(const ProbeData& d, std::optional<double> zero_difference) {
   // final size and the second fit corrects the small remainder.
   const Eigen::Vector2d ab1 = fit(recurrence(0.0, beta0));
   const Eigen::Vector2d ab2 = fit(recurrence(ab1[0], beta0 + ab1[1]));
-  Raw r;
-  r.w.resize(n);
   for (long K = 0; K < n; ++K) {
     const double k = static_cast<double>(K);
     X[K] += k * ab2[0] + k * (k - 1) / 2 * ab2[1];
     r.w[K] = (A[K] - a0) - X[K];  // eq. 13
   }
   r.xt = d.x.head(n - 1);
-  r.theta.resize(n - 1);
   for (long K = 0; K + 1 < n; ++K)
     r.theta[K] = ((B[K] - b0) - r.w[K + 1] - X[K] + r.w[1]) / l;  // eq. 14
   r.xg = d.x;
-  r.g = std::move(X);
   r.xw = d.x;
   r.parabola_free = !zero_difference.has_value();
-  return r;
 }
 
 // Coordinates for the parabola gauge: t = (x - xc)/L.
@@ -885,15 +916,22 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   auto restricted = [&](const ReferenceAlgebra::Cols& c) {
     return ReferenceAlgebra::restrict(G.topLeftCorner(ra.k, ra.k), c);
   };
-  std::vector<Row, Eigen::aligned_allocator<Row>> back;  // the adjoint state per station
+  // The adjoint state per station (written from the last station back, every entry before it is
+  // read) and the variances; their pages are committed on another core meanwhile.
+  std::vector<Row, Eigen::aligned_allocator<Row>> back(
+      static_cast<std::size_t>(method == Method::TwoPoint ? n + 1 : std::max<long>(n - 2, 0)));
   uw.resize(ra.mw);
   ug.resize(ra.mg);
   ut.resize(ra.mt);
+  const detail::Prefault prefault(
+      {{back.data(), sizeof(Row) * back.size()},
+       {uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
+       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
+       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
 
   if (method == Method::TwoPoint) {
     // w_0 = 0, w_{K+1} = w_K + B_K − A_K (K < n); g_K = A_K − w_K. Var w_j = 2j, var g_K = 1 + 2K.
     // Adjoint: w̄_j = vw_j − vg_j + w̄_{j+1}; z_B[K] = w̄_{K+1}, z_A[K] = vg_K − w̄_{K+1}.
-    back.resize(static_cast<std::size_t>(n + 1));
     Row wb = Row::Zero();
     for (long j = n; j >= 1; --j) {
       wb += ra.vw(j) - ra.vg(j);
@@ -923,7 +961,7 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   // Adjoint: X̄_K = λ_K + 2X̄_{K+1} − X̄_{K+2} (K ≥ 2) with λ_K = −vw_K + vg_K + vt_{K−1} − vt_K;
   // r̄_K = X̄_{K+2}; z_A[i] = vw_i − vt_{i−1} − 2r̄_{i−1} + r̄_{i−2}, z_B[i] = vt_i + 2r̄_i,
   // z_C[i] = −r̄_i.
-  back.assign(static_cast<std::size_t>(std::max<long>(n - 2, 0)), Row::Zero());  // r̄_0..r̄_{n−3}
+  // back holds r̄_0..r̄_{n−3}.
   auto rb = [&](long K) -> Row {
     return K >= 0 && K + 2 < n ? back[static_cast<std::size_t>(K)] : Row(Row::Zero());
   };
@@ -988,6 +1026,14 @@ Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v,
 }  // namespace
 
 Result separate(const ProbeData& data, const Options& opt) {
+  // A recurrence's arrays are known in size from the start: their pages are committed on another
+  // core while the data are checked and the recurrence runs.
+  Raw raw;
+  std::optional<detail::Prefault> prefault;
+  if (opt.method != Method::Lsq) {
+    raw = recurrence_arrays(opt.method, data.x.size());
+    prefault.emplace(regions_of(raw));
+  }
   data.validate();
   opt.validate();
   Result res;
@@ -1004,13 +1050,12 @@ Result separate(const ProbeData& data, const Options& opt) {
   if (!la.observable) throw Error(la.message);
   res.unobservable = la.unobservable;
 
-  Raw raw;
   switch (opt.method) {
     case Method::TwoPoint:
-      raw = two_point(data);
+      two_point(data, raw);
       break;
     case Method::ThreePoint:
-      raw = three_point(data, opt.zero_difference);
+      three_point(data, opt.zero_difference, raw);
       break;
     case Method::Lsq:
       break;
