@@ -20,12 +20,14 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <utility>
 #include <vector>
 
 #include "design.hpp"
+#include "prefault.hpp"
 
 namespace trueaxis::separation::detail {
 
@@ -82,10 +84,14 @@ class BandedLsq {
   Update solve_add(Eigen::VectorXd& v) const;
   // diag((AᵀA)⁻¹) over the free unknowns (pinned 0).
   Eigen::VectorXd covariance_diagonal() const;
+  // (AᵀA)⁻¹V for a V of k columns (a compile-time constant) given row by row, without storing
+  // either: v_row(id, out) writes the k values of a free unknown's row of V; use(id, zv) then
+  // receives that unknown's row of (AᵀA)⁻¹V, once per free unknown, from the last station back (the
+  // final window and the globals first). Holds the forward solve's workpiece rows (Q × k values)
+  // and a window.
+  template <int k, class VRow, class Use>
+  void solve_normal_rows(VRow&& v_row, Use&& use) const;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-  // Overwrites V (one row per unknown, a few columns) with (AᵀA)⁻¹ V; rows of pinned unknowns
-  // are ignored and returned 0. Row-major, so one unknown's values are adjacent.
-  void solve_normal_in_place(RowMajor& V) const;
 
  private:
   // Forms the right-hand sides b − A·v block by block, stores each station's local ones and
@@ -98,8 +104,6 @@ class BandedLsq {
                    const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
   int id_of(long K, int c) const;  // unknown at window column c when the window starts at w(K)
   bool active(int id) const;       // a free unknown that exists
-  template <int Cols>              // 0: any
-  void solve_normal_impl(RowMajor& z) const;
 
   const Design& D_;
   int L_ = 0;                   // local unknowns per station: g (and θ)
@@ -135,5 +139,139 @@ class BandedLsq {
   double min_pivot_ = 1;
   double scale_ = 1;
 };
+
+template <int k, class VRow, class Use>
+void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use) const {
+  // Rᵀy = V forward in elimination order (per station g, θ, w(K); then the final window), and
+  // R z = y backward. y(w(K)) is final after station K's step and needed again at that station on
+  // the way back, so the workpiece rows are kept; a station's local rows depend only on its own
+  // rows of V and are formed again on the way back.
+  const Design& D = D_;
+  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
+  const long n = D.n, Q = D.Q;
+  const auto ku = static_cast<std::size_t>(k);
+  Uninitialized<double> yw(static_cast<std::size_t>(Q) * ku);
+  const Prefault prefault({{yw.data(), yw.size() * sizeof(double)}});
+  std::vector<double> yg(static_cast<std::size_t>(G_) * ku);
+  auto wrow = [&](long pos) { return yw.data() + static_cast<std::size_t>(pos) * ku; };
+  auto is_free = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] == 0; };
+  auto v_or_zero = [&](int id, double* out) {
+    if (is_free(id))
+      v_row(id, out);
+    else
+      std::fill_n(out, k, 0.0);
+  };
+  std::vector<double*> win(static_cast<std::size_t>(m));
+  auto set_window = [&](long K) {
+    for (int c = 0; c < m; ++c)
+      win[static_cast<std::size_t>(c)] = c < nb ? (K + c < Q ? wrow(K + c) : nullptr)
+                                                : yg.data() + static_cast<std::size_t>(c - nb) * ku;
+  };
+  std::vector<double> yl(static_cast<std::size_t>(L) * ku), zl(static_cast<std::size_t>(L) * ku),
+      acc(ku);
+  auto local_forward = [&](long K) {  // yl = Rloc⁻ᵀ·(V's rows of g(K), θ(K))
+    for (int l = 0; l < L; ++l) {
+      double* y = yl.data() + static_cast<std::size_t>(l) * ku;
+      v_or_zero(l == 0 ? D.g(K) : D.t(K), y);
+      for (int j = 0; j < k; ++j) {
+        double v = y[j];
+        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * yl[static_cast<std::size_t>(i) * ku + j];
+        y[j] = v / Rloc_(l, l);
+      }
+    }
+  };
+
+  for (int g = 0; g < G_; ++g)
+    v_or_zero(globals_[static_cast<std::size_t>(g)], yg.data() + static_cast<std::size_t>(g) * ku);
+  for (long pos = 0; pos + 1 < nb && pos < Q; ++pos) v_or_zero(D.w(pos), wrow(pos));
+  for (long K = 0; K < n; ++K) {
+    if (K + nb - 1 < Q) v_or_zero(D.w(K + nb - 1), wrow(K + nb - 1));  // enters the window
+    set_window(K);
+    local_forward(K);
+    for (int c = 0; c < m; ++c) {
+      double* a = win[static_cast<std::size_t>(c)];
+      if (!a) continue;
+      for (int l = 0; l < L; ++l) {
+        const double cl = Cloc_(l, c);
+        const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
+        for (int j = 0; j < k; ++j) a[j] -= cl * y[j];
+      }
+    }
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+    double* y0 = win[0];
+    if (!is_free(D.w(K)) || R[0] == 0) {  // no row of R: 0
+      std::fill_n(y0, k, 0.0);
+      continue;
+    }
+    for (int j = 0; j < k; ++j) y0[j] /= R[0];
+    for (int c = 1; c < m; ++c) {
+      double* a = win[static_cast<std::size_t>(c)];
+      if (!a) continue;
+      const double rc = R[c];
+      for (int j = 0; j < k; ++j) a[j] -= rc * y0[j];
+    }
+  }
+  // The final window: forward, then backward, then its unknowns are done.
+  set_window(n);
+  for (int c = 0; c < m; ++c) {
+    double* yc = win[static_cast<std::size_t>(c)];
+    if (!yc) continue;
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(id_of(n, c)) || F[c] == 0) {
+      std::fill_n(yc, k, 0.0);
+      continue;
+    }
+    for (int j = 0; j < k; ++j) yc[j] /= F[c];
+    for (int i = c + 1; i < m; ++i)
+      if (double* a = win[static_cast<std::size_t>(i)])
+        for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
+  }
+  for (int c = m - 1; c >= 0; --c) {
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(id_of(n, c)) || F[c] == 0) continue;
+    double* zc = win[static_cast<std::size_t>(c)];
+    for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zc[j];
+    for (int i = c + 1; i < m; ++i)
+      if (const double* zi = win[static_cast<std::size_t>(i)])
+        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= F[i] * zi[j];
+    for (int j = 0; j < k; ++j) zc[j] = acc[static_cast<std::size_t>(j)] / F[c];
+  }
+  for (int c = 0; c < m; ++c)
+    if (const int id = id_of(n, c); id >= 0 && is_free(id))
+      use(id, static_cast<const double*>(win[static_cast<std::size_t>(c)]));
+  // Stations backward.
+  for (long K = n - 1; K >= 0; --K) {
+    set_window(K);
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+    double* z0 = win[0];
+    if (is_free(D.w(K)) && R[0] != 0) {
+      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = z0[j];
+      for (int c = 1; c < m; ++c)
+        if (const double* zc = win[static_cast<std::size_t>(c)])
+          for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
+      for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)] / R[0];
+    }
+    if (is_free(D.w(K))) use(D.w(K), static_cast<const double*>(z0));
+    local_forward(K);
+    for (int l = L - 1; l >= 0; --l) {
+      const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
+      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = y[j];
+      for (int c = 0; c < m; ++c)
+        if (const double* zc = win[static_cast<std::size_t>(c)]) {
+          const double cl = Cloc_(l, c);
+          for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= cl * zc[j];
+        }
+      for (int i = l + 1; i < L; ++i)
+        for (int j = 0; j < k; ++j)
+          acc[static_cast<std::size_t>(j)] -=
+              Rloc_(l, i) * zl[static_cast<std::size_t>(i) * ku + j];
+      for (int j = 0; j < k; ++j)
+        zl[static_cast<std::size_t>(l) * ku + j] = acc[static_cast<std::size_t>(j)] / Rloc_(l, l);
+    }
+    for (int l = 0; l < L; ++l)
+      if (const int id = l == 0 ? D.g(K) : D.t(K); is_free(id))
+        use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku));
+  }
+}
 
 }  // namespace trueaxis::separation::detail

@@ -846,52 +846,107 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
   const Design& D = st.D;
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
-  auto free = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] == 0; };
-  // V's nonzero rows as fn(unknown, row); pinned unknowns' rows are zero.
-  auto for_each_v = [&](auto&& fn) {
-    for (Eigen::Index j = 0; j < ra.mw; ++j)
-      if (free(D.w(j))) fn(D.w(j), ra.vw(j));
-    for (Eigen::Index K = 0; K < ra.mg; ++K)
-      if (free(D.g(K))) fn(D.g(K), ra.vg(K));
-    for (Eigen::Index K = 0; K < ra.mt; ++K)
-      if (free(D.t(K))) fn(D.t(K), ra.vt(K));
-  };
+  const long n = D.n;
   // diag(Z) by the selected inversion, on a second core for long runs: it and the solve below
   // only read the factorisation.
   constexpr long kThreadedStations = 20000;
   std::future<Eigen::VectorXd> diag_task =
-      std::async(D.n >= kThreadedStations ? std::launch::async : std::launch::deferred,
+      std::async(n >= kThreadedStations ? std::launch::async : std::launch::deferred,
                  [&st] { return st.engine->covariance_diagonal(); });
-  detail::BandedLsq::RowMajor Z(D.nvars, k);
-  Z.setZero();
-  for_each_v([&](int id, const Row& v) { Z.row(id) = v.head(k).transpose(); });
-  st.engine->solve_normal_in_place(Z);  // now ZV
-  Eigen::MatrixXd VZV = Eigen::MatrixXd::Zero(k, k);
-  for_each_v([&](int id, const Row& v) { VZV.noalias() += v.head(k) * Z.row(id); });
-  const Eigen::VectorXd zdiag = diag_task.get();
-  auto variance = [&](Eigen::Index m, auto&& id_of, auto&& u_of, const ReferenceAlgebra::Cols& c,
-                      double scale) {
-    const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV, c);
-    Eigen::VectorXd var(m);
-    for (Eigen::Index i = 0; i < m; ++i) {
-      const int id = id_of(i);
-      const bool f = free(id);
-      var[i] = ReferenceAlgebra::point_variance(
-          u_of(i), c, S, f ? zdiag[id] : 0.0,
-          f ? Z.data() + static_cast<std::ptrdiff_t>(id) * k : nullptr, scale);
-    }
-    return var;
+  // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_variance), with
+  // S = VᵀZV. (ZV)_u arrives row by row from the solve: its dot with u goes into the output
+  // array at once and its outer product with V_u into VᵀZV; S and Z_uu complete it afterwards.
+  // Pinned unknowns have no Z_uu and no (ZV)_u: their variance is u·S·u alone.
+  uw = Eigen::VectorXd::Zero(ra.mw);
+  ug = Eigen::VectorXd::Zero(ra.mg);
+  ut = Eigen::VectorXd::Zero(ra.mt);
+  enum Kind { kW, kG, kT, kOther };
+  auto kind_of = [&](int id, long& i) {
+    if (id < D.Q) return i = id, kW;
+    if (id < D.Q + n) return i = id - D.Q, kG;
+    if (D.pitch && id < D.Q + 2 * n) return i = id - D.Q - n, kT;
+    return i = 0, kOther;
   };
-  uw = variance(
-      ra.mw, [&](Eigen::Index j) { return D.w(j); }, [&](Eigen::Index j) { return ra.uw(j); },
-      ra.cw, 1.0);
-  ug = variance(
-      ra.mg, [&](Eigen::Index K) { return D.g(K); }, [&](Eigen::Index K) { return ra.ug(K); },
-      ra.cg, 1.0);
+  auto v_of = [&](int id) -> Row {
+    long i = 0;
+    switch (kind_of(id, i)) {
+      case kW:
+        return ra.vw(i);
+      case kG:
+        return ra.vg(i);
+      case kT:
+        return ra.vt(i);
+      default:
+        return Row::Zero();
+    }
+  };
+  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> VZV;
+  VZV.setZero();
+  auto cross = [](const Eigen::Vector3d& u, const ReferenceAlgebra::Cols& c, const Row& z) {
+    return u[0] * z[c[0]] + u[1] * z[c[1]] + u[2] * z[c[2]];
+  };
+  // The column count as a compile-time constant: the rows' small copies and products unroll.
+  auto solve = [&]<int Cols>() {
+    st.engine->solve_normal_rows<Cols>(
+        [&](int id, double* out) {
+          const Row v = v_of(id);
+          for (int j = 0; j < Cols; ++j) out[j] = v[j];
+        },
+        [&](int id, const double* zv) {
+          Row z = Row::Zero();
+          for (int j = 0; j < Cols; ++j) z[j] = zv[j];
+          long i = 0;
+          const Kind kind = kind_of(id, i);
+          Row v = Row::Zero();
+          switch (kind) {
+            case kW:
+              v = ra.vw(i);
+              uw[i] = cross(ra.uw(i), ra.cw, z);
+              break;
+            case kG:
+              v = ra.vg(i);
+              ug[i] = cross(ra.ug(i), ra.cg, z);
+              break;
+            case kT:
+              v = ra.vt(i);
+              if (i < ra.mt) ut[i] = cross(ra.ut(i), ra.ct, z);
+              break;
+            default:
+              return;  // an offset: no row of V
+          }
+          VZV.noalias() += v * z.transpose();
+        });
+  };
+  switch (k) {
+    case 4:
+      solve.template operator()<4>();
+      break;
+    case 5:
+      solve.template operator()<5>();
+      break;
+    default:
+      solve.template operator()<ReferenceAlgebra::kMaxCols>();
+  }
+  const Eigen::VectorXd zdiag = diag_task.get();
+  auto finish = [&](Eigen::VectorXd& var, auto&& id_of, auto&& u_of,
+                    const ReferenceAlgebra::Cols& c, double scale) {
+    const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), c);
+    for (Eigen::Index i = 0; i < var.size(); ++i) {
+      const Eigen::Vector3d u = u_of(i);
+      const double zd = zdiag[id_of(i)];  // 0 for pinned unknowns, as is their cross term
+      var[i] = std::max(0.0, u.dot(S * u) + scale * scale * zd - 2 * scale * var[i]);
+    }
+  };
+  finish(
+      uw, [&](Eigen::Index j) { return D.w(j); }, [&](Eigen::Index j) { return ra.uw(j); }, ra.cw,
+      1.0);
+  finish(
+      ug, [&](Eigen::Index K) { return D.g(K); }, [&](Eigen::Index K) { return ra.ug(K); }, ra.cg,
+      1.0);
   if (ra.pitch)
-    ut = variance(
-        ra.mt, [&](Eigen::Index K) { return D.t(K); }, [&](Eigen::Index K) { return ra.ut(K); },
-        ra.ct, 1.0 / st.h);
+    finish(
+        ut, [&](Eigen::Index K) { return D.t(K); }, [&](Eigen::Index K) { return ra.ut(K); }, ra.ct,
+        1.0 / st.h);
 }
 
 // Uncertainties (unit weight) of the two- and three-point results by exact propagation of every

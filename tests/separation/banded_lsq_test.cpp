@@ -1,12 +1,14 @@
 // The separation's banded least-squares solver against a dense least-squares solve of the same
-// rows (Eigen, column-pivoted Householder QR): solution, residual and diag((AᵀA)⁻¹), for
-// layouts that take each of its paths: narrow windows (width fixed at compile time, one-byte
+// rows (Eigen, column-pivoted Householder QR): solution, residual, diag((AᵀA)⁻¹) and (AᵀA)⁻¹V,
+// for layouts that take each of its paths: narrow windows (width fixed at compile time, one-byte
 // rotation masks), a 14-column window (two-byte masks, width at run time) and one over 64
 // columns (every rotation kept), with an angle channel and with a known zero difference.
 #include "../../src/separation/banded_lsq.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -124,5 +126,32 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
       zworst = std::max(zworst, std::abs(diag[id] - (c >= 0 ? zd[c] : 0.0)));
     }
     EXPECT_LT(zworst, kAgree * zscale) << L.name;
+
+    // (AᵀA)⁻¹V for a V of three columns given row by row, against the dense product; each free
+    // unknown's row arrives exactly once.
+    Eigen::MatrixXd V(nf, 3);
+    for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = noise(rng);
+    Eigen::MatrixXd Zr = Eigen::MatrixXd::Zero(nf, nf);  // R⁻¹R⁻ᵀ in pivoted order
+    Zr.noalias() = Rinv * Rinv.transpose();
+    const auto& perm = qr.colsPermutation().indices();
+    Eigen::MatrixXd Vp(nf, 3);  // Pᵀ·V
+    for (Eigen::Index i = 0; i < nf; ++i) Vp.row(i) = V.row(perm[i]);
+    const Eigen::MatrixXd ZVp = Zr * Vp;
+    Eigen::MatrixXd ZV(nf, 3);
+    for (Eigen::Index i = 0; i < nf; ++i) ZV.row(perm[i]) = ZVp.row(i);
+    Eigen::MatrixXd got = Eigen::MatrixXd::Constant(nf, 3, std::nan(""));
+    std::vector<int> seen(static_cast<std::size_t>(nf), 0);
+    engine.solve_normal_rows<3>(
+        [&](int id, double* out) {
+          for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
+        },
+        [&](int id, const double* zv) {
+          const int c = d.col[static_cast<std::size_t>(id)];
+          ASSERT_GE(c, 0) << L.name << ": a pinned unknown's row";
+          ++seen[static_cast<std::size_t>(c)];
+          for (int j = 0; j < 3; ++j) got(c, j) = zv[j];
+        });
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nf) << L.name;
+    EXPECT_LT((got - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff()) << L.name;
   }
 }
