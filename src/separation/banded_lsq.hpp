@@ -13,8 +13,9 @@
 //      window's first row is w(K)'s row of R, stored, and the window slides by one position.
 // This is the QR factorisation of the whole system in the order (g, θ, w)(K) station by station,
 // globals last: backward stable, O(n·(span + G)²) time, O(n·(span + G)) memory, no allocation per
-// station. The stored rows give the solution, the exact diagonal of (AᵀA)⁻¹ (a backward selected
-// inversion), and (AᵀA)⁻¹V for a few columns.
+// station. The stored rows give the solution (iterative refinement reapplies the kept rotations to
+// new right-hand sides), the exact diagonal of (AᵀA)⁻¹ (a backward selected inversion), and
+// (AᵀA)⁻¹V for a few columns, row by row.
 //
 // The unknowns are numbered as in Design; pinned unknowns are held at their pin values.
 #pragma once
@@ -59,7 +60,8 @@ class BandedLsq {
 
   // Factorises the system for the right-hand side b − A·v: b holds, per station, the probe
   // readings minus `mu` (n × N) and, with an angle channel, wa·angle_mm[K]. v holds a value for
-  // every unknown (pinned ones at their pin values). Afterwards solve() gives the correction to v.
+  // every unknown (pinned ones at their pin values). Afterwards solve_add() adds the correction
+  // to v.
   void factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
               const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
 

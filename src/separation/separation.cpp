@@ -661,9 +661,21 @@ struct LsWidths {
 };
 
 // Applies the ls / min-zone reference in place (parabola gauge first, if free).
+// Long profiles have their workpiece and guide passes run on two cores.
+constexpr Eigen::Index kTwoCorePoints = 50000;
+
+std::launch policy_for(const Raw& r) {
+  return r.g.size() >= kTwoCorePoints ? std::launch::async : std::launch::deferred;
+}
+
 LsWidths apply_reference(Raw& r, Reference ref) {
   const Scale s = scale_of(r.xg);
   LsWidths widths;
+  const std::launch policy = policy_for(r);
+  // The workpiece's sums (ls reference) meanwhile on another core.
+  std::future<Moments> wsums;
+  if (ref != Reference::MinZone)
+    wsums = std::async(policy, [&] { return moments_of(r.xw, r.w, s); });
   // The parabola gauge: c = φᵀg, the guide's t² coefficient, from the guide's sums (which the
   // ls reference needs anyway).
   Moments mg;
@@ -675,8 +687,8 @@ LsWidths apply_reference(Raw& r, Reference ref) {
   }
   if (ref != Reference::MinZone) {
     // Parabola gauge and line in two passes per profile: one for the sums, one for the update.
-    const Moments mw = moments_of(r.xw, r.w, s);
-    widths.w = add_parabola_less_line(r.xw, r.w, mw, c, s);
+    const Moments mw = wsums.get();
+    auto wupdate = std::async(policy, [&] { return add_parabola_less_line(r.xw, r.w, mw, c, s); });
     widths.g = add_parabola_less_line(r.xg, r.g, mg, -c, s);
     if (r.theta.size()) {
       // θ less the parabola's slope, about its mean.
@@ -689,6 +701,7 @@ LsWidths apply_reference(Raw& r, Reference ref) {
       const double mean = (st - k * sx) / static_cast<double>(r.theta.size());
       for (Eigen::Index i = 0; i < r.theta.size(); ++i) r.theta[i] -= k * (r.xt[i] - s.xc) + mean;
     }
+    widths.w = wupdate.get();
     return widths;
   }
   if (r.parabola_free) {
@@ -701,8 +714,10 @@ LsWidths apply_reference(Raw& r, Reference ref) {
     for (Eigen::Index i = 0; i < r.theta.size(); ++i)
       r.theta[i] -= 2 * c * (r.xt[i] - s.xc) / (s.L * s.L);
   }
-  geometry::subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle);
+  auto wzone = std::async(
+      policy, [&] { geometry::subtract_line(r.xw, r.w, geometry::min_zone(r.xw, r.w).middle); });
   geometry::subtract_line(r.xg, r.g, geometry::min_zone(r.xg, r.g).middle);
+  wzone.get();
   if (r.theta.size()) r.theta.array() -= r.theta.mean();
   return widths;
 }
@@ -1183,8 +1198,13 @@ Result separate(const ProbeData& data, const Options& opt) {
     raw.g = geometry::gaussian_filter(raw.g, h, opt.filter_cutoff);
     widths = {};  // the filtered profiles' own
   }
-  res.workpiece_straightness = straightness_of(raw.xw, raw.w, widths.w);
-  res.guide_straightness = straightness_of(raw.xg, raw.g, widths.g);
+  {
+    // The two minimum zones are independent: the guide's on another core for long profiles.
+    auto guide =
+        std::async(policy_for(raw), [&] { return straightness_of(raw.xg, raw.g, widths.g); });
+    res.workpiece_straightness = straightness_of(raw.xw, raw.w, widths.w);
+    res.guide_straightness = guide.get();
+  }
   res.workpiece = {std::move(raw.xw), std::move(raw.w), std::move(uw)};
   res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
   if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
