@@ -71,8 +71,15 @@ double ProbeData::step() const {
   return (x[x.size() - 1] - x[0]) / static_cast<double>(x.size() - 1);
 }
 
-void ProbeData::validate() const {
-  const Eigen::Index n = x.size();
+namespace {
+
+// ProbeData::validate in three parts, so that separate() can check the values (one pass over all
+// the data) on another core while the method runs; the errors are the same, in the same order.
+void check_shapes(const ProbeData& d) {
+  const Eigen::Index n = d.x.size();
+  const auto& readings = d.readings;
+  const auto& offsets = d.offsets;
+  const auto& angle = d.angle;
   if (n < 3) throw Error(fmt::format("too few stations: {} (need at least 3)", n));
   if (readings.rows() != n)
     throw Error(fmt::format("readings have {} rows but there are {} stations", readings.rows(), n));
@@ -82,6 +89,13 @@ void ProbeData::validate() const {
         fmt::format("{} probe offsets for {} probe columns", offsets.size(), readings.cols()));
   if (angle.size() != 0 && angle.size() != n)
     throw Error(fmt::format("angle channel has {} values for {} stations", angle.size(), n));
+}
+
+void check_values(const ProbeData& data) {
+  const Eigen::Index n = data.x.size();
+  const auto& x = data.x;
+  const auto& readings = data.readings;
+  const auto& angle = data.angle;
   // One vectorised pass per array decides; only a failure looks for the first offender.
   auto finite = [](const double* v, Eigen::Index m) {
     // v·0 is NaN for a NaN or an infinity, else 0; Eigen's sum keeps several vector
@@ -92,7 +106,7 @@ void ProbeData::validate() const {
   for (Eigen::Index j = 0; j < readings.cols() && all_finite; ++j)
     all_finite = finite(readings.col(j).data(), n);
   if (!all_finite) throw Error("non-finite value (NaN or Inf) in the data");
-  const double h = step();
+  const double h = data.step();
   if (!(h > 0)) throw Error("station positions must increase");
   const double tolerance = kStepTolerance * h + 1e-12;
   const double* xp = x.data();
@@ -111,6 +125,11 @@ void ProbeData::validate() const {
     if (std::abs(d - h) > tolerance)
       throw Error(fmt::format("uneven step at station {}: {} mm instead of {} mm", k, d, h));
   }
+}
+
+void check_offsets(const ProbeData& d) {
+  const auto& offsets = d.offsets;
+  const double h = d.step();
   if (offsets[0] != 0) throw Error("the first probe offset must be 0 (offsets are from probe A)");
   for (std::size_t i = 0; i < offsets.size(); ++i) {
     const double r = offsets[i] / h;
@@ -123,6 +142,14 @@ void ProbeData::validate() const {
         throw Error(
             fmt::format("probes {} and {} have the same offset {} mm", j + 1, i + 1, offsets[i]));
   }
+}
+
+}  // namespace
+
+void ProbeData::validate() const {
+  check_shapes(*this);
+  check_values(*this);
+  check_offsets(*this);
 }
 
 void Options::validate() const {
@@ -1104,40 +1131,51 @@ Result separate(const ProbeData& data, const Options& opt) {
     raw = recurrence_arrays(opt.method, data.x.size());
     prefault.emplace(regions_of(raw));
   }
-  data.validate();
-  opt.validate();
+  check_shapes(data);
+  const long n = data.x.size();
+  // The values (finite, evenly stepped: one pass over all the data) are checked on another core
+  // while the offsets, the layout and the method go on. Their error, if any, is the one reported,
+  // as if they had been checked first, and nothing computed from the data is used before.
+  std::future<void> values =
+      std::async(n >= kTwoCorePoints ? std::launch::async : std::launch::deferred,
+                 [&data] { check_values(data); });
   Result res;
   res.method = opt.method;
   res.reference = opt.reference;
-  const long n = data.x.size();
   const double h = data.step();
-  std::vector<long> p;
-  for (double s : data.offsets) p.push_back(std::lround(s / h));
   const bool angle = data.angle.size() == n;
-
-  // The layout must be observable (beyond line and, by convention, parabola) for every method.
-  const LayoutAnalysis la = analyze_layout(p, angle, opt.zero_difference.has_value(), n);
-  if (!la.observable) throw Error(la.message);
-  res.unobservable = la.unobservable;
-
-  switch (opt.method) {
-    case Method::TwoPoint:
-      two_point(data, raw);
-      break;
-    case Method::ThreePoint:
-      three_point(data, opt.zero_difference, raw);
-      break;
-    case Method::Lsq:
-      break;
+  std::vector<long> p;
+  LsqState st;
+  try {
+    check_offsets(data);
+    opt.validate();
+    for (double s : data.offsets) p.push_back(std::lround(s / h));
+    // The layout must be observable (beyond line and, by convention, parabola) for every method.
+    const LayoutAnalysis la = analyze_layout(p, angle, opt.zero_difference.has_value(), n);
+    if (!la.observable) throw Error(la.message);
+    res.unobservable = la.unobservable;
+    switch (opt.method) {
+      case Method::TwoPoint:
+        two_point(data, raw);
+        break;
+      case Method::ThreePoint:
+        three_point(data, opt.zero_difference, raw);
+        break;
+      case Method::Lsq:
+        raw = solve_lsq(data, opt, st);
+        break;
+    }
+  } catch (...) {
+    values.get();  // the values' error first
+    throw;
   }
+  values.get();
   // The least-squares solve gives the Lsq answer and its covariance. The recurrences (A, B)
   // propagate each reading exactly through their own equations. Without redundancy (A, B) the
   // noise level cannot be estimated, so their uncertainty needs a given sigma.
   const bool unc_possible =
       opt.compute_uncertainty && opt.filter_cutoff == 0 && opt.reference != Reference::Seed;
   const bool want_unc = unc_possible && (opt.method == Method::Lsq || opt.sigma.has_value());
-  LsqState st;
-  if (opt.method == Method::Lsq) raw = solve_lsq(data, opt, st);
   res.dof = st.engine ? st.dof : 0;
 
   LsWidths widths;  // NaN unless the reference found them

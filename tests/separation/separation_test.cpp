@@ -300,6 +300,36 @@ TEST(Separation, BadInputsGiveClearErrors) {
   expect_error(d, o, "zero difference is defined for three-probe layouts only");
 }
 
+// Long data have their values checked on another core while the method runs: a bad value is
+// still the error reported, before any error the method or the options would give, and for
+// every method.
+TEST(Separation, LongDataReportBadValuesFirst) {
+  const auto camp = sim::simulate_straightness(carriage(60000, {0, 10, 20}, 4));
+  auto message = [](const separation::ProbeData& d, const Options& o) -> std::string {
+    try {
+      separation::separate(d, o);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  for (Method m : {Method::TwoPoint, Method::ThreePoint, Method::Lsq}) {
+    Options o;
+    o.method = m;
+    auto d = camp.data;
+    d.readings(59990, 2) = INFINITY;
+    EXPECT_NE(message(d, o).find("non-finite"), std::string::npos) << to_string(m);
+    d = camp.data;
+    d.x[40000] += 1;
+    EXPECT_NE(message(d, o).find("uneven step at station 40000"), std::string::npos)
+        << to_string(m);
+    // The values' error also comes before the options' own.
+    o.filter_cutoff = -1;
+    EXPECT_NE(message(d, o).find("uneven step at station 40000"), std::string::npos)
+        << to_string(m);
+  }
+}
+
 TEST(Separation, MinZoneReferenceCentresTheZone) {
   const auto camp = sim::simulate_straightness(carriage(120, {0, 10, 20}, 3));
   Options o;
