@@ -480,6 +480,13 @@ void require_offsets(const ProbeData& d, std::initializer_list<long> want, const
     throw Error(fmt::format("method {} does not use an angle channel; use --method lsq", method));
 }
 
+// Long profiles have independent passes (workpiece and guide, copies) run on two cores.
+constexpr Eigen::Index kTwoCorePoints = 50000;
+
+std::launch policy_for(const Raw& r) {
+  return r.g.size() >= kTwoCorePoints ? std::launch::async : std::launch::deferred;
+}
+
 // The arrays a recurrence fills for n stations, and their regions for Prefault.
 Raw recurrence_arrays(Method m, long n) {
   Raw r;
@@ -535,6 +542,12 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   const double* B = d.readings.col(1).data();
   const double* C = d.readings.col(2).data();
   const double a0 = A[0], b0 = B[0], c0 = C[0];
+  // The profiles' station grids are copies of x: made on another core meanwhile.
+  auto grids = std::async(policy_for(r), [&] {
+    r.xt = d.x.head(n - 1);
+    r.xg = d.x;
+    r.xw = d.x;
+  });
   // Eq. 12 run from X_0 = 0, X_1 = α with the constant β: X_K = K·α + K(K−1)/2·β + C_K (eq. 15),
   // with D_K = m(K) − m(0) per probe formed on the fly. Returns b = −Σ_{K≥2} a_K·X_K with
   // a_K = (K, K(K−1)/2), for the fit below.
@@ -555,12 +568,16 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   // α, β (or α alone when β is known) minimising Σ_{K=2}^{n−1} (X_K + K·α + K(K−1)/2·β)²: the
   // 2×2 normal equations whose closed form is the seed's eqs. 16–17.
   const bool beta_known = zero_difference.has_value();
-  Eigen::Matrix2d Mn = Eigen::Matrix2d::Zero();
+  double s11 = 0, s12 = 0, s22 = 0;  // Σ a·aᵀ, a vectorised reduction
+#pragma omp simd reduction(+ : s11, s12, s22)
   for (long K = 2; K < n; ++K) {
-    const double k = static_cast<double>(K);
-    const Eigen::Vector2d a(k, k * (k - 1) / 2);
-    Mn += a * a.transpose();
+    const double k = static_cast<double>(K), t = k * (k - 1) / 2;
+    s11 += k * k;
+    s12 += k * t;
+    s22 += t * t;
   }
+  Eigen::Matrix2d Mn;
+  Mn << s11, s12, s12, s22;
   auto fit = [&](const Eigen::Vector2d& b) {
     if (beta_known) return Eigen::Vector2d(b[0] / Mn(0, 0), 0.0);
     return Eigen::Vector2d(Mn.ldlt().solve(b));
@@ -579,11 +596,9 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
     X[K] += k * ab2[0] + k * (k - 1) / 2 * ab2[1];
     r.w[K] = (A[K] - a0) - X[K];  // eq. 13
   }
-  r.xt = d.x.head(n - 1);
   for (long K = 0; K + 1 < n; ++K)
     r.theta[K] = ((B[K] - b0) - r.w[K + 1] - X[K] + r.w[1]) / l;  // eq. 14
-  r.xg = d.x;
-  r.xw = d.x;
+  grids.get();
   r.parabola_free = !zero_difference.has_value();
 }
 
@@ -688,13 +703,6 @@ struct LsWidths {
 };
 
 // Applies the ls / min-zone reference in place (parabola gauge first, if free).
-// Long profiles have their workpiece and guide passes run on two cores.
-constexpr Eigen::Index kTwoCorePoints = 50000;
-
-std::launch policy_for(const Raw& r) {
-  return r.g.size() >= kTwoCorePoints ? std::launch::async : std::launch::deferred;
-}
-
 LsWidths apply_reference(Raw& r, Reference ref) {
   const Scale s = scale_of(r.xg);
   LsWidths widths;
