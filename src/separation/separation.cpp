@@ -1147,6 +1147,12 @@ Result separate(const ProbeData& data, const Options& opt) {
   std::future<void> values =
       std::async(n >= kTwoCorePoints ? std::launch::async : std::launch::deferred,
                  [&data] { check_values(data); });
+  bool values_known = false;
+  auto values_first = [&] {  // rethrows the values' error, once
+    if (values_known) return;
+    values_known = true;
+    values.get();
+  };
   Result res;
   res.method = opt.method;
   res.reference = opt.reference;
@@ -1156,6 +1162,11 @@ Result separate(const ProbeData& data, const Options& opt) {
   LsqState st;
   try {
     check_offsets(data);
+    // Offsets of an absurd number of steps can only come from a broken x (which the values check
+    // reports): nothing is sized by them before that check has answered.
+    constexpr double kAbsurdSteps = 2147483647.0;
+    for (double s : data.offsets)
+      if (!(std::abs(s / h) <= kAbsurdSteps)) values_first();
     opt.validate();
     for (double s : data.offsets) p.push_back(std::lround(s / h));
     // The layout must be observable (beyond line and, by convention, parabola) for every method.
@@ -1174,10 +1185,10 @@ Result separate(const ProbeData& data, const Options& opt) {
         break;
     }
   } catch (...) {
-    values.get();  // the values' error first
+    values_first();  // the values' error first
     throw;
   }
-  values.get();
+  values_first();
   // The least-squares solve gives the Lsq answer and its covariance. The recurrences (A, B)
   // propagate each reading exactly through their own equations. Without redundancy (A, B) the
   // noise level cannot be estimated, so their uncertainty needs a given sigma.

@@ -327,6 +327,13 @@ TEST(Separation, LongDataReportBadValuesFirst) {
     o.filter_cutoff = -1;
     EXPECT_NE(message(d, o).find("uneven step at station 40000"), std::string::npos)
         << to_string(m);
+    // A broken x that makes the probe offsets an absurd number of steps: nothing is sized by
+    // them, the values' error is reported.
+    o.filter_cutoff = 0;
+    d = camp.data;
+    d.x.setZero();
+    d.x[d.x.size() - 1] = 1e-300;
+    EXPECT_NE(message(d, o).find("station 1 does not increase"), std::string::npos) << to_string(m);
   }
 }
 
