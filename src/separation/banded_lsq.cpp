@@ -185,76 +185,78 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
                                       {rot, (expect > used ? expect - used : 0) * sizeof(double)},
                                       {rot_mask_.data(), rot_mask_.size()}});
   };
-  for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) {
-    if (K == kBlock) start_prefault();
-    while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
-    const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
-    for (int r = 0; r < nred; ++r) {
-      // A reduced row: fold it into the window by Givens rotations.
-      std::uint64_t mask = 0;
-      const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
-      for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
-      row[static_cast<std::size_t>(m)] = reduced(r);
-      if (pin_in_band)
-        for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
-          row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
-      for (int j = 0; j < m; ++j) {
-        const double bj = row[static_cast<std::size_t>(j)];
-        if (bj == 0) {
-          if (keep_rotations_ && !masked_) {
-            *rot++ = 1;
-            *rot++ = 0;
+  for_each_station(
+      readings, mu, angle_mm,
+      v, [&](long K, auto&& reduced) __attribute__((optimize("no-tree-vectorize"))) {
+        if (K == kBlock) start_prefault();
+        while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
+        const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
+        for (int r = 0; r < nred; ++r) {
+          // A reduced row: fold it into the window by Givens rotations.
+          std::uint64_t mask = 0;
+          const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
+          for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
+          row[static_cast<std::size_t>(m)] = reduced(r);
+          if (pin_in_band)
+            for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
+              row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
+          for (int j = 0; j < m; ++j) {
+            const double bj = row[static_cast<std::size_t>(j)];
+            if (bj == 0) {
+              if (keep_rotations_ && !masked_) {
+                *rot++ = 1;
+                *rot++ = 0;
+              }
+              continue;
+            }
+            double* Wj = W.data() + static_cast<std::size_t>(j * s);
+            const double a = Wj[j];
+            double cs, sn;
+            if (a == 0) {  // an empty row of the window: the row takes its place
+              cs = 0;
+              sn = bj > 0 ? 1 : -1;
+              Wj[j] = std::abs(bj);
+            } else {
+              const double rr = std::sqrt(a * a + bj * bj);
+              cs = a / rr;
+              sn = bj / rr;
+              Wj[j] = rr;
+            }
+            for (int c = j + 1; c <= m; ++c) {
+              const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
+              Wj[c] = cs * wc + sn * xc;
+              row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
+            }
+            if (keep_rotations_) {
+              *rot++ = cs;
+              *rot++ = sn;
+              mask |= std::uint64_t{1} << (j & 63);
+            }
           }
-          continue;
+          if (keep_rotations_ && masked_)
+            for (int i = 0; i < mask_bytes_; ++i)
+              *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
+          ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
         }
-        double* Wj = W.data() + static_cast<std::size_t>(j * s);
-        const double a = Wj[j];
-        double cs, sn;
-        if (a == 0) {  // an empty row of the window: the row takes its place
-          cs = 0;
-          sn = bj > 0 ? 1 : -1;
-          Wj[j] = std::abs(bj);
-        } else {
-          const double rr = std::sqrt(a * a + bj * bj);
-          cs = a / rr;
-          sn = bj / rr;
-          Wj[j] = rr;
+        // No later row touches w(K): its row of R leaves the window, which slides by one position.
+        double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+        for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
+        qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
+        if (!D.pinned[static_cast<std::size_t>(D.w(K))])
+          min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
+        for (int t = 0; t < m; ++t) {
+          double* dst = W.data() + static_cast<std::size_t>(t * s);
+          if (t == nb - 1) {
+            for (int c = 0; c < s; ++c) dst[c] = 0;
+            continue;
+          }
+          const double* src = t < nb - 1 ? dst + s : dst;
+          for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
+          dst[nb - 1] = 0;
+          if (src != dst)
+            for (int c = nb; c < s; ++c) dst[c] = src[c];
         }
-        for (int c = j + 1; c <= m; ++c) {
-          const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
-          Wj[c] = cs * wc + sn * xc;
-          row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
-        }
-        if (keep_rotations_) {
-          *rot++ = cs;
-          *rot++ = sn;
-          mask |= std::uint64_t{1} << (j & 63);
-        }
-      }
-      if (keep_rotations_ && masked_)
-        for (int i = 0; i < mask_bytes_; ++i)
-          *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
-      ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
-    }
-    // No later row touches w(K): its row of R leaves the window, which slides by one position.
-    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-    for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
-    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-    if (!D.pinned[static_cast<std::size_t>(D.w(K))])
-      min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
-    for (int t = 0; t < m; ++t) {
-      double* dst = W.data() + static_cast<std::size_t>(t * s);
-      if (t == nb - 1) {
-        for (int c = 0; c < s; ++c) dst[c] = 0;
-        continue;
-      }
-      const double* src = t < nb - 1 ? dst + s : dst;
-      for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
-      dst[nb - 1] = 0;
-      if (src != dst)
-        for (int c = nb; c < s; ++c) dst[c] = src[c];
-    }
-  });
+      });
   final_.assign(W.begin(), W.end());
   for (int c = 0; c < m; ++c)
     if (active(id_of(n, c)))
@@ -268,9 +270,30 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
     factor(readings, mu, angle_mm, v);
     return;
   }
+  switch (m_) {  // as in factor()
+    case 2:
+      return refactor_rhs_impl<2>(readings, mu, angle_mm, v);
+    case 3:
+      return refactor_rhs_impl<3>(readings, mu, angle_mm, v);
+    case 4:
+      return refactor_rhs_impl<4>(readings, mu, angle_mm, v);
+    case 5:
+      return refactor_rhs_impl<5>(readings, mu, angle_mm, v);
+    case 6:
+      return refactor_rhs_impl<6>(readings, mu, angle_mm, v);
+    default:
+      return refactor_rhs_impl<0>(readings, mu, angle_mm, v);
+  }
+}
+
+template <int Width>
+void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                                  const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   // The same rotations applied to the new right-hand side only: the window's last column.
-  const int m = m_, s = m_ + 1, nb = nb_, nred = M_ - L_;
-  std::vector<double> wr(static_cast<std::size_t>(m), 0.0);
+  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, nred = M_ - L_;
+  std::vector<double> wr_heap(Width > 0 ? 0 : static_cast<std::size_t>(m), 0.0);
+  double wr_fixed[Width > 0 ? Width : 1] = {};
+  double* wr = Width > 0 ? wr_fixed : wr_heap.data();
   const double* rot = rot_.data();
   const unsigned char* mask_in = rot_mask_.data();
   ssr_ = 0;
@@ -280,8 +303,8 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
       auto apply = [&](int j) {
         const double cs = rot[0], sn = rot[1];
         rot += 2;
-        const double w = wr[static_cast<std::size_t>(j)];
-        wr[static_cast<std::size_t>(j)] = cs * w + sn * x;
+        const double w = wr[j];
+        wr[j] = cs * w + sn * x;
         x = cs * x - sn * w;
       };
       if (masked_) {
@@ -295,22 +318,23 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
       ssr_ += x * x;
     }
     qb_[static_cast<std::size_t>(K)] = wr[0];
-    for (int t = 0; t + 1 < nb; ++t)
-      wr[static_cast<std::size_t>(t)] = wr[static_cast<std::size_t>(t) + 1];
-    wr[static_cast<std::size_t>(nb) - 1] = 0;
+    for (int t = 0; t + 1 < nb; ++t) wr[t] = wr[t + 1];
+    wr[nb - 1] = 0;
   });
-  for (int c = 0; c < m; ++c)
-    final_[static_cast<std::size_t>(c * s + m)] = wr[static_cast<std::size_t>(c)];
+  for (int c = 0; c < m; ++c) final_[static_cast<std::size_t>(c * s + m)] = wr[c];
 }
 
-BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
+template <int NB>
+BandedLsq::Update BandedLsq::solve_add_impl(Eigen::VectorXd& v) const {
   const Design& D = D_;
-  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
-  Update u;
-  auto add = [&](int id, double dx) {
-    u.max_correction = std::max(u.max_correction, std::abs(dx));
-    v[id] += dx;
-    u.max_value = std::max(u.max_value, std::abs(v[id]));
+  const int m = m_, s = m_ + 1, nb = NB > 0 ? NB : nb_, L = L_, G = G_;
+  // Largest |correction| and |value| per stream (separate maxima: no chain of them per station).
+  double mc[4] = {0, 0, 0, 0}, mv[4] = {0, 0, 0, 0};
+  auto add = [&](int stream, int id, double dx) {
+    const double x = v[id] + dx;
+    v[id] = x;
+    mc[stream] = std::max(mc[stream], std::abs(dx));
+    mv[stream] = std::max(mv[stream], std::abs(x));
   };
   // The final window [w(n..n+span), globals] by back-substitution (inactive columns 0).
   std::vector<double> xc(static_cast<std::size_t>(m), 0.0);
@@ -321,47 +345,95 @@ BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
     double acc = F[m];
     for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
     xc[static_cast<std::size_t>(c)] = acc / F[c];
-    add(id, xc[static_cast<std::size_t>(c)]);
+    add(3, id, xc[static_cast<std::size_t>(c)]);
   }
   const double* xg = xc.data() + nb;  // the globals' corrections
-  // The workpiece corrections the back-substitution still needs, w(K..K+span), in a ring
-  // indexed by position modulo a power of two: no vector of corrections.
+  // The globals' share of each station's local equations is the same at every station.
+  double lg[2] = {0, 0};
+  for (int l = 0; l < L; ++l)
+    for (int k = 0; k < G; ++k) lg[l] += Cloc_(l, nb + k) * xg[k];
+  const double inv00 = 1 / Rloc_(0, 0), r01 = L == 2 ? Rloc_(0, 1) : 0.0,
+               inv11 = L == 2 ? 1 / Rloc_(1, 1) : 0.0;
+  // The workpiece corrections the back-substitution still needs, d[j] = Δw(K + j): a fixed
+  // array for a compile-time band, else a ring indexed by position modulo a power of two.
   std::size_t ring_size = 1;
   while (ring_size < static_cast<std::size_t>(nb)) ring_size *= 2;
   const std::size_t mask = ring_size - 1;
-  std::vector<double> ring(ring_size, 0.0);
-  for (int c = 0; c < nb; ++c)
-    ring[static_cast<std::size_t>(D.n + c) & mask] = xc[static_cast<std::size_t>(c)];
-  auto dw = [&](long pos) { return ring[static_cast<std::size_t>(pos) & mask]; };
+  std::vector<double> ring(NB > 0 ? 0 : ring_size, 0.0);
+  double d[NB > 0 ? NB : 1] = {};
+  auto dw = [&](long K, int j) -> double {
+    if constexpr (NB > 0)
+      return d[j];
+    else
+      return ring[static_cast<std::size_t>(K + j) & mask];
+  };
+  for (int c = 0; c < nb; ++c) {
+    if constexpr (NB > 0) {
+      if (c + 1 < nb) d[c + 1] = xc[static_cast<std::size_t>(c)];
+    } else {
+      ring[static_cast<std::size_t>(D.n + c) & mask] = xc[static_cast<std::size_t>(c)];
+    }
+  }
+  auto next_pin = pinned_w_.rbegin();  // the pinned positions, descending
+  while (next_pin != pinned_w_.rend() && *next_pin >= D.n) ++next_pin;
+  const double* Cl0 = Cloc_.data();  // column-major L × m: Cloc(l, j) at j·L + l
   for (long K = D.n - 1; K >= 0; --K) {
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double dwk = 0;
-    if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
+    const bool pinned = next_pin != pinned_w_.rend() && *next_pin == K;
+    if (pinned) ++next_pin;
+    if (!pinned && R[0] != 0) {
       double acc = qb_[static_cast<std::size_t>(K)];
-      for (int j = 1; j < nb; ++j) acc -= R[j] * dw(K + j);
-      for (int k = 0; k < G_; ++k) acc -= R[nb + k] * xg[k];
+      for (int k = 0; k < G; ++k) acc -= R[nb + k] * xg[k];
+      for (int j = nb - 1; j >= 1; --j) acc -= R[j] * dw(K, j);
       dwk = acc * (1 / R[0]);  // the reciprocal is off the back-substitution's dependency chain
-      add(D.w(K), dwk);
+      add(0, D.w(K), dwk);
     }
-    ring[static_cast<std::size_t>(K) & mask] = dwk;
+    if constexpr (NB > 0)
+      d[0] = dwk;
+    else
+      ring[static_cast<std::size_t>(K) & mask] = dwk;
     // Local equations: Rloc·[g θ] = bloc − Cloc·(window).
-    double rl[2];
     const double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
+    double rl[2];
     for (int l = 0; l < L; ++l) {
-      double acc = bl[l];
-      for (int j = 0; j < nb; ++j) acc -= Cloc_(l, j) * dw(K + j);
-      for (int k = 0; k < G_; ++k) acc -= Cloc_(l, nb + k) * xg[k];
+      double acc = bl[l] - lg[l];
+      for (int j = 0; j < nb; ++j) acc -= Cl0[j * L + l] * dw(K, j);
       rl[l] = acc;
     }
     if (L == 2) {
-      const double th = rl[1] / Rloc_(1, 1);
-      add(D.t(K), th);
-      add(D.g(K), (rl[0] - Rloc_(0, 1) * th) / Rloc_(0, 0));
+      const double th = rl[1] * inv11;
+      add(2, D.t(K), th);
+      add(1, D.g(K), (rl[0] - r01 * th) * inv00);
     } else {
-      add(D.g(K), rl[0] / Rloc_(0, 0));
+      add(1, D.g(K), rl[0] * inv00);
     }
+    if constexpr (NB > 0)
+      for (int j = NB - 1; j >= 1; --j) d[j] = d[j - 1];
+  }
+  Update u;
+  for (int i = 0; i < 4; ++i) {
+    u.max_correction = std::max(u.max_correction, mc[i]);
+    u.max_value = std::max(u.max_value, mv[i]);
   }
   return u;
+}
+
+BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
+  // The band width as a compile-time constant for the usual narrow bands: the corrections the
+  // back-substitution still needs then stay in registers.
+  switch (nb_) {
+    case 2:
+      return solve_add_impl<2>(v);
+    case 3:
+      return solve_add_impl<3>(v);
+    case 4:
+      return solve_add_impl<4>(v);
+    case 5:
+      return solve_add_impl<5>(v);
+    default:
+      return solve_add_impl<0>(v);
+  }
 }
 
 Eigen::VectorXd BandedLsq::covariance_diagonal() const {

@@ -102,6 +102,11 @@ class BandedLsq {
   void for_each_station(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                         const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v, Fn&& fn);
   template <int Width>  // window width, 0: any
+  void refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                         const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+  template <int NB>  // band width, 0: any
+  Update solve_add_impl(Eigen::VectorXd& v) const;
+  template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                    const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
   int id_of(long K, int c) const;  // unknown at window column c when the window starts at w(K)
