@@ -185,6 +185,8 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
                                       {rot, (expect > used ? expect - used : 0) * sizeof(double)},
                                       {rot_mask_.data(), rot_mask_.size()}});
   };
+  // The fold is not vectorised: each rotation's row and window updates are read back by the next
+  // one, and paired loads of values stored one at a time stall on store forwarding.
   for_each_station(
       readings, mu, angle_mm,
       v, [&](long K, auto&& reduced) __attribute__((optimize("no-tree-vectorize"))) {
@@ -212,6 +214,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
             double* Wj = W.data() + static_cast<std::size_t>(j * s);
             const double a = Wj[j];
             double cs, sn;
+            int c0 = j + 1;
             if (a == 0) {  // an empty row of the window: the row takes its place
               cs = 0;
               sn = bj > 0 ? 1 : -1;
@@ -221,8 +224,14 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
               cs = a / rr;
               sn = bj / rr;
               Wj[j] = rr;
+              // The next rotation waits for this element only: as (a·x − b·w)/rr its numerator is
+              // formed while the square root is taken, one multiplication off the chain.
+              const double wc = Wj[c0], xc = row[static_cast<std::size_t>(c0)];
+              Wj[c0] = cs * wc + sn * xc;
+              row[static_cast<std::size_t>(c0)] = (a * xc - bj * wc) / rr;
+              ++c0;
             }
-            for (int c = j + 1; c <= m; ++c) {
+            for (int c = c0; c <= m; ++c) {
               const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
               Wj[c] = cs * wc + sn * xc;
               row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
