@@ -361,6 +361,13 @@ struct Raw {
   bool parabola_free = false;
 };
 
+// Long profiles have independent passes (workpiece and guide, copies) run on two cores.
+constexpr Eigen::Index kTwoCorePoints = 50000;
+
+std::launch policy_for(const Raw& r) {
+  return r.g.size() >= kTwoCorePoints ? std::launch::async : std::launch::deferred;
+}
+
 // Everything the uncertainty propagation needs from a least-squares solve.
 struct LsqState {
   Design D;
@@ -405,10 +412,14 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   const detail::Prefault prefault(
       {{r.w.data(), sizeof(double) * static_cast<std::size_t>(D.Q)},
        {r.g.data(), sizeof(double) * static_cast<std::size_t>(n)},
-       {r.theta.data(), sizeof(double) * static_cast<std::size_t>(r.theta.size())},
-       {r.xw.data(), sizeof(double) * static_cast<std::size_t>(D.Q)},
-       {r.xg.data(), sizeof(double) * static_cast<std::size_t>(n)},
-       {r.xt.data(), sizeof(double) * static_cast<std::size_t>(r.xt.size())}});
+       {r.theta.data(), sizeof(double) * static_cast<std::size_t>(r.theta.size())}});
+  // The grids depend on x alone: filled on another core meanwhile.
+  const long pmin = *std::min_element(p.begin(), p.end());
+  auto grids = std::async(policy_for(r), [&] {
+    for (long j = 0; j < D.Q; ++j) r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
+    r.xg = data.x;
+    if (D.pitch) r.xt = data.x;
+  });
   st.engine = std::make_unique<detail::BandedLsq>(D);
   Eigen::VectorXd angle_mm;
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
@@ -449,17 +460,10 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   }
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
-  const long pmin = *std::min_element(p.begin(), p.end());
-  for (long j = 0; j < D.Q; ++j) {
-    r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
-    r.w[j] = v[D.w(j)];
-  }
-  r.xg = data.x;
-  for (long K = 0; K < n; ++K) r.g[K] = v[D.g(K)];
-  if (D.pitch) {
-    r.xt = data.x;
-    for (long K = 0; K < n; ++K) r.theta[K] = v[D.t(K)] / h;
-  }
+  r.w = v.segment(D.w(0), D.Q);
+  r.g = v.segment(D.g(0), n);
+  if (D.pitch) r.theta = v.segment(D.t(0), n) / h;
+  grids.get();
   r.parabola_free = D.parabola_free;
   return r;
 }
@@ -483,13 +487,6 @@ void require_offsets(const ProbeData& d, std::initializer_list<long> want, const
   }
   if (d.angle.size() != 0)
     throw Error(fmt::format("method {} does not use an angle channel; use --method lsq", method));
-}
-
-// Long profiles have independent passes (workpiece and guide, copies) run on two cores.
-constexpr Eigen::Index kTwoCorePoints = 50000;
-
-std::launch policy_for(const Raw& r) {
-  return r.g.size() >= kTwoCorePoints ? std::launch::async : std::launch::deferred;
 }
 
 // The arrays a recurrence fills for n stations, and their regions for Prefault.
