@@ -22,6 +22,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <utility>
@@ -104,6 +105,8 @@ class BandedLsq {
   template <int Width>  // window width, 0: any
   void refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                          const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+  template <int k, int Width, class VRow, class Use>  // window width, 0: any
+  void solve_normal_rows_impl(VRow& v_row, Use& use) const;
   template <int NB>  // band width, 0: any
   Update solve_add_impl(Eigen::VectorXd& v) const;
   template <int Width>  // window width, 0: any
@@ -149,12 +152,31 @@ class BandedLsq {
 
 template <int k, class VRow, class Use>
 void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use) const {
+  // The window width as a compile-time constant for the usual narrow windows (as in factor()).
+  switch (m_) {
+    case 2:
+      return solve_normal_rows_impl<k, 2>(v_row, use);
+    case 3:
+      return solve_normal_rows_impl<k, 3>(v_row, use);
+    case 4:
+      return solve_normal_rows_impl<k, 4>(v_row, use);
+    case 5:
+      return solve_normal_rows_impl<k, 5>(v_row, use);
+    case 6:
+      return solve_normal_rows_impl<k, 6>(v_row, use);
+    default:
+      return solve_normal_rows_impl<k, 0>(v_row, use);
+  }
+}
+
+template <int k, int Width, class VRow, class Use>
+void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
   // Rᵀy = V forward in elimination order (per station g, θ, w(K); then the final window), and
   // R z = y backward. y(w(K)) is final after station K's step and needed again at that station on
   // the way back, so the workpiece rows are kept; a station's local rows depend only on its own
   // rows of V and are formed again on the way back.
   const Design& D = D_;
-  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
+  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_;
   const long n = D.n, Q = D.Q;
   const auto ku = static_cast<std::size_t>(k);
   Uninitialized<double> yw(static_cast<std::size_t>(Q) * ku);
@@ -168,7 +190,13 @@ void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use) const {
     else
       std::fill_n(out, k, 0.0);
   };
-  std::vector<double*> win(static_cast<std::size_t>(m));
+  std::vector<double*> win_heap(Width > 0 ? 0 : static_cast<std::size_t>(m));
+  std::array<double*, (Width > 0 ? Width : 1)> win_fixed{};
+  double** const win_ptr = Width > 0 ? win_fixed.data() : win_heap.data();
+  struct WindowView {  // win[c]: the row of y (or z) of window column c, null past the end
+    double** p;
+    double*& operator[](std::size_t c) const { return p[c]; }
+  } win{win_ptr};
   auto set_window = [&](long K) {
     for (int c = 0; c < m; ++c)
       win[static_cast<std::size_t>(c)] = c < nb ? (K + c < Q ? wrow(K + c) : nullptr)
