@@ -554,18 +554,22 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   // with D_K = m(K) − m(0) per probe formed on the fly. Returns b = −Σ_{K≥2} a_K·X_K with
   // a_K = (K, K(K−1)/2), for the fit below.
   Eigen::VectorXd& X = r.g;  // the guide is X itself (eq. 13)
+  // Run as two sums, ΔX_{K+1} = ΔX_K + f_K and X_{K+2} = X_{K+1} + ΔX_{K+1}, with the forcing f_K
+  // formed off the chain: each station waits for two additions, not for the whole expression.
   auto recurrence = [&](double alpha, double beta) {
     X[0] = 0;
     X[1] = alpha;
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    double x = alpha, dx = alpha, b0s = 0, b1s = 0;
     for (long K = 0; K + 2 < n; ++K) {
-      X[K + 2] = 2 * X[K + 1] - X[K] - 2 * (A[K + 1] - a0) + (A[K + 2] - a0) + 2 * (B[K] - b0) -
-                 (C[K] - c0) + beta;
+      const double f = (A[K + 2] - a0) - 2 * (A[K + 1] - a0) + 2 * (B[K] - b0) - (C[K] - c0) + beta;
+      dx += f;
+      x += dx;
+      X[K + 2] = x;
       const double k = static_cast<double>(K + 2);
-      b[0] -= k * X[K + 2];
-      b[1] -= k * (k - 1) / 2 * X[K + 2];
+      b0s -= k * x;
+      b1s -= k * (k - 1) / 2 * x;
     }
-    return b;
+    return Eigen::Vector2d(b0s, b1s);
   };
   // α, β (or α alone when β is known) minimising Σ_{K=2}^{n−1} (X_K + K·α + K(K−1)/2·β)²: the
   // 2×2 normal equations whose closed form is the seed's eqs. 16–17.
@@ -588,10 +592,26 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   const double beta0 =
       beta_known ? *zero_difference - (d.readings(0, 0) - 2 * d.readings(0, 1) + d.readings(0, 2))
                  : 0.0;
-  // Two passes, identical in exact arithmetic to the one-shot formula: C_K can grow like K²·β
-  // (1e9 mm at a million stations), so the first fit is used to rerun the recurrence near its
-  // final size and the second fit corrects the small remainder.
-  const Eigen::Vector2d ab1 = fit(recurrence(0.0, beta0));
+  // Two fits, identical in exact arithmetic to the one-shot formula: C_K can grow like K²·β
+  // (1e9 mm at a million stations), so the first fit is used to run the recurrence near its
+  // final size and the second fit corrects the small remainder. The first needs only b, a linear
+  // function of the forcing: with α = 0 and f_j the forcing (β included), X_K = Σ_{j≤K−2}
+  // (K−1−j)·f_j, so b_i = −Σ_j f_j·W_i(j) with W_0(j) = Σ_{K=j+2}^{n−1} K·(K−1−j) and W_1(j) the
+  // same with K(K−1)/2; in m = K−1−j ∈ [1, M], M = n−2−j, c = j+1 these are sums of powers of m
+  // in closed form. One vectorised pass, not a recurrence.
+  auto forcing_moments = [&](double beta) {
+    double s0 = 0, s1 = 0;
+#pragma omp simd reduction(+ : s0, s1)
+    for (long j = 0; j < n - 2; ++j) {
+      const double f = (A[j + 2] - a0) - 2 * (A[j + 1] - a0) + 2 * (B[j] - b0) - (C[j] - c0) + beta;
+      const double M = static_cast<double>(n - 2 - j), c = static_cast<double>(j + 1);
+      const double S1 = M * (M + 1) / 2, S2 = S1 * (2 * M + 1) / 3, S3 = S1 * S1;
+      s0 -= f * (S2 + c * S1);
+      s1 -= f * (S3 + (2 * c - 1) * S2 + c * (c - 1) * S1) / 2;
+    }
+    return Eigen::Vector2d(s0, s1);
+  };
+  const Eigen::Vector2d ab1 = fit(forcing_moments(beta0));
   const Eigen::Vector2d ab2 = fit(recurrence(ab1[0], beta0 + ab1[1]));
   for (long K = 0; K < n; ++K) {
     const double k = static_cast<double>(K);
