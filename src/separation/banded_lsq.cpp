@@ -500,13 +500,14 @@ Eigen::VectorXd BandedLsq::covariance_diagonal() const {
     double zkk = 0;
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
       double rz = 0;
+      const double inv = 1 / R[0];  // one division per station, not one per window column
       for (int a = 0; a < mw; ++a) {
         double v = 0;
         for (int b = 0; b < mw; ++b) v += Z[static_cast<std::size_t>(a * mw + b)] * R[b + 1];
-        zk[static_cast<std::size_t>(a)] = -v / R[0];
+        zk[static_cast<std::size_t>(a)] = -v * inv;
         rz += R[a + 1] * zk[static_cast<std::size_t>(a)];
       }
-      zkk = 1 / (R[0] * R[0]) - rz / R[0];
+      zkk = inv * inv - rz * inv;
     } else {
       std::fill(zk.begin(), zk.end(), 0.0);
     }

@@ -91,9 +91,10 @@ class BandedLsq {
   // either: v_row(id, out) writes the k values of a free unknown's row of V; use(id, zv) then
   // receives that unknown's row of (AᵀA)⁻¹V, once per free unknown, from the last station back (the
   // final window and the globals first). Holds the forward solve's workpiece rows (Q × k values)
-  // and a window.
+  // and a window. With `gram` (k × k, row-major), also adds Vᵀ(AᵀA)⁻¹V to it: with Y = R⁻ᵀV the
+  // forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows' outer products.
   template <int k, class VRow, class Use>
-  void solve_normal_rows(VRow&& v_row, Use&& use) const;
+  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr) const;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
  private:
@@ -106,7 +107,7 @@ class BandedLsq {
   void refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                          const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
   template <int k, int Width, class VRow, class Use>  // window width, 0: any
-  void solve_normal_rows_impl(VRow& v_row, Use& use) const;
+  void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const;
   template <int NB>  // band width, 0: any
   Update solve_add_impl(Eigen::VectorXd& v) const;
   template <int Width>  // window width, 0: any
@@ -151,26 +152,26 @@ class BandedLsq {
 };
 
 template <int k, class VRow, class Use>
-void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use) const {
+void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) const {
   // The window width as a compile-time constant for the usual narrow windows (as in factor()).
   switch (m_) {
     case 2:
-      return solve_normal_rows_impl<k, 2>(v_row, use);
+      return solve_normal_rows_impl<k, 2>(v_row, use, gram);
     case 3:
-      return solve_normal_rows_impl<k, 3>(v_row, use);
+      return solve_normal_rows_impl<k, 3>(v_row, use, gram);
     case 4:
-      return solve_normal_rows_impl<k, 4>(v_row, use);
+      return solve_normal_rows_impl<k, 4>(v_row, use, gram);
     case 5:
-      return solve_normal_rows_impl<k, 5>(v_row, use);
+      return solve_normal_rows_impl<k, 5>(v_row, use, gram);
     case 6:
-      return solve_normal_rows_impl<k, 6>(v_row, use);
+      return solve_normal_rows_impl<k, 6>(v_row, use, gram);
     default:
-      return solve_normal_rows_impl<k, 0>(v_row, use);
+      return solve_normal_rows_impl<k, 0>(v_row, use, gram);
   }
 }
 
 template <int k, int Width, class VRow, class Use>
-void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
+void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const {
   // Rᵀy = V forward in elimination order (per station g, θ, w(K); then the final window), and
   // R z = y backward. y(w(K)) is final after station K's step and needed again at that station on
   // the way back, so the workpiece rows are kept; a station's local rows depend only on its own
@@ -202,8 +203,16 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
       win[static_cast<std::size_t>(c)] = c < nb ? (K + c < Q ? wrow(K + c) : nullptr)
                                                 : yg.data() + static_cast<std::size_t>(c - nb) * ku;
   };
-  std::vector<double> yl(static_cast<std::size_t>(L) * ku), zl(static_cast<std::size_t>(L) * ku),
-      acc(ku);
+  std::array<double, 2 * k> yl{}, zl{};
+  std::array<double, k> acc{};
+  // Divisions by the diagonal as multiplications by reciprocals: a division costs several times
+  // a multiplication's throughput, and there would be dozens per station.
+  const double rinv[2] = {1 / Rloc_(0, 0), L == 2 ? 1 / Rloc_(1, 1) : 0.0};
+  std::array<double, k * k> yy{};  // Σ y·yᵀ over the forward rows, upper triangle
+  auto add_gram = [&](const double* y) {
+    for (int a = 0; a < k; ++a)
+      for (int b = a; b < k; ++b) yy[static_cast<std::size_t>(a * k + b)] += y[a] * y[b];
+  };
   auto local_forward = [&](long K) {  // yl = Rloc⁻ᵀ·(V's rows of g(K), θ(K))
     for (int l = 0; l < L; ++l) {
       double* y = yl.data() + static_cast<std::size_t>(l) * ku;
@@ -211,7 +220,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
       for (int j = 0; j < k; ++j) {
         double v = y[j];
         for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * yl[static_cast<std::size_t>(i) * ku + j];
-        y[j] = v / Rloc_(l, l);
+        y[j] = v * rinv[l];
       }
     }
   };
@@ -223,6 +232,8 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
     if (K + nb - 1 < Q) v_or_zero(D.w(K + nb - 1), wrow(K + nb - 1));  // enters the window
     set_window(K);
     local_forward(K);
+    if (gram)
+      for (int l = 0; l < L; ++l) add_gram(yl.data() + static_cast<std::size_t>(l) * ku);
     for (int c = 0; c < m; ++c) {
       double* a = win[static_cast<std::size_t>(c)];
       if (!a) continue;
@@ -238,7 +249,9 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
       std::fill_n(y0, k, 0.0);
       continue;
     }
-    for (int j = 0; j < k; ++j) y0[j] /= R[0];
+    const double inv = 1 / R[0];
+    for (int j = 0; j < k; ++j) y0[j] *= inv;
+    if (gram) add_gram(y0);
     for (int c = 1; c < m; ++c) {
       double* a = win[static_cast<std::size_t>(c)];
       if (!a) continue;
@@ -257,10 +270,15 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
       continue;
     }
     for (int j = 0; j < k; ++j) yc[j] /= F[c];
+    if (gram) add_gram(yc);
     for (int i = c + 1; i < m; ++i)
       if (double* a = win[static_cast<std::size_t>(i)])
         for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
   }
+  if (gram)
+    for (int a = 0; a < k; ++a)
+      for (int b = 0; b < k; ++b)
+        gram[a * k + b] += yy[static_cast<std::size_t>(a <= b ? a * k + b : b * k + a)];
   for (int c = m - 1; c >= 0; --c) {
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
     if (!active(id_of(n, c)) || F[c] == 0) continue;
@@ -284,7 +302,8 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
       for (int c = 1; c < m; ++c)
         if (const double* zc = win[static_cast<std::size_t>(c)])
           for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
-      for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)] / R[0];
+      const double inv = 1 / R[0];
+      for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)] * inv;
     }
     if (is_free(D.w(K))) use(D.w(K), static_cast<const double*>(z0));
     local_forward(K);
@@ -301,7 +320,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use) const {
           acc[static_cast<std::size_t>(j)] -=
               Rloc_(l, i) * zl[static_cast<std::size_t>(i) * ku + j];
       for (int j = 0; j < k; ++j)
-        zl[static_cast<std::size_t>(l) * ku + j] = acc[static_cast<std::size_t>(j)] / Rloc_(l, l);
+        zl[static_cast<std::size_t>(l) * ku + j] = acc[static_cast<std::size_t>(j)] * rinv[l];
     }
     for (int l = 0; l < L; ++l)
       if (const int id = l == 0 ? D.g(K) : D.t(K); is_free(id))

@@ -958,7 +958,11 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
     return u[0] * z[c[0]] + u[1] * z[c[1]] + u[2] * z[c[2]];
   };
   // The column count as a compile-time constant: the rows' small copies and products unroll.
+  // VᵀZV comes from the solve's forward rows (their Gram matrix), so each row of ZV is only
+  // dotted with its point's u.
   auto solve = [&]<int Cols>() {
+    Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
+    gram.setZero();
     st.engine->solve_normal_rows<Cols>(
         [&](int id, double* out) {
           const Row v = v_of(id);
@@ -968,26 +972,22 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
           Row z = Row::Zero();
           for (int j = 0; j < Cols; ++j) z[j] = zv[j];
           long i = 0;
-          const Kind kind = kind_of(id, i);
-          Row v = Row::Zero();
-          switch (kind) {
+          switch (kind_of(id, i)) {
             case kW:
-              v = ra.vw(i);
               uw[i] = cross(ra.uw(i), ra.cw, z);
               break;
             case kG:
-              v = ra.vg(i);
               ug[i] = cross(ra.ug(i), ra.cg, z);
               break;
             case kT:
-              v = ra.vt(i);
               if (i < ra.mt) ut[i] = cross(ra.ut(i), ra.ct, z);
               break;
             default:
-              return;  // an offset: no row of V
+              break;  // an offset: no row of V
           }
-          VZV.noalias() += v * z.transpose();
-        });
+        },
+        gram.data());
+    VZV.template topLeftCorner<Cols, Cols>() = gram;
   };
   switch (k) {
     case 4:

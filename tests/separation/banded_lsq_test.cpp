@@ -141,6 +141,7 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
     for (Eigen::Index i = 0; i < nf; ++i) ZV.row(perm[i]) = ZVp.row(i);
     Eigen::MatrixXd got = Eigen::MatrixXd::Constant(nf, 3, std::nan(""));
     std::vector<int> seen(static_cast<std::size_t>(nf), 0);
+    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> gram = Eigen::Matrix3d::Constant(1.0);
     engine.solve_normal_rows<3>(
         [&](int id, double* out) {
           for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
@@ -150,8 +151,14 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
           ASSERT_GE(c, 0) << L.name << ": a pinned unknown's row";
           ++seen[static_cast<std::size_t>(c)];
           for (int j = 0; j < 3; ++j) got(c, j) = zv[j];
-        });
+        },
+        gram.data());
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nf) << L.name;
     EXPECT_LT((got - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff()) << L.name;
+    // VᵀZV from the forward rows, added to what the matrix held (ones).
+    const Eigen::Matrix3d VZV = V.transpose() * ZV;
+    EXPECT_LT((gram - Eigen::Matrix3d::Constant(1.0) - VZV).cwiseAbs().maxCoeff(),
+              kAgree * VZV.cwiseAbs().maxCoeff())
+        << L.name;
   }
 }
