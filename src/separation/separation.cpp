@@ -661,12 +661,6 @@ Eigen::Vector3d quad_coefficients(const Eigen::VectorXd& x, const Scale& s) {
   return quad_coefficients_from(m);
 }
 
-// φ_K at x given its coefficients e.
-double quad_at(const Eigen::Vector3d& e, const Scale& s, double x) {
-  const double t = (x - s.xc) / s.L;
-  return e[0] + t * (e[1] + t * e[2]);
-}
-
 Moments moments_of(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Scale& s) {
   Moments m;
   const double inv = 1 / s.L;
@@ -845,11 +839,14 @@ struct ReferenceAlgebra {
       if (mt) lin_mean /= static_cast<double>(mt);
     }
   }
+  // Per point, multiplications by these instead of divisions (the rows are formed ~5 times per
+  // station).
+  double invL = 1 / s.L, lin_k = 2.0 / (s.L * s.L);
   double t2(double x) const {
-    const double t = (x - s.xc) / s.L;
+    const double t = (x - s.xc) * invL;
     return t * t;
   }
-  double lin(double x) const { return (x - s.xc) * (2.0 / (s.L * s.L)); }
+  double lin(double x) const { return (x - s.xc) * lin_k; }
 
   // U's rows. Workpiece: its line, and the parabola the gauge moves into it (t² less its line).
   Eigen::Vector3d uw(Eigen::Index j) const {
@@ -878,7 +875,10 @@ struct ReferenceAlgebra {
     if (K >= 0 && K < mg) {
       v[kG0] = lg.b0;
       v[kG0 + 1] = lg.b1(r.xg[K]);
-      if (par) v[kPhi] = quad_at(e, s, r.xg[K]);
+      if (par) {  // φ_K, the parabola functional at x
+        const double t = (r.xg[K] - s.xc) * invL;
+        v[kPhi] = e[0] + t * (e[1] + t * e[2]);
+      }
     }
     return v;
   }
