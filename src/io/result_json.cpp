@@ -20,22 +20,24 @@ using separation::Profile;
 using separation::Result;
 
 // Arrays are written in the shortest round-trip form, formatted in parallel and streamed to the
-// file (see fast_text.hpp). x arrays shared by several profiles are formatted once.
+// file (see fast_text.hpp). An x array that repeats the last one, or the start of it (the pitch
+// grid is the station grid less its last point), reuses its text.
 class JsonArrays {
  public:
   explicit JsonArrays(detail::OutFile& f) : f_(f) {}
   void array(const Eigen::VectorXd& v, double scale, bool cache) {
     f_.write("[");
-    const bool hit = cache && scale == 1.0 && cached_.size() == v.size() &&
-                     std::equal(v.begin(), v.end(), cached_.begin());
-    if (!hit) {
+    if (cache && scale == 1.0 && cached_.size() > 0 && v.size() <= cached_.size() &&
+        std::equal(v.begin(), v.end(), cached_.begin())) {
+      write_prefix(static_cast<std::size_t>(cached_.size() - v.size()));
+    } else {
       detail::format_numbers(v.data(), static_cast<std::size_t>(v.size()), scale, ',', pieces_);
-      if (cache) {
+      if (cache && scale == 1.0) {
         cached_ = v;
         cached_pieces_ = pieces_;
       }
+      f_.write(pieces_);
     }
-    f_.write(hit ? cached_pieces_ : pieces_);
     f_.write("]");
   }
   void profile(const char* name, const Profile& p, double scale) {
@@ -51,6 +53,20 @@ class JsonArrays {
   }
 
  private:
+  // The cached text without its last `drop` numbers: up to the drop-th separator from the end
+  // (nothing when every number goes).
+  void write_prefix(std::size_t drop) {
+    const std::vector<std::string>& p = cached_pieces_;
+    if (drop == 0) return f_.write(p);
+    std::size_t seen = 0;
+    for (std::size_t i = p.size(); i-- > 0;)
+      for (std::size_t j = p[i].size(); j-- > 0;)
+        if (p[i][j] == ',' && ++seen == drop) {
+          for (std::size_t k = 0; k < i; ++k) f_.write(p[k]);
+          return f_.write(std::string_view(p[i]).substr(0, j));
+        }
+  }
+
   detail::OutFile& f_;
   std::vector<std::string> pieces_, cached_pieces_;
   Eigen::VectorXd cached_;

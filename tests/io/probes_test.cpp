@@ -124,6 +124,32 @@ TEST(ResultJson, RoundTripAndBadInput) {
   EXPECT_EQ(err("{\"method\": \"five-point\", \"workpiece\": {}}").rfind(bad + ":1:12: ", 0), 0u);
 }
 
+// x arrays that repeat the previous one or its start reuse its text: the file must read back
+// exactly, whether the text was cut inside one formatting piece or at a piece's edge.
+TEST(ResultJson, SharedGridsReadBackExactly) {
+  const Eigen::Index n = 150000;  // several formatting pieces
+  separation::Result r;
+  const Eigen::VectorXd xw = Eigen::VectorXd::LinSpaced(n + 2, -0.02, 0.01 * (n - 1)) * 1.0000001;
+  r.workpiece = {xw, Eigen::VectorXd::Constant(n + 2, 1e-3), {}};
+  r.guide = {xw.head(n), Eigen::VectorXd::Constant(n, 2e-3), {}};  // the start of the last
+  r.pitch = separation::Profile{xw.head(2), Eigen::VectorXd::Constant(2, 1e-6), {}};
+  const std::string p = test::temp_file("grids.json", "");
+  io::write_result(p, r);
+  auto back = io::read_result(p);
+  EXPECT_EQ(back.workpiece.x, r.workpiece.x);
+  EXPECT_EQ(back.guide.x, r.guide.x);
+  ASSERT_TRUE(back.pitch);
+  EXPECT_EQ(back.pitch->x, r.pitch->x);
+  // A grid that is not the start of the last one is written in full.
+  r.guide.x = xw.tail(n);
+  r.pitch = separation::Profile{xw.tail(n), Eigen::VectorXd::Constant(n, 1e-6), {}};
+  io::write_result(p, r);
+  back = io::read_result(p);
+  EXPECT_EQ(back.guide.x, r.guide.x);
+  ASSERT_TRUE(back.pitch);
+  EXPECT_EQ(back.pitch->x, r.pitch->x);
+}
+
 // An angle column (µrad) read as a fourth probe (µm) turned a 2.6 µm straightness into 237 µm:
 // columns are taken as probes only when that is unambiguous.
 TEST(Probes, AngleColumnIsNeverASilentProbe) {
