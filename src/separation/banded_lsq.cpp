@@ -125,20 +125,7 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   // The window width as a compile-time constant for the usual narrow windows, so the per-station
   // loops unroll and the window's small copies are moves, not library calls.
-  switch (m_) {
-    case 2:
-      return factor_impl<2>(readings, mu, angle_mm, v);
-    case 3:
-      return factor_impl<3>(readings, mu, angle_mm, v);
-    case 4:
-      return factor_impl<4>(readings, mu, angle_mm, v);
-    case 5:
-      return factor_impl<5>(readings, mu, angle_mm, v);
-    case 6:
-      return factor_impl<6>(readings, mu, angle_mm, v);
-    default:
-      return factor_impl<0>(readings, mu, angle_mm, v);
-  }
+  with_width(m_, [&]<int W>() { factor_impl<W>(readings, mu, angle_mm, v); });
 }
 
 template <int Width>
@@ -279,20 +266,7 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
     factor(readings, mu, angle_mm, v);
     return;
   }
-  switch (m_) {  // as in factor()
-    case 2:
-      return refactor_rhs_impl<2>(readings, mu, angle_mm, v);
-    case 3:
-      return refactor_rhs_impl<3>(readings, mu, angle_mm, v);
-    case 4:
-      return refactor_rhs_impl<4>(readings, mu, angle_mm, v);
-    case 5:
-      return refactor_rhs_impl<5>(readings, mu, angle_mm, v);
-    case 6:
-      return refactor_rhs_impl<6>(readings, mu, angle_mm, v);
-    default:
-      return refactor_rhs_impl<0>(readings, mu, angle_mm, v);
-  }
+  with_width(m_, [&]<int W>() { refactor_rhs_impl<W>(readings, mu, angle_mm, v); });
 }
 
 template <int Width>
@@ -431,18 +405,7 @@ BandedLsq::Update BandedLsq::solve_add_impl(Eigen::VectorXd& v) const {
 BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
   // The band width as a compile-time constant for the usual narrow bands: the corrections the
   // back-substitution still needs then stay in registers.
-  switch (nb_) {
-    case 2:
-      return solve_add_impl<2>(v);
-    case 3:
-      return solve_add_impl<3>(v);
-    case 4:
-      return solve_add_impl<4>(v);
-    case 5:
-      return solve_add_impl<5>(v);
-    default:
-      return solve_add_impl<0>(v);
-  }
+  return with_width(nb_, [&]<int W>() { return solve_add_impl<W>(v); });
 }
 
 Eigen::VectorXd BandedLsq::covariance_diagonal() const {

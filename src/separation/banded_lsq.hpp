@@ -54,6 +54,27 @@ struct DefaultInitAllocator : std::allocator<T> {
 template <class T>
 using Uninitialized = std::vector<T, DefaultInitAllocator<T>>;
 
+// Calls fn.template operator()<W>() with W = w for the usual narrow widths (2 to 6) and W = 0
+// (any width, read at run time) otherwise: a compile-time width lets the per-station loops unroll
+// and keep their small arrays in registers.
+template <class Fn>
+decltype(auto) with_width(int w, Fn&& fn) {
+  switch (w) {
+    case 2:
+      return fn.template operator()<2>();
+    case 3:
+      return fn.template operator()<3>();
+    case 4:
+      return fn.template operator()<4>();
+    case 5:
+      return fn.template operator()<5>();
+    case 6:
+      return fn.template operator()<6>();
+    default:
+      return fn.template operator()<0>();
+  }
+}
+
 class BandedLsq {
  public:
   // The design must outlive the solver.
@@ -153,21 +174,7 @@ class BandedLsq {
 
 template <int k, class VRow, class Use>
 void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) const {
-  // The window width as a compile-time constant for the usual narrow windows (as in factor()).
-  switch (m_) {
-    case 2:
-      return solve_normal_rows_impl<k, 2>(v_row, use, gram);
-    case 3:
-      return solve_normal_rows_impl<k, 3>(v_row, use, gram);
-    case 4:
-      return solve_normal_rows_impl<k, 4>(v_row, use, gram);
-    case 5:
-      return solve_normal_rows_impl<k, 5>(v_row, use, gram);
-    case 6:
-      return solve_normal_rows_impl<k, 6>(v_row, use, gram);
-    default:
-      return solve_normal_rows_impl<k, 0>(v_row, use, gram);
-  }
+  with_width(m_, [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram); });
 }
 
 template <int k, int Width, class VRow, class Use>
