@@ -32,7 +32,9 @@ bool blank(std::string_view line) {
 }  // namespace
 
 CsvTable CsvTable::read(const std::string& path) {
-  return parse(detail::read_text(path), path);
+  detail::Text text = detail::Text::read(path);
+  const std::string_view view = text.view();
+  return parse_text(std::move(text).owner(), view, path);
 }
 
 namespace {
@@ -115,10 +117,18 @@ void parse_chunk(std::string_view text, const std::vector<std::string>& header, 
 }  // namespace
 
 CsvTable CsvTable::parse(std::string text, std::string path) {
+  detail::normalize_text(text);
+  auto owned = std::make_shared<const std::string>(std::move(text));
+  const std::string_view view(*owned);
+  return parse_text(std::move(owned), view, std::move(path));
+}
+
+CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_view text,
+                              std::string path) {
   CsvTable t;
   t.path_ = std::move(path);
-  t.text_ = std::move(text);
-  detail::normalize_text(t.text_);
+  t.text_owner_ = std::move(owner);
+  t.text_ = text;
   const std::string_view all(t.text_);
   std::size_t pos = 0, line = 0;
   auto next_line = [&](std::string_view& out, std::size_t& start) {
@@ -236,7 +246,7 @@ std::string CsvTable::where(long row, int col) const {
     while (p < text_.size()) {
       const std::size_t nl = std::min(text_.find('\n', p), text_.size());
       ++n;
-      if (!blank(std::string_view(text_).substr(p, nl - p)) && ++seen == row) {
+      if (!blank(text_.substr(p, nl - p)) && ++seen == row) {
         start = p;
         lineno = n;
         break;

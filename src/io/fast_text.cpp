@@ -1,14 +1,18 @@
 #include "fast_text.hpp"
 
+#include <fcntl.h>
 #include <fmt/compile.h>
 #include <fmt/format.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <cctype>
+#include <cstring>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <thread>
 
 #include "trueaxis/error.hpp"
@@ -16,7 +20,10 @@
 
 namespace trueaxis::io::detail {
 
-std::string read_text(const std::string& path) {
+namespace {
+
+// The checks every reader makes before opening `path`; returns its size when known.
+std::optional<std::uintmax_t> check_readable(const std::string& path) {
   // Only regular files: a directory, a device (/dev/zero) or a pipe would either fail obscurely
   // or grow memory without limit.
   std::error_code ec;
@@ -32,11 +39,16 @@ std::string read_text(const std::string& path) {
         "{}: {:.1f} GB is more than trueaxis reads in one file ({} GB); "
         "split it",
         path, static_cast<double>(size) / 1e9, static_cast<double>(kMaxInputBytes) / 1e9));
+  if (ec) return std::nullopt;
+  return size;
+}
+
+std::string read_checked(const std::string& path, std::optional<std::uintmax_t> size) {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
   std::string text;
-  if (!ec && size > 0) {
-    text.resize(static_cast<std::size_t>(size));
+  if (size && *size > 0) {
+    text.resize(static_cast<std::size_t>(*size));
     text.resize(std::fread(text.data(), 1, text.size(), f.get()));
   }
   char buf[1 << 16];
@@ -49,6 +61,45 @@ std::string read_text(const std::string& path) {
                             static_cast<double>(kMaxInputBytes) / 1e9));
   normalize_text(text);
   return text;
+}
+
+}  // namespace
+
+std::string read_text(const std::string& path) {
+  return read_checked(path, check_readable(path));
+}
+
+Text::Text(std::string text) {
+  auto owned = std::make_shared<const std::string>(std::move(text));
+  view_ = *owned;
+  owner_ = std::move(owned);
+}
+
+Text Text::read(const std::string& path) {
+  const std::optional<std::uintmax_t> size = check_readable(path);
+#if defined(__linux__)
+  constexpr std::uintmax_t kMapFrom = std::uintmax_t{1} << 20;
+  if (size && *size >= kMapFrom) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) throw Error(fmt::format("{}: cannot open file for reading", path));
+    const auto n = static_cast<std::size_t>(*size);
+    void* m = ::mmap(nullptr, n, PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    ::close(fd);  // the mapping keeps the file
+    if (m != MAP_FAILED) {
+      const auto* p = static_cast<const char*>(m);
+      const bool bom = n >= 3 && std::memcmp(p, "\xEF\xBB\xBF", 3) == 0;
+      if (!bom && std::memchr(p, '\r', n) == nullptr) {
+        Text t;
+        t.owner_ = std::shared_ptr<const void>(
+            m, [n](const void* q) { ::munmap(const_cast<void*>(q), n); });
+        t.view_ = std::string_view(p, n);
+        return t;
+      }
+      ::munmap(m, n);  // to be normalised: read as usual
+    }
+  }
+#endif
+  return Text(read_checked(path, size));
 }
 
 void normalize_text(std::string& text) {

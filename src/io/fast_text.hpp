@@ -27,6 +27,25 @@ std::string read_text(const std::string& path);
 // Drops a UTF-8 byte-order mark and turns CRLF and lone CR line ends into LF, in place.
 void normalize_text(std::string& text);
 
+// A file's text as read_text gives it, without copying large files: a regular file of a
+// megabyte or more that needs no normalising (no byte-order mark, no CR) is mapped read-only and
+// its pages brought in at once (a copy into fresh memory costs ~5x as much: a page fault per 4 KB
+// written); anything else is read and normalised. The view stays valid while the object (or a
+// copy of it) lives. A file truncated by another program while it is mapped is beyond what this
+// guards against, as with any memory-mapped reader.
+class Text {
+ public:
+  static Text read(const std::string& path);  // the errors of read_text
+  explicit Text(std::string text);            // owns text as given
+  std::string_view view() const { return view_; }
+  std::shared_ptr<const void> owner() && { return std::move(owner_); }  // what keeps view() valid
+
+ private:
+  Text() = default;
+  std::shared_ptr<const void> owner_;
+  std::string_view view_;
+};
+
 // `s` cut to its first line and at most `max` characters ("..." marks a cut), for quoting input
 // in an error message.
 std::string quote_cut(std::string_view s, std::size_t max = 40);

@@ -137,6 +137,40 @@ TEST(Csv, LargeWriteReadRoundTripIsExact) {
   EXPECT_EQ(t.column(1), b);
 }
 
+// Files of a megabyte or more are mapped rather than copied when they need no normalising; the
+// table, the located errors and the line-end handling must be the same as reading them as text.
+TEST(Csv, LargeFilesReadFromDiskAsFromText) {
+  std::string lf = "x,a,b\n";
+  for (int i = 0; i < 100000; ++i)
+    lf += std::to_string(i) + "," + std::to_string(i * 0.25) + "," + std::to_string(-i) + "\n";
+  ASSERT_GT(lf.size(), std::size_t{1} << 20);
+  std::string crlf;
+  for (char c : lf) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  const std::string bom = "\xEF\xBB\xBF" + lf;
+  const auto expect = CsvTable::parse(lf, "mem.csv");
+  for (const auto& [name, text] : {std::pair{"lf.csv", lf}, {"crlf.csv", crlf}, {"bom.csv", bom}}) {
+    const std::string p = trueaxis::test::temp_file(name, text);
+    const auto t = CsvTable::read(p);
+    ASSERT_EQ(t.rows(), expect.rows()) << name;
+    EXPECT_EQ(t.header(), expect.header()) << name;
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(t.column(c), expect.column(c)) << name;
+    EXPECT_EQ(t.where(77777, 2), p + expect.where(77777, 2).substr(std::string("mem.csv").size()))
+        << name;
+    // The text read back for locating fields is the normalised one.
+    EXPECT_TRUE(trueaxis::io::detail::Text::read(p).view() == lf) << name;
+  }
+  // An error near the end of a mapped file is located as in the text.
+  std::string bad = lf;
+  bad.replace(bad.rfind("\n99998,") + 7, 1, "q");
+  const std::string p = trueaxis::test::temp_file("bad_big.csv", bad);
+  try {
+    CsvTable::read(p);
+    FAIL() << "no error";
+  } catch (const trueaxis::Error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(p + ":100000:7: 'q", 0), 0u) << e.what();
+  }
+}
+
 // Found by fuzzing: CR-only files were read as one giant line (and the error quoted the whole
 // file), a UTF-8 byte-order mark made 'x' a missing column, tab-separated files were reported
 // as a missing column, and an error quoted a 4 MB token.

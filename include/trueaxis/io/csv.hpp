@@ -9,6 +9,7 @@
 
 #include <Eigen/Core>
 #include <cstddef>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -39,8 +40,13 @@ class CsvTable {
   std::string where(long row, int col) const;
 
  private:
+  // The whole file's text (for locating fields in messages), kept alive by its owner: a string
+  // or a read-only mapping of the file.
+  static CsvTable parse_text(std::shared_ptr<const void> owner, std::string_view text,
+                             std::string path);
   std::string path_;
-  std::string text_;
+  std::shared_ptr<const void> text_owner_;
+  std::string_view text_;
   std::vector<std::string> header_;
   std::vector<Eigen::VectorXd> columns_;
   std::size_t header_start_ = 0, header_line_ = 1;  // byte offset and 1-based line of the header
