@@ -6,6 +6,14 @@
 #include <cstdint>
 #include <optional>
 
+// GCC's vectoriser pairs loads in the Givens fold that clang leaves alone (clang has no such
+// attribute).
+#if defined(__clang__)
+#define TA_NO_VECTORIZE
+#else
+#define TA_NO_VECTORIZE __attribute__((optimize("no-tree-vectorize")))
+#endif
+
 namespace trueaxis::separation::detail {
 
 BandedLsq::BandedLsq(const Design& design) : D_(design) {
@@ -174,85 +182,83 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
   };
   // The fold is not vectorised: each rotation's row and window updates are read back by the next
   // one, and paired loads of values stored one at a time stall on store forwarding.
-  for_each_station(
-      readings, mu, angle_mm,
-      v, [&](long K, auto&& reduced) __attribute__((optimize("no-tree-vectorize"))) {
-        if (K == kBlock) start_prefault();
-        while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
-        const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
-        for (int r = 0; r < nred; ++r) {
-          // A reduced row: fold it into the window by Givens rotations.
-          std::uint64_t mask = 0;
-          const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
-          for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
-          row[static_cast<std::size_t>(m)] = reduced(r);
-          if (pin_in_band)
-            for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
-              row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
-          for (int j = 0; j < m; ++j) {
-            const double bj = row[static_cast<std::size_t>(j)];
-            if (bj == 0) {
-              if (keep_rotations_ && !masked_) {
-                *rot++ = 1;
-                *rot++ = 0;
-              }
-              continue;
-            }
-            double* Wj = W.data() + static_cast<std::size_t>(j * s);
-            const double a = Wj[j];
-            double cs, sn;
-            int c0 = j + 1;
-            if (a == 0) {  // an empty row of the window: the row takes its place
-              cs = 0;
-              sn = bj > 0 ? 1 : -1;
-              Wj[j] = std::abs(bj);
-            } else {
-              const double rr = std::sqrt(a * a + bj * bj);
-              cs = a / rr;
-              sn = bj / rr;
-              Wj[j] = rr;
-              // The next rotation waits for this element only: as (a·x − b·w)/rr its numerator is
-              // formed while the square root is taken, one multiplication off the chain.
-              const double wc = Wj[c0], xc = row[static_cast<std::size_t>(c0)];
-              Wj[c0] = cs * wc + sn * xc;
-              row[static_cast<std::size_t>(c0)] = (a * xc - bj * wc) / rr;
-              ++c0;
-            }
-            for (int c = c0; c <= m; ++c) {
-              const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
-              Wj[c] = cs * wc + sn * xc;
-              row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
-            }
-            if (keep_rotations_) {
-              *rot++ = cs;
-              *rot++ = sn;
-              mask |= std::uint64_t{1} << (j & 63);
-            }
+  for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) TA_NO_VECTORIZE {
+    if (K == kBlock) start_prefault();
+    while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
+    const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
+    for (int r = 0; r < nred; ++r) {
+      // A reduced row: fold it into the window by Givens rotations.
+      std::uint64_t mask = 0;
+      const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
+      for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
+      row[static_cast<std::size_t>(m)] = reduced(r);
+      if (pin_in_band)
+        for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
+          row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
+      for (int j = 0; j < m; ++j) {
+        const double bj = row[static_cast<std::size_t>(j)];
+        if (bj == 0) {
+          if (keep_rotations_ && !masked_) {
+            *rot++ = 1;
+            *rot++ = 0;
           }
-          if (keep_rotations_ && masked_)
-            for (int i = 0; i < mask_bytes_; ++i)
-              *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
-          ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
+          continue;
         }
-        // No later row touches w(K): its row of R leaves the window, which slides by one position.
-        double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-        for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
-        qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-        if (!D.pinned[static_cast<std::size_t>(D.w(K))])
-          min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
-        for (int t = 0; t < m; ++t) {
-          double* dst = W.data() + static_cast<std::size_t>(t * s);
-          if (t == nb - 1) {
-            for (int c = 0; c < s; ++c) dst[c] = 0;
-            continue;
-          }
-          const double* src = t < nb - 1 ? dst + s : dst;
-          for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
-          dst[nb - 1] = 0;
-          if (src != dst)
-            for (int c = nb; c < s; ++c) dst[c] = src[c];
+        double* Wj = W.data() + static_cast<std::size_t>(j * s);
+        const double a = Wj[j];
+        double cs, sn;
+        int c0 = j + 1;
+        if (a == 0) {  // an empty row of the window: the row takes its place
+          cs = 0;
+          sn = bj > 0 ? 1 : -1;
+          Wj[j] = std::abs(bj);
+        } else {
+          const double rr = std::sqrt(a * a + bj * bj);
+          cs = a / rr;
+          sn = bj / rr;
+          Wj[j] = rr;
+          // The next rotation waits for this element only: as (a·x − b·w)/rr its numerator is
+          // formed while the square root is taken, one multiplication off the chain.
+          const double wc = Wj[c0], xc = row[static_cast<std::size_t>(c0)];
+          Wj[c0] = cs * wc + sn * xc;
+          row[static_cast<std::size_t>(c0)] = (a * xc - bj * wc) / rr;
+          ++c0;
         }
-      });
+        for (int c = c0; c <= m; ++c) {
+          const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
+          Wj[c] = cs * wc + sn * xc;
+          row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
+        }
+        if (keep_rotations_) {
+          *rot++ = cs;
+          *rot++ = sn;
+          mask |= std::uint64_t{1} << (j & 63);
+        }
+      }
+      if (keep_rotations_ && masked_)
+        for (int i = 0; i < mask_bytes_; ++i)
+          *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
+      ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
+    }
+    // No later row touches w(K): its row of R leaves the window, which slides by one position.
+    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+    for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
+    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))])
+      min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
+    for (int t = 0; t < m; ++t) {
+      double* dst = W.data() + static_cast<std::size_t>(t * s);
+      if (t == nb - 1) {
+        for (int c = 0; c < s; ++c) dst[c] = 0;
+        continue;
+      }
+      const double* src = t < nb - 1 ? dst + s : dst;
+      for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
+      dst[nb - 1] = 0;
+      if (src != dst)
+        for (int c = nb; c < s; ++c) dst[c] = src[c];
+    }
+  });
   final_.assign(W.begin(), W.end());
   for (int c = 0; c < m; ++c)
     if (active(id_of(n, c)))
