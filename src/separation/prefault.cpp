@@ -22,8 +22,32 @@ bool worth_a_thread() {
   return multi;
 }
 
-void populate(const std::vector<Prefault::Region>& regions) {
+std::uintptr_t page_size() {
   static const std::uintptr_t page = static_cast<std::uintptr_t>(sysconf(_SC_PAGESIZE));
+  return page;
+}
+
+// Asks for transparent huge pages (2 MB) in the regions: one fault commits 512 pages, and the
+// later passes over them miss the TLB less. Only a hint, which changes no data: the range is
+// rounded out to whole pages (a page shared with other data gets the hint too, harmlessly). The
+// kernel honours it where transparent huge pages are set to "madvise" or "always", for the 2 MB
+// blocks that lie wholly inside a region; elsewhere nothing changes.
+void advise_huge(const std::vector<Prefault::Region>& regions) {
+#ifdef MADV_HUGEPAGE
+  const std::uintptr_t page = page_size();
+  for (const auto& r : regions) {
+    const auto b = reinterpret_cast<std::uintptr_t>(r.data);
+    const std::uintptr_t first = b / page * page;
+    const std::uintptr_t last = (b + r.bytes + page - 1) / page * page;
+    (void)madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
+  }
+#else
+  (void)regions;
+#endif
+}
+
+void populate(const std::vector<Prefault::Region>& regions) {
+  const std::uintptr_t page = page_size();
   for (const auto& r : regions) {
     // Whole pages inside the region only: the pages at its ends may belong to other data.
     const auto b = reinterpret_cast<std::uintptr_t>(r.data);
@@ -49,7 +73,9 @@ Prefault::Prefault(std::vector<Region> regions) {
   std::vector<Region> big;
   for (const Region& r : regions)
     if (r.data && r.bytes >= kMinBytes) big.push_back(r);
-  if (big.empty() || !worth_a_thread()) return;
+  if (big.empty()) return;
+  advise_huge(big);
+  if (!worth_a_thread()) return;
   try {
     thread_ = std::thread([big = std::move(big)] { populate(big); });
   } catch (const std::system_error&) {

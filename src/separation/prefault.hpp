@@ -5,7 +5,9 @@
 // sequential pass is about to fill, a helper thread asks the kernel to commit their pages ahead of
 // it: madvise(MADV_POPULATE_WRITE) (Linux 5.14 and later) makes pages present and writable without
 // changing their contents, so the caller may write them at the same time. Where that is not
-// available, or on one core, it does nothing and the caller takes the faults as before.
+// available, or on one core, it does nothing and the caller takes the faults as before. The regions
+// are also marked for transparent huge pages (madvise(MADV_HUGEPAGE)), so that where the kernel
+// allows them one fault commits 2 MB instead of 4 KB, on whichever core touches the page first.
 #pragma once
 
 #include <cstddef>
@@ -20,7 +22,9 @@ class Prefault {
     const void* data;
     std::size_t bytes;
   };
-  // Starts committing the regions, in order, on a helper thread. Regions smaller than a few
+  // Marks the regions for huge pages and starts committing them, in order, on a helper thread.
+  // (Pages already written keep their size: the hint helps only where nothing was written yet.)
+  // Regions smaller than a few
   // megabytes are left alone (the thread would cost more than their faults).
   explicit Prefault(std::vector<Region> regions);
   Prefault(const Prefault&) = delete;

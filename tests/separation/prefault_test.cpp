@@ -6,6 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
 #include <vector>
 
 using trueaxis::separation::detail::Prefault;
@@ -27,4 +31,59 @@ TEST(Prefault, LeavesContentsAsTheCallerWroteThem) {
   }
   for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(b[i], i * 2654435761u) << i;
   for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], i % 4096 == 0 ? i : 7u) << i;
+}
+
+namespace {
+
+// The AnonHugePages (kB) of the mapping that holds `p`, from /proc/self/smaps; -1 if unknown.
+long huge_kb_of_mapping(const void* p) {
+  std::ifstream f("/proc/self/smaps");
+  const auto addr = reinterpret_cast<std::uintptr_t>(p);
+  std::string line;
+  bool inside = false;
+  while (std::getline(f, line)) {
+    unsigned long lo = 0, hi = 0;
+    if (std::sscanf(line.c_str(), "%lx-%lx ", &lo, &hi) == 2 && line.find(':') > line.find(' ')) {
+      inside = lo <= addr && addr < hi;
+      continue;
+    }
+    if (inside && line.rfind("AnonHugePages:", 0) == 0)
+      return std::strtol(line.c_str() + 14, nullptr, 10);
+  }
+  return -1;
+}
+
+long vmstat(const char* key) {
+  std::ifstream f("/proc/vmstat");
+  std::string k;
+  long v = 0;
+  while (f >> k >> v)
+    if (k == key) return v;
+  return -1;
+}
+
+}  // namespace
+
+// Where the kernel offers transparent huge pages on request, the regions get them: one fault per
+// 2 MB instead of per 4 KB page.
+TEST(Prefault, AsksForHugePages) {
+  std::ifstream mode("/sys/kernel/mm/transparent_hugepage/enabled");
+  std::string modes;
+  std::getline(mode, modes);
+  if (modes.find("[never]") != std::string::npos || modes.empty())
+    GTEST_SKIP() << "transparent huge pages are off on this machine";
+  constexpr std::size_t n = (std::size_t{16} << 20) / sizeof(double);  // 16 MB, new memory
+  std::vector<double> v;
+  v.reserve(n);
+  const long fallback_before = vmstat("thp_fault_fallback");
+  {
+    const Prefault prefault({{v.data(), n * sizeof(double)}});
+    for (std::size_t i = 0; i < n; ++i) v.push_back(static_cast<double>(i));
+  }
+  const long huge = huge_kb_of_mapping(v.data());
+  if (huge == 0 && vmstat("thp_fault_fallback") > fallback_before)
+    GTEST_SKIP() << "the kernel had no huge page to give (it fell back to small pages)";
+  if (huge < 0) GTEST_SKIP() << "no /proc/self/smaps here";
+  EXPECT_GT(huge, 0);
+  for (std::size_t i = 0; i < n; i += 4096) ASSERT_EQ(v[i], static_cast<double>(i));
 }
