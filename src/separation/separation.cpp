@@ -613,13 +613,34 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   };
   const Eigen::Vector2d ab1 = fit(forcing_moments(beta0));
   const Eigen::Vector2d ab2 = fit(recurrence(ab1[0], beta0 + ab1[1]));
-  for (long K = 0; K < n; ++K) {
-    const double k = static_cast<double>(K);
-    X[K] += k * ab2[0] + k * (k - 1) / 2 * ab2[1];
-    r.w[K] = (A[K] - a0) - X[K];  // eq. 13
+  // The corrected guide, w (eq. 13) and θ (eq. 14) in one pass: θ_K needs w_{K+1}, which is
+  // formed again from X_{K+1} before the next step overwrites it. The station number is a double
+  // made from a 32-bit offset in blocks, so that the loop vectorises.
+  {
+    const double c0 = ab2[0], c1 = ab2[1];
+    auto fixed = [c0, c1](double x, double k) { return x + (k * c0 + k * (k - 1) / 2 * c1); };
+    double* __restrict Xp = X.data();
+    double* __restrict wp = r.w.data();
+    double* __restrict tp = r.theta.data();
+    const double w1 = (A[1] - a0) - fixed(Xp[1], 1);
+    constexpr long kBlock = 1L << 20;
+    for (long K0 = 0; K0 + 1 < n; K0 += kBlock) {
+      const int m = static_cast<int>(std::min(kBlock, n - 1 - K0));
+      const double base = static_cast<double>(K0);
+      const double *Ab = A + K0, *Bb = B + K0;
+      double *Xb = Xp + K0, *wb = wp + K0, *tb = tp + K0;
+#pragma omp simd
+      for (int i = 0; i < m; ++i) {
+        const double k = base + static_cast<double>(i);
+        const double xk = fixed(Xb[i], k), xk1 = fixed(Xb[i + 1], k + 1);
+        Xb[i] = xk;
+        wb[i] = (Ab[i] - a0) - xk;
+        tb[i] = ((Bb[i] - b0) - ((Ab[i + 1] - a0) - xk1) - xk + w1) / l;
+      }
+    }
+    Xp[n - 1] = fixed(Xp[n - 1], static_cast<double>(n - 1));
+    wp[n - 1] = (A[n - 1] - a0) - Xp[n - 1];
   }
-  for (long K = 0; K + 1 < n; ++K)
-    r.theta[K] = ((B[K] - b0) - r.w[K + 1] - X[K] + r.w[1]) / l;  // eq. 14
   grids.get();
   r.parabola_free = !zero_difference.has_value();
 }
