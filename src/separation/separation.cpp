@@ -1058,10 +1058,33 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   using Row = ReferenceAlgebra::Row;
   const long n = d.x.size();
   const ReferenceAlgebra ra(r, with_pitch, true, d.step());
-  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> G;  // Σ z·zᵀ
+  // G = Σ z·zᵀ, summed a block of z at a time as one matrix product (a 6 × 6 outer product per z
+  // loads and stores all of G for 36 multiply-adds, which dominated the adjoint pass).
+  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> G;
   G.setZero();
-  auto gram = [&](const Row& z) { G.noalias() += z * z.transpose(); };
+  constexpr int kGramBlock = 192;
+  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, kGramBlock, Eigen::RowMajor> zs;
+  int zn = 0;
+  auto flush = [&] {  // the k·(k+1)/2 distinct entries, as dot products of contiguous rows
+    if (zn == 0) return;
+    for (int i = 0; i < ra.k; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double* a = zs.row(i).data();
+        const double* b = zs.row(j).data();
+        double acc = 0;
+#pragma omp simd reduction(+ : acc)
+        for (int c = 0; c < zn; ++c) acc += a[c] * b[c];
+        G(i, j) += acc;
+        if (j != i) G(j, i) += acc;
+      }
+    zn = 0;
+  };
+  auto gram = [&](const Row& z) {
+    zs.col(zn++) = z;
+    if (zn == kGramBlock) flush();
+  };
   auto restricted = [&](const ReferenceAlgebra::Cols& c) {
+    flush();
     return ReferenceAlgebra::restrict(G.topLeftCorner(ra.k, ra.k), c);
   };
   // The adjoint state per station (written from the last station back, every entry before it is
