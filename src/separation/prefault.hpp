@@ -24,8 +24,8 @@ class Prefault {
   };
   // Marks the regions for huge pages and starts committing them, in order, on a helper thread.
   // (Pages already written keep their size: the hint helps only where nothing was written yet.)
-  // Regions smaller than a few
-  // megabytes are left alone (the thread would cost more than their faults).
+  // Regions smaller than a few megabytes are left alone (the thread would cost more than their
+  // faults).
   explicit Prefault(std::vector<Region> regions);
   Prefault(const Prefault&) = delete;
   Prefault& operator=(const Prefault&) = delete;

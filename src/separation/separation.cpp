@@ -1058,8 +1058,8 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   using Row = ReferenceAlgebra::Row;
   const long n = d.x.size();
   const ReferenceAlgebra ra(r, with_pitch, true, d.step());
-  // G = Σ z·zᵀ, summed a block of z at a time as one matrix product (a 6 × 6 outer product per z
-  // loads and stores all of G for 36 multiply-adds, which dominated the adjoint pass).
+  // G = Σ z·zᵀ, summed a block of z at a time: a 6 × 6 outer product per z loaded and stored all
+  // of G for 36 multiply-adds, which dominated the adjoint pass.
   Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> G;
   G.setZero();
   constexpr int kGramBlock = 192;
