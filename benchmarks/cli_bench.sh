@@ -18,6 +18,14 @@ best() {  # best of 3 wall-clock seconds
   done
   echo "$b"
 }
+startup() {  # median wall-clock milliseconds of 21 runs
+  local s e i
+  for i in $(seq 21); do
+    s=$EPOCHREALTIME; "$@" >/dev/null 2>&1; e=$EPOCHREALTIME
+    awk -v a="$s" -v b="$e" 'BEGIN{printf "%.1f\n", (b - a) * 1e3}'
+  done | sort -g | sed -n 11p
+}
+echo "start-up: trueaxis --version $(startup "$T" --version) ms, awk 'BEGIN{}' $(startup awk 'BEGIN{}') ms (medians of 21)"
 awk_t=$(best awk -F, 'NR>1{s+=$2}END{print s}' "$D/p3.csv")
 echo "file: $(du -m "$D/p3.csv" | cut -f1) MB; awk pass: ${awk_t} s"
 for m in two-point three-point lsq; do

@@ -1,17 +1,16 @@
-// Design data: checks, lengths and samples of planar section curves (evaluated by OCCT).
+// Design data: checks, lengths and samples of section curves (NURBS curves are evaluated by Open
+// CASCADE Technology, in libtrueaxis_occt.so, loaded on first use: occt_api.hpp).
 #include "trueaxis/design/design.hpp"
 
 #include <fmt/format.h>
 
 #include <Eigen/SVD>
-#include <GCPnts_AbscissaPoint.hxx>
-#include <GCPnts_UniformAbscissa.hxx>
-#include <GeomAdaptor_Curve.hxx>
 #include <algorithm>
 #include <cmath>
+#include <utility>
 #include <vector>
 
-#include "occt.hpp"
+#include "occt_api.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::design {
@@ -128,13 +127,8 @@ std::optional<Problem> check(const Section& s) {
     if (!(n.knots[n.knots.size() - 1] > n.knots[0]))
       return Problem{"curve/nurbs/knots", -1, "all knots are equal: the curve has no extent"};
     if (auto p = check_points(n.control_points, plane, "curve/nurbs/control_points")) return p;
-    try {
-      Handle(Geom_BSplineCurve) c = occt::curve(s);
-      first = occt::vec(c->StartPoint());
-      last = occt::vec(c->EndPoint());
-    } catch (const Error& e) {
-      return Problem{"curve/nurbs", -1, e.what()};
-    }
+    if (std::string why = detail::occt_api().nurbs_ends(s, first, last); !why.empty())
+      return Problem{"curve/nurbs", -1, std::move(why)};
   } else {
     const Eigen::Matrix3Xd& p = s.polyline;
     if (p.cols() < 2)
@@ -198,8 +192,9 @@ double length(const Section& s) {
       l += (s.polyline.col(i) - s.polyline.col(i - 1)).norm();
     return l;
   }
-  GeomAdaptor_Curve a(occt::curve(s));
-  return GCPnts_AbscissaPoint::Length(a);
+  double l = 0;
+  if (const std::string why = detail::occt_api().nurbs_length(s, l); !why.empty()) throw Error(why);
+  return l;
 }
 
 namespace {
@@ -257,26 +252,17 @@ Samples sample_polyline(const Section& s, double spacing) {
 Samples sample(const Section& s, double spacing) {
   if (!(spacing > 0)) throw Error("the sample spacing must be positive (mm)");
   if (!s.nurbs) return sample_polyline(s, spacing);
-  Handle(Geom_BSplineCurve) c = occt::curve(s);
-  GeomAdaptor_Curve a(c);
-  const double total = GCPnts_AbscissaPoint::Length(a);
-  const int n = std::max(2, static_cast<int>(std::ceil(total / spacing)) + 1);
-  GCPnts_UniformAbscissa ua(a, n);
-  if (!ua.IsDone()) throw Error("cannot sample the section curve '" + s.name + "'");
-  const int m = s.closed ? ua.NbPoints() - 1 : ua.NbPoints();
   Samples out;
-  out.points.resize(3, m);
-  out.normals.resize(3, m);
-  out.arc.resize(m);
-  Section unit = s;
-  unit.plane.normal.normalize();
-  for (int i = 0; i < m; ++i) {
-    const double t = ua.Parameter(i + 1);
-    out.points.col(i) = occt::vec(c->Value(t));
-    out.normals.col(i) = occt::away_from_material(unit, *c, t);
-    out.arc[i] = total * i / (ua.NbPoints() - 1);
-  }
+  if (const std::string why = detail::occt_api().nurbs_sample(s, spacing, out); !why.empty())
+    throw Error(why);
   return out;
+}
+
+Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes) {
+  Design d;
+  if (const std::string why = detail::occt_api().from_step(path, planes, d); !why.empty())
+    throw Error(why);
+  return d;
 }
 
 }  // namespace trueaxis::design

@@ -401,6 +401,14 @@ expect_ok "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0
 grep -q "mid.1: closed contour of 400.000 mm, material on the left" out.txt && grep -q "mid.2: closed contour of 157.080 mm, material on the right" out.txt && ok || bad "design: ipp sections $(cat out.txt)"
 head -1 path.csv | grep -q "^section,segment,length_mm,speed_mm_s" && [ "$(grep -c '^mid.1,' path.csv)" -ge 8 ] && ok || bad "design --path csv"
 expect_ok "$T" design --design design.json --tip-radius 2 --pushing 0.5 -q
+# The CAD part (Open CASCADE) is opened when a command needs it, not at every start: the dynamic
+# loader's own log of the files it maps.
+LD_DEBUG=files "$T" --version >/dev/null 2>ld.txt
+if ! grep -q "file=libfmt" ld.txt; then bad "LD_DEBUG=files shows no loads: $(head -c 300 ld.txt)"
+elif grep -q "libtrueaxis_occt\|libTKernel" ld.txt; then bad "--version opens the CAD library"
+else ok; fi
+LD_DEBUG=files "$T" design --design design.json -q >/dev/null 2>ld.txt
+grep -q "file=.*libtrueaxis_occt.so" ld.txt && grep -q "file=libTKernel" ld.txt && ok || bad "design --design does not open the CAD library"
 expect_code 2 "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0;normal=0,0,1"
 expect_code 2 "$T" design --step "$DATA/ippdme/ipp_simple.stp"
 expect_code 2 "$T" design --design design.json --pushing 5

@@ -14,6 +14,7 @@
 #include <cmath>
 #include <gp_Pln.hxx>
 
+#include "../../src/design/occt_api.hpp"
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/io/design.hpp"
@@ -113,6 +114,24 @@ TEST(Design, StepRefusals) {
               design::from_step(face, {{"a", z_plane(0)}});
             }).find(face + ": the STEP file holds no solid"),
             std::string::npos);
+}
+
+// The Open CASCADE part of the library is opened on first use; a missing library, or one without
+// its entry point, is an Error that names it (never a crash or a call into the unknown).
+TEST(Design, CadLibraryIsOpenedAndOthersRefused) {
+  const auto& api = design::detail::load_occt_api(design::detail::kOcctLibrary);
+  ASSERT_NE(api.tag, nullptr);
+  EXPECT_EQ(std::string(api.tag), design::detail::occt_api_tag());
+  EXPECT_TRUE(api.nurbs_ends && api.nurbs_length && api.nurbs_sample && api.plane_path &&
+              api.from_step);
+  const std::string missing =
+      test::error_of([] { design::detail::load_occt_api("/nonexistent/libtrueaxis_occt.so"); });
+  EXPECT_NE(missing.find("cannot load /nonexistent/libtrueaxis_occt.so"), std::string::npos)
+      << missing;
+  EXPECT_NE(missing.find("installed completely"), std::string::npos) << missing;
+  const std::string foreign = test::error_of([] { design::detail::load_occt_api("libm.so.6"); });
+  EXPECT_NE(foreign.find("libm.so.6 is from another build of trueaxis"), std::string::npos)
+      << foreign;
 }
 
 TEST(Design, PathAroundTheIppSectionKeepsTheOffset) {

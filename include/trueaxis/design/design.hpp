@@ -13,7 +13,8 @@
 // a perfect part, so the probe is deflected by the pushing amount), as a chain of parametric
 // cubic curve (PCC) segments within a stated chordal tolerance, each with a speed from its
 // curvature. NURBS evaluation, offsetting and STEP sectioning are done by Open CASCADE
-// Technology (OCCT 7.6).
+// Technology (OCCT 7.6), from a part of the library that is loaded on first use
+// (libtrueaxis_occt.so): the functions that need it throw Error if it cannot be loaded.
 #pragma once
 
 #include <Eigen/Core>
@@ -137,8 +138,12 @@ struct PccSegment {
   double length = 0;                  // arc length (mm)
   double speed = 0;                   // scanning speed on this segment (mm/s)
   double curvature = 0;               // largest curvature of the offset curve on it (1/mm)
-  Eigen::Vector3d point(double u) const;
-  Eigen::Vector3d tangent(double u) const;  // dp/du (not unit)
+  Eigen::Vector3d point(double u) const {
+    return coeff.col(0) + u * (coeff.col(1) + u * (coeff.col(2) + u * coeff.col(3)));
+  }
+  Eigen::Vector3d tangent(double u) const {  // dp/du (not unit)
+    return coeff.col(1) + u * (2 * coeff.col(2) + 3 * u * coeff.col(3));
+  }
 };
 
 // A point of a path at arc length s: position, unit tangent, and unit normal in the plane away

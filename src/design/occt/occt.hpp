@@ -1,4 +1,6 @@
-// Internal: conversions between trueaxis design data and Open CASCADE Technology objects.
+// Internal to libtrueaxis_occt.so: the design module's Open CASCADE Technology (OCCT) code, and
+// conversions between trueaxis design data and OCCT objects. These throw Error or OCCT's
+// Standard_Failure; api.cpp turns both into messages at the library's boundary.
 #pragma once
 
 #include <Geom_BSplineCurve.hxx>
@@ -55,5 +57,17 @@ Nurbs nurbs(const Geom_BSplineCurve& c);
 
 // Unit normal of the surface at curve parameter t: in the plane, away from the material.
 Eigen::Vector3d away_from_material(const Section& s, const Geom_BSplineCurve& c, double t);
+
+// The first and last point of a NURBS section's curve (Error: OCCT rejects the curve).
+void ends(const Section& s, Eigen::Vector3d& first, Eigen::Vector3d& last);
+// design::length of a NURBS section (mm).
+double length(const Section& s);
+// design::sample of a NURBS section; spacing > 0 (mm).
+Samples sample(const Section& s, double spacing);
+// design::make_path of a checked plane section whose plane normal has unit length, with validated
+// options.
+ScanPath plane_path(const Section& s, const PathOptions& o);
+// design::from_step.
+Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes);
 
 }  // namespace trueaxis::design::occt

@@ -30,7 +30,7 @@
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
 
-namespace trueaxis::design {
+namespace trueaxis::design::occt {
 namespace {
 
 constexpr double kJoinTolerance = 1e-4;  // mm: cut edges closer than this are one contour
@@ -70,7 +70,7 @@ std::optional<Eigen::Vector3d> outward_normal(const std::vector<TopoDS_Face>& fa
     pr.LowerDistanceParameters(u, v);
     GeomLProp_SLProps props(surf, u, v, 1, 1e-9);
     if (!props.IsNormalDefined()) continue;
-    Eigen::Vector3d n = occt::vec(props.Normal().XYZ());
+    Eigen::Vector3d n = vec(props.Normal().XYZ());
     if (f.Orientation() == TopAbs_REVERSED) n = -n;
     return n;
   }
@@ -109,8 +109,7 @@ Design from_step(const std::string& path, const std::vector<StepSectionRequest>&
     Eigen::Vector3d normal = rq.plane.normal;
     if (!(normal.norm() > 1e-9)) throw Error("section '" + rq.name + "': the normal is zero");
     normal.normalize();
-    BRepAlgoAPI_Section cut(shape, gp_Pln(occt::pnt(rq.plane.origin), occt::dir(normal)),
-                            Standard_False);
+    BRepAlgoAPI_Section cut(shape, gp_Pln(pnt(rq.plane.origin), dir(normal)), Standard_False);
     cut.Approximation(Standard_True);
     cut.Build();
     if (!cut.IsDone()) throw Error(fmt::format("{}: section '{}': the cut failed", path, rq.name));
@@ -131,7 +130,7 @@ Design from_step(const std::string& path, const std::vector<StepSectionRequest>&
       try {
         c = join(TopoDS::Wire(wires->Value(w)));
       } catch (const Standard_Failure& e) {
-        throw Error(fmt::format("{}: section '{}': {}", path, rq.name, occt::message(e)));
+        throw Error(fmt::format("{}: section '{}': {}", path, rq.name, message(e)));
       } catch (const Error& e) {
         throw Error(fmt::format("{}: section '{}': {}", path, rq.name, e.what()));
       }
@@ -140,11 +139,11 @@ Design from_step(const std::string& path, const std::vector<StepSectionRequest>&
             fmt::format("{}: section '{}': a contour of the cut is open ({:.3g} mm gap): "
                         "is the solid closed?",
                         path, rq.name, c->StartPoint().Distance(c->EndPoint())));
-      if (occt::signed_area(*c, normal) < 0) c->Reverse();
+      if (signed_area(*c, normal) < 0) c->Reverse();
       Section s;
       s.plane = {rq.plane.origin, normal};
       s.closed = true;
-      s.nurbs = occt::nurbs(*c);
+      s.nurbs = nurbs(*c);
       // Material: the outward normal of the part's face under the cut, at points of the
       // contour, against the direction to the curve's left. (Ray-casting point classification
       // is not used: OCCT 7.6 misclassifies points inside some holes.)
@@ -155,7 +154,7 @@ Design from_step(const std::string& path, const std::vector<StepSectionRequest>&
         gp_Pnt p;
         gp_Vec d1;
         c->D1(t, p, d1);
-        const Eigen::Vector3d left = normal.cross(occt::vec(d1)).normalized();
+        const Eigen::Vector3d left = normal.cross(vec(d1)).normalized();
         if (const auto out = outward_normal(faces, p)) {
           const double dot = out->dot(left);
           if (dot > 0.1) ++left_out;
@@ -177,4 +176,4 @@ Design from_step(const std::string& path, const std::vector<StepSectionRequest>&
   return d;
 }
 
-}  // namespace trueaxis::design
+}  // namespace trueaxis::design::occt
