@@ -1,6 +1,8 @@
 #pragma once
 #include <gtest/gtest.h>
 
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -17,6 +19,24 @@ inline std::string temp_dir() {
       std::string(TRUEAXIS_TEST_TMP) + "/" + info->test_suite_name() + "." + info->name();
   std::filesystem::create_directories(d);
   return d;
+}
+
+// The VmFlags line of the mapping that holds `p`, from /proc/self/smaps ("" if not found): " hg"
+// in it marks memory the program asked to have in transparent huge pages.
+inline std::string vm_flags_of_mapping(const void* p) {
+  std::ifstream f("/proc/self/smaps");
+  const auto addr = reinterpret_cast<std::uintptr_t>(p);
+  std::string line;
+  bool inside = false;
+  while (std::getline(f, line)) {
+    unsigned long lo = 0, hi = 0;
+    if (std::sscanf(line.c_str(), "%lx-%lx ", &lo, &hi) == 2 && line.find(':') > line.find(' ')) {
+      inside = lo <= addr && addr < hi;
+      continue;
+    }
+    if (inside && line.rfind("VmFlags:", 0) == 0) return line;
+  }
+  return "";
 }
 
 // The message of the trueaxis::Error that `f` throws, or "(no error)".

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "../common/memory.hpp"
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
 
@@ -54,6 +55,7 @@ struct Chunk {
 void parse_chunk(std::string_view text, const std::vector<std::string>& header, Chunk& out) {
   const std::size_t ncol = header.size();
   out.values.reserve(text.size() / (ncol * 8 + 1) * ncol + ncol);
+  trueaxis::detail::advise_huge_pages(out.values.data(), out.values.capacity() * sizeof(double));
   std::size_t pos = 0;
   auto fail = [&](std::size_t col, std::string what) {
     out.failed = true;
@@ -206,7 +208,15 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
     rows += c.rows;
   }
   t.rows_ = rows;
-  t.columns_.assign(ncol, Eigen::VectorXd(static_cast<Eigen::Index>(rows)));
+  // Each column allocated, not copied from a prototype (assign() would copy 8 bytes per row and
+  // column of uninitialised memory, faulting in every page on one core): the gather below writes
+  // every entry, and faults the pages in on all workers.
+  t.columns_.clear();
+  t.columns_.reserve(ncol);
+  for (std::size_t c = 0; c < ncol; ++c) {
+    t.columns_.emplace_back(static_cast<Eigen::Index>(rows));
+    trueaxis::detail::advise_huge_pages(t.columns_.back().data(), rows * sizeof(double));
+  }
   detail::parallel_ranges(chunks.size(), w, [&](int, std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const double* v = chunks[k].values.data();

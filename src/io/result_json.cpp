@@ -27,16 +27,17 @@ class JsonArrays {
   explicit JsonArrays(detail::OutFile& f) : f_(f) {}
   void array(const Eigen::VectorXd& v, double scale, bool cache) {
     f_.write("[");
-    if (cache && scale == 1.0 && cached_.size() > 0 && v.size() <= cached_.size() &&
-        std::equal(v.begin(), v.end(), cached_.begin())) {
-      write_prefix(static_cast<std::size_t>(cached_.size() - v.size()));
+    if (cache && scale == 1.0 && cached_ && cached_->size() > 0 && v.size() <= cached_->size() &&
+        std::equal(v.begin(), v.end(), cached_->begin())) {
+      write_prefix(static_cast<std::size_t>(cached_->size() - v.size()));
     } else {
       detail::format_numbers(v.data(), static_cast<std::size_t>(v.size()), scale, ',', pieces_);
-      if (cache && scale == 1.0) {
-        cached_ = v;
-        cached_pieces_ = pieces_;
-      }
       f_.write(pieces_);
+      if (cache && scale == 1.0) {
+        // Kept by exchange, not copied; the old cache's strings are reused for the next array.
+        cached_ = &v;
+        std::swap(cached_pieces_, pieces_);
+      }
     }
     f_.write("]");
   }
@@ -69,7 +70,7 @@ class JsonArrays {
 
   detail::OutFile& f_;
   std::vector<std::string> pieces_, cached_pieces_;
-  Eigen::VectorXd cached_;
+  const Eigen::VectorXd* cached_ = nullptr;  // the result's own array, alive while it is written
 };
 
 std::string quoted(const std::string& s) {

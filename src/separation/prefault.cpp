@@ -3,6 +3,8 @@
 #include <cstdint>
 #include <system_error>
 
+#include "../common/memory.hpp"
+
 #if defined(__linux__)
 #include <sys/mman.h>
 #include <unistd.h>
@@ -27,23 +29,10 @@ std::uintptr_t page_size() {
   return page;
 }
 
-// Asks for transparent huge pages (2 MB) in the regions: one fault commits 512 pages, and the
-// later passes over them miss the TLB less. Only a hint, which changes no data: the range is
-// rounded out to whole pages (a page shared with other data gets the hint too, harmlessly). The
-// kernel honours it where transparent huge pages are set to "madvise" or "always", for the 2 MB
-// blocks that lie wholly inside a region; elsewhere nothing changes.
+// Huge pages where the kernel allows them: one fault commits 512 pages, and the later passes over
+// them miss the TLB less.
 void advise_huge(const std::vector<Prefault::Region>& regions) {
-#ifdef MADV_HUGEPAGE
-  const std::uintptr_t page = page_size();
-  for (const auto& r : regions) {
-    const auto b = reinterpret_cast<std::uintptr_t>(r.data);
-    const std::uintptr_t first = b / page * page;
-    const std::uintptr_t last = (b + r.bytes + page - 1) / page * page;
-    (void)madvise(reinterpret_cast<void*>(first), last - first, MADV_HUGEPAGE);
-  }
-#else
-  (void)regions;
-#endif
+  for (const auto& r : regions) trueaxis::detail::advise_huge_pages(r.data, r.bytes);
 }
 
 void populate(const std::vector<Prefault::Region>& regions) {

@@ -6,10 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
-#include <cstdio>
-#include <fstream>
 #include <string>
 #include <vector>
+
+#include "../test_util.hpp"
 
 using trueaxis::separation::detail::Prefault;
 
@@ -32,27 +32,6 @@ TEST(Prefault, LeavesContentsAsTheCallerWroteThem) {
   for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(a[i], i % 4096 == 0 ? i : 7u) << i;
 }
 
-namespace {
-
-// The VmFlags line of the mapping that holds `p`, from /proc/self/smaps ("" if not found).
-std::string vm_flags_of_mapping(const void* p) {
-  std::ifstream f("/proc/self/smaps");
-  const auto addr = reinterpret_cast<std::uintptr_t>(p);
-  std::string line;
-  bool inside = false;
-  while (std::getline(f, line)) {
-    unsigned long lo = 0, hi = 0;
-    if (std::sscanf(line.c_str(), "%lx-%lx ", &lo, &hi) == 2 && line.find(':') > line.find(' ')) {
-      inside = lo <= addr && addr < hi;
-      continue;
-    }
-    if (inside && line.rfind("VmFlags:", 0) == 0) return line;
-  }
-  return "";
-}
-
-}  // namespace
-
 // The regions are marked for transparent huge pages ("hg" in the mapping's flags), so that where
 // the kernel gives them one fault commits 2 MB instead of 4 KB. Whether it has a huge page to give
 // at that moment is the kernel's affair; the mark is ours.
@@ -64,7 +43,7 @@ TEST(Prefault, AsksForHugePages) {
     const Prefault prefault({{v.data(), n * sizeof(double)}});
     for (std::size_t i = 0; i < n; ++i) v.push_back(static_cast<double>(i));
   }
-  const std::string flags = vm_flags_of_mapping(v.data() + n / 2);
+  const std::string flags = trueaxis::test::vm_flags_of_mapping(v.data() + n / 2);
   ASSERT_NE(flags, "") << "no mapping holds the buffer in /proc/self/smaps";
   EXPECT_NE(flags.find(" hg"), std::string::npos) << flags;
   for (std::size_t i = 0; i < n; i += 4096) ASSERT_EQ(v[i], static_cast<double>(i));
