@@ -52,6 +52,42 @@ struct Chunk {
   std::string fail_what;
 };
 
+// One plain data row from `p` (at a line's start): ncol numbers separated by commas, each padded
+// with spaces at most, then the line's end. Appends them and returns the start of the next line,
+// or returns nullptr, appending nothing, for anything else (a blank line, a malformed or
+// out-of-range field), which the careful path below then reads and reports. It reads each field
+// as the careful path does (from_chars after an optional '+'); it only skips the searches for
+// the line's end and each comma, which cost more than the numbers on short fields.
+const char* plain_row(const char* p, const char* end, std::size_t ncol, std::vector<double>& out) {
+  const std::size_t size0 = out.size();
+  for (std::size_t c = 0; c < ncol; ++c) {
+    while (p < end && is_space(*p)) ++p;
+    const char* num = p < end && *p == '+' ? p + 1 : p;
+    double v = 0;
+    const auto r = std::from_chars(num, end, v);
+    if (r.ec != std::errc() || !std::isfinite(v) || std::abs(v) > kMaxCsvMagnitude) {
+      out.resize(size0);
+      return nullptr;
+    }
+    p = r.ptr;
+    while (p < end && is_space(*p)) ++p;
+    if (c + 1 < ncol) {
+      if (p == end || *p != ',') {
+        out.resize(size0);
+        return nullptr;
+      }
+      ++p;
+    }
+    out.push_back(v);
+  }
+  if (p == end) return p;
+  if (*p != '\n') {
+    out.resize(size0);
+    return nullptr;
+  }
+  return p + 1;
+}
+
 void parse_chunk(std::string_view text, const std::vector<std::string>& header, Chunk& out) {
   const std::size_t ncol = header.size();
   out.values.reserve(text.size() / (ncol * 8 + 1) * ncol + ncol);
@@ -63,7 +99,14 @@ void parse_chunk(std::string_view text, const std::vector<std::string>& header, 
     out.fail_col = col;
     out.fail_what = std::move(what);
   };
+  const char* const text_end = text.data() + text.size();
   while (pos < text.size()) {
+    if (const char* next = plain_row(text.data() + pos, text_end, ncol, out.values)) {
+      pos = static_cast<std::size_t>(next - text.data());
+      ++out.rows;
+      ++out.lines;
+      continue;
+    }
     const std::size_t nl = text.find('\n', pos);
     const std::size_t end = nl == std::string_view::npos ? text.size() : nl;
     const std::string_view l = text.substr(pos, end - pos);

@@ -39,6 +39,25 @@ TEST(Csv, ParsesHeaderAndNumbers) {
   EXPECT_EQ(t.where(1, 1), "f.csv:4:5: ");
 }
 
+// Plain rows are read by a fast path and anything else line by line: padded, signed, CRLF and
+// blank lines mixed in give the same table either way, and a row that fails half-way leaves no
+// values behind.
+TEST(Csv, PlainAndPaddedRowsReadAlike) {
+  const auto t =
+      CsvTable::parse("x,a,b\n0,1,2\n\t10 ,\t+5e0 , -0.25\r\n  \n20,3,4\n30,+.5,1e-3", "f.csv");
+  ASSERT_EQ(t.rows(), 4u);
+  const double a[] = {1, 5, 3, 0.5}, b[] = {2, -0.25, 4, 1e-3};
+  for (int r = 0; r < 4; ++r) {
+    EXPECT_EQ(t.column(0)[r], 10.0 * r);
+    EXPECT_EQ(t.column(1)[r], a[r]);
+    EXPECT_EQ(t.column(2)[r], b[r]);
+  }
+  EXPECT_EQ(t.where(3, 2), "f.csv:6:8: ");
+  EXPECT_EQ(error_of("x,a,b\n0,1,2\n1,2,3x\n"), "f.csv:3:5: '3x' is not a number (column 'b')");
+  EXPECT_NE(error_of("x,a,b\n0,1,2\n1,2\n").find("f.csv:3:4: missing field for column 'b'"),
+            std::string::npos);
+}
+
 TEST(Csv, RejectsNonNumberWithLineAndColumn) {
   EXPECT_EQ(error_of("x,a\n0,1\n1,abc\n"), "f.csv:3:3: 'abc' is not a number (column 'a')");
 }
