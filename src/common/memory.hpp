@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 namespace trueaxis::detail {
 
@@ -19,5 +20,14 @@ inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 // never fails: where the kernel does not offer huge pages, or for the pages already written,
 // nothing changes. Call it before the buffer is first written. Does nothing below kHugePageBytes.
 void advise_huge_pages(const void* data, std::size_t bytes) noexcept;
+
+// A new Eigen vector of n zeros, asked for in huge pages before the zeros are written.
+template <class Vector>
+Vector huge_page_zeros(std::ptrdiff_t n) {
+  Vector v(n);
+  advise_huge_pages(v.data(), static_cast<std::size_t>(n) * sizeof(typename Vector::Scalar));
+  v.setZero();
+  return v;
+}
 
 }  // namespace trueaxis::detail

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <optional>
 
+#include "../common/memory.hpp"
+
 // GCC's vectoriser pairs loads in the Givens fold that clang leaves alone (clang has no such
 // attribute).
 #if defined(__clang__)
@@ -421,7 +423,7 @@ Eigen::VectorXd BandedLsq::covariance_diagonal() const {
   // with F the covariance over the full window [w(K..K+span), globals].
   const Design& D = D_;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_;
-  Eigen::VectorXd diag = Eigen::VectorXd::Zero(D.nvars);
+  Eigen::VectorXd diag = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(D.nvars);
   std::vector<double> F(static_cast<std::size_t>(m * m), 0.0);
   auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
   {

@@ -15,6 +15,7 @@
 #include <span>
 #include <tuple>
 
+#include "../common/memory.hpp"
 #include "banded_lsq.hpp"
 #include "design.hpp"
 #include "prefault.hpp"
@@ -414,6 +415,9 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
        {r.g.data(), sizeof(double) * static_cast<std::size_t>(n)},
        {r.theta.data(), sizeof(double) * static_cast<std::size_t>(r.theta.size())}});
   // The grids depend on x alone: filled on another core meanwhile.
+  for (const Eigen::VectorXd* grid : {&r.xw, &r.xg, &r.xt})
+    trueaxis::detail::advise_huge_pages(grid->data(),
+                                        sizeof(double) * static_cast<std::size_t>(grid->size()));
   const long pmin = *std::min_element(p.begin(), p.end());
   auto grids = std::async(policy_for(r), [&] {
     for (long j = 0; j < D.Q; ++j) r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
@@ -423,7 +427,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   st.engine = std::make_unique<detail::BandedLsq>(D);
   Eigen::VectorXd angle_mm;
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
-  Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
+  Eigen::VectorXd v = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(D.nvars);
   double pin_size = 0;  // the largest pinned |value|: the refinement never changes those
   for (const auto& [id, value] : D.pins) {
     v[id] = value;
@@ -950,9 +954,9 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
   // S = VᵀZV. (ZV)_u arrives row by row from the solve: its dot with u goes into the output
   // array at once and its outer product with V_u into VᵀZV; S and Z_uu complete it afterwards.
   // Pinned unknowns have no Z_uu and no (ZV)_u: their variance is u·S·u alone.
-  uw = Eigen::VectorXd::Zero(ra.mw);
-  ug = Eigen::VectorXd::Zero(ra.mg);
-  ut = Eigen::VectorXd::Zero(ra.mt);
+  uw = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(ra.mw);
+  ug = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(ra.mg);
+  ut = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(ra.mt);
   enum Kind { kW, kG, kT, kOther };
   auto kind_of = [&](int id, long& i) {
     if (id < D.Q) return i = id, kW;
