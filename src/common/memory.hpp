@@ -3,8 +3,7 @@
 // The first write to each 4 KB page of new memory is a page fault, which on the virtual machines
 // we measure costs several times the writing of the page itself; a run that parses, separates and
 // writes 10⁶ stations touches a few hundred megabytes of new memory. Transparent huge pages commit
-// 2 MB per fault instead; with the kernel's default setting
-// ("madvise") only where the program asks for them.
+// 2 MB per fault instead; with the kernel's usual setting ("madvise") only where the program asks.
 #pragma once
 
 #include <cstddef>
