@@ -4,7 +4,7 @@
 // Debian builds the OCCT libraries with immediate binding, so a program linked to them resolves
 // their ~77 000 relocations and runs their static constructors at every start, whether or not it
 // reads a STEP file or evaluates a NURBS section. Most uses of trueaxis never do: a separation,
-// a fit or `trueaxis --help` paid ~30 ms for it. The library (libtrueaxis_occt.so, from
+// a fit or `trueaxis --help` paid 30–45 ms for it. The library (libtrueaxis_occt.so, from
 // src/design/occt/) is opened the first time a NURBS section, a plane section's scanning path or
 // a STEP file needs it, and it hands back this table of entry points.
 //
