@@ -7,7 +7,6 @@
 #pragma once
 
 #include <cstddef>
-#include <cstdint>
 
 namespace trueaxis::detail {
 
@@ -20,11 +19,19 @@ inline constexpr std::size_t kHugePageBytes = std::size_t{2} << 20;
 // nothing changes. Call it before the buffer is first written. Does nothing below kHugePageBytes.
 void advise_huge_pages(const void* data, std::size_t bytes) noexcept;
 
+// Resizes an Eigen vector or matrix to rows × cols (its contents then unset) and asks for its new
+// storage in huge pages before anything is written to it.
+template <class Array>
+void resize_in_huge_pages(Array& a, std::ptrdiff_t rows, std::ptrdiff_t cols) {
+  a.resize(rows, cols);
+  advise_huge_pages(a.data(), static_cast<std::size_t>(a.size()) * sizeof(typename Array::Scalar));
+}
+
 // A new Eigen vector of n zeros, asked for in huge pages before the zeros are written.
 template <class Vector>
 Vector huge_page_zeros(std::ptrdiff_t n) {
-  Vector v(n);
-  advise_huge_pages(v.data(), static_cast<std::size_t>(n) * sizeof(typename Vector::Scalar));
+  Vector v;
+  resize_in_huge_pages(v, n, 1);
   v.setZero();
   return v;
 }

@@ -2,9 +2,6 @@
 #include <dlfcn.h>
 #include <fmt/format.h>
 
-#include <atomic>
-#include <mutex>
-
 #include "occt_api.hpp"
 #include "trueaxis/error.hpp"
 
@@ -34,13 +31,9 @@ const OcctApi& load_occt_api(const std::string& library) {
 }
 
 const OcctApi& occt_api() {
-  static std::atomic<const OcctApi*> api{nullptr};
-  static std::mutex mutex;
-  if (const OcctApi* a = api.load(std::memory_order_acquire)) return *a;
-  const std::lock_guard lock(mutex);
-  if (!api.load(std::memory_order_relaxed))
-    api.store(&load_occt_api(kOcctLibrary), std::memory_order_release);
-  return *api.load(std::memory_order_relaxed);
+  // Initialised once, thread-safely; if loading throws, the next call tries again.
+  static const OcctApi& api = load_occt_api(kOcctLibrary);
+  return api;
 }
 
 }  // namespace trueaxis::design::detail

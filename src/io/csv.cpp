@@ -60,32 +60,26 @@ struct Chunk {
 // the line's end and each comma, which cost more than the numbers on short fields.
 const char* plain_row(const char* p, const char* end, std::size_t ncol, std::vector<double>& out) {
   const std::size_t size0 = out.size();
+  auto reject = [&]() -> const char* {
+    out.resize(size0);
+    return nullptr;
+  };
   for (std::size_t c = 0; c < ncol; ++c) {
     while (p < end && is_space(*p)) ++p;
     const char* num = p < end && *p == '+' ? p + 1 : p;
     double v = 0;
     const auto r = std::from_chars(num, end, v);
-    if (r.ec != std::errc() || !std::isfinite(v) || std::abs(v) > kMaxCsvMagnitude) {
-      out.resize(size0);
-      return nullptr;
-    }
+    if (r.ec != std::errc() || !std::isfinite(v) || std::abs(v) > kMaxCsvMagnitude) return reject();
     p = r.ptr;
     while (p < end && is_space(*p)) ++p;
     if (c + 1 < ncol) {
-      if (p == end || *p != ',') {
-        out.resize(size0);
-        return nullptr;
-      }
+      if (p == end || *p != ',') return reject();
       ++p;
     }
     out.push_back(v);
   }
   if (p == end) return p;
-  if (*p != '\n') {
-    out.resize(size0);
-    return nullptr;
-  }
-  return p + 1;
+  return *p == '\n' ? p + 1 : reject();
 }
 
 void parse_chunk(std::string_view text, const std::vector<std::string>& header, Chunk& out) {
@@ -253,13 +247,12 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
   t.rows_ = rows;
   // Each column allocated, not copied from a prototype (assign() would copy 8 bytes per row and
   // column of uninitialised memory, faulting in every page on one core): the gather below writes
-  // every entry, and faults the pages in on all workers.
+  // every entry, and commits the pages on all workers.
   t.columns_.clear();
   t.columns_.reserve(ncol);
-  for (std::size_t c = 0; c < ncol; ++c) {
-    t.columns_.emplace_back(static_cast<Eigen::Index>(rows));
-    trueaxis::detail::advise_huge_pages(t.columns_.back().data(), rows * sizeof(double));
-  }
+  for (std::size_t c = 0; c < ncol; ++c)
+    trueaxis::detail::resize_in_huge_pages(t.columns_.emplace_back(),
+                                           static_cast<Eigen::Index>(rows), 1);
   detail::parallel_ranges(chunks.size(), w, [&](int, std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k) {
       const double* v = chunks[k].values.data();

@@ -75,13 +75,9 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
                               t.where(k, 0), x[k - 1], x[k], d, h));
   }
   // The data's arrays in huge pages where the kernel offers them (see common/memory.hpp).
-  auto fresh = [](auto& a, Eigen::Index rows, Eigen::Index cols) {
-    a.resize(rows, cols);
-    trueaxis::detail::advise_huge_pages(a.data(),
-                                        static_cast<std::size_t>(a.size()) * sizeof(double));
-  };
+  using trueaxis::detail::resize_in_huge_pages;
   separation::ProbeData d;
-  fresh(d.x, n, 1);
+  resize_in_huge_pages(d.x, n, 1);
   d.x = x;
   if (opt.offsets.empty()) {
     for (std::size_t i = 0; i < probe_cols.size(); ++i)
@@ -109,11 +105,11 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
     }
   }
   const double sign = opt.invert ? -1.0 : 1.0;
-  fresh(d.readings, n, static_cast<Eigen::Index>(probe_cols.size()));
+  resize_in_huge_pages(d.readings, n, static_cast<Eigen::Index>(probe_cols.size()));
   for (std::size_t i = 0; i < probe_cols.size(); ++i)
     d.readings.col(static_cast<Eigen::Index>(i)) = t.column(probe_cols[i]) * (sign * 1e-3);
   if (angle_col >= 0) {
-    fresh(d.angle, n, 1);
+    resize_in_huge_pages(d.angle, n, 1);
     d.angle = t.column(angle_col) * 1e-6;
   }
   return d;
