@@ -10,6 +10,7 @@
 #include <optional>
 #include <set>
 
+#include "../common/eigen_instances.hpp"
 #include "common.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/fit.hpp"

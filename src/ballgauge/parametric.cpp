@@ -9,6 +9,7 @@
 #include <memory>
 #include <set>
 
+#include "../common/eigen_instances.hpp"
 #include "common.hpp"
 #include "trueaxis/error.hpp"
 

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "../common/eigen_instances.hpp"
 #include "occt_api.hpp"
 #include "trueaxis/error.hpp"
 

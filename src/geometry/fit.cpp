@@ -10,6 +10,7 @@
 #include <memory>
 #include <random>
 
+#include "../common/eigen_instances.hpp"
 #include "sphere_kernels.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/flatness.hpp"

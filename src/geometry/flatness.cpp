@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "../common/eigen_instances.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::geometry {

@@ -8,6 +8,7 @@
 #include <limits>
 #include <set>
 
+#include "../common/eigen_instances.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::guideway {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <optional>
 
+#include "../common/eigen_instances.hpp"
 #include "../common/memory.hpp"
 
 // GCC's vectoriser pairs loads in the Givens fold that clang leaves alone (clang has no such

@@ -15,6 +15,7 @@
 #include <span>
 #include <tuple>
 
+#include "../common/eigen_instances.hpp"
 #include "../common/memory.hpp"
 #include "banded_lsq.hpp"
 #include "design.hpp"

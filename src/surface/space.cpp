@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "../common/eigen_instances.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/surface/surface.hpp"
