@@ -51,8 +51,6 @@ struct Case {
   Element element;
 };
 
-}  // namespace
-
 class NistReference : public testing::TestWithParam<Case> {};
 
 TEST_P(NistReference, EverySetMatchesItsReferenceFit) {
@@ -209,8 +207,6 @@ TEST(PointSets, NoPointsAndAbsurdCoordinatesAreRefusedByName) {
             "plane fit: no points");
 }
 
-namespace {
-
 // An orthonormal frame tilted arbitrarily in space, with origin far from zero.
 Eigen::Isometry3d tilted() {
   Eigen::Isometry3d t = Eigen::Isometry3d::Identity();
@@ -220,8 +216,6 @@ Eigen::Isometry3d tilted() {
   t.translation() = Eigen::Vector3d(420, -130, 615);
   return t;
 }
-
-}  // namespace
 
 // Points alternating ±h about a known element give a zone of exactly 2h about that element:
 // no other element of the family can bring every +h point in and every −h point out at once.
@@ -273,8 +267,6 @@ TEST(MinZone, CircleOfAlternatingRadiiIsTwiceTheAmplitude) {
             std::string::npos);
 }
 
-namespace {
-
 // Points on a cone (apex angle 2·psi, axis through `apex` along `a`) over a sector of `turn`
 // radians and an axial stretch [z0, z1] mm, with Gaussian noise `sigma` mm normal to the surface.
 Eigen::Matrix3Xd cone_points(const Eigen::Isometry3d& frame, double psi, double z0, double z1,
@@ -291,8 +283,6 @@ Eigen::Matrix3Xd cone_points(const Eigen::Isometry3d& frame, double psi, double 
   }
   return p;
 }
-
-}  // namespace
 
 // The minimum is reached, not approached: the same points fitted in two frames give the same
 // cone to round-off. A stopping rule on the cost alone left a narrow cone sector 1e-7 mm short
@@ -364,8 +354,6 @@ TEST(Fit, LargeCloudsGiveTheSameFitWhateverTheirOrder) {
   }
 }
 
-namespace {
-
 // An independent reference: Gauss–Newton with step halving in 80-bit arithmetic on the
 // orthogonal distances to a cone (psi ≠ 0) or cylinder, started from a given fit and run to its
 // fixed point. Parameters: axis point (3), axis direction (3, normalised after each step), the
@@ -422,8 +410,6 @@ RefCone reference_refit(const Eigen::Matrix3Xd& p, RefCone s, bool cone) {
   }
   return s;
 }
-
-}  // namespace
 
 // Against the 80-bit reference, on cones and cylinders a CMM meets: sectors down to 20°, short
 // bands, wide and narrow cones, up to 1000 mm from the origin, noise, coordinates rounded to
@@ -492,8 +478,6 @@ TEST(Fit, ConesAndCylindersMeetAnExtendedPrecisionReference) {
   EXPECT_LE(refused, 8);
 }
 
-namespace {
-
 // An independent reference for spheres: Gauss–Newton with step halving in 80-bit arithmetic
 // (analytic Jacobian, QR), from a given fit to its fixed point, where Jᵀr = 0.
 Eigen::Matrix<long double, 4, 1> reference_sphere(const Eigen::Matrix3Xd& p,
@@ -526,8 +510,6 @@ Eigen::Matrix<long double, 4, 1> reference_sphere(const Eigen::Matrix3Xd& p,
   }
   return s;
 }
-
-}  // namespace
 
 // Against the 80-bit reference, on spheres a CMM meets: whole hemispheres down to caps of ±3°
 // (a probe on a large ball's pole), radii 1–200 mm up to 1000 mm from the origin, noise up to
@@ -631,3 +613,5 @@ TEST(Fit, ASphereOnAFlatPatchIsRefusedAndAShallowCapIsFlagged) {
     EXPECT_EQ(f.warnings.empty(), R < 10000) << R;
   }
 }
+
+}  // namespace

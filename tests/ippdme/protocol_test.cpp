@@ -13,13 +13,14 @@
 #include <set>
 #include <sstream>
 
+#include "nist.hpp"
 #include "trueaxis/ippdme/commands.hpp"
 
 namespace trueaxis {
 namespace {
 
 namespace fs = std::filesystem;
-const fs::path kNist = fs::path(TRUEAXIS_TEST_DATA) / "ippdme" / "nist";
+using test::kNist;
 
 // The protocol lines of a NIST file: each line is followed by a "\\" line, and the file ends
 // with ":" lines; CR LF endings.

@@ -14,7 +14,7 @@ namespace {
 // Noise-free: each point is the ball centre (carriage position + deflection) less the tip radius
 // along the deflection, which lands on the true surface whatever the servo's following error;
 // only round-off is left.
-constexpr double kRoundoff = 1e-9;  // mm
+constexpr double kSurfaceRoundoff = 1e-9;  // mm
 
 using test::square_and_hole;
 
@@ -42,7 +42,7 @@ TEST(VirtualCmm, DesignValueScanOfAPerfectPartFollowsItsSurface) {
     double worst = 0;
     for (const auto& x : out.samples)
       worst = std::max(worst, std::abs(cmm.distance(s.plane, x.surface)));
-    EXPECT_LT(worst, kRoundoff) << s.name;
+    EXPECT_LT(worst, kSurfaceRoundoff) << s.name;
     EXPECT_LT(worst_dl, 0.05) << s.name;  // the servo lags on the corner arcs, a little
   }
   EXPECT_GT(cmm.time(), 5);  // 550 mm at ≤ 100 mm/s, and the approaches
@@ -69,7 +69,7 @@ TEST(VirtualCmm, TouchAndAutonomousScanFindAMovedPart) {
   double worst = 0;
   for (const auto& x : out.samples)
     worst = std::max(worst, std::abs(cmm.distance(plane, x.surface)));
-  EXPECT_LT(worst, kRoundoff);
+  EXPECT_LT(worst, kSurfaceRoundoff);
   EXPECT_NEAR(out.samples.back().arc, 400, 2);
   EXPECT_GT(cmm.time() - t0, 400 / 12.0);  // slow: about 10× the design-value time
 }
