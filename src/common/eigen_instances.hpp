@@ -8,11 +8,7 @@
 // members gain nothing measurable from it and do not include it.)
 #pragma once
 
-#include <Eigen/Cholesky>
-#include <Eigen/Dense>
-#include <Eigen/Eigenvalues>
-#include <Eigen/QR>
-#include <Eigen/SVD>
+#include <Eigen/Dense>  // Cholesky, QR, SVD, Eigenvalues
 
 extern template class Eigen::JacobiSVD<Eigen::MatrixXd>;
 extern template class Eigen::JacobiSVD<Eigen::Matrix3Xd>;
