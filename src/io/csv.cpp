@@ -20,14 +20,14 @@ bool is_space(char c) {
   return c == ' ' || c == '\t' || c == '\r';
 }
 
-std::string_view trim(std::string_view s) {
+std::string_view trim_spaces(std::string_view s) {
   while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
   while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
   return s;
 }
 
 bool blank(std::string_view line) {
-  return trim(line).empty();
+  return trim_spaces(line).empty();
 }
 
 }  // namespace
@@ -199,8 +199,8 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
     std::size_t f0 = 0;
     while (true) {
       const std::size_t comma = l.find(',', f0);
-      const std::string_view field =
-          trim(l.substr(f0, comma == std::string_view::npos ? std::string_view::npos : comma - f0));
+      const std::string_view field = trim_spaces(
+          l.substr(f0, comma == std::string_view::npos ? std::string_view::npos : comma - f0));
       const int col = static_cast<int>(t.header_.size());
       if (field.empty())
         throw Error(

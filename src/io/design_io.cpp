@@ -120,7 +120,7 @@ design::Section read_section(const JsonFile& f, const ptr& p) {
   return s;
 }
 
-ojson vec(const Eigen::Vector3d& v) {
+ojson xyz(const Eigen::Vector3d& v) {
   return {v.x(), v.y(), v.z()};
 }
 
@@ -223,11 +223,11 @@ void write_part(const std::string& path, const sim::Part& part) {
                      {"height_mm", b.height},
                      {"width_mm", b.width}});
   ojson dev{{"scale", d.scale}};
-  if (d.scale_about_given) dev["scale_about"] = vec(d.scale_about);
-  dev["scale_direction"] = vec(d.scale_direction);
+  if (d.scale_about_given) dev["scale_about"] = xyz(d.scale_about);
+  dev["scale_direction"] = xyz(d.scale_direction);
   dev["directional_scale"] = d.directional_scale;
-  dev["rotation_deg"] = vec(d.rotation_deg);
-  dev["translation"] = vec(d.translation);
+  dev["rotation_deg"] = xyz(d.rotation_deg);
+  dev["translation"] = xyz(d.translation);
   dev["bumps"] = bumps;
   dev["noise_um"] = d.noise * 1e3;
   dev["seed"] = d.seed;
@@ -246,7 +246,7 @@ ojson design_json(const design::Design& d) {
     if (s.nurbs) {
       ojson cps = ojson::array();
       for (Eigen::Index i = 0; i < s.nurbs->control_points.cols(); ++i)
-        cps.push_back(vec(s.nurbs->control_points.col(i)));
+        cps.push_back(xyz(s.nurbs->control_points.col(i)));
       curve["nurbs"] = {
           {"degree", s.nurbs->degree},
           {"knots", std::vector<double>(s.nurbs->knots.begin(), s.nurbs->knots.end())},
@@ -254,19 +254,19 @@ ojson design_json(const design::Design& d) {
           {"control_points", cps}};
     } else {
       ojson pts = ojson::array();
-      for (Eigen::Index i = 0; i < s.polyline.cols(); ++i) pts.push_back(vec(s.polyline.col(i)));
+      for (Eigen::Index i = 0; i < s.polyline.cols(); ++i) pts.push_back(xyz(s.polyline.col(i)));
       curve["polyline"] = pts;
     }
     if (s.space_curve()) {
       ojson normals = ojson::array();
-      for (Eigen::Index i = 0; i < s.normals.cols(); ++i) normals.push_back(vec(s.normals.col(i)));
+      for (Eigen::Index i = 0; i < s.normals.cols(); ++i) normals.push_back(xyz(s.normals.col(i)));
       secs.push_back(
           ojson{{"name", s.name}, {"closed", s.closed}, {"curve", curve}, {"normals", normals}});
       continue;
     }
     secs.push_back(
         ojson{{"name", s.name},
-              {"plane", {{"origin", vec(s.plane.origin)}, {"normal", vec(s.plane.normal)}}},
+              {"plane", {{"origin", xyz(s.plane.origin)}, {"normal", xyz(s.plane.normal)}}},
               {"closed", s.closed},
               {"curve", curve},
               {"material", design::to_string(s.material)}});

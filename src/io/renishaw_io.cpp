@@ -22,7 +22,7 @@ using positioning::Reading;
 
 // Larger than any travel (mm) or positioning deviation (µm) of a machine tool or CMM, and than
 // any run or target count a laser test has.
-constexpr double kMaxTarget = 1e6, kMaxDeviation = 1e6;
+constexpr double kRtlMaxTarget = 1e6, kRtlMaxDeviation = 1e6;
 constexpr long kMaxCount = 100000;
 
 using detail::is_blank;
@@ -156,7 +156,8 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
     if (section == "TARGET DATA") {
       if (!keyed && collecting_targets && starts_numeric(s)) {
         for (const auto& [x, c] : numbers(b, l.size())) {
-          if (std::abs(x) > kMaxTarget) fail(c, fmt::format("target {:g} mm is out of range", x));
+          if (std::abs(x) > kRtlMaxTarget)
+            fail(c, fmt::format("target {:g} mm is out of range", x));
           f.targets.push_back(x);
           target_lines.push_back(line);
         }
@@ -176,7 +177,8 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         collecting_targets = true;
         if (!value.empty())
           for (const auto& [x, c] : numbers(vcol, l.size())) {
-            if (std::abs(x) > kMaxTarget) fail(c, fmt::format("target {:g} mm is out of range", x));
+            if (std::abs(x) > kRtlMaxTarget)
+              fail(c, fmt::format("target {:g} mm is out of range", x));
             f.targets.push_back(x);
             target_lines.push_back(line);
           }
@@ -223,7 +225,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         };
         const int run = index(0, run_count > 0 ? run_count : kMaxCount, "run");
         const int target = index(1, target_count > 0 ? target_count : kMaxCount, "target");
-        if (std::abs(v[2].first) > kMaxDeviation)
+        if (std::abs(v[2].first) > kRtlMaxDeviation)
           fail(v[2].second, fmt::format("deviation {:g} um is out of range", v[2].first));
         entries.push_back({run, target, v[2].first, line});
         return;

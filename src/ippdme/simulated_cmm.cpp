@@ -10,7 +10,7 @@ namespace trueaxis::ippdme {
 namespace {
 
 constexpr long kMaxTicks = 50'000'000;  // 14 hours of machine time at 1 kHz: a runaway guard
-constexpr double kDeg = M_PI / 180;
+constexpr double kRadPerDeg = M_PI / 180;
 
 }  // namespace
 
@@ -325,7 +325,7 @@ Surface plane_surface(const Eigen::Vector3d& point, const Eigen::Vector3d& norma
 Surface cone_surface(const Eigen::Vector3d& axis_point, const Eigen::Vector3d& axis, double radius,
                      double surface_angle) {
   const Eigen::Vector3d ax = axis.normalized();
-  const double c = std::cos(surface_angle * kDeg), s = std::sin(surface_angle * kDeg);
+  const double c = std::cos(surface_angle * kRadPerDeg), s = std::sin(surface_angle * kRadPerDeg);
   return [=](const Eigen::Vector3d& q) -> std::optional<Nearest> {
     const Eigen::Vector3d v = q - axis_point;
     const double h = v.dot(ax);

@@ -11,7 +11,7 @@
 namespace trueaxis::report {
 namespace {
 
-std::string um(double mm) {
+std::string um_2f(double mm) {
   return fmt::format("{:.2f}", mm * 1e3);
 }
 
@@ -94,16 +94,17 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
       "<p>Error vectors Δ = measured − true ball centre at {} mapped points from {} "
       "placements; largest |Δ| {} µm, largest standard uncertainty {} µm (it grows with every "
       "stitch). Measured points are corrected by X = x − Δ(x), trilinear.</p>",
-      r.points.size(), r.placements.size(), um(emax), um(umax));
+      r.points.size(), r.placements.size(), um_2f(emax), um_2f(umax));
   s.table = {{"placement", "alignment", "balls", "shared", "registration RMS (µm)",
               "sphere diameter error max (µm)"}};
   for (const auto& p : r.placements)
     s.table.push_back({p.name, alignment(p.alignment), std::to_string(p.balls),
-                       std::to_string(p.shared), um(p.registration_rms), um(p.diameter_error_max)});
+                       std::to_string(p.shared), um_2f(p.registration_rms),
+                       um_2f(p.diameter_error_max)});
   if (pr) {
     s.table.push_back({"parametric model (residual RMS, σ)", fmt::format("degree {}", pr->degree),
                        std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),
-                       um(pr->residual_rms), "σ " + um(pr->sigma)});
+                       um_2f(pr->residual_rms), "σ " + um_2f(pr->sigma)});
     // Squareness, the last three parameters (rad), with U = 2u.
     const Eigen::Index sq = 18 * (pr->degree + 1);
     const char* names[3] = {"EC0Y", "EB0Z", "EA0Z"};
@@ -158,16 +159,16 @@ Section lengths_section(const std::string& title,
       {"", "min (µm)", "max (µm)", "range (µm)", "mean (µm)", "RMS (µm)", "expected RMS (µm)"}};
   auto row = [&](const std::string& name, const ballgauge::LengthStats& st,
                  const std::string& expected) {
-    s.table.push_back(
-        {name, um(st.min), um(st.max), um(st.range()), um(st.mean), um(st.rms), expected});
+    s.table.push_back({name, um_2f(st.min), um_2f(st.max), um_2f(st.range()), um_2f(st.mean),
+                       um_2f(st.rms), expected});
   };
   row("before correction", first.before, "");
   for (const auto& v : results)
     row("after, " + v.correction, v.after,
         std::isnan(v.predicted_after)
             ? "no repeats"
-            : fmt::format("{} (repeatability {} ⊕ u {})", um(v.predicted_after),
-                          um(v.repeatability), um(v.correction_u_rms)));
+            : fmt::format("{} (repeatability {} ⊕ u {})", um_2f(v.predicted_after),
+                          um_2f(v.repeatability), um_2f(v.correction_u_rms)));
   if (mpe) {
     s.table.push_back({"", "", "", "", "", "", ""});
     auto verdict = [&](const std::string& name, const std::vector<ballgauge::LengthRow>& rows,

@@ -9,7 +9,7 @@
 namespace trueaxis::report {
 namespace {
 
-std::string um(double mm, int digits = 2) {
+std::string um_text(double mm, int digits = 2) {
   return std::isnan(mm) ? std::string("not defined") : fmt::format("{:.{}f} µm", mm * 1e3, digits);
 }
 
@@ -60,7 +60,8 @@ Section positioning_section(const std::string& title, const positioning::Result&
   auto row = [&](const char* what, const char* symbol, const std::string& name) {
     const double value = positioning::parameter(r, name);
     const auto* v = verdict_of(name);
-    s.table.push_back({what, symbol, um(value), v ? fmt::format("{:g} µm", v->limit * 1e3) : "",
+    s.table.push_back({what, symbol, um_text(value),
+                       v ? fmt::format("{:g} µm", v->limit * 1e3) : "",
                        v ? (v->pass                ? "pass"
                             : std::isnan(v->value) ? "FAIL (not defined)"
                                                    : "FAIL")
@@ -70,9 +71,9 @@ Section positioning_section(const std::string& title, const positioning::Result&
     row("positional uncertainty", "P", "P");
     row("positional deviation", "Pa", "Pa");
     row("positional scatter (largest)", "Ps", "Ps");
-    s.table.push_back({"positional scatter (mean)", "Ps mean", um(r.vdi.Ps_mean), "", ""});
+    s.table.push_back({"positional scatter (mean)", "Ps mean", um_text(r.vdi.Ps_mean), "", ""});
     row("reversal span (largest)", "U", "U");
-    s.table.push_back({"reversal span (mean)", "U mean", um(r.vdi.U_mean), "", ""});
+    s.table.push_back({"reversal span (mean)", "U mean", um_text(r.vdi.U_mean), "", ""});
   } else {
     row("accuracy, bidirectional", "A", "A");
     row("accuracy, ↑", "A↑", "A_up");
@@ -124,13 +125,14 @@ Section positioning_section(const std::string& title, const positioning::Result&
   p.x = x;
   if (vdi) {
     p.title = fmt::format("mean position x̄ with ±(U + Ps)/2 — P = {}, Pa = {}, Ps = {}, U = {}",
-                          um(r.vdi.P), um(r.vdi.Pa), um(r.vdi.Ps), um(r.vdi.U));
+                          um_text(r.vdi.P), um_text(r.vdi.Pa), um_text(r.vdi.Ps), um_text(r.vdi.U));
     p.series.push_back({"x̄ ± (U + Ps)/2", mean, bm, "#444444", false});
     if (r.has_up) p.series.push_back({"x̄↑", up, {}, "#1f77b4", true});
     if (r.has_down) p.series.push_back({"x̄↓", down, {}, "#d62728", true});
   } else {
     p.title = fmt::format("mean deviations with ±2s — A = {}, E = {}, M = {}, R = {}, B = {}",
-                          um(r.iso.A), um(r.iso.E), um(r.iso.M), um(r.iso.R), um(r.iso.B));
+                          um_text(r.iso.A), um_text(r.iso.E), um_text(r.iso.M), um_text(r.iso.R),
+                          um_text(r.iso.B));
     if (r.has_up) p.series.push_back({"x̄↑ ± 2s↑", up, bu, "#1f77b4", false});
     if (r.has_down) p.series.push_back({"x̄↓ ± 2s↓", down, bd, "#d62728", false});
     if (r.has_up && r.has_down)

@@ -15,7 +15,7 @@ std::string joined(const std::vector<std::string>& v, const char* empty = "nothi
   return s.empty() ? empty : s;
 }
 
-std::string um(double mm) {
+std::string um_3f(double mm) {
   return fmt::format("{:.3f}", mm * 1e3);
 }
 
@@ -43,12 +43,12 @@ Section surface_section(const std::string& title, const surface::Result& r,
   s.table = {{"quantity", "value"},
              {"method", r.method},
              {"lines / stations", fmt::format("{} / {}", r.lines.size(), r.points.size())},
-             {"flatness, least squares (µm)", um(r.flatness_ls)},
-             {"flatness, minimum zone (µm)", um(r.flatness_min_zone)}};
+             {"flatness, least squares (µm)", um_3f(r.flatness_ls)},
+             {"flatness, minimum zone (µm)", um_3f(r.flatness_min_zone)}};
   if (!r.crossings.empty()) {
     s.table.push_back({"crossings", fmt::format("{}", r.crossings.size())});
-    s.table.push_back(
-        {"closure RMS / max (µm)", fmt::format("{} / {}", um(r.closure_rms), um(r.closure_max))});
+    s.table.push_back({"closure RMS / max (µm)",
+                       fmt::format("{} / {}", um_3f(r.closure_rms), um_3f(r.closure_max))});
   }
   if (r.method.rfind("moody", 0) == 0) {
     // The numeric Union Jack, as Moody's worksheet shows it: every line's heights, station by
@@ -169,28 +169,28 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
       escape(sp.gauge));
   s.table = {{"quantity", "value (µm)"},
              {"error space RMS / max |e|",
-              fmt::format("{} / {}", um(std::sqrt(m.error.colwise().squaredNorm().mean())),
-                          um(m.error.colwise().norm().maxCoeff()))},
+              fmt::format("{} / {}", um_3f(std::sqrt(m.error.colwise().squaredNorm().mean())),
+                          um_3f(m.error.colwise().norm().maxCoeff()))},
              {"map − truth at the nodes, RMS / max",
-              fmt::format("{} / {}", um(sp.truth_rms), um(sp.truth_max))}};
+              fmt::format("{} / {}", um_3f(sp.truth_rms), um_3f(sp.truth_max))}};
   if (m.uncertainty.cols())
     s.table.push_back({"standard uncertainty, RMS over nodes",
-                       um(std::sqrt(m.uncertainty.colwise().squaredNorm().mean()))});
+                       um_3f(std::sqrt(m.uncertainty.colwise().squaredNorm().mean()))});
   if (v) {
     s.table.push_back(
         {fmt::format("positioning error at {} random points, before: RMS / max", v->points),
-         fmt::format("{} / {}", um(v->before_rms), um(v->before_max))});
+         fmt::format("{} / {}", um_3f(v->before_rms), um_3f(v->before_max))});
     s.table.push_back({"after compensation: RMS / max",
-                       fmt::format("{} / {}", um(v->after_rms), um(v->after_max))});
+                       fmt::format("{} / {}", um_3f(v->after_rms), um_3f(v->after_max))});
     if (v->uncertainty_known)
       s.table.push_back({"expected after: sqrt(interpolation² + uncertainty²)",
-                         fmt::format("{} = {} ⊕ {}", um(v->predicted_rms), um(v->interpolation_rms),
-                                     um(v->uncertainty_rms))});
+                         fmt::format("{} = {} ⊕ {}", um_3f(v->predicted_rms),
+                                     um_3f(v->interpolation_rms), um_3f(v->uncertainty_rms))});
     else
       s.table.push_back(
           {"expected after: at least the interpolation error (uncertainty not "
            "computed)",
-           fmt::format("≥ {}", um(v->interpolation_rms))});
+           fmt::format("≥ {}", um_3f(v->interpolation_rms))});
     s.table.push_back(
         {"improvement (RMS before / after)", fmt::format("×{:.1f}", v->improvement())});
   }
