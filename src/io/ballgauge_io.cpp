@@ -14,6 +14,7 @@ namespace {
 
 using ptr = JsonFile::pointer;
 using ojson = nlohmann::ordered_json;
+using detail::xyz;
 
 Eigen::Vector3d triple(const JsonFile& f, const ptr& p) {
   const Eigen::VectorXd v = f.numbers(p);
@@ -25,10 +26,6 @@ const char* alignment_name(ballgauge::Alignment a) {
   return a == ballgauge::Alignment::ThreeTwoOne    ? "321"
          : a == ballgauge::Alignment::LeastSquares ? "ls"
                                                    : "stitch";
-}
-
-ojson vec(const Eigen::Vector3d& v, double scale = 1.0) {
-  return {v.x() * scale, v.y() * scale, v.z() * scale};
 }
 
 }  // namespace
@@ -55,7 +52,7 @@ ballgauge::Gauge read_gauge(const std::string& path) {
 
 void write_gauge(const std::string& path, const ballgauge::Gauge& g) {
   ojson balls = ojson::array();
-  for (const auto& b : g.balls) balls.push_back(vec(b));
+  for (const auto& b : g.balls) balls.push_back(xyz(b));
   write_json(path, ojson{{"ball_diameter", g.ball_diameter}, {"balls", balls}});
 }
 
@@ -143,7 +140,7 @@ void write_measurements(const std::string& path, const std::vector<ballgauge::Pl
     ojson balls = ojson::array();
     for (const auto& b : p.balls) {
       ojson pts = ojson::array();
-      for (Eigen::Index q = 0; q < b.points.cols(); ++q) pts.push_back(vec(b.points.col(q)));
+      for (Eigen::Index q = 0; q < b.points.cols(); ++q) pts.push_back(xyz(b.points.col(q)));
       balls.push_back({{"index", b.index}, {"points", pts}});
     }
     arr.push_back({{"name", p.name},
@@ -159,10 +156,10 @@ void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
   for (const auto& p : r.points)
     pts.push_back({{"placement", p.placement},
                    {"ball", p.ball},
-                   {"nominal", vec(p.nominal)},
-                   {"measured", vec(p.measured)},
-                   {"error", vec(p.error, 1e3)},
-                   {"uncertainty", vec(p.uncertainty, 1e3)}});
+                   {"nominal", xyz(p.nominal)},
+                   {"measured", xyz(p.measured)},
+                   {"error", xyz(p.error, 1e3)},
+                   {"uncertainty", xyz(p.uncertainty, 1e3)}});
   ojson pl = ojson::array();
   for (const auto& p : r.placements)
     pl.push_back({{"name", p.name},
@@ -314,8 +311,8 @@ void write_parametric(const std::string& path, const ballgauge::ParametricResult
   j["identification"] = {
       {"method", "ball gauge, rigid-body model, linearised least squares"},
       {"degree", r.degree},
-      {"centre", vec(r.centre)},
-      {"half_span", vec(r.half_span)},
+      {"centre", xyz(r.centre)},
+      {"half_span", xyz(r.half_span)},
       {"parameters_units",
        "Chebyshev coefficients per error function (mm or rad), then EC0Y, EB0Z, EA0Z (rad)"},
       {"parameters", par},

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <set>
 
+#include "grid_json.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/design.hpp"
 #include "trueaxis/io/json.hpp"
@@ -14,6 +15,7 @@ namespace {
 
 using ptr = JsonFile::pointer;
 using ojson = nlohmann::ordered_json;
+using detail::xyz;
 
 Eigen::Vector3d triple(const JsonFile& f, const ptr& p, const char* what) {
   const Eigen::VectorXd v = f.numbers(p);
@@ -118,10 +120,6 @@ design::Section read_section(const JsonFile& f, const ptr& p) {
     f.fail(at, fmt::format("section '{}': {}", s.name, pr->what));
   }
   return s;
-}
-
-ojson xyz(const Eigen::Vector3d& v) {
-  return {v.x(), v.y(), v.z()};
 }
 
 design::Design design_at(const JsonFile& f, const ptr& base) {

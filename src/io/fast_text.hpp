@@ -59,6 +59,10 @@ std::string lower(std::string_view s);
 std::string upper(std::string_view s);
 std::string_view trim(std::string_view s);
 
+// Limits of the positioning readers (the CSV runs and Renishaw's RTL): larger than any travel
+// (mm) or positioning deviation (µm) of a machine tool or CMM.
+constexpr double kMaxTarget = 1e6, kMaxDeviation = 1e6;
+
 // Throws Error("path:line:col: what") (col0 is 0-based, the message's column 1-based).
 [[noreturn]] void fail_at(const std::string& path, std::size_t line, std::size_t col0,
                           const std::string& what);

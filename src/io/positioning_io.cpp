@@ -24,12 +24,12 @@ using ojson = nlohmann::ordered_json;
 enum Column { kTarget, kCycle, kDirection, kDeviation, kMaterial, kAir, kColumns };
 constexpr const char* kNames[kColumns] = {"target_mm",    "cycle",           "direction",
                                           "deviation_um", "material_temp_c", "air_temp_c"};
-// Larger than any travel (mm) or positioning deviation (µm) of a machine tool or CMM.
-constexpr double kMaxTarget = 1e6, kMaxDeviation = 1e6;
 constexpr double kMinTemperature = -50, kMaxTemperature = 100;
 
-using detail::lower;
 using detail::is_blank;
+using detail::kMaxDeviation;
+using detail::kMaxTarget;
+using detail::lower;
 
 // Fields of one line: [begin, end) offsets, trimmed.
 std::vector<std::pair<std::size_t, std::size_t>> split(std::string_view l) {

@@ -20,12 +20,12 @@ namespace {
 using positioning::Direction;
 using positioning::Reading;
 
-// Larger than any travel (mm) or positioning deviation (µm) of a machine tool or CMM, and than
-// any run or target count a laser test has.
-constexpr double kRtlMaxTarget = 1e6, kRtlMaxDeviation = 1e6;
+// Larger than any run or target count a laser test has.
 constexpr long kMaxCount = 100000;
 
 using detail::is_blank;
+using detail::kMaxDeviation;
+using detail::kMaxTarget;
 using detail::lower;
 using detail::trim;
 
@@ -156,8 +156,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
     if (section == "TARGET DATA") {
       if (!keyed && collecting_targets && starts_numeric(s)) {
         for (const auto& [x, c] : numbers(b, l.size())) {
-          if (std::abs(x) > kRtlMaxTarget)
-            fail(c, fmt::format("target {:g} mm is out of range", x));
+          if (std::abs(x) > kMaxTarget) fail(c, fmt::format("target {:g} mm is out of range", x));
           f.targets.push_back(x);
           target_lines.push_back(line);
         }
@@ -177,8 +176,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         collecting_targets = true;
         if (!value.empty())
           for (const auto& [x, c] : numbers(vcol, l.size())) {
-            if (std::abs(x) > kRtlMaxTarget)
-              fail(c, fmt::format("target {:g} mm is out of range", x));
+            if (std::abs(x) > kMaxTarget) fail(c, fmt::format("target {:g} mm is out of range", x));
             f.targets.push_back(x);
             target_lines.push_back(line);
           }
@@ -225,7 +223,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         };
         const int run = index(0, run_count > 0 ? run_count : kMaxCount, "run");
         const int target = index(1, target_count > 0 ? target_count : kMaxCount, "target");
-        if (std::abs(v[2].first) > kRtlMaxDeviation)
+        if (std::abs(v[2].first) > kMaxDeviation)
           fail(v[2].second, fmt::format("deviation {:g} um is out of range", v[2].first));
         entries.push_back({run, target, v[2].first, line});
         return;
