@@ -28,31 +28,17 @@
 #include <utility>
 #include <vector>
 
+#include "../common/memory.hpp"
 #include "design.hpp"
 #include "prefault.hpp"
 
 namespace trueaxis::separation::detail {
 
-// A vector whose resize leaves new elements uninitialised: large buffers that are written before
-// they are read cost no zeroing pass, and pages never written are never committed.
+// A vector whose resize leaves new elements uninitialised, its large blocks in huge pages (see
+// HugePageAllocator): buffers that are written before they are read cost no zeroing pass and few
+// page faults.
 template <class T>
-struct DefaultInitAllocator : std::allocator<T> {
-  template <class U>
-  struct rebind {
-    using other = DefaultInitAllocator<U>;
-  };
-  using std::allocator<T>::allocator;
-  template <class U>
-  void construct(U* p) noexcept {
-    ::new (static_cast<void*>(p)) U;
-  }
-  template <class U, class... Args>
-  void construct(U* p, Args&&... args) {
-    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-  }
-};
-template <class T>
-using Uninitialized = std::vector<T, DefaultInitAllocator<T>>;
+using Uninitialized = std::vector<T, trueaxis::detail::HugePageAllocator<T>>;
 
 // Calls fn.template operator()<W>() with W = w for the usual narrow widths (2 to 6) and W = 0
 // (any width, read at run time) otherwise: a compile-time width lets the per-station loops unroll
