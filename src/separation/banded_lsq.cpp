@@ -70,6 +70,13 @@ namespace {
 
 constexpr int kBlock = 256;  // stations whose right-hand sides are formed together
 
+double* keep_identity(double* rot) {  // (c̄, s̄, x_j) of a rotation that changes nothing
+  rot[0] = 1;
+  rot[1] = 0;
+  rot[2] = 0;
+  return rot + 3;
+}
+
 // Right-hand sides b − A·v of stations [K0, K0 + B), transformed by the constant Qᵀ (row-major
 // qt): bt[r·B + k] is row r (the L local ones first) of station K0 + k. Formed channel by channel
 // over the block, contiguous in the station, so the loops vectorise; b is scratch of M·B.
@@ -155,7 +162,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
   // but memory is only committed where written.
   masked_ = m <= 64;
   mask_bytes_ = (m + 7) / 8;  // the mask's low bytes: one for windows up to 8 columns
-  const std::size_t per_station = static_cast<std::size_t>(2 * m * nred);
+  const std::size_t per_station = static_cast<std::size_t>(kRotationValues * m * nred);
   keep_rotations_ =
       per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
   rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
@@ -190,7 +197,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
     while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
     const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
     for (int r = 0; r < nred; ++r) {
-      // A reduced row: fold it into the window by Givens rotations.
+      // A reduced row: fold it into the window by square-root-free Givens rotations.
       std::uint64_t mask = 0;
       const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
       for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
@@ -198,57 +205,63 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
       if (pin_in_band)
         for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
           row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
-      for (int j = 0; j < m; ++j) {
-        const double bj = row[static_cast<std::size_t>(j)];
-        if (bj == 0) {
-          if (keep_rotations_ && !masked_) {
-            *rot++ = 1;
-            *rot++ = 0;
-          }
+      double delta = 1;  // the row's weight
+      int j = 0;
+      for (; j < m; ++j) {
+        const double xi = row[static_cast<std::size_t>(j)];
+        if (xi == 0) {
+          if (keep_rotations_ && !masked_) rot = keep_identity(rot);
           continue;
         }
         double* Wj = W.data() + static_cast<std::size_t>(j * s);
-        const double a = Wj[j];
-        double cs, sn;
-        int c0 = j + 1;
-        if (a == 0) {  // an empty row of the window: the row takes its place
-          cs = 0;
-          sn = bj > 0 ? 1 : -1;
-          Wj[j] = std::abs(bj);
-        } else {
-          const double rr = std::sqrt(a * a + bj * bj);
-          cs = a / rr;
-          sn = bj / rr;
-          Wj[j] = rr;
-          // The next rotation waits for this element only: as (a·x − b·w)/rr its numerator is
-          // formed while the square root is taken, one multiplication off the chain.
-          const double wc = Wj[c0], xc = row[static_cast<std::size_t>(c0)];
-          Wj[c0] = cs * wc + sn * xc;
-          row[static_cast<std::size_t>(c0)] = (a * xc - bj * wc) / rr;
-          ++c0;
+        const double d = Wj[j];
+        if (d == 0) {
+          // An empty row of the window: the row takes its place, and nothing of it is left.
+          const double inv = 1 / xi;
+          Wj[j] = delta * xi * xi;
+          for (int c = j + 1; c <= m; ++c) Wj[c] = row[static_cast<std::size_t>(c)] * inv;
+          if (keep_rotations_) {
+            *rot++ = 0;
+            *rot++ = inv;
+            *rot++ = xi;
+            mask |= std::uint64_t{1} << (j & 63);
+          }
+          delta = 0;
+          ++j;
+          break;
         }
-        for (int c = c0; c <= m; ++c) {
-          const double wc = Wj[c], xc = row[static_cast<std::size_t>(c)];
-          Wj[c] = cs * wc + sn * xc;
-          row[static_cast<std::size_t>(c)] = cs * xc - sn * wc;
+        const double dp = d + delta * xi * xi;
+        const double inv = 1 / dp;
+        const double cb = d * inv, sb = delta * xi * inv;
+        delta *= cb;
+        Wj[j] = dp;
+        for (int c = j + 1; c <= m; ++c) {
+          const double u = Wj[c], x = row[static_cast<std::size_t>(c)];
+          row[static_cast<std::size_t>(c)] = x - xi * u;
+          Wj[c] = cb * u + sb * x;
         }
         if (keep_rotations_) {
-          *rot++ = cs;
-          *rot++ = sn;
+          *rot++ = cb;
+          *rot++ = sb;
+          *rot++ = xi;
           mask |= std::uint64_t{1} << (j & 63);
         }
       }
+      if (keep_rotations_ && !masked_)
+        for (; j < m; ++j) rot = keep_identity(rot);  // after the row found an empty place
       if (keep_rotations_ && masked_)
         for (int i = 0; i < mask_bytes_; ++i)
           *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
-      ssr_ += row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
+      ssr_ += delta * row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
     }
-    // No later row touches w(K): its row of R leaves the window, which slides by one position.
+    // No later row touches w(K): its row of R, √d·[1, ū], leaves the window, which slides by
+    // one position.
     double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-    for (int c = 0; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
-    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-    if (!D.pinned[static_cast<std::size_t>(D.w(K))])
-      min_pivot_ = std::min(min_pivot_, std::abs(out[0]) / scale_);
+    const double r0 = std::sqrt(W[0]);
+    out[0] = r0;
+    for (int c = 1; c < m; ++c) out[c] = r0 * W[static_cast<std::size_t>(c)];
+    qb_[static_cast<std::size_t>(K)] = r0 * W[static_cast<std::size_t>(m)];
+    if (!D.pinned[static_cast<std::size_t>(D.w(K))]) min_pivot_ = std::min(min_pivot_, r0 / scale_);
     for (int t = 0; t < m; ++t) {
       double* dst = W.data() + static_cast<std::size_t>(t * s);
       if (t == nb - 1) {
@@ -262,7 +275,15 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
         for (int c = nb; c < s; ++c) dst[c] = src[c];
     }
   });
-  final_.assign(W.begin(), W.end());
+  // The final window in the same form: row c is √d_c·[0…0, 1, ū_c].
+  final_.assign(W.size(), 0.0);
+  for (int c = 0; c < m; ++c) {
+    const double* Wc = W.data() + static_cast<std::size_t>(c * s);
+    double* Fc = final_.data() + static_cast<std::size_t>(c * s);
+    const double rc = std::sqrt(Wc[c]);
+    Fc[c] = rc;
+    for (int i = c + 1; i < s; ++i) Fc[i] = rc * Wc[i];
+  }
   for (int c = 0; c < m; ++c)
     if (active(id_of(n, c)))
       min_pivot_ =
@@ -281,23 +302,25 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
 template <int Width>
 void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                                   const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
-  // The same rotations applied to the new right-hand side only: the window's last column.
+  // The same rotations applied to the new right-hand side only: the window's last column, ū's
+  // right-hand side per row, by the kept rotations (c̄, s̄, x_j). (Rebuilding c̄ as 1 − s̄·x_j would
+  // keep one number fewer but loses ε·|ū| where the old row's ū is large and c̄ small: a row entry
+  // that is zero but for rounding, placed into an empty row, has |ū| ~ 1/ε.)
   const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, nred = M_ - L_;
   std::vector<double> wr_heap(Width > 0 ? 0 : static_cast<std::size_t>(m), 0.0);
   double wr_fixed[Width > 0 ? Width : 1] = {};
   double* wr = Width > 0 ? wr_fixed : wr_heap.data();
   const double* rot = rot_.data();
   const unsigned char* mask_in = rot_mask_.data();
-  ssr_ = 0;
   for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) {
     for (int r = 0; r < nred; ++r) {
       double x = reduced(r);
       auto apply = [&](int j) {
-        const double cs = rot[0], sn = rot[1];
-        rot += 2;
-        const double w = wr[j];
-        wr[j] = cs * w + sn * x;
-        x = cs * x - sn * w;
+        const double cb = rot[0], sb = rot[1], xj = rot[2];
+        rot += kRotationValues;
+        const double u = wr[j];
+        wr[j] = cb * u + sb * x;
+        x -= xj * u;
       };
       if (masked_) {
         std::uint64_t mask = 0;
@@ -307,13 +330,15 @@ void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::
       } else {
         for (int j = 0; j < m; ++j) apply(j);
       }
-      ssr_ += x * x;
     }
-    qb_[static_cast<std::size_t>(K)] = wr[0];
+    qb_[static_cast<std::size_t>(K)] =
+        rw_[static_cast<std::size_t>(K) * static_cast<std::size_t>(m)] * wr[0];
     for (int t = 0; t + 1 < nb; ++t) wr[t] = wr[t + 1];
     wr[nb - 1] = 0;
   });
-  for (int c = 0; c < m; ++c) final_[static_cast<std::size_t>(c * s + m)] = wr[c];
+  for (int c = 0; c < m; ++c)
+    final_[static_cast<std::size_t>(c * s + m)] =
+        final_[static_cast<std::size_t>(c * s + c)] * wr[c];
 }
 
 template <int NB>

@@ -9,8 +9,13 @@
 //      the band and the globals only. Their coefficients are the same at every station; only the
 //      right-hand side changes.
 //   2. The reduced rows are folded into a small upper-triangular window over [w(K..K+span),
-//      globals, rhs] by Givens rotations. Once station K is in, no later row touches w(K): the
-//      window's first row is w(K)'s row of R, stored, and the window slides by one position.
+//      globals, rhs] by Givens rotations in their square-root-free form (Gentleman 1973, "Least
+//      squares computations by Givens transformations without square roots", J. Inst. Maths
+//      Applics 12; the updates of Miller's AS 274): the window holds R = D^½·Ū, Ū unit upper
+//      triangular, as d and Ū. A rotation then waits for one division instead of a square root
+//      and a division: the fold is one long chain of dependent rotations, so its latency is the
+//      factorisation's time. Once station K is in, no later row touches w(K): the window's first
+//      row gives w(K)'s row of R, √d·[1, ū], stored, and the window slides by one position.
 // This is the QR factorisation of the whole system in the order (g, θ, w)(K) station by station,
 // globals last: backward stable, O(n·(span + G)²) time, O(n·(span + G)) memory, no allocation per
 // station. The stored rows give the solution (iterative refinement reapplies the kept rotations to
@@ -78,7 +83,7 @@ class BandedLsq {
   void refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                     const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
 
-  double ssr() const { return ssr_; }  // squared residual norm of the last factorisation
+  double ssr() const { return ssr_; }  // squared residual norm at the last factor()
   long rows() const { return rows_; }
   long unknowns() const { return unknowns_; }
   // Smallest |R_ii| relative to the coefficients' scale (small: a mode the data do not fix).
@@ -143,10 +148,11 @@ class BandedLsq {
   Uninitialized<double> qb_;    // n
   Uninitialized<double> bloc_;  // n × L
   std::vector<double> final_;   // m × (m + 1)
-  // The Givens rotations (cos, sin) in the order applied: per station and reduced row, those
-  // whose row entry was nonzero, with a mask of their window columns (masked_), or all of them
-  // (windows wider than 64 columns).
+  // The rotations in the order applied, each as (c̄, s̄, x_j): c̄ = d/d', s̄ = δ·x_j/d' and the
+  // row's entry x_j. Per station and reduced row, those whose row entry was nonzero, with a mask
+  // of their window columns (masked_), or all of them (windows wider than 64 columns).
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{256} << 20;
+  static constexpr int kRotationValues = 3;
   bool keep_rotations_ = false;
   bool masked_ = true;
   int mask_bytes_ = 1;
