@@ -49,6 +49,10 @@ std::string read_checked(const std::string& path, std::optional<std::uintmax_t> 
   if (!f) throw Error(fmt::format("{}: cannot open file for reading", path));
   std::string text;
   if (size && *size > 0) {
+    // Asked for in huge pages before resize() zero-fills it: a 60 MB file is ~15 000 page faults
+    // in 4 KB pages (~3 µs each on the machines we measure), ~30 in 2 MB ones.
+    text.reserve(static_cast<std::size_t>(*size));
+    trueaxis::detail::advise_huge_pages(text.data(), text.capacity());
     text.resize(static_cast<std::size_t>(*size));
     text.resize(std::fread(text.data(), 1, text.size(), f.get()));
   }

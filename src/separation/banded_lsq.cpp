@@ -442,14 +442,14 @@ BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
   return with_width(nb_, [&]<int W>() { return solve_add_impl<W>(v); });
 }
 
-Eigen::VectorXd BandedLsq::covariance_diagonal() const {
+Uninitialized<double> BandedLsq::covariance_diagonal() const {
   // Backward selected inversion. For w(K)'s row [d, r] over the window [w(K+1..K+span),
   // globals] with covariance Z: Z_K,window = −(Z rᵀ)/d and Z_KK = 1/d² − r·Z_K,window/d. The local
   // unknowns x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc,
   // with F the covariance over the full window [w(K..K+span), globals].
   const Design& D = D_;
   const int m = m_, s = m_ + 1, nb = nb_, L = L_;
-  Eigen::VectorXd diag = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(D.nvars);
+  Uninitialized<double> diag(static_cast<std::size_t>(D.nvars), 0.0);
   std::vector<double> F(static_cast<std::size_t>(m * m), 0.0);
   auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
   {
@@ -471,7 +471,7 @@ Eigen::VectorXd BandedLsq::covariance_diagonal() const {
       for (int b = 0; b < na; ++b)
         f(act[static_cast<std::size_t>(a)], act[static_cast<std::size_t>(b)]) = Zf(a, b);
     for (int c = 0; c < m; ++c)
-      if (const int id = id_of(D.n, c); id >= 0) diag[id] = f(c, c);
+      if (const int id = id_of(D.n, c); id >= 0) diag[static_cast<std::size_t>(id)] = f(c, c);
   }
   const Eigen::MatrixXd RlocInv =
       Rloc_.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(L, L));
@@ -508,7 +508,7 @@ Eigen::VectorXd BandedLsq::covariance_diagonal() const {
     } else {
       std::fill(zk.begin(), zk.end(), 0.0);
     }
-    diag[D.w(K)] = zkk;
+    diag[static_cast<std::size_t>(D.w(K))] = zkk;
     f(0, 0) = zkk;
     for (int a = 0; a < mw; ++a) {
       f(0, a + 1) = f(a + 1, 0) = zk[static_cast<std::size_t>(a)];
@@ -521,7 +521,7 @@ Eigen::VectorXd BandedLsq::covariance_diagonal() const {
         for (int b = 0; b < m; ++b) t += f(a, b) * P(l, b);
         v += P(l, a) * t;
       }
-      diag[l == 0 ? D.g(K) : D.t(K)] = v;
+      diag[static_cast<std::size_t>(l == 0 ? D.g(K) : D.t(K))] = v;
     }
     drop_last_band();
   }

@@ -97,8 +97,8 @@ class BandedLsq {
     double max_value = 0;
   };
   Update solve_add(Eigen::VectorXd& v) const;
-  // diag((AᵀA)⁻¹) over the free unknowns (pinned 0).
-  Eigen::VectorXd covariance_diagonal() const;
+  // diag((AᵀA)⁻¹) over the free unknowns (pinned 0), by unknown id.
+  Uninitialized<double> covariance_diagonal() const;
   // (AᵀA)⁻¹V for a V of k columns (a compile-time constant) given row by row, without storing
   // either: v_row(id, out) writes the k values of a free unknown's row of V; use(id, zv) then
   // receives that unknown's row of (AᵀA)⁻¹V, once per free unknown, from the last station back (the

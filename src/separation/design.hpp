@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include "../common/memory.hpp"
+
 namespace trueaxis::separation::detail {
 
 // Unknowns, all in mm: w (workpiece at positions 0..Q-1, position j at x_0 + (j + pmin)·h), g
@@ -26,7 +28,8 @@ struct Design {
   bool parabola_free = false;  // parabola fixed by a pin + the guide-quadratic gauge afterwards
   double wa = 0;               // weight of angle rows (relative to probe rows)
   int nvars = 0;
-  std::vector<char> pinned;                  // per unknown
+  // per unknown (3n + … bytes: aligned and in huge pages, like the solver's buffers)
+  std::vector<char, trueaxis::detail::HugePageAllocator<char>> pinned;
   std::vector<std::pair<int, double>> pins;  // the few pinned unknowns and their values
 
   double pin_value(int id) const {

@@ -948,7 +948,7 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
   // diag(Z) by the selected inversion, on a second core for long runs: it and the solve below
   // only read the factorisation.
   constexpr long kThreadedStations = 20000;
-  std::future<Eigen::VectorXd> diag_task =
+  std::future<detail::Uninitialized<double>> diag_task =
       std::async(n >= kThreadedStations ? std::launch::async : std::launch::deferred,
                  [&st] { return st.engine->covariance_diagonal(); });
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_variance), with
@@ -1025,13 +1025,14 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
     default:
       solve.template operator()<ReferenceAlgebra::kMaxCols>();
   }
-  const Eigen::VectorXd zdiag = diag_task.get();
+  const detail::Uninitialized<double> zdiag = diag_task.get();
   auto finish = [&](Eigen::VectorXd& var, auto&& id_of, auto&& u_of,
                     const ReferenceAlgebra::Cols& c, double scale) {
     const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), c);
     for (Eigen::Index i = 0; i < var.size(); ++i) {
       const Eigen::Vector3d u = u_of(i);
-      const double zd = zdiag[id_of(i)];  // 0 for pinned unknowns, as is their cross term
+      const double zd = zdiag[static_cast<std::size_t>(
+          id_of(i))];  // 0 for pinned unknowns, as is their cross term
       var[i] = std::max(0.0, u.dot(S * u) + scale * scale * zd - 2 * scale * var[i]);
     }
   };

@@ -110,7 +110,7 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
     EXPECT_NEAR(ssr, ssr_dense, kAgree * std::max(1e-12, ssr_dense)) << L.name;
 
     // diag((AᵀA)⁻¹) by the selected inversion against the dense inverse.
-    const Eigen::VectorXd diag = engine.covariance_diagonal();
+    const auto diag = engine.covariance_diagonal();
     // (AᵀA)⁻¹ = P·R⁻¹R⁻ᵀ·Pᵀ from the dense QR AP = QR: the diagonal at column P(i) is the
     // squared norm of R⁻¹'s row i.
     const Eigen::Index nf = d.A.cols();
@@ -123,7 +123,8 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
     double zworst = 0;
     for (int id = 0; id < D.nvars; ++id) {
       const int c = d.col[static_cast<std::size_t>(id)];
-      zworst = std::max(zworst, std::abs(diag[id] - (c >= 0 ? zd[c] : 0.0)));
+      zworst =
+          std::max(zworst, std::abs(diag[static_cast<std::size_t>(id)] - (c >= 0 ? zd[c] : 0.0)));
     }
     EXPECT_LT(zworst, kAgree * zscale) << L.name;
 
