@@ -41,11 +41,11 @@ Vector huge_page_zeros(std::ptrdiff_t n) {
 // An allocator for large scratch buffers that are written before they are read:
 //   - resize leaves new elements uninitialised (no zeroing pass; pages never written are never
 //     committed);
-//   - a block of kHugePageBytes or more starts on a 2 MB boundary and is marked for huge pages
-//     before anything is written to it. A block that merely follows malloc's layout shares its
-//     first and last 2 MB with other data (or malloc's own header, written first), so those
-//     stay in 4 KB pages: on the virtual machines we measure, ~3 µs per 4 KB fault, i.e. up to
-//     ~12 ms per buffer.
+//   - a block of kHugePageBytes or more starts on a 2 MB boundary, is rounded up to whole 2 MB
+//     pages, and is marked for huge pages before anything is written to it. A block that merely
+//     follows malloc's layout shares its first and last 2 MB with other data (or malloc's own
+//     header, written first), so those stay in 4 KB pages: on the virtual machines we measure,
+//     ~3 µs per 4 KB fault, i.e. up to ~3 ms per buffer.
 template <class T>
 struct HugePageAllocator {
   using value_type = T;
@@ -62,8 +62,9 @@ struct HugePageAllocator {
   T* allocate(std::size_t n) {
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kHugePageBytes) return static_cast<T*>(::operator new(bytes));
-    void* p = ::operator new (bytes, std::align_val_t{kAlign});
-    advise_huge_pages(p, bytes);
+    const std::size_t whole = (bytes + kAlign - 1) / kAlign * kAlign;
+    void* p = ::operator new (whole, std::align_val_t{kAlign});
+    advise_huge_pages(p, whole);
     return static_cast<T*>(p);
   }
   void deallocate(T* p, std::size_t n) noexcept {
