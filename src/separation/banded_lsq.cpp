@@ -70,13 +70,6 @@ namespace {
 
 constexpr int kBlock = 256;  // stations whose right-hand sides are formed together
 
-double* keep_identity(double* rot) {  // (c̄, s̄, x_j) of a rotation that changes nothing
-  rot[0] = 1;
-  rot[1] = 0;
-  rot[2] = 0;
-  return rot + 3;
-}
-
 // Right-hand sides b − A·v of stations [K0, K0 + B), transformed by the constant Qᵀ (row-major
 // qt): bt[r·B + k] is row r (the L local ones first) of station K0 + k. Formed channel by channel
 // over the block, contiguous in the station, so the loops vectorise; b is scratch of M·B.
@@ -171,6 +164,13 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
                        : 0);
   unsigned char* mask_out = rot_mask_.data();
   double* rot = rot_.data();
+  static_assert(kRotationValues == 3);
+  auto keep_identity = [&rot] {  // (c̄, s̄, x_j) of a rotation that changes nothing
+    rot[0] = 1;
+    rot[1] = 0;
+    rot[2] = 0;
+    rot += kRotationValues;
+  };
   std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> row(static_cast<std::size_t>(s));
   ssr_ = 0;
@@ -210,7 +210,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
       for (; j < m; ++j) {
         const double xi = row[static_cast<std::size_t>(j)];
         if (xi == 0) {
-          if (keep_rotations_ && !masked_) rot = keep_identity(rot);
+          if (keep_rotations_ && !masked_) keep_identity();
           continue;
         }
         double* Wj = W.data() + static_cast<std::size_t>(j * s);
@@ -248,7 +248,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
         }
       }
       if (keep_rotations_ && !masked_)
-        for (; j < m; ++j) rot = keep_identity(rot);  // after the row found an empty place
+        for (; j < m; ++j) keep_identity();  // after the row found an empty place
       if (keep_rotations_ && masked_)
         for (int i = 0; i < mask_bytes_; ++i)
           *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));

@@ -151,7 +151,9 @@ class BandedLsq {
   // The rotations in the order applied, each as (c̄, s̄, x_j): c̄ = d/d', s̄ = δ·x_j/d' and the
   // row's entry x_j. Per station and reduced row, those whose row entry was nonzero, with a mask
   // of their window columns (masked_), or all of them (windows wider than 64 columns).
-  static constexpr std::size_t kRotationBudgetBytes = std::size_t{256} << 20;
+  // Reserved, not committed: only the rotations written take memory. 384 MB of three numbers each
+  // keeps as many stations' rotations as 256 MB did of two.
+  static constexpr std::size_t kRotationBudgetBytes = std::size_t{384} << 20;
   static constexpr int kRotationValues = 3;
   bool keep_rotations_ = false;
   bool masked_ = true;

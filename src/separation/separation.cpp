@@ -1031,8 +1031,8 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
     const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), c);
     for (Eigen::Index i = 0; i < var.size(); ++i) {
       const Eigen::Vector3d u = u_of(i);
-      const double zd = zdiag[static_cast<std::size_t>(
-          id_of(i))];  // 0 for pinned unknowns, as is their cross term
+      // 0 for pinned unknowns, as is their cross term
+      const double zd = zdiag[static_cast<std::size_t>(id_of(i))];
       var[i] = std::max(0.0, u.dot(S * u) + scale * scale * zd - 2 * scale * var[i]);
     }
   };
