@@ -153,8 +153,11 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
   // something are stored, with a mask of their columns per reduced row when the window is narrow
   // enough (most are identities where the row is already zero): the buffer is reserved for all,
   // but memory is only committed where written.
-  masked_ = m <= 64;
-  mask_bytes_ = (m + 7) / 8;  // the mask's low bytes: one for windows up to 8 columns
+  // The mask's bit m flags a row that ended in an empty row of the window: that placement is
+  // kept as one number, 1/x_j (the empty row's right-hand side is 0 on every pass, so the
+  // rotation reduces to ū_j = x/x_j).
+  masked_ = m <= 63;
+  mask_bytes_ = (m + 8) / 8;  // the mask's low bytes: one for windows up to 7 columns
   const std::size_t per_station = static_cast<std::size_t>(kRotationValues * m * nred);
   keep_rotations_ =
       per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
@@ -220,11 +223,13 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
           const double inv = 1 / xi;
           Wj[j] = delta * xi * xi;
           for (int c = j + 1; c <= m; ++c) Wj[c] = row[static_cast<std::size_t>(c)] * inv;
-          if (keep_rotations_) {
+          if (keep_rotations_ && masked_) {
+            *rot++ = inv;
+            mask |= (std::uint64_t{1} << j) | (std::uint64_t{1} << m);
+          } else if (keep_rotations_) {
             *rot++ = 0;
             *rot++ = inv;
             *rot++ = xi;
-            mask |= std::uint64_t{1} << (j & 63);
           }
           delta = 0;
           ++j;
@@ -244,7 +249,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
           *rot++ = cb;
           *rot++ = sb;
           *rot++ = xi;
-          mask |= std::uint64_t{1} << (j & 63);
+          if (masked_) mask |= std::uint64_t{1} << j;
         }
       }
       if (keep_rotations_ && !masked_)
@@ -254,13 +259,13 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
           *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
       ssr_ += delta * row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
     }
-    // No later row touches w(K): its row of R, √d·[1, ū], leaves the window, which slides by
-    // one position.
+    // No later row touches w(K): its row of R, √d·[1, ū], leaves the window (stored as √d and
+    // ū), which slides by one position.
     double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     const double r0 = std::sqrt(W[0]);
     out[0] = r0;
-    for (int c = 1; c < m; ++c) out[c] = r0 * W[static_cast<std::size_t>(c)];
-    qb_[static_cast<std::size_t>(K)] = r0 * W[static_cast<std::size_t>(m)];
+    for (int c = 1; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
+    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
     if (!D.pinned[static_cast<std::size_t>(D.w(K))]) min_pivot_ = std::min(min_pivot_, r0 / scale_);
     for (int t = 0; t < m; ++t) {
       double* dst = W.data() + static_cast<std::size_t>(t * s);
@@ -326,13 +331,22 @@ void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::
         std::uint64_t mask = 0;
         for (int i = 0; i < mask_bytes_; ++i)
           mask |= static_cast<std::uint64_t>(*mask_in++) << (8 * i);
-        for (; mask != 0; mask &= mask - 1) apply(std::countr_zero(mask));
+        const bool placed = (mask >> m) & 1;  // the last one placed the row into an empty row
+        mask &= (std::uint64_t{1} << m) - 1;
+        for (; mask != 0; mask &= mask - 1) {
+          const int j = std::countr_zero(mask);
+          if (placed && (mask & (mask - 1)) == 0) {
+            wr[j] = rot[0] * x;
+            ++rot;
+          } else {
+            apply(j);
+          }
+        }
       } else {
         for (int j = 0; j < m; ++j) apply(j);
       }
     }
-    qb_[static_cast<std::size_t>(K)] =
-        rw_[static_cast<std::size_t>(K) * static_cast<std::size_t>(m)] * wr[0];
+    qb_[static_cast<std::size_t>(K)] = wr[0];
     for (int t = 0; t + 1 < nb; ++t) wr[t] = wr[t + 1];
     wr[nb - 1] = 0;
   });
@@ -400,10 +414,12 @@ BandedLsq::Update BandedLsq::solve_add_impl(Eigen::VectorXd& v) const {
     const bool pinned = next_pin != pinned_w_.rend() && *next_pin == K;
     if (pinned) ++next_pin;
     if (!pinned && R[0] != 0) {
+      // The row √d·[1, ū] and its right-hand side √d·b̄: Δw(K) = b̄ − ū·(the later unknowns), no
+      // division on the back-substitution's dependency chain.
       double acc = qb_[static_cast<std::size_t>(K)];
       for (int k = 0; k < G; ++k) acc -= R[nb + k] * xg[k];
       for (int j = nb - 1; j >= 1; --j) acc -= R[j] * dw(K, j);
-      dwk = acc * (1 / R[0]);  // the reciprocal is off the back-substitution's dependency chain
+      dwk = acc;
       add(0, D.w(K), dwk);
     }
     if constexpr (NB > 0)
@@ -496,15 +512,16 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double zkk = 0;
     if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
+      // The row is √d·[1, ū] (stored as √d, ū): Z_K,window = −Z ū, Z_KK = 1/d − ū·Z_K,window.
       double rz = 0;
-      const double inv = 1 / R[0];  // one division per station, not one per window column
       for (int a = 0; a < mw; ++a) {
         double v = 0;
         for (int b = 0; b < mw; ++b) v += Z[static_cast<std::size_t>(a * mw + b)] * R[b + 1];
-        zk[static_cast<std::size_t>(a)] = -v * inv;
+        zk[static_cast<std::size_t>(a)] = -v;
         rz += R[a + 1] * zk[static_cast<std::size_t>(a)];
       }
-      zkk = inv * inv - rz * inv;
+      const double inv = 1 / R[0];
+      zkk = inv * inv - rz;
     } else {
       std::fill(zk.begin(), zk.end(), 0.0);
     }

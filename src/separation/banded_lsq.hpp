@@ -141,8 +141,9 @@ class BandedLsq {
   RowMajor Cred_;               // (M − L) × m: reduced rows over the window columns
   std::vector<long> pinned_w_;  // pinned workpiece positions, ascending
 
-  // Factorisation: per station, w(K)'s row of R over the window (m values, the same for every
-  // right-hand side), its transformed right-hand side and the local equations' right-hand sides;
+  // Factorisation: per station, w(K)'s row of R over the window, √d·[1, ū], stored as
+  // [√d, ū_1..ū_m−1] (the same for every right-hand side), its transformed right-hand side
+  // divided by √d, and the local equations' right-hand sides;
   // the final window over [w(n..n+span), globals] with its right-hand side.
   Uninitialized<double> rw_;    // n × m
   Uninitialized<double> qb_;    // n
@@ -150,7 +151,8 @@ class BandedLsq {
   std::vector<double> final_;   // m × (m + 1)
   // The rotations in the order applied, each as (c̄, s̄, x_j): c̄ = d/d', s̄ = δ·x_j/d' and the
   // row's entry x_j. Per station and reduced row, those whose row entry was nonzero, with a mask
-  // of their window columns (masked_), or all of them (windows wider than 64 columns).
+  // of their window columns (masked_), or all of them (windows wider than 63 columns). With the
+  // mask, a row's placement into an empty window row is one number, 1/x_j (mask bit m).
   // Reserved, not committed: only the rotations written take memory. 384 MB of three numbers each
   // keeps as many stations' rotations as 256 MB did of two.
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{384} << 20;
@@ -250,15 +252,17 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
       std::fill_n(y0, k, 0.0);
       continue;
     }
-    const double inv = 1 / R[0];
-    for (int j = 0; j < k; ++j) y0[j] *= inv;
-    if (gram) add_gram(y0);
+    // The row is √d·[1, ū] (stored as √d, ū): y(w(K)) = a/√d, and the later columns lose
+    // √d·ū_c·y(w(K)) = ū_c·a.
     for (int c = 1; c < m; ++c) {
       double* a = win[static_cast<std::size_t>(c)];
       if (!a) continue;
-      const double rc = R[c];
-      for (int j = 0; j < k; ++j) a[j] -= rc * y0[j];
+      const double uc = R[c];
+      for (int j = 0; j < k; ++j) a[j] -= uc * y0[j];
     }
+    const double inv = 1 / R[0];
+    for (int j = 0; j < k; ++j) y0[j] *= inv;
+    if (gram) add_gram(y0);
   }
   // The final window: forward, then backward, then its unknowns are done.
   set_window(n);
@@ -298,13 +302,13 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     set_window(K);
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double* z0 = win[0];
-    if (is_free(D.w(K)) && R[0] != 0) {
-      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = z0[j];
+    if (is_free(D.w(K)) && R[0] != 0) {  // z(w(K)) = y/√d − ū·(the later z)
+      const double inv = 1 / R[0];
+      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = z0[j] * inv;
       for (int c = 1; c < m; ++c)
         if (const double* zc = win[static_cast<std::size_t>(c)])
           for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
-      const double inv = 1 / R[0];
-      for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)] * inv;
+      for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)];
     }
     if (is_free(D.w(K))) use(D.w(K), static_cast<const double*>(z0));
     local_forward(K);
