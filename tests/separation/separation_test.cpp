@@ -156,6 +156,33 @@ TEST(Separation, LsqEqualsSeedMethodsWhereTheyApply) {
             1e-15);
 }
 
+// Three probes at equal spacing without an angle channel leave no redundancy: least squares
+// solves the same equations as the three-point recurrence, which is exact to the readings'
+// rounding. On a long noisy run the chain amplifies whatever the least-squares solve leaves in
+// its right-hand sides by up to n² (10¹⁰ here), so this checks the refinement's residual. Formed
+// as readings − workpiece − guide − pitch term − offset it agrees to 2e-10 of the guide; with
+// the offsets subtracted before the guide and pitch (a rounding at the guide's size) it left
+// 1.2e-8 (both measured).
+TEST(Separation, LsqEqualsThreePointOnALongNoisyRun) {
+  constexpr double kRelative = 1e-9;  // of the largest |guide|
+  auto so = carriage(100000, {0, 10, 20}, 13);
+  so.noise = 1e-4;
+  const auto camp = sim::simulate_straightness(so);
+  Options o;
+  o.compute_uncertainty = false;
+  o.method = Method::ThreePoint;
+  const Result b = separation::separate(camp.data, o);
+  o.method = Method::Lsq;
+  const Result c = separation::separate(camp.data, o);
+  const double size = b.guide.value.cwiseAbs().maxCoeff();
+  EXPECT_LT(maxdiff(c.guide.value, b.guide.value), kRelative * size);
+  Profile cw{
+      c.workpiece.x.head(b.workpiece.x.size()), c.workpiece.value.head(b.workpiece.x.size()), {}};
+  Profile cg = c.guide;
+  separation::express_in_reference(cw, cg, nullptr, Reference::LeastSquares, false);
+  EXPECT_LT(maxdiff(cw.value, b.workpiece.value), kRelative * size);
+}
+
 // An independent implementation of the seed's equations (JPH0464003B2 eqs. 12–17), written
 // straight from the text in one pass with Cramer's rule on the γ/δ sums.
 TEST(Separation, SeedReferenceMatchesAnIndependentImplementation) {
