@@ -134,22 +134,40 @@ TEST(Separation, KnownZeroDifferenceFixesTheParabola) {
   }
 }
 
-TEST(Separation, LsqEqualsSeedMethodsWhereTheyApply) {
-  const auto camp = sim::simulate_straightness(carriage(250, {0, 10, 20}, 11));
+namespace {
+
+// Three-point (b) and lsq (c) on the same data, and the largest differences of their workpiece
+// and guide. Three-point reports the workpiece at probe A's positions, lsq also at the two beyond:
+// compared on three-point's grid after the same reference.
+struct LsqAndThreePoint {
+  Result b, c;
+  double dw = 0, dg = 0;
+};
+LsqAndThreePoint lsq_and_three_point(const separation::ProbeData& data) {
+  LsqAndThreePoint r;
   Options o;
   o.compute_uncertainty = false;
   o.method = Method::ThreePoint;
-  const Result b = separation::separate(camp.data, o);
+  r.b = separation::separate(data, o);
   o.method = Method::Lsq;
-  const Result c = separation::separate(camp.data, o);
-  // B reports the workpiece at probe A's positions; C also at the two beyond. Compare on B's grid
-  // after the same reference.
-  Profile cw{
-      c.workpiece.x.head(b.workpiece.x.size()), c.workpiece.value.head(b.workpiece.x.size()), {}};
-  Profile cg = c.guide;
+  r.c = separation::separate(data, o);
+  const Eigen::Index nw = r.b.workpiece.x.size();
+  Profile cw{r.c.workpiece.x.head(nw), r.c.workpiece.value.head(nw), {}};
+  Profile cg = r.c.guide;
   separation::express_in_reference(cw, cg, nullptr, Reference::LeastSquares, false);
-  EXPECT_LT(maxdiff(cw.value, b.workpiece.value), 1e-14);
-  EXPECT_LT(maxdiff(c.guide.value, b.guide.value), 1e-14);
+  r.dw = maxdiff(cw.value, r.b.workpiece.value);
+  r.dg = maxdiff(r.c.guide.value, r.b.guide.value);
+  return r;
+}
+
+}  // namespace
+
+TEST(Separation, LsqEqualsSeedMethodsWhereTheyApply) {
+  const auto camp = sim::simulate_straightness(carriage(250, {0, 10, 20}, 11));
+  const LsqAndThreePoint r = lsq_and_three_point(camp.data);
+  const Result &b = r.b, &c = r.c;
+  EXPECT_LT(r.dw, 1e-14);
+  EXPECT_LT(r.dg, 1e-14);
   EXPECT_LT(maxdiff(c.pitch->value.head(b.pitch->value.size()).array() -
                         c.pitch->value.head(b.pitch->value.size()).mean(),
                     b.pitch->value.array() - b.pitch->value.mean()),
@@ -167,20 +185,10 @@ TEST(Separation, LsqEqualsThreePointOnALongNoisyRun) {
   constexpr double kRelative = 1e-9;  // of the largest |guide|
   auto so = carriage(100000, {0, 10, 20}, 13);
   so.noise = 1e-4;
-  const auto camp = sim::simulate_straightness(so);
-  Options o;
-  o.compute_uncertainty = false;
-  o.method = Method::ThreePoint;
-  const Result b = separation::separate(camp.data, o);
-  o.method = Method::Lsq;
-  const Result c = separation::separate(camp.data, o);
-  const double size = b.guide.value.cwiseAbs().maxCoeff();
-  EXPECT_LT(maxdiff(c.guide.value, b.guide.value), kRelative * size);
-  Profile cw{
-      c.workpiece.x.head(b.workpiece.x.size()), c.workpiece.value.head(b.workpiece.x.size()), {}};
-  Profile cg = c.guide;
-  separation::express_in_reference(cw, cg, nullptr, Reference::LeastSquares, false);
-  EXPECT_LT(maxdiff(cw.value, b.workpiece.value), kRelative * size);
+  const LsqAndThreePoint r = lsq_and_three_point(sim::simulate_straightness(so).data);
+  const double size = r.b.guide.value.cwiseAbs().maxCoeff();
+  EXPECT_LT(r.dg, kRelative * size);
+  EXPECT_LT(r.dw, kRelative * size);
 }
 
 // An independent implementation of the seed's equations (JPH0464003B2 eqs. 12–17), written
