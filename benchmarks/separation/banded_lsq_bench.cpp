@@ -1,0 +1,73 @@
+// The least-squares separation's solver alone at 10⁶ stations (three probes): one chain of
+// stations, against two independent halves solved at once on two threads. The halves are not
+// the same problem (they are not joined), but their time bounds what factorising from both ends
+// towards the middle could reach on two cores, with both cores' memory traffic and page commits
+// competing as they would (see BENCHMARKS.md).
+#include <benchmark/benchmark.h>
+
+#include <thread>
+
+#include "../../src/separation/banded_lsq.hpp"
+#include "trueaxis/sim/straightness.hpp"
+
+using namespace trueaxis;
+using separation::detail::BandedLsq;
+using separation::detail::Design;
+
+namespace {
+
+struct Chain {
+  Design D;
+  Eigen::MatrixXd readings;
+  Eigen::RowVectorXd mu;
+};
+
+// Factorisation, back-substitution, one refinement pass and its back-substitution: what one
+// separation asks of the solver.
+void solve(const Chain& c) {
+  BandedLsq s(c.D);
+  Eigen::VectorXd v = Eigen::VectorXd::Zero(c.D.nvars);
+  for (const auto& [id, value] : c.D.pins) v[id] = value;
+  const Eigen::VectorXd no_angle;
+  s.factor(c.readings, c.mu, no_angle, v);
+  s.solve_add(v);
+  s.refactor_rhs(c.readings, c.mu, no_angle, v);
+  benchmark::DoNotOptimize(s.solve_add(v));
+}
+
+Chain chain(const Eigen::MatrixXd& readings, long first, long n) {
+  return {separation::detail::make_design({0, 1, 2}, n, false, std::nullopt, 1.0),
+          readings.middleRows(first, n), readings.colwise().mean()};
+}
+
+const Eigen::MatrixXd& readings() {
+  static const Eigen::MatrixXd r = [] {
+    sim::StraightnessOptions o;
+    o.stations = 1000000;
+    o.step = 1;
+    o.offsets = {0, 1, 2};
+    o.noise = 1e-5;
+    return sim::simulate_straightness(o).data.readings;
+  }();
+  return r;
+}
+
+void BM_LsqSolverOneChain(benchmark::State& st) {
+  const Chain c = chain(readings(), 0, readings().rows());
+  for (auto _ : st) solve(c);
+}
+
+void BM_LsqSolverTwoHalvesOnTwoThreads(benchmark::State& st) {
+  const long n = readings().rows(), h = n / 2;
+  const Chain a = chain(readings(), 0, h), b = chain(readings(), h, n - h);
+  for (auto _ : st) {
+    std::thread other([&] { solve(b); });
+    solve(a);
+    other.join();
+  }
+}
+
+}  // namespace
+
+BENCHMARK(BM_LsqSolverOneChain)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_LsqSolverTwoHalvesOnTwoThreads)->Unit(benchmark::kMillisecond)->UseRealTime();
