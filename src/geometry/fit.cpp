@@ -947,6 +947,8 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
 
 namespace {
 
+constexpr int kMinZoneCircleMaxPivots = 5000;
+
 // Minimum-zone circle of 2-D points: minimise R − r subject to r ≤ |q_i − c| ≤ R, linearised
 // at the current centre (|q_i − c − dc| ≈ ρ_i − u_i·dc) and solved as an LP; repeated from the
 // new centre until the step is below round-off.
@@ -977,7 +979,16 @@ Circle2 min_zone_circle(const Eigen::Matrix2Xd& q, Circle2 c, double& width, int
     glp_smcp parm;
     glp_init_smcp(&parm);
     parm.msg_lev = GLP_MSG_OFF;
+    // Four structural columns: an optimum takes a few dozen pivots. The limit only ends a
+    // simplex that stalls on a degenerate LP (points that barely bend, not refused by the
+    // least-squares check) instead of running for minutes.
+    parm.it_lim = kMinZoneCircleMaxPivots;
     const int rc = glp_simplex(lp.get(), &parm);
+    if (rc == GLP_EITLIM)
+      throw Error(fmt::format(
+          "minimum-zone circle: the LP did not reach an optimum within {} pivots; the points "
+          "barely determine a circle: fit a line or a plane",
+          kMinZoneCircleMaxPivots));
     if (rc != 0 || glp_get_status(lp.get()) != GLP_OPT)
       throw Error(fmt::format("minimum-zone circle: the LP solver failed (code {}, status {})", rc,
                               glp_get_status(lp.get())));
@@ -1040,6 +1051,9 @@ Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& p) {
       break;
     }
     case Element::Circle: {
+      // Points that do not determine a circle (too little of an arc for their scatter) are
+      // refused as the least-squares fit refuses them: the zone's LP is then degenerate.
+      fit(Element::Circle, p);
       const Eigen::Matrix3d R = basis(s.axes.col(2));
       const Eigen::Matrix2Xd q = (R.transpose() * (p.colwise() - s.centroid)).topRows<2>();
       int it = 0;
