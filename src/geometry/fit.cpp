@@ -1051,13 +1051,15 @@ Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& p) {
       break;
     }
     case Element::Circle: {
-      // Points that do not determine a circle (too little of an arc for their scatter) are
-      // refused as the least-squares fit refuses them: the zone's LP is then degenerate.
-      fit(Element::Circle, p);
+      // Starts from the least-squares circle (in the same plane and frame), which also refuses
+      // points that do not determine a circle (too little of an arc for their scatter): the
+      // zone's LP would be degenerate.
+      const Fit ls = fit(Element::Circle, p);
       const Eigen::Matrix3d R = basis(s.axes.col(2));
       const Eigen::Matrix2Xd q = (R.transpose() * (p.colwise() - s.centroid)).topRows<2>();
+      const Circle2 start{(R.transpose() * (ls.point - s.centroid)).head<2>(), ls.diameter / 2};
       int it = 0;
-      const Circle2 c = min_zone_circle(q, circle2_fit(q, nullptr), f.zone, it);
+      const Circle2 c = min_zone_circle(q, start, f.zone, it);
       f.iterations = it;
       f.point = s.centroid + R * Eigen::Vector3d(c.c.x(), c.c.y(), 0);
       f.direction = s.axes.col(2);
