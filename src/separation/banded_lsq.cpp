@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <future>
 #include <optional>
 
 #include "../common/eigen_instances.hpp"
@@ -19,7 +20,7 @@
 
 namespace trueaxis::separation::detail {
 
-BandedLsq::BandedLsq(const Design& design) : D_(design) {
+BandedLsq::BandedLsq(const Design& design, long split_stations) : D_(design) {
   const Design& D = D_;
   L_ = D.pitch ? 2 : 1;
   M_ = D.N + (D.angle ? 1 : 0);
@@ -48,18 +49,47 @@ BandedLsq::BandedLsq(const Design& design) : D_(design) {
   Qt_ = Eigen::MatrixXd(qr.householderQ()).transpose();  // row-major: read row by row below
   Rloc_ = (Qt_ * Aloc).topRows(L_).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd T = Qt_ * Awin;
-  Cloc_ = T.topRows(L_);
-  Cred_ = T.bottomRows(M_ - L_);
   scale_ = std::max({1.0, Aloc.cwiseAbs().maxCoeff(), Awin.cwiseAbs().maxCoeff()});
   for (long j = 0; j < D.Q; ++j)
     if (D.pinned[static_cast<std::size_t>(D.w(j))]) pinned_w_.push_back(j);
   rows_ = D.n * M_;
   unknowns_ = static_cast<long>(std::count(D.pinned.begin(), D.pinned.end(), 0));
+
+  // The chains. The mirrored one's window column c holds the station's band column span − c.
+  auto make_chain = [&](long first_station, long first_pos, long steps, int dir) {
+    Chain ch;
+    ch.first_station = first_station;
+    ch.first_pos = first_pos;
+    ch.steps = steps;
+    ch.dir = dir;
+    Eigen::MatrixXd Tc = T;
+    if (dir < 0)
+      for (int c = 0; c < nb_; ++c) Tc.col(c) = T.col(nb_ - 1 - c);
+    ch.Cloc = Tc.topRows(L_);
+    ch.Cred = Tc.bottomRows(M_ - L_);
+    for (const long pos : pinned_w_) ch.pinned.push_back(dir * (pos - first_pos));
+    std::sort(ch.pinned.begin(), ch.pinned.end());
+    return ch;
+  };
+  const long n = D.n;
+  const bool two = n >= split_stations && n / 2 > nb_ && n - n / 2 > nb_;
+  h_ = two ? n / 2 : n;
+  chains_.push_back(make_chain(0, 0, h_, 1));
+  if (two) chains_.push_back(make_chain(n - 1, D.Q - 1, n - h_, -1));
 }
 
-int BandedLsq::id_of(long K, int c) const {
+int BandedLsq::final_id(int c) const {
   if (c >= nb_) return globals_[static_cast<std::size_t>(c - nb_)];
-  return K + c < D_.Q ? D_.w(K + c) : -1;
+  if (c == nb_ - 1) return -1;  // the position past the chains' windows
+  return h_ + c < D_.Q ? D_.w(h_ + c) : -1;
+}
+
+int BandedLsq::chain_col(const Chain& ch, int c) const {
+  if (c >= nb_) return c;
+  const int id = final_id(c);
+  if (id < 0) return -1;
+  const long cc = ch.dir * (id - D_.w(0) - ch.first_pos) - ch.steps;
+  return cc >= 0 && cc < nb_ ? static_cast<int>(cc) : -1;
 }
 
 bool BandedLsq::active(int id) const {
@@ -110,24 +140,38 @@ void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings,
 }  // namespace
 
 template <class Fn>
-void BandedLsq::for_each_station(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                                 const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v,
-                                 Fn&& fn) {
+void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
+                                 const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                                 const Eigen::VectorXd& v, Fn&& fn) {
   const Design& D = D_;
   const int L = L_, M = M_;
   std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
       bt(static_cast<std::size_t>(M * kBlock));
   std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
-  for (long K0 = 0; K0 < D.n; K0 += kBlock) {
-    const int B = static_cast<int>(std::min<long>(kBlock, D.n - K0));
+  // Blocks in the chain's direction, and the stations of each in that order.
+  const long lo = ch.dir > 0 ? ch.first_station : ch.first_station - ch.steps + 1;
+  const long hi = lo + ch.steps;
+  auto block = [&](long K0, int B) {
     block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
               bt.data());
-    for (int k = 0; k < B; ++k) {
+    for (int i = 0; i < B; ++i) {
+      const int k = ch.dir > 0 ? i : B - 1 - i;
       const long K = K0 + k;
       double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
       for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
-      fn(K, [&](int r) { return bt[static_cast<std::size_t>((L + r) * B + k)]; });
+      fn(ch.dir * (K - ch.first_station), K,
+         [&](int r) { return bt[static_cast<std::size_t>((L + r) * B + k)]; });
+    }
+  };
+  if (ch.dir > 0) {
+    for (long K0 = lo; K0 < hi; K0 += kBlock)
+      block(K0, static_cast<int>(std::min<long>(kBlock, hi - K0)));
+  } else {
+    for (long end = hi; end > lo;) {
+      const long K0 = std::max(lo, end - kBlock);
+      block(K0, static_cast<int>(end - K0));
+      end = K0;
     }
   }
 }
@@ -139,12 +183,28 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   with_width(m_, [&]<int W>() { factor_impl<W>(readings, mu, angle_mm, v); });
 }
 
+namespace {
+
+// Runs fn(chain) for each chain, the second on another thread.
+template <class Chains, class Fn>
+void for_each_chain(Chains& chains, Fn&& fn) {
+  if (chains.size() == 1) {
+    fn(chains[0]);
+    return;
+  }
+  auto other = std::async(std::launch::async, [&] { fn(chains[1]); });
+  fn(chains[0]);
+  other.get();
+}
+
+}  // namespace
+
 template <int Width>
 void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                             const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   const Design& D = D_;
   const long n = D.n;
-  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, nred = M_ - L_;
+  const int m = Width > 0 ? Width : m_, s = m + 1, L = L_, nred = M_ - L_;
   rw_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(m));
   qb_.resize(static_cast<std::size_t>(n));
   bloc_.resize(static_cast<std::size_t>(n) * static_cast<std::size_t>(L));
@@ -161,12 +221,33 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
   const std::size_t per_station = static_cast<std::size_t>(kRotationValues * m * nred);
   keep_rotations_ =
       per_station * static_cast<std::size_t>(n) * sizeof(double) <= kRotationBudgetBytes;
-  rot_.resize(keep_rotations_ ? per_station * static_cast<std::size_t>(n) : 0);
-  rot_mask_.resize(keep_rotations_ && masked_
-                       ? static_cast<std::size_t>(n * nred) * static_cast<std::size_t>(mask_bytes_)
-                       : 0);
-  unsigned char* mask_out = rot_mask_.data();
-  double* rot = rot_.data();
+  for (Chain& ch : chains_) {
+    const auto steps = static_cast<std::size_t>(ch.steps);
+    ch.rot.resize(keep_rotations_ ? per_station * steps : 0);
+    ch.rot_mask.resize(keep_rotations_ && masked_ ? steps * static_cast<std::size_t>(nred) *
+                                                        static_cast<std::size_t>(mask_bytes_)
+                                                  : 0);
+  }
+  for_each_chain(chains_, [&](Chain& ch) { fold<Width>(ch, readings, mu, angle_mm, v); });
+  ssr_ = join();
+  min_pivot_ = 1;
+  for (const Chain& ch : chains_) {
+    ssr_ += ch.ssr;
+    min_pivot_ = std::min(min_pivot_, ch.min_pivot);
+  }
+  for (int c = 0; c < m; ++c)
+    if (active(final_id(c)))
+      min_pivot_ =
+          std::min(min_pivot_, std::abs(final_[static_cast<std::size_t>(c * s + c)]) / scale_);
+}
+
+template <int Width>
+void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                     const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+  const Design& D = D_;
+  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, nred = M_ - L_;
+  unsigned char* mask_out = ch.rot_mask.data();
+  double* rot = ch.rot.data();
   static_assert(kRotationValues == 3);
   auto keep_identity = [&rot] {  // (c̄, s̄, x_j) of a rotation that changes nothing
     rot[0] = 1;
@@ -174,125 +255,174 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
     rot[2] = 0;
     rot += kRotationValues;
   };
-  std::vector<double> W(static_cast<std::size_t>(m * s), 0.0);
+  std::vector<double>& W = ch.W;
+  W.assign(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> row(static_cast<std::size_t>(s));
-  ssr_ = 0;
-  min_pivot_ = 1;
-  std::size_t next_pin = 0;  // first pinned position not below K
+  double ssr = 0, min_pivot = 1;
+  const std::vector<long>& pins = ch.pinned;
+  std::size_t next_pin = 0;  // first pinned position not below t
   // After the first block, when the rotations kept per station are known, the pages the rest of
-  // the factorisation will write are committed on another core.
+  // the chain will write are committed on another core. Not with two chains: both cores are busy
+  // folding, and a helper only adds switches (measured: the solver 3 ms slower of 45).
   std::optional<Prefault> prefault;
+  const long lo = ch.dir > 0 ? ch.first_station : ch.first_station - ch.steps + 1;
+  const auto span_of = [&](const auto& buf, long first, long count, std::size_t per) {
+    return Prefault::Region{buf.data() + static_cast<std::size_t>(first) * per,
+                            static_cast<std::size_t>(count) * per * sizeof(buf[0])};
+  };
   auto start_prefault = [&] {
-    const auto used = static_cast<std::size_t>(rot - rot_.data());
-    const std::size_t expect = std::min(
-        rot_.size(), used / static_cast<std::size_t>(kBlock) * static_cast<std::size_t>(n) * 9 / 8);
+    const auto used = static_cast<std::size_t>(rot - ch.rot.data());
+    const std::size_t expect =
+        std::min(ch.rot.size(), used / static_cast<std::size_t>(kBlock) *
+                                    static_cast<std::size_t>(ch.steps) * 9 / 8);
     prefault.emplace(
-        std::vector<Prefault::Region>{{rw_.data(), rw_.size() * sizeof(double)},
-                                      {qb_.data(), qb_.size() * sizeof(double)},
-                                      {bloc_.data(), bloc_.size() * sizeof(double)},
+        std::vector<Prefault::Region>{span_of(rw_, lo, ch.steps, static_cast<std::size_t>(m)),
+                                      span_of(qb_, lo, ch.steps, 1),
+                                      span_of(bloc_, lo, ch.steps, static_cast<std::size_t>(L)),
                                       {rot, (expect > used ? expect - used : 0) * sizeof(double)},
-                                      {rot_mask_.data(), rot_mask_.size()}});
+                                      {ch.rot_mask.data(), ch.rot_mask.size()}});
   };
   // The fold is not vectorised: each rotation's row and window updates are read back by the next
   // one, and paired loads of values stored one at a time stall on store forwarding.
-  for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) TA_NO_VECTORIZE {
-    if (K == kBlock) start_prefault();
-    while (next_pin < pinned_w_.size() && pinned_w_[next_pin] < K) ++next_pin;
-    const bool pin_in_band = next_pin < pinned_w_.size() && pinned_w_[next_pin] <= K + nb - 1;
-    for (int r = 0; r < nred; ++r) {
-      // A reduced row: fold it into the window by square-root-free Givens rotations.
-      std::uint64_t mask = 0;
-      const double* cr = Cred_.data() + static_cast<std::size_t>(r * m);
-      for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
-      row[static_cast<std::size_t>(m)] = reduced(r);
-      if (pin_in_band)
-        for (std::size_t i = next_pin; i < pinned_w_.size() && pinned_w_[i] <= K + nb - 1; ++i)
-          row[static_cast<std::size_t>(pinned_w_[i] - K)] = 0;
-      double delta = 1;  // the row's weight
-      int j = 0;
-      for (; j < m; ++j) {
-        const double xi = row[static_cast<std::size_t>(j)];
-        if (xi == 0) {
-          if (keep_rotations_ && !masked_) keep_identity();
-          continue;
-        }
-        double* Wj = W.data() + static_cast<std::size_t>(j * s);
-        const double d = Wj[j];
-        if (d == 0) {
-          // An empty row of the window: the row takes its place, and nothing of it is left.
-          const double inv = 1 / xi;
-          Wj[j] = delta * xi * xi;
-          for (int c = j + 1; c <= m; ++c) Wj[c] = row[static_cast<std::size_t>(c)] * inv;
-          if (keep_rotations_ && masked_) {
-            *rot++ = inv;
-            mask |= (std::uint64_t{1} << j) | (std::uint64_t{1} << m);
-          } else if (keep_rotations_) {
-            *rot++ = 0;
-            *rot++ = inv;
-            *rot++ = xi;
+  for_each_station(
+      ch, readings, mu, angle_mm, v, [&](long t, long K, auto&& reduced) TA_NO_VECTORIZE {
+        if (t == kBlock && chains_.size() == 1) start_prefault();
+        while (next_pin < pins.size() && pins[next_pin] < t) ++next_pin;
+        const bool pin_in_band = next_pin < pins.size() && pins[next_pin] <= t + nb - 1;
+        for (int r = 0; r < nred; ++r) {
+          // A reduced row: fold it into the window by square-root-free Givens rotations.
+          std::uint64_t mask = 0;
+          const double* cr = ch.Cred.data() + static_cast<std::size_t>(r * m);
+          for (int c = 0; c < m; ++c) row[static_cast<std::size_t>(c)] = cr[c];
+          row[static_cast<std::size_t>(m)] = reduced(r);
+          if (pin_in_band)
+            for (std::size_t i = next_pin; i < pins.size() && pins[i] <= t + nb - 1; ++i)
+              row[static_cast<std::size_t>(pins[i] - t)] = 0;
+          double delta = 1;  // the row's weight
+          int j = 0;
+          for (; j < m; ++j) {
+            const double xi = row[static_cast<std::size_t>(j)];
+            if (xi == 0) {
+              if (keep_rotations_ && !masked_) keep_identity();
+              continue;
+            }
+            double* Wj = W.data() + static_cast<std::size_t>(j * s);
+            const double d = Wj[j];
+            if (d == 0) {
+              // An empty row of the window: the row takes its place, and nothing of it is left.
+              const double inv = 1 / xi;
+              Wj[j] = delta * xi * xi;
+              for (int c = j + 1; c <= m; ++c) Wj[c] = row[static_cast<std::size_t>(c)] * inv;
+              if (keep_rotations_ && masked_) {
+                *rot++ = inv;
+                mask |= (std::uint64_t{1} << j) | (std::uint64_t{1} << m);
+              } else if (keep_rotations_) {
+                *rot++ = 0;
+                *rot++ = inv;
+                *rot++ = xi;
+              }
+              delta = 0;
+              ++j;
+              break;
+            }
+            const double dp = d + delta * xi * xi;
+            const double inv = 1 / dp;
+            const double cb = d * inv, sb = delta * xi * inv;
+            delta *= cb;
+            Wj[j] = dp;
+            for (int c = j + 1; c <= m; ++c) {
+              const double u = Wj[c], x = row[static_cast<std::size_t>(c)];
+              row[static_cast<std::size_t>(c)] = x - xi * u;
+              Wj[c] = cb * u + sb * x;
+            }
+            if (keep_rotations_) {
+              *rot++ = cb;
+              *rot++ = sb;
+              *rot++ = xi;
+              if (masked_) mask |= std::uint64_t{1} << j;
+            }
           }
-          delta = 0;
-          ++j;
-          break;
+          if (keep_rotations_ && !masked_)
+            for (; j < m; ++j) keep_identity();  // after the row found an empty place
+          if (keep_rotations_ && masked_)
+            for (int i = 0; i < mask_bytes_; ++i)
+              *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
+          ssr += delta * row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
         }
-        const double dp = d + delta * xi * xi;
-        const double inv = 1 / dp;
-        const double cb = d * inv, sb = delta * xi * inv;
-        delta *= cb;
-        Wj[j] = dp;
-        for (int c = j + 1; c <= m; ++c) {
-          const double u = Wj[c], x = row[static_cast<std::size_t>(c)];
-          row[static_cast<std::size_t>(c)] = x - xi * u;
-          Wj[c] = cb * u + sb * x;
+        // No later row of the chain touches the eliminated w: its row of R, √d·[1, ū], leaves the
+        // window (stored as √d and ū), which slides by one position.
+        double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+        const double r0 = std::sqrt(W[0]);
+        out[0] = r0;
+        for (int c = 1; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
+        qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
+        if (!D.pinned[static_cast<std::size_t>(D.w(ch.position(t)))])
+          min_pivot = std::min(min_pivot, r0 / scale_);
+        for (int tt = 0; tt < m; ++tt) {
+          double* dst = W.data() + static_cast<std::size_t>(tt * s);
+          if (tt == nb - 1) {
+            for (int c = 0; c < s; ++c) dst[c] = 0;
+            continue;
+          }
+          const double* src = tt < nb - 1 ? dst + s : dst;
+          for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
+          dst[nb - 1] = 0;
+          if (src != dst)
+            for (int c = nb; c < s; ++c) dst[c] = src[c];
         }
-        if (keep_rotations_) {
-          *rot++ = cb;
-          *rot++ = sb;
-          *rot++ = xi;
-          if (masked_) mask |= std::uint64_t{1} << j;
-        }
-      }
-      if (keep_rotations_ && !masked_)
-        for (; j < m; ++j) keep_identity();  // after the row found an empty place
-      if (keep_rotations_ && masked_)
-        for (int i = 0; i < mask_bytes_; ++i)
-          *mask_out++ = static_cast<unsigned char>(mask >> (8 * i));
-      ssr_ += delta * row[static_cast<std::size_t>(m)] * row[static_cast<std::size_t>(m)];
+      });
+  ch.ssr = ssr;
+  ch.min_pivot = min_pivot;
+}
+
+double BandedLsq::join() {
+  const int m = m_, s = m + 1;
+  final_.assign(static_cast<std::size_t>(m * s), 0.0);
+  if (chains_.size() == 1) {
+    // The last window in R's form: row c is √d_c·[0…0, 1, ū_c].
+    const std::vector<double>& W = chains_[0].W;
+    for (int c = 0; c < m; ++c) {
+      const double* Wc = W.data() + static_cast<std::size_t>(c * s);
+      double* Fc = final_.data() + static_cast<std::size_t>(c * s);
+      const double rc = std::sqrt(Wc[c]);
+      Fc[c] = rc;
+      for (int i = c + 1; i < s; ++i) Fc[i] = rc * Wc[i];
     }
-    // No later row touches w(K): its row of R, √d·[1, ū], leaves the window (stored as √d and
-    // ū), which slides by one position.
-    double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-    const double r0 = std::sqrt(W[0]);
-    out[0] = r0;
-    for (int c = 1; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
-    qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-    if (!D.pinned[static_cast<std::size_t>(D.w(K))]) min_pivot_ = std::min(min_pivot_, r0 / scale_);
-    for (int t = 0; t < m; ++t) {
-      double* dst = W.data() + static_cast<std::size_t>(t * s);
-      if (t == nb - 1) {
-        for (int c = 0; c < s; ++c) dst[c] = 0;
-        continue;
-      }
-      const double* src = t < nb - 1 ? dst + s : dst;
-      for (int c = 0; c + 1 < nb; ++c) dst[c] = src[c + 1];
-      dst[nb - 1] = 0;
-      if (src != dst)
-        for (int c = nb; c < s; ++c) dst[c] = src[c];
-    }
-  });
-  // The final window in the same form: row c is √d_c·[0…0, 1, ū_c].
-  final_.assign(W.size(), 0.0);
-  for (int c = 0; c < m; ++c) {
-    const double* Wc = W.data() + static_cast<std::size_t>(c * s);
-    double* Fc = final_.data() + static_cast<std::size_t>(c * s);
-    const double rc = std::sqrt(Wc[c]);
-    Fc[c] = rc;
-    for (int i = c + 1; i < s; ++i) Fc[i] = rc * Wc[i];
+    return 0;
   }
+  // Both chains' last windows as rows of R over the final window's active columns (and the
+  // right-hand side), stacked; their QR is the final window's R, and the part of the right-hand
+  // side it leaves over is the residual's last share.
+  std::vector<int> act;
   for (int c = 0; c < m; ++c)
-    if (active(id_of(n, c)))
-      min_pivot_ =
-          std::min(min_pivot_, std::abs(final_[static_cast<std::size_t>(c * s + c)]) / scale_);
+    if (active(final_id(c))) act.push_back(c);
+  const int na = static_cast<int>(act.size());
+  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(2 * m, na + 1);
+  for (std::size_t ci = 0; ci < chains_.size(); ++ci) {
+    const Chain& ch = chains_[ci];
+    for (int c = 0; c < m; ++c) {
+      const double* Wc = ch.W.data() + static_cast<std::size_t>(c * s);
+      if (Wc[c] == 0) continue;
+      const double rc = std::sqrt(Wc[c]);
+      const auto r = static_cast<Eigen::Index>(ci) * m + c;
+      for (int a = 0; a < na; ++a) {
+        const int cc = chain_col(ch, act[static_cast<std::size_t>(a)]);
+        if (cc == c)
+          S(r, a) = rc;
+        else if (cc > c)
+          S(r, a) = rc * Wc[cc];
+      }
+      S(r, na) = rc * Wc[m];
+    }
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(S);
+  const Eigen::MatrixXd& R = qr.matrixQR();
+  for (int a = 0; a < na; ++a) {
+    double* Fa = final_.data() + static_cast<std::size_t>(act[static_cast<std::size_t>(a)] * s);
+    for (int b = a; b < na; ++b) Fa[act[static_cast<std::size_t>(b)]] = R(a, b);
+    Fa[m] = R(a, na);
+  }
+  return R(na, na) * R(na, na);
 }
 
 void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
@@ -307,6 +437,13 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
 template <int Width>
 void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                                   const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+  for_each_chain(chains_, [&](Chain& ch) { refold_rhs<Width>(ch, readings, mu, angle_mm, v); });
+  join();
+}
+
+template <int Width>
+void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                           const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
   // The same rotations applied to the new right-hand side only: the window's last column, ū's
   // right-hand side per row, by the kept rotations (c̄, s̄, x_j). (Rebuilding c̄ as 1 − s̄·x_j would
   // keep one number fewer but loses ε·|ū| where the old row's ū is large and c̄ small: a row entry
@@ -315,9 +452,9 @@ void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::
   std::vector<double> wr_heap(Width > 0 ? 0 : static_cast<std::size_t>(m), 0.0);
   double wr_fixed[Width > 0 ? Width : 1] = {};
   double* wr = Width > 0 ? wr_fixed : wr_heap.data();
-  const double* rot = rot_.data();
-  const unsigned char* mask_in = rot_mask_.data();
-  for_each_station(readings, mu, angle_mm, v, [&](long K, auto&& reduced) {
+  const double* rot = ch.rot.data();
+  const unsigned char* mask_in = ch.rot_mask.data();
+  for_each_station(ch, readings, mu, angle_mm, v, [&](long, long K, auto&& reduced) {
     for (int r = 0; r < nred; ++r) {
       double x = reduced(r);
       auto apply = [&](int j) {
@@ -350,88 +487,81 @@ void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::
     for (int t = 0; t + 1 < nb; ++t) wr[t] = wr[t + 1];
     wr[nb - 1] = 0;
   });
-  for (int c = 0; c < m; ++c)
-    final_[static_cast<std::size_t>(c * s + m)] =
-        final_[static_cast<std::size_t>(c * s + c)] * wr[c];
+  for (int c = 0; c < m; ++c) ch.W[static_cast<std::size_t>(c * s + m)] = wr[c];
 }
 
 template <int NB>
-BandedLsq::Update BandedLsq::solve_add_impl(Eigen::VectorXd& v) const {
+void BandedLsq::back_substitute(const Chain& ch, const std::vector<double>& xc, Eigen::VectorXd& v,
+                                double* mc, double* mv) const {
   const Design& D = D_;
-  const int m = m_, s = m_ + 1, nb = NB > 0 ? NB : nb_, L = L_, G = G_;
-  // Largest |correction| and |value| per stream (separate maxima: no chain of them per station).
-  double mc[4] = {0, 0, 0, 0}, mv[4] = {0, 0, 0, 0};
+  const int m = m_, nb = NB > 0 ? NB : nb_, L = L_, G = G_;
+  // Largest |correction| and |value| per stream (separate maxima: no chain of them per station),
+  // kept here and written out at the end: the other chain's maxima share their cache line.
+  double lc[3] = {0, 0, 0}, lv[3] = {0, 0, 0};
   auto add = [&](int stream, int id, double dx) {
     const double x = v[id] + dx;
     v[id] = x;
-    mc[stream] = std::max(mc[stream], std::abs(dx));
-    mv[stream] = std::max(mv[stream], std::abs(x));
+    lc[stream] = std::max(lc[stream], std::abs(dx));
+    lv[stream] = std::max(lv[stream], std::abs(x));
   };
-  // The final window [w(n..n+span), globals] by back-substitution (inactive columns 0).
-  std::vector<double> xc(static_cast<std::size_t>(m), 0.0);
-  for (int c = m - 1; c >= 0; --c) {
-    const int id = id_of(D.n, c);
-    const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(id) || F[c] == 0) continue;
-    double acc = F[m];
-    for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
-    xc[static_cast<std::size_t>(c)] = acc / F[c];
-    add(3, id, xc[static_cast<std::size_t>(c)]);
-  }
   const double* xg = xc.data() + nb;  // the globals' corrections
   // The globals' share of each station's local equations is the same at every station.
   double lg[2] = {0, 0};
   for (int l = 0; l < L; ++l)
-    for (int k = 0; k < G; ++k) lg[l] += Cloc_(l, nb + k) * xg[k];
+    for (int k = 0; k < G; ++k) lg[l] += ch.Cloc(l, nb + k) * xg[k];
   const double inv00 = 1 / Rloc_(0, 0), r01 = L == 2 ? Rloc_(0, 1) : 0.0,
                inv11 = L == 2 ? 1 / Rloc_(1, 1) : 0.0;
-  // The workpiece corrections the back-substitution still needs, d[j] = Δw(K + j): a fixed
-  // array for a compile-time band, else a ring indexed by position modulo a power of two.
+  // The workpiece corrections the back-substitution still needs, d[j] = Δw at the chain's
+  // position t + j: a fixed array for a compile-time band, else a ring indexed by position
+  // modulo a power of two.
   std::size_t ring_size = 1;
   while (ring_size < static_cast<std::size_t>(nb)) ring_size *= 2;
   const std::size_t mask = ring_size - 1;
   std::vector<double> ring(NB > 0 ? 0 : ring_size, 0.0);
   double d[NB > 0 ? NB : 1] = {};
-  auto dw = [&](long K, int j) -> double {
+  auto dw = [&](long t, int j) -> double {
     if constexpr (NB > 0)
       return d[j];
     else
-      return ring[static_cast<std::size_t>(K + j) & mask];
+      return ring[static_cast<std::size_t>(t + j) & mask];
   };
-  for (int c = 0; c < nb; ++c) {
-    if constexpr (NB > 0) {
-      if (c + 1 < nb) d[c + 1] = xc[static_cast<std::size_t>(c)];
-    } else {
-      ring[static_cast<std::size_t>(D.n + c) & mask] = xc[static_cast<std::size_t>(c)];
-    }
+  // Start from the final window's positions past the chain's last step.
+  for (int j = 1; j < nb; ++j) {
+    const long col = ch.position(ch.steps + j - 1) - h_;
+    const double x = col >= 0 && col < nb - 1 ? xc[static_cast<std::size_t>(col)] : 0.0;
+    if constexpr (NB > 0)
+      d[j] = x;
+    else
+      ring[static_cast<std::size_t>(ch.steps + j - 1) & mask] = x;
   }
-  auto next_pin = pinned_w_.rbegin();  // the pinned positions, descending
-  while (next_pin != pinned_w_.rend() && *next_pin >= D.n) ++next_pin;
-  const double* Cl0 = Cloc_.data();  // column-major L × m: Cloc(l, j) at j·L + l
-  for (long K = D.n - 1; K >= 0; --K) {
+  auto next_pin = ch.pinned.rbegin();  // the pinned positions, descending
+  while (next_pin != ch.pinned.rend() && *next_pin >= ch.steps) ++next_pin;
+  const double* Cl0 = ch.Cloc.data();  // column-major L × m: Cloc(l, j) at j·L + l
+  for (long t = ch.steps - 1; t >= 0; --t) {
+    const long K = ch.station(t);
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double dwk = 0;
-    const bool pinned = next_pin != pinned_w_.rend() && *next_pin == K;
+    const bool pinned = next_pin != ch.pinned.rend() && *next_pin == t;
     if (pinned) ++next_pin;
     if (!pinned && R[0] != 0) {
-      // The row √d·[1, ū] and its right-hand side √d·b̄: Δw(K) = b̄ − ū·(the later unknowns), no
+      // The row √d·[1, ū] and its right-hand side √d·b̄: Δw = b̄ − ū·(the later unknowns), no
       // division on the back-substitution's dependency chain.
       double acc = qb_[static_cast<std::size_t>(K)];
       for (int k = 0; k < G; ++k) acc -= R[nb + k] * xg[k];
-      for (int j = nb - 1; j >= 1; --j) acc -= R[j] * dw(K, j);
+      for (int j = nb - 1; j >= 1; --j) acc -= R[j] * dw(t, j);
       dwk = acc;
-      add(0, D.w(K), dwk);
+      add(0, D.w(ch.position(t)), dwk);
     }
     if constexpr (NB > 0)
       d[0] = dwk;
     else
-      ring[static_cast<std::size_t>(K) & mask] = dwk;
+      ring[static_cast<std::size_t>(t) & mask] = dwk;
     // Local equations: Rloc·[g θ] = bloc − Cloc·(window).
     const double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
     double rl[2];
     for (int l = 0; l < L; ++l) {
       double acc = bl[l] - lg[l];
-      for (int j = 0; j < nb; ++j) acc -= Cl0[j * L + l] * dw(K, j);
+      for (int j = 0; j < nb; ++j) acc -= Cl0[j * L + l] * dw(t, j);
       rl[l] = acc;
     }
     if (L == 2) {
@@ -444,59 +574,105 @@ BandedLsq::Update BandedLsq::solve_add_impl(Eigen::VectorXd& v) const {
     if constexpr (NB > 0)
       for (int j = NB - 1; j >= 1; --j) d[j] = d[j - 1];
   }
-  Update u;
-  for (int i = 0; i < 4; ++i) {
-    u.max_correction = std::max(u.max_correction, mc[i]);
-    u.max_value = std::max(u.max_value, mv[i]);
+  for (int i = 0; i < 3; ++i) {
+    mc[i] = lc[i];
+    mv[i] = lv[i];
   }
-  return u;
 }
 
 BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
-  // The band width as a compile-time constant for the usual narrow bands: the corrections the
-  // back-substitution still needs then stay in registers.
-  return with_width(nb_, [&]<int W>() { return solve_add_impl<W>(v); });
+  const int m = m_, s = m_ + 1;
+  // Per chain and stream, the largest |correction| and |value|; stream 3 the final window's.
+  double mc[2][4] = {}, mv[2][4] = {};
+  // The final window [w(h..h+span−1), none, globals] by back-substitution (inactive columns 0).
+  std::vector<double> xc(static_cast<std::size_t>(m), 0.0);
+  for (int c = m - 1; c >= 0; --c) {
+    const int id = final_id(c);
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(id) || F[c] == 0) continue;
+    double acc = F[m];
+    for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
+    const double dx = acc / F[c];
+    xc[static_cast<std::size_t>(c)] = dx;
+    v[id] += dx;
+    mc[0][3] = std::max(mc[0][3], std::abs(dx));
+    mv[0][3] = std::max(mv[0][3], std::abs(v[id]));
+  }
+  // Both chains outward at once (they write different unknowns). The band width as a
+  // compile-time constant for the usual narrow bands: the corrections the back-substitution
+  // still needs then stay in registers.
+  with_width(nb_, [&]<int NB>() {
+    const std::size_t n_chains = chains_.size();
+    std::future<void> other;
+    if (n_chains == 2)
+      other = std::async(std::launch::async,
+                         [&] { back_substitute<NB>(chains_[1], xc, v, mc[1], mv[1]); });
+    back_substitute<NB>(chains_[0], xc, v, mc[0], mv[0]);
+    if (other.valid()) other.get();
+  });
+  Update u;
+  for (int c = 0; c < 2; ++c)
+    for (int i = 0; i < 4; ++i) {
+      u.max_correction = std::max(u.max_correction, mc[c][i]);
+      u.max_value = std::max(u.max_value, mv[c][i]);
+    }
+  return u;
 }
 
 Uninitialized<double> BandedLsq::covariance_diagonal() const {
-  // Backward selected inversion. For w(K)'s row [d, r] over the window [w(K+1..K+span),
-  // globals] with covariance Z: Z_K,window = −(Z rᵀ)/d and Z_KK = 1/d² − r·Z_K,window/d. The local
-  // unknowns x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc,
-  // with F the covariance over the full window [w(K..K+span), globals].
+  // Backward selected inversion, from the final window's covariance outward along each chain.
   const Design& D = D_;
-  const int m = m_, s = m_ + 1, nb = nb_, L = L_;
+  const int m = m_, s = m_ + 1;
   Uninitialized<double> diag(static_cast<std::size_t>(D.nvars), 0.0);
+  // The final window's covariance (inactive columns 0).
+  std::vector<double> Fj(static_cast<std::size_t>(m * m), 0.0);
+  std::vector<int> act;
+  for (int c = 0; c < m; ++c)
+    if (active(final_id(c)) && final_[static_cast<std::size_t>(c * s + c)] != 0) act.push_back(c);
+  const int na = static_cast<int>(act.size());
+  Eigen::MatrixXd Rf = Eigen::MatrixXd::Zero(na, na);
+  for (int a = 0; a < na; ++a)
+    for (int b = a; b < na; ++b)
+      Rf(a, b) = final_[static_cast<std::size_t>(act[static_cast<std::size_t>(a)] * s +
+                                                 act[static_cast<std::size_t>(b)])];
+  const Eigen::MatrixXd Ri =
+      Rf.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(na, na));
+  const Eigen::MatrixXd Zf = Ri * Ri.transpose();
+  for (int a = 0; a < na; ++a)
+    for (int b = 0; b < na; ++b)
+      Fj[static_cast<std::size_t>(act[static_cast<std::size_t>(a)] * m +
+                                  act[static_cast<std::size_t>(b)])] = Zf(a, b);
+  for (int c = 0; c < m; ++c)
+    if (const int id = final_id(c); id >= 0)
+      diag[static_cast<std::size_t>(id)] = Fj[static_cast<std::size_t>(c * m + c)];
+  for (const Chain& ch : chains_) chain_covariance(ch, Fj, diag.data());
+  return diag;
+}
+
+void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
+                                 double* diag) const {
+  // For the eliminated w's row [d, r] over the window [the next span positions, globals] with
+  // covariance Z: Z_w,window = −(Z rᵀ)/d and Z_ww = 1/d² − r·Z_w,window/d. The local unknowns
+  // x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc, with F the
+  // covariance over the full window [w(t..t+span), globals].
+  const Design& D = D_;
+  const int m = m_, nb = nb_, L = L_;
   std::vector<double> F(static_cast<std::size_t>(m * m), 0.0);
   auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
-  {
-    // The final window's covariance (inactive columns 0).
-    std::vector<int> act;
-    for (int c = 0; c < m; ++c)
-      if (active(id_of(D.n, c)) && final_[static_cast<std::size_t>(c * s + c)] != 0)
-        act.push_back(c);
-    const int na = static_cast<int>(act.size());
-    Eigen::MatrixXd Rf = Eigen::MatrixXd::Zero(na, na);
-    for (int a = 0; a < na; ++a)
-      for (int b = a; b < na; ++b)
-        Rf(a, b) = final_[static_cast<std::size_t>(act[static_cast<std::size_t>(a)] * s +
-                                                   act[static_cast<std::size_t>(b)])];
-    const Eigen::MatrixXd Ri =
-        Rf.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(na, na));
-    const Eigen::MatrixXd Zf = Ri * Ri.transpose();
-    for (int a = 0; a < na; ++a)
-      for (int b = 0; b < na; ++b)
-        f(act[static_cast<std::size_t>(a)], act[static_cast<std::size_t>(b)]) = Zf(a, b);
-    for (int c = 0; c < m; ++c)
-      if (const int id = id_of(D.n, c); id >= 0) diag[static_cast<std::size_t>(id)] = f(c, c);
-  }
+  // The final window's covariance in the chain's column order.
+  for (int a = 0; a < m; ++a)
+    if (const int ca = chain_col(ch, a); ca >= 0)
+      for (int b = 0; b < m; ++b)
+        if (const int cb = chain_col(ch, b); cb >= 0)
+          f(ca, cb) = Fj[static_cast<std::size_t>(a * m + b)];
   const Eigen::MatrixXd RlocInv =
       Rloc_.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(L, L));
-  const Eigen::MatrixXd P = RlocInv * Cloc_;
+  const Eigen::MatrixXd P = RlocInv * ch.Cloc;
   const Eigen::VectorXd S = (RlocInv * RlocInv.transpose()).diagonal();
-  // Z: covariance over [w(K+1..K+span), globals] (size m − 1): F without its band column span.
+  // Z: covariance over [the next span positions, globals] (size m − 1): F without its band
+  // column span.
   const int mw = m - 1;
-  std::vector<double> Z(static_cast<std::size_t>(mw * mw)), zk(static_cast<std::size_t>(mw)),
-      pf(static_cast<std::size_t>(m));
+  std::vector<double> Z(static_cast<std::size_t>(mw * mw)), zk(static_cast<std::size_t>(mw));
   auto drop_last_band = [&] {
     for (int a = 0, ia = 0; a < m; ++a) {
       if (a == nb - 1) continue;
@@ -508,11 +684,13 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
     }
   };
   drop_last_band();
-  for (long K = D.n - 1; K >= 0; --K) {
+  for (long t = ch.steps - 1; t >= 0; --t) {
+    const long K = ch.station(t);
+    const int idw = D.w(ch.position(t));
     const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
     double zkk = 0;
-    if (!D.pinned[static_cast<std::size_t>(D.w(K))] && R[0] != 0) {
-      // The row is √d·[1, ū] (stored as √d, ū): Z_K,window = −Z ū, Z_KK = 1/d − ū·Z_K,window.
+    if (!D.pinned[static_cast<std::size_t>(idw)] && R[0] != 0) {
+      // The row is √d·[1, ū] (stored as √d, ū): Z_w,window = −Z ū, Z_ww = 1/d − ū·Z_w,window.
       double rz = 0;
       for (int a = 0; a < mw; ++a) {
         double v = 0;
@@ -525,7 +703,7 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
     } else {
       std::fill(zk.begin(), zk.end(), 0.0);
     }
-    diag[static_cast<std::size_t>(D.w(K))] = zkk;
+    diag[static_cast<std::size_t>(idw)] = zkk;
     f(0, 0) = zkk;
     for (int a = 0; a < mw; ++a) {
       f(0, a + 1) = f(a + 1, 0) = zk[static_cast<std::size_t>(a)];
@@ -534,15 +712,14 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
     for (int l = 0; l < L; ++l) {
       double v = S[l];
       for (int a = 0; a < m; ++a) {
-        double t = 0;
-        for (int b = 0; b < m; ++b) t += f(a, b) * P(l, b);
-        v += P(l, a) * t;
+        double tt = 0;
+        for (int b = 0; b < m; ++b) tt += f(a, b) * P(l, b);
+        v += P(l, a) * tt;
       }
       diag[static_cast<std::size_t>(l == 0 ? D.g(K) : D.t(K))] = v;
     }
     drop_last_band();
   }
-  return diag;
 }
 
 }  // namespace trueaxis::separation::detail

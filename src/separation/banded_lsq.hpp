@@ -18,9 +18,18 @@
 //      row gives w(K)'s row of R, √d·[1, ū], stored, and the window slides by one position.
 // This is the QR factorisation of the whole system in the order (g, θ, w)(K) station by station,
 // globals last: backward stable, O(n·(span + G)²) time, O(n·(span + G)) memory, no allocation per
-// station. The stored rows give the solution (iterative refinement reapplies the kept rotations to
-// new right-hand sides), the exact diagonal of (AᵀA)⁻¹ (a backward selected inversion), and
-// (AᵀA)⁻¹V for a few columns, row by row.
+// station.
+//
+// Long runs are factorised as two chains at once, on two cores: stations 0..h−1 forward as above,
+// and stations n−1 down to h mirrored (the same fold with positions counted from the top, so the
+// band's columns reversed), each towards the middle. Neither touches the other's eliminated
+// unknowns, so this is the same QR with the columns in another order: the lower chain's, the upper
+// chain's, then the unknowns both still hold (w(h..h+span−1) and the globals). Their two final
+// windows are stacked and joined by a small Householder QR (Golub & Van Loan, "Matrix
+// Computations", 4th ed., §5.2), which also gives the residual's last part. Back-substitutions
+// then run outward from the joined solution, both chains at once. The stored rows give the solution
+// (iterative refinement reapplies the kept rotations to new right-hand sides), the exact diagonal
+// of (AᵀA)⁻¹ (a backward selected inversion), and (AᵀA)⁻¹V for a few columns, row by row.
 //
 // The unknowns are numbered as in Design; pinned unknowns are held at their pin values.
 #pragma once
@@ -68,8 +77,13 @@ decltype(auto) with_width(int w, Fn&& fn) {
 
 class BandedLsq {
  public:
-  // The design must outlive the solver.
-  explicit BandedLsq(const Design& design);
+  // Runs of at least this many stations are factorised as two chains on two cores.
+  static constexpr long kSplitStations = 20000;
+
+  // The design must outlive the solver. Runs of at least split_stations stations (and long enough
+  // for two chains of more than a band each) are factorised as two chains.
+  explicit BandedLsq(const Design& design, long split_stations = kSplitStations);
+  bool split() const { return chains_.size() == 2; }
 
   // Factorises the system for the right-hand side b − A·v: b holds, per station, the probe
   // readings minus `mu` (n × N) and, with an angle channel, wa·angle_mm[K]. v holds a value for
@@ -110,23 +124,57 @@ class BandedLsq {
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
  private:
+  // One chain of the factorisation: `steps` stations from first_station in direction dir (+1,
+  // or −1 for the mirrored upper chain). Its own numbering of the workpiece positions, pp, runs
+  // from first_pos in the same direction: step t eliminates pp = t and its window holds pp =
+  // t..t+span (band column c at t + c), then the globals. Its rows of R, right-hand sides and
+  // local right-hand sides are stored at the station's index K, in the chain's column order.
+  struct Chain {
+    long first_station = 0, first_pos = 0, steps = 0;
+    int dir = 1;
+    RowMajor Cred;                          // reduced rows over the chain's window columns
+    Eigen::MatrixXd Cloc;                   // local equations over them
+    std::vector<long> pinned;               // pinned positions as pp, ascending
+    Uninitialized<double> rot;              // the kept rotations, in the order applied
+    Uninitialized<unsigned char> rot_mask;  // per station and reduced row: mask_bytes_ bytes
+    std::vector<double> W;  // the window after the last step: m × (m + 1), d and ū
+    double ssr = 0, min_pivot = 1;
+    long station(long t) const { return first_station + dir * t; }
+    long position(long pp) const { return first_pos + dir * pp; }
+  };
+
   // Forms the right-hand sides b − A·v block by block, stores each station's local ones and
-  // calls fn(K, reduced) in station order, reduced(r) giving its reduced right-hand side r.
+  // calls fn(t, K, reduced) in the chain's order, reduced(r) giving its reduced right-hand side r.
   template <class Fn>
-  void for_each_station(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                        const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v, Fn&& fn);
+  void for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
+                        const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                        const Eigen::VectorXd& v, Fn&& fn);
   template <int Width>  // window width, 0: any
-  void refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                         const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+  void fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+            const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+  template <int Width>  // window width, 0: any
+  void refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                  const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+  // final_ from the chains' last windows (one chain: converted; two: joined by a QR). Returns the
+  // residual's share left by the join.
+  double join();
   template <int k, int Width, class VRow, class Use>  // window width, 0: any
   void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const;
   template <int NB>  // band width, 0: any
-  Update solve_add_impl(Eigen::VectorXd& v) const;
+  void back_substitute(const Chain& ch, const std::vector<double>& xc, Eigen::VectorXd& v,
+                       double* mc, double* mv) const;
+  void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* diag) const;
   template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                    const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
-  int id_of(long K, int c) const;  // unknown at window column c when the window starts at w(K)
-  bool active(int id) const;       // a free unknown that exists
+  template <int Width>  // window width, 0: any
+  void refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                         const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+  // The unknown at column c of the final (joined) window: w(h..h+span−1), none, the globals.
+  int final_id(int c) const;
+  // The chain's column of the final window's column c (its window after the last step), or −1.
+  int chain_col(const Chain& ch, int c) const;
+  bool active(int id) const;  // a free unknown that exists
 
   const Design& D_;
   int L_ = 0;                   // local unknowns per station: g (and θ)
@@ -137,14 +185,14 @@ class BandedLsq {
   std::vector<int> globals_;    // their ids
   RowMajor Qt_;                 // M × M: the constant row transform
   Eigen::MatrixXd Rloc_;        // L × L, upper triangular
-  Eigen::MatrixXd Cloc_;        // L × m: local equations over the window columns
-  RowMajor Cred_;               // (M − L) × m: reduced rows over the window columns
   std::vector<long> pinned_w_;  // pinned workpiece positions, ascending
+  std::vector<Chain> chains_;   // one, or two (lower, upper mirrored)
+  long h_ = 0;                  // the lower chain's stations: the final window starts at w(h)
 
-  // Factorisation: per station, w(K)'s row of R over the window, √d·[1, ū], stored as
-  // [√d, ū_1..ū_m−1] (the same for every right-hand side), its transformed right-hand side
-  // divided by √d, and the local equations' right-hand sides;
-  // the final window over [w(n..n+span), globals] with its right-hand side.
+  // Factorisation: per station, the eliminated position's row of R over its chain's window,
+  // √d·[1, ū], stored as [√d, ū_1..ū_m−1] (the same for every right-hand side), its transformed
+  // right-hand side divided by √d, and the local equations' right-hand sides;
+  // the final window over [w(h..h+span−1), none, globals] with its right-hand side (R, not d/ū).
   Uninitialized<double> rw_;    // n × m
   Uninitialized<double> qb_;    // n
   Uninitialized<double> bloc_;  // n × L
@@ -160,8 +208,6 @@ class BandedLsq {
   bool keep_rotations_ = false;
   bool masked_ = true;
   int mask_bytes_ = 1;
-  Uninitialized<double> rot_;
-  Uninitialized<unsigned char> rot_mask_;  // per station and reduced row: mask_bytes_ bytes
   double ssr_ = 0;
   long rows_ = 0, unknowns_ = 0;
   double min_pivot_ = 1;
@@ -173,15 +219,18 @@ void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) const {
   with_width(m_, [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram); });
 }
 
-template <int k, int Width, class VRow, class Use>
+template <int k, int Width, class VRow, class Use>  // window width, 0: any
 void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const {
-  // Rᵀy = V forward in elimination order (per station g, θ, w(K); then the final window), and
-  // R z = y backward. y(w(K)) is final after station K's step and needed again at that station on
-  // the way back, so the workpiece rows are kept; a station's local rows depend only on its own
-  // rows of V and are formed again on the way back.
+  // Rᵀy = V forward in elimination order (per chain and station g, θ, and the eliminated w; then
+  // the final window), and R z = y backward. y of an eliminated w is final after its station's
+  // step and needed again at that station on the way back, so the workpiece rows are kept; a
+  // station's local rows depend only on its own rows of V and are formed again on the way back.
+  // The chains run one after the other here (the caller runs this beside the selected
+  // inversion): the upper chain's forward steps subtract from the shared columns' y where the
+  // lower chain's left them.
   const Design& D = D_;
   const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_;
-  const long n = D.n, Q = D.Q;
+  const long Q = D.Q;
   const auto ku = static_cast<std::size_t>(k);
   Uninitialized<double> yw(static_cast<std::size_t>(Q) * ku);
   const Prefault prefault({{yw.data(), yw.size() * sizeof(double)}});
@@ -201,10 +250,23 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     double** p;
     double*& operator[](std::size_t c) const { return p[c]; }
   } win{win_ptr};
-  auto set_window = [&](long K) {
-    for (int c = 0; c < m; ++c)
-      win[static_cast<std::size_t>(c)] = c < nb ? (K + c < Q ? wrow(K + c) : nullptr)
-                                                : yg.data() + static_cast<std::size_t>(c - nb) * ku;
+  auto set_globals = [&] {
+    for (int c = nb; c < m; ++c)
+      win[static_cast<std::size_t>(c)] = yg.data() + static_cast<std::size_t>(c - nb) * ku;
+  };
+  auto set_window = [&](const Chain& ch, long t) {  // the chain's window at step t
+    for (int c = 0; c < nb; ++c) {
+      const long pos = ch.position(t + c);
+      win[static_cast<std::size_t>(c)] = pos >= 0 && pos < Q ? wrow(pos) : nullptr;
+    }
+    set_globals();
+  };
+  auto set_final_window = [&] {
+    for (int c = 0; c < nb; ++c) {
+      const int id = final_id(c);
+      win[static_cast<std::size_t>(c)] = id >= 0 ? wrow(id - D.w(0)) : nullptr;
+    }
+    set_globals();
   };
   std::array<double, 2 * k> yl{}, zl{};
   std::array<double, k> acc{};
@@ -230,47 +292,57 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
 
   for (int g = 0; g < G_; ++g)
     v_or_zero(globals_[static_cast<std::size_t>(g)], yg.data() + static_cast<std::size_t>(g) * ku);
-  for (long pos = 0; pos + 1 < nb && pos < Q; ++pos) v_or_zero(D.w(pos), wrow(pos));
-  for (long K = 0; K < n; ++K) {
-    if (K + nb - 1 < Q) v_or_zero(D.w(K + nb - 1), wrow(K + nb - 1));  // enters the window
-    set_window(K);
-    local_forward(K);
-    if (gram)
-      for (int l = 0; l < L; ++l) add_gram(yl.data() + static_cast<std::size_t>(l) * ku);
-    for (int c = 0; c < m; ++c) {
-      double* a = win[static_cast<std::size_t>(c)];
-      if (!a) continue;
-      for (int l = 0; l < L; ++l) {
-        const double cl = Cloc_(l, c);
-        const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
-        for (int j = 0; j < k; ++j) a[j] -= cl * y[j];
+  for (std::size_t ci = 0; ci < chains_.size(); ++ci) {
+    const Chain& ch = chains_[ci];
+    // A position's row of V is loaded as it enters the chain's window; the final window's
+    // positions by the lower chain only.
+    auto load = [&](long pp) {
+      const long pos = ch.position(pp);
+      if (pos >= 0 && pos < Q && (ci == 0 || pp < ch.steps)) v_or_zero(D.w(pos), wrow(pos));
+    };
+    for (long pp = 0; pp + 1 < nb; ++pp) load(pp);
+    for (long t = 0; t < ch.steps; ++t) {
+      const long K = ch.station(t);
+      load(t + nb - 1);  // enters the window
+      set_window(ch, t);
+      local_forward(K);
+      if (gram)
+        for (int l = 0; l < L; ++l) add_gram(yl.data() + static_cast<std::size_t>(l) * ku);
+      for (int c = 0; c < m; ++c) {
+        double* a = win[static_cast<std::size_t>(c)];
+        if (!a) continue;
+        for (int l = 0; l < L; ++l) {
+          const double cl = ch.Cloc(l, c);
+          const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
+          for (int j = 0; j < k; ++j) a[j] -= cl * y[j];
+        }
       }
+      const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+      double* y0 = win[0];
+      if (!is_free(D.w(ch.position(t))) || R[0] == 0) {  // no row of R: 0
+        std::fill_n(y0, k, 0.0);
+        continue;
+      }
+      // The row is √d·[1, ū] (stored as √d, ū): y(w) = a/√d, and the later columns lose
+      // √d·ū_c·y(w) = ū_c·a.
+      for (int c = 1; c < m; ++c) {
+        double* a = win[static_cast<std::size_t>(c)];
+        if (!a) continue;
+        const double uc = R[c];
+        for (int j = 0; j < k; ++j) a[j] -= uc * y0[j];
+      }
+      const double inv = 1 / R[0];
+      for (int j = 0; j < k; ++j) y0[j] *= inv;
+      if (gram) add_gram(y0);
     }
-    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-    double* y0 = win[0];
-    if (!is_free(D.w(K)) || R[0] == 0) {  // no row of R: 0
-      std::fill_n(y0, k, 0.0);
-      continue;
-    }
-    // The row is √d·[1, ū] (stored as √d, ū): y(w(K)) = a/√d, and the later columns lose
-    // √d·ū_c·y(w(K)) = ū_c·a.
-    for (int c = 1; c < m; ++c) {
-      double* a = win[static_cast<std::size_t>(c)];
-      if (!a) continue;
-      const double uc = R[c];
-      for (int j = 0; j < k; ++j) a[j] -= uc * y0[j];
-    }
-    const double inv = 1 / R[0];
-    for (int j = 0; j < k; ++j) y0[j] *= inv;
-    if (gram) add_gram(y0);
   }
   // The final window: forward, then backward, then its unknowns are done.
-  set_window(n);
+  set_final_window();
   for (int c = 0; c < m; ++c) {
     double* yc = win[static_cast<std::size_t>(c)];
     if (!yc) continue;
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(id_of(n, c)) || F[c] == 0) {
+    if (!active(final_id(c)) || F[c] == 0) {
       std::fill_n(yc, k, 0.0);
       continue;
     }
@@ -286,7 +358,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
         gram[a * k + b] += yy[static_cast<std::size_t>(a <= b ? a * k + b : b * k + a)];
   for (int c = m - 1; c >= 0; --c) {
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(id_of(n, c)) || F[c] == 0) continue;
+    if (!active(final_id(c)) || F[c] == 0) continue;
     double* zc = win[static_cast<std::size_t>(c)];
     for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zc[j];
     for (int i = c + 1; i < m; ++i)
@@ -295,41 +367,45 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     for (int j = 0; j < k; ++j) zc[j] = acc[static_cast<std::size_t>(j)] / F[c];
   }
   for (int c = 0; c < m; ++c)
-    if (const int id = id_of(n, c); id >= 0 && is_free(id))
+    if (const int id = final_id(c); id >= 0 && is_free(id))
       use(id, static_cast<const double*>(win[static_cast<std::size_t>(c)]));
-  // Stations backward.
-  for (long K = n - 1; K >= 0; --K) {
-    set_window(K);
-    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
-    double* z0 = win[0];
-    if (is_free(D.w(K)) && R[0] != 0) {  // z(w(K)) = y/√d − ū·(the later z)
-      const double inv = 1 / R[0];
-      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = z0[j] * inv;
-      for (int c = 1; c < m; ++c)
-        if (const double* zc = win[static_cast<std::size_t>(c)])
-          for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
-      for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)];
-    }
-    if (is_free(D.w(K))) use(D.w(K), static_cast<const double*>(z0));
-    local_forward(K);
-    for (int l = L - 1; l >= 0; --l) {
-      const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
-      for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = y[j];
-      for (int c = 0; c < m; ++c)
-        if (const double* zc = win[static_cast<std::size_t>(c)]) {
-          const double cl = Cloc_(l, c);
-          for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= cl * zc[j];
-        }
-      for (int i = l + 1; i < L; ++i)
+  // Each chain's stations backward, outward from the final window.
+  for (const Chain& ch : chains_) {
+    for (long t = ch.steps - 1; t >= 0; --t) {
+      const long K = ch.station(t);
+      const int idw = D.w(ch.position(t));
+      set_window(ch, t);
+      const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+      double* z0 = win[0];
+      if (is_free(idw) && R[0] != 0) {  // z(w) = y/√d − ū·(the later z)
+        const double inv = 1 / R[0];
+        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = z0[j] * inv;
+        for (int c = 1; c < m; ++c)
+          if (const double* zc = win[static_cast<std::size_t>(c)])
+            for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
+        for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)];
+      }
+      if (is_free(idw)) use(idw, static_cast<const double*>(z0));
+      local_forward(K);
+      for (int l = L - 1; l >= 0; --l) {
+        const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
+        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = y[j];
+        for (int c = 0; c < m; ++c)
+          if (const double* zc = win[static_cast<std::size_t>(c)]) {
+            const double cl = ch.Cloc(l, c);
+            for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= cl * zc[j];
+          }
+        for (int i = l + 1; i < L; ++i)
+          for (int j = 0; j < k; ++j)
+            acc[static_cast<std::size_t>(j)] -=
+                Rloc_(l, i) * zl[static_cast<std::size_t>(i) * ku + j];
         for (int j = 0; j < k; ++j)
-          acc[static_cast<std::size_t>(j)] -=
-              Rloc_(l, i) * zl[static_cast<std::size_t>(i) * ku + j];
-      for (int j = 0; j < k; ++j)
-        zl[static_cast<std::size_t>(l) * ku + j] = acc[static_cast<std::size_t>(j)] * rinv[l];
+          zl[static_cast<std::size_t>(l) * ku + j] = acc[static_cast<std::size_t>(j)] * rinv[l];
+      }
+      for (int l = 0; l < L; ++l)
+        if (const int id = l == 0 ? D.g(K) : D.t(K); is_free(id))
+          use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku));
     }
-    for (int l = 0; l < L; ++l)
-      if (const int id = l == 0 ? D.g(K) : D.t(K); is_free(id))
-        use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku));
   }
 }
 

@@ -2,7 +2,8 @@
 // rows (Eigen, column-pivoted Householder QR): solution, residual, diag((AᵀA)⁻¹) and (AᵀA)⁻¹V,
 // for layouts that take each of its paths: narrow windows (width fixed at compile time, one-byte
 // rotation masks), a 14-column window (two-byte masks, width at run time) and one over 64
-// columns (every rotation kept), with an angle channel and with a known zero difference.
+// columns (every rotation kept), with an angle channel and with a known zero difference; each
+// factorised as one chain and as two chains joined in the middle (as long runs are).
 #include "../../src/separation/banded_lsq.hpp"
 
 #include <gtest/gtest.h>
@@ -72,94 +73,98 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
   };
   std::mt19937_64 rng(7);
   std::normal_distribution<double> noise(0.0, 1e-3);
-  for (const Layout& L : layouts) {
-    const long n = L.n;
-    const double wa = 0.7;
-    const Design D = make_design(L.p, n, L.angle, L.zero_difference, wa);
-    Eigen::MatrixXd readings(n, D.N);
-    for (Eigen::Index i = 0; i < readings.size(); ++i) readings.data()[i] = noise(rng);
-    Eigen::VectorXd angle(L.angle ? n : 0);
-    for (Eigen::Index i = 0; i < angle.size(); ++i) angle[i] = noise(rng);
-    // The solver's angle rows carry wa·angle; station_rows scales the reading itself.
-    const Eigen::VectorXd angle_mm = angle;
+  for (const Layout& layout : layouts)
+    for (const bool split : {false, true}) {
+      const Layout& L = layout;
+      SCOPED_TRACE(split ? "two chains" : "one chain");
+      const long n = L.n;
+      const double wa = 0.7;
+      const Design D = make_design(L.p, n, L.angle, L.zero_difference, wa);
+      Eigen::MatrixXd readings(n, D.N);
+      for (Eigen::Index i = 0; i < readings.size(); ++i) readings.data()[i] = noise(rng);
+      Eigen::VectorXd angle(L.angle ? n : 0);
+      for (Eigen::Index i = 0; i < angle.size(); ++i) angle[i] = noise(rng);
+      // The solver's angle rows carry wa·angle; station_rows scales the reading itself.
+      const Eigen::VectorXd angle_mm = angle;
 
-    BandedLsq engine(D);
-    Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
-    for (const auto& [id, value] : D.pins) v[id] = value;
-    const Eigen::RowVectorXd mu = Eigen::RowVectorXd::Zero(D.N);
-    engine.factor(readings, mu, angle_mm, v);
-    const double ssr = engine.ssr();
-    engine.solve_add(v);
-    // One refinement pass through the kept rotations (or a new factorisation).
-    engine.refactor_rhs(readings, mu, angle_mm, v);
-    const BandedLsq::Update second = engine.solve_add(v);
+      BandedLsq engine(D, split ? 0 : n + 1);
+      ASSERT_EQ(engine.split(), split) << L.name;
+      Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
+      for (const auto& [id, value] : D.pins) v[id] = value;
+      const Eigen::RowVectorXd mu = Eigen::RowVectorXd::Zero(D.N);
+      engine.factor(readings, mu, angle_mm, v);
+      const double ssr = engine.ssr();
+      engine.solve_add(v);
+      // One refinement pass through the kept rotations (or a new factorisation).
+      engine.refactor_rhs(readings, mu, angle_mm, v);
+      const BandedLsq::Update second = engine.solve_add(v);
 
-    const Dense d = dense_rows(D, readings, angle);
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(d.A);
-    ASSERT_EQ(qr.rank(), d.A.cols()) << L.name;
-    const Eigen::VectorXd x = qr.solve(d.b);
-    const double scale = x.cwiseAbs().maxCoeff();
-    double worst = 0;
-    for (int id = 0; id < D.nvars; ++id) {
-      const int c = d.col[static_cast<std::size_t>(id)];
-      if (c >= 0) worst = std::max(worst, std::abs(v[id] - x[c]));
+      const Dense d = dense_rows(D, readings, angle);
+      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(d.A);
+      ASSERT_EQ(qr.rank(), d.A.cols()) << L.name;
+      const Eigen::VectorXd x = qr.solve(d.b);
+      const double scale = x.cwiseAbs().maxCoeff();
+      double worst = 0;
+      for (int id = 0; id < D.nvars; ++id) {
+        const int c = d.col[static_cast<std::size_t>(id)];
+        if (c >= 0) worst = std::max(worst, std::abs(v[id] - x[c]));
+      }
+      EXPECT_LT(worst, kAgree * scale) << L.name;
+      EXPECT_LT(second.max_correction, kAgree * scale) << L.name;
+      const double ssr_dense = (d.A * x - d.b).squaredNorm();
+      EXPECT_NEAR(ssr, ssr_dense, kAgree * std::max(1e-12, ssr_dense)) << L.name;
+
+      // diag((AᵀA)⁻¹) by the selected inversion against the dense inverse.
+      const auto diag = engine.covariance_diagonal();
+      // (AᵀA)⁻¹ = P·R⁻¹R⁻ᵀ·Pᵀ from the dense QR AP = QR: the diagonal at column P(i) is the
+      // squared norm of R⁻¹'s row i.
+      const Eigen::Index nf = d.A.cols();
+      const Eigen::MatrixXd Rinv = qr.matrixQR().topRows(nf).triangularView<Eigen::Upper>().solve(
+          Eigen::MatrixXd::Identity(nf, nf));
+      Eigen::VectorXd zd(nf);
+      for (Eigen::Index i = 0; i < nf; ++i)
+        zd[qr.colsPermutation().indices()[i]] = Rinv.row(i).squaredNorm();
+      const double zscale = zd.maxCoeff();
+      double zworst = 0;
+      for (int id = 0; id < D.nvars; ++id) {
+        const int c = d.col[static_cast<std::size_t>(id)];
+        zworst =
+            std::max(zworst, std::abs(diag[static_cast<std::size_t>(id)] - (c >= 0 ? zd[c] : 0.0)));
+      }
+      EXPECT_LT(zworst, kAgree * zscale) << L.name;
+
+      // (AᵀA)⁻¹V for a V of three columns given row by row, against the dense product; each free
+      // unknown's row arrives exactly once.
+      Eigen::MatrixXd V(nf, 3);
+      for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = noise(rng);
+      Eigen::MatrixXd Zr = Eigen::MatrixXd::Zero(nf, nf);  // R⁻¹R⁻ᵀ in pivoted order
+      Zr.noalias() = Rinv * Rinv.transpose();
+      const auto& perm = qr.colsPermutation().indices();
+      Eigen::MatrixXd Vp(nf, 3);  // Pᵀ·V
+      for (Eigen::Index i = 0; i < nf; ++i) Vp.row(i) = V.row(perm[i]);
+      const Eigen::MatrixXd ZVp = Zr * Vp;
+      Eigen::MatrixXd ZV(nf, 3);
+      for (Eigen::Index i = 0; i < nf; ++i) ZV.row(perm[i]) = ZVp.row(i);
+      Eigen::MatrixXd got = Eigen::MatrixXd::Constant(nf, 3, std::nan(""));
+      std::vector<int> seen(static_cast<std::size_t>(nf), 0);
+      Eigen::Matrix<double, 3, 3, Eigen::RowMajor> gram = Eigen::Matrix3d::Constant(1.0);
+      engine.solve_normal_rows<3>(
+          [&](int id, double* out) {
+            for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
+          },
+          [&](int id, const double* zv) {
+            const int c = d.col[static_cast<std::size_t>(id)];
+            ASSERT_GE(c, 0) << L.name << ": a pinned unknown's row";
+            ++seen[static_cast<std::size_t>(c)];
+            for (int j = 0; j < 3; ++j) got(c, j) = zv[j];
+          },
+          gram.data());
+      EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nf) << L.name;
+      EXPECT_LT((got - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff()) << L.name;
+      // VᵀZV from the forward rows, added to what the matrix held (ones).
+      const Eigen::Matrix3d VZV = V.transpose() * ZV;
+      EXPECT_LT((gram - Eigen::Matrix3d::Constant(1.0) - VZV).cwiseAbs().maxCoeff(),
+                kAgree * VZV.cwiseAbs().maxCoeff())
+          << L.name;
     }
-    EXPECT_LT(worst, kAgree * scale) << L.name;
-    EXPECT_LT(second.max_correction, kAgree * scale) << L.name;
-    const double ssr_dense = (d.A * x - d.b).squaredNorm();
-    EXPECT_NEAR(ssr, ssr_dense, kAgree * std::max(1e-12, ssr_dense)) << L.name;
-
-    // diag((AᵀA)⁻¹) by the selected inversion against the dense inverse.
-    const auto diag = engine.covariance_diagonal();
-    // (AᵀA)⁻¹ = P·R⁻¹R⁻ᵀ·Pᵀ from the dense QR AP = QR: the diagonal at column P(i) is the
-    // squared norm of R⁻¹'s row i.
-    const Eigen::Index nf = d.A.cols();
-    const Eigen::MatrixXd Rinv = qr.matrixQR().topRows(nf).triangularView<Eigen::Upper>().solve(
-        Eigen::MatrixXd::Identity(nf, nf));
-    Eigen::VectorXd zd(nf);
-    for (Eigen::Index i = 0; i < nf; ++i)
-      zd[qr.colsPermutation().indices()[i]] = Rinv.row(i).squaredNorm();
-    const double zscale = zd.maxCoeff();
-    double zworst = 0;
-    for (int id = 0; id < D.nvars; ++id) {
-      const int c = d.col[static_cast<std::size_t>(id)];
-      zworst =
-          std::max(zworst, std::abs(diag[static_cast<std::size_t>(id)] - (c >= 0 ? zd[c] : 0.0)));
-    }
-    EXPECT_LT(zworst, kAgree * zscale) << L.name;
-
-    // (AᵀA)⁻¹V for a V of three columns given row by row, against the dense product; each free
-    // unknown's row arrives exactly once.
-    Eigen::MatrixXd V(nf, 3);
-    for (Eigen::Index i = 0; i < V.size(); ++i) V.data()[i] = noise(rng);
-    Eigen::MatrixXd Zr = Eigen::MatrixXd::Zero(nf, nf);  // R⁻¹R⁻ᵀ in pivoted order
-    Zr.noalias() = Rinv * Rinv.transpose();
-    const auto& perm = qr.colsPermutation().indices();
-    Eigen::MatrixXd Vp(nf, 3);  // Pᵀ·V
-    for (Eigen::Index i = 0; i < nf; ++i) Vp.row(i) = V.row(perm[i]);
-    const Eigen::MatrixXd ZVp = Zr * Vp;
-    Eigen::MatrixXd ZV(nf, 3);
-    for (Eigen::Index i = 0; i < nf; ++i) ZV.row(perm[i]) = ZVp.row(i);
-    Eigen::MatrixXd got = Eigen::MatrixXd::Constant(nf, 3, std::nan(""));
-    std::vector<int> seen(static_cast<std::size_t>(nf), 0);
-    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> gram = Eigen::Matrix3d::Constant(1.0);
-    engine.solve_normal_rows<3>(
-        [&](int id, double* out) {
-          for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
-        },
-        [&](int id, const double* zv) {
-          const int c = d.col[static_cast<std::size_t>(id)];
-          ASSERT_GE(c, 0) << L.name << ": a pinned unknown's row";
-          ++seen[static_cast<std::size_t>(c)];
-          for (int j = 0; j < 3; ++j) got(c, j) = zv[j];
-        },
-        gram.data());
-    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nf) << L.name;
-    EXPECT_LT((got - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff()) << L.name;
-    // VᵀZV from the forward rows, added to what the matrix held (ones).
-    const Eigen::Matrix3d VZV = V.transpose() * ZV;
-    EXPECT_LT((gram - Eigen::Matrix3d::Constant(1.0) - VZV).cwiseAbs().maxCoeff(),
-              kAgree * VZV.cwiseAbs().maxCoeff())
-        << L.name;
-  }
 }
