@@ -52,6 +52,10 @@ BandedLsq::BandedLsq(const Design& design, long split_stations) : D_(design) {
   scale_ = std::max({1.0, Aloc.cwiseAbs().maxCoeff(), Awin.cwiseAbs().maxCoeff()});
   for (long j = 0; j < D.Q; ++j)
     if (D.pinned[static_cast<std::size_t>(D.w(j))]) pinned_w_.push_back(j);
+  pinned_o_.assign(static_cast<std::size_t>(M_), 0.0);
+  for (int i = 0; i < M_; ++i)
+    if (D.pinned[static_cast<std::size_t>(D.o(i))])
+      pinned_o_[static_cast<std::size_t>(i)] = D.pin_value(D.o(i));
   rows_ = D.n * M_;
   unknowns_ = static_cast<long>(std::count(D.pinned.begin(), D.pinned.end(), 0));
 
@@ -102,18 +106,23 @@ constexpr int kBlock = 256;  // stations whose right-hand sides are formed toget
 
 // Right-hand sides b − A·v of stations [K0, K0 + B), transformed by the constant Qᵀ (row-major
 // qt): bt[r·B + k] is row r (the L local ones first) of station K0 + k. Formed channel by channel
-// over the block, contiguous in the station, so the loops vectorise; b is scratch of M·B.
+// over the block, contiguous in the station, so the loops vectorise; b is scratch of M·B. Without
+// v, its profiles are 0 (only the offsets `off` count).
 void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings, const double* mu,
-               const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v, const double* off,
+               const Eigen::VectorXd& angle_mm, const Unknowns* v, const double* off,
                const double* qt, int M, double* b, double* bt) {
-  const double* g = v.data() + D.g(K0);
-  const double* t = D.pitch ? v.data() + D.t(K0) : nullptr;
+  const double* g = v ? v->g + K0 : nullptr;
+  const double* t = v && D.pitch ? v->t + K0 : nullptr;
   for (int i = 0; i < D.N; ++i) {
     const double* rd = readings.col(i).data() + K0;
-    const double* w = v.data() + D.w(K0 + D.q[static_cast<std::size_t>(i)]);
     const double mi = mu[i], oi = off[i];
-    const double pi = static_cast<double>(D.p[static_cast<std::size_t>(i)]);
     double* bi = b + static_cast<std::ptrdiff_t>(i) * B;
+    if (!v) {
+      for (int k = 0; k < B; ++k) bi[k] = rd[k] - mi - oi;
+      continue;
+    }
+    const double* w = v->w + (K0 + D.q[static_cast<std::size_t>(i)]);
+    const double pi = static_cast<double>(D.p[static_cast<std::size_t>(i)]);
     if (t)
       for (int k = 0; k < B; ++k) bi[k] = rd[k] - mi - w[k] - g[k] - pi * t[k] - oi;
     else
@@ -123,7 +132,10 @@ void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings,
     const double* an = angle_mm.data() + K0;
     const double oa = off[D.N], wa = D.wa;
     double* bi = b + static_cast<std::ptrdiff_t>(D.N) * B;
-    for (int k = 0; k < B; ++k) bi[k] = wa * (an[k] - t[k] - oa);
+    if (t)
+      for (int k = 0; k < B; ++k) bi[k] = wa * (an[k] - t[k] - oa);
+    else
+      for (int k = 0; k < B; ++k) bi[k] = wa * (an[k] - oa);
   }
   for (int r = 0; r < M; ++r) {
     double* o = bt + static_cast<std::ptrdiff_t>(r) * B;
@@ -142,13 +154,14 @@ void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings,
 template <class Fn>
 void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
                                  const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
-                                 const Eigen::VectorXd& v, Fn&& fn) {
+                                 const Unknowns* v, Fn&& fn) {
   const Design& D = D_;
   const int L = L_, M = M_;
   std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
       bt(static_cast<std::size_t>(M * kBlock));
   std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
-  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v[D.o(i)];
+  for (int i = 0; i < M; ++i)
+    off[static_cast<std::size_t>(i)] = v ? v->o[i] : pinned_o_[static_cast<std::size_t>(i)];
   // Blocks in the chain's direction, and the stations of each in that order.
   const long lo = ch.dir > 0 ? ch.first_station : ch.first_station - ch.steps + 1;
   const long hi = lo + ch.steps;
@@ -177,10 +190,11 @@ void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& reading
 }
 
 void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                       const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+                       const Eigen::VectorXd& angle_mm, const Unknowns& v, bool only_pins) {
   // The window width as a compile-time constant for the usual narrow windows, so the per-station
   // loops unroll and the window's small copies are moves, not library calls.
-  with_width(m_, [&]<int W>() { factor_impl<W>(readings, mu, angle_mm, v); });
+  const Unknowns* pv = only_pins ? nullptr : &v;
+  with_width(m_, [&]<int W>() { factor_impl<W>(readings, mu, angle_mm, pv); });
 }
 
 namespace {
@@ -201,7 +215,7 @@ void for_each_chain(Chains& chains, Fn&& fn) {
 
 template <int Width>
 void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                            const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+                            const Eigen::VectorXd& angle_mm, const Unknowns* v) {
   const Design& D = D_;
   const long n = D.n;
   const int m = Width > 0 ? Width : m_, s = m + 1, L = L_, nred = M_ - L_;
@@ -243,7 +257,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
 
 template <int Width>
 void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                     const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+                     const Eigen::VectorXd& angle_mm, const Unknowns* v) {
   const Design& D = D_;
   const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, nred = M_ - L_;
   unsigned char* mask_out = ch.rot_mask.data();
@@ -426,7 +440,7 @@ double BandedLsq::join() {
 }
 
 void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                             const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+                             const Eigen::VectorXd& angle_mm, const Unknowns& v) {
   if (!keep_rotations_) {
     factor(readings, mu, angle_mm, v);
     return;
@@ -436,14 +450,14 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
 
 template <int Width>
 void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                                  const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
-  for_each_chain(chains_, [&](Chain& ch) { refold_rhs<Width>(ch, readings, mu, angle_mm, v); });
+                                  const Eigen::VectorXd& angle_mm, const Unknowns& v) {
+  for_each_chain(chains_, [&](Chain& ch) { refold_rhs<Width>(ch, readings, mu, angle_mm, &v); });
   join();
 }
 
 template <int Width>
 void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                           const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v) {
+                           const Eigen::VectorXd& angle_mm, const Unknowns* v) {
   // The same rotations applied to the new right-hand side only: the window's last column, ū's
   // right-hand side per row, by the kept rotations (c̄, s̄, x_j). (Rebuilding c̄ as 1 − s̄·x_j would
   // keep one number fewer but loses ε·|ū| where the old row's ū is large and c̄ small: a row entry
@@ -491,16 +505,15 @@ void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eig
 }
 
 template <int NB>
-void BandedLsq::back_substitute(const Chain& ch, const std::vector<double>& xc, Eigen::VectorXd& v,
-                                double* mc, double* mv) const {
-  const Design& D = D_;
+void BandedLsq::back_substitute(const Chain& ch, const std::vector<double>& xc, const Unknowns& v,
+                                bool set_free, double* mc, double* mv) const {
   const int m = m_, nb = NB > 0 ? NB : nb_, L = L_, G = G_;
   // Largest |correction| and |value| per stream (separate maxima: no chain of them per station),
   // kept here and written out at the end: the other chain's maxima share their cache line.
   double lc[3] = {0, 0, 0}, lv[3] = {0, 0, 0};
-  auto add = [&](int stream, int id, double dx) {
-    const double x = v[id] + dx;
-    v[id] = x;
+  auto add = [&](int stream, double& u, double dx) {
+    const double x = set_free ? dx : u + dx;
+    u = x;
     lc[stream] = std::max(lc[stream], std::abs(dx));
     lv[stream] = std::max(lv[stream], std::abs(x));
   };
@@ -543,14 +556,16 @@ void BandedLsq::back_substitute(const Chain& ch, const std::vector<double>& xc, 
     double dwk = 0;
     const bool pinned = next_pin != ch.pinned.rend() && *next_pin == t;
     if (pinned) ++next_pin;
-    if (!pinned && R[0] != 0) {
-      // The row √d·[1, ū] and its right-hand side √d·b̄: Δw = b̄ − ū·(the later unknowns), no
-      // division on the back-substitution's dependency chain.
-      double acc = qb_[static_cast<std::size_t>(K)];
-      for (int k = 0; k < G; ++k) acc -= R[nb + k] * xg[k];
-      for (int j = nb - 1; j >= 1; --j) acc -= R[j] * dw(t, j);
-      dwk = acc;
-      add(0, D.w(ch.position(t)), dwk);
+    if (!pinned) {
+      if (R[0] != 0) {
+        // The row √d·[1, ū] and its right-hand side √d·b̄: Δw = b̄ − ū·(the later unknowns), no
+        // division on the back-substitution's dependency chain.
+        double acc = qb_[static_cast<std::size_t>(K)];
+        for (int k = 0; k < G; ++k) acc -= R[nb + k] * xg[k];
+        for (int j = nb - 1; j >= 1; --j) acc -= R[j] * dw(t, j);
+        dwk = acc;
+      }
+      add(0, v.w[ch.position(t)], dwk);
     }
     if constexpr (NB > 0)
       d[0] = dwk;
@@ -566,10 +581,10 @@ void BandedLsq::back_substitute(const Chain& ch, const std::vector<double>& xc, 
     }
     if (L == 2) {
       const double th = rl[1] * inv11;
-      add(2, D.t(K), th);
-      add(1, D.g(K), (rl[0] - r01 * th) * inv00);
+      add(2, v.t[K], th);
+      add(1, v.g[K], (rl[0] - r01 * th) * inv00);
     } else {
-      add(1, D.g(K), rl[0] * inv00);
+      add(1, v.g[K], rl[0] * inv00);
     }
     if constexpr (NB > 0)
       for (int j = NB - 1; j >= 1; --j) d[j] = d[j - 1];
@@ -580,7 +595,7 @@ void BandedLsq::back_substitute(const Chain& ch, const std::vector<double>& xc, 
   }
 }
 
-BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
+BandedLsq::Update BandedLsq::solve_add(const Unknowns& v, bool set_free) const {
   const int m = m_, s = m_ + 1;
   // Per chain and stream, the largest |correction| and |value|; stream 3 the final window's.
   double mc[2][4] = {}, mv[2][4] = {};
@@ -588,15 +603,19 @@ BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
   std::vector<double> xc(static_cast<std::size_t>(m), 0.0);
   for (int c = m - 1; c >= 0; --c) {
     const int id = final_id(c);
+    if (!active(id)) continue;
     const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(id) || F[c] == 0) continue;
-    double acc = F[m];
-    for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
-    const double dx = acc / F[c];
+    double dx = 0;
+    if (F[c] != 0) {
+      double acc = F[m];
+      for (int k = c + 1; k < m; ++k) acc -= F[k] * xc[static_cast<std::size_t>(k)];
+      dx = acc / F[c];
+    }
     xc[static_cast<std::size_t>(c)] = dx;
-    v[id] += dx;
+    double& u = v(D_, id);
+    u = set_free ? dx : u + dx;
     mc[0][3] = std::max(mc[0][3], std::abs(dx));
-    mv[0][3] = std::max(mv[0][3], std::abs(v[id]));
+    mv[0][3] = std::max(mv[0][3], std::abs(u));
   }
   // Both chains outward at once (they write different unknowns). The band width as a
   // compile-time constant for the usual narrow bands: the corrections the back-substitution
@@ -606,8 +625,8 @@ BandedLsq::Update BandedLsq::solve_add(Eigen::VectorXd& v) const {
     std::future<void> other;
     if (n_chains == 2)
       other = std::async(std::launch::async,
-                         [&] { back_substitute<NB>(chains_[1], xc, v, mc[1], mv[1]); });
-    back_substitute<NB>(chains_[0], xc, v, mc[0], mv[0]);
+                         [&] { back_substitute<NB>(chains_[1], xc, v, set_free, mc[1], mv[1]); });
+    back_substitute<NB>(chains_[0], xc, v, set_free, mc[0], mv[0]);
     if (other.valid()) other.get();
   });
   Update u;

@@ -75,6 +75,27 @@ decltype(auto) with_width(int w, Fn&& fn) {
   }
 }
 
+// Where the solver's unknowns live (ids as Design numbers them): the workpiece at w[pos], the
+// guide at g[K], θ·h at t[K] (null without pitch), the offsets at o[i] (probes, then the angle
+// channel). Separate arrays, so a caller can solve straight into its result arrays.
+struct Unknowns {
+  double* w = nullptr;
+  double* g = nullptr;
+  double* t = nullptr;
+  double* o = nullptr;
+  // The unknowns as one vector by id (nvars long).
+  static Unknowns in(const Design& D, Eigen::VectorXd& v) {
+    double* p = v.data();
+    return {p + D.w(0), p + D.g(0), D.pitch ? p + D.t(0) : nullptr, p + D.o(0)};
+  }
+  double& operator()(const Design& D, int id) const {
+    if (id < D.g(0)) return w[id - D.w(0)];
+    if (id < (D.pitch ? D.t(0) : D.o(0))) return g[id - D.g(0)];
+    if (id < D.o(0)) return t[id - D.t(0)];
+    return o[id - D.o(0)];
+  }
+};
+
 class BandedLsq {
  public:
   // Runs of at least this many stations are factorised as two chains on two cores.
@@ -89,13 +110,17 @@ class BandedLsq {
   // readings minus `mu` (n × N) and, with an angle channel, wa·angle_mm[K]. v holds a value for
   // every unknown (pinned ones at their pin values). Afterwards solve_add() adds the correction
   // to v.
+  // With only_pins, v's free unknowns are taken as 0 without being read (they may hold anything)
+  // and its pinned workpiece positions must be 0, as make_design pins them: the right-hand side
+  // is then formed from the readings and the pinned offsets alone. Follow it with
+  // solve_add(v, true).
   void factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-              const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+              const Eigen::VectorXd& angle_mm, const Unknowns& v, bool only_pins = false);
 
   // The same for a new v, reusing the last factorisation's rotations when they were kept (the
   // coefficients do not change): only the right-hand side is transformed.
   void refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                    const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+                    const Eigen::VectorXd& angle_mm, const Unknowns& v);
 
   double ssr() const { return ssr_; }  // squared residual norm at the last factor()
   long rows() const { return rows_; }
@@ -104,13 +129,14 @@ class BandedLsq {
   double min_pivot_ratio() const { return min_pivot_; }
 
   // Adds the least-squares correction to v (pinned unknowns unchanged), without a vector of
-  // corrections. Returns the largest |correction| and the largest |v| after the update, both over
-  // the free unknowns.
+  // corrections; with set_free, writes it into every free unknown instead (after
+  // factor(…, only_pins)). Returns the largest |correction| and the largest |v| after the update,
+  // both over the free unknowns.
   struct Update {
     double max_correction = 0;
     double max_value = 0;
   };
-  Update solve_add(Eigen::VectorXd& v) const;
+  Update solve_add(const Unknowns& v, bool set_free = false) const;
   // diag((AᵀA)⁻¹) over the free unknowns (pinned 0), by unknown id.
   Uninitialized<double> covariance_diagonal() const;
   // (AᵀA)⁻¹V for a V of k columns (a compile-time constant) given row by row, without storing
@@ -143,33 +169,34 @@ class BandedLsq {
     long position(long pp) const { return first_pos + dir * pp; }
   };
 
-  // Forms the right-hand sides b − A·v block by block, stores each station's local ones and
+  // Forms the right-hand sides b − A·v block by block (v null: its free unknowns 0, only the
+  // offsets pinned), stores each station's local ones and
   // calls fn(t, K, reduced) in the chain's order, reduced(r) giving its reduced right-hand side r.
   template <class Fn>
   void for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
                         const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
-                        const Eigen::VectorXd& v, Fn&& fn);
+                        const Unknowns* v, Fn&& fn);
   template <int Width>  // window width, 0: any
   void fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-            const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+            const Eigen::VectorXd& angle_mm, const Unknowns* v);
   template <int Width>  // window width, 0: any
   void refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                  const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+                  const Eigen::VectorXd& angle_mm, const Unknowns* v);
   // final_ from the chains' last windows (one chain: converted; two: joined by a QR). Returns the
   // residual's share left by the join.
   double join();
   template <int k, int Width, class VRow, class Use>  // window width, 0: any
   void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const;
   template <int NB>  // band width, 0: any
-  void back_substitute(const Chain& ch, const std::vector<double>& xc, Eigen::VectorXd& v,
-                       double* mc, double* mv) const;
+  void back_substitute(const Chain& ch, const std::vector<double>& xc, const Unknowns& v,
+                       bool set_free, double* mc, double* mv) const;
   void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* diag) const;
   template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                   const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+                   const Eigen::VectorXd& angle_mm, const Unknowns* v);
   template <int Width>  // window width, 0: any
   void refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
-                         const Eigen::VectorXd& angle_mm, const Eigen::VectorXd& v);
+                         const Eigen::VectorXd& angle_mm, const Unknowns& v);
   // The unknown at column c of the final (joined) window: w(h..h+span−1), none, the globals.
   int final_id(int c) const;
   // The chain's column of the final window's column c (its window after the last step), or −1.
@@ -177,17 +204,18 @@ class BandedLsq {
   bool active(int id) const;  // a free unknown that exists
 
   const Design& D_;
-  int L_ = 0;                   // local unknowns per station: g (and θ)
-  int M_ = 0;                   // rows per station
-  int nb_ = 0;                  // band width: span + 1
-  int G_ = 0;                   // free globals
-  int m_ = 0;                   // window columns: nb + G
-  std::vector<int> globals_;    // their ids
-  RowMajor Qt_;                 // M × M: the constant row transform
-  Eigen::MatrixXd Rloc_;        // L × L, upper triangular
-  std::vector<long> pinned_w_;  // pinned workpiece positions, ascending
-  std::vector<Chain> chains_;   // one, or two (lower, upper mirrored)
-  long h_ = 0;                  // the lower chain's stations: the final window starts at w(h)
+  int L_ = 0;                     // local unknowns per station: g (and θ)
+  int M_ = 0;                     // rows per station
+  int nb_ = 0;                    // band width: span + 1
+  int G_ = 0;                     // free globals
+  int m_ = 0;                     // window columns: nb + G
+  std::vector<int> globals_;      // their ids
+  RowMajor Qt_;                   // M × M: the constant row transform
+  Eigen::MatrixXd Rloc_;          // L × L, upper triangular
+  std::vector<long> pinned_w_;    // pinned workpiece positions, ascending
+  std::vector<double> pinned_o_;  // the offsets' pin values (0 where free)
+  std::vector<Chain> chains_;     // one, or two (lower, upper mirrored)
+  long h_ = 0;                    // the lower chain's stations: the final window starts at w(h)
 
   // Factorisation: per station, the eliminated position's row of R over its chain's window,
   // √d·[1, ū], stored as [√d, ū_1..ū_m−1] (the same for every right-hand side), its transformed

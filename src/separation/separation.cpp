@@ -400,8 +400,8 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   // Iterative refinement: each pass factorises the system with right-hand side b − A·v and
   // corrects v. A single pass carries the error the long chain's conditioning puts into any
   // backward-stable solve (~1e-4 relative at a million stations); a second one removes it.
-  // The profiles' arrays are filled at the end; their pages are committed on another core
-  // meanwhile.
+  // The profiles' arrays hold the unknowns; their pages are committed on another core while the
+  // first pass factorises.
   Raw r;
   r.xw.resize(D.Q);
   r.w.resize(D.Q);
@@ -428,10 +428,15 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   st.engine = std::make_unique<detail::BandedLsq>(D);
   Eigen::VectorXd angle_mm;
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
-  Eigen::VectorXd v = trueaxis::detail::huge_page_zeros<Eigen::VectorXd>(D.nvars);
+  // The unknowns are solved straight into the profiles' arrays (θ as θ·h until the end). The
+  // first pass starts from zero without writing it: it forms the right-hand side from the
+  // readings and the pins, and then sets every free unknown.
+  std::vector<double> offsets(static_cast<std::size_t>(D.N + (angle ? 1 : 0)), 0.0);
+  const detail::Unknowns v{r.w.data(), r.g.data(), D.pitch ? r.theta.data() : nullptr,
+                           offsets.data()};
   double pin_size = 0;  // the largest pinned |value|: the refinement never changes those
   for (const auto& [id, value] : D.pins) {
-    v[id] = value;
+    v(D, id) = value;
     pin_size = std::max(pin_size, std::abs(value));
   }
   double ssr0 = 0, last = 0;
@@ -439,7 +444,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
       std::max(1e-14, static_cast<double>(n) * std::numeric_limits<double>::epsilon());
   for (int iter = 0; iter < 4; ++iter) {
     if (iter == 0)
-      st.engine->factor(data.readings, mu, angle_mm, v);
+      st.engine->factor(data.readings, mu, angle_mm, v, true);
     else
       st.engine->refactor_rhs(data.readings, mu, angle_mm, v);
     if (iter == 0) {
@@ -450,7 +455,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
       }
       ssr0 = st.engine->ssr();
     }
-    const detail::BandedLsq::Update up = st.engine->solve_add(v);
+    const detail::BandedLsq::Update up = st.engine->solve_add(v, iter == 0);
     // Refinement converges linearly: the next correction is about (this one)²/(the last one).
     // Stop when that is below the round-off floor: the residual b − A·v is itself rounded
     // (~ε of its terms per row) and the long chain carries that into every correction, so after
@@ -465,9 +470,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   }
   st.ssr = ssr0;
   st.dof = st.engine->rows() - st.engine->unknowns();
-  r.w = v.segment(D.w(0), D.Q);
-  r.g = v.segment(D.g(0), n);
-  if (D.pitch) r.theta = v.segment(D.t(0), n) / h;
+  if (D.pitch) r.theta /= h;
   grids.get();
   r.parabola_free = D.parabola_free;
   return r;

@@ -89,15 +89,19 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
 
       BandedLsq engine(D, split ? 0 : n + 1);
       ASSERT_EQ(engine.split(), split) << L.name;
-      Eigen::VectorXd v = Eigen::VectorXd::Zero(D.nvars);
+      // The first pass starts from the pins alone: every free unknown must be written (NaN
+      // would remain otherwise).
+      Eigen::VectorXd v = Eigen::VectorXd::Constant(D.nvars, std::nan(""));
       for (const auto& [id, value] : D.pins) v[id] = value;
+      const Unknowns u = Unknowns::in(D, v);
       const Eigen::RowVectorXd mu = Eigen::RowVectorXd::Zero(D.N);
-      engine.factor(readings, mu, angle_mm, v);
+      engine.factor(readings, mu, angle_mm, u, true);
       const double ssr = engine.ssr();
-      engine.solve_add(v);
+      engine.solve_add(u, true);
+      ASSERT_TRUE(v.allFinite()) << L.name;
       // One refinement pass through the kept rotations (or a new factorisation).
-      engine.refactor_rhs(readings, mu, angle_mm, v);
-      const BandedLsq::Update second = engine.solve_add(v);
+      engine.refactor_rhs(readings, mu, angle_mm, u);
+      const BandedLsq::Update second = engine.solve_add(u);
 
       const Dense d = dense_rows(D, readings, angle);
       const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(d.A);
