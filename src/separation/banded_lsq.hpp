@@ -38,6 +38,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <future>
 #include <memory>
 #include <utility>
 #include <vector>
@@ -141,10 +142,11 @@ class BandedLsq {
   Uninitialized<double> covariance_diagonal() const;
   // (AᵀA)⁻¹V for a V of k columns (a compile-time constant) given row by row, without storing
   // either: v_row(id, out) writes the k values of a free unknown's row of V; use(id, zv) then
-  // receives that unknown's row of (AᵀA)⁻¹V, once per free unknown, from the last station back (the
-  // final window and the globals first). Holds the forward solve's workpiece rows (Q × k values)
-  // and a window. With `gram` (k × k, row-major), also adds Vᵀ(AᵀA)⁻¹V to it: with Y = R⁻ᵀV the
-  // forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows' outer products.
+  // receives that unknown's row of (AᵀA)⁻¹V, once per free unknown, the final window and the
+  // globals first, then outward along each chain. With two chains, both callbacks are called
+  // from two threads at once (for different unknowns). Holds the forward solve's workpiece rows (Q
+  // × k values) and a window. With `gram` (k × k, row-major), also adds Vᵀ(AᵀA)⁻¹V to it: with Y =
+  // R⁻ᵀV the forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows' outer products.
   template <int k, class VRow, class Use>
   void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr) const;
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
@@ -253,9 +255,9 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
   // the final window), and R z = y backward. y of an eliminated w is final after its station's
   // step and needed again at that station on the way back, so the workpiece rows are kept; a
   // station's local rows depend only on its own rows of V and are formed again on the way back.
-  // The chains run one after the other here (the caller runs this beside the selected
-  // inversion): the upper chain's forward steps subtract from the shared columns' y where the
-  // lower chain's left them.
+  // Two chains run at once, each way: forward, the upper chain adds its share of the final
+  // window's y into a copy of its own (from 0), summed with the lower chain's before the final
+  // window; backward, each chain reads only the final window's z.
   const Design& D = D_;
   const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_;
   const long Q = D.Q;
@@ -263,6 +265,9 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
   Uninitialized<double> yw(static_cast<std::size_t>(Q) * ku);
   const Prefault prefault({{yw.data(), yw.size() * sizeof(double)}});
   std::vector<double> yg(static_cast<std::size_t>(G_) * ku);
+  const bool two = chains_.size() == 2;
+  // The upper chain's share of w(h..h+span−1)'s y, then of the globals'.
+  std::vector<double> up_shared(two ? static_cast<std::size_t>(nb - 1 + G_) * ku : 0, 0.0);
   auto wrow = [&](long pos) { return yw.data() + static_cast<std::size_t>(pos) * ku; };
   auto is_free = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] == 0; };
   auto v_or_zero = [&](int id, double* out) {
@@ -271,44 +276,42 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     else
       std::fill_n(out, k, 0.0);
   };
-  std::vector<double*> win_heap(Width > 0 ? 0 : static_cast<std::size_t>(m));
-  std::array<double*, (Width > 0 ? Width : 1)> win_fixed{};
-  double** const win_ptr = Width > 0 ? win_fixed.data() : win_heap.data();
-  struct WindowView {  // win[c]: the row of y (or z) of window column c, null past the end
-    double** p;
-    double*& operator[](std::size_t c) const { return p[c]; }
-  } win{win_ptr};
-  auto set_globals = [&] {
-    for (int c = nb; c < m; ++c)
-      win[static_cast<std::size_t>(c)] = yg.data() + static_cast<std::size_t>(c - nb) * ku;
-  };
-  auto set_window = [&](const Chain& ch, long t) {  // the chain's window at step t
-    for (int c = 0; c < nb; ++c) {
-      const long pos = ch.position(t + c);
-      win[static_cast<std::size_t>(c)] = pos >= 0 && pos < Q ? wrow(pos) : nullptr;
-    }
-    set_globals();
-  };
-  auto set_final_window = [&] {
-    for (int c = 0; c < nb; ++c) {
-      const int id = final_id(c);
-      win[static_cast<std::size_t>(c)] = id >= 0 ? wrow(id - D.w(0)) : nullptr;
-    }
-    set_globals();
-  };
-  std::array<double, 2 * k> yl{}, zl{};
-  std::array<double, k> acc{};
   // Divisions by the diagonal as multiplications by reciprocals: a division costs several times
   // a multiplication's throughput, and there would be dozens per station.
   const double rinv[2] = {1 / Rloc_(0, 0), L == 2 ? 1 / Rloc_(1, 1) : 0.0};
-  std::array<double, k * k> yy{};  // Σ y·yᵀ over the forward rows, upper triangle
-  auto add_gram = [&](const double* y) {
+  using Gram = std::array<double, k * k>;  // Σ y·yᵀ over forward rows, upper triangle
+  std::array<Gram, 2> yy{};
+  auto add_gram = [](Gram& g, const double* y) {
     for (int a = 0; a < k; ++a)
-      for (int b = a; b < k; ++b) yy[static_cast<std::size_t>(a * k + b)] += y[a] * y[b];
+      for (int b = a; b < k; ++b) g[static_cast<std::size_t>(a * k + b)] += y[a] * y[b];
   };
-  auto local_forward = [&](long K) {  // yl = Rloc⁻ᵀ·(V's rows of g(K), θ(K))
+  // win[c]: the row of y (or z) of window column c, null past the end.
+  struct Window {
+    std::vector<double*> heap;
+    std::array<double*, (Width > 0 ? Width : 1)> fixed{};
+    double** p;
+    explicit Window(int width)
+        : heap(Width > 0 ? 0 : static_cast<std::size_t>(width)),
+          p(Width > 0 ? fixed.data() : heap.data()) {}
+    double*& operator[](int c) const { return p[c]; }
+  };
+  // The chain's window at step t (its shares of the final window's rows in `shared`, or in yw/yg).
+  auto set_window = [&](Window& win, const Chain& ch, long t, double* shared) {
+    for (int c = 0; c < nb; ++c) {
+      const long pos = ch.position(t + c);
+      if (pos < 0 || pos >= Q)
+        win[c] = nullptr;
+      else if (shared && pos >= h_ && pos < h_ + nb - 1)
+        win[c] = shared + static_cast<std::size_t>(pos - h_) * ku;
+      else
+        win[c] = wrow(pos);
+    }
+    double* globals = shared ? shared + static_cast<std::size_t>(nb - 1) * ku : yg.data();
+    for (int c = nb; c < m; ++c) win[c] = globals + static_cast<std::size_t>(c - nb) * ku;
+  };
+  auto local_forward = [&](long K, double* yl) {  // yl = Rloc⁻ᵀ·(V's rows of g(K), θ(K))
     for (int l = 0; l < L; ++l) {
-      double* y = yl.data() + static_cast<std::size_t>(l) * ku;
+      double* y = yl + static_cast<std::size_t>(l) * ku;
       v_or_zero(l == 0 ? D.g(K) : D.t(K), y);
       for (int j = 0; j < k; ++j) {
         double v = y[j];
@@ -317,11 +320,12 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
       }
     }
   };
-
-  for (int g = 0; g < G_; ++g)
-    v_or_zero(globals_[static_cast<std::size_t>(g)], yg.data() + static_cast<std::size_t>(g) * ku);
-  for (std::size_t ci = 0; ci < chains_.size(); ++ci) {
+  auto forward = [&](std::size_t ci) {
     const Chain& ch = chains_[ci];
+    double* shared = ci == 1 ? up_shared.data() : nullptr;
+    Gram g{};  // here, not in yy: yy[0] and yy[1] share a cache line
+    Window win(m);
+    std::array<double, 2 * k> yl{};
     // A position's row of V is loaded as it enters the chain's window; the final window's
     // positions by the lower chain only.
     auto load = [&](long pp) {
@@ -332,12 +336,12 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     for (long t = 0; t < ch.steps; ++t) {
       const long K = ch.station(t);
       load(t + nb - 1);  // enters the window
-      set_window(ch, t);
-      local_forward(K);
+      set_window(win, ch, t, shared);
+      local_forward(K, yl.data());
       if (gram)
-        for (int l = 0; l < L; ++l) add_gram(yl.data() + static_cast<std::size_t>(l) * ku);
+        for (int l = 0; l < L; ++l) add_gram(g, yl.data() + static_cast<std::size_t>(l) * ku);
       for (int c = 0; c < m; ++c) {
-        double* a = win[static_cast<std::size_t>(c)];
+        double* a = win[c];
         if (!a) continue;
         for (int l = 0; l < L; ++l) {
           const double cl = ch.Cloc(l, c);
@@ -354,72 +358,43 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
       // The row is √d·[1, ū] (stored as √d, ū): y(w) = a/√d, and the later columns lose
       // √d·ū_c·y(w) = ū_c·a.
       for (int c = 1; c < m; ++c) {
-        double* a = win[static_cast<std::size_t>(c)];
+        double* a = win[c];
         if (!a) continue;
         const double uc = R[c];
         for (int j = 0; j < k; ++j) a[j] -= uc * y0[j];
       }
       const double inv = 1 / R[0];
       for (int j = 0; j < k; ++j) y0[j] *= inv;
-      if (gram) add_gram(y0);
+      if (gram) add_gram(g, y0);
     }
-  }
-  // The final window: forward, then backward, then its unknowns are done.
-  set_final_window();
-  for (int c = 0; c < m; ++c) {
-    double* yc = win[static_cast<std::size_t>(c)];
-    if (!yc) continue;
-    const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(final_id(c)) || F[c] == 0) {
-      std::fill_n(yc, k, 0.0);
-      continue;
-    }
-    for (int j = 0; j < k; ++j) yc[j] /= F[c];
-    if (gram) add_gram(yc);
-    for (int i = c + 1; i < m; ++i)
-      if (double* a = win[static_cast<std::size_t>(i)])
-        for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
-  }
-  if (gram)
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b < k; ++b)
-        gram[a * k + b] += yy[static_cast<std::size_t>(a <= b ? a * k + b : b * k + a)];
-  for (int c = m - 1; c >= 0; --c) {
-    const double* F = final_.data() + static_cast<std::size_t>(c * s);
-    if (!active(final_id(c)) || F[c] == 0) continue;
-    double* zc = win[static_cast<std::size_t>(c)];
-    for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zc[j];
-    for (int i = c + 1; i < m; ++i)
-      if (const double* zi = win[static_cast<std::size_t>(i)])
-        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= F[i] * zi[j];
-    for (int j = 0; j < k; ++j) zc[j] = acc[static_cast<std::size_t>(j)] / F[c];
-  }
-  for (int c = 0; c < m; ++c)
-    if (const int id = final_id(c); id >= 0 && is_free(id))
-      use(id, static_cast<const double*>(win[static_cast<std::size_t>(c)]));
-  // Each chain's stations backward, outward from the final window.
-  for (const Chain& ch : chains_) {
+    yy[ci] = g;
+  };
+  auto backward = [&](std::size_t ci) {
+    const Chain& ch = chains_[ci];
+    Window win(m);
+    std::array<double, 2 * k> yl{}, zl{};
+    std::array<double, k> acc{};
     for (long t = ch.steps - 1; t >= 0; --t) {
       const long K = ch.station(t);
       const int idw = D.w(ch.position(t));
-      set_window(ch, t);
+      set_window(win, ch, t, nullptr);
       const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
       double* z0 = win[0];
       if (is_free(idw) && R[0] != 0) {  // z(w) = y/√d − ū·(the later z)
         const double inv = 1 / R[0];
         for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = z0[j] * inv;
         for (int c = 1; c < m; ++c)
-          if (const double* zc = win[static_cast<std::size_t>(c)])
+          if (const double* zc = win[c])
             for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
         for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)];
       }
       if (is_free(idw)) use(idw, static_cast<const double*>(z0));
-      local_forward(K);
+      local_forward(K, yl.data());
       for (int l = L - 1; l >= 0; --l) {
         const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
         for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = y[j];
         for (int c = 0; c < m; ++c)
-          if (const double* zc = win[static_cast<std::size_t>(c)]) {
+          if (const double* zc = win[c]) {
             const double cl = ch.Cloc(l, c);
             for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= cl * zc[j];
           }
@@ -434,7 +409,68 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
         if (const int id = l == 0 ? D.g(K) : D.t(K); is_free(id))
           use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku));
     }
+  };
+  auto both = [&](auto&& pass) {
+    std::future<void> other;
+    if (two) other = std::async(std::launch::async, [&] { pass(1); });
+    pass(0);
+    if (other.valid()) other.get();
+  };
+
+  for (int g = 0; g < G_; ++g)
+    v_or_zero(globals_[static_cast<std::size_t>(g)], yg.data() + static_cast<std::size_t>(g) * ku);
+  both(forward);
+  if (two) {  // the upper chain's shares
+    for (int c = 0; c + 1 < nb; ++c)
+      if (const int id = final_id(c); id >= 0)
+        for (std::size_t j = 0; j < ku; ++j)
+          wrow(id - D.w(0))[j] += up_shared[static_cast<std::size_t>(c) * ku + j];
+    for (std::size_t i = 0; i < static_cast<std::size_t>(G_) * ku; ++i)
+      yg[i] += up_shared[static_cast<std::size_t>(nb - 1) * ku + i];
   }
+  // The final window: forward, then backward, then its unknowns are done.
+  Window win(m);
+  for (int c = 0; c < nb; ++c) {
+    const int id = final_id(c);
+    win[c] = id >= 0 ? wrow(id - D.w(0)) : nullptr;
+  }
+  for (int c = nb; c < m; ++c) win[c] = yg.data() + static_cast<std::size_t>(c - nb) * ku;
+  for (int c = 0; c < m; ++c) {
+    double* yc = win[c];
+    if (!yc) continue;
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(final_id(c)) || F[c] == 0) {
+      std::fill_n(yc, k, 0.0);
+      continue;
+    }
+    for (int j = 0; j < k; ++j) yc[j] /= F[c];
+    if (gram) add_gram(yy[0], yc);
+    for (int i = c + 1; i < m; ++i)
+      if (double* a = win[i])
+        for (int j = 0; j < k; ++j) a[j] -= F[i] * yc[j];
+  }
+  if (gram)
+    for (int a = 0; a < k; ++a)
+      for (int b = 0; b < k; ++b) {
+        const auto ab = static_cast<std::size_t>(a <= b ? a * k + b : b * k + a);
+        gram[a * k + b] += yy[0][ab] + yy[1][ab];
+      }
+  std::array<double, k> acc{};
+  for (int c = m - 1; c >= 0; --c) {
+    const double* F = final_.data() + static_cast<std::size_t>(c * s);
+    if (!active(final_id(c)) || F[c] == 0) continue;
+    double* zc = win[c];
+    for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] = zc[j];
+    for (int i = c + 1; i < m; ++i)
+      if (const double* zi = win[i])
+        for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= F[i] * zi[j];
+    for (int j = 0; j < k; ++j) zc[j] = acc[static_cast<std::size_t>(j)] / F[c];
+  }
+  for (int c = 0; c < m; ++c)
+    if (const int id = final_id(c); id >= 0 && is_free(id))
+      use(id, static_cast<const double*>(win[c]));
+  // Each chain's stations backward, outward from the final window.
+  both(backward);
 }
 
 }  // namespace trueaxis::separation::detail
