@@ -664,20 +664,35 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
   for (int c = 0; c < m; ++c)
     if (const int id = final_id(c); id >= 0)
       diag[static_cast<std::size_t>(id)] = Fj[static_cast<std::size_t>(c * m + c)];
-  for (const Chain& ch : chains_) chain_covariance(ch, Fj, diag.data());
+  with_width(m, [&]<int W>() {
+    for (const Chain& ch : chains_) chain_covariance<W>(ch, Fj, diag.data());
+  });
   return diag;
 }
 
+template <int Width>
 void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
                                  double* diag) const {
   // For the eliminated w's row [d, r] over the window [the next span positions, globals] with
   // covariance Z: Z_w,window = −(Z rᵀ)/d and Z_ww = 1/d² − r·Z_w,window/d. The local unknowns
   // x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc, with F the
-  // covariance over the full window [w(t..t+span), globals].
+  // covariance over the full window [w(t..t+span), globals]. The window's small matrices are
+  // fixed-size arrays for a compile-time width (their loops unroll).
   const Design& D = D_;
-  const int m = m_, nb = nb_, L = L_;
-  std::vector<double> F(static_cast<std::size_t>(m * m), 0.0);
-  auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
+  const int m = Width > 0 ? Width : m_, nb = nb_, L = L_, mw = m - 1;
+  constexpr std::size_t kFixed = Width > 0 ? static_cast<std::size_t>(Width * Width) : 1;
+  std::array<double, kFixed> F_fixed{}, Z_fixed{};
+  std::array<double, 2 * (Width > 0 ? Width : 1)> P_fixed{};
+  std::array<double, (Width > 0 ? Width : 1)> zk_fixed{};
+  const auto mm = static_cast<std::size_t>(Width > 0 ? 0 : m * m);
+  std::vector<double> F_heap(mm, 0.0), Z_heap(mm, 0.0),
+      P_heap(Width > 0 ? 0 : static_cast<std::size_t>(2 * m), 0.0),
+      zk_heap(Width > 0 ? 0 : static_cast<std::size_t>(m), 0.0);
+  double* const F = Width > 0 ? F_fixed.data() : F_heap.data();
+  double* const Z = Width > 0 ? Z_fixed.data() : Z_heap.data();   // row stride mw
+  double* const Pl = Width > 0 ? P_fixed.data() : P_heap.data();  // P row-major, L × m
+  double* const zk = Width > 0 ? zk_fixed.data() : zk_heap.data();
+  auto f = [&](int a, int b) -> double& { return F[a * m + b]; };
   // The final window's covariance in the chain's column order.
   for (int a = 0; a < m; ++a)
     if (const int ca = chain_col(ch, a); ca >= 0)
@@ -687,17 +702,17 @@ void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
   const Eigen::MatrixXd RlocInv =
       Rloc_.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(L, L));
   const Eigen::MatrixXd P = RlocInv * ch.Cloc;
+  for (int l = 0; l < L; ++l)
+    for (int a = 0; a < m; ++a) Pl[l * m + a] = P(l, a);
   const Eigen::VectorXd S = (RlocInv * RlocInv.transpose()).diagonal();
   // Z: covariance over [the next span positions, globals] (size m − 1): F without its band
   // column span.
-  const int mw = m - 1;
-  std::vector<double> Z(static_cast<std::size_t>(mw * mw)), zk(static_cast<std::size_t>(mw));
   auto drop_last_band = [&] {
     for (int a = 0, ia = 0; a < m; ++a) {
       if (a == nb - 1) continue;
       for (int b = 0, ib = 0; b < m; ++b) {
         if (b == nb - 1) continue;
-        Z[static_cast<std::size_t>(ia * mw + ib++)] = f(a, b);
+        Z[ia * mw + ib++] = f(a, b);
       }
       ++ia;
     }
@@ -713,27 +728,28 @@ void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
       double rz = 0;
       for (int a = 0; a < mw; ++a) {
         double v = 0;
-        for (int b = 0; b < mw; ++b) v += Z[static_cast<std::size_t>(a * mw + b)] * R[b + 1];
-        zk[static_cast<std::size_t>(a)] = -v;
-        rz += R[a + 1] * zk[static_cast<std::size_t>(a)];
+        for (int b = 0; b < mw; ++b) v += Z[a * mw + b] * R[b + 1];
+        zk[a] = -v;
+        rz += R[a + 1] * zk[a];
       }
       const double inv = 1 / R[0];
       zkk = inv * inv - rz;
     } else {
-      std::fill(zk.begin(), zk.end(), 0.0);
+      for (int a = 0; a < mw; ++a) zk[a] = 0;
     }
     diag[static_cast<std::size_t>(idw)] = zkk;
     f(0, 0) = zkk;
     for (int a = 0; a < mw; ++a) {
-      f(0, a + 1) = f(a + 1, 0) = zk[static_cast<std::size_t>(a)];
-      for (int b = 0; b < mw; ++b) f(a + 1, b + 1) = Z[static_cast<std::size_t>(a * mw + b)];
+      f(0, a + 1) = f(a + 1, 0) = zk[a];
+      for (int b = 0; b < mw; ++b) f(a + 1, b + 1) = Z[a * mw + b];
     }
     for (int l = 0; l < L; ++l) {
+      const double* pl = Pl + l * m;
       double v = S[l];
       for (int a = 0; a < m; ++a) {
         double tt = 0;
-        for (int b = 0; b < m; ++b) tt += f(a, b) * P(l, b);
-        v += P(l, a) * tt;
+        for (int b = 0; b < m; ++b) tt += f(a, b) * pl[b];
+        v += pl[a] * tt;
       }
       diag[static_cast<std::size_t>(l == 0 ? D.g(K) : D.t(K))] = v;
     }

@@ -192,6 +192,7 @@ class BandedLsq {
   template <int NB>  // band width, 0: any
   void back_substitute(const Chain& ch, const std::vector<double>& xc, const Unknowns& v,
                        bool set_free, double* mc, double* mv) const;
+  template <int Width>  // window width, 0: any
   void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* diag) const;
   template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
