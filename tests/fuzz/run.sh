@@ -41,6 +41,8 @@ printf '\x0a{"design": {"sections": [{"name": "s", "plane": {"origin": [0, 0, 0]
 printf '\x0b{"kind": "positioning", "standard": "ISO 230-2:2014", "A": 3, "B": null, "cycles": 2, "targets": [{"position": 0, "n_up": 2, "mean_up": 1, "s_up": 0.5}, {"position": 50, "n_up": 2, "mean_up": 2, "s_up": 0.1}], "temperature": {"material": [20, 21], "air": null, "corrected": true, "reference": 20, "expansion_coefficient": 1.15e-05, "datum_mm": 0, "max_correction_um": 0.5}, "tolerances": {"A": {"limit": 5, "value": 3, "pass": true}}, "warnings": ["w"], "readings": {"target_mm": [0, 50, 0, 50], "cycle": [1, 1, 2, 2], "direction": "++++", "deviation_um": [1, 2, 1, 2]}}' > "$corpus/json/positioning"
 printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
 find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
+# Inputs the fuzzers once found a problem with (kept in tests/data/fuzz), so each run starts there.
+cp tests/data/fuzz/*.ds "$corpus/ds/"
 for f in tests/data/moody/*.txt; do
   for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/moody/$(basename "$f").$r"; done
 done
