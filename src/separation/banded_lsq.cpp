@@ -206,9 +206,7 @@ void for_each_chain(Chains& chains, Fn&& fn) {
     fn(chains[0]);
     return;
   }
-  auto other = std::async(std::launch::async, [&] { fn(chains[1]); });
-  fn(chains[0]);
-  other.get();
+  at_once([&] { fn(chains[0]); }, [&] { fn(chains[1]); });
 }
 
 }  // namespace
@@ -622,12 +620,11 @@ BandedLsq::Update BandedLsq::solve_add(const Unknowns& v, bool set_free) const {
   // still needs then stay in registers.
   with_width(nb_, [&]<int NB>() {
     const std::size_t n_chains = chains_.size();
-    std::future<void> other;
     if (n_chains == 2)
-      other = std::async(std::launch::async,
-                         [&] { back_substitute<NB>(chains_[1], xc, v, set_free, mc[1], mv[1]); });
-    back_substitute<NB>(chains_[0], xc, v, set_free, mc[0], mv[0]);
-    if (other.valid()) other.get();
+      at_once([&] { back_substitute<NB>(chains_[0], xc, v, set_free, mc[0], mv[0]); },
+              [&] { back_substitute<NB>(chains_[1], xc, v, set_free, mc[1], mv[1]); });
+    else
+      back_substitute<NB>(chains_[0], xc, v, set_free, mc[0], mv[0]);
   });
   Update u;
   for (int c = 0; c < 2; ++c)

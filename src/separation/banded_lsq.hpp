@@ -40,6 +40,7 @@
 #include <cstdint>
 #include <future>
 #include <memory>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -74,6 +75,22 @@ decltype(auto) with_width(int w, Fn&& fn) {
     default:
       return fn.template operator()<0>();
   }
+}
+
+// Runs first() here and, at the same time, second() on another thread (both must finish before
+// it returns); one after the other if no thread can be started.
+template <class First, class Second>
+void at_once(First&& first, Second&& second) {
+  std::future<void> other;
+  try {
+    other = std::async(std::launch::async, second);
+  } catch (const std::system_error&) {
+    first();
+    second();
+    return;
+  }
+  first();
+  other.get();
 }
 
 // Where the solver's unknowns live (ids as Design numbers them): the workpiece at w[pos], the
@@ -412,10 +429,10 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     }
   };
   auto both = [&](auto&& pass) {
-    std::future<void> other;
-    if (two) other = std::async(std::launch::async, [&] { pass(1); });
-    pass(0);
-    if (other.valid()) other.get();
+    if (two)
+      at_once([&] { pass(0); }, [&] { pass(1); });
+    else
+      pass(0);
   };
 
   for (int g = 0; g < G_; ++g)
