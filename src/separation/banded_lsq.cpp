@@ -639,7 +639,10 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
   // Backward selected inversion, from the final window's covariance outward along each chain.
   const Design& D = D_;
   const int m = m_, s = m_ + 1;
-  Uninitialized<double> diag(static_cast<std::size_t>(D.nvars), 0.0);
+  // Every workpiece, guide and pitch entry is written below (pinned ones as 0), and the free
+  // offsets with the final window: only the offsets are set to 0 first.
+  Uninitialized<double> diag(static_cast<std::size_t>(D.nvars));
+  std::fill(diag.begin() + D.o(0), diag.end(), 0.0);
   // The final window's covariance (inactive columns 0).
   std::vector<double> Fj(static_cast<std::size_t>(m * m), 0.0);
   std::vector<int> act;
