@@ -12,7 +12,7 @@ using separation::detail::Design;
 
 namespace {
 
-struct Chain {
+struct Run {
   Design D;
   Eigen::MatrixXd readings;
   Eigen::RowVectorXd mu;
@@ -20,7 +20,7 @@ struct Chain {
 
 // Factorisation, back-substitution, one refinement pass and its back-substitution: what one
 // separation asks of the solver.
-void solve(const Chain& c, long split_stations) {
+void solve(const Run& c, long split_stations) {
   BandedLsq s(c.D, split_stations);
   Eigen::VectorXd v(c.D.nvars);
   for (const auto& [id, value] : c.D.pins) v[id] = value;
@@ -32,9 +32,9 @@ void solve(const Chain& c, long split_stations) {
   benchmark::DoNotOptimize(s.solve_add(u));
 }
 
-Chain chain(const Eigen::MatrixXd& readings, long first, long n) {
-  return {separation::detail::make_design({0, 1, 2}, n, false, std::nullopt, 1.0),
-          readings.middleRows(first, n), readings.colwise().mean()};
+Run run(const Eigen::MatrixXd& readings) {
+  return {separation::detail::make_design({0, 1, 2}, readings.rows(), false, std::nullopt, 1.0),
+          readings, readings.colwise().mean()};
 }
 
 const Eigen::MatrixXd& readings() {
@@ -50,12 +50,12 @@ const Eigen::MatrixXd& readings() {
 }
 
 void BM_LsqSolverOneChain(benchmark::State& st) {
-  const Chain c = chain(readings(), 0, readings().rows());
+  const Run c = run(readings());
   for (auto _ : st) solve(c, readings().rows() + 1);
 }
 
 void BM_LsqSolverTwoChains(benchmark::State& st) {
-  const Chain c = chain(readings(), 0, readings().rows());
+  const Run c = run(readings());
   for (auto _ : st) solve(c, BandedLsq::kSplitStations);
 }
 

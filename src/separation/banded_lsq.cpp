@@ -4,7 +4,6 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <future>
 #include <optional>
 
 #include "../common/eigen_instances.hpp"
@@ -52,10 +51,6 @@ BandedLsq::BandedLsq(const Design& design, long split_stations) : D_(design) {
   scale_ = std::max({1.0, Aloc.cwiseAbs().maxCoeff(), Awin.cwiseAbs().maxCoeff()});
   for (long j = 0; j < D.Q; ++j)
     if (D.pinned[static_cast<std::size_t>(D.w(j))]) pinned_w_.push_back(j);
-  pinned_o_.assign(static_cast<std::size_t>(M_), 0.0);
-  for (int i = 0; i < M_; ++i)
-    if (D.pinned[static_cast<std::size_t>(D.o(i))])
-      pinned_o_[static_cast<std::size_t>(i)] = D.pin_value(D.o(i));
   rows_ = D.n * M_;
   unknowns_ = static_cast<long>(std::count(D.pinned.begin(), D.pinned.end(), 0));
 
@@ -159,12 +154,11 @@ void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& reading
   const int L = L_, M = M_;
   std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
       bt(static_cast<std::size_t>(M * kBlock));
-  std::vector<double> off(static_cast<std::size_t>(M));  // o_i, free or pinned
-  for (int i = 0; i < M; ++i)
-    off[static_cast<std::size_t>(i)] = v ? v->o[i] : pinned_o_[static_cast<std::size_t>(i)];
+  // o_i, free or pinned; without v, the pins' values (0 for a free offset)
+  std::vector<double> off(static_cast<std::size_t>(M));
+  for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v ? v->o[i] : D.pin_value(D.o(i));
   // Blocks in the chain's direction, and the stations of each in that order.
-  const long lo = ch.dir > 0 ? ch.first_station : ch.first_station - ch.steps + 1;
-  const long hi = lo + ch.steps;
+  const long lo = ch.lowest_station(), hi = lo + ch.steps;
   auto block = [&](long K0, int B) {
     block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
               bt.data());
@@ -197,20 +191,6 @@ void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd
   with_width(m_, [&]<int W>() { factor_impl<W>(readings, mu, angle_mm, pv); });
 }
 
-namespace {
-
-// Runs fn(chain) for each chain, the second on another thread.
-template <class Chains, class Fn>
-void for_each_chain(Chains& chains, Fn&& fn) {
-  if (chains.size() == 1) {
-    fn(chains[0]);
-    return;
-  }
-  at_once([&] { fn(chains[0]); }, [&] { fn(chains[1]); });
-}
-
-}  // namespace
-
 template <int Width>
 void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                             const Eigen::VectorXd& angle_mm, const Unknowns* v) {
@@ -240,7 +220,7 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
                                                         static_cast<std::size_t>(mask_bytes_)
                                                   : 0);
   }
-  for_each_chain(chains_, [&](Chain& ch) { fold<Width>(ch, readings, mu, angle_mm, v); });
+  on_chains([&](std::size_t i) { fold<Width>(chains_[i], readings, mu, angle_mm, v); });
   ssr_ = join();
   min_pivot_ = 1;
   for (const Chain& ch : chains_) {
@@ -277,7 +257,7 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
   // the chain will write are committed on another core. Not with two chains: both cores are busy
   // folding, and a helper only adds switches (measured: the solver 3 ms slower of 45).
   std::optional<Prefault> prefault;
-  const long lo = ch.dir > 0 ? ch.first_station : ch.first_station - ch.steps + 1;
+  const long lo = ch.lowest_station();
   const auto span_of = [&](const auto& buf, long first, long count, std::size_t per) {
     return Prefault::Region{buf.data() + static_cast<std::size_t>(first) * per,
                             static_cast<std::size_t>(count) * per * sizeof(buf[0])};
@@ -449,7 +429,7 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
 template <int Width>
 void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                                   const Eigen::VectorXd& angle_mm, const Unknowns& v) {
-  for_each_chain(chains_, [&](Chain& ch) { refold_rhs<Width>(ch, readings, mu, angle_mm, &v); });
+  on_chains([&](std::size_t i) { refold_rhs<Width>(chains_[i], readings, mu, angle_mm, &v); });
   join();
 }
 
@@ -619,12 +599,8 @@ BandedLsq::Update BandedLsq::solve_add(const Unknowns& v, bool set_free) const {
   // compile-time constant for the usual narrow bands: the corrections the back-substitution
   // still needs then stay in registers.
   with_width(nb_, [&]<int NB>() {
-    const std::size_t n_chains = chains_.size();
-    if (n_chains == 2)
-      at_once([&] { back_substitute<NB>(chains_[0], xc, v, set_free, mc[0], mv[0]); },
-              [&] { back_substitute<NB>(chains_[1], xc, v, set_free, mc[1], mv[1]); });
-    else
-      back_substitute<NB>(chains_[0], xc, v, set_free, mc[0], mv[0]);
+    on_chains(
+        [&](std::size_t i) { back_substitute<NB>(chains_[i], xc, v, set_free, mc[i], mv[i]); });
   });
   Update u;
   for (int c = 0; c < 2; ++c)

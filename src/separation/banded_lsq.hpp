@@ -185,8 +185,18 @@ class BandedLsq {
     std::vector<double> W;  // the window after the last step: m × (m + 1), d and ū
     double ssr = 0, min_pivot = 1;
     long station(long t) const { return first_station + dir * t; }
+    long lowest_station() const { return dir > 0 ? first_station : first_station - steps + 1; }
     long position(long pp) const { return first_pos + dir * pp; }
   };
+
+  // Calls fn(i) for each chain i, the second on another thread.
+  template <class Fn>
+  void on_chains(Fn&& fn) const {
+    if (chains_.size() == 1)
+      fn(std::size_t{0});
+    else
+      at_once([&] { fn(std::size_t{0}); }, [&] { fn(std::size_t{1}); });
+  }
 
   // Forms the right-hand sides b − A·v block by block (v null: its free unknowns 0, only the
   // offsets pinned), stores each station's local ones and
@@ -224,18 +234,17 @@ class BandedLsq {
   bool active(int id) const;  // a free unknown that exists
 
   const Design& D_;
-  int L_ = 0;                     // local unknowns per station: g (and θ)
-  int M_ = 0;                     // rows per station
-  int nb_ = 0;                    // band width: span + 1
-  int G_ = 0;                     // free globals
-  int m_ = 0;                     // window columns: nb + G
-  std::vector<int> globals_;      // their ids
-  RowMajor Qt_;                   // M × M: the constant row transform
-  Eigen::MatrixXd Rloc_;          // L × L, upper triangular
-  std::vector<long> pinned_w_;    // pinned workpiece positions, ascending
-  std::vector<double> pinned_o_;  // the offsets' pin values (0 where free)
-  std::vector<Chain> chains_;     // one, or two (lower, upper mirrored)
-  long h_ = 0;                    // the lower chain's stations: the final window starts at w(h)
+  int L_ = 0;                   // local unknowns per station: g (and θ)
+  int M_ = 0;                   // rows per station
+  int nb_ = 0;                  // band width: span + 1
+  int G_ = 0;                   // free globals
+  int m_ = 0;                   // window columns: nb + G
+  std::vector<int> globals_;    // their ids
+  RowMajor Qt_;                 // M × M: the constant row transform
+  Eigen::MatrixXd Rloc_;        // L × L, upper triangular
+  std::vector<long> pinned_w_;  // pinned workpiece positions, ascending
+  std::vector<Chain> chains_;   // one, or two (lower, upper mirrored)
+  long h_ = 0;                  // the lower chain's stations: the final window starts at w(h)
 
   // Factorisation: per station, the eliminated position's row of R over its chain's window,
   // √d·[1, ū], stored as [√d, ū_1..ū_m−1] (the same for every right-hand side), its transformed
@@ -428,16 +437,10 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
           use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku));
     }
   };
-  auto both = [&](auto&& pass) {
-    if (two)
-      at_once([&] { pass(0); }, [&] { pass(1); });
-    else
-      pass(0);
-  };
 
   for (int g = 0; g < G_; ++g)
     v_or_zero(globals_[static_cast<std::size_t>(g)], yg.data() + static_cast<std::size_t>(g) * ku);
-  both(forward);
+  on_chains(forward);
   if (two) {  // the upper chain's shares
     for (int c = 0; c + 1 < nb; ++c)
       if (const int id = final_id(c); id >= 0)
@@ -488,7 +491,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
     if (const int id = final_id(c); id >= 0 && is_free(id))
       use(id, static_cast<const double*>(win[c]));
   // Each chain's stations backward, outward from the final window.
-  both(backward);
+  on_chains(backward);
 }
 
 }  // namespace trueaxis::separation::detail
