@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "../../src/separation/banded_lsq.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
 
@@ -11,8 +12,11 @@ using namespace trueaxis;
 using separation::Method;
 using separation::Options;
 using separation::Profile;
+using separation::detail::BandedLsq;
 
 namespace {
+
+constexpr int kLongRuns = 30;  // independent long runs (their points are correlated)
 
 struct Stats {
   double within2 = 0;  // fraction of |error| <= 2u
@@ -23,12 +27,13 @@ struct Stats {
 
 // Repeats a noisy campaign over `runs` seeds and compares errors against the stated uncertainty
 // at every workpiece point (runs are independent; points within a run are correlated).
-Stats run(Method m, std::vector<double> offsets, bool angle, bool given_sigma, int runs = 120) {
+Stats run(Method m, std::vector<double> offsets, bool angle, bool given_sigma, int runs = 120,
+          long stations = 60) {
   long cnt = 0, in = 0;
   double z2 = 0, e2 = 0, u = 0;
   for (int s = 0; s < runs; ++s) {
     sim::StraightnessOptions so;
-    so.stations = 60;
+    so.stations = stations;
     so.step = 10;
     so.offsets = offsets;
     so.noise = 0.1e-3;
@@ -77,6 +82,23 @@ TEST(SeparationNoise, ErrorsAgreeWithStatedUncertainty) {
     EXPECT_GT(s.within2, 0.90) << c.name;
     EXPECT_LT(s.within2, 0.99) << c.name;
     EXPECT_NEAR(s.rms_z, 1.0, 0.2) << c.name;
+  }
+}
+
+// Long runs are solved as two chains joined in the middle, on two threads, and their uncertainty
+// likewise: the stated uncertainty must still describe the errors there.
+TEST(SeparationNoise, ErrorsAgreeWithStatedUncertaintyOnLongRuns) {
+  constexpr long kStations = BandedLsq::kSplitStations + 10000;
+  for (const bool angle : {false, true}) {
+    const char* name = angle ? "lsq 3 probes + level" : "lsq 5 probes, sigma estimated";
+    const Stats s = angle
+                        ? run(Method::Lsq, {0, 10, 20}, true, true, kLongRuns, kStations)
+                        : run(Method::Lsq, {0, 10, 20, 30, 40}, false, false, kLongRuns, kStations);
+    std::printf("%s, %ld stations: within 2u %.3f, RMS error/u %.3f\n", name, kStations, s.within2,
+                s.rms_z);
+    EXPECT_GT(s.within2, 0.90) << name;
+    EXPECT_LT(s.within2, 0.99) << name;
+    EXPECT_NEAR(s.rms_z, 1.0, 0.2) << name;
   }
 }
 
