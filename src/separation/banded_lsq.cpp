@@ -611,15 +611,9 @@ BandedLsq::Update BandedLsq::solve_add(const Unknowns& v, bool set_free) const {
   return u;
 }
 
-Uninitialized<double> BandedLsq::covariance_diagonal() const {
-  // Backward selected inversion, from the final window's covariance outward along each chain.
-  const Design& D = D_;
+std::vector<double> BandedLsq::final_covariance() const {
+  // The inverse of the final window's R over its active columns, R⁻¹R⁻ᵀ.
   const int m = m_, s = m_ + 1;
-  // Every workpiece, guide and pitch entry is written below (pinned ones as 0), and the free
-  // offsets with the final window: only the offsets are set to 0 first.
-  Uninitialized<double> diag(static_cast<std::size_t>(D.nvars));
-  std::fill(diag.begin() + D.o(0), diag.end(), 0.0);
-  // The final window's covariance (inactive columns 0).
   std::vector<double> Fj(static_cast<std::size_t>(m * m), 0.0);
   std::vector<int> act;
   for (int c = 0; c < m; ++c)
@@ -637,18 +631,17 @@ Uninitialized<double> BandedLsq::covariance_diagonal() const {
     for (int b = 0; b < na; ++b)
       Fj[static_cast<std::size_t>(act[static_cast<std::size_t>(a)] * m +
                                   act[static_cast<std::size_t>(b)])] = Zf(a, b);
-  for (int c = 0; c < m; ++c)
-    if (const int id = final_id(c); id >= 0)
-      diag[static_cast<std::size_t>(id)] = Fj[static_cast<std::size_t>(c * m + c)];
-  with_width(m, [&]<int W>() {
-    for (const Chain& ch : chains_) chain_covariance<W>(ch, Fj, diag.data());
-  });
-  return diag;
+  return Fj;
+}
+
+void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                                 double* zloc) const {
+  with_width(m_, [&]<int W>() { chain_covariance_impl<W>(ch, Fj, zw, zloc); });
 }
 
 template <int Width>
-void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
-                                 double* diag) const {
+void BandedLsq::chain_covariance_impl(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                                      double* zloc) const {
   // For the eliminated w's row [d, r] over the window [the next span positions, globals] with
   // covariance Z: Z_w,window = −(Z rᵀ)/d and Z_ww = 1/d² − r·Z_w,window/d. The local unknowns
   // x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc, with F the
@@ -713,7 +706,7 @@ void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
     } else {
       for (int a = 0; a < mw; ++a) zk[a] = 0;
     }
-    diag[static_cast<std::size_t>(idw)] = zkk;
+    zw[K] = zkk;
     f(0, 0) = zkk;
     for (int a = 0; a < mw; ++a) {
       f(0, a + 1) = f(a + 1, 0) = zk[a];
@@ -727,7 +720,7 @@ void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj,
         for (int b = 0; b < m; ++b) tt += f(a, b) * pl[b];
         v += pl[a] * tt;
       }
-      diag[static_cast<std::size_t>(l == 0 ? D.g(K) : D.t(K))] = v;
+      zloc[K * L + l] = v;
     }
     drop_last_band();
   }

@@ -155,17 +155,20 @@ class BandedLsq {
     double max_value = 0;
   };
   Update solve_add(const Unknowns& v, bool set_free = false) const;
-  // diag((AᵀA)⁻¹) over the free unknowns (pinned 0), by unknown id.
-  Uninitialized<double> covariance_diagonal() const;
   // (AᵀA)⁻¹V for a V of k columns (a compile-time constant) given row by row, without storing
-  // either: v_row(id, out) writes the k values of a free unknown's row of V; use(id, zv) then
-  // receives that unknown's row of (AᵀA)⁻¹V, once per free unknown, the final window and the
-  // globals first, then outward along each chain. With two chains, both callbacks are called
-  // from two threads at once (for different unknowns). Holds the forward solve's workpiece rows (Q
-  // × k values) and a window. With `gram` (k × k, row-major), also adds Vᵀ(AᵀA)⁻¹V to it: with Y =
-  // R⁻ᵀV the forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows' outer products.
+  // either, and the diagonal of (AᵀA)⁻¹ (a backward selected inversion, meanwhile): v_row(id, out)
+  // writes the k values of a free unknown's row of V; use(id, zv, z) then receives that unknown's
+  // row of (AᵀA)⁻¹V and its diagonal entry of (AᵀA)⁻¹, once per free unknown, the final window and
+  // the globals first, then outward along each chain. With two chains, both callbacks are called
+  // from two threads at once (for different unknowns). With `gram` (k × k, row-major), also adds
+  // Vᵀ(AᵀA)⁻¹V to it: with Y = R⁻ᵀV the forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows'
+  // outer products.
+  // It works in the factorisation's memory that only solve_add and refactor_rhs read: the forward
+  // solve's workpiece rows (Q × k values) in the kept rotations where they fit, the diagonal in
+  // the right-hand sides. So after it, a solve_add needs a factor() first (refactor_rhs() then
+  // factorises again).
   template <int k, class VRow, class Use>
-  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr) const;
+  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr);
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
  private:
@@ -215,12 +218,21 @@ class BandedLsq {
   // residual's share left by the join.
   double join();
   template <int k, int Width, class VRow, class Use>  // window width, 0: any
-  void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const;
+  void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Uninitialized<double> (&yw)[2],
+                              long split);
   template <int NB>  // band width, 0: any
   void back_substitute(const Chain& ch, const std::vector<double>& xc, const Unknowns& v,
                        bool set_free, double* mc, double* mv) const;
+  // (AᵀA)⁻¹ over the final window's columns (m × m, row-major; inactive columns 0).
+  std::vector<double> final_covariance() const;
+  // diag((AᵀA)⁻¹) along a chain, outward from the final window's covariance Fj: per station K,
+  // that of its eliminated w at zw[K] (0 where w is pinned) and of its local unknowns at
+  // zloc[K·L + l].
+  void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                        double* zloc) const;
   template <int Width>  // window width, 0: any
-  void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* diag) const;
+  void chain_covariance_impl(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                             double* zloc) const;
   template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                    const Eigen::VectorXd& angle_mm, const Unknowns* v);
@@ -272,30 +284,54 @@ class BandedLsq {
 };
 
 template <int k, class VRow, class Use>
-void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) const {
-  with_width(m_, [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram); });
+void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) {
+  // The forward solve's workpiece rows: the lower chain's positions (up to the final window's) in
+  // one buffer, the upper chain's in another, each in its chain's dead rotations where they fit
+  // (pages already committed), else new.
+  const bool two = chains_.size() == 2;
+  const long split = two ? h_ + nb_ - 1 : D_.Q;
+  const std::size_t need[2] = {static_cast<std::size_t>(split) * k,
+                               static_cast<std::size_t>(D_.Q - split) * k};
+  Uninitialized<double> yw[2];
+  for (std::size_t c = 0; c < chains_.size(); ++c) {
+    Uninitialized<double>& rot = chains_[c].rot;
+    if (rot.capacity() >= need[c]) {
+      yw[c].swap(rot);
+      keep_rotations_ = false;  // a later refactor_rhs factorises again
+    }
+    yw[c].resize(need[c]);
+  }
+  with_width(m_, [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram, yw, split); });
 }
 
 template <int k, int Width, class VRow, class Use>  // window width, 0: any
-void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) const {
+void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram,
+                                       Uninitialized<double> (&yw)[2], long split) {
   // Rᵀy = V forward in elimination order (per chain and station g, θ, and the eliminated w; then
   // the final window), and R z = y backward. y of an eliminated w is final after its station's
   // step and needed again at that station on the way back, so the workpiece rows are kept; a
   // station's local rows depend only on its own rows of V and are formed again on the way back.
   // Two chains run at once, each way: forward, the upper chain adds its share of the final
   // window's y into a copy of its own (from 0), summed with the lower chain's before the final
-  // window; backward, each chain reads only the final window's z.
+  // window; backward, each chain reads only the final window's z. The selected inversion runs on
+  // a third thread during the forward solve.
   const Design& D = D_;
   const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_;
   const long Q = D.Q;
   const auto ku = static_cast<std::size_t>(k);
-  Uninitialized<double> yw(static_cast<std::size_t>(Q) * ku);
-  const Prefault prefault({{yw.data(), yw.size() * sizeof(double)}});
+  const Prefault prefault({{yw[0].data(), yw[0].size() * sizeof(double)},
+                           {yw[1].data(), yw[1].size() * sizeof(double)}});
   std::vector<double> yg(static_cast<std::size_t>(G_) * ku);
+  // diag((AᵀA)⁻¹), in the right-hand sides' memory (below).
+  double* const zdiag_w = qb_.data();
+  double* const zdiag_loc = bloc_.data();
   const bool two = chains_.size() == 2;
   // The upper chain's share of w(h..h+span−1)'s y, then of the globals'.
   std::vector<double> up_shared(two ? static_cast<std::size_t>(nb - 1 + G_) * ku : 0, 0.0);
-  auto wrow = [&](long pos) { return yw.data() + static_cast<std::size_t>(pos) * ku; };
+  auto wrow = [&](long pos) {
+    return pos < split ? yw[0].data() + static_cast<std::size_t>(pos) * ku
+                       : yw[1].data() + static_cast<std::size_t>(pos - split) * ku;
+  };
   auto is_free = [&](int id) { return D.pinned[static_cast<std::size_t>(id)] == 0; };
   auto v_or_zero = [&](int id, double* out) {
     if (is_free(id))
@@ -415,7 +451,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
             for (int j = 0; j < k; ++j) acc[static_cast<std::size_t>(j)] -= R[c] * zc[j];
         for (int j = 0; j < k; ++j) z0[j] = acc[static_cast<std::size_t>(j)];
       }
-      if (is_free(idw)) use(idw, static_cast<const double*>(z0));
+      if (is_free(idw)) use(idw, static_cast<const double*>(z0), zdiag_w[K]);
       local_forward(K, yl.data());
       for (int l = L - 1; l >= 0; --l) {
         const double* y = yl.data() + static_cast<std::size_t>(l) * ku;
@@ -434,13 +470,26 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
       }
       for (int l = 0; l < L; ++l)
         if (const int id = l == 0 ? D.g(K) : D.t(K); is_free(id))
-          use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku));
+          use(id, static_cast<const double*>(zl.data() + static_cast<std::size_t>(l) * ku),
+              zdiag_loc[static_cast<std::size_t>(K * L + l)]);
     }
   };
 
   for (int g = 0; g < G_; ++g)
     v_or_zero(globals_[static_cast<std::size_t>(g)], yg.data() + static_cast<std::size_t>(g) * ku);
-  on_chains(forward);
+  // diag((AᵀA)⁻¹) by the selected inversion, for long runs on a third thread meanwhile (it and
+  // the forward solve only read the factorisation), into the memory of the right-hand sides, dead
+  // since the last solve_add (their pages are committed).
+  const std::vector<double> Fj = final_covariance();
+  auto diagonal = [&] {
+    for (const Chain& ch : chains_) chain_covariance(ch, Fj, zdiag_w, zdiag_loc);
+  };
+  if (two)
+    at_once([&] { on_chains(forward); }, diagonal);
+  else {
+    diagonal();
+    forward(0);
+  }
   if (two) {  // the upper chain's shares
     for (int c = 0; c + 1 < nb; ++c)
       if (const int id = final_id(c); id >= 0)
@@ -489,7 +538,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram) cons
   }
   for (int c = 0; c < m; ++c)
     if (const int id = final_id(c); id >= 0 && is_free(id))
-      use(id, static_cast<const double*>(win[c]));
+      use(id, static_cast<const double*>(win[c]), Fj[static_cast<std::size_t>(c * m + c)]);
   // Each chain's stations backward, outward from the final window.
   on_chains(backward);
 }

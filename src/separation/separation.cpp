@@ -878,20 +878,20 @@ struct ReferenceAlgebra {
   double lin(double x) const { return (x - s.xc) * lin_k; }
 
   // U's rows. Workpiece: its line, and the parabola the gauge moves into it (t² less its line).
-  Eigen::Vector3d uw(Eigen::Index j) const {
+  [[gnu::always_inline]] Eigen::Vector3d uw(Eigen::Index j) const {
     const double x = r.xw[j], b1 = lw.b1(x);
     return {lw.b0, b1, par ? -(t2(x) - lw.b0 * pw0 - b1 * pw1) : 0.0};
   }
-  Eigen::Vector3d ug(Eigen::Index K) const {
+  [[gnu::always_inline]] Eigen::Vector3d ug(Eigen::Index K) const {
     const double x = r.xg[K], b1 = lg.b1(x);
     return {lg.b0, b1, par ? t2(x) - lg.b0 * pg0 - b1 * pg1 : 0.0};
   }
   // Pitch (its unknown is θ·h): about its mean, and the parabola's slope about its mean.
-  Eigen::Vector3d ut(Eigen::Index K) const {
+  [[gnu::always_inline]] Eigen::Vector3d ut(Eigen::Index K) const {
     return {1.0 / (h * static_cast<double>(mt)), par ? lin(r.xt[K]) - lin_mean : 0.0, 0.0};
   }
   // V's rows on each profile (zero beyond the profile's grid).
-  Row vw(Eigen::Index j) const {
+  [[gnu::always_inline]] Row vw(Eigen::Index j) const {
     Row v = Row::Zero();
     if (j >= 0 && j < mw) {
       v[kW0] = lw.b0;
@@ -899,7 +899,7 @@ struct ReferenceAlgebra {
     }
     return v;
   }
-  Row vg(Eigen::Index K) const {
+  [[gnu::always_inline]] Row vg(Eigen::Index K) const {
     Row v = Row::Zero();
     if (K >= 0 && K < mg) {
       v[kG0] = lg.b0;
@@ -911,7 +911,7 @@ struct ReferenceAlgebra {
     }
     return v;
   }
-  Row vt(Eigen::Index K) const {
+  [[gnu::always_inline]] Row vt(Eigen::Index K) const {
     Row v = Row::Zero();
     if (pitch && K >= 0 && K < mt) v[kT] = 1.0;
     return v;
@@ -941,27 +941,21 @@ struct ReferenceAlgebra {
 
 // Uncertainties (unit weight) of the reported w, g, θ under the ls reference from the
 // least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
-void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
+void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
                        Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
   using Row = ReferenceAlgebra::Row;
   const Design& D = st.D;
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
   const long n = D.n;
-  // diag(Z) by the selected inversion, on a second core for long runs: it and the solve below
-  // only read the factorisation.
-  constexpr long kThreadedStations = 20000;
-  std::future<detail::Uninitialized<double>> diag_task =
-      std::async(n >= kThreadedStations ? std::launch::async : std::launch::deferred,
-                 [&st] { return st.engine->covariance_diagonal(); });
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_variance), with
-  // S = VᵀZV. (ZV)_u arrives row by row from the solve: its dot with u goes into the output
-  // array at once and its outer product with V_u into VᵀZV; S and Z_uu complete it afterwards.
-  // Pinned unknowns have no Z_uu and no (ZV)_u: their variance is u·S·u alone. The solve writes
-  // every free unknown's entry, so only the pinned ones are set to 0 first (not the whole arrays:
-  // a zeroing pass over 24 MB).
+  // S = VᵀZV. (ZV)_u and Z_uu arrive row by row from the solve (which runs the selected inversion
+  // alongside): s²·Z_uu − 2s·u·(ZV)_u goes into the output array at once, and S, from the solve's
+  // forward rows, completes it afterwards. Pinned unknowns have no Z_uu and no (ZV)_u: their
+  // variance is u·S·u alone. The solve writes every free unknown's entry, so only the pinned ones
+  // are set to 0 first (not the whole arrays: a zeroing pass over 24 MB).
   enum Kind { kW, kG, kT, kOther };
-  auto kind_of = [&](int id, long& i) {
+  auto kind_of = [&](int id, long& i) __attribute__((always_inline)) {
     if (id < D.Q) return i = id, kW;
     if (id < D.Q + n) return i = id - D.Q, kG;
     if (D.pitch && id < D.Q + 2 * n) return i = id - D.Q - n, kT;
@@ -986,7 +980,7 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
         break;
     }
   }
-  auto v_of = [&](int id) -> Row {
+  auto v_of = [&](int id) __attribute__((always_inline))->Row {
     long i = 0;
     switch (kind_of(id, i)) {
       case kW:
@@ -1004,6 +998,7 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
   auto cross = [](const Eigen::Vector3d& u, const ReferenceAlgebra::Cols& c, const Row& z) {
     return u[0] * z[c[0]] + u[1] * z[c[1]] + u[2] * z[c[2]];
   };
+  const double inv_h = 1.0 / st.h;  // the pitch unknown is θ·h
   // The column count as a compile-time constant: the rows' small copies and products unroll.
   // VᵀZV comes from the solve's forward rows (their Gram matrix), so each row of ZV is only
   // dotted with its point's u.
@@ -1011,23 +1006,24 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
     Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
     gram.setZero();
     st.engine->solve_normal_rows<Cols>(
-        [&](int id, double* out) {
+        [&](int id, double* out) __attribute__((always_inline)) {
           const Row v = v_of(id);
           for (int j = 0; j < Cols; ++j) out[j] = v[j];
         },
-        [&](int id, const double* zv) {
+        // Inlined into the solve's loops (called three times per station).
+        [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
           Row z = Row::Zero();
           for (int j = 0; j < Cols; ++j) z[j] = zv[j];
           long i = 0;
           switch (kind_of(id, i)) {
             case kW:
-              uw[i] = cross(ra.uw(i), ra.cw, z);
+              uw[i] = zuu - 2 * cross(ra.uw(i), ra.cw, z);
               break;
             case kG:
-              ug[i] = cross(ra.ug(i), ra.cg, z);
+              ug[i] = zuu - 2 * cross(ra.ug(i), ra.cg, z);
               break;
             case kT:
-              if (i < ra.mt) ut[i] = cross(ra.ut(i), ra.ct, z);
+              if (i < ra.mt) ut[i] = inv_h * (inv_h * zuu - 2 * cross(ra.ut(i), ra.ct, z));
               break;
             default:
               break;  // an offset: no row of V
@@ -1046,27 +1042,20 @@ void lsq_uncertainties(const LsqState& st, const Raw& r, bool with_pitch, Eigen:
     default:
       solve.template operator()<ReferenceAlgebra::kMaxCols>();
   }
-  const detail::Uninitialized<double> zdiag = diag_task.get();
-  auto finish = [&](Eigen::VectorXd& var, auto&& id_of, auto&& u_of,
-                    const ReferenceAlgebra::Cols& c, double scale) {
+  auto finish = [&](Eigen::VectorXd& var, auto&& u_of, const ReferenceAlgebra::Cols& c) {
     const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), c);
     for (Eigen::Index i = 0; i < var.size(); ++i) {
       const Eigen::Vector3d u = u_of(i);
-      // 0 for pinned unknowns, as is their cross term
-      const double zd = zdiag[static_cast<std::size_t>(id_of(i))];
-      var[i] = std::max(0.0, u.dot(S * u) + scale * scale * zd - 2 * scale * var[i]);
+      var[i] = std::max(0.0, u.dot(S * u) + var[i]);
     }
   };
   finish(
-      uw, [&](Eigen::Index j) { return D.w(j); }, [&](Eigen::Index j) { return ra.uw(j); }, ra.cw,
-      1.0);
+      uw, [&](Eigen::Index j) { return ra.uw(j); }, ra.cw);
   finish(
-      ug, [&](Eigen::Index K) { return D.g(K); }, [&](Eigen::Index K) { return ra.ug(K); }, ra.cg,
-      1.0);
+      ug, [&](Eigen::Index K) { return ra.ug(K); }, ra.cg);
   if (ra.pitch)
     finish(
-        ut, [&](Eigen::Index K) { return D.t(K); }, [&](Eigen::Index K) { return ra.ut(K); }, ra.ct,
-        1.0 / st.h);
+        ut, [&](Eigen::Index K) { return ra.ut(K); }, ra.ct);
 }
 
 // Uncertainties (unit weight) of the two- and three-point results by exact propagation of every
