@@ -1,9 +1,11 @@
 #include "banded_lsq.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <optional>
 
 #include "../common/eigen_instances.hpp"
@@ -49,10 +51,11 @@ BandedLsq::BandedLsq(const Design& design, long split_stations) : D_(design) {
   Rloc_ = (Qt_ * Aloc).topRows(L_).triangularView<Eigen::Upper>();
   const Eigen::MatrixXd T = Qt_ * Awin;
   scale_ = std::max({1.0, Aloc.cwiseAbs().maxCoeff(), Awin.cwiseAbs().maxCoeff()});
-  for (long j = 0; j < D.Q; ++j)
-    if (D.pinned[static_cast<std::size_t>(D.w(j))]) pinned_w_.push_back(j);
+  for (const auto& pin : D.pins)  // a few: not a pass over all Q positions
+    if (pin.first < D.g(0)) pinned_w_.push_back(pin.first - D.w(0));
+  std::sort(pinned_w_.begin(), pinned_w_.end());
   rows_ = D.n * M_;
-  unknowns_ = static_cast<long>(std::count(D.pinned.begin(), D.pinned.end(), 0));
+  unknowns_ = D.nvars - static_cast<long>(D.pins.size());
 
   // The chains. The mirrored one's window column c holds the station's band column span − c.
   auto make_chain = [&](long first_station, long first_pos, long steps, int dir) {
@@ -250,7 +253,9 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
   std::vector<double>& W = ch.W;
   W.assign(static_cast<std::size_t>(m * s), 0.0);
   std::vector<double> row(static_cast<std::size_t>(s));
-  double ssr = 0, min_pivot = 1;
+  // The smallest d of a free w's row: its √d/scale is the smallest pivot (√ and the division are
+  // monotone, so they are taken once, at the end, off the per-station path).
+  double ssr = 0, min_d = std::numeric_limits<double>::infinity();
   const std::vector<long>& pins = ch.pinned;
   std::size_t next_pin = 0;  // first pinned position not below t
   // After the first block, when the rotations kept per station are known, the pages the rest of
@@ -348,8 +353,7 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
         out[0] = r0;
         for (int c = 1; c < m; ++c) out[c] = W[static_cast<std::size_t>(c)];
         qb_[static_cast<std::size_t>(K)] = W[static_cast<std::size_t>(m)];
-        if (!D.pinned[static_cast<std::size_t>(D.w(ch.position(t)))])
-          min_pivot = std::min(min_pivot, r0 / scale_);
+        if (!D.pinned[static_cast<std::size_t>(D.w(ch.position(t)))]) min_d = std::min(min_d, W[0]);
         for (int tt = 0; tt < m; ++tt) {
           double* dst = W.data() + static_cast<std::size_t>(tt * s);
           if (tt == nb - 1) {
@@ -364,7 +368,7 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
         }
       });
   ch.ssr = ssr;
-  ch.min_pivot = min_pivot;
+  ch.min_pivot = std::min(1.0, std::sqrt(min_d) / scale_);
 }
 
 double BandedLsq::join() {
@@ -441,11 +445,48 @@ void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eig
   // keep one number fewer but loses ε·|ū| where the old row's ū is large and c̄ small: a row entry
   // that is zero but for rounding, placed into an empty row, has |ū| ~ 1/ε.)
   const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, nred = M_ - L_;
-  std::vector<double> wr_heap(Width > 0 ? 0 : static_cast<std::size_t>(m), 0.0);
-  double wr_fixed[Width > 0 ? Width : 1] = {};
-  double* wr = Width > 0 ? wr_fixed : wr_heap.data();
   const double* rot = ch.rot.data();
   const unsigned char* mask_in = ch.rot_mask.data();
+  if constexpr (Width > 0) {
+    // A fixed narrow window (its mask one byte): the loops over its columns have constant bounds
+    // and are written out whole. Not vectorised: the window's slide, done with wide loads of
+    // values just stored one at a time, stalled on store forwarding (a third of this pass).
+    static_assert(Width + 1 <= 8, "one mask byte");
+    std::array<double, Width> w{};
+    for_each_station(
+        ch, readings, mu, angle_mm, v, [&](long, long K, auto&& reduced) TA_NO_VECTORIZE {
+          for (int r = 0; r < nred; ++r) {
+            double x = reduced(r);
+            const unsigned bits = *mask_in++;
+            const unsigned cols = bits & ((1u << Width) - 1);
+            // With bit m, the row ended in an empty row of the window, at its last column.
+            const int placed = (bits >> Width) & 1 ? 31 - std::countl_zero(cols) : Width;
+            for (int j = 0; j < Width; ++j) {
+              if (!((cols >> j) & 1)) continue;
+              if (j == placed) {
+                w[static_cast<std::size_t>(j)] = rot[0] * x;
+                ++rot;
+                continue;
+              }
+              const double cb = rot[0], sb = rot[1], xj = rot[2],
+                           u = w[static_cast<std::size_t>(j)];
+              rot += kRotationValues;
+              w[static_cast<std::size_t>(j)] = cb * u + sb * x;
+              x -= xj * u;
+            }
+          }
+          qb_[static_cast<std::size_t>(K)] = w[0];
+          for (int j = 0; j + 1 < Width; ++j)
+            if (j + 1 < nb) w[static_cast<std::size_t>(j)] = w[static_cast<std::size_t>(j + 1)];
+          for (int j = 0; j < Width; ++j)
+            if (j == nb - 1) w[static_cast<std::size_t>(j)] = 0;
+        });
+    for (int c = 0; c < m; ++c)
+      ch.W[static_cast<std::size_t>(c * s + m)] = w[static_cast<std::size_t>(c)];
+    return;
+  }
+  std::vector<double> wr_heap(static_cast<std::size_t>(m), 0.0);
+  double* wr = wr_heap.data();
   for_each_station(ch, readings, mu, angle_mm, v, [&](long, long K, auto&& reduced) {
     for (int r = 0; r < nred; ++r) {
       double x = reduced(r);
