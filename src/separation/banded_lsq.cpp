@@ -52,7 +52,7 @@ BandedLsq::BandedLsq(const Design& design, long split_stations) : D_(design) {
   const Eigen::MatrixXd T = Qt_ * Awin;
   scale_ = std::max({1.0, Aloc.cwiseAbs().maxCoeff(), Awin.cwiseAbs().maxCoeff()});
   for (const auto& pin : D.pins)  // a few: not a pass over all Q positions
-    if (pin.first < D.g(0)) pinned_w_.push_back(pin.first - D.w(0));
+    if (const auto at = D.place(pin.first); at.kind == Design::Kind::w) pinned_w_.push_back(at.i);
   std::sort(pinned_w_.begin(), pinned_w_.end());
   rows_ = D.n * M_;
   unknowns_ = D.nvars - static_cast<long>(D.pins.size());

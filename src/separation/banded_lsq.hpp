@@ -107,10 +107,17 @@ struct Unknowns {
     return {p + D.w(0), p + D.g(0), D.pitch ? p + D.t(0) : nullptr, p + D.o(0)};
   }
   double& operator()(const Design& D, int id) const {
-    if (id < D.g(0)) return w[id - D.w(0)];
-    if (id < (D.pitch ? D.t(0) : D.o(0))) return g[id - D.g(0)];
-    if (id < D.o(0)) return t[id - D.t(0)];
-    return o[id - D.o(0)];
+    const auto [kind, i] = D.place(id);
+    switch (kind) {
+      case Design::Kind::w:
+        return w[i];
+      case Design::Kind::g:
+        return g[i];
+      case Design::Kind::t:
+        return t[i];
+      default:
+        return o[i];
+    }
   }
 };
 

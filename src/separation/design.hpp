@@ -43,6 +43,18 @@ struct Design {
   int t(long K) const { return static_cast<int>(Q + n + K); }  // θ scaled by h (mm)
   int o(int i) const { return static_cast<int>(Q + n * (pitch ? 2 : 1) + i); }
   int oa() const { return o(N); }
+  // Which unknowns an id is among (workpiece, guide, pitch, offsets) and its index there.
+  enum class Kind { w, g, t, o };
+  struct Place {
+    Kind kind;
+    long i;
+  };
+  Place place(int id) const {
+    if (id < g(0)) return {Kind::w, id - w(0)};
+    if (id < (pitch ? t(0) : o(0))) return {Kind::g, id - g(0)};
+    if (id < o(0)) return {Kind::t, id - t(0)};
+    return {Kind::o, id - o(0)};
+  }
 };
 
 // Weights of the zero difference e = Σ z_i·o_i of a three-probe layout: z_A = 1 and z annihilates

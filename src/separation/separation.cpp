@@ -947,33 +947,26 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
   const Design& D = st.D;
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
-  const long n = D.n;
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_variance), with
   // S = VᵀZV. (ZV)_u and Z_uu arrive row by row from the solve (which runs the selected inversion
   // alongside): s²·Z_uu − 2s·u·(ZV)_u goes into the output array at once, and S, from the solve's
   // forward rows, completes it afterwards. Pinned unknowns have no Z_uu and no (ZV)_u: their
   // variance is u·S·u alone. The solve writes every free unknown's entry, so only the pinned ones
   // are set to 0 first (not the whole arrays: a zeroing pass over 24 MB).
-  enum Kind { kW, kG, kT, kOther };
-  auto kind_of = [&](int id, long& i) __attribute__((always_inline)) {
-    if (id < D.Q) return i = id, kW;
-    if (id < D.Q + n) return i = id - D.Q, kG;
-    if (D.pitch && id < D.Q + 2 * n) return i = id - D.Q - n, kT;
-    return i = 0, kOther;
-  };
+  using Kind = Design::Kind;
   trueaxis::detail::resize_in_huge_pages(uw, ra.mw, 1);
   trueaxis::detail::resize_in_huge_pages(ug, ra.mg, 1);
   trueaxis::detail::resize_in_huge_pages(ut, ra.mt, 1);
-  for (const auto& [id, value] : D.pins) {
-    long i = 0;
-    switch (kind_of(id, i)) {
-      case kW:
+  for (const auto& pin : D.pins) {
+    const auto [kind, i] = D.place(pin.first);
+    switch (kind) {
+      case Kind::w:
         uw[i] = 0;
         break;
-      case kG:
+      case Kind::g:
         ug[i] = 0;
         break;
-      case kT:
+      case Kind::t:
         if (i < ra.mt) ut[i] = 0;
         break;
       default:
@@ -981,13 +974,13 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
     }
   }
   auto v_of = [&](int id) __attribute__((always_inline))->Row {
-    long i = 0;
-    switch (kind_of(id, i)) {
-      case kW:
+    const auto [kind, i] = D.place(id);
+    switch (kind) {
+      case Kind::w:
         return ra.vw(i);
-      case kG:
+      case Kind::g:
         return ra.vg(i);
-      case kT:
+      case Kind::t:
         return ra.vt(i);
       default:
         return Row::Zero();
@@ -995,8 +988,9 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
   };
   Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> VZV;
   VZV.setZero();
-  auto cross = [](const Eigen::Vector3d& u, const ReferenceAlgebra::Cols& c, const Row& z) {
-    return u[0] * z[c[0]] + u[1] * z[c[1]] + u[2] * z[c[2]];
+  // u·(ZV)_u over a profile's columns of the solve's row zv.
+  auto cross = [](const Eigen::Vector3d& u, const ReferenceAlgebra::Cols& c, const double* zv) {
+    return u[0] * zv[c[0]] + u[1] * zv[c[1]] + u[2] * zv[c[2]];
   };
   const double inv_h = 1.0 / st.h;  // the pitch unknown is θ·h
   // The column count as a compile-time constant: the rows' small copies and products unroll.
@@ -1012,18 +1006,16 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
         },
         // Inlined into the solve's loops (called three times per station).
         [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
-          Row z = Row::Zero();
-          for (int j = 0; j < Cols; ++j) z[j] = zv[j];
-          long i = 0;
-          switch (kind_of(id, i)) {
-            case kW:
-              uw[i] = zuu - 2 * cross(ra.uw(i), ra.cw, z);
+          const auto [kind, i] = D.place(id);
+          switch (kind) {
+            case Kind::w:
+              uw[i] = zuu - 2 * cross(ra.uw(i), ra.cw, zv);
               break;
-            case kG:
-              ug[i] = zuu - 2 * cross(ra.ug(i), ra.cg, z);
+            case Kind::g:
+              ug[i] = zuu - 2 * cross(ra.ug(i), ra.cg, zv);
               break;
-            case kT:
-              if (i < ra.mt) ut[i] = inv_h * (inv_h * zuu - 2 * cross(ra.ut(i), ra.ct, z));
+            case Kind::t:
+              if (i < ra.mt) ut[i] = inv_h * (inv_h * zuu - 2 * cross(ra.ut(i), ra.ct, zv));
               break;
             default:
               break;  // an offset: no row of V
