@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <utility>
 
 #include "../common/eigen_instances.hpp"
 #include "../common/memory.hpp"
@@ -150,9 +151,9 @@ void block_rhs(const Design& D, long K0, int B, const Eigen::MatrixXd& readings,
 }  // namespace
 
 template <class Fn>
-void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
-                                 const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
-                                 const Unknowns* v, Fn&& fn) {
+void BandedLsq::for_each_block(const Chain& ch, const Eigen::MatrixXd& readings,
+                               const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                               const Unknowns* v, Fn&& fn) {
   const Design& D = D_;
   const int L = L_, M = M_;
   std::vector<double> b(static_cast<std::size_t>(M * kBlock)),
@@ -160,19 +161,18 @@ void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& reading
   // o_i, free or pinned; without v, the pins' values (0 for a free offset)
   std::vector<double> off(static_cast<std::size_t>(M));
   for (int i = 0; i < M; ++i) off[static_cast<std::size_t>(i)] = v ? v->o[i] : D.pin_value(D.o(i));
-  // Blocks in the chain's direction, and the stations of each in that order.
+  // Blocks in the chain's direction.
   const long lo = ch.lowest_station(), hi = lo + ch.steps;
   auto block = [&](long K0, int B) {
     block_rhs(D, K0, B, readings, mu.data(), angle_mm, v, off.data(), Qt_.data(), M, b.data(),
               bt.data());
-    for (int i = 0; i < B; ++i) {
-      const int k = ch.dir > 0 ? i : B - 1 - i;
-      const long K = K0 + k;
-      double* bl = bloc_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(L);
-      for (int l = 0; l < L; ++l) bl[l] = bt[static_cast<std::size_t>(l * B + k)];
-      fn(ch.dir * (K - ch.first_station), K,
-         [&](int r) { return bt[static_cast<std::size_t>((L + r) * B + k)]; });
+    for (int l = 0; l < L; ++l) {
+      const double* src = bt.data() + static_cast<std::size_t>(l * B);
+      double* dst = bloc_.data() + static_cast<std::size_t>(K0) * static_cast<std::size_t>(L) +
+                    static_cast<std::size_t>(l);
+      for (int k = 0; k < B; ++k) dst[static_cast<std::size_t>(k * L)] = src[k];
     }
+    fn(K0, B, static_cast<const double*>(bt.data()));
   };
   if (ch.dir > 0) {
     for (long K0 = lo; K0 < hi; K0 += kBlock)
@@ -184,6 +184,21 @@ void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& reading
       end = K0;
     }
   }
+}
+
+template <class Fn>
+void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
+                                 const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                                 const Unknowns* v, Fn&& fn) {
+  const int L = L_;
+  for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
+    for (int i = 0; i < B; ++i) {
+      const int k = ch.dir > 0 ? i : B - 1 - i;
+      const long K = K0 + k;
+      fn(ch.dir * (K - ch.first_station), K,
+         [&](int r) { return bt[static_cast<std::size_t>((L + r) * B + k)]; });
+    }
+  });
 }
 
 void BandedLsq::factor(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
@@ -223,7 +238,11 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
                                                         static_cast<std::size_t>(mask_bytes_)
                                                   : 0);
   }
-  on_chains([&](std::size_t i) { fold<Width>(chains_[i], readings, mu, angle_mm, v); });
+  on_chains([&](std::size_t i) {
+    if (!with_narrow<Width>(
+            [&]<int NB>() { fold_narrow<Width, NB>(chains_[i], readings, mu, angle_mm, v); }))
+      fold(chains_[i], readings, mu, angle_mm, v);
+  });
   ssr_ = join();
   min_pivot_ = 1;
   for (const Chain& ch : chains_) {
@@ -236,11 +255,10 @@ void BandedLsq::factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVec
           std::min(min_pivot_, std::abs(final_[static_cast<std::size_t>(c * s + c)]) / scale_);
 }
 
-template <int Width>
 void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                      const Eigen::VectorXd& angle_mm, const Unknowns* v) {
   const Design& D = D_;
-  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, L = L_, nred = M_ - L_;
+  const int m = m_, s = m + 1, nb = nb_, nred = M_ - L_;
   unsigned char* mask_out = ch.rot_mask.data();
   double* rot = ch.rot.data();
   static_assert(kRotationValues == 3);
@@ -262,28 +280,11 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
   // the chain will write are committed on another core. Not with two chains: both cores are busy
   // folding, and a helper only adds switches (measured: the solver 3 ms slower of 45).
   std::optional<Prefault> prefault;
-  const long lo = ch.lowest_station();
-  const auto span_of = [&](const auto& buf, long first, long count, std::size_t per) {
-    return Prefault::Region{buf.data() + static_cast<std::size_t>(first) * per,
-                            static_cast<std::size_t>(count) * per * sizeof(buf[0])};
-  };
-  auto start_prefault = [&] {
-    const auto used = static_cast<std::size_t>(rot - ch.rot.data());
-    const std::size_t expect =
-        std::min(ch.rot.size(), used / static_cast<std::size_t>(kBlock) *
-                                    static_cast<std::size_t>(ch.steps) * 9 / 8);
-    prefault.emplace(
-        std::vector<Prefault::Region>{span_of(rw_, lo, ch.steps, static_cast<std::size_t>(m)),
-                                      span_of(qb_, lo, ch.steps, 1),
-                                      span_of(bloc_, lo, ch.steps, static_cast<std::size_t>(L)),
-                                      {rot, (expect > used ? expect - used : 0) * sizeof(double)},
-                                      {ch.rot_mask.data(), ch.rot_mask.size()}});
-  };
   // The fold is not vectorised: each rotation's row and window updates are read back by the next
   // one, and paired loads of values stored one at a time stall on store forwarding.
   for_each_station(
       ch, readings, mu, angle_mm, v, [&](long t, long K, auto&& reduced) TA_NO_VECTORIZE {
-        if (t == kBlock && chains_.size() == 1) start_prefault();
+        if (t == kBlock && chains_.size() == 1) prefault.emplace(rest_of_fold(ch, rot));
         while (next_pin < pins.size() && pins[next_pin] < t) ++next_pin;
         const bool pin_in_band = next_pin < pins.size() && pins[next_pin] <= t + nb - 1;
         for (int r = 0; r < nred; ++r) {
@@ -371,6 +372,150 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
   ch.min_pivot = std::min(1.0, std::sqrt(min_d) / scale_);
 }
 
+std::vector<Prefault::Region> BandedLsq::rest_of_fold(const Chain& ch, const double* rot) const {
+  const long lo = ch.lowest_station();
+  const auto span_of = [&](const auto& buf, std::size_t per) {
+    return Prefault::Region{buf.data() + static_cast<std::size_t>(lo) * per,
+                            static_cast<std::size_t>(ch.steps) * per * sizeof(buf[0])};
+  };
+  const auto used = static_cast<std::size_t>(rot - ch.rot.data());
+  const std::size_t expect =
+      std::min(ch.rot.size(), used / static_cast<std::size_t>(kBlock) *
+                                  static_cast<std::size_t>(ch.steps) * 9 / 8);
+  return {span_of(rw_, static_cast<std::size_t>(m_)),
+          span_of(qb_, 1),
+          span_of(bloc_, static_cast<std::size_t>(L_)),
+          {rot, (expect > used ? expect - used : 0) * sizeof(double)},
+          {ch.rot_mask.data(), ch.rot_mask.size()}};
+}
+
+namespace {
+
+// Calls f(std::integral_constant<int, I>{}) for I = 0 … N − 1: a loop over a narrow window's
+// columns with compile-time indices, so that the window can stay in registers.
+template <int N, class F>
+[[gnu::always_inline]] inline void unroll(F&& f) {
+  if constexpr (N > 0) [&]<int... I>(std::integer_sequence<int, I...>) {
+      (f(std::integral_constant<int, I>{}), ...);
+    }
+  (std::make_integer_sequence<int, N>{});
+}
+
+}  // namespace
+
+template <int Width, int NB>
+void BandedLsq::fold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
+                            const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                            const Unknowns* v) {
+  // The same rotations as fold, in the same order and arithmetic (the results are identical),
+  // with the window's columns and the band's width known at compile time: the window and the
+  // row are local arrays indexed by constants, which the compiler keeps in registers across the
+  // stations of a block, and its slide is a renaming of registers, not copies through memory.
+  // Only the window's upper triangle is kept (the rest is zero and never read).
+  constexpr int m = Width, s = Width + 1;
+  static_assert(NB >= 1 && NB <= Width && Width + 1 <= 8, "one mask byte");
+  const int L = L_, nred = M_ - L_;
+  const bool keep = keep_rotations_;
+  unsigned char* mask_out = ch.rot_mask.data();
+  double* rot = ch.rot.data();
+  std::array<double, m * s> window{};
+  double ssr = 0, min_d = std::numeric_limits<double>::infinity();
+  const std::vector<long>& pins = ch.pinned;
+  std::size_t next_pin = 0;          // first pinned position not below t
+  std::optional<Prefault> prefault;  // as in fold
+  for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
+    const long t0 = ch.dir > 0 ? K0 - ch.first_station : ch.first_station - (K0 + B - 1);
+    if (t0 == kBlock && chains_.size() == 1) prefault.emplace(rest_of_fold(ch, rot));
+    std::array<double, m* s> W = window;
+    double* rp = rot;
+    unsigned char* mp = mask_out;
+    double ss = ssr, md = min_d;
+    for (int i = 0; i < B; ++i) {
+      const int k = ch.dir > 0 ? i : B - 1 - i;
+      const long K = K0 + k, t = t0 + i;
+      while (next_pin < pins.size() && pins[next_pin] < t) ++next_pin;
+      unsigned pinned = 0;  // the band's columns whose w is pinned
+      for (std::size_t p = next_pin; p < pins.size() && pins[p] <= t + NB - 1; ++p)
+        pinned |= 1u << (pins[p] - t);
+      for (int r = 0; r < nred; ++r) {
+        const double* cr = ch.Cred.data() + static_cast<std::size_t>(r * m);
+        std::array<double, s> row;
+        unroll<m>([&](auto c) { row[c] = (pinned >> c) & 1 ? 0.0 : cr[c]; });
+        row[m] = bt[static_cast<std::size_t>((L + r) * B + k)];
+        double delta = 1;
+        unsigned mask = 0;
+        unroll<m>([&](auto jc) {
+          constexpr int j = decltype(jc)::value;
+          const double xi = row[j];
+          if (xi == 0) return;
+          const double d = W[j * s + j];
+          if (d == 0) {
+            // An empty row of the window: the row takes its place, and nothing of it is left.
+            const double inv = 1 / xi;
+            W[j * s + j] = delta * xi * xi;
+            unroll<m - j>([&](auto cc) {
+              constexpr int c = j + 1 + decltype(cc)::value;
+              W[j * s + c] = row[c] * inv;
+              if constexpr (c < m) row[c] = 0;
+            });
+            if (keep) *rp++ = inv;
+            mask |= (1u << j) | (1u << m);
+            delta = 0;
+            return;
+          }
+          const double dp = d + delta * xi * xi;
+          const double inv = 1 / dp;
+          const double cb = d * inv, sb = delta * xi * inv;
+          delta *= cb;
+          W[j * s + j] = dp;
+          unroll<m - j>([&](auto cc) {
+            constexpr int c = j + 1 + decltype(cc)::value;
+            const double u = W[j * s + c], x = row[c];
+            row[c] = x - xi * u;
+            W[j * s + c] = cb * u + sb * x;
+          });
+          if (keep) {
+            rp[0] = cb;
+            rp[1] = sb;
+            rp[2] = xi;
+            rp += kRotationValues;
+          }
+          mask |= 1u << j;
+        });
+        if (keep) *mp++ = static_cast<unsigned char>(mask);
+        ss += delta * row[m] * row[m];
+      }
+      double* out = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(m);
+      out[0] = std::sqrt(W[0]);
+      unroll<m - 1>([&](auto c) { out[c + 1] = W[c + 1]; });
+      qb_[static_cast<std::size_t>(K)] = W[m];
+      if (!(pinned & 1)) md = std::min(md, W[0]);
+      // The slide: row tt takes row tt + 1 one column left; row NB − 1 starts empty. The globals'
+      // rows do not move (their band columns are left of the diagonal).
+      unroll<NB>([&](auto ttc) {
+        constexpr int tt = decltype(ttc)::value;
+        unroll<s - tt>([&](auto cc) {
+          constexpr int c = tt + decltype(cc)::value;
+          if constexpr (tt == NB - 1 || c == NB - 1)
+            W[tt * s + c] = 0;
+          else if constexpr (c + 1 < NB)
+            W[tt * s + c] = W[(tt + 1) * s + c + 1];
+          else
+            W[tt * s + c] = W[(tt + 1) * s + c];
+        });
+      });
+    }
+    window = W;
+    rot = rp;
+    mask_out = mp;
+    ssr = ss;
+    min_d = md;
+  });
+  ch.W.assign(window.begin(), window.end());
+  ch.ssr = ssr;
+  ch.min_pivot = std::min(1.0, std::sqrt(min_d) / scale_);
+}
+
 double BandedLsq::join() {
   const int m = m_, s = m + 1;
   final_.assign(static_cast<std::size_t>(m * s), 0.0);
@@ -433,58 +578,79 @@ void BandedLsq::refactor_rhs(const Eigen::MatrixXd& readings, const Eigen::RowVe
 template <int Width>
 void BandedLsq::refactor_rhs_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                                   const Eigen::VectorXd& angle_mm, const Unknowns& v) {
-  on_chains([&](std::size_t i) { refold_rhs<Width>(chains_[i], readings, mu, angle_mm, &v); });
+  on_chains([&](std::size_t i) {
+    if (!with_narrow<Width>(
+            [&]<int NB>() { refold_narrow<Width, NB>(chains_[i], readings, mu, angle_mm, &v); }))
+      refold_rhs(chains_[i], readings, mu, angle_mm, &v);
+  });
   join();
 }
 
-template <int Width>
+template <int Width, int NB>
+void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
+                              const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                              const Unknowns* v) {
+  // refold_rhs for a window of Width columns (its mask one byte), NB of them the band's: the
+  // window's right-hand sides are a local array indexed by constants, in registers across a
+  // block's stations.
+  constexpr int m = Width, s = Width + 1;
+  static_assert(NB >= 1 && NB <= Width && Width + 1 <= 8, "one mask byte");
+  const int L = L_, nred = M_ - L_;
+  const double* rot = ch.rot.data();
+  const unsigned char* mask_in = ch.rot_mask.data();
+  std::array<double, m> window{};
+  for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
+    std::array<double, m> w = window;
+    const double* rp = rot;
+    const unsigned char* mp = mask_in;
+    for (int i = 0; i < B; ++i) {
+      const int k = ch.dir > 0 ? i : B - 1 - i;
+      for (int r = 0; r < nred; ++r) {
+        double x = bt[static_cast<std::size_t>((L + r) * B + k)];
+        const unsigned bits = *mp++;
+        const unsigned cols = bits & ((1u << m) - 1);
+        // With bit m, the row ended in an empty row of the window, at its last column.
+        const int placed = (bits >> m) & 1 ? 31 - std::countl_zero(cols) : m;
+        unroll<m>([&](auto jc) {
+          constexpr int j = decltype(jc)::value;
+          if (!((cols >> j) & 1)) return;
+          if (j == placed) {
+            w[j] = rp[0] * x;
+            ++rp;
+            return;
+          }
+          const double cb = rp[0], sb = rp[1], xj = rp[2], u = w[j];
+          rp += kRotationValues;
+          w[j] = cb * u + sb * x;
+          x -= xj * u;
+        });
+      }
+      qb_[static_cast<std::size_t>(K0 + k)] = w[0];
+      unroll<NB>([&](auto jc) {  // the slide; the globals' entries stay
+        constexpr int j = decltype(jc)::value;
+        if constexpr (j + 1 < NB)
+          w[j] = w[j + 1];
+        else
+          w[j] = 0;
+      });
+    }
+    window = w;
+    rot = rp;
+    mask_in = mp;
+  });
+  for (int c = 0; c < m; ++c)
+    ch.W[static_cast<std::size_t>(c * s + m)] = window[static_cast<std::size_t>(c)];
+}
+
 void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                            const Eigen::VectorXd& angle_mm, const Unknowns* v) {
   // The same rotations applied to the new right-hand side only: the window's last column, ū's
   // right-hand side per row, by the kept rotations (c̄, s̄, x_j). (Rebuilding c̄ as 1 − s̄·x_j would
   // keep one number fewer but loses ε·|ū| where the old row's ū is large and c̄ small: a row entry
   // that is zero but for rounding, placed into an empty row, has |ū| ~ 1/ε.)
-  const int m = Width > 0 ? Width : m_, s = m + 1, nb = nb_, nred = M_ - L_;
+  const int m = m_, s = m + 1, nb = nb_, nred = M_ - L_;
   const double* rot = ch.rot.data();
   const unsigned char* mask_in = ch.rot_mask.data();
-  if constexpr (Width > 0) {
-    // A fixed narrow window (its mask one byte): the loops over its columns have constant bounds
-    // and are written out whole. Not vectorised: the window's slide, done with wide loads of
-    // values just stored one at a time, stalled on store forwarding (a third of this pass).
-    static_assert(Width + 1 <= 8, "one mask byte");
-    std::array<double, Width> w{};
-    for_each_station(
-        ch, readings, mu, angle_mm, v, [&](long, long K, auto&& reduced) TA_NO_VECTORIZE {
-          for (int r = 0; r < nred; ++r) {
-            double x = reduced(r);
-            const unsigned bits = *mask_in++;
-            const unsigned cols = bits & ((1u << Width) - 1);
-            // With bit m, the row ended in an empty row of the window, at its last column.
-            const int placed = (bits >> Width) & 1 ? 31 - std::countl_zero(cols) : Width;
-            for (int j = 0; j < Width; ++j) {
-              if (!((cols >> j) & 1)) continue;
-              if (j == placed) {
-                w[static_cast<std::size_t>(j)] = rot[0] * x;
-                ++rot;
-                continue;
-              }
-              const double cb = rot[0], sb = rot[1], xj = rot[2],
-                           u = w[static_cast<std::size_t>(j)];
-              rot += kRotationValues;
-              w[static_cast<std::size_t>(j)] = cb * u + sb * x;
-              x -= xj * u;
-            }
-          }
-          qb_[static_cast<std::size_t>(K)] = w[0];
-          for (int j = 0; j + 1 < Width; ++j)
-            if (j + 1 < nb) w[static_cast<std::size_t>(j)] = w[static_cast<std::size_t>(j + 1)];
-          for (int j = 0; j < Width; ++j)
-            if (j == nb - 1) w[static_cast<std::size_t>(j)] = 0;
-        });
-    for (int c = 0; c < m; ++c)
-      ch.W[static_cast<std::size_t>(c * s + m)] = w[static_cast<std::size_t>(c)];
-    return;
-  }
   std::vector<double> wr_heap(static_cast<std::size_t>(m), 0.0);
   double* wr = wr_heap.data();
   for_each_station(ch, readings, mu, angle_mm, v, [&](long, long K, auto&& reduced) {

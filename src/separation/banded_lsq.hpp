@@ -209,18 +209,53 @@ class BandedLsq {
   }
 
   // Forms the right-hand sides b − A·v block by block (v null: its free unknowns 0, only the
-  // offsets pinned), stores each station's local ones and
-  // calls fn(t, K, reduced) in the chain's order, reduced(r) giving its reduced right-hand side r.
+  // offsets pinned), stores each station's local ones and calls fn(K0, B, bt) per block of
+  // stations [K0, K0 + B) in the chain's order; bt[(L + r)·B + k] is the reduced right-hand side
+  // r of station K0 + k, and the block's stations are to be taken in the chain's direction.
+  template <class Fn>
+  void for_each_block(const Chain& ch, const Eigen::MatrixXd& readings,
+                      const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
+                      const Unknowns* v, Fn&& fn);
+  // for_each_block station by station: fn(t, K, reduced) in the chain's order, reduced(r) giving
+  // the station's reduced right-hand side r.
   template <class Fn>
   void for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
                         const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
                         const Unknowns* v, Fn&& fn);
-  template <int Width>  // window width, 0: any
+  // Calls fn.template operator()<NB>() with the band's width NB as a constant when the window's
+  // width Width is one (its masks then one byte) and returns true; false otherwise.
+  template <int Width, class Fn>
+  bool with_narrow(Fn&& fn) const {
+    if constexpr (Width == 0) {
+      return false;
+    } else {
+      return masked_ && with_width(nb_, [&]<int NB>() {
+               if constexpr (NB > 0 && NB <= Width) {
+                 fn.template operator()<NB>();
+                 return true;
+               } else {
+                 return false;
+               }
+             });
+    }
+  }
+  // Folds the chain's rows into R by Givens rotations, station by station (any window width).
   void fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
             const Eigen::VectorXd& angle_mm, const Unknowns* v);
-  template <int Width>  // window width, 0: any
+  // The pages a chain's fold writes from here on (the kept rotations from rot), committed on
+  // another core: started after the first block, when the rotations per station are known.
+  std::vector<Prefault::Region> rest_of_fold(const Chain& ch, const double* rot) const;
+  // fold for a window of Width columns, NB of them the band's (both compile-time constants).
+  template <int Width, int NB>
+  void fold_narrow(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                   const Eigen::VectorXd& angle_mm, const Unknowns* v);
+  // The kept rotations applied to a new right-hand side (any window width).
   void refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                   const Eigen::VectorXd& angle_mm, const Unknowns* v);
+  // refold_rhs for a window of Width columns, NB of them the band's.
+  template <int Width, int NB>
+  void refold_narrow(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
+                     const Eigen::VectorXd& angle_mm, const Unknowns* v);
   // final_ from the chains' last windows (one chain: converted; two: joined by a QR). Returns the
   // residual's share left by the join.
   double join();
