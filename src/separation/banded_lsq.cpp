@@ -440,7 +440,11 @@ void BandedLsq::fold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
       for (int r = 0; r < nred; ++r) {
         const double* cr = ch.Cred.data() + static_cast<std::size_t>(r * m);
         std::array<double, s> row;
-        unroll<m>([&](auto c) { row[c] = (pinned >> c) & 1 ? 0.0 : cr[c]; });
+        unroll<m>([&](auto c) { row[c] = cr[c]; });
+        if (pinned != 0) [[unlikely]]
+          unroll<m>([&](auto c) {
+            if ((pinned >> c) & 1) row[c] = 0;
+          });
         row[m] = bt[static_cast<std::size_t>((L + r) * B + k)];
         double delta = 1;
         unsigned mask = 0;
