@@ -66,6 +66,8 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
       {"three probes 0, 1, 2", {0, 1, 2}, false, {}},
       {"two probes and an angle channel", {0, 1}, true, {}},
       {"three probes, known zero difference", {0, 1, 2}, false, 0.002},
+      {"three probes and an angle channel (5-column window)", {0, 1, 2}, true, {}},
+      {"four probes 0, 1, 2, 3 (6-column window)", {0, 1, 2, 3}, false, {}},
       {"five probes", {0, 1, 2, 3, 4}, false, {}},
       {"four probes over 11 steps (14-column window)", {0, 3, 7, 11}, false, {}},
       {"four probes over 66 steps (window over 64 columns)", {0, 1, 2, 66}, false, {}, 300},
