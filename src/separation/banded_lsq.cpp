@@ -426,7 +426,7 @@ void BandedLsq::fold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
   for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
     const long t0 = ch.dir > 0 ? K0 - ch.first_station : ch.first_station - (K0 + B - 1);
     if (t0 == kBlock && chains_.size() == 1) prefault.emplace(rest_of_fold(ch, rot));
-    std::array<double, m* s> W = window;
+    auto W = window;  // in registers for the block
     double* rp = rot;
     unsigned char* mp = mask_out;
     double ss = ssr, md = min_d;
@@ -604,7 +604,7 @@ void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
   const unsigned char* mask_in = ch.rot_mask.data();
   std::array<double, m> window{};
   for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
-    std::array<double, m> w = window;
+    auto w = window;  // in registers for the block
     const double* rp = rot;
     const unsigned char* mp = mask_in;
     for (int i = 0; i < B; ++i) {
