@@ -261,11 +261,10 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
   const int m = m_, s = m + 1, nb = nb_, nred = M_ - L_;
   unsigned char* mask_out = ch.rot_mask.data();
   double* rot = ch.rot.data();
-  static_assert(kRotationValues == 3);
-  auto keep_identity = [&rot] {  // (c̄, s̄, x_j) of a rotation that changes nothing
+  static_assert(kRotationValues == 2);
+  auto keep_identity = [&rot] {  // (c̄, x_j) of a rotation that changes nothing
     rot[0] = 1;
     rot[1] = 0;
-    rot[2] = 0;
     rot += kRotationValues;
   };
   std::vector<double>& W = ch.W;
@@ -315,8 +314,7 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
                 *rot++ = inv;
                 mask |= (std::uint64_t{1} << j) | (std::uint64_t{1} << m);
               } else if (keep_rotations_) {
-                *rot++ = 0;
-                *rot++ = inv;
+                *rot++ = 0;  // the refinement knows the placement by its empty window row
                 *rot++ = xi;
               }
               delta = 0;
@@ -335,7 +333,6 @@ void BandedLsq::fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::Ro
             }
             if (keep_rotations_) {
               *rot++ = cb;
-              *rot++ = sb;
               *rot++ = xi;
               if (masked_) mask |= std::uint64_t{1} << j;
             }
@@ -480,8 +477,7 @@ void BandedLsq::fold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
           });
           if (keep) {
             rp[0] = cb;
-            rp[1] = sb;
-            rp[2] = xi;
+            rp[1] = xi;
             rp += kRotationValues;
           }
           mask |= 1u << j;
@@ -595,22 +591,25 @@ void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
                               const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
                               const Unknowns* v) {
   // refold_rhs for a window of Width columns (its mask one byte), NB of them the band's: the
-  // window's right-hand sides are a local array indexed by constants, in registers across a
-  // block's stations.
+  // window's right-hand sides and weights are local arrays indexed by constants, in registers
+  // across a block's stations.
   constexpr int m = Width, s = Width + 1;
   static_assert(NB >= 1 && NB <= Width && Width + 1 <= 8, "one mask byte");
+  constexpr double kEmpty = std::numeric_limits<double>::infinity();
   const int L = L_, nred = M_ - L_;
   const double* rot = ch.rot.data();
   const unsigned char* mask_in = ch.rot_mask.data();
-  std::array<double, m> window{};
+  std::array<double, m> window{}, inv_d;
+  inv_d.fill(kEmpty);
   for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
     auto w = window;  // in registers for the block
+    auto e = inv_d;
     const double* rp = rot;
     const unsigned char* mp = mask_in;
     for (int i = 0; i < B; ++i) {
       const int k = ch.dir > 0 ? i : B - 1 - i;
       for (int r = 0; r < nred; ++r) {
-        double x = bt[static_cast<std::size_t>((L + r) * B + k)];
+        double x = bt[static_cast<std::size_t>((L + r) * B + k)], delta = 1;
         const unsigned bits = *mp++;
         const unsigned cols = bits & ((1u << m) - 1);
         // With bit m, the row ended in an empty row of the window, at its last column.
@@ -619,12 +618,17 @@ void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
           constexpr int j = decltype(jc)::value;
           if (!((cols >> j) & 1)) return;
           if (j == placed) {
-            w[j] = rp[0] * x;
+            const double inv = rp[0];
             ++rp;
+            w[j] = inv * x;
+            e[j] = inv * inv / delta;
             return;
           }
-          const double cb = rp[0], sb = rp[1], xj = rp[2], u = w[j];
+          const double cb = rp[0], xj = rp[1], u = w[j];
           rp += kRotationValues;
+          e[j] *= cb;
+          const double sb = delta * xj * e[j];
+          delta *= cb;
           w[j] = cb * u + sb * x;
           x -= xj * u;
         });
@@ -632,13 +636,17 @@ void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
       qb_[static_cast<std::size_t>(K0 + k)] = w[0];
       unroll<NB>([&](auto jc) {  // the slide; the globals' entries stay
         constexpr int j = decltype(jc)::value;
-        if constexpr (j + 1 < NB)
+        if constexpr (j + 1 < NB) {
           w[j] = w[j + 1];
-        else
+          e[j] = e[j + 1];
+        } else {
           w[j] = 0;
+          e[j] = kEmpty;
+        }
       });
     }
     window = w;
+    inv_d = e;
     rot = rp;
     mask_in = mp;
   });
@@ -649,21 +657,35 @@ void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
 void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                            const Eigen::VectorXd& angle_mm, const Unknowns* v) {
   // The same rotations applied to the new right-hand side only: the window's last column, ū's
-  // right-hand side per row, by the kept rotations (c̄, s̄, x_j). (Rebuilding c̄ as 1 − s̄·x_j would
-  // keep one number fewer but loses ε·|ū| where the old row's ū is large and c̄ small: a row entry
+  // right-hand side per row, by the kept rotations (c̄, x_j). s̄ = δ·x_j/d' is formed again from
+  // the window's weights, which the pass follows as 1/d (1/d' = c̄/d; a placement sets
+  // d = δ·x_j²), and the row's δ (δ' = c̄·δ): products only, so s̄ comes back to a few units of
+  // round-off relative, where storing it cost a third of the rotations' memory. (Rebuilding c̄ as
+  // 1 − s̄·x_j instead would lose ε·|ū| where the old row's ū is large and c̄ small: a row entry
   // that is zero but for rounding, placed into an empty row, has |ū| ~ 1/ε.)
+  constexpr double kEmpty = std::numeric_limits<double>::infinity();
   const int m = m_, s = m + 1, nb = nb_, nred = M_ - L_;
   const double* rot = ch.rot.data();
   const unsigned char* mask_in = ch.rot_mask.data();
-  std::vector<double> wr_heap(static_cast<std::size_t>(m), 0.0);
-  double* wr = wr_heap.data();
+  std::vector<double> wr(static_cast<std::size_t>(m), 0.0), e(static_cast<std::size_t>(m), kEmpty);
   for_each_station(ch, readings, mu, angle_mm, v, [&](long, long K, auto&& reduced) {
     for (int r = 0; r < nred; ++r) {
-      double x = reduced(r);
-      auto apply = [&](int j) {
-        const double cb = rot[0], sb = rot[1], xj = rot[2];
+      double x = reduced(r), delta = 1;
+      auto place = [&](std::size_t j, double inv) {
+        wr[j] = inv * x;
+        e[j] = inv * inv / delta;
+      };
+      auto apply = [&](std::size_t j) {
+        const double cb = rot[0], xj = rot[1], u = wr[j];
         rot += kRotationValues;
-        const double u = wr[j];
+        if (xj == 0) return;   // an identity (windows without masks)
+        if (e[j] == kEmpty) {  // a placement (windows without masks)
+          place(j, 1 / xj);
+          return;
+        }
+        e[j] *= cb;
+        const double sb = delta * xj * e[j];
+        delta *= cb;
         wr[j] = cb * u + sb * x;
         x -= xj * u;
       };
@@ -674,23 +696,28 @@ void BandedLsq::refold_rhs(Chain& ch, const Eigen::MatrixXd& readings, const Eig
         const bool placed = (mask >> m) & 1;  // the last one placed the row into an empty row
         mask &= (std::uint64_t{1} << m) - 1;
         for (; mask != 0; mask &= mask - 1) {
-          const int j = std::countr_zero(mask);
+          const auto j = static_cast<std::size_t>(std::countr_zero(mask));
           if (placed && (mask & (mask - 1)) == 0) {
-            wr[j] = rot[0] * x;
+            place(j, rot[0]);
             ++rot;
           } else {
             apply(j);
           }
         }
       } else {
-        for (int j = 0; j < m; ++j) apply(j);
+        for (std::size_t j = 0; j < static_cast<std::size_t>(m); ++j) apply(j);
       }
     }
     qb_[static_cast<std::size_t>(K)] = wr[0];
-    for (int t = 0; t + 1 < nb; ++t) wr[t] = wr[t + 1];
-    wr[nb - 1] = 0;
+    for (std::size_t t = 0; t + 1 < static_cast<std::size_t>(nb); ++t) {
+      wr[t] = wr[t + 1];
+      e[t] = e[t + 1];
+    }
+    wr[static_cast<std::size_t>(nb - 1)] = 0;
+    e[static_cast<std::size_t>(nb - 1)] = kEmpty;
   });
-  for (int c = 0; c < m; ++c) ch.W[static_cast<std::size_t>(c * s + m)] = wr[c];
+  for (int c = 0; c < m; ++c)
+    ch.W[static_cast<std::size_t>(c * s + m)] = wr[static_cast<std::size_t>(c)];
 }
 
 template <int NB>

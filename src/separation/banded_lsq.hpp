@@ -308,14 +308,14 @@ class BandedLsq {
   Uninitialized<double> qb_;    // n
   Uninitialized<double> bloc_;  // n × L
   std::vector<double> final_;   // m × (m + 1)
-  // The rotations in the order applied, each as (c̄, s̄, x_j): c̄ = d/d', s̄ = δ·x_j/d' and the
-  // row's entry x_j. Per station and reduced row, those whose row entry was nonzero, with a mask
-  // of their window columns (masked_), or all of them (windows wider than 63 columns). With the
+  // The rotations in the order applied, each as (c̄, x_j): c̄ = d/d' and the row's entry x_j
+  // (the refinement forms s̄ = δ·x_j/d' again from them). Per station and reduced row, those
+  // whose row entry was nonzero, with a mask of their window columns (masked_), or all of them
+  // (windows wider than 63 columns: identities as (1, 0), a placement as (0, x_j)). With the
   // mask, a row's placement into an empty window row is one number, 1/x_j (mask bit m).
-  // Reserved, not committed: only the rotations written take memory. 384 MB of three numbers each
-  // keeps as many stations' rotations as 256 MB did of two.
+  // Reserved, not committed: only the rotations written take memory.
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{384} << 20;
-  static constexpr int kRotationValues = 3;
+  static constexpr int kRotationValues = 2;
   bool keep_rotations_ = false;
   bool masked_ = true;
   int mask_bytes_ = 1;
