@@ -13,9 +13,11 @@
 //      squares computations by Givens transformations without square roots", J. Inst. Maths
 //      Applics 12; the updates of Miller's AS 274): the window holds R = D^½·Ū, Ū unit upper
 //      triangular, as d and Ū. A rotation then waits for one division instead of a square root
-//      and a division: the fold is one long chain of dependent rotations, so its latency is the
-//      factorisation's time. Once station K is in, no later row touches w(K): the window's first
-//      row gives w(K)'s row of R, √d·[1, ū], stored, and the window slides by one position.
+//      and a division. For windows of up to six columns the window and the row are kept in
+//      registers across a block of stations (the widths are compile-time constants), so a
+//      station costs its arithmetic and the stores of its outputs, not the window's traffic.
+//      Once station K is in, no later row touches w(K): the window's first row gives w(K)'s row
+//      of R, √d·[1, ū], stored, and the window slides by one position.
 // This is the QR factorisation of the whole system in the order (g, θ, w)(K) station by station,
 // globals last: backward stable, O(n·(span + G)²) time, O(n·(span + G)) memory, no allocation per
 // station.
