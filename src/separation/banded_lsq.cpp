@@ -193,7 +193,7 @@ void BandedLsq::for_each_station(const Chain& ch, const Eigen::MatrixXd& reading
   const int L = L_;
   for_each_block(ch, readings, mu, angle_mm, v, [&](long K0, int B, const double* bt) {
     for (int i = 0; i < B; ++i) {
-      const int k = ch.dir > 0 ? i : B - 1 - i;
+      const int k = ch.in_block(i, B);
       const long K = K0 + k;
       fn(ch.dir * (K - ch.first_station), K,
          [&](int r) { return bt[static_cast<std::size_t>((L + r) * B + k)]; });
@@ -428,7 +428,7 @@ void BandedLsq::fold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
     unsigned char* mp = mask_out;
     double ss = ssr, md = min_d;
     for (int i = 0; i < B; ++i) {
-      const int k = ch.dir > 0 ? i : B - 1 - i;
+      const int k = ch.in_block(i, B);
       const long K = K0 + k, t = t0 + i;
       while (next_pin < pins.size() && pins[next_pin] < t) ++next_pin;
       unsigned pinned = 0;  // the band's columns whose w is pinned
@@ -607,7 +607,7 @@ void BandedLsq::refold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
     const double* rp = rot;
     const unsigned char* mp = mask_in;
     for (int i = 0; i < B; ++i) {
-      const int k = ch.dir > 0 ? i : B - 1 - i;
+      const int k = ch.in_block(i, B);
       for (int r = 0; r < nred; ++r) {
         double x = bt[static_cast<std::size_t>((L + r) * B + k)], delta = 1;
         const unsigned bits = *mp++;

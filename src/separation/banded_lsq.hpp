@@ -199,6 +199,8 @@ class BandedLsq {
     long station(long t) const { return first_station + dir * t; }
     long lowest_station() const { return dir > 0 ? first_station : first_station - steps + 1; }
     long position(long pp) const { return first_pos + dir * pp; }
+    // The i-th station of a block of B, in the chain's order, as its offset in the block.
+    int in_block(int i, int B) const { return dir > 0 ? i : B - 1 - i; }
   };
 
   // Calls fn(i) for each chain i, the second on another thread.
@@ -224,8 +226,9 @@ class BandedLsq {
   void for_each_station(const Chain& ch, const Eigen::MatrixXd& readings,
                         const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,
                         const Unknowns* v, Fn&& fn);
-  // Calls fn.template operator()<NB>() with the band's width NB as a constant when the window's
-  // width Width is one (its masks then one byte) and returns true; false otherwise.
+  // For a compile-time window width Width (not 0: any), calls fn.template operator()<NB>() with
+  // the band's width NB as a constant too and returns true; false for Width 0 or a band width
+  // without an instance (the general passes then run).
   template <int Width, class Fn>
   bool with_narrow(Fn&& fn) const {
     if constexpr (Width == 0) {
@@ -315,7 +318,8 @@ class BandedLsq {
   // whose row entry was nonzero, with a mask of their window columns (masked_), or all of them
   // (windows wider than 63 columns: identities as (1, 0), a placement as (0, x_j)). With the
   // mask, a row's placement into an empty window row is one number, 1/x_j (mask bit m).
-  // Reserved, not committed: only the rotations written take memory.
+  // Reserved, not committed: only the rotations written take memory. At two numbers each, 384 MB
+  // keeps rotations for 1.5 times the stations it did at three.
   static constexpr std::size_t kRotationBudgetBytes = std::size_t{384} << 20;
   static constexpr int kRotationValues = 2;
   bool keep_rotations_ = false;
