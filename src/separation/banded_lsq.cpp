@@ -386,20 +386,6 @@ std::vector<Prefault::Region> BandedLsq::rest_of_fold(const Chain& ch, const dou
           {ch.rot_mask.data(), ch.rot_mask.size()}};
 }
 
-namespace {
-
-// Calls f(std::integral_constant<int, I>{}) for I = 0 … N − 1: a loop over a narrow window's
-// columns with compile-time indices, so that the window can stay in registers.
-template <int N, class F>
-[[gnu::always_inline]] inline void unroll(F&& f) {
-  if constexpr (N > 0) [&]<int... I>(std::integer_sequence<int, I...>) {
-      (f(std::integral_constant<int, I>{}), ...);
-    }
-  (std::make_integer_sequence<int, N>{});
-}
-
-}  // namespace
-
 template <int Width, int NB>
 void BandedLsq::fold_narrow(Chain& ch, const Eigen::MatrixXd& readings,
                             const Eigen::RowVectorXd& mu, const Eigen::VectorXd& angle_mm,

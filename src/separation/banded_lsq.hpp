@@ -79,6 +79,16 @@ decltype(auto) with_width(int w, Fn&& fn) {
   }
 }
 
+// Calls f(std::integral_constant<int, I>{}) for I = 0 … N − 1: a loop over a narrow window's
+// columns with compile-time indices, so that the window can stay in registers.
+template <int N, class F>
+[[gnu::always_inline]] inline void unroll(F&& f) {
+  if constexpr (N > 0) [&]<int... I>(std::integer_sequence<int, I...>) {
+      (f(std::integral_constant<int, I>{}), ...);
+    }
+  (std::make_integer_sequence<int, N>{});
+}
+
 // Runs first() here and, at the same time, second() on another thread (both must finish before
 // it returns); one after the other if no thread can be started.
 template <class First, class Second>
@@ -230,19 +240,24 @@ class BandedLsq {
   // the band's width NB as a constant too and returns true; false for Width 0 or a band width
   // without an instance (the general passes then run).
   template <int Width, class Fn>
-  bool with_narrow(Fn&& fn) const {
+  bool with_band(Fn&& fn) const {
     if constexpr (Width == 0) {
       return false;
     } else {
-      return masked_ && with_width(nb_, [&]<int NB>() {
-               if constexpr (NB > 0 && NB <= Width) {
-                 fn.template operator()<NB>();
-                 return true;
-               } else {
-                 return false;
-               }
-             });
+      return with_width(nb_, [&]<int NB>() {
+        if constexpr (NB > 0 && NB <= Width) {
+          fn.template operator()<NB>();
+          return true;
+        } else {
+          return false;
+        }
+      });
     }
+  }
+  // with_band for the factorisation's passes, which also need the rotations' column masks.
+  template <int Width, class Fn>
+  bool with_narrow(Fn&& fn) const {
+    return masked_ && with_band<Width>(std::forward<Fn>(fn));
   }
   // Folds the chain's rows into R by Givens rotations, station by station (any window width).
   void fold(Chain& ch, const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
@@ -390,11 +405,14 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram,
   // Divisions by the diagonal as multiplications by reciprocals: a division costs several times
   // a multiplication's throughput, and there would be dozens per station.
   const double rinv[2] = {1 / Rloc_(0, 0), L == 2 ? 1 / Rloc_(1, 1) : 0.0};
-  using Gram = std::array<double, k * k>;  // Σ y·yᵀ over forward rows, upper triangle
+  // Σ y·yᵀ over the forward rows, of which the upper triangle is used. All k × k products: each
+  // row of the sum is y[a] times y, whole aligned pairs of y, where the triangle's rows start
+  // mid-pair and their loads span two of y's stores (a stall of a dozen cycles each).
+  using Gram = std::array<double, k * k>;
   std::array<Gram, 2> yy{};
   auto add_gram = [](Gram& g, const double* y) {
     for (int a = 0; a < k; ++a)
-      for (int b = a; b < k; ++b) g[static_cast<std::size_t>(a * k + b)] += y[a] * y[b];
+      for (int b = 0; b < k; ++b) g[static_cast<std::size_t>(a * k + b)] += y[a] * y[b];
   };
   // win[c]: the row of y (or z) of window column c, null past the end.
   struct Window {
@@ -431,7 +449,161 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram,
       }
     }
   };
+  // The two passes for a window of Width columns, NB of them the band's (compile-time constants):
+  // the window's rows of y (or z) are local arrays indexed by constants only (every loop over
+  // columns unrolled), so they stay in registers, the slide by one position is a renaming, and no
+  // load waits on a store it only partly overlaps. Same arithmetic, in the same order, as the
+  // general passes below.
+  using KRow = std::array<double, k>;
+  auto chain_cloc = [&](const Chain& ch) {
+    std::array<double, 2 * (Width > 0 ? Width : 1)> cloc{};  // 0 for a missing θ
+    for (int l = 0; l < L; ++l)
+      for (int c = 0; c < m; ++c) cloc[static_cast<std::size_t>(l * m + c)] = ch.Cloc(l, c);
+    return cloc;
+  };
+  // local_forward into two rows (the second 0 without θ).
+  const double rl01 = L == 2 ? Rloc_(0, 1) : 0.0;
+  auto local_narrow = [&](long K, KRow& y0, KRow& y1) __attribute__((always_inline)) {
+    v_or_zero(D.g(K), y0.data());
+    unroll<k>([&](auto j) { y0[j] *= rinv[0]; });
+    if (L == 2) {
+      v_or_zero(D.t(K), y1.data());
+      unroll<k>([&](auto j) { y1[j] = (y1[j] - rl01 * y0[j]) * rinv[1]; });
+    } else {
+      y1.fill(0.0);
+    }
+  };
+  auto forward_narrow = [&]<int NB>(std::size_t ci) {
+    constexpr int W = Width, G = W - NB;
+    const Chain& ch = chains_[ci];
+    const bool upper = ci == 1;
+    const auto cloc = chain_cloc(ch);
+    Gram g{};
+    std::array<KRow, W> a;  // the band's positions t..t+NB−1, then the globals
+    // A position's row of V as it enters the window (the final window's positions: the lower
+    // chain's; the upper chain sums its share from 0); positions past the ends stay 0.
+    auto enter = [&](long pp, KRow& r) {
+      const long pos = ch.position(pp);
+      if (pos >= 0 && pos < Q && (!upper || pp < ch.steps))
+        v_or_zero(D.w(pos), r.data());
+      else
+        r.fill(0.0);
+    };
+    unroll<NB - 1>([&](auto c) { enter(c, a[c]); });
+    unroll<G>([&](auto gi) {
+      constexpr int c = NB + decltype(gi)::value;
+      if (upper)
+        a[c].fill(0.0);
+      else
+        std::copy_n(yg.data() + static_cast<std::size_t>(gi) * ku, k, a[c].data());
+    });
+    for (long t = 0; t < ch.steps; ++t) {
+      const long K = ch.station(t), pos = ch.position(t);
+      enter(t + NB - 1, a[NB - 1]);
+      KRow y0l, y1l;
+      local_narrow(K, y0l, y1l);
+      unroll<W>([&](auto c) {
+        const double c0 = cloc[c], c1 = cloc[W + c];
+        unroll<k>([&](auto j) { a[c][j] -= c0 * y0l[j]; });
+        if (L == 2) unroll<k>([&](auto j) { a[c][j] -= c1 * y1l[j]; });
+      });
+      const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(W);
+      if (is_free(D.w(pos)) && R[0] != 0) {
+        unroll<W - 1>([&](auto c1) {
+          constexpr int c = decltype(c1)::value + 1;
+          const double uc = R[c];
+          unroll<k>([&](auto j) { a[c][j] -= uc * a[0][j]; });
+        });
+        const double inv = 1 / R[0];
+        unroll<k>([&](auto j) { a[0][j] *= inv; });
+      } else {  // no row of R: 0
+        a[0].fill(0.0);
+      }
+      double* y0 = wrow(pos);
+      unroll<k>([&](auto j) { y0[j] = a[0][j]; });
+      if (gram)  // the station's three rows in one pass over the sum
+        unroll<k>([&](auto r) {
+          unroll<k>([&](auto c) {
+            double& e = g[static_cast<std::size_t>(r * k + c)];
+            e += y0l[r] * y0l[c];
+            if (L == 2) e += y1l[r] * y1l[c];
+            e += a[0][r] * a[0][c];
+          });
+        });
+      unroll<NB - 1>([&](auto c) { a[c] = a[c + 1]; });
+    }
+    // What the window holds at the end: the final window's positions and the globals.
+    unroll<NB - 1>([&](auto c) {
+      const long pos = ch.position(ch.steps + c);
+      if (pos < 0 || pos >= Q) return;
+      double* out = upper ? up_shared.data() + static_cast<std::size_t>(pos - h_) * ku : wrow(pos);
+      std::copy_n(a[c].data(), k, out);
+    });
+    unroll<G>([&](auto gi) {
+      double* out = (upper ? up_shared.data() + static_cast<std::size_t>(NB - 1) * ku : yg.data()) +
+                    static_cast<std::size_t>(gi) * ku;
+      std::copy_n(a[NB + gi].data(), k, out);
+    });
+    yy[ci] = g;
+  };
+  auto backward_narrow = [&]<int NB>(std::size_t ci) {
+    constexpr int W = Width, G = W - NB;
+    const Chain& ch = chains_[ci];
+    const auto cloc = chain_cloc(ch);
+    std::array<KRow, W> z{};      // the band's positions t..t+NB−1, then the globals
+    unroll<NB - 1>([&](auto c) {  // the final window's positions: solved
+      const long pos = ch.position(ch.steps + c);
+      if (pos >= 0 && pos < Q) std::copy_n(wrow(pos), k, z[c + 1].data());
+    });
+    unroll<G>([&](auto gi) {
+      std::copy_n(yg.data() + static_cast<std::size_t>(gi) * ku, k, z[NB + gi].data());
+    });
+    for (long t = ch.steps - 1; t >= 0; --t) {
+      const long K = ch.station(t), pos = ch.position(t);
+      const int idw = D.w(pos);
+      const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(W);
+      const double* y = wrow(pos);
+      if (is_free(idw) && R[0] != 0) {  // z(w) = y/√d − ū·(the later z)
+        const double inv = 1 / R[0];
+        unroll<k>([&](auto j) { z[0][j] = y[j] * inv; });
+        unroll<W - 1>([&](auto c1) {
+          constexpr int c = decltype(c1)::value + 1;
+          const double uc = R[c];
+          unroll<k>([&](auto j) { z[0][j] -= uc * z[c][j]; });
+        });
+      } else {
+        unroll<k>([&](auto j) { z[0][j] = y[j]; });
+      }
+      if (is_free(idw)) use(idw, static_cast<const double*>(z[0].data()), zdiag_w[K]);
+      KRow y0l, y1l, z1{};
+      local_narrow(K, y0l, y1l);
+      if (L == 2) {
+        unroll<W>([&](auto c) {
+          const double cl = cloc[W + c];
+          unroll<k>([&](auto j) { y1l[j] -= cl * z[c][j]; });
+        });
+        unroll<k>([&](auto j) { z1[j] = y1l[j] * rinv[1]; });
+      }
+      unroll<W>([&](auto c) {
+        const double cl = cloc[c];
+        unroll<k>([&](auto j) { y0l[j] -= cl * z[c][j]; });
+      });
+      if (L == 2) unroll<k>([&](auto j) { y0l[j] -= rl01 * z1[j]; });
+      unroll<k>([&](auto j) { y0l[j] *= rinv[0]; });
+      if (const int id = D.g(K); is_free(id))
+        use(id, static_cast<const double*>(y0l.data()), zdiag_loc[static_cast<std::size_t>(K * L)]);
+      if (L == 2)
+        if (const int id = D.t(K); is_free(id))
+          use(id, static_cast<const double*>(z1.data()),
+              zdiag_loc[static_cast<std::size_t>(K * L + 1)]);
+      unroll<NB - 1>([&](auto c1) {
+        constexpr int c = NB - 1 - decltype(c1)::value;
+        z[c] = z[c - 1];
+      });
+    }
+  };
   auto forward = [&](std::size_t ci) {
+    if (with_band<Width>([&]<int NB>() { forward_narrow.template operator()<NB>(ci); })) return;
     const Chain& ch = chains_[ci];
     double* shared = ci == 1 ? up_shared.data() : nullptr;
     Gram g{};  // here, not in yy: yy[0] and yy[1] share a cache line
@@ -481,6 +653,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram,
     yy[ci] = g;
   };
   auto backward = [&](std::size_t ci) {
+    if (with_band<Width>([&]<int NB>() { backward_narrow.template operator()<NB>(ci); })) return;
     const Chain& ch = chains_[ci];
     Window win(m);
     std::array<double, 2 * k> yl{}, zl{};

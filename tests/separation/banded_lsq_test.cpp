@@ -65,6 +65,7 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
   const std::vector<Layout> layouts = {
       {"three probes 0, 1, 2", {0, 1, 2}, false, {}},
       {"two probes and an angle channel", {0, 1}, true, {}},
+      {"two probes, no pitch (one local unknown per station)", {0, 1}, false, {}},
       {"three probes, known zero difference", {0, 1, 2}, false, 0.002},
       {"three probes and an angle channel (5-column window)", {0, 1, 2}, true, {}},
       {"four probes 0, 1, 2, 3 (6-column window)", {0, 1, 2, 3}, false, {}},
