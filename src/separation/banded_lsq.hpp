@@ -181,13 +181,18 @@ class BandedLsq {
   // the globals first, then outward along each chain. With two chains, both callbacks are called
   // from two threads at once (for different unknowns). With `gram` (k × k, row-major), also adds
   // Vᵀ(AᵀA)⁻¹V to it: with Y = R⁻ᵀV the forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows'
-  // outer products.
+  // outer products; it is complete when ready() is called, after the forward solve and before
+  // the first use() (so use() may read it).
   // It works in the factorisation's memory that only solve_add and refactor_rhs read: the forward
   // solve's workpiece rows (Q × k values) in the kept rotations where they fit, the diagonal in
   // the right-hand sides. So after it, a solve_add needs a factor() first (refactor_rhs() then
   // factorises again).
+  template <int k, class VRow, class Use, class Ready>
+  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&& ready);
   template <int k, class VRow, class Use>
-  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr);
+  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr) {
+    solve_normal_rows<k>(std::forward<VRow>(v_row), std::forward<Use>(use), gram, [] {});
+  }
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
  private:
@@ -279,9 +284,9 @@ class BandedLsq {
   // final_ from the chains' last windows (one chain: converted; two: joined by a QR). Returns the
   // residual's share left by the join.
   double join();
-  template <int k, int Width, class VRow, class Use>  // window width, 0: any
-  void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Uninitialized<double> (&yw)[2],
-                              long split);
+  template <int k, int Width, class VRow, class Use, class Ready>  // window width, 0: any
+  void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Ready& ready,
+                              Uninitialized<double> (&yw)[2], long split);
   template <int NB>  // band width, 0: any
   void back_substitute(const Chain& ch, const std::vector<double>& xc, const Unknowns& v,
                        bool set_free, double* mc, double* mv) const;
@@ -346,8 +351,8 @@ class BandedLsq {
   double scale_ = 1;
 };
 
-template <int k, class VRow, class Use>
-void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) {
+template <int k, class VRow, class Use, class Ready>
+void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&& ready) {
   // The forward solve's workpiece rows: the lower chain's positions (up to the final window's) in
   // one buffer, the upper chain's in another, each in its chain's dead rotations where they fit
   // (pages already committed), else new.
@@ -364,11 +369,12 @@ void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram) {
     }
     yw[c].resize(need[c]);
   }
-  with_width(m_, [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram, yw, split); });
+  with_width(m_,
+             [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram, ready, yw, split); });
 }
 
-template <int k, int Width, class VRow, class Use>  // window width, 0: any
-void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram,
+template <int k, int Width, class VRow, class Use, class Ready>  // window width, 0: any
+void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Ready& ready,
                                        Uninitialized<double> (&yw)[2], long split) {
   // Rᵀy = V forward in elimination order (per chain and station g, θ, and the eliminated w; then
   // the final window), and R z = y backward. y of an eliminated w is final after its station's
@@ -746,6 +752,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram,
         const auto ab = static_cast<std::size_t>(a <= b ? a * k + b : b * k + a);
         gram[a * k + b] += yy[0][ab] + yy[1][ab];
       }
+  ready();
   std::array<double, k> acc{};
   for (int c = m - 1; c >= 0; --c) {
     const double* F = final_.data() + static_cast<std::size_t>(c * s);

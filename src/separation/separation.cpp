@@ -943,111 +943,131 @@ struct ReferenceAlgebra {
 // least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
 void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
                        Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
-  using Row = ReferenceAlgebra::Row;
   const Design& D = st.D;
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_variance), with
-  // S = VᵀZV. (ZV)_u and Z_uu arrive row by row from the solve (which runs the selected inversion
-  // alongside): s²·Z_uu − 2s·u·(ZV)_u goes into the output array at once, and S, from the solve's
-  // forward rows, completes it afterwards. Pinned unknowns have no Z_uu and no (ZV)_u: their
-  // variance is u·S·u alone. The solve writes every free unknown's entry, so only the pinned ones
-  // are set to 0 first (not the whole arrays: a zeroing pass over 24 MB).
+  // S = VᵀZV. S comes from the solve's forward rows (their Gram matrix) and is complete before
+  // the backward solve hands out (ZV)_u and Z_uu row by row (the selected inversion runs
+  // alongside), so each point's variance is written once, as its row arrives. Pinned unknowns
+  // have no Z_uu and no (ZV)_u: their variance is u·S·u alone, set afterwards.
   using Kind = Design::Kind;
   trueaxis::detail::resize_in_huge_pages(uw, ra.mw, 1);
   trueaxis::detail::resize_in_huge_pages(ug, ra.mg, 1);
   trueaxis::detail::resize_in_huge_pages(ut, ra.mt, 1);
-  for (const auto& pin : D.pins) {
-    const auto [kind, i] = D.place(pin.first);
-    switch (kind) {
-      case Kind::w:
-        uw[i] = 0;
-        break;
-      case Kind::g:
-        ug[i] = 0;
-        break;
-      case Kind::t:
-        if (i < ra.mt) ut[i] = 0;
-        break;
-      default:
-        break;
-    }
-  }
-  auto v_of = [&](int id) __attribute__((always_inline))->Row {
-    const auto [kind, i] = D.place(id);
-    switch (kind) {
-      case Kind::w:
-        return ra.vw(i);
-      case Kind::g:
-        return ra.vg(i);
-      case Kind::t:
-        return ra.vt(i);
-      default:
-        return Row::Zero();
-    }
-  };
-  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> VZV;
-  VZV.setZero();
-  // u·(ZV)_u over a profile's columns of the solve's row zv.
-  auto cross = [](const Eigen::Vector3d& u, const ReferenceAlgebra::Cols& c, const double* zv) {
-    return u[0] * zv[c[0]] + u[1] * zv[c[1]] + u[2] * zv[c[2]];
+  // VᵀZV restricted to each profile's columns: workpiece, guide, pitch.
+  std::array<Eigen::Matrix3d, 3> S;
+  // u·S·u + rest, at least 0 (written out: Eigen's dot stays a call here).
+  auto variance = [](const Eigen::Vector3d& u, const Eigen::Matrix3d& Sp, double rest)
+      __attribute__((always_inline)) {
+    double q = 0;
+    for (int a = 0; a < 3; ++a) q += u[a] * (Sp(a, 0) * u[0] + Sp(a, 1) * u[1] + Sp(a, 2) * u[2]);
+    return std::max(0.0, q + rest);
   };
   const double inv_h = 1.0 / st.h;  // the pitch unknown is θ·h
-  // The column count as a compile-time constant: the rows' small copies and products unroll.
+  // The column count and the parabola's and pitch's columns (−1: none) as compile-time
+  // constants: the rows of V and ZV are then indexed by constants only and stay in registers in
+  // the solve's loops (which inline both callbacks, each called up to three times per station).
   // VᵀZV comes from the solve's forward rows (their Gram matrix), so each row of ZV is only
   // dotted with its point's u.
-  auto solve = [&]<int Cols>() {
+  auto solve = [&]<int Cols, int KPhi, int KT>() {
+    constexpr int w0 = ReferenceAlgebra::kW0, g0 = ReferenceAlgebra::kG0;
+    constexpr int phi = KPhi >= 0 ? KPhi : 0;  // U's padding column: u there is 0
+    // u·(ZV)_u over a profile's columns (ReferenceAlgebra's cw, cg, ct).
+    auto cross = [](const Eigen::Vector3d& u, const double* zv, int c0, int c1, int c2)
+        __attribute__((always_inline)) {
+      return u[0] * zv[c0] + u[1] * zv[c1] + u[2] * zv[c2];
+    };
     Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
     gram.setZero();
     st.engine->solve_normal_rows<Cols>(
         [&](int id, double* out) __attribute__((always_inline)) {
-          const Row v = v_of(id);
-          for (int j = 0; j < Cols; ++j) out[j] = v[j];
+#pragma GCC unroll 8
+          for (int j = 0; j < Cols; ++j) out[j] = 0.0;
+          const auto [kind, i] = D.place(id);
+          switch (kind) {
+            case Kind::w:  // ra.vw
+              if (i < ra.mw) {
+                out[w0] = ra.lw.b0;
+                out[w0 + 1] = ra.lw.b1(r.xw[i]);
+              }
+              break;
+            case Kind::g:  // ra.vg
+              if (i < ra.mg) {
+                out[g0] = ra.lg.b0;
+                out[g0 + 1] = ra.lg.b1(r.xg[i]);
+                if constexpr (KPhi >= 0) {
+                  const double t = (r.xg[i] - ra.s.xc) * ra.invL;
+                  out[KPhi] = ra.e[0] + t * (ra.e[1] + t * ra.e[2]);
+                }
+              }
+              break;
+            case Kind::t:  // ra.vt
+              if constexpr (KT >= 0)
+                if (i < ra.mt) out[KT] = 1.0;
+              break;
+            default:
+              break;
+          }
         },
-        // Inlined into the solve's loops (called three times per station).
         [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
           const auto [kind, i] = D.place(id);
           switch (kind) {
-            case Kind::w:
-              uw[i] = zuu - 2 * cross(ra.uw(i), ra.cw, zv);
+            case Kind::w: {
+              const Eigen::Vector3d u = ra.uw(i);
+              uw[i] = variance(u, S[0], zuu - 2 * cross(u, zv, w0, w0 + 1, phi));
               break;
-            case Kind::g:
-              ug[i] = zuu - 2 * cross(ra.ug(i), ra.cg, zv);
+            }
+            case Kind::g: {
+              const Eigen::Vector3d u = ra.ug(i);
+              ug[i] = variance(u, S[1], zuu - 2 * cross(u, zv, g0, g0 + 1, phi));
               break;
+            }
             case Kind::t:
-              if (i < ra.mt) ut[i] = inv_h * (inv_h * zuu - 2 * cross(ra.ut(i), ra.ct, zv));
+              if constexpr (KT >= 0)
+                if (i < ra.mt) {
+                  const Eigen::Vector3d u = ra.ut(i);
+                  ut[i] = variance(u, S[2], inv_h * (inv_h * zuu - 2 * cross(u, zv, KT, phi, 0)));
+                }
               break;
             default:
               break;  // an offset: no row of V
           }
         },
-        gram.data());
-    VZV.template topLeftCorner<Cols, Cols>() = gram;
+        gram.data(),
+        [&] {
+          Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> VZV;
+          VZV.setZero();
+          VZV.template topLeftCorner<Cols, Cols>() = gram;
+          S[0] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cw);
+          S[1] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cg);
+          S[2] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.ct);
+        });
   };
-  switch (k) {
-    case 4:
-      solve.template operator()<4>();
-      break;
-    case 5:
-      solve.template operator()<5>();
-      break;
-    default:
-      solve.template operator()<ReferenceAlgebra::kMaxCols>();
-  }
-  auto finish = [&](Eigen::VectorXd& var, auto&& u_of, const ReferenceAlgebra::Cols& c) {
-    const Eigen::Matrix3d S = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), c);
-    for (Eigen::Index i = 0; i < var.size(); ++i) {
-      const Eigen::Vector3d u = u_of(i);
-      var[i] = std::max(0.0, u.dot(S * u) + var[i]);
+  if (ra.kPhi >= 0 && ra.kT >= 0)
+    solve.template operator()<6, 4, 5>();
+  else if (ra.kPhi >= 0)
+    solve.template operator()<5, 4, -1>();
+  else if (ra.kT >= 0)
+    solve.template operator()<5, -1, 4>();
+  else
+    solve.template operator()<4, -1, -1>();
+  for (const auto& pin : D.pins) {
+    const auto [kind, i] = D.place(pin.first);
+    switch (kind) {
+      case Kind::w:
+        uw[i] = variance(ra.uw(i), S[0], 0.0);
+        break;
+      case Kind::g:
+        ug[i] = variance(ra.ug(i), S[1], 0.0);
+        break;
+      case Kind::t:
+        if (i < ra.mt) ut[i] = variance(ra.ut(i), S[2], 0.0);
+        break;
+      default:
+        break;
     }
-  };
-  finish(
-      uw, [&](Eigen::Index j) { return ra.uw(j); }, ra.cw);
-  finish(
-      ug, [&](Eigen::Index K) { return ra.ug(K); }, ra.cg);
-  if (ra.pitch)
-    finish(
-        ut, [&](Eigen::Index K) { return ra.ut(K); }, ra.ct);
+  }
 }
 
 // Uncertainties (unit weight) of the two- and three-point results by exact propagation of every
