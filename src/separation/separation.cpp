@@ -890,31 +890,51 @@ struct ReferenceAlgebra {
   [[gnu::always_inline]] Eigen::Vector3d ut(Eigen::Index K) const {
     return {1.0 / (h * static_cast<double>(mt)), par ? lin(r.xt[K]) - lin_mean : 0.0, 0.0};
   }
-  // V's rows on each profile (zero beyond the profile's grid).
-  [[gnu::always_inline]] Row vw(Eigen::Index j) const {
-    Row v = Row::Zero();
-    if (j >= 0 && j < mw) {
-      v[kW0] = lw.b0;
-      v[kW0 + 1] = lw.b1(r.xw[j]);
+  // V's row of point i of a profile (zero beyond the profile's grid) into out[0..Cols), with the
+  // parabola's and the pitch's columns cphi and ct (−1: none). The least-squares solve's callback
+  // passes them as compile-time constants, so its rows are indexed by constants only.
+  template <int Cols>
+  [[gnu::always_inline]] void v_into(Design::Kind kind, Eigen::Index i, int cphi, int ct,
+                                     double* out) const {
+#pragma GCC unroll 8
+    for (int j = 0; j < Cols; ++j) out[j] = 0.0;
+    switch (kind) {
+      case Design::Kind::w:
+        if (i >= 0 && i < mw) {
+          out[kW0] = lw.b0;
+          out[kW0 + 1] = lw.b1(r.xw[i]);
+        }
+        break;
+      case Design::Kind::g:
+        if (i >= 0 && i < mg) {
+          out[kG0] = lg.b0;
+          out[kG0 + 1] = lg.b1(r.xg[i]);
+          if (cphi >= 0) {  // φ_K, the parabola functional at x
+            const double t = (r.xg[i] - s.xc) * invL;
+            out[cphi] = e[0] + t * (e[1] + t * e[2]);
+          }
+        }
+        break;
+      case Design::Kind::t:
+        if (ct >= 0 && i >= 0 && i < mt) out[ct] = 1.0;
+        break;
+      default:
+        break;
     }
+  }
+  [[gnu::always_inline]] Row v_of(Design::Kind kind, Eigen::Index i) const {
+    Row v;
+    v_into<kMaxCols>(kind, i, kPhi, kT, v.data());
     return v;
+  }
+  [[gnu::always_inline]] Row vw(Eigen::Index j) const {
+    return v_of(Design::Kind::w, j);
   }
   [[gnu::always_inline]] Row vg(Eigen::Index K) const {
-    Row v = Row::Zero();
-    if (K >= 0 && K < mg) {
-      v[kG0] = lg.b0;
-      v[kG0 + 1] = lg.b1(r.xg[K]);
-      if (par) {  // φ_K, the parabola functional at x
-        const double t = (r.xg[K] - s.xc) * invL;
-        v[kPhi] = e[0] + t * (e[1] + t * e[2]);
-      }
-    }
-    return v;
+    return v_of(Design::Kind::g, K);
   }
   [[gnu::always_inline]] Row vt(Eigen::Index K) const {
-    Row v = Row::Zero();
-    if (pitch && K >= 0 && K < mt) v[kT] = 1.0;
-    return v;
+    return v_of(Design::Kind::t, K);
   }
 
   // VᵀZV restricted to a profile's columns (padding columns have zero U).
@@ -982,33 +1002,8 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
     gram.setZero();
     st.engine->solve_normal_rows<Cols>(
         [&](int id, double* out) __attribute__((always_inline)) {
-#pragma GCC unroll 8
-          for (int j = 0; j < Cols; ++j) out[j] = 0.0;
           const auto [kind, i] = D.place(id);
-          switch (kind) {
-            case Kind::w:  // ra.vw
-              if (i < ra.mw) {
-                out[w0] = ra.lw.b0;
-                out[w0 + 1] = ra.lw.b1(r.xw[i]);
-              }
-              break;
-            case Kind::g:  // ra.vg
-              if (i < ra.mg) {
-                out[g0] = ra.lg.b0;
-                out[g0 + 1] = ra.lg.b1(r.xg[i]);
-                if constexpr (KPhi >= 0) {
-                  const double t = (r.xg[i] - ra.s.xc) * ra.invL;
-                  out[KPhi] = ra.e[0] + t * (ra.e[1] + t * ra.e[2]);
-                }
-              }
-              break;
-            case Kind::t:  // ra.vt
-              if constexpr (KT >= 0)
-                if (i < ra.mt) out[KT] = 1.0;
-              break;
-            default:
-              break;
-          }
+          ra.v_into<Cols>(kind, i, KPhi, KT, out);
         },
         [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
           const auto [kind, i] = D.place(id);
