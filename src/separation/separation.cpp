@@ -988,8 +988,6 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
   // The column count and the parabola's and pitch's columns (−1: none) as compile-time
   // constants: the rows of V and ZV are then indexed by constants only and stay in registers in
   // the solve's loops (which inline both callbacks, each called up to three times per station).
-  // VᵀZV comes from the solve's forward rows (their Gram matrix), so each row of ZV is only
-  // dotted with its point's u.
   auto solve = [&]<int Cols, int KPhi, int KT>() {
     constexpr int w0 = ReferenceAlgebra::kW0, g0 = ReferenceAlgebra::kG0;
     constexpr int phi = KPhi >= 0 ? KPhi : 0;  // U's padding column: u there is 0
@@ -1039,6 +1037,8 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
           S[2] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.ct);
         });
   };
+  // ReferenceAlgebra numbers its columns 0–3 for the lines, then the parabola's, then the
+  // pitch's: k and the two columns follow from which of the two there are.
   if (ra.kPhi >= 0 && ra.kT >= 0)
     solve.template operator()<6, 4, 5>();
   else if (ra.kPhi >= 0)
