@@ -444,17 +444,21 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
     double* globals = shared ? shared + static_cast<std::size_t>(nb - 1) * ku : yg.data();
     for (int c = nb; c < m; ++c) win[c] = globals + static_cast<std::size_t>(c - nb) * ku;
   };
-  auto local_forward = [&](long K, double* yl) {  // yl = Rloc⁻ᵀ·(V's rows of g(K), θ(K))
-    for (int l = 0; l < L; ++l) {
-      double* y = yl + static_cast<std::size_t>(l) * ku;
-      v_or_zero(l == 0 ? D.g(K) : D.t(K), y);
-      for (int j = 0; j < k; ++j) {
-        double v = y[j];
-        for (int i = 0; i < l; ++i) v -= Rloc_(i, l) * yl[static_cast<std::size_t>(i) * ku + j];
-        y[j] = v * rinv[l];
-      }
+  // y0, y1 = Rloc⁻ᵀ·(V's rows of g(K), θ(K)) (y1 0 without θ), with the few coefficients in
+  // registers.
+  const double rl01 = L == 2 ? Rloc_(0, 1) : 0.0;
+  auto local_forward2 = [&](long K, double* y0, double* y1) __attribute__((always_inline)) {
+    v_or_zero(D.g(K), y0);
+    unroll<k>([&](auto j) { y0[j] *= rinv[0]; });
+    if (L == 2) {
+      v_or_zero(D.t(K), y1);
+      unroll<k>([&](auto j) { y1[j] = (y1[j] - rl01 * y0[j]) * rinv[1]; });
+    } else {
+      std::fill_n(y1, k, 0.0);
     }
   };
+  // The same into yl's rows (2k values).
+  auto local_forward = [&](long K, double* yl) { local_forward2(K, yl, yl + ku); };
   // The two passes for a window of Width columns, NB of them the band's (compile-time constants):
   // the window's rows of y (or z) are local arrays indexed by constants only (every loop over
   // columns unrolled), so they stay in registers, the slide by one position is a renaming, and no
@@ -466,18 +470,6 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
     for (int l = 0; l < L; ++l)
       for (int c = 0; c < m; ++c) cloc[static_cast<std::size_t>(l * m + c)] = ch.Cloc(l, c);
     return cloc;
-  };
-  // local_forward into two rows (the second 0 without θ).
-  const double rl01 = L == 2 ? Rloc_(0, 1) : 0.0;
-  auto local_narrow = [&](long K, KRow& y0, KRow& y1) __attribute__((always_inline)) {
-    v_or_zero(D.g(K), y0.data());
-    unroll<k>([&](auto j) { y0[j] *= rinv[0]; });
-    if (L == 2) {
-      v_or_zero(D.t(K), y1.data());
-      unroll<k>([&](auto j) { y1[j] = (y1[j] - rl01 * y0[j]) * rinv[1]; });
-    } else {
-      y1.fill(0.0);
-    }
   };
   auto forward_narrow = [&]<int NB>(std::size_t ci) {
     constexpr int W = Width, G = W - NB;
@@ -507,7 +499,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
       const long K = ch.station(t), pos = ch.position(t);
       enter(t + NB - 1, a[NB - 1]);
       KRow y0l, y1l;
-      local_narrow(K, y0l, y1l);
+      local_forward2(K, y0l.data(), y1l.data());
       unroll<W>([&](auto c) {
         const double c0 = cloc[c], c1 = cloc[W + c];
         unroll<k>([&](auto j) { a[c][j] -= c0 * y0l[j]; });
@@ -582,7 +574,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
       }
       if (is_free(idw)) use(idw, static_cast<const double*>(z[0].data()), zdiag_w[K]);
       KRow y0l, y1l, z1{};
-      local_narrow(K, y0l, y1l);
+      local_forward2(K, y0l.data(), y1l.data());
       if (L == 2) {
         unroll<W>([&](auto c) {
           const double cl = cloc[W + c];

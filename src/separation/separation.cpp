@@ -947,10 +947,13 @@ struct ReferenceAlgebra {
   }
 
   // var(y_i) from Z_uu (`zd`) and the row (ZV)_u (`zv`, all k columns; null when x_u is pinned,
-  // which then also ignores zd).
-  static double point_variance(const Eigen::Vector3d& u, const Cols& c, const Eigen::Matrix3d& S,
-                               double zd, const double* zv, double scale) {
-    double v = u.dot(S * u);
+  // which then also ignores zd). Inlined, with u·S·u written out (Eigen's dot stayed a call in
+  // the least-squares solve's loop), so that constant columns c index zv by constants.
+  [[gnu::always_inline]] static double point_variance(const Eigen::Vector3d& u, const Cols& c,
+                                                      const Eigen::Matrix3d& S, double zd,
+                                                      const double* zv, double scale) {
+    double v = 0;
+    for (int a = 0; a < 3; ++a) v += u[a] * (S(a, 0) * u[0] + S(a, 1) * u[1] + S(a, 2) * u[2]);
     if (zv) {
       const double uz = u[0] * zv[c[0]] + u[1] * zv[c[1]] + u[2] * zv[c[2]];
       v += scale * scale * zd - 2 * scale * uz;
@@ -977,25 +980,18 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
   trueaxis::detail::resize_in_huge_pages(ut, ra.mt, 1);
   // VᵀZV restricted to each profile's columns: workpiece, guide, pitch.
   std::array<Eigen::Matrix3d, 3> S;
-  // u·S·u + rest, at least 0 (written out: Eigen's dot stays a call here).
-  auto variance = [](const Eigen::Vector3d& u, const Eigen::Matrix3d& Sp, double rest)
-      __attribute__((always_inline)) {
-    double q = 0;
-    for (int a = 0; a < 3; ++a) q += u[a] * (Sp(a, 0) * u[0] + Sp(a, 1) * u[1] + Sp(a, 2) * u[2]);
-    return std::max(0.0, q + rest);
-  };
   const double inv_h = 1.0 / st.h;  // the pitch unknown is θ·h
   // The column count and the parabola's and pitch's columns (−1: none) as compile-time
   // constants: the rows of V and ZV are then indexed by constants only and stay in registers in
   // the solve's loops (which inline both callbacks, each called up to three times per station).
   auto solve = [&]<int Cols, int KPhi, int KT>() {
-    constexpr int w0 = ReferenceAlgebra::kW0, g0 = ReferenceAlgebra::kG0;
-    constexpr int phi = KPhi >= 0 ? KPhi : 0;  // U's padding column: u there is 0
-    // u·(ZV)_u over a profile's columns (ReferenceAlgebra's cw, cg, ct).
-    auto cross = [](const Eigen::Vector3d& u, const double* zv, int c0, int c1, int c2)
-        __attribute__((always_inline)) {
-      return u[0] * zv[c0] + u[1] * zv[c1] + u[2] * zv[c2];
-    };
+    // ReferenceAlgebra's cw, cg, ct as constants (the padding column's u is 0).
+    constexpr int phi = KPhi >= 0 ? KPhi : 0;
+    static constexpr ReferenceAlgebra::Cols cw{ReferenceAlgebra::kW0, ReferenceAlgebra::kW0 + 1,
+                                               phi};
+    static constexpr ReferenceAlgebra::Cols cg{ReferenceAlgebra::kG0, ReferenceAlgebra::kG0 + 1,
+                                               phi};
+    static constexpr ReferenceAlgebra::Cols ct{KT >= 0 ? KT : 0, phi, 0};
     Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
     gram.setZero();
     st.engine->solve_normal_rows<Cols>(
@@ -1006,22 +1002,16 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
         [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
           const auto [kind, i] = D.place(id);
           switch (kind) {
-            case Kind::w: {
-              const Eigen::Vector3d u = ra.uw(i);
-              uw[i] = variance(u, S[0], zuu - 2 * cross(u, zv, w0, w0 + 1, phi));
+            case Kind::w:
+              uw[i] = ReferenceAlgebra::point_variance(ra.uw(i), cw, S[0], zuu, zv, 1.0);
               break;
-            }
-            case Kind::g: {
-              const Eigen::Vector3d u = ra.ug(i);
-              ug[i] = variance(u, S[1], zuu - 2 * cross(u, zv, g0, g0 + 1, phi));
+            case Kind::g:
+              ug[i] = ReferenceAlgebra::point_variance(ra.ug(i), cg, S[1], zuu, zv, 1.0);
               break;
-            }
             case Kind::t:
               if constexpr (KT >= 0)
-                if (i < ra.mt) {
-                  const Eigen::Vector3d u = ra.ut(i);
-                  ut[i] = variance(u, S[2], inv_h * (inv_h * zuu - 2 * cross(u, zv, KT, phi, 0)));
-                }
+                if (i < ra.mt)
+                  ut[i] = ReferenceAlgebra::point_variance(ra.ut(i), ct, S[2], zuu, zv, inv_h);
               break;
             default:
               break;  // an offset: no row of V
@@ -1051,13 +1041,14 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
     const auto [kind, i] = D.place(pin.first);
     switch (kind) {
       case Kind::w:
-        uw[i] = variance(ra.uw(i), S[0], 0.0);
+        uw[i] = ReferenceAlgebra::point_variance(ra.uw(i), ra.cw, S[0], 0, nullptr, 1);
         break;
       case Kind::g:
-        ug[i] = variance(ra.ug(i), S[1], 0.0);
+        ug[i] = ReferenceAlgebra::point_variance(ra.ug(i), ra.cg, S[1], 0, nullptr, 1);
         break;
       case Kind::t:
-        if (i < ra.mt) ut[i] = variance(ra.ut(i), S[2], 0.0);
+        if (i < ra.mt)
+          ut[i] = ReferenceAlgebra::point_variance(ra.ut(i), ra.ct, S[2], 0, nullptr, 1);
         break;
       default:
         break;
