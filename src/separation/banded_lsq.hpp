@@ -411,9 +411,10 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
   // Divisions by the diagonal as multiplications by reciprocals: a division costs several times
   // a multiplication's throughput, and there would be dozens per station.
   const double rinv[2] = {1 / Rloc_(0, 0), L == 2 ? 1 / Rloc_(1, 1) : 0.0};
-  // Σ y·yᵀ over the forward rows, of which the upper triangle is used. All k × k products: each
-  // row of the sum is y[a] times y, whole aligned pairs of y, where the triangle's rows start
-  // mid-pair and their loads span two of y's stores (a stall of a dozen cycles each).
+  // Σ y·yᵀ over the forward rows, of which the upper triangle is used. Each row of the sum is
+  // y[a] times y in whole aligned pairs of y: the triangle's rows start mid-pair, and their loads
+  // would span two of y's stores (a stall of a dozen cycles each). The general passes add all
+  // k × k products; the narrow ones only the pairs on or above the diagonal's (a third fewer).
   using Gram = std::array<double, k * k>;
   std::array<Gram, 2> yy{};
   auto add_gram = [](Gram& g, const double* y) {
@@ -519,13 +520,15 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
       }
       double* y0 = wrow(pos);
       unroll<k>([&](auto j) { y0[j] = a[0][j]; });
-      if (gram)  // the station's three rows in one pass over the sum
+      if (gram)  // the station's three rows in one pass over the sum's upper aligned pairs
         unroll<k>([&](auto r) {
           unroll<k>([&](auto c) {
-            double& e = g[static_cast<std::size_t>(r * k + c)];
-            e += y0l[r] * y0l[c];
-            if (L == 2) e += y1l[r] * y1l[c];
-            e += a[0][r] * a[0][c];
+            if constexpr (c / 2 >= r / 2) {
+              double& e = g[static_cast<std::size_t>(r * k + c)];
+              e += y0l[r] * y0l[c];
+              if (L == 2) e += y1l[r] * y1l[c];
+              e += a[0][r] * a[0][c];
+            }
           });
         });
       unroll<NB - 1>([&](auto c) { a[c] = a[c + 1]; });
