@@ -946,30 +946,33 @@ struct ReferenceAlgebra {
     return S;
   }
 
-  // var(y_i) from Z_uu (`zd`) and the row (ZV)_u (`zv`, all k columns; null when x_u is pinned,
-  // which then also ignores zd). Inlined, with u·S·u written out (Eigen's dot stayed a call in
-  // the least-squares solve's loop), so that constant columns c index zv by constants.
-  [[gnu::always_inline]] static double point_variance(const Eigen::Vector3d& u, const Cols& c,
-                                                      const Eigen::Matrix3d& S, double zd,
-                                                      const double* zv, double scale) {
+  // The standard uncertainty √(noise_var·var(y_i)), var(y_i) (unit weight) from Z_uu (`zd`) and
+  // the row (ZV)_u (`zv`, all k columns; null when x_u is pinned, which then also ignores zd):
+  // each point's value is final as it is written, with no pass over the profiles afterwards.
+  // Inlined, with u·S·u written out (Eigen's dot stayed a call in the least-squares solve's loop),
+  // so that constant columns c index zv by constants.
+  [[gnu::always_inline]] static double point_uncertainty(const Eigen::Vector3d& u, const Cols& c,
+                                                         const Eigen::Matrix3d& S, double zd,
+                                                         const double* zv, double scale,
+                                                         double noise_var) {
     double v = 0;
     for (int a = 0; a < 3; ++a) v += u[a] * (S(a, 0) * u[0] + S(a, 1) * u[1] + S(a, 2) * u[2]);
     if (zv) {
       const double uz = u[0] * zv[c[0]] + u[1] * zv[c[1]] + u[2] * zv[c[2]];
       v += scale * scale * zd - 2 * scale * uz;
     }
-    return std::max(0.0, v);
+    return std::sqrt(std::max(0.0, v) * noise_var);
   }
 };
 
-// Uncertainties (unit weight) of the reported w, g, θ under the ls reference from the
-// least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
-void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::VectorXd& uw,
-                       Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
+// Standard uncertainties (for noise variance noise_var per row) of the reported w, g, θ under
+// the ls reference from the least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
+void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise_var,
+                       Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
   const Design& D = st.D;
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
-  // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_variance), with
+  // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_uncertainty), with
   // S = VᵀZV. S comes from the solve's forward rows (their Gram matrix) and is complete before
   // the backward solve hands out (ZV)_u and Z_uu row by row (the selected inversion runs
   // alongside), so each point's variance is written once, as its row arrives. Pinned unknowns
@@ -1003,15 +1006,18 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
           const auto [kind, i] = D.place(id);
           switch (kind) {
             case Kind::w:
-              uw[i] = ReferenceAlgebra::point_variance(ra.uw(i), cw, S[0], zuu, zv, 1.0);
+              uw[i] =
+                  ReferenceAlgebra::point_uncertainty(ra.uw(i), cw, S[0], zuu, zv, 1.0, noise_var);
               break;
             case Kind::g:
-              ug[i] = ReferenceAlgebra::point_variance(ra.ug(i), cg, S[1], zuu, zv, 1.0);
+              ug[i] =
+                  ReferenceAlgebra::point_uncertainty(ra.ug(i), cg, S[1], zuu, zv, 1.0, noise_var);
               break;
             case Kind::t:
               if constexpr (KT >= 0)
                 if (i < ra.mt)
-                  ut[i] = ReferenceAlgebra::point_variance(ra.ut(i), ct, S[2], zuu, zv, inv_h);
+                  ut[i] = ReferenceAlgebra::point_uncertainty(ra.ut(i), ct, S[2], zuu, zv, inv_h,
+                                                              noise_var);
               break;
             default:
               break;  // an offset: no row of V
@@ -1041,14 +1047,17 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
     const auto [kind, i] = D.place(pin.first);
     switch (kind) {
       case Kind::w:
-        uw[i] = ReferenceAlgebra::point_variance(ra.uw(i), ra.cw, S[0], 0, nullptr, 1);
+        uw[i] =
+            ReferenceAlgebra::point_uncertainty(ra.uw(i), ra.cw, S[0], 0, nullptr, 1, noise_var);
         break;
       case Kind::g:
-        ug[i] = ReferenceAlgebra::point_variance(ra.ug(i), ra.cg, S[1], 0, nullptr, 1);
+        ug[i] =
+            ReferenceAlgebra::point_uncertainty(ra.ug(i), ra.cg, S[1], 0, nullptr, 1, noise_var);
         break;
       case Kind::t:
         if (i < ra.mt)
-          ut[i] = ReferenceAlgebra::point_variance(ra.ut(i), ra.ct, S[2], 0, nullptr, 1);
+          ut[i] =
+              ReferenceAlgebra::point_uncertainty(ra.ut(i), ra.ct, S[2], 0, nullptr, 1, noise_var);
         break;
       default:
         break;
@@ -1056,11 +1065,12 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
   }
 }
 
-// Uncertainties (unit weight) of the two- and three-point results by exact propagation of every
-// reading through the recurrence. T, the map from readings to the raw unknowns, is taken with the
-// gauge X_0 = X_1 = 0 and without the first-reading offsets: it differs from the method's own map
-// only by lines (and, for three-point, a parabola) that the reference removes, so the reported
-// values, and their variances, are the same. Z = T·Tᵀ:
+// Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
+// results by exact propagation of every reading through the recurrence. T, the map from readings
+// to the raw unknowns, is taken with the gauge X_0 = X_1 = 0 and without the first-reading
+// offsets: it differs from the method's own map only by lines (and, for three-point, a parabola)
+// that the reference removes, so the reported values, and their variances, are the same.
+// Z = T·Tᵀ:
 // - diag(Z) in closed form (sums of squared integer coefficients);
 // - ZV = T·(TᵀV): the adjoint recurrence backwards, then the recurrence forwards, k columns at
 //   once; VᵀZV = (TᵀV)ᵀ(TᵀV), the Gram matrix of the adjoint vectors, is summed in the backward
@@ -1068,7 +1078,8 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, Eigen::Vecto
 // O(n·k) work and one n × k array, where the least-squares covariance needs a banded
 // factorisation, a selected inversion and a solve over all 3n unknowns.
 void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, bool with_pitch,
-                              Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
+                              double noise_var, Eigen::VectorXd& uw, Eigen::VectorXd& ug,
+                              Eigen::VectorXd& ut) {
   using Row = ReferenceAlgebra::Row;
   const long n = d.x.size();
   const ReferenceAlgebra ra(r, with_pitch, true, d.step());
@@ -1127,14 +1138,14 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
     const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg);
     Row Y = Row::Zero();  // (T z) at w_j
     for (long j = 0; j <= n; ++j) {
-      uw[j] = ReferenceAlgebra::point_variance(ra.uw(j), ra.cw, Sw, 2.0 * static_cast<double>(j),
-                                               Y.data(), 1.0);
+      uw[j] = ReferenceAlgebra::point_uncertainty(ra.uw(j), ra.cw, Sw, 2.0 * static_cast<double>(j),
+                                                  Y.data(), 1.0, noise_var);
       if (j == n) break;
       const Row zB = back[static_cast<std::size_t>(j + 1)];
       const Row zA = ra.vg(j) - zB;
       const Row gz = zA - Y;
-      ug[j] = ReferenceAlgebra::point_variance(ra.ug(j), ra.cg, Sg,
-                                               1.0 + 2.0 * static_cast<double>(j), gz.data(), 1.0);
+      ug[j] = ReferenceAlgebra::point_uncertainty(
+          ra.ug(j), ra.cg, Sg, 1.0 + 2.0 * static_cast<double>(j), gz.data(), 1.0, noise_var);
       Y += zB - zA;
     }
     return;
@@ -1185,15 +1196,16 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   for (long K = 0; K < n; ++K) {
     const Row a2 = zA(K + 2);
     const Row w = a0 - y0;
-    uw[K] = ReferenceAlgebra::point_variance(ra.uw(K), ra.cw, Sw, K < 2 ? 1.0 : var_x(K) - 1,
-                                             w.data(), 1.0);
-    ug[K] = ReferenceAlgebra::point_variance(ra.ug(K), ra.cg, Sg, var_x(K), y0.data(), 1.0);
+    uw[K] = ReferenceAlgebra::point_uncertainty(ra.uw(K), ra.cw, Sw, K < 2 ? 1.0 : var_x(K) - 1,
+                                                w.data(), 1.0, noise_var);
+    ug[K] = ReferenceAlgebra::point_uncertainty(ra.ug(K), ra.cg, Sg, var_x(K), y0.data(), 1.0,
+                                                noise_var);
     const Row b = zB(K);
     if (K < ra.mt) {
       const Row t = b - a1 + y1 - y0;
-      ut[K] = ReferenceAlgebra::point_variance(ra.ut(K), ra.ct, St,
-                                               K == 0 ? 2.0 : 6.0 * static_cast<double>(K) + 4,
-                                               t.data(), 1.0 / ra.h);
+      ut[K] = ReferenceAlgebra::point_uncertainty(ra.ut(K), ra.ct, St,
+                                                  K == 0 ? 2.0 : 6.0 * static_cast<double>(K) + 4,
+                                                  t.data(), 1.0 / ra.h, noise_var);
     }
     const Row y2 = K + 2 < n ? Row(2 * y1 - y0 - 2 * a1 + a2 + 2 * b + rb(K)) : Row(Row::Zero());
     y0 = y1;
@@ -1311,17 +1323,15 @@ Result separate(const ProbeData& data, const Options& opt) {
       res.sigma = std::sqrt(s2);
       res.sigma_estimated = true;
     }
+    // Standard uncertainties; without a noise level, those for unit noise.
+    const double noise_var = res.sigma ? s2 : 1.0;
     if (opt.method == Method::Lsq)
-      lsq_uncertainties(st, raw, res.sigma.has_value(), uw, ug, ut);
+      lsq_uncertainties(st, raw, res.sigma.has_value(), noise_var, uw, ug, ut);
     else
-      recurrence_uncertainties(data, opt.method, raw, res.sigma.has_value(), uw, ug, ut);
-    if (res.sigma) {
-      uw = (uw * s2).cwiseSqrt();
-      ug = (ug * s2).cwiseSqrt();
-      if (ut.size()) ut = (ut * s2).cwiseSqrt();
-    } else {
+      recurrence_uncertainties(data, opt.method, raw, res.sigma.has_value(), noise_var, uw, ug, ut);
+    if (!res.sigma) {
       // No noise level: state no uncertainty, only how strongly the layout amplifies noise.
-      res.noise_gain = std::sqrt(std::max(uw.maxCoeff(), ug.maxCoeff()));
+      res.noise_gain = std::max(uw.maxCoeff(), ug.maxCoeff());
       uw.resize(0);
       ug.resize(0);
       ut.resize(0);
