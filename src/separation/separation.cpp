@@ -841,9 +841,14 @@ struct ReferenceAlgebra {
   double lin_mean = 0;                          // mean of the parabola's slope on the θ grid
   Cols cw{}, cg{}, ct{};
 
+  // Whether the pitch is among the reported values (then V has the pitch's column).
+  static bool reports_pitch(const Raw& raw, bool with_pitch, bool has_pitch_unknowns) {
+    return with_pitch && raw.theta.size() && has_pitch_unknowns;
+  }
+
   ReferenceAlgebra(const Raw& raw, bool with_pitch, bool has_pitch_unknowns, double step)
       : r(raw), s(scale_of(raw.xg)), lw(raw.xw), lg(raw.xg), par(raw.parabola_free), h(step) {
-    pitch = with_pitch && r.theta.size() && has_pitch_unknowns;
+    pitch = reports_pitch(raw, with_pitch, has_pitch_unknowns);
     if (par) kPhi = k++;
     if (pitch) kT = k++;
     mw = r.xw.size();
@@ -970,6 +975,17 @@ struct ReferenceAlgebra {
 void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise_var,
                        Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
   const Design& D = st.D;
+  // The results are written in the solve's backward pass, on both cores: their pages are
+  // committed meanwhile on another core, from now on, while the reference algebra's sums keep
+  // only this one busy.
+  trueaxis::detail::resize_in_huge_pages(uw, r.xw.size(), 1);
+  trueaxis::detail::resize_in_huge_pages(ug, r.xg.size(), 1);
+  trueaxis::detail::resize_in_huge_pages(
+      ut, ReferenceAlgebra::reports_pitch(r, with_pitch, D.pitch) ? r.xt.size() : 0, 1);
+  const detail::Prefault prefault(
+      {{uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
+       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
+       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_uncertainty), with
@@ -978,9 +994,6 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
   // alongside), so each point's variance is written once, as its row arrives. Pinned unknowns
   // have no Z_uu and no (ZV)_u: their variance is u·S·u alone, set afterwards.
   using Kind = Design::Kind;
-  trueaxis::detail::resize_in_huge_pages(uw, ra.mw, 1);
-  trueaxis::detail::resize_in_huge_pages(ug, ra.mg, 1);
-  trueaxis::detail::resize_in_huge_pages(ut, ra.mt, 1);
   // VᵀZV restricted to each profile's columns: workpiece, guide, pitch.
   std::array<Eigen::Matrix3d, 3> S;
   const double inv_h = 1.0 / st.h;  // the pitch unknown is θ·h
