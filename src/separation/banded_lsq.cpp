@@ -860,44 +860,44 @@ std::vector<double> BandedLsq::final_covariance() const {
 
 void BandedLsq::chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* zw,
                                  double* zloc) const {
-  with_width(m_, [&]<int W>() { chain_covariance_impl<W>(ch, Fj, zw, zloc); });
+  const bool narrow = with_width(m_, [&]<int W>() {
+    return with_band<W>([&]<int NB>() { chain_covariance_narrow<W, NB>(ch, Fj, zw, zloc); });
+  });
+  if (!narrow) chain_covariance_any(ch, Fj, zw, zloc);
 }
 
-template <int Width>
-void BandedLsq::chain_covariance_impl(const Chain& ch, const std::vector<double>& Fj, double* zw,
-                                      double* zloc) const {
+namespace {
+
+// (Rloc⁻¹·Cloc, diag(Rloc⁻¹Rloc⁻ᵀ)) for the local unknowns' covariance.
+std::pair<Eigen::MatrixXd, Eigen::VectorXd> local_maps(const Eigen::MatrixXd& Rloc,
+                                                       const Eigen::MatrixXd& Cloc) {
+  const auto L = Rloc.rows();
+  const Eigen::MatrixXd RlocInv =
+      Rloc.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(L, L));
+  return {RlocInv * Cloc, (RlocInv * RlocInv.transpose()).diagonal()};
+}
+
+}  // namespace
+
+void BandedLsq::chain_covariance_any(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                                     double* zloc) const {
   // For the eliminated w's row [d, r] over the window [the next span positions, globals] with
   // covariance Z: Z_w,window = −(Z rᵀ)/d and Z_ww = 1/d² − r·Z_w,window/d. The local unknowns
   // x_loc = Rloc⁻¹(b − Cloc·window) then have Rloc⁻¹Rloc⁻ᵀ + P·F·Pᵀ, P = Rloc⁻¹Cloc, with F the
-  // covariance over the full window [w(t..t+span), globals]. The window's small matrices are
-  // fixed-size arrays for a compile-time width (their loops unroll).
+  // covariance over the full window [w(t..t+span), globals].
   const Design& D = D_;
-  const int m = Width > 0 ? Width : m_, nb = nb_, L = L_, mw = m - 1;
-  constexpr std::size_t kFixed = Width > 0 ? static_cast<std::size_t>(Width * Width) : 1;
-  std::array<double, kFixed> F_fixed{}, Z_fixed{};
-  std::array<double, 2 * (Width > 0 ? Width : 1)> P_fixed{};
-  std::array<double, (Width > 0 ? Width : 1)> zk_fixed{};
-  const auto mm = static_cast<std::size_t>(Width > 0 ? 0 : m * m);
-  std::vector<double> F_heap(mm, 0.0), Z_heap(mm, 0.0),
-      P_heap(Width > 0 ? 0 : static_cast<std::size_t>(2 * m), 0.0),
-      zk_heap(Width > 0 ? 0 : static_cast<std::size_t>(m), 0.0);
-  double* const F = Width > 0 ? F_fixed.data() : F_heap.data();
-  double* const Z = Width > 0 ? Z_fixed.data() : Z_heap.data();   // row stride mw
-  double* const Pl = Width > 0 ? P_fixed.data() : P_heap.data();  // P row-major, L × m
-  double* const zk = Width > 0 ? zk_fixed.data() : zk_heap.data();
-  auto f = [&](int a, int b) -> double& { return F[a * m + b]; };
+  const int m = m_, nb = nb_, L = L_, mw = m - 1;
+  const auto mm = static_cast<std::size_t>(m * m);
+  std::vector<double> F(mm, 0.0), Z(mm, 0.0), zk(static_cast<std::size_t>(m), 0.0);
+  auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
+  auto z = [&](int a, int b) -> double& { return Z[static_cast<std::size_t>(a * mw + b)]; };
   // The final window's covariance in the chain's column order.
   for (int a = 0; a < m; ++a)
     if (const int ca = chain_col(ch, a); ca >= 0)
       for (int b = 0; b < m; ++b)
         if (const int cb = chain_col(ch, b); cb >= 0)
           f(ca, cb) = Fj[static_cast<std::size_t>(a * m + b)];
-  const Eigen::MatrixXd RlocInv =
-      Rloc_.triangularView<Eigen::Upper>().solve(Eigen::MatrixXd::Identity(L, L));
-  const Eigen::MatrixXd P = RlocInv * ch.Cloc;
-  for (int l = 0; l < L; ++l)
-    for (int a = 0; a < m; ++a) Pl[l * m + a] = P(l, a);
-  const Eigen::VectorXd S = (RlocInv * RlocInv.transpose()).diagonal();
+  const auto [P, S] = local_maps(Rloc_, ch.Cloc);
   // Z: covariance over [the next span positions, globals] (size m − 1): F without its band
   // column span.
   auto drop_last_band = [&] {
@@ -905,7 +905,7 @@ void BandedLsq::chain_covariance_impl(const Chain& ch, const std::vector<double>
       if (a == nb - 1) continue;
       for (int b = 0, ib = 0; b < m; ++b) {
         if (b == nb - 1) continue;
-        Z[ia * mw + ib++] = f(a, b);
+        z(ia, ib++) = f(a, b);
       }
       ++ia;
     }
@@ -921,32 +921,110 @@ void BandedLsq::chain_covariance_impl(const Chain& ch, const std::vector<double>
       double rz = 0;
       for (int a = 0; a < mw; ++a) {
         double v = 0;
-        for (int b = 0; b < mw; ++b) v += Z[a * mw + b] * R[b + 1];
-        zk[a] = -v;
-        rz += R[a + 1] * zk[a];
+        for (int b = 0; b < mw; ++b) v += z(a, b) * R[b + 1];
+        zk[static_cast<std::size_t>(a)] = -v;
+        rz += R[a + 1] * zk[static_cast<std::size_t>(a)];
       }
       const double inv = 1 / R[0];
       zkk = inv * inv - rz;
     } else {
-      for (int a = 0; a < mw; ++a) zk[a] = 0;
+      std::fill(zk.begin(), zk.end(), 0.0);
     }
     zw[K] = zkk;
     f(0, 0) = zkk;
     for (int a = 0; a < mw; ++a) {
-      f(0, a + 1) = f(a + 1, 0) = zk[a];
-      for (int b = 0; b < mw; ++b) f(a + 1, b + 1) = Z[a * mw + b];
+      f(0, a + 1) = f(a + 1, 0) = zk[static_cast<std::size_t>(a)];
+      for (int b = 0; b < mw; ++b) f(a + 1, b + 1) = z(a, b);
     }
     for (int l = 0; l < L; ++l) {
-      const double* pl = Pl + l * m;
       double v = S[l];
       for (int a = 0; a < m; ++a) {
         double tt = 0;
-        for (int b = 0; b < m; ++b) tt += f(a, b) * pl[b];
-        v += pl[a] * tt;
+        for (int b = 0; b < m; ++b) tt += f(a, b) * P(l, b);
+        v += P(l, a) * tt;
       }
       zloc[K * L + l] = v;
     }
     drop_last_band();
+  }
+}
+
+template <int W, int NB>
+void BandedLsq::chain_covariance_narrow(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                                        double* zloc) const {
+  constexpr int MW = W - 1;
+  // F's index of Z's index i: F is over [w(t), w(t+1..t+span), globals], Z the same without
+  // w(t) and, for the next station, without w(t+span), the band's last column.
+  constexpr auto from_f = [](int i) { return i < NB - 1 ? i : i + 1; };
+  const Design& D = D_;
+  const int L = L_;
+  std::array<std::array<double, W>, W> F0{};
+  for (int a = 0; a < W; ++a)
+    if (const int ca = chain_col(ch, a); ca >= 0)
+      for (int b = 0; b < W; ++b)
+        if (const int cb = chain_col(ch, b); cb >= 0)
+          F0[static_cast<std::size_t>(ca)][static_cast<std::size_t>(cb)] =
+              Fj[static_cast<std::size_t>(a * W + b)];
+  using Row = std::array<double, MW>;
+  std::array<Row, MW> Z;
+  for (int a = 0; a < MW; ++a)
+    for (int b = 0; b < MW; ++b)
+      Z[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] =
+          F0[static_cast<std::size_t>(from_f(a))][static_cast<std::size_t>(from_f(b))];
+  const auto [Pm, Sv] = local_maps(Rloc_, ch.Cloc);
+  std::array<std::array<double, W>, 2> P{};
+  const double S[2] = {Sv[0], L == 2 ? Sv[1] : 0.0};
+  for (int l = 0; l < L; ++l)
+    for (int a = 0; a < W; ++a)
+      P[static_cast<std::size_t>(l)][static_cast<std::size_t>(a)] = Pm(l, a);
+  for (long t = ch.steps - 1; t >= 0; --t) {
+    const long K = ch.station(t);
+    const int idw = D.w(ch.position(t));
+    const double* R = rw_.data() + static_cast<std::size_t>(K) * static_cast<std::size_t>(W);
+    double zkk = 0;
+    Row zk{};
+    if (!D.pinned[static_cast<std::size_t>(idw)] && R[0] != 0) {
+      double rz = 0;
+      unroll<MW>([&](auto a) {
+        double v = 0;
+        unroll<MW>([&](auto b) { v += Z[a][b] * R[b + 1]; });
+        zk[a] = -v;
+        rz += R[a + 1] * zk[a];
+      });
+      const double inv = 1 / R[0];
+      zkk = inv * inv - rz;
+    }
+    zw[K] = zkk;
+    // F over [w(t), the window]: [[Z_ww, Z_w,windowᵀ], [Z_w,window, Z]].
+    auto f = [&](auto a, auto b) {
+      constexpr int ia = decltype(a)::value, ib = decltype(b)::value;
+      if constexpr (ia == 0 && ib == 0)
+        return zkk;
+      else if constexpr (ia == 0)
+        return zk[ib - 1];
+      else if constexpr (ib == 0)
+        return zk[ia - 1];
+      else
+        return Z[ia - 1][ib - 1];
+    };
+    for (int l = 0; l < L; ++l) {
+      const auto& pl = P[static_cast<std::size_t>(l)];
+      double v = S[l];
+      unroll<W>([&](auto a) {
+        double tt = 0;
+        unroll<W>([&](auto b) { tt += f(a, b) * pl[b]; });
+        v += pl[a] * tt;
+      });
+      zloc[K * L + l] = v;
+    }
+    std::array<Row, MW> next;
+    unroll<MW>([&](auto a) {
+      unroll<MW>([&](auto b) {
+        next[a][b] = f(std::integral_constant<int, from_f(decltype(a)::value)>{},
+                       std::integral_constant<int, from_f(decltype(b)::value)>{});
+      });
+    });
+    Z = next;
   }
 }
 

@@ -297,9 +297,15 @@ class BandedLsq {
   // zloc[K·L + l].
   void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* zw,
                         double* zloc) const;
-  template <int Width>  // window width, 0: any
-  void chain_covariance_impl(const Chain& ch, const std::vector<double>& Fj, double* zw,
-                             double* zloc) const;
+  void chain_covariance_any(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                            double* zloc) const;
+  // The same for a window of W columns, NB of them the band's (compile-time constants): the
+  // window's small matrices are local arrays indexed by constants only, so they stay in
+  // registers and dropping the band's last column is a renaming. Same arithmetic, in the same
+  // order.
+  template <int W, int NB>
+  void chain_covariance_narrow(const Chain& ch, const std::vector<double>& Fj, double* zw,
+                               double* zloc) const;
   template <int Width>  // window width, 0: any
   void factor_impl(const Eigen::MatrixXd& readings, const Eigen::RowVectorXd& mu,
                    const Eigen::VectorXd& angle_mm, const Unknowns* v);
