@@ -879,6 +879,18 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> local_maps(const Eigen::MatrixXd& Rl
 
 }  // namespace
 
+std::vector<double> BandedLsq::in_chain_order(const Chain& ch,
+                                              const std::vector<double>& Fj) const {
+  const int m = m_;
+  std::vector<double> F(static_cast<std::size_t>(m * m), 0.0);
+  for (int a = 0; a < m; ++a)
+    if (const int ca = chain_col(ch, a); ca >= 0)
+      for (int b = 0; b < m; ++b)
+        if (const int cb = chain_col(ch, b); cb >= 0)
+          F[static_cast<std::size_t>(ca * m + cb)] = Fj[static_cast<std::size_t>(a * m + b)];
+  return F;
+}
+
 void BandedLsq::chain_covariance_any(const Chain& ch, const std::vector<double>& Fj, double* zw,
                                      double* zloc) const {
   // For the eliminated w's row [d, r] over the window [the next span positions, globals] with
@@ -887,16 +899,11 @@ void BandedLsq::chain_covariance_any(const Chain& ch, const std::vector<double>&
   // covariance over the full window [w(t..t+span), globals].
   const Design& D = D_;
   const int m = m_, nb = nb_, L = L_, mw = m - 1;
-  const auto mm = static_cast<std::size_t>(m * m);
-  std::vector<double> F(mm, 0.0), Z(mm, 0.0), zk(static_cast<std::size_t>(m), 0.0);
+  // The final window's covariance in the chain's column order.
+  std::vector<double> F = in_chain_order(ch, Fj), Z(F.size(), 0.0),
+                      zk(static_cast<std::size_t>(m), 0.0);
   auto f = [&](int a, int b) -> double& { return F[static_cast<std::size_t>(a * m + b)]; };
   auto z = [&](int a, int b) -> double& { return Z[static_cast<std::size_t>(a * mw + b)]; };
-  // The final window's covariance in the chain's column order.
-  for (int a = 0; a < m; ++a)
-    if (const int ca = chain_col(ch, a); ca >= 0)
-      for (int b = 0; b < m; ++b)
-        if (const int cb = chain_col(ch, b); cb >= 0)
-          f(ca, cb) = Fj[static_cast<std::size_t>(a * m + b)];
   const auto [P, S] = local_maps(Rloc_, ch.Cloc);
   // Z: covariance over [the next span positions, globals] (size m − 1): F without its band
   // column span.
@@ -958,19 +965,13 @@ void BandedLsq::chain_covariance_narrow(const Chain& ch, const std::vector<doubl
   constexpr auto from_f = [](int i) { return i < NB - 1 ? i : i + 1; };
   const Design& D = D_;
   const int L = L_;
-  std::array<std::array<double, W>, W> F0{};
-  for (int a = 0; a < W; ++a)
-    if (const int ca = chain_col(ch, a); ca >= 0)
-      for (int b = 0; b < W; ++b)
-        if (const int cb = chain_col(ch, b); cb >= 0)
-          F0[static_cast<std::size_t>(ca)][static_cast<std::size_t>(cb)] =
-              Fj[static_cast<std::size_t>(a * W + b)];
+  const std::vector<double> F0 = in_chain_order(ch, Fj);
   using Row = std::array<double, MW>;
   std::array<Row, MW> Z;
   for (int a = 0; a < MW; ++a)
     for (int b = 0; b < MW; ++b)
       Z[static_cast<std::size_t>(a)][static_cast<std::size_t>(b)] =
-          F0[static_cast<std::size_t>(from_f(a))][static_cast<std::size_t>(from_f(b))];
+          F0[static_cast<std::size_t>(from_f(a) * W + from_f(b))];
   const auto [Pm, Sv] = local_maps(Rloc_, ch.Cloc);
   std::array<std::array<double, W>, 2> P{};
   const double S[2] = {Sv[0], L == 2 ? Sv[1] : 0.0};

@@ -297,6 +297,8 @@ class BandedLsq {
   // zloc[K·L + l].
   void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* zw,
                         double* zloc) const;
+  // Fj (m × m, row-major) in the chain's column order (0 where the chain has no column).
+  std::vector<double> in_chain_order(const Chain& ch, const std::vector<double>& Fj) const;
   void chain_covariance_any(const Chain& ch, const std::vector<double>& Fj, double* zw,
                             double* zloc) const;
   // The same for a window of W columns, NB of them the band's (compile-time constants): the
