@@ -908,14 +908,8 @@ void BandedLsq::chain_covariance_any(const Chain& ch, const std::vector<double>&
   // Z: covariance over [the next span positions, globals] (size m − 1): F without its band
   // column span.
   auto drop_last_band = [&] {
-    for (int a = 0, ia = 0; a < m; ++a) {
-      if (a == nb - 1) continue;
-      for (int b = 0, ib = 0; b < m; ++b) {
-        if (b == nb - 1) continue;
-        z(ia, ib++) = f(a, b);
-      }
-      ++ia;
-    }
+    for (int a = 0; a < mw; ++a)
+      for (int b = 0; b < mw; ++b) z(a, b) = f(skip_band_end(a, nb), skip_band_end(b, nb));
   };
   drop_last_band();
   for (long t = ch.steps - 1; t >= 0; --t) {
@@ -960,9 +954,7 @@ template <int W, int NB>
 void BandedLsq::chain_covariance_narrow(const Chain& ch, const std::vector<double>& Fj, double* zw,
                                         double* zloc) const {
   constexpr int MW = W - 1;
-  // F's index of Z's index i: F is over [w(t), w(t+1..t+span), globals], Z the same without
-  // w(t) and, for the next station, without w(t+span), the band's last column.
-  constexpr auto from_f = [](int i) { return i < NB - 1 ? i : i + 1; };
+  constexpr auto from_f = [](int i) { return skip_band_end(i, NB); };
   const Design& D = D_;
   const int L = L_;
   const std::vector<double> F0 = in_chain_order(ch, Fj);

@@ -297,6 +297,10 @@ class BandedLsq {
   // zloc[K·L + l].
   void chain_covariance(const Chain& ch, const std::vector<double>& Fj, double* zw,
                         double* zloc) const;
+  // A chain's window after station t is [w(t+1..t+span), globals]; station t − 1's is the same
+  // without w(t+span), the band's last column (nb: the band's width). Its column i in the full
+  // window [w(t..t+span), globals]:
+  static constexpr int skip_band_end(int i, int nb) { return i < nb - 1 ? i : i + 1; }
   // Fj (m × m, row-major) in the chain's column order (0 where the chain has no column).
   std::vector<double> in_chain_order(const Chain& ch, const std::vector<double>& Fj) const;
   void chain_covariance_any(const Chain& ch, const std::vector<double>& Fj, double* zw,
@@ -422,7 +426,8 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
   // Σ y·yᵀ over the forward rows, of which the upper triangle is used. Each row of the sum is
   // y[a] times y in whole aligned pairs of y: the triangle's rows start mid-pair, and their loads
   // would span two of y's stores (a stall of a dozen cycles each). The general passes add all
-  // k × k products; the narrow ones only the pairs on or above the diagonal's (a third fewer).
+  // k × k products; the narrow ones only the 2 × 2 blocks on or above the diagonal (a third
+  // fewer).
   using Gram = std::array<double, k * k>;
   std::array<Gram, 2> yy{};
   auto add_gram = [](Gram& g, const double* y) {

@@ -841,9 +841,13 @@ struct ReferenceAlgebra {
   double lin_mean = 0;                          // mean of the parabola's slope on the θ grid
   Cols cw{}, cg{}, ct{};
 
-  // Whether the pitch is among the reported values (then V has the pitch's column).
+  // Whether the pitch is among the reported values (then V has the pitch's column), and on how
+  // many points (mt; 0 if not).
   static bool reports_pitch(const Raw& raw, bool with_pitch, bool has_pitch_unknowns) {
     return with_pitch && raw.theta.size() && has_pitch_unknowns;
+  }
+  static Eigen::Index pitch_points(const Raw& raw, bool with_pitch, bool has_pitch_unknowns) {
+    return reports_pitch(raw, with_pitch, has_pitch_unknowns) ? raw.xt.size() : 0;
   }
 
   ReferenceAlgebra(const Raw& raw, bool with_pitch, bool has_pitch_unknowns, double step)
@@ -853,7 +857,7 @@ struct ReferenceAlgebra {
     if (pitch) kT = k++;
     mw = r.xw.size();
     mg = r.xg.size();
-    mt = pitch ? r.xt.size() : 0;
+    mt = pitch_points(raw, with_pitch, has_pitch_unknowns);
     cw = {kW0, kW0 + 1, par ? kPhi : 0};
     cg = {kG0, kG0 + 1, par ? kPhi : 0};
     ct = {pitch ? kT : 0, par ? kPhi : 0, 0};
@@ -975,13 +979,12 @@ struct ReferenceAlgebra {
 void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise_var,
                        Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
   const Design& D = st.D;
-  // The results are written in the solve's backward pass, on both cores: their pages are
-  // committed meanwhile on another core, from now on, while the reference algebra's sums keep
-  // only this one busy.
+  // The results are written by the solve's backward pass on both cores. Their pages are committed
+  // by another core from here on, while the reference algebra's sums below use only this one.
   trueaxis::detail::resize_in_huge_pages(uw, r.xw.size(), 1);
   trueaxis::detail::resize_in_huge_pages(ug, r.xg.size(), 1);
-  trueaxis::detail::resize_in_huge_pages(
-      ut, ReferenceAlgebra::reports_pitch(r, with_pitch, D.pitch) ? r.xt.size() : 0, 1);
+  trueaxis::detail::resize_in_huge_pages(ut, ReferenceAlgebra::pitch_points(r, with_pitch, D.pitch),
+                                         1);
   const detail::Prefault prefault(
       {{uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
        {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
@@ -991,7 +994,7 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_uncertainty), with
   // S = VᵀZV. S comes from the solve's forward rows (their Gram matrix) and is complete before
   // the backward solve hands out (ZV)_u and Z_uu row by row (the selected inversion runs
-  // alongside), so each point's variance is written once, as its row arrives. Pinned unknowns
+  // alongside), so each point's uncertainty is written once, as its row arrives. Pinned unknowns
   // have no Z_uu and no (ZV)_u: their variance is u·S·u alone, set afterwards.
   using Kind = Design::Kind;
   // VᵀZV restricted to each profile's columns: workpiece, guide, pitch.
@@ -1010,33 +1013,32 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
     static constexpr ReferenceAlgebra::Cols ct{KT >= 0 ? KT : 0, phi, 0};
     Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
     gram.setZero();
+    // A point's uncertainty from its Z_uu and row of ZV (null for a pinned unknown).
+    auto use = [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
+      const auto [kind, i] = D.place(id);
+      switch (kind) {
+        case Kind::w:
+          uw[i] = ReferenceAlgebra::point_uncertainty(ra.uw(i), cw, S[0], zuu, zv, 1.0, noise_var);
+          break;
+        case Kind::g:
+          ug[i] = ReferenceAlgebra::point_uncertainty(ra.ug(i), cg, S[1], zuu, zv, 1.0, noise_var);
+          break;
+        case Kind::t:
+          if constexpr (KT >= 0)
+            if (i < ra.mt)
+              ut[i] = ReferenceAlgebra::point_uncertainty(ra.ut(i), ct, S[2], zuu, zv, inv_h,
+                                                          noise_var);
+          break;
+        default:
+          break;  // an offset: no row of V
+      }
+    };
     st.engine->solve_normal_rows<Cols>(
         [&](int id, double* out) __attribute__((always_inline)) {
           const auto [kind, i] = D.place(id);
           ra.v_into<Cols>(kind, i, KPhi, KT, out);
         },
-        [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
-          const auto [kind, i] = D.place(id);
-          switch (kind) {
-            case Kind::w:
-              uw[i] =
-                  ReferenceAlgebra::point_uncertainty(ra.uw(i), cw, S[0], zuu, zv, 1.0, noise_var);
-              break;
-            case Kind::g:
-              ug[i] =
-                  ReferenceAlgebra::point_uncertainty(ra.ug(i), cg, S[1], zuu, zv, 1.0, noise_var);
-              break;
-            case Kind::t:
-              if constexpr (KT >= 0)
-                if (i < ra.mt)
-                  ut[i] = ReferenceAlgebra::point_uncertainty(ra.ut(i), ct, S[2], zuu, zv, inv_h,
-                                                              noise_var);
-              break;
-            default:
-              break;  // an offset: no row of V
-          }
-        },
-        gram.data(),
+        use, gram.data(),
         [&] {
           Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> VZV;
           VZV.setZero();
@@ -1045,6 +1047,7 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
           S[1] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cg);
           S[2] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.ct);
         });
+    for (const auto& pin : D.pins) use(pin.first, nullptr, 0.0);
   };
   // ReferenceAlgebra numbers its columns 0–3 for the lines, then the parabola's, then the
   // pitch's: k and the two columns follow from which of the two there are.
@@ -1056,26 +1059,6 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
     solve.template operator()<5, -1, 4>();
   else
     solve.template operator()<4, -1, -1>();
-  for (const auto& pin : D.pins) {
-    const auto [kind, i] = D.place(pin.first);
-    switch (kind) {
-      case Kind::w:
-        uw[i] =
-            ReferenceAlgebra::point_uncertainty(ra.uw(i), ra.cw, S[0], 0, nullptr, 1, noise_var);
-        break;
-      case Kind::g:
-        ug[i] =
-            ReferenceAlgebra::point_uncertainty(ra.ug(i), ra.cg, S[1], 0, nullptr, 1, noise_var);
-        break;
-      case Kind::t:
-        if (i < ra.mt)
-          ut[i] =
-              ReferenceAlgebra::point_uncertainty(ra.ut(i), ra.ct, S[2], 0, nullptr, 1, noise_var);
-        break;
-      default:
-        break;
-    }
-  }
 }
 
 // Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
