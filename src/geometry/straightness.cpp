@@ -1,10 +1,12 @@
 #include "trueaxis/geometry/straightness.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <numeric>
+#include <optional>
 #include <vector>
 
 #include "trueaxis/error.hpp"
@@ -58,24 +60,32 @@ double cross(const P& o, const P& a, const P& b) {
 
 // Andrew's monotone chain on points sorted by (x, y), given as point(i) for i < n, skipping the
 // points for which skip_lower(i, point(i)) (skip_upper) says they cannot be vertices of the lower
-// (upper) chain; the first and last points must not be skipped. Returns the hull
+// (upper) chain, and, in blocks of `block` points, whole blocks b with over[b] (under[b]) set
+// (null: none); the first and last points must not be skipped. Returns the hull
 // counter-clockwise without repeating the first point; collinear points dropped. The work array
 // is left uninitialised: a profile's hull has few vertices, so few of its pages are touched.
 template <class Point, class SkipLower, class SkipUpper>
-std::vector<P> hull_chains(std::size_t n, Point point, SkipLower skip_lower, SkipUpper skip_upper) {
+std::vector<P> hull_chains(std::size_t n, Point point, SkipLower skip_lower, SkipUpper skip_upper,
+                           std::size_t block = 1, const unsigned char* over = nullptr,
+                           const unsigned char* under = nullptr) {
   const auto h = std::make_unique_for_overwrite<P[]>(2 * n);
   std::size_t k = 0;
-  for (std::size_t i = 0; i < n; ++i) {
+  auto add = [&](std::size_t i, std::size_t t, auto skip) {
     const P q = point(i);
-    if (skip_lower(i, q)) continue;
-    while (k >= 2 && cross(h[k - 2], h[k - 1], q) <= 0) --k;
-    h[k++] = q;
-  }
-  for (std::size_t i = n - 1, t = k + 1; i-- > 0;) {
-    const P q = point(i);
-    if (skip_upper(i, q)) continue;
+    if (skip(i, q)) return;
     while (k >= t && cross(h[k - 2], h[k - 1], q) <= 0) --k;
     h[k++] = q;
+  };
+  for (std::size_t b0 = 0; b0 < n; b0 += block) {
+    if (over && over[b0 / block]) continue;
+    for (std::size_t i = b0, end = std::min(n, b0 + block); i < end; ++i) add(i, 2, skip_lower);
+  }
+  // The upper chain backwards from point n − 2, block by block.
+  const std::size_t t = k + 1;
+  for (std::size_t b0 = (n - 2) / block * block + block; b0 > 0;) {
+    b0 -= block;
+    if (under && under[b0 / block]) continue;
+    for (std::size_t i = std::min(n - 1, b0 + block); i-- > b0;) add(i, t, skip_upper);
   }
   return std::vector<P>(h.get(), h.get() + (k - 1));
 }
@@ -103,32 +113,70 @@ std::vector<P> chain(const std::vector<P>& v, bool upper) {
   return h;
 }
 
-// The hull of a profile (x strictly increasing), point(i) for i < n. On noisy data the monotone
-// chain's pops are unpredictable branches (~7 ns a point), so most points are ruled out first by
-// a test that is cheap and predictable: the hull of the highest points of blocks of kBlock
-// points is made of points of the set, so a point strictly below it lies inside the hull and is
-// no vertex of the upper chain; likewise above the hull of the blocks' lowest points for the
-// lower chain. What is left is a few points near each hull vertex.
-template <class Point>
-std::vector<P> hull_profile(std::size_t n, Point point) {
-  constexpr std::size_t kBlock = 64;
+// The hull of a profile, or nothing when x is not strictly increasing (checked on the way; NaN
+// is not increasing). On noisy data the monotone chain's pops are unpredictable branches (~7 ns
+// a point), so most points are ruled out first by a test that is cheap and predictable: the hull
+// of the highest points of blocks of kBlock points is made of points of the set, so a point
+// strictly below it lies inside the hull and is no vertex of the upper chain; likewise above the
+// hull of the blocks' lowest points for the lower chain. What is left is a few points near each
+// hull vertex. Points are taken about (cx, cy).
+std::optional<std::vector<P>> hull_profile(const double* x, const double* y, std::size_t n,
+                                           double cx, double cy) {
+  const auto point = [&](std::size_t i) { return P{x[i] - cx, y[i] - cy}; };
+  constexpr std::size_t kBlock = 64, kLanes = 8, kRows = kBlock / kLanes;
   const std::size_t nb = (n + kBlock - 1) / kBlock;
-  if (nb < 8) return hull_sorted(n, point);
-  std::vector<P> top(nb), bottom(nb);
-  for (std::size_t b = 0; b < nb; ++b) {
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    std::size_t hi = b * kBlock, lo = hi;
-    double yhi = point(hi).y, ylo = yhi;
-    for (std::size_t i = b * kBlock + 1; i < end; ++i) {
-      const double y = point(i).y;
-      hi = y > yhi ? i : hi;
-      yhi = y > yhi ? y : yhi;
-      lo = y < ylo ? i : lo;
-      ylo = y < ylo ? y : ylo;
-    }
-    top[b] = point(hi);
-    bottom[b] = point(lo);
+  // The order check, one vectorised pass without an early exit; the count is a double (the
+  // lanes' width).
+  auto not_rising = [&](std::size_t from, std::size_t to) {
+    double bad = 0;
+#pragma omp simd reduction(+ : bad)
+    for (std::size_t i = from; i < to; ++i) bad += x[i] > x[i - 1] ? 0.0 : 1.0;
+    return bad;
+  };
+  if (nb < 8) {
+    if (not_rising(1, n) > 0) return std::nullopt;
+    return hull_sorted(n, point);
   }
+  // Each block's highest and lowest point, in the same pass as the order check: a whole block's
+  // extremes by lanes of every kLanes-th point (vectorised), then the point of the lane that
+  // attains each; the last, partial block point by point. The heights are compared before cy is
+  // subtracted: rounding is monotone, so the highest y is also a highest y − cy.
+  std::vector<P> top(nb), bottom(nb);
+  double bad = 0;
+  for (std::size_t b = 0; b < nb; ++b) {
+    const std::size_t b0 = b * kBlock, m = std::min(n, b0 + kBlock) - b0;
+    bad += not_rising(std::max<std::size_t>(b0, 1), b0 + m);
+    const double* yb = y + b0;
+    std::size_t hi = 0, lo = 0;
+    if (m == kBlock) {
+      std::array<double, kLanes> lmax, lmin;
+      for (std::size_t c = 0; c < kLanes; ++c) lmax[c] = lmin[c] = yb[c];
+      for (std::size_t r = 1; r < kRows; ++r)
+        for (std::size_t c = 0; c < kLanes; ++c) {
+          const double v = yb[r * kLanes + c];
+          lmax[c] = std::max(lmax[c], v);
+          lmin[c] = std::min(lmin[c], v);
+        }
+      const double yhi = *std::max_element(lmax.begin(), lmax.end());
+      const double ylo = *std::min_element(lmin.begin(), lmin.end());
+      // (A NaN never matches: the loops stop at the last candidate.)
+      std::size_t ch = 0, cl = 0;
+      while (ch + 1 < kLanes && !(lmax[ch] == yhi)) ++ch;
+      while (cl + 1 < kLanes && !(lmin[cl] == ylo)) ++cl;
+      hi = ch;
+      lo = cl;
+      while (hi + kLanes < kBlock && !(yb[hi] == yhi)) hi += kLanes;
+      while (lo + kLanes < kBlock && !(yb[lo] == ylo)) lo += kLanes;
+    } else {
+      for (std::size_t i = 1; i < m; ++i) {
+        hi = yb[i] > yb[hi] ? i : hi;
+        lo = yb[i] < yb[lo] ? i : lo;
+      }
+    }
+    top[b] = point(b0 + hi);
+    bottom[b] = point(b0 + lo);
+  }
+  if (bad > 0) return std::nullopt;
   const std::vector<P> roof = chain(top, true), floor = chain(bottom, false);
   // Whole blocks first: the roof is concave, so over a block's x range it is lowest at one of
   // the ends; a block whose highest point lies below both (by more than the interpolation's
@@ -161,18 +209,17 @@ std::vector<P> hull_profile(std::size_t n, Point point) {
   std::size_t jl = 0, ju = roof.size() - 2;
   return hull_chains(
       n, point,
-      [&](std::size_t i, const P& q) {
-        if (over[i / kBlock]) return true;
+      [&](std::size_t, const P& q) {
         if (q.x <= floor.front().x || q.x >= floor.back().x) return false;
         while (q.x > floor[jl + 1].x) ++jl;
         return cross(floor[jl], floor[jl + 1], q) > 0;  // strictly above the floor
       },
-      [&](std::size_t i, const P& q) {
-        if (under[i / kBlock]) return true;
+      [&](std::size_t, const P& q) {
         if (q.x <= roof.front().x || q.x >= roof.back().x) return false;
         while (q.x < roof[ju].x) --ju;
         return cross(roof[ju], roof[ju + 1], q) < 0;  // strictly below the roof
-      });
+      },
+      kBlock, over.data(), under.data());
 }
 
 }  // namespace
@@ -180,28 +227,25 @@ std::vector<P> hull_profile(std::size_t n, Point point) {
 MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
   if (x.size() != y.size() || x.size() < 2) throw Error("min_zone: need at least two points");
   const std::size_t n = static_cast<std::size_t>(x.size());
-  auto less = [](const P& a, const P& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
-  std::vector<P> p;  // a sorted copy, only when x is not strictly increasing (a profile is)
-  // One vectorised pass (NaN compares false: not increasing).
-  const bool increasing = ((x.tail(x.size() - 1) - x.head(x.size() - 1)).array() > 0).all();
-  // Work about a point within the data (widths are tiny compared with lengths): a profile's
-  // mid-range and first height, which costs no pass; otherwise the centroid.
+  // A profile (x strictly increasing) is taken about its mid-range and first height, which
+  // costs no pass (widths are tiny compared with lengths); other point sets are sorted, about
+  // their centroid.
+  std::optional<std::vector<P>> profile_hull =
+      hull_profile(x.data(), y.data(), n, 0.5 * (x[0] + x[x.size() - 1]), y[0]);
+  const bool increasing = profile_hull.has_value();
   const double cx = increasing ? 0.5 * (x[0] + x[x.size() - 1]) : x.mean();
   const double cy = increasing ? y[0] : y.mean();
   if (!increasing) {
-    p.resize(n);
+    std::vector<P> p(n);
     for (std::size_t i = 0; i < n; ++i) {
       const auto e = static_cast<Eigen::Index>(i);
       p[i] = {x[e] - cx, y[e] - cy};
     }
+    auto less = [](const P& a, const P& b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
     std::sort(p.begin(), p.end(), less);
+    profile_hull = hull_sorted(n, [&](std::size_t i) { return p[i]; });
   }
-  const std::vector<P> h = increasing ? hull_profile(n,
-                                                     [&](std::size_t i) {
-                                                       const auto e = static_cast<Eigen::Index>(i);
-                                                       return P{x[e] - cx, y[e] - cy};
-                                                     })
-                                      : hull_sorted(n, [&](std::size_t i) { return p[i]; });
+  const std::vector<P>& h = *profile_hull;
   const std::size_t m = h.size();
   if (m < 3) {
     // All points collinear: zero width along the line through them.

@@ -86,13 +86,15 @@ TEST(Straightness, GaussianFilterTransmitsHalfAtCutoff) {
 // bound allows). The same points in reverse order (not increasing: sorted, then the plain
 // monotone chain) must give the same zone: white noise, noise on a form, steps, isolated spikes
 // up and down, a smooth curve, a line with noise at round-off level, a parabola (every point on
-// the hull) and a steep line far from zero with nanometre noise.
+// the hull), a steep line far from zero with nanometre noise, heights quantised to a 0.1 µm
+// resolution (many ties for a block's highest point) and a spike out of order deep inside (the
+// order check, made on the way through the blocks, must send it to the sorting path).
 TEST(Straightness, MinZoneOfALongProfileEqualsThePlainHulls) {
   std::mt19937_64 rng(8);
   std::normal_distribution<double> N(0, 1);
   std::uniform_real_distribution<double> U(0, 1);
   const int n = 20011;  // not a whole number of blocks
-  for (int kind = 0; kind < 8; ++kind) {
+  for (int kind = 0; kind < 10; ++kind) {
     Eigen::VectorXd x(n), y(n);
     for (int i = 0; i < n; ++i) {
       const double t = static_cast<double>(i) / (n - 1);
@@ -122,7 +124,17 @@ TEST(Straightness, MinZoneOfALongProfileEqualsThePlainHulls) {
         case 7:  // far from zero, steep, and noisy: the block test's rounding margin
           y[i] = 1000 + 0.5 * x[i] + 1e-9 * N(rng);
           break;
+        case 8:
+          y[i] = 1e-4 * std::round(3 * N(rng));
+          break;
+        case 9:
+          y[i] = 2e-3 * t * t + 1e-4 * N(rng);
+          break;
       }
+    }
+    if (kind == 9) {  // a point far out of line, its x swapped with one near the start
+      y[n / 2] += 5e-2;
+      std::swap(x[n / 2], x[100]);
     }
     const MinZone a = min_zone(x, y), b = min_zone(x.reverse().eval(), y.reverse().eval());
     EXPECT_NEAR(a.width, b.width, kRoundOff * std::max(1e-3, b.width)) << "kind " << kind;
