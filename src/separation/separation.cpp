@@ -104,21 +104,25 @@ void check_values(const ProbeData& data) {
     // accumulators, so the pass runs at memory speed.
     return (Eigen::Map<const Eigen::ArrayXd>(v, m) * 0.0).sum() == 0;
   };
-  bool all_finite = finite(x.data(), n) && finite(angle.data(), angle.size());
+  bool all_finite = finite(angle.data(), angle.size());
   for (Eigen::Index j = 0; j < readings.cols() && all_finite; ++j)
     all_finite = finite(readings.col(j).data(), n);
   if (!all_finite) throw Error("non-finite value (NaN or Inf) in the data");
-  const double h = data.step();
-  if (!(h > 0)) throw Error("station positions must increase");
-  const double tolerance = kStepTolerance * h + 1e-12;
+  // x's own check rides on the pass over its steps (which are used only once x is finite).
   const double* xp = x.data();
-  double smallest = h, worst = 0;  // the steps are finite here
-#pragma omp simd reduction(min : smallest) reduction(max : worst)
+  const double h = n >= 2 && std::isfinite(xp[0]) && std::isfinite(xp[n - 1]) ? data.step() : 0.0;
+  const double tolerance = kStepTolerance * h + 1e-12;
+  double smallest = h, worst = 0, x_finite = n ? xp[0] * 0.0 : 0.0;
+#pragma omp simd reduction(min : smallest) reduction(max : worst) reduction(+ : x_finite)
   for (Eigen::Index k = 1; k < n; ++k) {
     const double d = xp[k] - xp[k - 1];
+    x_finite += xp[k] * 0.0;
     smallest = std::min(smallest, d);
     worst = std::max(worst, std::abs(d - h));
   }
+  if (!(x_finite == 0)) throw Error("non-finite value (NaN or Inf) in the data");
+  if (n < 2) data.step();  // throws its error
+  if (!(h > 0)) throw Error("station positions must increase");
   const bool uneven = !(smallest > 0) || worst > tolerance;
   for (Eigen::Index k = 1; k < n && uneven; ++k) {
     const double d = x[k] - x[k - 1];
@@ -659,7 +663,13 @@ struct Scale {
 };
 
 Scale scale_of(const Eigen::VectorXd& x) {
-  const double lo = x.minCoeff(), hi = x.maxCoeff();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // in one vectorised pass
+  const double* xp = x.data();
+#pragma omp simd reduction(min : lo) reduction(max : hi)
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    lo = std::min(lo, xp[i]);
+    hi = std::max(hi, xp[i]);
+  }
   return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
 }
 
@@ -717,6 +727,21 @@ Moments moments_of(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Sca
   return m;
 }
 
+// Σθ and Σ(x − x_c) over a pitch profile, in one vectorised pass.
+struct PitchSums {
+  double st = 0, sx = 0;
+};
+PitchSums pitch_sums(const Eigen::VectorXd& xt, const Eigen::VectorXd& theta, const Scale& s) {
+  double st = 0, sx = 0;
+  const double *xp = xt.data(), *tp = theta.data();
+#pragma omp simd reduction(+ : st, sx)
+  for (Eigen::Index i = 0; i < theta.size(); ++i) {
+    st += tp[i];
+    sx += xp[i] - s.xc;
+  }
+  return {st, sx};
+}
+
 // y ← y + a·t² less the least-squares line of that sum (found from the moments: the line of y
 // plus a times the line of t²), in one pass that also returns the range of the result: the
 // least-squares straightness of the profile as referenced.
@@ -752,10 +777,12 @@ LsWidths apply_reference(Raw& r, Reference ref) {
   const Scale s = scale_of(r.xg);
   LsWidths widths;
   const std::launch policy = policy_for(r);
-  // The workpiece's sums (ls reference) meanwhile on another core.
-  std::future<Moments> wsums;
+  // The workpiece's sums (ls reference), and θ's, meanwhile on another core.
+  std::future<std::pair<Moments, PitchSums>> wsums;
   if (ref != Reference::MinZone)
-    wsums = std::async(policy, [&] { return moments_of(r.xw, r.w, s); });
+    wsums = std::async(policy, [&] {
+      return std::make_pair(moments_of(r.xw, r.w, s), pitch_sums(r.xt, r.theta, s));
+    });
   // The parabola gauge: c = φᵀg, the guide's t² coefficient, from the guide's sums (which the
   // ls reference needs anyway).
   Moments mg;
@@ -767,19 +794,19 @@ LsWidths apply_reference(Raw& r, Reference ref) {
   }
   if (ref != Reference::MinZone) {
     // Parabola gauge and line in two passes per profile: one for the sums, one for the update.
-    const Moments mw = wsums.get();
+    // θ's sums (which do not depend on the parabola) are taken with the workpiece's, and θ is
+    // updated after the guide: the two cores then move about the same number of bytes.
+    const auto [mw, pitch] = wsums.get();
     auto wupdate = std::async(policy, [&] { return add_parabola_less_line(r.xw, r.w, mw, c, s); });
     widths.g = add_parabola_less_line(r.xg, r.g, mg, -c, s);
     if (r.theta.size()) {
       // θ less the parabola's slope, about its mean.
       const double k = 2 * c / (s.L * s.L);
-      double st = 0, sx = 0;
-      for (Eigen::Index i = 0; i < r.theta.size(); ++i) {
-        st += r.theta[i];
-        sx += r.xt[i] - s.xc;
-      }
-      const double mean = (st - k * sx) / static_cast<double>(r.theta.size());
-      for (Eigen::Index i = 0; i < r.theta.size(); ++i) r.theta[i] -= k * (r.xt[i] - s.xc) + mean;
+      const double mean = (pitch.st - k * pitch.sx) / static_cast<double>(r.theta.size());
+      const double* xt = r.xt.data();
+      double* theta = r.theta.data();
+#pragma omp simd
+      for (Eigen::Index i = 0; i < r.theta.size(); ++i) theta[i] -= k * (xt[i] - s.xc) + mean;
     }
     widths.w = wupdate.get();
     return widths;

@@ -354,6 +354,12 @@ TEST(Separation, LongDataReportBadValuesFirst) {
     auto d = camp.data;
     d.readings(59990, 2) = INFINITY;
     EXPECT_NE(message(d, o).find("non-finite"), std::string::npos) << to_string(m);
+    // A non-finite station position, inside or at either end (x's check shares the steps' pass).
+    for (Eigen::Index i : {Eigen::Index{0}, Eigen::Index{31337}, d.x.size() - 1}) {
+      d = camp.data;
+      d.x[i] = i == 0 ? -INFINITY : NAN;
+      EXPECT_NE(message(d, o).find("non-finite"), std::string::npos) << to_string(m) << " " << i;
+    }
     d = camp.data;
     d.x[40000] += 1;
     EXPECT_NE(message(d, o).find("uneven step at station 40000"), std::string::npos)
