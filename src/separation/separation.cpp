@@ -586,20 +586,6 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   // α, β (or α alone when β is known) minimising Σ_{K=2}^{n−1} (X_K + K·α + K(K−1)/2·β)²: the
   // 2×2 normal equations whose closed form is the seed's eqs. 16–17.
   const bool beta_known = zero_difference.has_value();
-  double s11 = 0, s12 = 0, s22 = 0;  // Σ a·aᵀ, a vectorised reduction
-#pragma omp simd reduction(+ : s11, s12, s22)
-  for (long K = 2; K < n; ++K) {
-    const double k = static_cast<double>(K), t = k * (k - 1) / 2;
-    s11 += k * k;
-    s12 += k * t;
-    s22 += t * t;
-  }
-  Eigen::Matrix2d Mn;
-  Mn << s11, s12, s12, s22;
-  auto fit = [&](const Eigen::Vector2d& b) {
-    if (beta_known) return Eigen::Vector2d(b[0] / Mn(0, 0), 0.0);
-    return Eigen::Vector2d(Mn.ldlt().solve(b));
-  };
   // β = 2Y_1 − Y_2 = e − (D_0A − 2D_0B + D_0C) when the zero difference e is known.
   const double beta0 =
       beta_known ? *zero_difference - (d.readings(0, 0) - 2 * d.readings(0, 1) + d.readings(0, 2))
@@ -609,19 +595,41 @@ void three_point(const ProbeData& d, std::optional<double> zero_difference, Raw&
   // final size and the second fit corrects the small remainder. The first needs only b, a linear
   // function of the forcing: with α = 0 and f_j the forcing (β included), X_K = Σ_{j≤K−2}
   // (K−1−j)·f_j, so b_i = −Σ_j f_j·W_i(j) with W_0(j) = Σ_{K=j+2}^{n−1} K·(K−1−j) and W_1(j) the
-  // same with K(K−1)/2; in m = K−1−j ∈ [1, M], M = n−2−j, c = j+1 these are sums of powers of m
-  // in closed form. One vectorised pass, not a recurrence.
+  // same with K(K−1)/2. In m = K−1−j ∈ [1, M], M = n−2−j, c = j+1 these are sums of powers of
+  // m, which with S1 = M(M+1)/2 close to W_0 = S1·(3n−2−M)/3 and
+  // W_1 = S1·(3·S1 + (2c−1)(2M+1) + 3c(c−1))/6 (integers below 2⁵³ up to the last product; the
+  // common divisors are applied once). The same pass sums the fit's normal matrix Σ a·aᵀ over
+  // K = j+2 into Mn. One vectorised pass, not a recurrence: the counts are doubles made from 32-bit
+  // offsets in blocks (64-bit integers do not convert to doubles in vector registers).
+  Eigen::Matrix2d Mn;
   auto forcing_moments = [&](double beta) {
-    double s0 = 0, s1 = 0;
-#pragma omp simd reduction(+ : s0, s1)
-    for (long j = 0; j < n - 2; ++j) {
-      const double f = (A[j + 2] - a0) - 2 * (A[j + 1] - a0) + 2 * (B[j] - b0) - (C[j] - c0) + beta;
-      const double M = static_cast<double>(n - 2 - j), c = static_cast<double>(j + 1);
-      const double S1 = M * (M + 1) / 2, S2 = S1 * (2 * M + 1) / 3, S3 = S1 * S1;
-      s0 -= f * (S2 + c * S1);
-      s1 -= f * (S3 + (2 * c - 1) * S2 + c * (c - 1) * S1) / 2;
+    double s0 = 0, s1 = 0, s11 = 0, s12 = 0, s22 = 0;
+    const double n1 = static_cast<double>(n - 2), n3 = 3.0 * static_cast<double>(n) - 2;
+    constexpr long kBlock = 1L << 20;
+    for (long j0 = 0; j0 < n - 2; j0 += kBlock) {
+      const int m = static_cast<int>(std::min(kBlock, n - 2 - j0));
+      const double base = static_cast<double>(j0);
+      const double *Ab = A + j0, *Bb = B + j0, *Cb = C + j0;
+#pragma omp simd reduction(+ : s0, s1, s11, s12, s22)
+      for (int i = 0; i < m; ++i) {
+        const double f =
+            (Ab[i + 2] - a0) - 2 * (Ab[i + 1] - a0) + 2 * (Bb[i] - b0) - (Cb[i] - c0) + beta;
+        const double j = base + static_cast<double>(i), M = n1 - j, c = j + 1;
+        const double S1 = M * (M + 1) * 0.5;
+        s0 -= f * (S1 * (n3 - M));
+        s1 -= f * (S1 * (3 * S1 + (2 * c - 1) * (2 * M + 1) + 3 * c * (c - 1)));
+        const double k = c + 1, t = k * c * 0.5;  // K = j + 2 and K(K−1)/2
+        s11 += k * k;
+        s12 += k * t;
+        s22 += t * t;
+      }
     }
-    return Eigen::Vector2d(s0, s1);
+    Mn << s11, s12, s12, s22;
+    return Eigen::Vector2d(s0 / 3, s1 / 6);
+  };
+  auto fit = [&](const Eigen::Vector2d& b) {
+    if (beta_known) return Eigen::Vector2d(b[0] / Mn(0, 0), 0.0);
+    return Eigen::Vector2d(Mn.ldlt().solve(b));
   };
   const Eigen::Vector2d ab1 = fit(forcing_moments(beta0));
   const Eigen::Vector2d ab2 = fit(recurrence(ab1[0], beta0 + ab1[1]));
