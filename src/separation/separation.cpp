@@ -365,6 +365,8 @@ struct Raw {
   Eigen::VectorXd xg, g;      // station grid, guide (mm)
   Eigen::VectorXd xt, theta;  // pitch grid and values (rad); empty if not modelled
   bool parabola_free = false;
+  // xg is known to be strictly increasing (the checked data's stations): its range is its ends.
+  bool xg_increasing = false;
 };
 
 // Long profiles have independent passes (workpiece and guide, copies) run on two cores.
@@ -670,7 +672,12 @@ struct Scale {
   double xc = 0, L = 1;
 };
 
-Scale scale_of(const Eigen::VectorXd& x) {
+// The scale of grid x: its mid-range and half range (from its ends when it is known to increase).
+Scale scale_of(const Eigen::VectorXd& x, bool increasing = false) {
+  if (increasing && x.size()) {
+    const double lo = x[0], hi = x[x.size() - 1];
+    return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
+  }
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // in one vectorised pass
   const double* xp = x.data();
 #pragma omp simd reduction(min : lo) reduction(max : hi)
@@ -782,7 +789,7 @@ struct LsWidths {
 
 // Applies the ls / min-zone reference in place (parabola gauge first, if free).
 LsWidths apply_reference(Raw& r, Reference ref) {
-  const Scale s = scale_of(r.xg);
+  const Scale s = scale_of(r.xg, r.xg_increasing);
   LsWidths widths;
   const std::launch policy = policy_for(r);
   // The workpiece's sums (ls reference), and θ's, meanwhile on another core.
@@ -886,7 +893,12 @@ struct ReferenceAlgebra {
   }
 
   ReferenceAlgebra(const Raw& raw, bool with_pitch, bool has_pitch_unknowns, double step)
-      : r(raw), s(scale_of(raw.xg)), lw(raw.xw), lg(raw.xg), par(raw.parabola_free), h(step) {
+      : r(raw),
+        s(scale_of(raw.xg, raw.xg_increasing)),
+        lw(raw.xw),
+        lg(raw.xg),
+        par(raw.parabola_free),
+        h(step) {
     pitch = reports_pitch(raw, with_pitch, has_pitch_unknowns);
     if (par) kPhi = k++;
     if (pitch) kT = k++;
@@ -1312,6 +1324,7 @@ Result separate(const ProbeData& data, const Options& opt) {
     throw;
   }
   values_first();
+  raw.xg_increasing = true;  // every method's guide grid is the stations, now checked
   // The least-squares solve gives the Lsq answer and its covariance. The recurrences (A, B)
   // propagate each reading exactly through their own equations. Without redundancy (A, B) the
   // noise level cannot be estimated, so their uncertainty needs a given sigma.
