@@ -9,6 +9,7 @@
 #include <optional>
 #include <vector>
 
+#include "profile_min_zone.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::geometry {
@@ -121,7 +122,7 @@ std::vector<P> chain(const std::vector<P>& v, bool upper) {
 // hull of the blocks' lowest points for the lower chain. What is left is a few points near each
 // hull vertex. Points are taken about (cx, cy).
 std::optional<std::vector<P>> hull_profile(const double* x, const double* y, std::size_t n,
-                                           double cx, double cy) {
+                                           double cx, double cy, bool check_order) {
   const auto point = [&](std::size_t i) { return P{x[i] - cx, y[i] - cy}; };
   constexpr std::size_t kBlock = 64, kLanes = 8, kRows = kBlock / kLanes;
   const std::size_t nb = (n + kBlock - 1) / kBlock;
@@ -134,7 +135,7 @@ std::optional<std::vector<P>> hull_profile(const double* x, const double* y, std
     return bad;
   };
   if (nb < 8) {
-    if (not_rising(1, n) > 0) return std::nullopt;
+    if (check_order && not_rising(1, n) > 0) return std::nullopt;
     return hull_sorted(n, point);
   }
   // Each block's highest and lowest point, in the same pass as the order check: a whole block's
@@ -145,7 +146,7 @@ std::optional<std::vector<P>> hull_profile(const double* x, const double* y, std
   double bad = 0;
   for (std::size_t b = 0; b < nb; ++b) {
     const std::size_t b0 = b * kBlock, m = std::min(n, b0 + kBlock) - b0;
-    bad += not_rising(std::max<std::size_t>(b0, 1), b0 + m);
+    if (check_order) bad += not_rising(std::max<std::size_t>(b0, 1), b0 + m);
     const double* yb = y + b0;
     std::size_t hi = 0, lo = 0;
     if (m == kBlock) {
@@ -222,16 +223,12 @@ std::optional<std::vector<P>> hull_profile(const double* x, const double* y, std
       kBlock, over.data(), under.data());
 }
 
-}  // namespace
-
-MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+// min_zone, with x's order checked on the way (check_order) or known to be strictly increasing.
+MinZone min_zone_impl(const Eigen::VectorXd& x, const Eigen::VectorXd& y, bool check_order) {
   if (x.size() != y.size() || x.size() < 2) throw Error("min_zone: need at least two points");
   const std::size_t n = static_cast<std::size_t>(x.size());
-  // A profile (x strictly increasing) is taken about its mid-range and first height, which
-  // costs no pass (widths are tiny compared with lengths); other point sets are sorted, about
-  // their centroid.
   std::optional<std::vector<P>> profile_hull =
-      hull_profile(x.data(), y.data(), n, 0.5 * (x[0] + x[x.size() - 1]), y[0]);
+      hull_profile(x.data(), y.data(), n, 0.5 * (x[0] + x[x.size() - 1]), y[0], check_order);
   const bool increasing = profile_hull.has_value();
   const double cx = increasing ? 0.5 * (x[0] + x[x.size() - 1]) : x.mean();
   const double cy = increasing ? y[0] : y.mean();
@@ -282,6 +279,16 @@ MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
     icpt = 0.5 * (ia + ic);
   }
   return {best, {icpt + cy - slope * cx, slope}};
+}
+
+}  // namespace
+
+MinZone min_zone(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  return min_zone_impl(x, y, true);
+}
+
+MinZone detail::min_zone_of_increasing(const Eigen::VectorXd& x, const Eigen::VectorXd& y) {
+  return min_zone_impl(x, y, false);
 }
 
 Eigen::VectorXd gaussian_filter(const Eigen::VectorXd& y, double dx, double cutoff) {

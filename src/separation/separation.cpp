@@ -17,6 +17,7 @@
 
 #include "../common/eigen_instances.hpp"
 #include "../common/memory.hpp"
+#include "../geometry/profile_min_zone.hpp"
 #include "banded_lsq.hpp"
 #include "design.hpp"
 #include "prefault.hpp"
@@ -1258,9 +1259,11 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   }
 }
 
-// `ls`: the least-squares straightness when already known (not NaN).
+// `ls`: the least-squares straightness when already known (not NaN). x is one of separate()'s
+// grids, strictly increasing by construction from the checked stations.
 Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v, double ls) {
-  return {std::isnan(ls) ? geometry::ls_straightness(x, v) : ls, geometry::min_zone(x, v).width};
+  return {std::isnan(ls) ? geometry::ls_straightness(x, v) : ls,
+          geometry::detail::min_zone_of_increasing(x, v).width};
 }
 
 }  // namespace
