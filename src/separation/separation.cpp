@@ -812,7 +812,9 @@ LsWidths apply_reference(Raw& r, Reference ref) {
     // Parabola gauge and line in two passes per profile: one for the sums, one for the update.
     // θ's sums (which do not depend on the parabola) are taken with the workpiece's, and θ is
     // updated after the guide: the two cores then move about the same number of bytes.
-    const auto [mw, pitch] = wsums.get();
+    const auto sums = wsums.get();  // (named members: clang 14 lambdas cannot capture bindings)
+    const Moments& mw = sums.first;
+    const PitchSums& pitch = sums.second;
     auto wupdate = std::async(policy, [&] { return add_parabola_less_line(r.xw, r.w, mw, c, s); });
     widths.g = add_parabola_less_line(r.xg, r.g, mg, -c, s);
     if (r.theta.size()) {
