@@ -114,13 +114,13 @@ std::vector<P> chain(const std::vector<P>& v, bool upper) {
   return h;
 }
 
-// The hull of a profile, or nothing when x is not strictly increasing (checked on the way; NaN
-// is not increasing). On noisy data the monotone chain's pops are unpredictable branches (~7 ns
-// a point), so most points are ruled out first by a test that is cheap and predictable: the hull
-// of the highest points of blocks of kBlock points is made of points of the set, so a point
-// strictly below it lies inside the hull and is no vertex of the upper chain; likewise above the
-// hull of the blocks' lowest points for the lower chain. What is left is a few points near each
-// hull vertex. Points are taken about (cx, cy).
+// The hull of a profile, or nothing when x is not strictly increasing (with check_order, checked
+// on the way, NaN counting as not increasing; without, the caller vouches for the order). On noisy
+// data the monotone chain's pops are unpredictable branches (~7 ns a point), so most points are
+// ruled out first by a test that is cheap and predictable: the hull of the highest points of blocks
+// of kBlock points is made of points of the set, so a point strictly below it lies inside the hull
+// and is no vertex of the upper chain; likewise above the hull of the blocks' lowest points for the
+// lower chain. What is left is a few points near each hull vertex. Points are taken about (cx, cy).
 std::optional<std::vector<P>> hull_profile(const double* x, const double* y, std::size_t n,
                                            double cx, double cy, bool check_order) {
   const auto point = [&](std::size_t i) { return P{x[i] - cx, y[i] - cy}; };
