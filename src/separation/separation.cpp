@@ -111,7 +111,7 @@ void check_values(const ProbeData& data) {
   if (!all_finite) throw Error("non-finite value (NaN or Inf) in the data");
   // x's own check rides on the pass over its steps (which are used only once x is finite).
   const double* xp = x.data();
-  const double h = n >= 2 && std::isfinite(xp[0]) && std::isfinite(xp[n - 1]) ? data.step() : 0.0;
+  const double h = n >= 2 ? data.step() : 0.0;  // (not finite with x: reported below)
   const double tolerance = kStepTolerance * h + 1e-12;
   double smallest = h, worst = 0, x_finite = n ? xp[0] * 0.0 : 0.0;
 #pragma omp simd reduction(min : smallest) reduction(max : worst) reduction(+ : x_finite)
@@ -675,16 +675,17 @@ struct Scale {
 
 // The scale of grid x: its mid-range and half range (from its ends when it is known to increase).
 Scale scale_of(const Eigen::VectorXd& x, bool increasing = false) {
-  if (increasing && x.size()) {
-    const double lo = x[0], hi = x[x.size() - 1];
-    return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
-  }
-  double lo = std::numeric_limits<double>::infinity(), hi = -lo;  // in one vectorised pass
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   const double* xp = x.data();
+  if (increasing && x.size()) {
+    lo = xp[0];
+    hi = xp[x.size() - 1];
+  } else {  // one vectorised pass
 #pragma omp simd reduction(min : lo) reduction(max : hi)
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    lo = std::min(lo, xp[i]);
-    hi = std::max(hi, xp[i]);
+    for (Eigen::Index i = 0; i < x.size(); ++i) {
+      lo = std::min(lo, xp[i]);
+      hi = std::max(hi, xp[i]);
+    }
   }
   return {0.5 * (lo + hi), std::max(1e-12, 0.5 * (hi - lo))};
 }
