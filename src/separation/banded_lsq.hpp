@@ -430,10 +430,19 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
   // fewer).
   using Gram = std::array<double, k * k>;
   std::array<Gram, 2> yy{};
+  // (GCC 12, vectorising this for AVX2 in the general passes, takes a local row that is written
+  // before every call for one that may not be.)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#endif
   auto add_gram = [](Gram& g, const double* y) {
     for (int a = 0; a < k; ++a)
       for (int b = 0; b < k; ++b) g[static_cast<std::size_t>(a * k + b)] += y[a] * y[b];
   };
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
   // win[c]: the row of y (or z) of window column c, null past the end.
   struct Window {
     std::vector<double*> heap;

@@ -53,7 +53,7 @@ Contour::Contour(Eigen::Matrix3Xd points, const Eigen::Vector3d& plane_normal, b
   if (!(n_.norm() > 0)) throw Error("contour: the plane normal is zero");
   n_.normalize();
   if (closed_ && p_.cols() > 2 && (p_.col(0) - p_.col(p_.cols() - 1)).norm() < 1e-12)
-    p_.conservativeResize(3, p_.cols() - 1);
+    p_ = p_.leftCols(p_.cols() - 1).eval();  // the repeated closing point dropped
   if (p_.cols() < 2 || !p_.allFinite()) throw Error("contour: needs at least 2 finite points");
   const Eigen::Index n = p_.cols(), segs = closed_ ? n : n - 1;
   arc_.resize(segs + 1);

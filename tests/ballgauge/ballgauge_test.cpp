@@ -83,7 +83,9 @@ TEST(BallGauge, NoiseFreeStitchedMapEqualsTheTruthUpToTheAlignmentFrame) {
     X.col(i) = truth.at({mp.placement, mp.ball});
     Xmap.col(i) = mp.nominal;
   }
-  const Eigen::Matrix4d T = Eigen::umeyama(X, Xmap, false);
+  // (With dynamic sizes: GCC 12 compiling Eigen's fixed-size umeyama for AVX2 takes a 4-wide copy
+  // of a 3-vector for a read past its end, -Warray-bounds.)
+  const Eigen::Matrix4d T = Eigen::umeyama(Eigen::MatrixXd(X), Eigen::MatrixXd(Xmap), false);
   const Eigen::Matrix3Xd moved = (T.topLeftCorner<3, 3>() * X).colwise() + T.topRightCorner<3, 1>();
   EXPECT_LT((moved - Xmap).cwiseAbs().maxCoeff(), 1e-11);  // mm
   EXPECT_GT((X - Xmap).cwiseAbs().maxCoeff(), 1e-4);       // the frames really differ
@@ -160,7 +162,9 @@ TEST(BallGauge, LeastSquaresAlignmentHasNoRigidErrorAndSmallerUncertainty) {
       if (c.placements[pl].balls[b].index == mp.ball) X.col(i) = c.true_centres[pl][b];
     Xmap.col(i) = mp.nominal;
   }
-  const Eigen::Matrix4d T = Eigen::umeyama(X, Xmap, false);
+  // (With dynamic sizes: GCC 12 compiling Eigen's fixed-size umeyama for AVX2 takes a 4-wide copy
+  // of a 3-vector for a read past its end, -Warray-bounds.)
+  const Eigen::Matrix4d T = Eigen::umeyama(Eigen::MatrixXd(X), Eigen::MatrixXd(Xmap), false);
   const Eigen::Matrix3Xd moved = (T.topLeftCorner<3, 3>() * X).colwise() + T.topRightCorner<3, 1>();
   EXPECT_LT((moved - Xmap).cwiseAbs().maxCoeff(), 1e-11);
 }

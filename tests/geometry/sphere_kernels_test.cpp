@@ -63,8 +63,7 @@ TEST(SphereKernels, GaussNewtonSumsAndHessianMatchTheirDefinitions) {
     for (int i = 0; i < n; ++i) {
       const Eigen::Vector3d d = Eigen::Vector3d(cl.x[i], cl.y[i], cl.z[i]) - Eigen::Vector3d(c);
       const double rho = d.norm(), res = rho - r;
-      Eigen::Vector4d j;
-      j << -d / rho, -1;
+      const Eigen::Vector4d j(-d.x() / rho, -d.y() / rho, -d.z() / rho, -1);
       JtJ += j * j.transpose();
       Jtr += res * j;
       cost += res * res;
