@@ -1,26 +1,16 @@
 #pragma once
 #include <gtest/gtest.h>
 
-#include <Eigen/Core>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <initializer_list>
 #include <iterator>
 #include <string>
 
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::test {
-
-// A dynamic vector of the given values. Assigning a fixed-size temporary such as
-// Eigen::Vector3d(a, b, c) to an Eigen::VectorXd does the same, but GCC 12 compiling for AVX2
-// takes Eigen's 4-wide copy of the temporary for a read past its end (-Warray-bounds).
-inline Eigen::VectorXd vec(std::initializer_list<double> values) {
-  return Eigen::Map<const Eigen::VectorXd>(values.begin(),
-                                           static_cast<Eigen::Index>(values.size()));
-}
 
 // A directory of the running test's own (ctest runs tests in parallel processes).
 inline std::string temp_dir() {

@@ -94,10 +94,11 @@ TEST(Probes, NanInData) {
 TEST(ResultJson, RoundTripAndBadInput) {
   separation::Result r;
   r.method = separation::Method::ThreePoint;
-  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 2), test::vec({1e-3, -2e-3, 0.5e-3}),
-                 test::vec({1e-4, 1e-4, 2e-4})};
-  r.guide = {Eigen::VectorXd::LinSpaced(3, 0, 2), test::vec({0, 1e-3, 0}), {}};
-  r.pitch = separation::Profile{Eigen::VectorXd::LinSpaced(2, 0, 1), test::vec({1e-6, -1e-6}), {}};
+  r.workpiece = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::VectorXd{{1e-3, -2e-3, 0.5e-3}},
+                 Eigen::VectorXd{{1e-4, 1e-4, 2e-4}}};
+  r.guide = {Eigen::VectorXd::LinSpaced(3, 0, 2), Eigen::VectorXd{{0, 1e-3, 0}}, {}};
+  r.pitch =
+      separation::Profile{Eigen::VectorXd::LinSpaced(2, 0, 1), Eigen::VectorXd{{1e-6, -1e-6}}, {}};
   r.unobservable = {"line", "parabola"};
   const std::string p = test::temp_file("r.json", "");
   io::write_result(p, r);

@@ -45,13 +45,13 @@ TEST(Svg, NiceMagnificationIsOneTwoOrFiveTimesAPowerOfTen) {
 TEST(Svg, HeatMapDrawsEveryCellAndPointWithItsValue) {
   report::HeatMap h;
   h.title = "t <1>";
-  h.grid_x = test::vec({0, 10, 20});
-  h.grid_y = test::vec({0, 5});
+  h.grid_x = Eigen::VectorXd{{0, 10, 20}};
+  h.grid_y = Eigen::VectorXd{{0, 5}};
   h.grid_value.resize(2, 3);
   h.grid_value << -2, 0, 1, 2, 0.5, -1;
-  h.px = test::vec({3, 4});
-  h.py = test::vec({1, 2});
-  h.pvalue = test::vec({0.25, -0.25});
+  h.px = Eigen::VectorXd{{3, 4}};
+  h.py = Eigen::VectorXd{{1, 2}};
+  h.pvalue = Eigen::VectorXd{{0.25, -0.25}};
   h.lines = {{0, 1}};
   const std::string s = report::svg(h);
   EXPECT_EQ(count(s, "<svg"), 1u);
@@ -76,15 +76,15 @@ TEST(Svg, HeatMapDrawsEveryCellAndPointWithItsValue) {
 
 TEST(Svg, RefusesInconsistentShapes) {
   report::HeatMap h;
-  h.grid_x = test::vec({0, 1, 2});
-  h.grid_y = test::vec({0, 1});
+  h.grid_x = Eigen::VectorXd{{0, 1, 2}};
+  h.grid_y = Eigen::VectorXd{{0, 1}};
   h.grid_value = Eigen::MatrixXd::Zero(3, 2);
   EXPECT_NE(test::error_of([&] { report::svg(h); }).find("len(y) x len(x)"), std::string::npos);
   EXPECT_NE(test::error_of([] { report::svg(report::HeatMap{}); }).find("no data"),
             std::string::npos);
   report::DistortedGrid g;
-  g.u = test::vec({0, 1});
-  g.v = test::vec({0, 1});
+  g.u = Eigen::VectorXd{{0, 1}};
+  g.v = Eigen::VectorXd{{0, 1}};
   g.du = g.dv = Eigen::MatrixXd::Zero(2, 2);
   g.normal = Eigen::MatrixXd::Zero(2, 3);
   EXPECT_NE(test::error_of([&] { report::svg(g); }).find("len(v) x len(u)"), std::string::npos);
@@ -92,8 +92,8 @@ TEST(Svg, RefusesInconsistentShapes) {
 
 TEST(Svg, DistortedGridMovesNodesByTheMagnifiedError) {
   report::DistortedGrid g;
-  g.u = test::vec({0, 50, 100});
-  g.v = test::vec({0, 50});
+  g.u = Eigen::VectorXd{{0, 50, 100}};
+  g.v = Eigen::VectorXd{{0, 50}};
   g.du = Eigen::MatrixXd::Zero(2, 3);
   g.dv = Eigen::MatrixXd::Zero(2, 3);
   g.normal = Eigen::MatrixXd::Zero(2, 3);
