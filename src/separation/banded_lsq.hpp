@@ -183,12 +183,18 @@ class BandedLsq {
   // Vᵀ(AᵀA)⁻¹V to it: with Y = R⁻ᵀV the forward solve, VᵀR⁻¹R⁻ᵀV = YᵀY, the sum of its rows'
   // outer products; it is complete when ready() is called, after the forward solve and before
   // the first use() (so use() may read it).
+  // With `local_vv` (3 · k × k, row-major), the caller gives the local unknowns' share of V's
+  // rows as three sums over every free g and θ: Σ v_g·v_gᵀ, Σ v_g·v_θᵀ (v_g and v_θ of the same
+  // station) and Σ v_θ·v_θᵀ (zeros without θ). The local rows of Y are V's rows through the
+  // constant Rloc⁻ᵀ, so their Gram follows from these without a product per station; the forward
+  // solve then sums only the workpiece rows' products (a third of them).
   // It works in the factorisation's memory that only solve_add and refactor_rhs read: the forward
   // solve's workpiece rows (Q × k values) in the kept rotations where they fit, the diagonal in
   // the right-hand sides. So after it, a solve_add needs a factor() first (refactor_rhs() then
   // factorises again).
   template <int k, class VRow, class Use, class Ready>
-  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&& ready);
+  void solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&& ready,
+                         const double* local_vv = nullptr);
   template <int k, class VRow, class Use>
   void solve_normal_rows(VRow&& v_row, Use&& use, double* gram = nullptr) {
     solve_normal_rows<k>(std::forward<VRow>(v_row), std::forward<Use>(use), gram, [] {});
@@ -286,7 +292,7 @@ class BandedLsq {
   double join();
   template <int k, int Width, class VRow, class Use, class Ready>  // window width, 0: any
   void solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Ready& ready,
-                              Uninitialized<double> (&yw)[2], long split);
+                              const double* local_vv, Uninitialized<double> (&yw)[2], long split);
   template <int NB>  // band width, 0: any
   void back_substitute(const Chain& ch, const std::vector<double>& xc, const Unknowns& v,
                        bool set_free, double* mc, double* mv) const;
@@ -364,7 +370,8 @@ class BandedLsq {
 };
 
 template <int k, class VRow, class Use, class Ready>
-void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&& ready) {
+void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&& ready,
+                                  const double* local_vv) {
   // The forward solve's workpiece rows: the lower chain's positions (up to the final window's) in
   // one buffer, the upper chain's in another, each in its chain's dead rotations where they fit
   // (pages already committed), else new.
@@ -381,13 +388,15 @@ void BandedLsq::solve_normal_rows(VRow&& v_row, Use&& use, double* gram, Ready&&
     }
     yw[c].resize(need[c]);
   }
-  with_width(m_,
-             [&]<int W>() { solve_normal_rows_impl<k, W>(v_row, use, gram, ready, yw, split); });
+  with_width(m_, [&]<int W>() {
+    solve_normal_rows_impl<k, W>(v_row, use, gram, ready, local_vv, yw, split);
+  });
 }
 
 template <int k, int Width, class VRow, class Use, class Ready>  // window width, 0: any
 void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Ready& ready,
-                                       Uninitialized<double> (&yw)[2], long split) {
+                                       const double* local_vv, Uninitialized<double> (&yw)[2],
+                                       long split) {
   // Rᵀy = V forward in elimination order (per chain and station g, θ, and the eliminated w; then
   // the final window), and R z = y backward. y of an eliminated w is final after its station's
   // step and needed again at that station on the way back, so the workpiece rows are kept; a
@@ -494,7 +503,8 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
       for (int c = 0; c < m; ++c) cloc[static_cast<std::size_t>(l * m + c)] = ch.Cloc(l, c);
     return cloc;
   };
-  auto forward_narrow = [&]<int NB>(std::size_t ci) {
+  // Local: the local rows' products are summed here (no local_vv).
+  auto forward_narrow = [&]<int NB, bool Local>(std::size_t ci) {
     constexpr int W = Width, G = W - NB;
     const Chain& ch = chains_[ci];
     const bool upper = ci == 1;
@@ -542,13 +552,15 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
       }
       double* y0 = wrow(pos);
       unroll<k>([&](auto j) { y0[j] = a[0][j]; });
-      if (gram)  // the station's three rows in one pass over the sum's upper aligned pairs
+      if (gram)  // the station's rows in one pass over the sum's upper aligned pairs
         unroll<k>([&](auto r) {
           unroll<k>([&](auto c) {
             if constexpr (c / 2 >= r / 2) {
               double& e = g[static_cast<std::size_t>(r * k + c)];
-              e += y0l[r] * y0l[c];
-              if (L == 2) e += y1l[r] * y1l[c];
+              if constexpr (Local) {
+                e += y0l[r] * y0l[c];
+                if (L == 2) e += y1l[r] * y1l[c];
+              }
               e += a[0][r] * a[0][c];
             }
           });
@@ -626,7 +638,13 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
     }
   };
   auto forward = [&](std::size_t ci) {
-    if (with_band<Width>([&]<int NB>() { forward_narrow.template operator()<NB>(ci); })) return;
+    if (with_band<Width>([&]<int NB>() {
+          if (local_vv)
+            forward_narrow.template operator()<NB, false>(ci);
+          else
+            forward_narrow.template operator()<NB, true>(ci);
+        }))
+      return;
     const Chain& ch = chains_[ci];
     double* shared = ci == 1 ? up_shared.data() : nullptr;
     Gram g{};  // here, not in yy: yy[0] and yy[1] share a cache line
@@ -644,7 +662,7 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
       load(t + nb - 1);  // enters the window
       set_window(win, ch, t, shared);
       local_forward(K, yl.data());
-      if (gram)
+      if (gram && !local_vv)
         for (int l = 0; l < L; ++l) add_gram(g, yl.data() + static_cast<std::size_t>(l) * ku);
       for (int c = 0; c < m; ++c) {
         double* a = win[c];
@@ -733,6 +751,22 @@ void BandedLsq::solve_normal_rows_impl(VRow& v_row, Use& use, double* gram, Read
   else {
     diagonal();
     forward(0);
+  }
+  if (gram && local_vv) {
+    // The local rows' Gram from V's: y_g = v_g/r00 and y_θ = (v_θ − r01·y_g)/r11, so
+    // Σ y_g·y_gᵀ = Σ v_g·v_gᵀ/r00² and Σ y_θ·y_θᵀ = (Σ v_θ·v_θᵀ − r01/r00·(Σ v_g·v_θᵀ + its
+    // transpose) + (r01/r00)²·Σ v_g·v_gᵀ)/r11².
+    const double* gg = local_vv;
+    const double* gt = local_vv + k * k;
+    const double* tt = local_vv + 2 * k * k;
+    const double q = rl01 * rinv[0];
+    for (int a = 0; a < k; ++a)
+      for (int b = 0; b < k; ++b) {
+        const int ab = a * k + b, ba = b * k + a;
+        double e = gg[ab] * rinv[0] * rinv[0];
+        if (L == 2) e += (tt[ab] - q * (gt[ab] + gt[ba]) + q * q * gg[ab]) * rinv[1] * rinv[1];
+        yy[0][static_cast<std::size_t>(ab)] += e;
+      }
   }
   if (two) {  // the upper chain's shares
     for (int c = 0; c + 1 < nb; ++c)

@@ -997,6 +997,55 @@ struct ReferenceAlgebra {
     return v_of(Design::Kind::t, K);
   }
 
+  // V's guide and pitch rows' share of VᵀV, as the least-squares solve takes it (see
+  // BandedLsq::solve_normal_rows): Σ v_g·v_gᵀ, Σ v_g·v_θᵀ (the same station's) and Σ v_θ·v_θᵀ over
+  // every guide and pitch point, three Cols × Cols blocks, row-major, with the parabola's and the
+  // pitch's columns cphi and ct (−1: none). A guide row is [b0, b1(x), φ(x)] in its columns, a
+  // pitch row a 1 in ct: the sums are moments of the guide's grid, in one vectorised pass.
+  template <int Cols>
+  std::array<double, 3 * Cols * Cols> local_gram(int cphi, int ct) const {
+    const Eigen::Index mgt = ct >= 0 ? std::min(mg, mt) : 0;  // stations with both rows
+    const double* x = r.xg.data();
+    const double mean = lg.mean, inv = lg.inv, xc = s.xc, iL = invL;
+    const double e0 = e[0], e1 = e[1], e2 = e[2];
+    const bool with_phi = cphi >= 0;
+    double s1 = 0, s11 = 0, sp = 0, s1p = 0, spp = 0, c1 = 0, cp = 0;
+#pragma omp simd reduction(+ : s1, s11, sp, s1p, spp, c1, cp)
+    for (Eigen::Index K = 0; K < mg; ++K) {
+      const double b1 = (x[K] - mean) * inv, t = (x[K] - xc) * iL;
+      const double phi = with_phi ? e0 + t * (e1 + t * e2) : 0.0;
+      const double both = K < mgt ? 1.0 : 0.0;
+      s1 += b1;
+      s11 += b1 * b1;
+      sp += phi;
+      s1p += b1 * phi;
+      spp += phi * phi;
+      c1 += both * b1;
+      cp += both * phi;
+    }
+    std::array<double, 3 * Cols * Cols> out{};
+    auto at = [&](int block, int a, int b) -> double& {
+      return out[static_cast<std::size_t>(block * Cols * Cols + a * Cols + b)];
+    };
+    const double b0 = lg.b0;
+    auto sym = [&](int a, int b, double v) { at(0, a, b) = at(0, b, a) = v; };
+    sym(kG0, kG0, b0 * b0 * static_cast<double>(mg));
+    sym(kG0, kG0 + 1, b0 * s1);
+    sym(kG0 + 1, kG0 + 1, s11);
+    if (with_phi) {
+      sym(kG0, cphi, b0 * sp);
+      sym(kG0 + 1, cphi, s1p);
+      sym(cphi, cphi, spp);
+    }
+    if (ct >= 0) {
+      at(1, kG0, ct) = b0 * static_cast<double>(mgt);
+      at(1, kG0 + 1, ct) = c1;
+      if (with_phi) at(1, cphi, ct) = cp;
+      at(2, ct, ct) = static_cast<double>(mt);
+    }
+    return out;
+  }
+
   // VᵀZV restricted to a profile's columns (padding columns have zero U).
   static Eigen::Matrix3d restrict(const Eigen::MatrixXd& VZV, const Cols& c) {
     Eigen::Matrix3d S;
@@ -1064,6 +1113,13 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
     static constexpr ReferenceAlgebra::Cols ct{KT >= 0 ? KT : 0, phi, 0};
     Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
     gram.setZero();
+    // The guide's and pitch's rows' share of the Gram matrix from their moments, when every one
+    // of those unknowns is free (make_design pins only workpiece points and offsets).
+    const bool locals_free = std::none_of(D.pins.begin(), D.pins.end(), [&](const auto& pin) {
+      const Kind kind = D.place(pin.first).kind;
+      return kind == Kind::g || kind == Kind::t;
+    });
+    const auto local_vv = ra.local_gram<Cols>(KPhi, KT);
     // A point's uncertainty from its Z_uu and row of ZV (null for a pinned unknown).
     auto use = [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
       const auto [kind, i] = D.place(id);
@@ -1097,7 +1153,8 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
           S[0] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cw);
           S[1] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cg);
           S[2] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.ct);
-        });
+        },
+        locals_free ? local_vv.data() : nullptr);
     for (const auto& pin : D.pins) use(pin.first, nullptr, 0.0);
   };
   // ReferenceAlgebra numbers its columns 0–3 for the lines, then the parabola's, then the

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -161,6 +162,35 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
       EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nf) << L.name;
       EXPECT_LT((got - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff()) << L.name;
       EXPECT_LT((got_diag - zd).cwiseAbs().maxCoeff(), kAgree * zd.maxCoeff()) << L.name;
+      // The same with the guide and pitch rows' share of VᵀV given as sums (the forward solve
+      // then sums only the workpiece rows): the same VᵀZV, and the same rows.
+      std::array<double, 27> local_vv{};
+      auto row_of = [&](int id) -> Eigen::RowVector3d {
+        const int c = d.col[static_cast<std::size_t>(id)];
+        return c >= 0 ? Eigen::RowVector3d(V.row(c)) : Eigen::RowVector3d::Zero();
+      };
+      for (long K = 0; K < n; ++K) {
+        const Eigen::RowVector3d vg = row_of(D.g(K));
+        const Eigen::RowVector3d vt = D.pitch ? row_of(D.t(K)) : Eigen::RowVector3d::Zero();
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) {
+            local_vv[static_cast<std::size_t>(a * 3 + b)] += vg[a] * vg[b];
+            local_vv[static_cast<std::size_t>(9 + a * 3 + b)] += vg[a] * vt[b];
+            local_vv[static_cast<std::size_t>(18 + a * 3 + b)] += vt[a] * vt[b];
+          }
+      }
+      Eigen::Matrix<double, 3, 3, Eigen::RowMajor> gram_given = Eigen::Matrix3d::Zero();
+      Eigen::MatrixXd got_given = Eigen::MatrixXd::Constant(nf, 3, std::nan(""));
+      engine.solve_normal_rows<3>(
+          [&](int id, double* out) {
+            for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
+          },
+          [&](int id, const double* zv, double) {
+            for (int j = 0; j < 3; ++j) got_given(d.col[static_cast<std::size_t>(id)], j) = zv[j];
+          },
+          gram_given.data(), [] {}, local_vv.data());
+      EXPECT_LT((got_given - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff())
+          << L.name;
       // The solve took the kept rotations' memory: a further refinement factorises again.
       engine.refactor_rhs(readings, mu, angle_mm, u);
       EXPECT_LT(engine.solve_add(u).max_correction, kAgree * scale) << L.name;
@@ -168,6 +198,8 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
       const Eigen::Matrix3d VZV = V.transpose() * ZV;
       EXPECT_LT((gram - Eigen::Matrix3d::Constant(1.0) - VZV).cwiseAbs().maxCoeff(),
                 kAgree * VZV.cwiseAbs().maxCoeff())
+          << L.name;
+      EXPECT_LT((gram_given - VZV).cwiseAbs().maxCoeff(), kAgree * VZV.cwiseAbs().maxCoeff())
           << L.name;
     }
 }
