@@ -705,15 +705,23 @@ Eigen::Vector3d quad_coefficients_from(const Moments& m) {
 }
 
 Eigen::Vector3d quad_coefficients(const Eigen::VectorXd& x, const Scale& s) {
-  Moments m;
+  double t1 = 0, t2s = 0, t3 = 0, t4 = 0;
+  const double* xp = x.data();
+  const double xc = s.xc, L = s.L;
+#pragma omp simd reduction(+ : t1, t2s, t3, t4)
   for (Eigen::Index i = 0; i < x.size(); ++i) {
-    const double t = (x[i] - s.xc) / s.L, t2 = t * t;
-    m.t[1] += t;
-    m.t[2] += t2;
-    m.t[3] += t2 * t;
-    m.t[4] += t2 * t2;
+    const double t = (xp[i] - xc) / L, t2 = t * t;
+    t1 += t;
+    t2s += t2;
+    t3 += t2 * t;
+    t4 += t2 * t2;
   }
+  Moments m;
   m.t[0] = static_cast<double>(x.size());
+  m.t[1] = t1;
+  m.t[2] = t2s;
+  m.t[3] = t3;
+  m.t[4] = t4;
   return quad_coefficients_from(m);
 }
 
@@ -914,19 +922,28 @@ struct ReferenceAlgebra {
     ct = {pitch ? kT : 0, par ? kPhi : 0, 0};
     if (par) {
       e = quad_coefficients(r.xg, s);
-      for (Eigen::Index j = 0; j < mw; ++j) {
-        pw0 += t2(r.xw[j]);
-        pw1 += lw.b1(r.xw[j]) * t2(r.xw[j]);
-      }
+      std::tie(pw0, pw1) = t2_on_line(r.xw, lw);
       pw0 *= lw.b0;
-      for (Eigen::Index K = 0; K < mg; ++K) {
-        pg0 += t2(r.xg[K]);
-        pg1 += lg.b1(r.xg[K]) * t2(r.xg[K]);
-      }
+      std::tie(pg0, pg1) = t2_on_line(r.xg, lg);
       pg0 *= lg.b0;
-      for (Eigen::Index K = 0; K < mt; ++K) lin_mean += lin(r.xt[K]);
-      if (mt) lin_mean /= static_cast<double>(mt);
+      const double* xt = r.xt.data();
+      double sum = 0;
+#pragma omp simd reduction(+ : sum)
+      for (Eigen::Index K = 0; K < mt; ++K) sum += lin(xt[K]);
+      if (mt) lin_mean = sum / static_cast<double>(mt);
     }
+  }
+  // Σt² and Σb1·t² over a grid, in one vectorised pass.
+  std::pair<double, double> t2_on_line(const Eigen::VectorXd& x, const Line& l) const {
+    const double* xp = x.data();
+    double s0 = 0, s1 = 0;
+#pragma omp simd reduction(+ : s0, s1)
+    for (Eigen::Index j = 0; j < x.size(); ++j) {
+      const double q = t2(xp[j]);
+      s0 += q;
+      s1 += l.b1(xp[j]) * q;
+    }
+    return {s0, s1};
   }
   // Per point, multiplications by these instead of divisions (the rows are formed ~5 times per
   // station).
@@ -935,7 +952,9 @@ struct ReferenceAlgebra {
     const double t = (x - s.xc) * invL;
     return t * t;
   }
-  double lin(double x) const { return (x - s.xc) * lin_k; }
+  double lin(double x) const {
+    return (x - s.xc) * lin_k;
+  }
 
   // U's rows. Workpiece: its line, and the parabola the gauge moves into it (t² less its line).
   [[gnu::always_inline]] Eigen::Vector3d uw(Eigen::Index j) const {
