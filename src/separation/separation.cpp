@@ -1075,10 +1075,11 @@ struct ReferenceAlgebra {
   }
 
   // The standard uncertainty √(noise_var·var(y_i)), var(y_i) (unit weight) from Z_uu (`zd`) and
-  // the row (ZV)_u (`zv`, all k columns; null when x_u is pinned, which then also ignores zd):
-  // each point's value is final as it is written, with no pass over the profiles afterwards.
+  // the row (ZV)_u (`zv`, all k columns; null when x_u is pinned, which then also ignores zd).
   // Inlined, with u·S·u written out (Eigen's dot stayed a call in the least-squares solve's loop),
-  // so that constant columns c index zv by constants.
+  // so that constant columns c index zv by constants. Without Root, the variance
+  // max(0, var(y_i))·noise_var instead (its square root taken later, four at a time).
+  template <bool Root = true>
   [[gnu::always_inline]] static double point_uncertainty(const Eigen::Vector3d& u, const Cols& c,
                                                          const Eigen::Matrix3d& S, double zd,
                                                          const double* zv, double scale,
@@ -1089,7 +1090,10 @@ struct ReferenceAlgebra {
       const double uz = u[0] * zv[c[0]] + u[1] * zv[c[1]] + u[2] * zv[c[2]];
       v += scale * scale * zd - 2 * scale * uz;
     }
-    return std::sqrt(std::max(0.0, v) * noise_var);
+    if constexpr (Root)
+      return std::sqrt(std::max(0.0, v) * noise_var);
+    else
+      return std::max(0.0, v) * noise_var;
   }
 };
 
@@ -1113,8 +1117,9 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_uncertainty), with
   // S = VᵀZV. S comes from the solve's forward rows (their Gram matrix) and is complete before
   // the backward solve hands out (ZV)_u and Z_uu row by row (the selected inversion runs
-  // alongside), so each point's uncertainty is written once, as its row arrives. Pinned unknowns
-  // have no Z_uu and no (ZV)_u: their variance is u·S·u alone, set afterwards.
+  // alongside), so each point's variance is written once, as its row arrives, and its square
+  // root taken in one vectorised pass at the end. Pinned unknowns have no Z_uu and no (ZV)_u:
+  // their variance is u·S·u alone, set after the solve.
   using Kind = Design::Kind;
   // VᵀZV restricted to each profile's columns: workpiece, guide, pitch.
   std::array<Eigen::Matrix3d, 3> S;
@@ -1144,16 +1149,18 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
       const auto [kind, i] = D.place(id);
       switch (kind) {
         case Kind::w:
-          uw[i] = ReferenceAlgebra::point_uncertainty(ra.uw(i), cw, S[0], zuu, zv, 1.0, noise_var);
+          uw[i] = ReferenceAlgebra::point_uncertainty<false>(ra.uw(i), cw, S[0], zuu, zv, 1.0,
+                                                             noise_var);
           break;
         case Kind::g:
-          ug[i] = ReferenceAlgebra::point_uncertainty(ra.ug(i), cg, S[1], zuu, zv, 1.0, noise_var);
+          ug[i] = ReferenceAlgebra::point_uncertainty<false>(ra.ug(i), cg, S[1], zuu, zv, 1.0,
+                                                             noise_var);
           break;
         case Kind::t:
           if constexpr (KT >= 0)
             if (i < ra.mt)
-              ut[i] = ReferenceAlgebra::point_uncertainty(ra.ut(i), ct, S[2], zuu, zv, inv_h,
-                                                          noise_var);
+              ut[i] = ReferenceAlgebra::point_uncertainty<false>(ra.ut(i), ct, S[2], zuu, zv, inv_h,
+                                                                 noise_var);
           break;
         default:
           break;  // an offset: no row of V
@@ -1186,6 +1193,22 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
     solve.template operator()<5, -1, 4>();
   else
     solve.template operator()<4, -1, -1>();
+  // The square roots of the variances written above, four per instruction, on both cores: in
+  // the solve's loop each one waited ~20 cycles for its scalar root before the next could retire.
+  auto roots = [](Eigen::VectorXd& u, Eigen::Index begin, Eigen::Index end) {
+    u.segment(begin, end - begin) = u.segment(begin, end - begin).cwiseSqrt();
+  };
+  detail::at_once(
+      [&] {
+        roots(uw, 0, uw.size() / 2);
+        roots(ug, 0, ug.size() / 2);
+        roots(ut, 0, ut.size() / 2);
+      },
+      [&] {
+        roots(uw, uw.size() / 2, uw.size());
+        roots(ug, ug.size() / 2, ug.size());
+        roots(ut, ut.size() / 2, ut.size());
+      });
 }
 
 // Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
