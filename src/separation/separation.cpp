@@ -920,6 +920,12 @@ struct ReferenceAlgebra {
     cw = {kW0, kW0 + 1, par ? kPhi : 0};
     cg = {kG0, kG0 + 1, par ? kPhi : 0};
     ct = {pitch ? kT : 0, par ? kPhi : 0, 0};
+    e_w0 = unit(kW0);
+    e_w1 = unit(kW0 + 1);
+    e_g0 = unit(kG0);
+    e_g1 = unit(kG0 + 1);
+    e_phi = unit(kPhi);
+    e_t = unit(kT);
     if (par) {
       e = quad_coefficients(r.xg, s);
       std::tie(pw0, pw1) = t2_on_line(r.xw, lw);
@@ -1001,19 +1007,25 @@ struct ReferenceAlgebra {
         break;
     }
   }
-  [[gnu::always_inline]] Row v_of(Design::Kind kind, Eigen::Index i) const {
-    Row v;
-    v_into<kMaxCols>(kind, i, kPhi, kT, v.data());
-    return v;
+  // The same rows as whole vectors, as sums of unit rows: v_into's store at a run-time column
+  // followed by the row's vector loads stalled each time (a load cannot take its data from a
+  // narrower store still in flight). Each entry is the same number (x·1 + 0).
+  static Row unit(int c) {
+    return c >= 0 ? Row(Row::Unit(c)) : Row(Row::Zero());
   }
+  Row e_w0, e_w1, e_g0, e_g1, e_phi, e_t;  // set once the columns are known
   [[gnu::always_inline]] Row vw(Eigen::Index j) const {
-    return v_of(Design::Kind::w, j);
+    if (j < 0 || j >= mw) return Row::Zero();
+    return lw.b0 * e_w0 + lw.b1(r.xw[j]) * e_w1;
   }
   [[gnu::always_inline]] Row vg(Eigen::Index K) const {
-    return v_of(Design::Kind::g, K);
+    if (K < 0 || K >= mg) return Row::Zero();
+    const double x = r.xg[K], t = (x - s.xc) * invL;
+    const double phi = kPhi >= 0 ? e[0] + t * (e[1] + t * e[2]) : 0.0;
+    return lg.b0 * e_g0 + lg.b1(x) * e_g1 + phi * e_phi;
   }
   [[gnu::always_inline]] Row vt(Eigen::Index K) const {
-    return v_of(Design::Kind::t, K);
+    return kT >= 0 && K >= 0 && K < mt ? e_t : Row(Row::Zero());
   }
 
   // V's guide and pitch rows' share of VᵀV, as the least-squares solve takes it (see
@@ -1238,13 +1250,23 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   int zn = 0;
   auto flush = [&] {  // the k·(k+1)/2 distinct entries, as dot products of contiguous rows
     if (zn == 0) return;
+    // Each dot product as four independent sums over the block's quarters: one sum was a chain
+    // of dependent vector additions (latency, not throughput, bound).
+    const int q = zn / 4;
     for (int i = 0; i < ra.k; ++i)
       for (int j = 0; j <= i; ++j) {
         const double* a = zs.row(i).data();
         const double* b = zs.row(j).data();
-        double acc = 0;
-#pragma omp simd reduction(+ : acc)
-        for (int c = 0; c < zn; ++c) acc += a[c] * b[c];
+        double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+#pragma omp simd reduction(+ : a0, a1, a2, a3)
+        for (int c = 0; c < q; ++c) {
+          a0 += a[c] * b[c];
+          a1 += a[c + q] * b[c + q];
+          a2 += a[c + 2 * q] * b[c + 2 * q];
+          a3 += a[c + 3 * q] * b[c + 3 * q];
+        }
+        for (int c = 4 * q; c < zn; ++c) a0 += a[c] * b[c];
+        const double acc = (a0 + a1) + (a2 + a3);
         G(i, j) += acc;
         if (j != i) G(j, i) += acc;
       }
