@@ -1109,6 +1109,26 @@ struct ReferenceAlgebra {
   }
 };
 
+// The standard uncertainties from the variances that point_uncertainty<false> wrote, four per
+// instruction, half of each profile on each core: in the propagation's loops each scalar root
+// held up the instructions after it for its latency (~20 cycles), two or three per station.
+void take_square_roots(Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
+  auto roots = [](Eigen::VectorXd& u, Eigen::Index begin, Eigen::Index end) {
+    u.segment(begin, end - begin) = u.segment(begin, end - begin).cwiseSqrt();
+  };
+  detail::at_once(
+      [&] {
+        roots(uw, 0, uw.size() / 2);
+        roots(ug, 0, ug.size() / 2);
+        roots(ut, 0, ut.size() / 2);
+      },
+      [&] {
+        roots(uw, uw.size() / 2, uw.size());
+        roots(ug, ug.size() / 2, ug.size());
+        roots(ut, ut.size() / 2, ut.size());
+      });
+}
+
 // Standard uncertainties (for noise variance noise_var per row) of the reported w, g, θ under
 // the ls reference from the least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
 void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise_var,
@@ -1205,22 +1225,7 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
     solve.template operator()<5, -1, 4>();
   else
     solve.template operator()<4, -1, -1>();
-  // The square roots of the variances written above, four per instruction, on both cores: in
-  // the solve's loop each one waited ~20 cycles for its scalar root before the next could retire.
-  auto roots = [](Eigen::VectorXd& u, Eigen::Index begin, Eigen::Index end) {
-    u.segment(begin, end - begin) = u.segment(begin, end - begin).cwiseSqrt();
-  };
-  detail::at_once(
-      [&] {
-        roots(uw, 0, uw.size() / 2);
-        roots(ug, 0, ug.size() / 2);
-        roots(ut, 0, ut.size() / 2);
-      },
-      [&] {
-        roots(uw, uw.size() / 2, uw.size());
-        roots(ug, ug.size() / 2, ug.size());
-        roots(ut, ut.size() / 2, ut.size());
-      });
+  take_square_roots(uw, ug, ut);
 }
 
 // Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
@@ -1306,16 +1311,17 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
     const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg);
     Row Y = Row::Zero();  // (T z) at w_j
     for (long j = 0; j <= n; ++j) {
-      uw[j] = ReferenceAlgebra::point_uncertainty(ra.uw(j), ra.cw, Sw, 2.0 * static_cast<double>(j),
-                                                  Y.data(), 1.0, noise_var);
+      uw[j] = ReferenceAlgebra::point_uncertainty<false>(
+          ra.uw(j), ra.cw, Sw, 2.0 * static_cast<double>(j), Y.data(), 1.0, noise_var);
       if (j == n) break;
       const Row zB = back[static_cast<std::size_t>(j + 1)];
       const Row zA = ra.vg(j) - zB;
       const Row gz = zA - Y;
-      ug[j] = ReferenceAlgebra::point_uncertainty(
+      ug[j] = ReferenceAlgebra::point_uncertainty<false>(
           ra.ug(j), ra.cg, Sg, 1.0 + 2.0 * static_cast<double>(j), gz.data(), 1.0, noise_var);
       Y += zB - zA;
     }
+    take_square_roots(uw, ug, ut);
     return;
   }
 
@@ -1364,16 +1370,16 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   for (long K = 0; K < n; ++K) {
     const Row a2 = zA(K + 2);
     const Row w = a0 - y0;
-    uw[K] = ReferenceAlgebra::point_uncertainty(ra.uw(K), ra.cw, Sw, K < 2 ? 1.0 : var_x(K) - 1,
-                                                w.data(), 1.0, noise_var);
-    ug[K] = ReferenceAlgebra::point_uncertainty(ra.ug(K), ra.cg, Sg, var_x(K), y0.data(), 1.0,
-                                                noise_var);
+    uw[K] = ReferenceAlgebra::point_uncertainty<false>(
+        ra.uw(K), ra.cw, Sw, K < 2 ? 1.0 : var_x(K) - 1, w.data(), 1.0, noise_var);
+    ug[K] = ReferenceAlgebra::point_uncertainty<false>(ra.ug(K), ra.cg, Sg, var_x(K), y0.data(),
+                                                       1.0, noise_var);
     const Row b = zB(K);
     if (K < ra.mt) {
       const Row t = b - a1 + y1 - y0;
-      ut[K] = ReferenceAlgebra::point_uncertainty(ra.ut(K), ra.ct, St,
-                                                  K == 0 ? 2.0 : 6.0 * static_cast<double>(K) + 4,
-                                                  t.data(), 1.0 / ra.h, noise_var);
+      ut[K] = ReferenceAlgebra::point_uncertainty<false>(
+          ra.ut(K), ra.ct, St, K == 0 ? 2.0 : 6.0 * static_cast<double>(K) + 4, t.data(),
+          1.0 / ra.h, noise_var);
     }
     const Row y2 = K + 2 < n ? Row(2 * y1 - y0 - 2 * a1 + a2 + 2 * b + rb(K)) : Row(Row::Zero());
     y0 = y1;
@@ -1381,6 +1387,7 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
     a0 = a1;
     a1 = a2;
   }
+  take_square_roots(uw, ug, ut);
 }
 
 // `ls`: the least-squares straightness when already known (not NaN). x is one of separate()'s
