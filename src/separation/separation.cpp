@@ -1110,12 +1110,19 @@ struct ReferenceAlgebra {
 };
 
 // The standard uncertainties from the variances that point_uncertainty<false> wrote, four per
-// instruction, half of each profile on each core: in the propagation's loops each scalar root
-// held up the instructions after it for its latency (~20 cycles), two or three per station.
+// instruction, half of each profile on each core for long profiles: in the propagation's loops
+// each scalar root held up the instructions after it for its latency (~20 cycles), two or three
+// per station.
 void take_square_roots(Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
   auto roots = [](Eigen::VectorXd& u, Eigen::Index begin, Eigen::Index end) {
     u.segment(begin, end - begin) = u.segment(begin, end - begin).cwiseSqrt();
   };
+  if (ug.size() < kTwoCorePoints) {  // a thread would cost more than it saves
+    roots(uw, 0, uw.size());
+    roots(ug, 0, ug.size());
+    roots(ut, 0, ut.size());
+    return;
+  }
   detail::at_once(
       [&] {
         roots(uw, 0, uw.size() / 2);
