@@ -498,12 +498,38 @@ printf '00001 StartSession()\r\n00002 GoTo(X(1), X(2))\r\n00003 AbortE()\r\n0000
 expect_code 2 "$T" ipp
 expect_code 2 "$T" ipp check
 
+# start_server ARGS...: 'trueaxis serve ARGS' in the background (SERVE; its output in serve.txt),
+# and PORT once it says where it listens. That may take seconds on a loaded machine (a server with
+# a part opens the CAD library first), so it is given 60 s; a server that never says is killed
+# and named (PORT 1 then, so that its clients fail at once instead of waiting).
+start_server() {
+  "$T" serve "$@" >serve.txt 2>&1 &
+  SERVE=$!
+  for _ in $(seq 600); do
+    PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+    [ -n "$PORT" ] && return 0
+    kill -0 "$SERVE" 2>/dev/null || break
+    sleep 0.1
+  done
+  bad "serve $*: no address (it stopped, or 60 s passed): $(cat serve.txt)"
+  kill "$SERVE" 2>/dev/null
+  PORT=1
+}
+# end_server: the server's exit status once its sessions are done; one that is still running
+# 60 s later (its client never came) is killed and named, so the test cannot hang.
+end_server() {
+  for _ in $(seq 600); do
+    kill -0 "$SERVE" 2>/dev/null || { wait "$SERVE"; return; }
+    sleep 0.1
+  done
+  kill "$SERVE" 2>/dev/null
+  wait "$SERVE"
+  bad "serve did not stop after its sessions: $(cat serve.txt)"
+  return 1
+}
 # The virtual CMM served over I++ DME: NIST's programs run through 'ipp run' and compared with
 # NIST's recordings; the server stops after the sessions asked for.
-"$T" serve --port 0 --time-scale 0 --sessions 3 >serve.txt 2>&1 &
-SERVE=$!
-for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
-PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+start_server --port 0 --time-scale 0 --sessions 3
 expect_ok "$T" ipp run "$NIST/PtMeas.prg" --port "$PORT" --expect "$NIST/PtMeas.res" --log client.log
 grep -q "the structure matches" out.txt && grep -q "00210 # Y(0.77900)" out.txt && grep -q "sent: 00080 PtMeas" client.log && ok || bad "ipp run PtMeas: $(tail -3 out.txt)"
 # Error.prg: the specification's 2500 where NIST's server answered 1008 — named, exit 1.
@@ -514,20 +540,17 @@ fi
 printf '00001 StartSession()\r\n\\\\\r\n00002 GoTo(X(1), X(2))\r\n\\\\\r\n09999 EndSession()\r\n' > bad.prg
 expect_ok "$T" ipp run bad.prg --port "$PORT"
 grep -q "bad.prg:3:18: error 0502: GoTo: X is given twice (sent as it is)" err.txt && grep -q '00002 ! Error(3, 0502, "column 18: GoTo: X is given twice"' out.txt && ok || bad "ipp run bad line: $(cat err.txt out.txt)"
-wait $SERVE && grep -q "stopped after 3 session(s)" serve.txt && ok || bad "serve --sessions 3: $(cat serve.txt)"
+end_server && grep -q "stopped after 3 session(s)" serve.txt && ok || bad "serve --sessions 3: $(cat serve.txt)"
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" ipp run "$NIST/PtMeas.prg" --port 1
 # The scanning controller over I++ DME: the part served, scanned through the protocol, makes the
 # same decisions as in process (the lines per section without their point counts and times).
-"$T" serve --part part.json --port 0 --time-scale 0 --sessions 1 >serve.txt 2>&1 &
-SERVE=$!
-for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
-PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+start_server --part part.json --port 0 --time-scale 0 --sessions 1
 flow() { grep -E "^mid\.[0-9]+: " "$1" | sed -E 's/ — [0-9]+ points,/ —/; s/, [0-9.]+ s$//'; }
 "$T" scan --design design.json --part part.json -o scan-here.json >here.txt 2>&1
 expect_ok "$T" scan --design design.json --cmm "ipp://127.0.0.1:$PORT" --part part.json -o scan-ipp.json --truth truth-ipp.csv
 cp out.txt there.txt
 [ -n "$(flow here.txt)" ] && [ "$(flow here.txt)" = "$(flow there.txt)" ] && grep -q "scanned through the I++ DME server at ipp://127.0.0.1:$PORT" there.txt && ok || bad "scan --cmm differs from in process: $(cat here.txt there.txt)"
-wait $SERVE
+end_server
 expect_code 2 "$T" scan --design design.json --cmm "127.0.0.1:$PORT" -o s.json
 grep -q "expected ipp://HOST:PORT" err.txt && ok || bad "scan --cmm bad address: $(cat err.txt)"
 expect_code 2 "$T" scan --design design.json -o s.json
@@ -536,15 +559,12 @@ expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" scan --desi
 # without noise: the same to a few nm); the placements' balls stand in the server's world.
 expect_ok "$T" simulate ballgauge --machine machine.json --sections 2 --tip-radius 1 --gauge bgi-gauge.json --measurements bgi-here.json --truth bgi-truth.csv --balls bgi-balls.csv
 head -1 bgi-balls.csv | grep -qx "x,y,z,diameter" && [ "$(wc -l < bgi-balls.csv)" -eq 61 ] && ok || bad "simulate ballgauge --balls: $(head -2 bgi-balls.csv)"
-"$T" serve --machine machine.json --balls bgi-balls.csv --port 0 --time-scale 0 --sessions 1 >serve.txt 2>&1 &
-SERVE=$!
-for i in $(seq 100); do grep -q "on 127.0.0.1:" serve.txt && break; sleep 0.05; done
-PORT=$(sed -n 's/.*on 127.0.0.1:\([0-9]*\),.*/\1/p' serve.txt)
+start_server --machine machine.json --balls bgi-balls.csv --port 0 --time-scale 0 --sessions 1
 expect_code 2 "$T" simulate ballgauge --cmm "ipp://127.0.0.1:$PORT" --noise 0.5
 expect_code 2 "$T" simulate ballgauge --cmm "127.0.0.1:$PORT"
 expect_ok "$T" simulate ballgauge --machine machine.json --sections 2 --cmm "ipp://127.0.0.1:$PORT" --gauge bgi-gauge.json --measurements bgi-there.json --truth bgi-truth.csv
 grep -q "measured 2 placements of a 40-ball frame gauge through the I++ DME server at ipp://127.0.0.1:$PORT" out.txt && grep -q "60 balls of bgi-balls.csv" serve.txt && ok || bad "simulate ballgauge --cmm: $(cat out.txt serve.txt)"
-wait $SERVE
+end_server
 expect_ok "$T" ballgauge --gauge bgi-gauge.json --measurements bgi-here.json -o bgi-here-map.json
 expect_ok "$T" ballgauge --gauge bgi-gauge.json --measurements bgi-there.json -o bgi-there-map.json
 python3 -c "
