@@ -704,27 +704,6 @@ Eigen::Vector3d quad_coefficients_from(const Moments& m) {
   return G.ldlt().solve(Eigen::Vector3d(0, 0, 1));
 }
 
-Eigen::Vector3d quad_coefficients(const Eigen::VectorXd& x, const Scale& s) {
-  double t1 = 0, t2s = 0, t3 = 0, t4 = 0;
-  const double* xp = x.data();
-  const double xc = s.xc, L = s.L;
-#pragma omp simd reduction(+ : t1, t2s, t3, t4)
-  for (Eigen::Index i = 0; i < x.size(); ++i) {
-    const double t = (xp[i] - xc) / L, t2 = t * t;
-    t1 += t;
-    t2s += t2;
-    t3 += t2 * t;
-    t4 += t2 * t2;
-  }
-  Moments m;
-  m.t[0] = static_cast<double>(x.size());
-  m.t[1] = t1;
-  m.t[2] = t2s;
-  m.t[3] = t3;
-  m.t[4] = t4;
-  return quad_coefficients_from(m);
-}
-
 Moments moments_of(const Eigen::VectorXd& x, const Eigen::VectorXd& y, const Scale& s) {
   Moments m;
   const double inv = 1 / s.L;
@@ -927,7 +906,7 @@ struct ReferenceAlgebra {
     e_phi = unit(kPhi);
     e_t = unit(kT);
     if (par) {
-      e = quad_coefficients(r.xg, s);
+      e = quad_coefficients_from(moments_of(r.xg, r.xg, s));  // (the y sums unused)
       std::tie(pw0, pw1) = t2_on_line(r.xw, lw);
       pw0 *= lw.b0;
       std::tie(pg0, pg1) = t2_on_line(r.xg, lg);
@@ -960,6 +939,11 @@ struct ReferenceAlgebra {
   }
   double lin(double x) const {
     return (x - s.xc) * lin_k;
+  }
+  // φ(x), the parabola functional's row entry at a guide point (with the parabola free).
+  double phi(double x) const {
+    const double t = (x - s.xc) * invL;
+    return e[0] + t * (e[1] + t * e[2]);
   }
 
   // U's rows. Workpiece: its line, and the parabola the gauge moves into it (t² less its line).
@@ -994,10 +978,7 @@ struct ReferenceAlgebra {
         if (i >= 0 && i < mg) {
           out[kG0] = lg.b0;
           out[kG0 + 1] = lg.b1(r.xg[i]);
-          if (cphi >= 0) {  // φ_K, the parabola functional at x
-            const double t = (r.xg[i] - s.xc) * invL;
-            out[cphi] = e[0] + t * (e[1] + t * e[2]);
-          }
+          if (cphi >= 0) out[cphi] = phi(r.xg[i]);
         }
         break;
       case Design::Kind::t:
@@ -1020,9 +1001,8 @@ struct ReferenceAlgebra {
   }
   [[gnu::always_inline]] Row vg(Eigen::Index K) const {
     if (K < 0 || K >= mg) return Row::Zero();
-    const double x = r.xg[K], t = (x - s.xc) * invL;
-    const double phi = kPhi >= 0 ? e[0] + t * (e[1] + t * e[2]) : 0.0;
-    return lg.b0 * e_g0 + lg.b1(x) * e_g1 + phi * e_phi;
+    const double x = r.xg[K];
+    return lg.b0 * e_g0 + lg.b1(x) * e_g1 + (kPhi >= 0 ? phi(x) : 0.0) * e_phi;
   }
   [[gnu::always_inline]] Row vt(Eigen::Index K) const {
     return kT >= 0 && K >= 0 && K < mt ? e_t : Row(Row::Zero());
@@ -1037,14 +1017,11 @@ struct ReferenceAlgebra {
   std::array<double, 3 * Cols * Cols> local_gram(int cphi, int ct) const {
     const Eigen::Index mgt = ct >= 0 ? std::min(mg, mt) : 0;  // stations with both rows
     const double* x = r.xg.data();
-    const double mean = lg.mean, inv = lg.inv, xc = s.xc, iL = invL;
-    const double e0 = e[0], e1 = e[1], e2 = e[2];
     const bool with_phi = cphi >= 0;
     double s1 = 0, s11 = 0, sp = 0, s1p = 0, spp = 0, c1 = 0, cp = 0;
 #pragma omp simd reduction(+ : s1, s11, sp, s1p, spp, c1, cp)
     for (Eigen::Index K = 0; K < mg; ++K) {
-      const double b1 = (x[K] - mean) * inv, t = (x[K] - xc) * iL;
-      const double phi = with_phi ? e0 + t * (e1 + t * e2) : 0.0;
+      const double b1 = lg.b1(x[K]), phi = with_phi ? this->phi(x[K]) : 0.0;
       const double both = K < mgt ? 1.0 : 0.0;
       s1 += b1;
       s11 += b1 * b1;
