@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../common/memory.hpp"
+#include "trueaxis/separation/separation.hpp"
 
 namespace trueaxis::separation::detail {
 
@@ -66,6 +67,16 @@ Eigen::Vector3d zero_difference_weights(const std::vector<long>& p);
 // channel) the parabola. Throws Error if a zero difference cannot be used with this layout.
 Design make_design(const std::vector<long>& p, long n, bool angle, std::optional<double> zero_diff,
                    double wa);
+
+// Which least-squares solver separate() may use: the direct solve of a layout without redundancy
+// where it applies (Automatic), or always the banded factorisation (Banded; tests compare the two).
+enum class LsqSolver { Automatic, Banded };
+Result separate(const ProbeData& data, const Options& opt, LsqSolver solver);
+
+// Whether Automatic solves offsets p (in steps), with or without an angle channel, directly: the
+// layouts without redundancy whose least-squares solution is the exact one (three probes at 0, 1
+// and 2 steps, no angle channel).
+bool direct_layout(const std::vector<long>& p, bool angle);
 
 // Rows of station K: probes then angle. Coefficients on free ids; pinned values moved to rhs.
 template <class Emit>

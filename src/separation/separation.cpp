@@ -377,14 +377,39 @@ std::launch policy_for(const Raw& r) {
   return r.g.size() >= kTwoCorePoints ? std::launch::async : std::launch::deferred;
 }
 
-// Everything the uncertainty propagation needs from a least-squares solve.
+// Everything the uncertainty propagation needs from a least-squares solve. The banded solve
+// leaves its factorisation (engine); the direct solve of a layout without redundancy has none,
+// and its uncertainties, which depend on the grids alone, may be under way on another core
+// (propagation, into uw, ug, ut, from its own copy of the grids).
 struct LsqState {
   Design D;
   std::unique_ptr<detail::BandedLsq> engine;
   double h = 0;
   double ssr = 0;
   long dof = 0;
+  bool direct = false;
+  Raw grids;
+  Eigen::VectorXd uw, ug, ut;
+  std::future<void> propagation;
 };
+
+}  // namespace
+
+// Each station's three readings determine its three new unknowns (the workpiece under probe C,
+// the guide, the pitch); with the gauge pins the system is square (dof = 0).
+bool detail::direct_layout(const std::vector<long>& p, bool angle) {
+  return !angle && p == std::vector<long>{0, 1, 2};
+}
+
+namespace {
+
+// The least-squares grids for n stations at x (workpiece positions 0..Q−1 at x_0 + (j + pmin)·h,
+// guide and pitch at the stations), into r's arrays (sized by the caller).
+void fill_lsq_grids(const Eigen::VectorXd& x, long pmin, double h, Raw& r) {
+  for (Eigen::Index j = 0; j < r.xw.size(); ++j) r.xw[j] = x[0] + static_cast<double>(j + pmin) * h;
+  r.xg = x;
+  if (r.xt.size()) r.xt = x;
+}
 
 Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   const long n = data.x.size();
@@ -427,11 +452,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
     trueaxis::detail::advise_huge_pages(grid->data(),
                                         sizeof(double) * static_cast<std::size_t>(grid->size()));
   const long pmin = *std::min_element(p.begin(), p.end());
-  auto grids = std::async(policy_for(r), [&] {
-    for (long j = 0; j < D.Q; ++j) r.xw[j] = data.x[0] + static_cast<double>(j + pmin) * h;
-    r.xg = data.x;
-    if (D.pitch) r.xt = data.x;
-  });
+  auto grids = std::async(policy_for(r), [&] { fill_lsq_grids(data.x, pmin, h, r); });
   st.engine = std::make_unique<detail::BandedLsq>(D);
   Eigen::VectorXd angle_mm;
   if (angle) angle_mm = (data.angle.array() - mu_a) * h;
@@ -480,6 +501,124 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
   if (D.pitch) r.theta /= h;
   grids.get();
   r.parabola_free = D.parabola_free;
+  return r;
+}
+
+// The least-squares solution for a direct_layout, without a factorisation. With the pins of
+// make_design (w_0 = w_{Q−1} = 0, o_A = o_C = 0, and w_m = 0 at m = Q/2 or o_B from the known
+// zero difference) and the centred readings a, b, c of probes A, B, C, station K's rows
+//   w_K + g_K = a_K,  w_{K+1} + g_K + t_K + o_B = b_K,  w_{K+2} + g_K + 2t_K = c_K
+// (t = θ·h) give g_K and t_K from w, and w_{K+2} = 2w_{K+1} − w_K + f_K + β with
+// f_K = a_K − 2b_K + c_K and β = 2·o_B. w is that recurrence run from w_0 = 0, w_1 = α, with α
+// and (parabola free) β set by the pins at Q − 1 and m. The chain's rounding (~1e-9 of the
+// profile at a million stations) is removed as the banded solve removes its own: one refinement
+// with the residual of the recurrence, solved by the same recurrence, which leaves the result at
+// the residual's own rounding floor.
+Raw solve_lsq_direct(const ProbeData& data, const Options& opt, LsqState& st) {
+  const long n = data.x.size();
+  const double h = data.step();
+  const long Q = n + 2, m = Q / 2;
+  Raw r;
+  r.xw.resize(Q);
+  r.w.resize(Q);
+  r.xg.resize(n);
+  r.g.resize(n);
+  r.xt.resize(n);
+  r.theta.resize(n);
+  const detail::Prefault prefault({{r.g.data(), sizeof(double) * static_cast<std::size_t>(n)},
+                                   {r.theta.data(), sizeof(double) * static_cast<std::size_t>(n)}});
+  auto grids = std::async(policy_for(r), [&] { fill_lsq_grids(data.x, 0, h, r); });
+  const Eigen::RowVectorXd mu = data.readings.colwise().mean();
+  const double ma = mu[0], mb = mu[1], mc = mu[2];
+  const double* A = data.readings.col(0).data();
+  const double* B = data.readings.col(1).data();
+  const double* C = data.readings.col(2).data();
+  const bool beta_known = opt.zero_difference.has_value();
+  // With o_A = o_C = 0, o_B = −e'/2 for the zero difference of the centred offsets,
+  // e' = e − (μ_A − 2μ_B + μ_C).
+  double beta = beta_known ? (ma - 2 * mb + mc) - *opt.zero_difference : 0.0;
+  auto forcing = [&](long K) { return (A[K] - ma) - 2 * (B[K] - mb) + (C[K] - mc); };
+  // α·j + δβ·j(j − 1)/2 that brings the values at the pins Q − 1 and m (end, mid) to zero.
+  const double e1 = static_cast<double>(Q - 1), e2 = e1 * (e1 - 1) / 2;
+  const double m1 = static_cast<double>(m), m2 = m1 * (m1 - 1) / 2;
+  auto fit = [&](double end, double mid) -> std::pair<double, double> {
+    if (beta_known) return {-end / e1, 0.0};
+    const double det = e1 * m2 - e2 * m1;
+    return {(e2 * mid - m2 * end) / det, (m1 * end - e1 * mid) / det};
+  };
+  double* w = r.w.data();
+  // The recurrence as two sums (the forcing off the chain), from w_0 = w_1 = 0.
+  w[0] = w[1] = 0;
+  {
+    double x = 0, dx = 0;
+    for (long K = 0; K < n; ++K) {
+      dx += forcing(K) + beta;
+      x += dx;
+      w[K + 2] = x;
+    }
+  }
+  // The refinement, with the pins' line and parabola of the first pass applied on the fly: the
+  // residual ρ_K of each station's recurrence as the values stand, and the correction δ that
+  // it drives, run from δ_0 = δ_1 = 0.
+  {
+    const auto [a1, b1] = fit(w[Q - 1], w[m]);
+    beta += b1;
+    auto first = [&, a1 = a1, b1 = b1](long j) {
+      const double q = static_cast<double>(j);
+      return w[j] + (a1 * q + b1 * (q * (q - 1) * 0.5));
+    };
+    double o0 = first(0), o1 = first(1), d0 = 0, d1 = 0, dd = 0;
+    for (long K = 0; K < n; ++K) {
+      const double o2 = first(K + 2);
+      dd += (forcing(K) + beta) - ((o2 - 2 * o1) + o0);
+      const double d2 = d1 + dd;
+      w[K] = o0 + d0;
+      o0 = o1;
+      o1 = o2;
+      d0 = d1;
+      d1 = d2;
+    }
+    w[n] = o0 + d0;
+    w[n + 1] = o1 + d1;
+  }
+  // The pins' line and parabola of the correction, then g and t from each station's A and B rows,
+  // in one vectorised pass: t_K needs w_{K+1}, formed again before the next step overwrites it.
+  // The station number is a double made from a 32-bit offset in blocks, so that the loop
+  // vectorises.
+  {
+    const auto [a2, b2] = fit(w[Q - 1], w[m]);
+    beta += b2;
+    const double oB = beta / 2;
+    auto fixed = [a2 = a2, b2 = b2](double v, double q) {
+      return v + (a2 * q + b2 * (q * (q - 1) * 0.5));
+    };
+    double* __restrict g = r.g.data();
+    double* __restrict t = r.theta.data();
+    constexpr long kBlock = 1L << 20;
+    for (long K0 = 0; K0 < n; K0 += kBlock) {
+      const int len = static_cast<int>(std::min(kBlock, n - K0));
+      const double base = static_cast<double>(K0);
+      const double *Ab = A + K0, *Bb = B + K0;
+      double *wb = w + K0, *gb = g + K0, *tb = t + K0;
+#pragma omp simd
+      for (int i = 0; i < len; ++i) {
+        const double q = base + static_cast<double>(i);
+        const double wk = fixed(wb[i], q), wk1 = fixed(wb[i + 1], q + 1);
+        const double gk = (Ab[i] - ma) - wk;
+        wb[i] = wk;
+        gb[i] = gk;
+        tb[i] = ((Bb[i] - mb) - oB - wk1 - gk) / h;
+      }
+    }
+    w[n] = fixed(w[n], static_cast<double>(n));
+    w[n + 1] = fixed(w[n + 1], static_cast<double>(n + 1));
+  }
+  st.h = h;
+  st.ssr = 0;
+  st.dof = 0;
+  st.direct = true;
+  grids.get();
+  r.parabola_free = !beta_known;
   return r;
 }
 
@@ -877,7 +1016,7 @@ struct ReferenceAlgebra {
   // Whether the pitch is among the reported values (then V has the pitch's column), and on how
   // many points (mt; 0 if not).
   static bool reports_pitch(const Raw& raw, bool with_pitch, bool has_pitch_unknowns) {
-    return with_pitch && raw.theta.size() && has_pitch_unknowns;
+    return with_pitch && raw.xt.size() && has_pitch_unknowns;
   }
   static Eigen::Index pitch_points(const Raw& raw, bool with_pitch, bool has_pitch_unknowns) {
     return reports_pitch(raw, with_pitch, has_pitch_unknowns) ? raw.xt.size() : 0;
@@ -1212,6 +1351,55 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
   take_square_roots(uw, ug, ut);
 }
 
+// Σ z·zᵀ over the adjoint vectors z of a propagation (k ≤ kMaxCols entries each), summed a block
+// of z at a time: a 6 × 6 outer product per z loaded and stored all of the sum for 36
+// multiply-adds, which dominated the adjoint pass.
+class GramSum {
+ public:
+  using Row = ReferenceAlgebra::Row;
+  explicit GramSum(int k) : k_(k) { G_.setZero(); }
+  void add(const Row& z) {
+    zs_.col(zn_++) = z;
+    if (zn_ == kBlock) flush();
+  }
+  // The sum restricted to a profile's columns.
+  Eigen::Matrix3d restricted(const ReferenceAlgebra::Cols& c) {
+    flush();
+    return ReferenceAlgebra::restrict(G_.topLeftCorner(k_, k_), c);
+  }
+
+ private:
+  static constexpr int kBlock = 192;
+  void flush() {  // the k·(k+1)/2 distinct entries, as dot products of contiguous rows
+    if (zn_ == 0) return;
+    // Each dot product as four independent sums over the block's quarters: one sum was a chain
+    // of dependent vector additions (latency, not throughput, bound).
+    const int q = zn_ / 4;
+    for (int i = 0; i < k_; ++i)
+      for (int j = 0; j <= i; ++j) {
+        const double* a = zs_.row(i).data();
+        const double* b = zs_.row(j).data();
+        double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
+#pragma omp simd reduction(+ : a0, a1, a2, a3)
+        for (int c = 0; c < q; ++c) {
+          a0 += a[c] * b[c];
+          a1 += a[c + q] * b[c + q];
+          a2 += a[c + 2 * q] * b[c + 2 * q];
+          a3 += a[c + 3 * q] * b[c + 3 * q];
+        }
+        for (int c = 4 * q; c < zn_; ++c) a0 += a[c] * b[c];
+        const double acc = (a0 + a1) + (a2 + a3);
+        G_(i, j) += acc;
+        if (j != i) G_(j, i) += acc;
+      }
+    zn_ = 0;
+  }
+  int k_;
+  int zn_ = 0;
+  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> G_;
+  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, kBlock, Eigen::RowMajor> zs_;
+};
+
 // Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
 // results by exact propagation of every reading through the recurrence. T, the map from readings
 // to the raw unknowns, is taken with the gauge X_0 = X_1 = 0 and without the first-reading
@@ -1230,45 +1418,7 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   using Row = ReferenceAlgebra::Row;
   const long n = d.x.size();
   const ReferenceAlgebra ra(r, with_pitch, true, d.step());
-  // G = Σ z·zᵀ, summed a block of z at a time: a 6 × 6 outer product per z loaded and stored all
-  // of G for 36 multiply-adds, which dominated the adjoint pass.
-  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> G;
-  G.setZero();
-  constexpr int kGramBlock = 192;
-  Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, kGramBlock, Eigen::RowMajor> zs;
-  int zn = 0;
-  auto flush = [&] {  // the k·(k+1)/2 distinct entries, as dot products of contiguous rows
-    if (zn == 0) return;
-    // Each dot product as four independent sums over the block's quarters: one sum was a chain
-    // of dependent vector additions (latency, not throughput, bound).
-    const int q = zn / 4;
-    for (int i = 0; i < ra.k; ++i)
-      for (int j = 0; j <= i; ++j) {
-        const double* a = zs.row(i).data();
-        const double* b = zs.row(j).data();
-        double a0 = 0, a1 = 0, a2 = 0, a3 = 0;
-#pragma omp simd reduction(+ : a0, a1, a2, a3)
-        for (int c = 0; c < q; ++c) {
-          a0 += a[c] * b[c];
-          a1 += a[c + q] * b[c + q];
-          a2 += a[c + 2 * q] * b[c + 2 * q];
-          a3 += a[c + 3 * q] * b[c + 3 * q];
-        }
-        for (int c = 4 * q; c < zn; ++c) a0 += a[c] * b[c];
-        const double acc = (a0 + a1) + (a2 + a3);
-        G(i, j) += acc;
-        if (j != i) G(j, i) += acc;
-      }
-    zn = 0;
-  };
-  auto gram = [&](const Row& z) {
-    zs.col(zn++) = z;
-    if (zn == kGramBlock) flush();
-  };
-  auto restricted = [&](const ReferenceAlgebra::Cols& c) {
-    flush();
-    return ReferenceAlgebra::restrict(G.topLeftCorner(ra.k, ra.k), c);
-  };
+  GramSum gram(ra.k);
   // The adjoint state per station (written from the last station back, every entry before it is
   // read) and the variances; their pages are committed on another core meanwhile.
   std::vector<Row, Eigen::aligned_allocator<Row>> back(
@@ -1289,10 +1439,10 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
     for (long j = n; j >= 1; --j) {
       wb += ra.vw(j) - ra.vg(j);
       back[static_cast<std::size_t>(j)] = wb;
-      gram(wb);                 // z_B[j − 1]
-      gram(ra.vg(j - 1) - wb);  // z_A[j − 1]
+      gram.add(wb);                 // z_B[j − 1]
+      gram.add(ra.vg(j - 1) - wb);  // z_A[j − 1]
     }
-    const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg);
+    const Eigen::Matrix3d Sw = gram.restricted(ra.cw), Sg = gram.restricted(ra.cg);
     Row Y = Row::Zero();  // (T z) at w_j
     for (long j = 0; j <= n; ++j) {
       uw[j] = ReferenceAlgebra::point_uncertainty<false>(
@@ -1329,17 +1479,17 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
     for (long K = n - 1; K >= 2; --K) {
       const Row x = ra.vg(K) - ra.vw(K) + ra.vt(K - 1) - ra.vt(K) + 2 * x1 - x2;
       back[static_cast<std::size_t>(K - 2)] = x;
-      gram(ra.vt(K - 2) + 2 * x);                  // z_B[K − 2]
-      gram(x);                                     // z_C[K − 2] = −r̄: sign irrelevant here
-      gram(ra.vw(K) - ra.vt(K - 1) - 2 * x1 + x);  // z_A[K]
+      gram.add(ra.vt(K - 2) + 2 * x);  // z_B[K − 2]
+      gram.add(x);                     // z_C[K − 2] = −r̄: sign irrelevant here
+      gram.add(ra.vw(K) - ra.vt(K - 1) - 2 * x1 + x);  // z_A[K]
       x2 = x1;
       x1 = x;
     }
-    for (long i : {0L, 1L}) gram(zA(i));
-    for (long i : {n - 2, n - 1}) gram(zB(i));
+    for (long i : {0L, 1L}) gram.add(zA(i));
+    for (long i : {n - 2, n - 1}) gram.add(zB(i));
   }
-  const Eigen::Matrix3d Sw = restricted(ra.cw), Sg = restricted(ra.cg),
-                        St = ra.pitch ? restricted(ra.ct) : Eigen::Matrix3d::Zero();
+  const Eigen::Matrix3d Sw = gram.restricted(ra.cw), Sg = gram.restricted(ra.cg),
+                        St = ra.pitch ? gram.restricted(ra.ct) : Eigen::Matrix3d::Zero();
   // Var X_K = the sum of its squared reading coefficients: B_j 2(K−1−j) and C_j −(K−1−j)
   // (j ≤ K−2), A_1 −2(K−1), A_i −(K−1−i) (2 ≤ i ≤ K), for K ≥ 2. Var w_K = var X_K − 1 (the
   // coefficient of A_K in X_K is 1), var t_K = 6K + 4 (K ≥ 1).
@@ -1374,6 +1524,80 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   take_square_roots(uw, ug, ut);
 }
 
+// Standard uncertainties (for noise variance noise_var per reading) of the least-squares results
+// of the layout without redundancy (solve_lsq_direct), on its grids, by exact propagation of
+// every reading as recurrence_uncertainties does. With the gauge w_0 = w_1 = 0, β = 0 and zero
+// offsets (the reference removes the difference, as there) the map from the readings a, b, c of
+// probes A, B, C to the raw unknowns is
+//   w_{K+2} = 2w_{K+1} − w_K + a_K − 2b_K + c_K,  g_K = a_K − w_K,  t_K = b_K − a_K − w_{K+1} + w_K
+// (t the pitch unknown θ·h). Adjoint: W̄_j = λ_j + 2W̄_{j+1} − W̄_{j+2} (j ≥ 2) with
+// λ_j = vw_j − vg_j + vt_j − vt_{j−1}; z_a[K] = vg_K − vt_K + W̄_{K+2}, z_b[K] = vt_K − 2W̄_{K+2},
+// z_c[K] = W̄_{K+2}. Diagonal: var w_j = (j − 1)·j·(2j − 1), var g_K = 1 + var w_K,
+// var t_K = 2 + 6K. It uses the grids only (not the readings): the solve can run meanwhile.
+void direct_uncertainties(const Raw& r, bool with_pitch, double h, double noise_var,
+                          Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut) {
+  using Row = ReferenceAlgebra::Row;
+  const long n = r.xg.size();
+  const ReferenceAlgebra ra(r, with_pitch, true, h);
+  GramSum gram(ra.k);
+  // W̄_{K+2} per station (written from the last station back) and the variances; their pages are
+  // committed on another core meanwhile.
+  std::vector<Row, Eigen::aligned_allocator<Row>> back(static_cast<std::size_t>(n));
+  uw.resize(ra.mw);
+  ug.resize(ra.mg);
+  ut.resize(ra.mt);
+  const detail::Prefault prefault(
+      {{back.data(), sizeof(Row) * back.size()},
+       {uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
+       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
+       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
+  {
+    Row x1 = Row::Zero(), x2 = Row::Zero();  // W̄_{K+3}, W̄_{K+4}
+    for (long K = n - 1; K >= 0; --K) {
+      const long j = K + 2;
+      const Row x = ra.vw(j) - ra.vg(j) + ra.vt(j) - ra.vt(j - 1) + 2 * x1 - x2;
+      back[static_cast<std::size_t>(K)] = x;
+      const Row vg = ra.vg(K), vt = ra.vt(K);
+      gram.add(vg - vt + x);  // z_a[K]
+      gram.add(vt - 2 * x);   // z_b[K]
+      gram.add(x);            // z_c[K]
+      x2 = x1;
+      x1 = x;
+    }
+  }
+  const Eigen::Matrix3d Sw = gram.restricted(ra.cw), Sg = gram.restricted(ra.cg),
+                        St = ra.pitch ? gram.restricted(ra.ct) : Eigen::Matrix3d::Zero();
+  auto var_w = [](long j) {
+    const double q = static_cast<double>(j);
+    return j < 2 ? 0.0 : (q - 1) * q * (2 * q - 1);
+  };
+  Row y0 = Row::Zero(), y1 = Row::Zero();  // (T z) at w_K, w_{K+1}
+  for (long K = 0; K < n; ++K) {
+    const Row x = back[static_cast<std::size_t>(K)], vg = ra.vg(K), vt = ra.vt(K);
+    const Row za = vg - vt + x, zb = vt - 2 * x;
+    const double vw = var_w(K);
+    uw[K] = ReferenceAlgebra::point_uncertainty<false>(ra.uw(K), ra.cw, Sw, vw, y0.data(), 1.0,
+                                                       noise_var);
+    const Row g = za - y0;
+    ug[K] = ReferenceAlgebra::point_uncertainty<false>(ra.ug(K), ra.cg, Sg, 1 + vw, g.data(), 1.0,
+                                                       noise_var);
+    if (K < ra.mt) {
+      const Row t = zb - za - y1 + y0;
+      ut[K] = ReferenceAlgebra::point_uncertainty<false>(
+          ra.ut(K), ra.ct, St, 2 + 6 * static_cast<double>(K), t.data(), 1.0 / h, noise_var);
+    }
+    const Row y2 = 2 * y1 - y0 + za - 2 * zb + x;
+    y0 = y1;
+    y1 = y2;
+  }
+  for (long j : {n, n + 1}) {
+    uw[j] = ReferenceAlgebra::point_uncertainty<false>(ra.uw(j), ra.cw, Sw, var_w(j), y0.data(),
+                                                       1.0, noise_var);
+    y0 = y1;
+  }
+  take_square_roots(uw, ug, ut);
+}
+
 // `ls`: the least-squares straightness when already known (not NaN). x is one of separate()'s
 // grids, strictly increasing by construction from the checked stations.
 Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v, double ls) {
@@ -1383,7 +1607,7 @@ Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v,
 
 }  // namespace
 
-Result separate(const ProbeData& data, const Options& opt) {
+Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver solver) {
   // A recurrence's arrays are known in size from the start: their pages are committed on another
   // core while the data are checked and the recurrence runs.
   Raw raw;
@@ -1412,6 +1636,11 @@ Result separate(const ProbeData& data, const Options& opt) {
   const double h = data.step();
   const bool angle = data.angle.size() == n;
   std::vector<long> p;
+  // The least-squares solve gives the Lsq answer and its covariance. The recurrences (A, B)
+  // propagate each reading exactly through their own equations. Without redundancy (A, B) the
+  // noise level cannot be estimated, so their uncertainty needs a given sigma.
+  const bool unc_possible =
+      opt.compute_uncertainty && opt.filter_cutoff == 0 && opt.reference != Reference::Seed;
   LsqState st;
   try {
     check_offsets(data);
@@ -1434,7 +1663,28 @@ Result separate(const ProbeData& data, const Options& opt) {
         three_point(data, opt.zero_difference, raw);
         break;
       case Method::Lsq:
-        raw = solve_lsq(data, opt, st);
+        if (solver == detail::LsqSolver::Automatic && detail::direct_layout(p, angle)) {
+          // Its uncertainties need the grids only, and a noise level that only a given sigma can
+          // set (no redundancy): they are propagated on another core while the solve runs.
+          if (unc_possible) {
+            const bool with_pitch = opt.sigma.has_value();
+            const double noise_var = with_pitch ? *opt.sigma * *opt.sigma : 1.0;
+            st.propagation = std::async(
+                n >= kTwoCorePoints ? std::launch::async : std::launch::deferred,
+                [&st, &data, h, with_pitch, noise_var, par = !opt.zero_difference] {
+                  Raw& grids = st.grids;
+                  grids.parabola_free = par;   // as solve_lsq_direct's
+                  grids.xg_increasing = true;  // used only once the values are checked
+                  grids.xw.resize(data.x.size() + 2);
+                  grids.xt.resize(with_pitch ? data.x.size() : 0);
+                  fill_lsq_grids(data.x, 0, h, grids);
+                  direct_uncertainties(grids, with_pitch, h, noise_var, st.uw, st.ug, st.ut);
+                });
+          }
+          raw = solve_lsq_direct(data, opt, st);
+        } else {
+          raw = solve_lsq(data, opt, st);
+        }
         break;
     }
   } catch (...) {
@@ -1443,11 +1693,6 @@ Result separate(const ProbeData& data, const Options& opt) {
   }
   values_first();
   raw.xg_increasing = true;  // every method's guide grid is the stations, now checked
-  // The least-squares solve gives the Lsq answer and its covariance. The recurrences (A, B)
-  // propagate each reading exactly through their own equations. Without redundancy (A, B) the
-  // noise level cannot be estimated, so their uncertainty needs a given sigma.
-  const bool unc_possible =
-      opt.compute_uncertainty && opt.filter_cutoff == 0 && opt.reference != Reference::Seed;
   const bool want_unc = unc_possible && (opt.method == Method::Lsq || opt.sigma.has_value());
   res.dof = st.engine ? st.dof : 0;
 
@@ -1487,7 +1732,12 @@ Result separate(const ProbeData& data, const Options& opt) {
     }
     // Standard uncertainties; without a noise level, those for unit noise.
     const double noise_var = res.sigma ? s2 : 1.0;
-    if (opt.method == Method::Lsq)
+    if (st.direct) {
+      st.propagation.get();
+      uw = std::move(st.uw);
+      ug = std::move(st.ug);
+      ut = std::move(st.ut);
+    } else if (opt.method == Method::Lsq)
       lsq_uncertainties(st, raw, res.sigma.has_value(), noise_var, uw, ug, ut);
     else
       recurrence_uncertainties(data, opt.method, raw, res.sigma.has_value(), noise_var, uw, ug, ut);
@@ -1518,6 +1768,10 @@ Result separate(const ProbeData& data, const Options& opt) {
   res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
   if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
   return res;
+}
+
+Result separate(const ProbeData& data, const Options& opt) {
+  return detail::separate(data, opt, detail::LsqSolver::Automatic);
 }
 
 void express_in_reference(Profile& workpiece, Profile& guide, Profile* pitch, Reference reference,

@@ -1,10 +1,12 @@
 // Straightness separation against the virtual carriage's truth (noise-free) and the seed.
 #include "trueaxis/separation/separation.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 
+#include "../../src/separation/design.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/sim/straightness.hpp"
 
@@ -189,6 +191,76 @@ TEST(Separation, LsqEqualsThreePointOnALongNoisyRun) {
   const double size = r.b.guide.value.cwiseAbs().maxCoeff();
   EXPECT_LT(r.dg, kRelative * size);
   EXPECT_LT(r.dw, kRelative * size);
+}
+
+// The layout without redundancy (three probes at 0, 1, 2 steps, no angle channel) is solved
+// directly, without the banded factorisation: both must give the same profiles and the same
+// stated uncertainties, with the parabola by convention and with a known zero difference, from
+// the shortest run to a long noisy one. Values to round-off of the profile. Variances to a part in
+// 10⁹ of the largest on short runs (both exact there); at 10⁵ stations the banded covariance
+// carries its own conditioning (measured: 3e-5 of the largest uncertainty), while the direct
+// propagation agrees with the three-point recurrence's, on the grid they share (the guide's), to
+// 3e-8 (measured).
+TEST(Separation, DirectLsqEqualsTheBandedSolve) {
+  ASSERT_TRUE(separation::detail::direct_layout({0, 1, 2}, false));
+  ASSERT_FALSE(separation::detail::direct_layout({0, 1, 2}, true));
+  ASSERT_FALSE(separation::detail::direct_layout({0, 1, 3}, false));
+  struct Run {
+    long n;
+    double value_tol, unc_tol;  // relative to the largest |value| / |uncertainty|
+  };
+  for (const Run run : {Run{3, 1e-12, 1e-9}, Run{250, 1e-12, 1e-9}, Run{100000, 1e-9, 1e-4}}) {
+    auto so = carriage(run.n, {0, 10, 20}, 17);
+    so.noise = 1e-4;
+    const auto camp = sim::simulate_straightness(so);
+    for (const std::optional<double> e : {std::optional<double>(), std::optional<double>(0.002)})
+      for (const bool sigma : {false, true}) {
+        Options o;
+        o.zero_difference = e;
+        if (sigma) o.sigma = 1e-4;
+        const double noise = sigma ? *o.sigma : 1.0;  // (unit noise for the noise gain)
+        const std::string what =
+            fmt::format("n {}, {}, {}", run.n, e ? "zero difference" : "parabola free",
+                        sigma ? "sigma given" : "noise gain");
+        const Result a =
+            separation::detail::separate(camp.data, o, separation::detail::LsqSolver::Automatic);
+        const Result b =
+            separation::detail::separate(camp.data, o, separation::detail::LsqSolver::Banded);
+        EXPECT_EQ(a.dof, 0) << what;
+        EXPECT_EQ(b.dof, 0) << what;
+        auto same = [&](const Profile& x, const Profile& y, const char* name) {
+          ASSERT_EQ(x.value.size(), y.value.size()) << name << ", " << what;
+          const double size = y.value.cwiseAbs().maxCoeff();
+          EXPECT_LT(maxdiff(x.value, y.value), run.value_tol * size) << name << ", " << what;
+          ASSERT_EQ(x.uncertainty.size(), y.uncertainty.size()) << name << ", " << what;
+          if (y.uncertainty.size()) {
+            // (at least the readings' noise: a profile of three stations has a guide of zero
+            // uncertainty, found as round-off)
+            const double largest = std::max(y.uncertainty.cwiseAbs().maxCoeff(), noise);
+            EXPECT_LT(maxdiff(x.uncertainty.array().square(), y.uncertainty.array().square()),
+                      run.unc_tol * largest * largest)
+                << name << ", " << what;
+          }
+        };
+        same(a.workpiece, b.workpiece, "workpiece");
+        same(a.guide, b.guide, "guide");
+        ASSERT_TRUE(a.pitch && b.pitch) << what;
+        same(*a.pitch, *b.pitch, "pitch");
+        ASSERT_EQ(a.noise_gain.has_value(), b.noise_gain.has_value()) << what;
+        if (b.noise_gain) {
+          EXPECT_NEAR(*a.noise_gain, *b.noise_gain, run.unc_tol * *b.noise_gain) << what;
+        }
+        EXPECT_EQ(a.gauge, b.gauge) << what;
+        if (sigma && run.n > 1000) {
+          constexpr double kAgainstThreePoint = 1e-7;  // relative to the largest
+          o.method = Method::ThreePoint;
+          const Result c = separation::separate(camp.data, o);
+          const double largest = c.guide.uncertainty.maxCoeff();
+          EXPECT_LT(maxdiff(a.guide.uncertainty, c.guide.uncertainty), kAgainstThreePoint * largest)
+              << what;
+        }
+      }
+  }
 }
 
 // An independent implementation of the seed's equations (JPH0464003B2 eqs. 12–17), written
