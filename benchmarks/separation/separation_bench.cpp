@@ -71,4 +71,10 @@ BENCHMARK_CAPTURE(run, lsq_3probes_uncertainty, separation::Method::Lsq, 3, fals
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(run, lsq_3probes_level_uncertainty, separation::Method::Lsq, 3, true, true)
     ->Unit(benchmark::kMillisecond);
+// Four probes are redundant (4 readings for 3 new unknowns per station): the banded
+// least-squares factorisation, which three probes without an angle channel no longer need.
+BENCHMARK_CAPTURE(run, lsq_4probes, separation::Method::Lsq, 4, false, false)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(run, lsq_4probes_uncertainty, separation::Method::Lsq, 4, false, true)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();
