@@ -1553,11 +1553,16 @@ void direct_uncertainties(const Raw& r, bool with_pitch, double h, double noise_
        {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
   {
     Row x1 = Row::Zero(), x2 = Row::Zero();  // W̄_{K+3}, W̄_{K+4}
+    // V's guide rows at K + 1 and K + 2 (zero beyond the guide), kept from the steps before: the
+    // rows cost more than the recurrence.
+    Row vg1 = ra.vg(n), vg2 = ra.vg(n + 1);
     for (long K = n - 1; K >= 0; --K) {
       const long j = K + 2;
-      const Row x = ra.vw(j) - ra.vg(j) + ra.vt(j) - ra.vt(j - 1) + 2 * x1 - x2;
-      back[static_cast<std::size_t>(K)] = x;
       const Row vg = ra.vg(K), vt = ra.vt(K);
+      const Row x = ra.vw(j) - vg2 + ra.vt(j) - ra.vt(j - 1) + 2 * x1 - x2;
+      back[static_cast<std::size_t>(K)] = x;
+      vg2 = vg1;
+      vg1 = vg;
       gram.add(vg - vt + x);  // z_a[K]
       gram.add(vt - 2 * x);   // z_b[K]
       gram.add(x);            // z_c[K]
