@@ -1402,6 +1402,30 @@ class GramSum {
   Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, kBlock, Eigen::RowMajor> zs_;
 };
 
+// A propagation's arrays: `rows` adjoint rows and the three profiles' variances (uw, ug, ut, sized
+// for ra's grids). Their pages are committed on another core while the propagation starts.
+struct PropagationArrays {
+  std::vector<ReferenceAlgebra::Row, Eigen::aligned_allocator<ReferenceAlgebra::Row>> back;
+  detail::Prefault prefault;
+  PropagationArrays(const ReferenceAlgebra& ra, std::size_t rows, Eigen::VectorXd& uw,
+                    Eigen::VectorXd& ug, Eigen::VectorXd& ut)
+      : back(rows), prefault(regions(ra, back, uw, ug, ut)) {}
+
+ private:
+  static std::vector<detail::Prefault::Region> regions(const ReferenceAlgebra& ra,
+                                                       const decltype(back)& rows,
+                                                       Eigen::VectorXd& uw, Eigen::VectorXd& ug,
+                                                       Eigen::VectorXd& ut) {
+    uw.resize(ra.mw);
+    ug.resize(ra.mg);
+    ut.resize(ra.mt);
+    return {{rows.data(), sizeof(ReferenceAlgebra::Row) * rows.size()},
+            {uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
+            {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
+            {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}};
+  }
+};
+
 // Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
 // results by exact propagation of every reading through the recurrence. T, the map from readings
 // to the raw unknowns, is taken with the gauge X_0 = X_1 = 0 and without the first-reading
@@ -1422,17 +1446,11 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   const ReferenceAlgebra ra(r, with_pitch, true, d.step());
   GramSum gram(ra.k);
   // The adjoint state per station (written from the last station back, every entry before it is
-  // read) and the variances; their pages are committed on another core meanwhile.
-  std::vector<Row, Eigen::aligned_allocator<Row>> back(
-      static_cast<std::size_t>(method == Method::TwoPoint ? n + 1 : std::max<long>(n - 2, 0)));
-  uw.resize(ra.mw);
-  ug.resize(ra.mg);
-  ut.resize(ra.mt);
-  const detail::Prefault prefault(
-      {{back.data(), sizeof(Row) * back.size()},
-       {uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
-       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
-       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
+  // read) and the variances.
+  PropagationArrays arrays(
+      ra, static_cast<std::size_t>(method == Method::TwoPoint ? n + 1 : std::max<long>(n - 2, 0)),
+      uw, ug, ut);
+  auto& back = arrays.back;
 
   if (method == Method::TwoPoint) {
     // w_0 = 0, w_{K+1} = w_K + B_K − A_K (K < n); g_K = A_K − w_K. Var w_j = 2j, var g_K = 1 + 2K.
@@ -1542,17 +1560,9 @@ void direct_uncertainties(const Raw& r, bool with_pitch, double h, double noise_
   const long n = r.xg.size();
   const ReferenceAlgebra ra(r, with_pitch, true, h);
   GramSum gram(ra.k);
-  // W̄_{K+2} per station (written from the last station back) and the variances; their pages are
-  // committed on another core meanwhile.
-  std::vector<Row, Eigen::aligned_allocator<Row>> back(static_cast<std::size_t>(n));
-  uw.resize(ra.mw);
-  ug.resize(ra.mg);
-  ut.resize(ra.mt);
-  const detail::Prefault prefault(
-      {{back.data(), sizeof(Row) * back.size()},
-       {uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
-       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
-       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
+  // W̄_{K+2} per station (written from the last station back) and the variances.
+  PropagationArrays arrays(ra, static_cast<std::size_t>(n), uw, ug, ut);
+  auto& back = arrays.back;
   {
     Row x1 = Row::Zero(), x2 = Row::Zero();  // W̄_{K+3}, W̄_{K+4}
     // V's guide rows at K + 1 and K + 2 (zero beyond the guide), kept from the steps before: the
