@@ -378,16 +378,15 @@ std::launch policy_for(const Raw& r) {
 }
 
 // Everything the uncertainty propagation needs from a least-squares solve. The banded solve
-// leaves its factorisation (engine); the direct solve of a layout without redundancy has none,
-// and its uncertainties, which depend on the grids alone, may be under way on another core
-// (propagation, into uw, ug, ut, from its own copy of the grids).
+// leaves its factorisation (engine); the direct solve of a layout without redundancy has none
+// (dof 0), and its uncertainties, which depend on the grids alone, are under way on another core
+// when wanted (propagation, into uw, ug, ut, from its own copy of the grids).
 struct LsqState {
   Design D;
   std::unique_ptr<detail::BandedLsq> engine;
   double h = 0;
   double ssr = 0;
   long dof = 0;
-  bool direct = false;
   Raw grids;
   Eigen::VectorXd uw, ug, ut;
   std::future<void> propagation;
@@ -514,7 +513,7 @@ Raw solve_lsq(const ProbeData& data, const Options& opt, LsqState& st) {
 // profile at a million stations) is removed as the banded solve removes its own: one refinement
 // with the residual of the recurrence, solved by the same recurrence, which leaves the result at
 // the residual's own rounding floor.
-Raw solve_lsq_direct(const ProbeData& data, const Options& opt, LsqState& st) {
+Raw solve_lsq_direct(const ProbeData& data, const Options& opt) {
   const long n = data.x.size();
   const double h = data.step();
   const long Q = n + 2, m = Q / 2;
@@ -613,10 +612,6 @@ Raw solve_lsq_direct(const ProbeData& data, const Options& opt, LsqState& st) {
     w[n] = fixed(w[n], static_cast<double>(n));
     w[n + 1] = fixed(w[n + 1], static_cast<double>(n + 1));
   }
-  st.h = h;
-  st.ssr = 0;
-  st.dof = 0;
-  st.direct = true;
   grids.get();
   r.parabola_free = !beta_known;
   return r;
@@ -1698,7 +1693,7 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
                   direct_uncertainties(grids, with_pitch, h, noise_var, st.uw, st.ug, st.ut);
                 });
           }
-          raw = solve_lsq_direct(data, opt, st);
+          raw = solve_lsq_direct(data, opt);
         } else {
           raw = solve_lsq(data, opt, st);
         }
@@ -1749,7 +1744,7 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
     }
     // Standard uncertainties; without a noise level, those for unit noise.
     const double noise_var = res.sigma ? s2 : 1.0;
-    if (st.direct) {
+    if (st.propagation.valid()) {  // the direct solve's, launched with it
       st.propagation.get();
       uw = std::move(st.uw);
       ug = std::move(st.ug);
