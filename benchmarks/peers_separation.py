@@ -13,8 +13,9 @@ Peers (numpy/scipy from Debian's python3-numpy / python3-scipy, benchmark-only):
     solution is the least-squares one.
 
 Prints the times (best of 3), the ratio peer time / trueaxis time (above 1: trueaxis is faster),
-and how far trueaxis's lsq profile is from the sparse direct solve after both are put in the same
-reference (relative to the profile).
+how far trueaxis's lsq profile is from the sparse direct solve after both are put in the same
+reference (relative to the profile), and how far its per-point uncertainties are from the exact
+propagation of every reading through that solve and reference (1000 stations: a dense Jacobian).
 """
 import sys
 import time
@@ -41,19 +42,9 @@ def line_residual(x, y):
     return y - np.polyval(a, x - x.mean())
 
 
-def guide_quadratic_gauge(xw, w, xg, g):
-    """Moves the parabola that three probes cannot see into the guide's LS quadratic, as trueaxis
-    states its results (the guide has no quadratic least-squares component)."""
-    xc = 0.5 * (xg.min() + xg.max())
-    L = 0.5 * (xg.max() - xg.min())
-    tg = (xg - xc) / L
-    c = np.polyfit(tg, g, 2)[0]
-    return w + c * ((xw - xc) / L) ** 2, g - c * tg**2
-
-
-def sparse_lsq(m):
-    """Solves m_i(K) = w(K + i) + g(K) + i·θh(K) + o_i for i = 0, 1, 2 by sparse LU."""
-    n = m.shape[0]
+def lsq_system(n):
+    """The system m_i(K) = w(K + i) + g(K) + i·θh(K) + o_i for i = 0, 1, 2 with the pins, as a
+    sparse matrix (row 3K + i), and the positions of w(0..n+1) and g(0..n−1) among its unknowns."""
     Q = n + 2
     # Unknown order station by station: w(K), g(K), θh(K), then w(n), w(n+1), then o_1.
     def w(j):
@@ -84,11 +75,54 @@ def sparse_lsq(m):
     newcol = -np.ones(nv, dtype=np.int64)
     newcol[free] = np.arange(free.size)
     A = sp.csc_matrix((vals[keep], (rows[keep], newcol[cols[keep]])), shape=(3 * n, free.size))
+    return A, newcol[np.r_[np.arange(0, 3 * n, 3), 3 * n, 3 * n + 1]], newcol[1 : 3 * n : 3]
+
+
+def sparse_lsq(m):
+    """Solves the system by sparse LU; the pinned workpiece points are 0."""
+    A, iw, ig = lsq_system(m.shape[0])
     b = (m - m.mean(axis=0)).reshape(-1)  # row 3K + i
-    z = spla.spsolve(A, b, permc_spec="NATURAL")
-    v = np.zeros(nv)
-    v[free] = z
-    return v[np.r_[np.arange(0, 3 * n, 3), 3 * n, 3 * n + 1]], v[1 : 3 * n : 3]
+    z = np.append(spla.spsolve(A, b, permc_spec="NATURAL"), 0.0)  # index −1: a pin
+    return z[iw], z[ig]
+
+
+def reported(x, xw, W, G):
+    """The reference trueaxis states its lsq results in (residuals from each profile's LS line,
+    the parabola three probes cannot see moved into the workpiece), applied to the columns of W
+    (workpiece) and G (guide): a linear map, so it carries a Jacobian as well as a profile."""
+    def line_residual_cols(x, Y):
+        X = np.stack((np.ones_like(x), x - x.mean()), axis=1)
+        return Y - X @ np.linalg.lstsq(X, Y, rcond=None)[0]
+
+    W, G = line_residual_cols(xw, W), line_residual_cols(x, G)
+    xc = 0.5 * (x.min() + x.max())
+    L = 0.5 * (x.max() - x.min())
+    c = np.linalg.lstsq(np.vander((x - xc) / L, 3), G, rcond=None)[0][0]  # t² coefficients
+    W = W + np.outer(((xw - xc) / L) ** 2, c)
+    G = G - np.outer(((x - xc) / L) ** 2, c)
+    return line_residual_cols(xw, W), line_residual_cols(x, G)
+
+
+def lsq_uncertainty_check(n=1000, sigma=0.01):
+    """trueaxis's per-point lsq uncertainties against the exact propagation of every reading
+    through the sparse LU solve and the reference (the Jacobian from unit readings), relative to
+    the largest."""
+    d = ta.simulate_straightness(stations=n, step=1.0, offsets=[0, 1, 2], noise=sigma, seed=2)
+    x, m = np.asarray(d["x"]), np.asarray(d["readings"])
+    res = ta.separate(x, m, offsets=[0, 1, 2], method="lsq", sigma=sigma)
+    A, iw, ig = lsq_system(n)
+    # Unit readings, centred per probe as the solve centres them; reading (K, i) is row 3K + i.
+    E = np.eye(3 * n).reshape(n, 3, 3 * n)
+    E = (E - E.mean(axis=0)).reshape(3 * n, 3 * n)
+    Z = np.vstack((spla.splu(A, permc_spec="NATURAL").solve(E), np.zeros((1, 3 * n))))
+    xw = x[0] + np.arange(n + 2) * (x[1] - x[0])
+    Jw, Jg = reported(x, xw, Z[iw], Z[ig])
+    out = []
+    for J, name in ((Jw, "workpiece"), (Jg, "guide")):
+        u_lu = sigma * np.sqrt((J**2).sum(axis=1))
+        u_ta = np.asarray(res[name]["uncertainty"])
+        out.append(np.abs(u_ta - u_lu).max() / u_lu.max())
+    return out
 
 
 def main():
@@ -117,9 +151,7 @@ def main():
     t_c, res = best(lambda: ta.separate(x, m, offsets=[0, 1, 2], method="lsq", sigma=0.01))
     t_lu, (wv, gv) = best(lambda: sparse_lsq(m))
     xw = x[0] + np.arange(n + 2)
-    wv, gv = line_residual(xw, wv), line_residual(x, gv)
-    wv, gv = guide_quadratic_gauge(xw, wv, x, gv)
-    wv, gv = line_residual(xw, wv), line_residual(x, gv)
+    wv, gv = (v[:, 0] for v in reported(x, xw, wv[:, None], gv[:, None]))
     w_ta = np.asarray(res["workpiece"]["value"])
     g_ta = np.asarray(res["guide"]["value"])
     scale = max(np.abs(w_ta).max(), 1e-300)
@@ -131,6 +163,9 @@ def main():
           f"   ratio {t_lu / t_c:5.2f}   (trueaxis includes per-point uncertainties)")
     print(f"lsq against sparse LU: workpiece {np.abs(w_ta - wv).max() / scale:.2e}, guide "
           f"{np.abs(g_ta - gv).max() / scale:.2e} of the profile")
+    uw, ug = lsq_uncertainty_check()
+    print(f"lsq uncertainty against the exact propagation through the sparse LU (1000 stations): "
+          f"workpiece {uw:.2e}, guide {ug:.2e} of the largest")
 
 
 if __name__ == "__main__":
