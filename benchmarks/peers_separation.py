@@ -37,9 +37,10 @@ def best(f, reps=3):
     return min(t), out
 
 
-def line_residual(x, y):
-    a = np.polyfit(x - x.mean(), y, 1)
-    return y - np.polyval(a, x - x.mean())
+def line_residual(x, Y):
+    """Y (a profile, or profiles as columns) less its least-squares line in x."""
+    X = np.stack((np.ones_like(x), x - x.mean()), axis=1)
+    return Y - X @ np.linalg.lstsq(X, Y, rcond=None)[0]
 
 
 def lsq_system(n):
@@ -90,17 +91,13 @@ def reported(x, xw, W, G):
     """The reference trueaxis states its lsq results in (residuals from each profile's LS line,
     the parabola three probes cannot see moved into the workpiece), applied to the columns of W
     (workpiece) and G (guide): a linear map, so it carries a Jacobian as well as a profile."""
-    def line_residual_cols(x, Y):
-        X = np.stack((np.ones_like(x), x - x.mean()), axis=1)
-        return Y - X @ np.linalg.lstsq(X, Y, rcond=None)[0]
-
-    W, G = line_residual_cols(xw, W), line_residual_cols(x, G)
+    W, G = line_residual(xw, W), line_residual(x, G)
     xc = 0.5 * (x.min() + x.max())
     L = 0.5 * (x.max() - x.min())
     c = np.linalg.lstsq(np.vander((x - xc) / L, 3), G, rcond=None)[0][0]  # t² coefficients
     W = W + np.outer(((xw - xc) / L) ** 2, c)
     G = G - np.outer(((x - xc) / L) ** 2, c)
-    return line_residual_cols(xw, W), line_residual_cols(x, G)
+    return line_residual(xw, W), line_residual(x, G)
 
 
 def lsq_uncertainty_check(n=1000, sigma=0.01):

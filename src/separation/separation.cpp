@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <span>
 #include <tuple>
 
@@ -403,8 +404,16 @@ namespace {
 
 // The least-squares grids for n stations at x (workpiece positions 0..Q−1 at x_0 + (j + pmin)·h,
 // guide and pitch at the stations), into r's arrays (sized by the caller).
+// Workpiece position j (a whole number) of a least-squares grid starting at the first station x0:
+// the one formula for every copy of the grid (the direct solve's uncertainties form their own,
+// and must agree with the solve's to the last bit).
+inline double workpiece_position(double x0, double j, double h) {
+  return x0 + j * h;
+}
+
 void fill_lsq_grids(const Eigen::VectorXd& x, long pmin, double h, Raw& r) {
-  for (Eigen::Index j = 0; j < r.xw.size(); ++j) r.xw[j] = x[0] + static_cast<double>(j + pmin) * h;
+  for (Eigen::Index j = 0; j < r.xw.size(); ++j)
+    r.xw[j] = workpiece_position(x[0], static_cast<double>(j + pmin), h);
   r.xg = x;
   if (r.xt.size()) r.xt = x;
 }
@@ -1262,6 +1271,22 @@ void take_square_roots(Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd
       });
 }
 
+// Sizes the three profiles' uncertainties uw, ug, ut to mw, mg, mt points, their storage asked
+// for in huge pages, and starts committing their pages on another core, after those of `first`
+// (a propagation's own work array) if given. The returned helper must outlive the writes' start.
+detail::Prefault results_committed(Eigen::Index mw, Eigen::Index mg, Eigen::Index mt,
+                                   Eigen::VectorXd& uw, Eigen::VectorXd& ug, Eigen::VectorXd& ut,
+                                   std::optional<detail::Prefault::Region> first = {}) {
+  trueaxis::detail::resize_in_huge_pages(uw, mw, 1);
+  trueaxis::detail::resize_in_huge_pages(ug, mg, 1);
+  trueaxis::detail::resize_in_huge_pages(ut, mt, 1);
+  std::vector<detail::Prefault::Region> regions;
+  if (first) regions.push_back(*first);
+  for (const Eigen::VectorXd* v : {&uw, &ug, &ut})
+    regions.push_back({v->data(), sizeof(double) * static_cast<std::size_t>(v->size())});
+  return detail::Prefault(std::move(regions));
+}
+
 // Standard uncertainties (for noise variance noise_var per row) of the reported w, g, θ under
 // the ls reference from the least-squares covariance Z = (AᵀA)⁻¹, on the lsq grids.
 void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise_var,
@@ -1269,14 +1294,9 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
   const Design& D = st.D;
   // The results are written by the solve's backward pass on both cores. Their pages are committed
   // by another core from here on, while the reference algebra's sums below use only this one.
-  trueaxis::detail::resize_in_huge_pages(uw, r.xw.size(), 1);
-  trueaxis::detail::resize_in_huge_pages(ug, r.xg.size(), 1);
-  trueaxis::detail::resize_in_huge_pages(
-      ut, ReferenceAlgebra::pitch_points(r.xt.size(), with_pitch, D.pitch), 1);
-  const detail::Prefault prefault(
-      {{uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
-       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
-       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
+  const detail::Prefault prefault = results_committed(
+      r.xw.size(), r.xg.size(), ReferenceAlgebra::pitch_points(r.xt.size(), with_pitch, D.pitch),
+      uw, ug, ut);
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
   const int k = ra.k;
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_uncertainty), with
@@ -1412,30 +1432,6 @@ class GramSum {
   Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, kBlock, Eigen::RowMajor> zs_;
 };
 
-// A propagation's arrays: `rows` adjoint rows and the three profiles' variances (uw, ug, ut, sized
-// for ra's grids). Their pages are committed on another core while the propagation starts.
-struct PropagationArrays {
-  std::vector<ReferenceAlgebra::Row, Eigen::aligned_allocator<ReferenceAlgebra::Row>> back;
-  detail::Prefault prefault;
-  PropagationArrays(const ReferenceAlgebra& ra, std::size_t rows, Eigen::VectorXd& uw,
-                    Eigen::VectorXd& ug, Eigen::VectorXd& ut)
-      : back(rows), prefault(regions(ra, back, uw, ug, ut)) {}
-
- private:
-  static std::vector<detail::Prefault::Region> regions(const ReferenceAlgebra& ra,
-                                                       const decltype(back)& rows,
-                                                       Eigen::VectorXd& uw, Eigen::VectorXd& ug,
-                                                       Eigen::VectorXd& ut) {
-    uw.resize(ra.mw);
-    ug.resize(ra.mg);
-    ut.resize(ra.mt);
-    return {{rows.data(), sizeof(ReferenceAlgebra::Row) * rows.size()},
-            {uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
-            {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
-            {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}};
-  }
-};
-
 // Standard uncertainties (for noise variance noise_var per reading) of the two- and three-point
 // results by exact propagation of every reading through the recurrence. T, the map from readings
 // to the raw unknowns, is taken with the gauge X_0 = X_1 = 0 and without the first-reading
@@ -1456,11 +1452,12 @@ void recurrence_uncertainties(const ProbeData& d, Method method, const Raw& r, b
   const ReferenceAlgebra ra(r, with_pitch, true, d.step());
   GramSum gram(ra.k);
   // The adjoint state per station (written from the last station back, every entry before it is
-  // read) and the variances.
-  PropagationArrays arrays(
-      ra, static_cast<std::size_t>(method == Method::TwoPoint ? n + 1 : std::max<long>(n - 2, 0)),
-      uw, ug, ut);
-  auto& back = arrays.back;
+  // read) and the variances, their pages committed on another core meanwhile.
+  std::vector<Row, Eigen::aligned_allocator<Row>> back(
+      static_cast<std::size_t>(method == Method::TwoPoint ? n + 1 : std::max<long>(n - 2, 0)));
+  const detail::Prefault prefault =
+      results_committed(ra.mw, ra.mg, ra.mt, uw, ug, ut,
+                        detail::Prefault::Region{back.data(), sizeof(Row) * back.size()});
 
   if (method == Method::TwoPoint) {
     // w_0 = 0, w_{K+1} = w_K + B_K − A_K (K < n); g_K = A_K − w_K. Var w_j = 2j, var g_K = 1 + 2K.
@@ -1822,9 +1819,8 @@ class DirectPropagation {
     if constexpr (Pitch) roots(t);
   }
 
-  // Workpiece point j's position, as fill_lsq_grids computes it (j a whole number).
   double workpiece_x(double j) const {
-    return xg_[0] + j * h_;
+    return workpiece_position(xg_[0], j, h_);
   }
 
   const ReferenceAlgebra& ra_;
@@ -1841,25 +1837,19 @@ class DirectPropagation {
 void direct_uncertainties(const Eigen::VectorXd& x, bool parabola_free, bool with_pitch, double h,
                           double noise_var, Eigen::VectorXd& uw, Eigen::VectorXd& ug,
                           Eigen::VectorXd& ut) {
-  // The guide's and pitch's grids are the stations themselves; only the workpiece's is made, as
-  // fill_lsq_grids makes it.
+  // The guide's and pitch's grids are the stations themselves; only the workpiece's is made.
   const Eigen::Index n = x.size();
   Eigen::VectorXd xw;
   trueaxis::detail::resize_in_huge_pages(xw, n + 2, 1);
-  for (Eigen::Index j = 0; j < n + 2; ++j) xw[j] = x[0] + static_cast<double>(j) * h;
+  for (Eigen::Index j = 0; j < n + 2; ++j)
+    xw[j] = workpiece_position(x[0], static_cast<double>(j), h);
   using View = GridViews::View;
   const GridViews grids{View(xw.data(), xw.size()), View(x.data(), n),
                         View(x.data(), with_pitch ? n : 0), parabola_free,
                         true};  // increasing: used only once the values are checked
   const ReferenceAlgebra ra(grids, with_pitch, true, h);
   // The variances' pages are committed on another core while the backward pass runs.
-  trueaxis::detail::resize_in_huge_pages(uw, ra.mw, 1);
-  trueaxis::detail::resize_in_huge_pages(ug, ra.mg, 1);
-  trueaxis::detail::resize_in_huge_pages(ut, ra.mt, 1);
-  const detail::Prefault prefault(
-      {{uw.data(), sizeof(double) * static_cast<std::size_t>(uw.size())},
-       {ug.data(), sizeof(double) * static_cast<std::size_t>(ug.size())},
-       {ut.data(), sizeof(double) * static_cast<std::size_t>(ut.size())}});
+  const detail::Prefault prefault = results_committed(ra.mw, ra.mg, ra.mt, uw, ug, ut);
   auto go = [&]<bool Par, bool Pitch>() {
     auto p = std::make_unique<DirectPropagation<Par, Pitch>>(ra, h);
     p->run(noise_var, uw, ug, ut);
