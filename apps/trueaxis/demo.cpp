@@ -410,7 +410,7 @@ int run_demo(const DemoOptions& o) {
     if (name == "ipp_simple.stp") io::write_text((dir / "ipp_simple.stp").string(), text);
   const design::Design part_design =
       design::from_step((dir / "ipp_simple.stp").string(),
-                        {{"mid", {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()}}});
+                        {{"mid", {Eigen::Vector3d(0, 0, 37.5), Eigen::Vector3d::UnitZ()}}});
   io::write_design((dir / "design.json").string(), part_design);
   sim::PartDeviation pdev;
   pdev.translation = Eigen::Vector3d(1.8, -1.1, 0);
@@ -518,7 +518,9 @@ int run_demo(const DemoOptions& o) {
       ss.intro_html =
           fmt::format(
               "<p>NIST's I++ DME test part (<code>ipp_simple.stp</code>, a 100 × 100 × 50 mm "
-              "block with a Ø50 mm hole) is cut at z = 25 mm into two contours: the square and "
+              "block with a Ø50 mm hole 25 mm deep) is cut half-way down the hole, at z = 37.5 mm, "
+              "into "
+              "two contours: the square and "
               "the hole. The parts of this batch sit 1.8 mm off and turned 0.3° in their "
               "fixture, and carry a 2 mm bump on the outline; they are scanned on the same "
               "virtual CMM as above (geometric errors, {:g} µm probe noise, 1 kHz servo). A "

@@ -91,26 +91,46 @@ std::string speeds(const design::ScanPath& p) {
 
 int run_design(const DesignArgs& a) {
   design::Design d;
+  // What could not be made, one line each (planes that gave no section, sections with no path).
+  std::vector<std::string> failed;
   if (!a.step.empty()) {
     std::vector<design::StepSectionRequest> req;
     for (std::size_t i = 0; i < a.sections.size(); ++i)
       req.push_back(parse_section(a.sections[i], i));
-    d = design::from_step(a.step, req);
+    design::StepCut cut = design::cut_step(a.step, req);
+    if (!a.quiet) {
+      fmt::print("{}: {} solid{}; cut edges joined across gaps up to {:.4g} mm ({})\n", a.step,
+                 cut.solids, cut.solids == 1 ? "" : "s", cut.join_tolerance,
+                 cut.file_tolerance ? fmt::format("the file states {:.4g} mm", *cut.file_tolerance)
+                                    : std::string("the file states no tolerance"));
+      for (const auto& n : cut.notes) fmt::print("note: {}\n", n);
+    }
+    for (const auto& f : cut.failures)
+      failed.push_back(fmt::format("section '{}': {}", f.name, f.reason));
+    d = std::move(cut.design);
   } else {
     d = io::read_design(a.design);
   }
   std::string table =
       "section,segment,length_mm,speed_mm_s,curvature_1_mm,ax,ay,az,bx,by,bz,cx,cy,cz,dx,dy,dz\n";
   for (const auto& s : d.sections) {
-    const auto p = design::make_path(s, a.path);
+    design::ScanPath p;
+    try {
+      p = design::make_path(s, a.path);
+    } catch (const Error& e) {
+      failed.push_back(e.what());
+      continue;
+    }
     if (!a.quiet)
       fmt::print(
-          "{}: {} {} of {:.3f} mm, {}; scanning path {:.3f} mm in {} {} segments "
+          "{}: {} {} of {:.3f} mm, {}{}; scanning path {:.3f} mm in {} {} segments "
           "(chordal error {:.2g} µm), {:.1f} s at {} mm/s\n",
           s.name, s.closed ? "closed" : "open", s.space_curve() ? "space curve" : "contour",
           design::length(s),
           s.space_curve() ? "material behind its surface normals"
                           : fmt::format("material on the {}", design::to_string(s.material)),
+          s.joined_gap > 1e-7 ? fmt::format(", cut edges joined across {:.2g} mm", s.joined_gap)
+                              : std::string(),
           p.length(), p.segments.size(), s.space_curve() ? "straight" : "cubic",
           p.chordal_error * 1e3, p.nominal_time(), speeds(p));
     for (std::size_t i = 0; i < p.segments.size(); ++i) {
@@ -121,7 +141,7 @@ int run_design(const DesignArgs& a) {
       table += '\n';
     }
   }
-  if (!a.output.empty()) {
+  if (!a.output.empty() && !d.sections.empty()) {
     io::write_design(a.output, d);
     if (!a.quiet) fmt::print("wrote {} ({} sections)\n", a.output, d.sections.size());
   }
@@ -129,7 +149,12 @@ int run_design(const DesignArgs& a) {
     io::write_text(a.path_csv, table);
     if (!a.quiet) fmt::print("wrote {}\n", a.path_csv);
   }
-  return 0;
+  for (const auto& f : failed) fmt::print(stderr, "trueaxis: error: {}\n", f);
+  if (!failed.empty() && !a.output.empty())
+    fmt::print(stderr, "trueaxis: {} of the requested sections could not be made{}\n",
+               failed.size(),
+               d.sections.empty() ? "; nothing written" : "; " + a.output + " holds the others");
+  return failed.empty() ? 0 : 1;
 }
 
 struct PartArgs {

@@ -259,11 +259,27 @@ Samples sample(const Section& s, double spacing) {
   return out;
 }
 
-Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes) {
-  Design d;
-  if (const std::string why = detail::occt_api().from_step(path, planes, d); !why.empty())
+void StepCutOptions::validate() const {
+  if (!(min_join >= 1e-7 && min_join <= max_join && max_join <= 1))
+    throw Error(fmt::format("join tolerances {:g} to {:g} mm: need 1e-7 ≤ least ≤ largest ≤ 1 mm",
+                            min_join, max_join));
+}
+
+StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>& planes,
+                 const StepCutOptions& options) {
+  options.validate();
+  StepCut out;
+  if (const std::string why = detail::occt_api().cut_step(path, planes, options, out); !why.empty())
     throw Error(why);
-  return d;
+  return out;
+}
+
+Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes) {
+  StepCut cut = cut_step(path, planes);
+  if (!cut.failures.empty())
+    throw Error(fmt::format("{}: section '{}': {}", path, cut.failures.front().name,
+                            cut.failures.front().reason));
+  return std::move(cut.design);
 }
 
 }  // namespace trueaxis::design

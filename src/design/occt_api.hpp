@@ -21,6 +21,14 @@
 
 namespace trueaxis::design::detail {
 
+// A part's boundary as triangles (solid::Mesh's input): vertices (mm), vertex indices, and the CAD
+// face of each triangle.
+struct MeshData {
+  Eigen::Matrix3Xd vertices;
+  Eigen::Matrix3Xi triangles;
+  std::vector<int> faces;
+};
+
 struct OcctApi {
   // occt_api_tag() of the library's build.
   const char* tag = nullptr;
@@ -35,16 +43,20 @@ struct OcctApi {
   // The scanning path of a plane section (checked, its plane normal of unit length, options
   // validated), as design::make_path.
   std::string (*plane_path)(const Section& s, const PathOptions& o, ScanPath& out) = nullptr;
-  // design::from_step.
-  std::string (*from_step)(const std::string& path, const std::vector<StepSectionRequest>& planes,
-                           Design& out) = nullptr;
+  // design::cut_step (options validated).
+  std::string (*cut_step)(const std::string& path, const std::vector<StepSectionRequest>& planes,
+                          const StepCutOptions& options, StepCut& out) = nullptr;
+  // The union of a STEP file's solids tessellated with chords within `deflection` mm of its faces
+  // (each triangle counter-clockwise seen from outside the part).
+  std::string (*step_mesh)(const std::string& path, double deflection, MeshData& out) = nullptr;
 };
 
 // Changes whenever the table or the types it passes change size or meaning.
 inline std::string occt_api_tag() {
-  return std::string("trueaxis-occt-1/") + std::to_string(sizeof(Section)) + "/" +
+  return std::string("trueaxis-occt-3/") + std::to_string(sizeof(Section)) + "/" +
          std::to_string(sizeof(ScanPath)) + "/" + std::to_string(sizeof(PathOptions)) + "/" +
-         std::to_string(sizeof(Samples)) + "/" + std::to_string(sizeof(Design));
+         std::to_string(sizeof(Samples)) + "/" + std::to_string(sizeof(Design)) + "/" +
+         std::to_string(sizeof(StepCut)) + "/" + std::to_string(sizeof(MeshData));
 }
 
 // The library's file name (found through the program's run path) and its one exported symbol, a

@@ -49,7 +49,7 @@ void need(const JsonFile& f, const ptr& p, const char* key) {
 }
 
 design::Section read_section(const JsonFile& f, const ptr& p) {
-  only(f, p, {"name", "plane", "closed", "curve", "material", "normals"});
+  only(f, p, {"name", "plane", "closed", "curve", "material", "normals", "joined_gap_mm"});
   // A space curve (surface normals per point) has no plane and no material side.
   const bool space = f.has(p / "normals");
   for (const char* k : {"name", "closed", "curve"}) need(f, p, k);
@@ -70,6 +70,11 @@ design::Section read_section(const JsonFile& f, const ptr& p) {
     need(f, p / "plane", "normal");
     s.plane.origin = triple(f, p / "plane" / "origin", "x, y, z (mm)");
     s.plane.normal = triple(f, p / "plane" / "normal", "i, j, k");
+  }
+  if (f.has(p / "joined_gap_mm")) {
+    s.joined_gap = f.number(p / "joined_gap_mm");
+    if (!(s.joined_gap >= 0 && s.joined_gap <= 1))
+      f.fail(p / "joined_gap_mm", "the gap closed to join the cut's edges must be 0 to 1 mm");
   }
   if (!f.root()[p / "closed"].is_boolean()) f.fail(p / "closed", "'closed' must be true or false");
   s.closed = f.root()[p / "closed"].get<bool>();
@@ -262,12 +267,13 @@ ojson design_json(const design::Design& d) {
           ojson{{"name", s.name}, {"closed", s.closed}, {"curve", curve}, {"normals", normals}});
       continue;
     }
-    secs.push_back(
-        ojson{{"name", s.name},
-              {"plane", {{"origin", xyz(s.plane.origin)}, {"normal", xyz(s.plane.normal)}}},
-              {"closed", s.closed},
-              {"curve", curve},
-              {"material", design::to_string(s.material)}});
+    ojson o{{"name", s.name},
+            {"plane", {{"origin", xyz(s.plane.origin)}, {"normal", xyz(s.plane.normal)}}},
+            {"closed", s.closed},
+            {"curve", curve},
+            {"material", design::to_string(s.material)}};
+    if (s.joined_gap > 0) o["joined_gap_mm"] = s.joined_gap;
+    secs.push_back(std::move(o));
   }
   return ojson{{"sections", secs}};
 }

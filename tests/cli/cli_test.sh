@@ -397,7 +397,7 @@ expect_err "lines.json: exists; nothing was written (use --force to overwrite)" 
 expect_ok "$T" examples -o ex --force -q
 
 # Design data for scanning: sections of NIST's I++ test part, paths, and refusals.
-expect_ok "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0,25;normal=0,0,1;name=mid" -o design.json --path path.csv
+expect_ok "$T" design --step "$DATA/ippdme/ipp_simple.stp" --section "origin=0,0,37.5;normal=0,0,1;name=mid" -o design.json --path path.csv
 grep -q "mid.1: closed contour of 400.000 mm, material on the left" out.txt && grep -q "mid.2: closed contour of 157.080 mm, material on the right" out.txt && ok || bad "design: ipp sections $(cat out.txt)"
 head -1 path.csv | grep -q "^section,segment,length_mm,speed_mm_s" && [ "$(grep -c '^mid.1,' path.csv)" -ge 8 ] && ok || bad "design --path csv"
 expect_ok "$T" design --design design.json --tip-radius 2 --pushing 0.5 -q

@@ -25,13 +25,15 @@ namespace {
 constexpr double kLengthTol = 1e-6;  // mm: OCCT's arc length of lines and exact arcs
 constexpr double kOffsetTol = 1e-6;  // mm: OCCT's offset of lines and arcs is exact
 const std::string kIpp = std::string(TRUEAXIS_TEST_DATA) + "/ippdme/ipp_simple.stp";
+// ipp_simple's Ø50 mm hole is 25 mm deep, from the top face (z = 50) down to its floor at z = 25:
+// the plane half-way down the hole cuts the block's outline and the hole.
+constexpr double kHoleMid = 37.5;
 
 design::Plane z_plane(double z) {
   return {Eigen::Vector3d(0, 0, z), Eigen::Vector3d::UnitZ()};
 }
 
-// Distance from p to the boundary of the ipp_simple section at z = 25: the square [0,100]² and
-// the circle of radius 25 about (50, 50).
+// Distance from p to the outline of an ipp_simple section below its top: the square [0,100]².
 double dist_to_square(const Eigen::Vector3d& p) {
   const double dx = std::max({0.0 - p.x(), p.x() - 100, 0.0});
   const double dy = std::max({0.0 - p.y(), p.y() - 100, 0.0});
@@ -40,7 +42,7 @@ double dist_to_square(const Eigen::Vector3d& p) {
 }
 
 TEST(Design, IppSimpleSectionIsFourLinesAndTheHole) {
-  const auto d = design::from_step(kIpp, {{"mid", z_plane(25)}});
+  const auto d = design::from_step(kIpp, {{"mid", z_plane(kHoleMid)}});
   ASSERT_EQ(d.sections.size(), 2u);
   const auto& outer = d.sections[0];
   const auto& hole = d.sections[1];
@@ -61,13 +63,13 @@ TEST(Design, IppSimpleSectionIsFourLinesAndTheHole) {
   const auto so = design::sample(outer, 5);
   for (Eigen::Index i = 0; i < so.points.cols(); ++i) {
     EXPECT_NEAR(dist_to_square(so.points.col(i)), 0, 1e-9);
-    EXPECT_NEAR(so.points(2, i), 25, 1e-12);
+    EXPECT_NEAR(so.points(2, i), kHoleMid, 1e-12);
     const Eigen::Vector3d out = so.points.col(i) + 0.5 * so.normals.col(i);
     EXPECT_TRUE(out.x() < 0 || out.x() > 100 || out.y() < 0 || out.y() > 100) << i;
   }
   const auto sh = design::sample(hole, 5);
   for (Eigen::Index i = 0; i < sh.points.cols(); ++i) {
-    const Eigen::Vector3d r = sh.points.col(i) - Eigen::Vector3d(50, 50, 25);
+    const Eigen::Vector3d r = sh.points.col(i) - Eigen::Vector3d(50, 50, kHoleMid);
     EXPECT_NEAR(r.norm(), 25, 1e-9);
     EXPECT_NEAR(sh.normals.col(i).dot(r / 25), -1, 1e-9);
   }
@@ -116,6 +118,54 @@ TEST(Design, StepRefusals) {
             std::string::npos);
 }
 
+// Each plane succeeds or fails on its own, and a refusal says what is the case: a plane on the
+// hole's floor keeps the outline and refuses the hole's contour (it runs along the floor, where a
+// ball would touch the floor too); a plane on the top face has nothing to scan; a plane beside
+// the part misses it, by how much.
+TEST(Design, EveryPlaneOnItsOwnWithTheTrueReason) {
+  const auto cut =
+      design::cut_step(kIpp, {{"floor", z_plane(25)},
+                              {"top", z_plane(50)},
+                              {"above", z_plane(80)},
+                              {"mid", z_plane(kHoleMid)},
+                              {"zero", {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()}}});
+  EXPECT_EQ(cut.solids, 1);
+  // The file states 1e-8 mm; edges are joined across at least 1e-4 mm.
+  ASSERT_TRUE(cut.file_tolerance);
+  EXPECT_NEAR(*cut.file_tolerance, 1e-8, 1e-20);
+  EXPECT_DOUBLE_EQ(cut.join_tolerance, design::StepCutOptions{}.min_join);
+  std::vector<std::string> names;
+  for (const auto& s : cut.design.sections) names.push_back(s.name);
+  EXPECT_EQ(names, (std::vector<std::string>{"floor", "mid.1", "mid.2"}));
+  EXPECT_NEAR(design::length(cut.design.sections[0]), 400, kLengthTol);
+  ASSERT_EQ(cut.failures.size(), 4u);
+  EXPECT_EQ(cut.failures[0].name, "floor");
+  EXPECT_NE(cut.failures[0].reason.find("runs along the edge of a flat face"), std::string::npos)
+      << cut.failures[0].reason;
+  EXPECT_NE(cut.failures[0].reason.find("(50.000, 50.000, 25.000)"), std::string::npos);
+  EXPECT_EQ(cut.failures[1].name, "top");
+  EXPECT_NE(cut.failures[1].reason.find("the plane lies on flat faces"), std::string::npos)
+      << cut.failures[1].reason;
+  EXPECT_EQ(cut.failures[2].name, "above");
+  EXPECT_NE(cut.failures[2].reason.find("misses the part: the part lies -80.000 to -30.000 mm"),
+            std::string::npos)
+      << cut.failures[2].reason;
+  EXPECT_NE(cut.failures[3].reason.find("normal is zero"), std::string::npos);
+  EXPECT_FALSE(cut.ok());
+  // from_step throws at the first failure, naming the file and the plane.
+  EXPECT_NE(test::error_of([] {
+              design::from_step(kIpp, {{"floor", z_plane(25)}});
+            }).find("ipp_simple.stp: section 'floor': a contour of 157.1 mm"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([] {
+              design::StepCutOptions o;
+              o.min_join = 1;
+              o.max_join = 0.1;
+              design::cut_step(kIpp, {}, o);
+            }).find("join tolerances"),
+            std::string::npos);
+}
+
 // The Open CASCADE part of the library is opened on first use; a missing library, or one without
 // its entry point, is an Error that names it (never a crash or a call into the unknown).
 TEST(Design, CadLibraryIsOpenedAndOthersRefused) {
@@ -123,7 +173,7 @@ TEST(Design, CadLibraryIsOpenedAndOthersRefused) {
   ASSERT_NE(api.tag, nullptr);
   EXPECT_EQ(std::string(api.tag), design::detail::occt_api_tag());
   EXPECT_TRUE(api.nurbs_ends && api.nurbs_length && api.nurbs_sample && api.plane_path &&
-              api.from_step);
+              api.cut_step);
   const std::string missing =
       test::error_of([] { design::detail::load_occt_api("/nonexistent/libtrueaxis_occt.so"); });
   EXPECT_NE(missing.find("cannot load /nonexistent/libtrueaxis_occt.so"), std::string::npos)
@@ -135,7 +185,7 @@ TEST(Design, CadLibraryIsOpenedAndOthersRefused) {
 }
 
 TEST(Design, PathAroundTheIppSectionKeepsTheOffset) {
-  const auto d = design::from_step(kIpp, {{"mid", z_plane(25)}});
+  const auto d = design::from_step(kIpp, {{"mid", z_plane(kHoleMid)}});
   design::PathOptions o;
   o.tip_radius = 2;
   o.pushing = 0.3;
@@ -157,7 +207,7 @@ TEST(Design, PathAroundTheIppSectionKeepsTheOffset) {
       EXPECT_NEAR(dist_to_square(seg.point(u)), off, o.chordal_tolerance + kOffsetTol);
   for (const auto& seg : hole.segments)
     for (double u : {0.0, 0.5})
-      EXPECT_NEAR((seg.point(u) - Eigen::Vector3d(50, 50, 25)).norm(), 25 - off,
+      EXPECT_NEAR((seg.point(u) - Eigen::Vector3d(50, 50, kHoleMid)).norm(), 25 - off,
                   o.chordal_tolerance + kOffsetTol);
   // The path is continuous, closed, starts beside the design curve's start and runs its way.
   for (std::size_t i = 0; i + 1 < outer.segments.size(); ++i)
@@ -293,7 +343,7 @@ TEST(Design, BsplineSolidFromStep) {
 }
 
 TEST(Design, JsonRoundTripAndOptionRefusals) {
-  const auto d = design::from_step(kIpp, {{"mid", z_plane(25)}});
+  const auto d = design::from_step(kIpp, {{"mid", z_plane(kHoleMid)}});
   const std::string path = test::temp_dir() + "/design.json";
   io::write_design(path, d);
   const auto back = io::read_design(path);

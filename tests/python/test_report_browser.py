@@ -107,7 +107,7 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
 def test_scan_report_renders(tmp_path):
     data = os.path.join(os.path.dirname(__file__), "..", "data", "ippdme", "ipp_simple.stp")
     d, p, s, h = (tmp_path / n for n in ("design.json", "part.json", "scan.json", "scan.html"))
-    subprocess.run([TRUEAXIS, "design", "--step", data, "--section", "origin=0,0,25;normal=0,0,1;name=mid",
+    subprocess.run([TRUEAXIS, "design", "--step", data, "--section", "origin=0,0,37.5;normal=0,0,1;name=mid",
                     "-o", str(d), "-q"], check=True)
     subprocess.run([TRUEAXIS, "simulate", "part", "--design", str(d), "--translate", "1.8,-1.1,0",
                     "--bump", "mid.1,150,2,30", "-o", str(p), "-q"], check=True)

@@ -18,7 +18,7 @@ TRUEAXIS = os.environ.get("TRUEAXIS", "trueaxis")
 def files(tmp_path_factory):
     d = tmp_path_factory.mktemp("scan")
     subprocess.run([TRUEAXIS, "design", "--step", str(DATA / "ippdme" / "ipp_simple.stp"),
-                    "--section", "origin=0,0,25;normal=0,0,1;name=mid", "-o", str(d / "design.json"),
+                    "--section", "origin=0,0,37.5;normal=0,0,1;name=mid", "-o", str(d / "design.json"),
                     "-q"], check=True)
     subprocess.run([TRUEAXIS, "simulate", "part", "--design", str(d / "design.json"),
                     "--translate", "1.8,-1.1,0", "--bump", "mid.1,150,2,30", "--seed", "3",

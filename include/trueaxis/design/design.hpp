@@ -56,6 +56,9 @@ struct Section {
   // A space curve is a polyline; `plane` and `material` do not apply to it.
   Eigen::Matrix3Xd normals;
   bool space_curve() const { return normals.cols() > 0; }
+  // A section cut from CAD: the largest gap between the cut's edges (or between its last edge and
+  // its first) that was closed to join them into one curve (mm; 0 when they met exactly).
+  double joined_gap = 0;
 };
 
 struct Design {
@@ -105,16 +108,51 @@ struct Samples {
 };
 Samples sample(const Section& s, double spacing);
 
-// Sections of a STEP (AP203/AP214) solid, cut by planes. Each closed contour of the cut becomes
-// a section named after its request ("<name>", or "<name>.<k>" when the plane cuts several
-// contours, largest first), its curve one NURBS (lines and arcs converted exactly, joined where
-// they meet), oriented counter-clockwise seen from the plane's normal, with the material side
-// taken from the outward normals of the solid's faces under the cut. Throws Error naming the
-// file for unreadable files, files with no solid, and planes that miss the part.
+// Sections of a STEP (AP203/AP214) part, cut by planes. The part is the union of every solid in
+// the file (solids that share volume are named in `notes`). Each closed contour of a cut becomes a
+// section named after its request ("<name>", or "<name>.<k>" when the plane cuts several contours,
+// longest first), its curve one NURBS (lines and arcs converted exactly), oriented
+// counter-clockwise seen from the plane's normal. The material side comes from the contours'
+// nesting in the plane: a contour inside an even number of others bounds material on its inside,
+// inside an odd number a hole. The cut's edges are joined across gaps up to the tolerance the
+// file states for its geometry (ISO 10303-41 uncertainty_measure_with_unit, in mm), bounded by
+// StepCutOptions; each section records the largest gap closed (Section::joined_gap).
 struct StepSectionRequest {
   std::string name;  // the section's name (its contours get ".1", ".2" when there are several)
   Plane plane;
 };
+
+struct StepCutOptions {
+  // The join tolerance is the file's own, but at least min_join (the round-off of exact CAD
+  // arithmetic; also used when the file states none) and at most max_join (mm).
+  double min_join = 1e-4, max_join = 0.1;
+  void validate() const;  // throws Error naming the option: 1e-7 ≤ min_join ≤ max_join ≤ 1 mm
+};
+
+// A plane that gave no section, and why, in words: it misses the part (with the part's extent
+// along its normal), lies on a flat face, only grazes the part, or its cut does not close (where,
+// and by how much).
+struct StepPlaneFailure {
+  std::string name;
+  Plane plane;
+  std::string reason;
+};
+
+struct StepCut {
+  Design design;                           // the sections of every plane that gave some
+  std::vector<StepPlaneFailure> failures;  // the planes that gave none, in request order
+  double join_tolerance = 0;               // mm: the gaps joined across
+  std::optional<double> file_tolerance;    // mm: the file's stated tolerance (none: not stated)
+  int solids = 0;                          // solids in the file
+  std::vector<std::string> notes;          // facts about the part a user should know
+  bool ok() const { return failures.empty(); }
+};
+
+// Throws Error naming the file for unreadable files and files with no solid; every plane's own
+// failure is returned in `failures`, the other planes' sections still made.
+StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>& planes,
+                 const StepCutOptions& options = {});
+// The same, throwing Error ("<file>: section '<name>': <reason>") at the first failed plane.
 Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes);
 
 // ---------------------------------------------------------------------------------------------

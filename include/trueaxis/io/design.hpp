@@ -3,7 +3,8 @@
 // design.json: {"sections": [{"name": str, "plane": {"origin": [x, y, z], "normal": [i, j, k]},
 //   "closed": bool, "curve": {"nurbs": {"degree": int, "knots": [...], "weights": [...],
 //   "control_points": [[x, y, z], ...]}} or {"polyline": [[x, y, z], ...]},
-//   "material": "left" | "right"}, ...]}
+//   "material": "left" | "right", "joined_gap_mm": the largest gap closed to join the edges of
+//   a cut from CAD (optional, 0 to 1 mm)}, ...]}
 // mm, part coordinates. A space curve (a scan path that need not lie in a plane, e.g. a spiral
 // over a sphere) is written instead as {"name", "closed", "curve": {"polyline": [...]},
 // "normals": [[i, j, k], ...]}: one surface normal per point, away from the material, and no

@@ -41,8 +41,13 @@ detail::OcctApi make_api() {
   api.plane_path = [](const Section& s, const PathOptions& o, ScanPath& out) {
     return guarded([&] { out = occt::plane_path(s, o); });
   };
-  api.from_step = [](const std::string& path, const std::vector<StepSectionRequest>& planes,
-                     Design& out) { return guarded([&] { out = occt::from_step(path, planes); }); };
+  api.cut_step = [](const std::string& path, const std::vector<StepSectionRequest>& planes,
+                    const StepCutOptions& options, StepCut& out) {
+    return guarded([&] { out = occt::cut_step(path, planes, options); });
+  };
+  api.step_mesh = [](const std::string& path, double deflection, detail::MeshData& out) {
+    return guarded([&] { occt::step_mesh(path, deflection, out); });
+  };
   return api;
 }
 

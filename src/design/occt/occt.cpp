@@ -96,8 +96,8 @@ TopoDS_Wire wire(const Section& s) {
   Handle(Geom_BSplineCurve) c = curve(s);
   // One edge between corners (offsetting needs edges with continuous tangents).
   std::vector<double> cuts{c->FirstParameter()};
-  for (double u : corners(*c, s.closed))
-    if (u > cuts.front() && u < c->LastParameter()) cuts.push_back(u);
+  for (int i = c->FirstUKnotIndex() + 1; i < c->LastUKnotIndex(); ++i)
+    if (c->Multiplicity(i) >= c->Degree()) cuts.push_back(c->Knot(i));
   cuts.push_back(c->LastParameter());
   // OCCT 7.6 finds no inward offset of a closed wire of one or two edges (a circle): split the
   // pieces until there are at least four.

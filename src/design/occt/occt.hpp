@@ -3,6 +3,7 @@
 // Standard_Failure; api.cpp turns both into messages at the library's boundary.
 #pragma once
 
+#include <Bnd_Box.hxx>
 #include <Geom_BSplineCurve.hxx>
 #include <Standard_Failure.hxx>
 #include <TopoDS_Wire.hxx>
@@ -12,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "../occt_api.hpp"
 #include "trueaxis/design/design.hpp"
 
 namespace trueaxis::design::occt {
@@ -34,6 +36,19 @@ inline Eigen::Vector3d vec(const gp_Vec& p) {
 
 // OCCT's message for a failure it raised ("" if none), for our one-line errors.
 std::string message(const Standard_Failure& e);
+
+// A stretch of a curve, walked from parameter a to b (a < b).
+struct OffsetSpan {
+  Handle(Geom_Curve) curve;
+  double a = 0, b = 0;
+};
+
+// The planar offset of a plane section's curve (`c`, as curve(s)) by d ≥ 0 mm away from the
+// material: the path of a ball centre of radius d rolling along it, in the curve's direction,
+// starting beside its start (or where the ball first fits). Throws Error naming where the ball
+// does not fit (offset.cpp).
+std::vector<OffsetSpan> offset_curve(const Section& s, const Handle(Geom_BSplineCurve) & c,
+                                     double d);
 
 // The section's curve as one B-spline (a polyline is a degree-1 B-spline with knots at its
 // cumulative chord lengths). Precondition: check(s) is empty.
@@ -67,7 +82,19 @@ Samples sample(const Section& s, double spacing);
 // design::make_path of a checked plane section whose plane normal has unit length, with validated
 // options.
 ScanPath plane_path(const Section& s, const PathOptions& o);
-// design::from_step.
-Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes);
+// A STEP file's part: the union of its solids, with what was learnt reading it (the counts,
+// tolerances and notes of StepCut).
+struct StepPart {
+  TopoDS_Shape shape;
+  double join = 0;  // mm: cut edges closer than this are joined
+  Bnd_Box box;
+};
+StepPart read_step(const std::string& path, const StepCutOptions& o, StepCut& info);
+
+// design::cut_step.
+StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>& planes,
+                 const StepCutOptions& options);
+// The part of a STEP file as triangles within `deflection` of its faces (mesh.cpp).
+void step_mesh(const std::string& path, double deflection, detail::MeshData& out);
 
 }  // namespace trueaxis::design::occt
