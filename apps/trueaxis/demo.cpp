@@ -431,9 +431,9 @@ int run_demo(const DemoOptions& o) {
     sim::Part part{part_design, pdev};
     part.deviation.seed = o.seed + k;
     io::write_part((dir / fmt::format("part{}.json", k)).string(), part);
-    const Eigen::Vector3d home(50, -30, 60);
-    scan::VirtualCmm cmm(part, vo, home);
     const design::Design used = batch_design;
+    const Eigen::Vector3d home = scan::start_position(used, sco);
+    scan::VirtualCmm cmm(part, vo, home);
     const auto r = scan::scan(cmm, used, sco);
     scan::VirtualCmm cmm_auto(part, vo, home);
     autonomous_s.push_back(scan::scan(cmm_auto, part_design, auto_only).time.total);
@@ -457,7 +457,7 @@ int run_demo(const DemoOptions& o) {
       Eigen::VectorXd t(static_cast<Eigen::Index>(r.sections[i].points.size()));
       for (std::size_t j = 0; j < r.sections[i].points.size(); ++j) {
         const auto& pt = r.sections[i].points[j];
-        const auto& plane = used.sections[i].plane;
+        const auto& plane = r.planned.sections[i].plane;
         t[static_cast<Eigen::Index>(j)] = cmm.distance(plane, pt.surface) * 1e3;
         const Eigen::Vector3d command = pt.surface +
                                         (sco.path.tip_radius - sco.path.pushing) * pt.normal +
@@ -491,7 +491,7 @@ int run_demo(const DemoOptions& o) {
             const Eigen::Vector3d p = centre + R * (where[v][k] - centre) + t;
             const Eigen::Vector3d& nn = normals[k];
             const auto kk = static_cast<Eigen::Index>(k);
-            d[kk] = cmm.distance(used.sections[i].plane, p);
+            d[kk] = cmm.distance(r.planned.sections[i].plane, p);
             A.row(kk) << nn.x(), nn.y(), nn.dot(Eigen::Vector3d::UnitZ().cross(p - centre));
           }
         const Eigen::Vector3d x = A.colPivHouseholderQr().solve(-d);
@@ -513,7 +513,7 @@ int run_demo(const DemoOptions& o) {
     form_um.push_back({form[0], form[1], form_max[0], form_max[1]});
     auto ss = report::scan_section(fmt::format("Error-tolerant scanning, part {} of a batch{}", k,
                                                k == 1 ? "" : ", with the corrected design data"),
-                                   r, used, sco.tolerance, truth_um, true_part);
+                                   r, r.planned, sco.tolerance, truth_um, true_part);
     if (k == 1)
       ss.intro_html =
           fmt::format(

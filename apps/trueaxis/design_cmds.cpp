@@ -5,6 +5,9 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <map>
 #include <memory>
 #include <sstream>
 
@@ -25,9 +28,16 @@ struct DesignArgs {
   bool quiet = false;
 };
 
-// "origin=X,Y,Z;normal=I,J,K[;name=N]" -> a section request, or a usage error.
-design::StepSectionRequest parse_section(const std::string& text, std::size_t index) {
-  design::StepSectionRequest r;
+struct SectionArg {
+  design::StepSectionRequest request;
+  design::ProbeOrientation probe;
+};
+
+// "origin=X,Y,Z;normal=I,J,K[;name=N][;probe=A<deg>B<deg>]" -> a section request, or a usage
+// error.
+SectionArg parse_section(const std::string& text, std::size_t index) {
+  SectionArg arg;
+  design::StepSectionRequest& r = arg.request;
   r.name = fmt::format("S{}", index + 1);
   bool origin = false, normal = false;
   std::stringstream ss(text);
@@ -67,15 +77,25 @@ design::StepSectionRequest parse_section(const std::string& text, std::size_t in
       normal = true;
     } else if (key == "name" && !value.empty()) {
       r.name = value;
+    } else if (key == "probe") {
+      // A<deg>B<deg>, e.g. A90B-90
+      double a = 0, b = 0;
+      int used = 0;
+      if (std::sscanf(value.c_str(), "A%lfB%lf%n", &a, &b, &used) != 2 ||
+          used != static_cast<int>(value.size()))
+        throw CLI::ValidationError(
+            fmt::format("'{}': probe=A<degrees>B<degrees>, e.g. probe=A90B-90", text));
+      arg.probe = {a, b};
+      if (const std::string why = design::head_refusal(arg.probe); !why.empty())
+        throw CLI::ValidationError(fmt::format("'{}': the probe head cannot take {}", text, why));
     } else {
-      throw CLI::ValidationError(
-          "--section", fmt::format("'{}': expected origin=X,Y,Z;normal=I,J,K[;name=N]", text));
+      throw CLI::ValidationError(fmt::format(
+          "'{}': expected origin=X,Y,Z;normal=I,J,K[;name=N][;probe=A<deg>B<deg>]", text));
     }
   }
   if (!origin || !normal)
-    throw CLI::ValidationError("--section",
-                               fmt::format("'{}': give both origin=X,Y,Z and normal=I,J,K", text));
-  return r;
+    throw CLI::ValidationError(fmt::format("'{}': give both origin=X,Y,Z and normal=I,J,K", text));
+  return arg;
 }
 
 // "37–100" (slowest and fastest segment), or "100" when all are equal.
@@ -95,9 +115,22 @@ int run_design(const DesignArgs& a) {
   std::vector<std::string> failed;
   if (!a.step.empty()) {
     std::vector<design::StepSectionRequest> req;
-    for (std::size_t i = 0; i < a.sections.size(); ++i)
-      req.push_back(parse_section(a.sections[i], i));
+    std::map<std::string, design::ProbeOrientation> probes;
+    for (std::size_t i = 0; i < a.sections.size(); ++i) {
+      const SectionArg arg = parse_section(a.sections[i], i);
+      req.push_back(arg.request);
+      probes[arg.request.name] = arg.probe;
+    }
     design::StepCut cut = design::cut_step(a.step, req);
+    // Each contour of a plane is scanned with the plane's probe orientation.
+    for (auto& s : cut.design.sections) {
+      const auto dot = s.name.rfind('.');
+      const auto it = probes.find(s.name);
+      if (it != probes.end())
+        s.probe = it->second;
+      else if (dot != std::string::npos && probes.count(s.name.substr(0, dot)))
+        s.probe = probes[s.name.substr(0, dot)];
+    }
     if (!a.quiet) {
       fmt::print("{}: {} solid{}; cut edges joined across gaps up to {:.4g} mm ({})\n", a.step,
                  cut.solids, cut.solids == 1 ? "" : "s", cut.join_tolerance,
@@ -129,8 +162,11 @@ int run_design(const DesignArgs& a) {
           design::length(s),
           s.space_curve() ? "material behind its surface normals"
                           : fmt::format("material on the {}", design::to_string(s.material)),
-          s.joined_gap > 1e-7 ? fmt::format(", cut edges joined across {:.2g} mm", s.joined_gap)
-                              : std::string(),
+          (s.joined_gap > 1e-7 ? fmt::format(", cut edges joined across {:.2g} mm", s.joined_gap)
+                               : std::string()) +
+              (s.probe.a_deg != 0 || s.probe.b_deg != 0
+                   ? fmt::format(", probe at A{:g}° B{:g}°", s.probe.a_deg, s.probe.b_deg)
+                   : std::string()),
           p.length(), p.segments.size(), s.space_curve() ? "straight" : "cubic",
           p.chordal_error * 1e3, p.nominal_time(), speeds(p));
     for (std::size_t i = 0; i < p.segments.size(); ++i) {
@@ -282,9 +318,10 @@ std::vector<Command> add_design_commands(CLI::App& app, CLI::App& simulate) {
                   ->check(CLI::ExistingFile);
   step->excludes(des);
   c->add_option("--section", a->sections,
-                "a cutting plane \"origin=X,Y,Z;normal=I,J,K[;name=N]\" (mm; repeat for more "
-                "sections). A plane that cuts several contours gives sections N.1, N.2, ... "
-                "(largest first)")
+                "a cutting plane \"origin=X,Y,Z;normal=I,J,K[;name=N][;probe=A<deg>B<deg>]\" (mm; "
+                "repeat for more sections). A plane that cuts several contours gives sections "
+                "N.1, N.2, ... (longest first). probe: the orientation of the probe head for "
+                "its contours, e.g. probe=A90B-90 (default: the stylus vertical)")
       ->needs(step)
       ->check(CLI::Validator(
           [](std::string& v) -> std::string {

@@ -48,8 +48,7 @@ int run_scan(ScanArgs& a) {
     origin = Eigen::Vector3d(a.part_origin[0], a.part_origin[1], a.part_origin[2]);
   vo.part_origin = origin;
   // Start above the part's first section, clear of it.
-  const auto smp = design::sample(d.sections.front(), 1.0);
-  const Eigen::Vector3d home = smp.points.col(0) + (a.o.path.tip_radius + 20) * smp.normals.col(0);
+  const Eigen::Vector3d home = scan::start_position(d, a.o);
   // The simulated part in process: the CMM itself, or (with --cmm) the truth to compare with.
   std::optional<scan::VirtualCmm> virt;
   if (part) virt.emplace(*part, vo, home);
@@ -60,18 +59,12 @@ int run_scan(ScanArgs& a) {
     ro.part_origin = origin;
     ro.tip_radius = a.o.path.tip_radius;
     remote = std::make_unique<ippdme::RemoteCmm>(ro);
-    // From wherever the CMM is, up (part +z) to the start's height or above, across, and down.
-    const Eigen::Vector3d at = remote->position();
-    const double z = std::max(at.z(), home.z());
-    remote->move(Eigen::Vector3d(at.x(), at.y(), z), a.o.move_speed);
-    remote->move(Eigen::Vector3d(home.x(), home.y(), z), a.o.move_speed);
-    remote->move(home, a.o.move_speed);
   }
   scan::Machine& cmm = remote ? static_cast<scan::Machine&>(*remote) : *virt;
-  const auto r = scan::scan(cmm, d, a.o, [&](std::size_t i, std::size_t n) {
-    if (!a.quiet)
-      fmt::print(stderr, "scanning section {}/{} '{}' ...\n", i + 1, n, d.sections[i].name);
-  });
+  const auto r =
+      scan::scan(cmm, d, a.o, [&](std::size_t i, std::size_t n, const std::string& name) {
+        if (!a.quiet) fmt::print(stderr, "scanning section {}/{} '{}' ...\n", i + 1, n, name);
+      });
   io::ScanCmm rec{a.o.path.tip_radius, a.probe_noise_um, {}, {}};
   if (remote) {
     rec.machine = a.cmm;
@@ -94,7 +87,7 @@ int run_scan(ScanArgs& a) {
     for (std::size_t k = 0; k < pts.size(); ++k) {
       const auto& p = pts[k];
       if (!virt) break;
-      const double dist = virt->distance(d.sections[i], p.surface);
+      const double dist = virt->distance(r.planned.sections[i], p.surface);
       t[static_cast<Eigen::Index>(k)] = dist * 1e3;
       worst = std::max(worst, std::abs(dist));
       if (!a.truth.empty())
@@ -110,19 +103,19 @@ int run_scan(ScanArgs& a) {
   if (!a.report.empty()) {
     // The simulated part's contour of each scanned section (matched by name).
     std::vector<Eigen::Matrix3Xd> true_part;
-    for (const auto& ds : d.sections) {
+    for (const auto& ds : r.planned.sections) {
       true_part.emplace_back(3, 0);
       if (!part) continue;
       for (const auto& ps : part->design.sections)
-        if (ps.name == ds.name)
+        if (ps.name == ds.name || ds.name.rfind(ps.name + ":", 0) == 0)
           true_part.back() = ps.space_curve() ? sim::true_space_curve(*part, ps).points()
                                               : sim::true_contour(*part, ps).points();
     }
-    report::write(
-        a.report,
-        report::render("trueaxis scanning report",
-                       {report::scan_section(a.design, r, d, a.o.tolerance, truth_um, true_part)},
-                       4000, report_meta()));
+    report::write(a.report,
+                  report::render("trueaxis scanning report",
+                                 {report::scan_section(a.design, r, r.planned, a.o.tolerance,
+                                                       truth_um, true_part)},
+                                 4000, report_meta()));
   }
   if (!a.quiet) {
     if (remote)

@@ -55,7 +55,7 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
     for (std::size_t i = 0; i < r.sections.size(); ++i) {
       std::vector<double> t;
       for (const auto& x : r.sections[i].points)
-        t.push_back(cmm.distance(d.sections[i], x.surface) * 1e3);
+        t.push_back(cmm.distance(r.planned.sections[i], x.surface) * 1e3);
       truth.push_back(std::move(t));
     }
   }

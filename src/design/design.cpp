@@ -7,6 +7,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <utility>
 #include <vector>
 
@@ -79,6 +80,8 @@ std::optional<Problem> check(const Section& s) {
     return Problem{"plane/origin", -1, "the plane origin is not a point within ±1e6 mm"};
   if (!s.plane.normal.allFinite() || !(s.plane.normal.norm() > 1e-9))
     return Problem{"plane/normal", -1, "the plane normal has no direction (zero length)"};
+  if (std::string why = head_refusal(s.probe); !why.empty())
+    return Problem{"probe", -1, "the probe head cannot take " + why};
   Plane plane = s.plane;
   plane.normal.normalize();
   if (s.nurbs && s.polyline.cols())
@@ -256,6 +259,64 @@ Samples sample(const Section& s, double spacing) {
   Samples out;
   if (const std::string why = detail::occt_api().nurbs_sample(s, spacing, out); !why.empty())
     throw Error(why);
+  return out;
+}
+
+Eigen::Vector3d stylus_axis(const ProbeOrientation& o) {
+  const double a = o.a_deg * M_PI / 180, b = o.b_deg * M_PI / 180;
+  // The stylus points from the head to the ball along (sin A sin B, −sin A cos B, −cos A).
+  return Eigen::Vector3d(-std::sin(a) * std::sin(b), std::sin(a) * std::cos(b), std::cos(a));
+}
+
+std::string head_refusal(const ProbeOrientation& o) {
+  auto on_step = [](double v) {
+    return std::abs(v / kHeadStep - std::round(v / kHeadStep)) < 1e-9;
+  };
+  if (!std::isfinite(o.a_deg) || o.a_deg < 0 || o.a_deg > kHeadMaxA)
+    return fmt::format("A = {:g}°: the head tilts the stylus from 0° (straight down) to {:g}°",
+                       o.a_deg, kHeadMaxA);
+  if (!std::isfinite(o.b_deg) || std::abs(o.b_deg) > 180)
+    return fmt::format("B = {:g}°: the head turns from −180° to 180°", o.b_deg);
+  if (!on_step(o.a_deg) || !on_step(o.b_deg))
+    return fmt::format("A = {:g}°, B = {:g}°: the head indexes in steps of {:g}°", o.a_deg, o.b_deg,
+                       kHeadStep);
+  return {};
+}
+
+Section piece(const Section& s, double from, double to, const std::string& name) {
+  if (s.space_curve()) throw Error("section '" + s.name + "': a space curve has no pieces");
+  const double total = length(s);
+  if (!(from >= 0 && from < to && to <= (s.closed ? from + total : total) + 1e-9))
+    throw Error(fmt::format("section '{}': no stretch from {:g} to {:g} mm of its {:g} mm", s.name,
+                            from, to, total));
+  Section out;
+  if (s.nurbs) {
+    if (const std::string why = detail::occt_api().nurbs_piece(s, from, to, out); !why.empty())
+      throw Error(fmt::format("section '{}': {}", s.name, why));
+  } else {
+    // Walk the polyline (wrapping a closed one) and keep what lies between the two arcs.
+    const Eigen::Matrix3Xd& p = s.polyline;
+    std::vector<Eigen::Vector3d> kept;
+    double arc = 0;
+    const int laps = s.closed ? 2 : 1;
+    for (int lap = 0; lap < laps; ++lap)
+      for (Eigen::Index i = 0; i + 1 < p.cols(); ++i) {
+        const Eigen::Vector3d a = p.col(i), b = p.col(i + 1);
+        const double len = (b - a).norm(), a0 = arc, a1 = arc + len;
+        arc = a1;
+        if (a1 < from || a0 > to || len <= 0) continue;
+        const Eigen::Vector3d q0 = a + (b - a) * std::clamp((from - a0) / len, 0.0, 1.0);
+        const Eigen::Vector3d q1 = a + (b - a) * std::clamp((to - a0) / len, 0.0, 1.0);
+        if (kept.empty() || (kept.back() - q0).norm() > 1e-9) kept.push_back(q0);
+        if ((kept.back() - q1).norm() > 1e-9) kept.push_back(q1);
+      }
+    out = s;
+    out.polyline.resize(3, static_cast<Eigen::Index>(kept.size()));
+    for (std::size_t i = 0; i < kept.size(); ++i)
+      out.polyline.col(static_cast<Eigen::Index>(i)) = kept[i];
+  }
+  out.name = name;
+  out.closed = false;
   return out;
 }
 

@@ -38,6 +38,8 @@ struct OcctApi {
                             Eigen::Vector3d& last) = nullptr;
   // Arc length of a NURBS section's curve (mm).
   std::string (*nurbs_length)(const Section& s, double& out) = nullptr;
+  // design::piece of a NURBS section (arcs checked).
+  std::string (*nurbs_piece)(const Section& s, double from, double to, Section& out) = nullptr;
   // A NURBS section sampled at about `spacing` mm (> 0), as design::sample.
   std::string (*nurbs_sample)(const Section& s, double spacing, Samples& out) = nullptr;
   // The scanning path of a plane section (checked, its plane normal of unit length, options
@@ -56,7 +58,8 @@ inline std::string occt_api_tag() {
   return std::string("trueaxis-occt-3/") + std::to_string(sizeof(Section)) + "/" +
          std::to_string(sizeof(ScanPath)) + "/" + std::to_string(sizeof(PathOptions)) + "/" +
          std::to_string(sizeof(Samples)) + "/" + std::to_string(sizeof(Design)) + "/" +
-         std::to_string(sizeof(StepCut)) + "/" + std::to_string(sizeof(MeshData));
+         std::to_string(sizeof(StepCut)) + "/" + std::to_string(sizeof(MeshData)) + "/" +
+         std::to_string(sizeof(PccSegment));
 }
 
 // The library's file name (found through the program's run path) and its one exported symbol, a

@@ -2,6 +2,7 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <filesystem>
 #include <set>
 
 #include "grid_json.hpp"
@@ -49,7 +50,7 @@ void need(const JsonFile& f, const ptr& p, const char* key) {
 }
 
 design::Section read_section(const JsonFile& f, const ptr& p) {
-  only(f, p, {"name", "plane", "closed", "curve", "material", "normals", "joined_gap_mm"});
+  only(f, p, {"name", "plane", "closed", "curve", "material", "normals", "joined_gap_mm", "probe"});
   // A space curve (surface normals per point) has no plane and no material side.
   const bool space = f.has(p / "normals");
   for (const char* k : {"name", "closed", "curve"}) need(f, p, k);
@@ -70,6 +71,14 @@ design::Section read_section(const JsonFile& f, const ptr& p) {
     need(f, p / "plane", "normal");
     s.plane.origin = triple(f, p / "plane" / "origin", "x, y, z (mm)");
     s.plane.normal = triple(f, p / "plane" / "normal", "i, j, k");
+  }
+  if (f.has(p / "probe")) {
+    if (space) f.fail(p / "probe", "a space curve is scanned with the stylus vertical: no 'probe'");
+    only(f, p / "probe", {"a_deg", "b_deg"});
+    if (f.has(p / "probe" / "a_deg")) s.probe.a_deg = f.number(p / "probe" / "a_deg");
+    if (f.has(p / "probe" / "b_deg")) s.probe.b_deg = f.number(p / "probe" / "b_deg");
+    if (const std::string why = design::head_refusal(s.probe); !why.empty())
+      f.fail(p / "probe", fmt::format("section '{}': the probe head cannot take {}", s.name, why));
   }
   if (f.has(p / "joined_gap_mm")) {
     s.joined_gap = f.number(p / "joined_gap_mm");
@@ -127,12 +136,35 @@ design::Section read_section(const JsonFile& f, const ptr& p) {
   return s;
 }
 
+// The folder a file's relative paths start from.
+std::filesystem::path folder_of(const std::string& file) {
+  const std::filesystem::path p(file);
+  return p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
+}
+
 design::Design design_at(const JsonFile& f, const ptr& base) {
-  only(f, base, {"sections"});
+  only(f, base, {"sections", "solid"});
   need(f, base, "sections");
+  std::string solid;
+  if (f.has(base / "solid")) {
+    only(f, base / "solid", {"step"});
+    need(f, base / "solid", "step");
+    const std::string given = f.string(base / "solid" / "step");
+    std::filesystem::path at(given);
+    if (at.is_relative()) at = folder_of(f.path()) / at;
+    at = at.lexically_normal();
+    std::error_code ec;
+    if (given.empty() || !std::filesystem::is_regular_file(at, ec))
+      f.fail(base / "solid" / "step",
+             fmt::format("the part's solid '{}' ({}) is not there: scanning plans its moves "
+                         "against it; put the STEP file there, or remove 'solid'",
+                         given, at.string()));
+    solid = at.string();
+  }
   const auto& a = f.array(base / "sections");
   if (a.empty()) f.fail(base / "sections", "no sections: nothing to scan");
   design::Design d;
+  d.solid = solid;
   std::set<std::string> names;
   for (std::size_t i = 0; i < a.size(); ++i) {
     d.sections.push_back(read_section(f, base / "sections" / i));
@@ -147,7 +179,7 @@ design::Design design_from(const JsonFile& f) {
   return design_at(f, ptr());
 }
 
-ojson design_json(const design::Design& d);
+ojson design_json(const design::Design& d, const std::filesystem::path& folder);
 
 sim::Part part_from(const JsonFile& f) {
   only(f, ptr(), {"design", "deviation"});
@@ -234,15 +266,16 @@ void write_part(const std::string& path, const sim::Part& part) {
   dev["bumps"] = bumps;
   dev["noise_um"] = d.noise * 1e3;
   dev["seed"] = d.seed;
-  write_json(path, ojson{{"design", design_json(part.design)}, {"deviation", dev}});
+  write_json(path,
+             ojson{{"design", design_json(part.design, folder_of(path))}, {"deviation", dev}});
 }
 
 void write_design(const std::string& path, const design::Design& d) {
-  write_json(path, design_json(d));
+  write_json(path, design_json(d, folder_of(path)));
 }
 
 namespace {
-ojson design_json(const design::Design& d) {
+ojson design_json(const design::Design& d, const std::filesystem::path& folder) {
   ojson secs = ojson::array();
   for (const auto& s : d.sections) {
     ojson curve;
@@ -272,10 +305,22 @@ ojson design_json(const design::Design& d) {
             {"closed", s.closed},
             {"curve", curve},
             {"material", design::to_string(s.material)}};
-    if (s.joined_gap > 0) o["joined_gap_mm"] = s.joined_gap;
+    if (s.joined_gap > 1e-9) o["joined_gap_mm"] = s.joined_gap;
+    if (!s.probe.vertical() || s.probe.b_deg != 0)
+      o["probe"] = {{"a_deg", s.probe.a_deg}, {"b_deg", s.probe.b_deg}};
     secs.push_back(std::move(o));
   }
-  return ojson{{"sections", secs}};
+  ojson out{{"sections", secs}};
+  if (!d.solid.empty()) {
+    // Relative to the file's folder when it lies there or below, so that the two move
+    // together; else where it is.
+    std::error_code ec;
+    const auto abs = std::filesystem::absolute(d.solid, ec);
+    const auto rel = std::filesystem::proximate(abs, std::filesystem::absolute(folder, ec), ec);
+    const bool below = !ec && rel.is_relative() && *rel.begin() != "..";
+    out["solid"] = {{"step", below ? rel.generic_string() : abs.generic_string()}};
+  }
+  return out;
 }
 }  // namespace
 

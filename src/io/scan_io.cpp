@@ -47,15 +47,25 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
     }
     ojson pts = ojson::array();
     for (const auto& p : s.points) pts.push_back({p.surface.x(), p.surface.y(), p.surface.z()});
-    secs.push_back({{"name", s.name},
-                    {"status", s.ok ? "ok" : "error"},
-                    {"reason", s.reason},
-                    {"machine_time_s", times(s.time)},
-                    {"corrections", corr},
-                    {"autonomous_count", s.autonomous_count},
-                    {"trajectory_errors", s.trajectory_errors},
-                    {"points", pts}});
+    ojson sec{{"name", s.name}};
+    if (!s.source.empty()) sec["stretch_of"] = s.source;
+    sec.update(ojson{{"status", s.ok ? "ok" : "error"},
+                     {"reason", s.reason},
+                     {"machine_time_s", times(s.time)},
+                     {"corrections", corr},
+                     {"autonomous_count", s.autonomous_count},
+                     {"trajectory_errors", s.trajectory_errors},
+                     {"points", pts}});
+    secs.push_back(std::move(sec));
   }
+  ojson blocked = ojson::array();
+  for (const auto& u : r.unreachable)
+    blocked.push_back({{"section", u.section},
+                       {"from_arc_mm", u.from},
+                       {"to_arc_mm", u.to},
+                       {"start_mm", {u.start.x(), u.start.y(), u.start.z()}},
+                       {"end_mm", {u.end.x(), u.end.y(), u.end.z()}},
+                       {"reason", u.why}});
   write_json(
       path,
       ojson{{"kind", "scan"},
@@ -63,6 +73,7 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
             {"tolerance_mm", o.tolerance},
             {"ok", r.ok()},
             {"summary", r.summary()},
+            {"stopped", r.stopped.empty() ? ojson(nullptr) : ojson(r.stopped)},
             {"cmm",
              {{"tip_radius_mm", cmm.tip_radius},
               {"probe_noise_um", cmm.probe_noise_um},
@@ -71,7 +82,8 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
                                                          cmm.part_origin->z()}
                                                  : ojson(nullptr)}}},
             {"machine_time_s", times(r.time)},
-            {"sections", secs}});
+            {"sections", secs},
+            {"not_reachable", blocked}});
 }
 
 void write_scan_points(const std::string& path, const scan::Result& r) {

@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
+#include "section.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/sim/cmm.hpp"
 
@@ -50,22 +52,36 @@ design::Section overwrite(const design::Section& s, const std::vector<Sample>& s
 }
 
 struct SectionRun {
+  SectionRun(Machine& machine, const ControllerOptions& options, const Planner& planner,
+             std::vector<Event>& log, bool& first, design::Section section)
+      : m(machine),
+        o(options),
+        nominal(planner),
+        events(log),
+        first_move(first),
+        current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
+  const Planner& nominal;  // against the design's solid
   std::vector<Event>& events;
+  bool& first_move;  // the run's first free move rises along the stylus whatever is around
   SectionResult r;
   design::Section current;
-  double safe_z = 0;  // free moves between operations pass at this height (mm)
+  // Against the solid moved by the corrections accepted for this section so far (what the
+  // controller knows of where the part really is).
+  std::optional<Planner> moved_planner;
+  Eigen::Affine3d learnt = Eigen::Affine3d::Identity();
+  const Planner& planner() const { return moved_planner ? *moved_planner : nominal; }
 
-  // A free move by way of the safe height: up, across, down.
+  // A free move the planner finds: straight when clear of the part, else retract along the
+  // stylus to the clearance level, across, and down.
   void safe_move(const Eigen::Vector3d& to) {
     const Eigen::Vector3d from = m.position();
     if ((to - from).norm() < 1e-6) return;
+    const auto way = planner().route(from, to, m.stylus_axis(), first_move);
+    first_move = false;
     timed(m, r.time.moves, [&] {
-      const double z = std::max({safe_z, from.z(), to.z()});
-      m.move(Eigen::Vector3d(from.x(), from.y(), z), o.move_speed);
-      m.move(Eigen::Vector3d(to.x(), to.y(), z), o.move_speed);
-      m.move(to, o.move_speed);
+      for (const auto& p : way) m.move(p, o.move_speed);
       return 0;
     });
   }
@@ -104,22 +120,37 @@ struct SectionRun {
           return false;
       return true;
     };
-    timed(m, r.time.moves, [&] {
-      // Back out along the last touch's approach line to the route (the touch start lies on
-      // the way), round, and in along the next touch's approach line.
-      m.move(way.front(), o.move_speed);
-      std::size_t at = 0;
-      while (at + 1 < way.size()) {
-        std::size_t best = at + 1;
-        for (std::size_t j = way.size() - 1; j > at + 1; --j)
-          if (clear(way[at], way[j])) {
-            best = j;
-            break;
-          }
-        m.move(way[best], o.move_speed);
-        at = best;
+    // Back out along the last touch's approach line to the route (the touch start lies on the
+    // way), round, and in along the next touch's approach line; every leg clear of the part's
+    // solid, or else the planner's way (over the part).
+    std::vector<Eigen::Vector3d> legs{way.front()};
+    std::size_t at = 0;
+    while (at + 1 < way.size()) {
+      std::size_t best = at + 1;
+      for (std::size_t j = way.size() - 1; j > at + 1; --j)
+        if (clear(way[at], way[j])) {
+          best = j;
+          break;
+        }
+      legs.push_back(way[best]);
+      at = best;
+    }
+    legs.push_back(next_start);
+    // The first leg leaves the surface just touched: it may start nearer than the margin, but
+    // must not come nearer than it starts.
+    Eigen::Vector3d leg_start = m.position();
+    double margin =
+        std::min(planner().margin(), planner().clearance(leg_start, m.stylus_axis()) - 0.01);
+    for (const auto& p : legs) {
+      if (!planner().clear(leg_start, p, m.stylus_axis(), margin)) {
+        safe_move(next_start);
+        return;
       }
-      m.move(next_start, o.move_speed);
+      leg_start = p;
+      margin = planner().margin();
+    }
+    timed(m, r.time.moves, [&] {
+      for (const auto& p : legs) m.move(p, o.move_speed);
       return 0;
     });
   }
@@ -203,9 +234,13 @@ struct SectionRun {
         route(smp, outline, reach, last, j);
       last = j;
       const auto t = timed(m, r.time.touch, [&] {
-        return m.touch(current.plane, p + reach * nn, -nn,
-                       2 * (o.tolerance + kMargin) + o.touch_trigger, o.touch_speed,
-                       o.touch_trigger);
+        auto got =
+            m.touch(current.plane, p + reach * nn, -nn,
+                    2 * (o.tolerance + kMargin) + o.touch_trigger, o.touch_speed, o.touch_trigger);
+        // Back the way the ball came, to the touch's start: outside the band the part may be
+        // in, where the next move can be planned against the design's solid.
+        m.move(p + reach * nn, o.move_speed);
+        return got;
       });
       if (!t) {
         log(arc, 0, "touch", "touch", "no surface found along the design normal here");
@@ -254,8 +289,20 @@ struct SectionRun {
     Eigen::Index best = 0;
     double best_gap = -1;
     const double L = design::length(current);
+    // An open contour is followed from near its start to its end: the first smooth place at
+    // least 1 mm in (and a tenth of the way at most).
+    const double lead = std::min(1.0, 0.1 * L);
     for (Eigen::Index i = 0; i < n; ++i) {
-      double gap = current.closed ? L : std::min(smp.arc[i], L - smp.arc[i]);
+      if (!current.closed) {
+        bool near_corner = false;
+        for (double c : corners) near_corner = near_corner || std::abs(smp.arc[i] - c) < 1;
+        if (smp.arc[i] >= lead && !near_corner) {
+          best = i;
+          break;
+        }
+        continue;
+      }
+      double gap = L;
       for (double c : corners) {
         double d = std::abs(smp.arc[i] - c);
         if (current.closed) d = std::min(d, L - d);
@@ -271,7 +318,7 @@ struct SectionRun {
     safe_move(p + reach * nn);
     const auto out = timed(m, r.time.autonomous, [&] {
       return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
-                            design::length(current), o.autonomous_speed, settings());
+                            current.closed ? L : L - smp.arc[best], o.autonomous_speed, settings());
     });
     ++r.autonomous_count;
     if (!out.completed || out.samples.size() < 10) {
@@ -344,7 +391,12 @@ struct SectionRun {
           }
           for (const auto& c : tried)
             if (c.type != "none") r.corrections.push_back(c);
-          if (corrected) current = fixed;
+          if (corrected) {
+            current = fixed;
+            for (const auto& c : tried)
+              if (c.accepted) learnt = c.transform * learnt;
+            moved_planner.emplace(nominal.moved(learnt));
+          }
         } else {
           log(stop.arc, stop.delta_l, "correction", "correction_rejected",
               fmt::format("only {} touch points found: no correction can be fitted", got.cols()));
@@ -370,6 +422,22 @@ struct SectionRun {
 };
 
 }  // namespace
+
+namespace detail {
+SectionResult run_section(const SectionContext& c, design::Section& section) {
+  SectionRun run(c.machine, c.options, c.planner, c.events, c.first_move, section);
+  try {
+    run.run();
+  } catch (...) {
+    // What the section measured before it stopped stays in its result: the caller records why.
+    section = run.current;
+    c.partial = std::move(run.r);
+    throw;
+  }
+  section = run.current;
+  return std::move(run.r);
+}
+}  // namespace detail
 
 const char* to_string(Strategy s) {
   return s == Strategy::ErrorTolerant ? "error-tolerant"
@@ -408,51 +476,6 @@ void ControllerOptions::validate() const {
     bad("accept", accept, "must be positive and below the tolerance");
   if (!(record_spacing >= 0.01 && record_spacing <= 10))
     bad("record spacing", record_spacing, "must be in [0.01, 10] mm");
-}
-
-bool Result::ok() const {
-  for (const auto& s : sections)
-    if (!s.ok) return false;
-  return true;
-}
-
-std::string Result::summary() const {
-  int ok = 0, errors = 0, aut = 0, corr = 0;
-  for (const auto& s : sections) {
-    ok += s.ok;
-    errors += s.trajectory_errors;
-    aut += s.autonomous_count;
-    for (const auto& c : s.corrections) corr += c.accepted;
-  }
-  return fmt::format(
-      "{} of {} sections scanned; {} trajectory errors, {} geometric corrections, {} autonomous "
-      "scans; machine time {:.1f} s (design {:.1f}, touch {:.1f}, autonomous {:.1f}, moves {:.1f})",
-      ok, sections.size(), errors, corr, aut, time.total, time.design, time.touch, time.autonomous,
-      time.moves);
-}
-
-Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
-            const std::function<void(std::size_t, std::size_t)>& progress) {
-  options.validate();
-  Result res;
-  res.design = design;
-  double top = -INFINITY;
-  for (const auto& s : design.sections)
-    top = std::max(top, design::sample(s, 1.0).points.row(2).maxCoeff());
-  const double safe_z = top + options.clearance;
-  for (std::size_t i = 0; i < design.sections.size(); ++i) {
-    if (progress) progress(i, design.sections.size());
-    SectionRun run{machine, options, res.events, {}, design.sections[i], safe_z};
-    run.run();
-    res.design.sections[i] = run.current;
-    res.time.total += run.r.time.total;
-    res.time.design += run.r.time.design;
-    res.time.touch += run.r.time.touch;
-    res.time.autonomous += run.r.time.autonomous;
-    res.time.moves += run.r.time.moves;
-    res.sections.push_back(std::move(run.r));
-  }
-  return res;
 }
 
 }  // namespace trueaxis::scan

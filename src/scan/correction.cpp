@@ -227,6 +227,15 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     const Eigen::VectorXd after = distances(curve_of(cand), touched);
     Correction c;
     c.type = name(k);
+    {
+      // The same map in 3-D: in the plane A about the frame's origin, then t; along the normal
+      // nothing.
+      Eigen::Matrix<double, 3, 2> E;
+      E << f.e1, f.e2;
+      const Eigen::Matrix3d lin = E * a.A * E.transpose() + f.n * f.n.transpose();
+      c.transform.linear() = lin;
+      c.transform.translation() = f.o + E * a.t - lin * f.o;
+    }
     c.residual_before = worst_before;
     c.residual_after = after.cwiseAbs().maxCoeff();
     const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();

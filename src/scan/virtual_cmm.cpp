@@ -8,11 +8,18 @@
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/scan/machine.hpp"
+#include "trueaxis/sim/part.hpp"
 
 namespace trueaxis::scan {
 namespace {
 
 constexpr long kMaxTicks = 50'000'000;  // 14 hours of machine time at 1 kHz: a runaway guard
+// A ball entering a face it may not touch by more than this is a collision (mm): the probe's
+// trigger threshold of a touch-trigger probe, well under a scanning probe's deflection.
+constexpr double kCollision = 0.05;
+// Distances to the solid are looked for this far beyond an element's surface (mm); farther
+// counts as this far.
+constexpr double kSolidLookout = 10;
 
 bool same_plane(const design::Plane& a, const design::Plane& b) {
   const Eigen::Vector3d na = a.normal.normalized(), nb = b.normal.normalized();
@@ -39,6 +46,15 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     design::Plane pl = s.plane;
     pl.normal.normalize();
     contours_.emplace_back(pl, sim::true_contour(part_, s));
+  }
+  o_.stylus.validate(probe_.options().tip_radius);
+  std::shared_ptr<const solid::Mesh> design_solid = o_.solid;
+  if (!design_solid && !part_.design.solid.empty())
+    design_solid = solid::load_step(part_.design.solid);
+  if (design_solid && !design_solid->empty()) {
+    solid_ = std::make_shared<const solid::Mesh>(design_solid->transformed(sim::transform(part_)));
+    if (o_.table) table_z_ = solid_->box().min().z();
+    touch_faces(nullptr);
   }
   if (const auto& m = o_.geometry) {
     m->validate();
@@ -70,6 +86,97 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
             "mm ({:g} mm clearance included), the travel is {:g} to {:g} mm",
             m->name, "XYZ"[k], a, b, o_.clearance, m->range[k][0], m->range[k][1]));
     }
+  }
+}
+
+void Stylus::validate(double tip_radius) const {
+  auto bad = [](const char* what, double v, const char* why) {
+    throw Error(fmt::format("stylus {} {:g} mm: {}", what, v, why));
+  };
+  if (!(length >= 2 * tip_radius && length <= 1000))
+    bad("length", length, "must be at least the ball's diameter and at most 1000 mm");
+  if (!(shaft_radius >= 0 && shaft(tip_radius) < tip_radius))
+    bad("shaft radius", shaft_radius, "must be thinner than the ball (0: half its radius)");
+  if (!(body_radius > 0 && body_radius <= 1000))
+    bad("body radius", body_radius, "must be in (0, 1000]");
+  if (!(body_length >= body_radius && body_length <= 1000))
+    bad("body length", body_length, "must be at least the body's radius, at most 1000 mm");
+}
+
+struct VirtualCmm::Operation {
+  VirtualCmm& m;
+  std::vector<char> saved;
+  Operation(VirtualCmm& cmm, const design::Plane& plane) : m(cmm), saved(cmm.touchable_) {
+    m.touch_faces(&plane);
+  }
+  ~Operation() {
+    m.touchable_ = std::move(saved);
+    m.guard_clear_ = {-1, -1, -1};
+  }
+};
+
+void VirtualCmm::orient(const Eigen::Vector3d& axis) {
+  if (!axis.allFinite() || !(axis.norm() > 0.5))
+    throw Error("orient: the stylus axis is not a direction");
+  Machine::orient(axis);
+  guard_clear_ = {-1, -1, -1};
+}
+
+void VirtualCmm::touch_faces(const design::Plane* plane) {
+  guard_clear_ = {-1, -1, -1};
+  if (!solid_) return;
+  touchable_.assign(static_cast<std::size_t>(solid_->face_count()), 0);
+  if (!plane) return;
+  const Eigen::Vector3d n = plane->normal.normalized();
+  for (int f = 0; f < solid_->face_count(); ++f) {
+    const Eigen::AlignedBox3d& b = solid_->face_box(f);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+      const double h =
+          (b.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - plane->origin).dot(n);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+    touchable_[static_cast<std::size_t>(f)] = lo <= 1e-6 && hi >= -1e-6;
+  }
+}
+
+void VirtualCmm::check_solid() {
+  if (!solid_) return;
+  const Eigen::Vector3d c = free_ball_centre();
+  const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
+  const Eigen::Vector3d& u = axis_;
+  // The stem from the ball to the probe's nose; the body a capsule whose round nose ends where
+  // the stem does.
+  const double rb = o_.stylus.body_radius;
+  const Eigen::Vector3d s0 = c + r * u, s1 = c + (o_.stylus.length + rb) * u,
+                        b1 = c + (o_.stylus.length + o_.stylus.body_length) * u;
+  const char* what[3] = {"ball", "stylus", "probe body"};
+  for (int k = 0; k < 3; ++k) {
+    // Nothing can have been reached since the last check if the carriage moved less than the
+    // clearance found then (every point of a translated element moves as far).
+    if (guard_clear_[k] > 0 && (c - guard_at_[k]).norm() < guard_clear_[k]) continue;
+    ++solid_checks_;
+    double clear = 0, table = INFINITY;
+    if (k == 0) {
+      clear = solid_->distance(c, r + kSolidLookout, touchable_) - (r - ball_allowance_);
+      table = c.z() - r - table_z_;
+    } else if (k == 1) {
+      clear = solid_->distance(s0, s1, rs + kSolidLookout) - rs;
+      table = std::min(s0.z(), s1.z()) - rs - table_z_;
+    } else {
+      clear = solid_->distance(s1, b1, rb + kSolidLookout) - rb;
+      table = std::min(s1.z(), b1.z()) - rb - table_z_;
+    }
+    if (clear < 0 || table < -(k == 0 ? ball_allowance_ : 0)) {
+      settle();  // the machine stops
+      throw Error(fmt::format(
+          "collision: the {} ran into the {} with the ball centre at ({:.2f}, {:.2f}, {:.2f}) mm "
+          "and the stylus along ({:.3f}, {:.3f}, {:.3f})",
+          what[k], clear < 0 ? "part" : "table", c.x(), c.y(), c.z(), u.x(), u.y(), u.z()));
+    }
+    guard_at_[k] = c;
+    guard_clear_[k] = std::min(clear, table);
   }
 }
 
@@ -169,10 +276,22 @@ void VirtualCmm::settle() {
 void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
   if (!(speed > 0) || !to.allFinite()) throw Error("move: bad target or speed");
   const Eigen::Vector3d from = servo_.position();
-  // A free move must not push the ball into the part: more than the deflection it started with
-  // (a retract starts in contact) and 50 µm is a collision.
+  // The ball may leave a surface it touches (a retract) but enter none: it may be as deep in a
+  // face as it starts, and kCollision more.
+  struct Allowance {
+    double& slot;
+    double saved;
+    ~Allowance() { slot = saved; }
+  } keep{ball_allowance_, ball_allowance_};
+  if (solid_) {
+    const double r = probe_.options().tip_radius;
+    ball_allowance_ = std::max(
+        ball_allowance_, r - solid_->distance(free_ball_centre(), r, touchable_) + kCollision);
+    guard_clear_[0] = -1;
+  }
+  // A free move must not push the ball into the part's sections either: more than the deflection
+  // it started with (a retract starts in contact) and kCollision is a collision.
   const double start = penetration();
-  constexpr double kCollision = 0.05;  // mm
   const double L = (to - from).norm();
   const Eigen::Vector3d dir = L > 0 ? Eigen::Vector3d((to - from) / L) : Eigen::Vector3d::Zero();
   const double a = o_.path_acceleration, dt = servo_.options().dt();
@@ -183,6 +302,7 @@ void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
     v = at_end ? 0 : std::min({speed, v + a * dt, std::sqrt(2 * a * std::max(0.0, L - s))});
     servo_.step(from + dir * std::min(s, L), dir * v);
     s = std::min(L, s + v * dt);
+    check_solid();
     if (penetration() > start + kCollision) {
       const Eigen::Vector3d p = servo_.position();
       settle();  // the machine stops
@@ -199,6 +319,7 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
                                        const Eigen::Vector3d& direction, double distance,
                                        double speed, double trigger) {
   const auto c = in_plane(plane);
+  const Operation op(*this, plane);
   move(start, o_.positioning_speed);
   const Eigen::Vector3d d = direction.normalized();
   const double dt = servo_.options().dt();
@@ -207,6 +328,7 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
   while (s <= distance) {
     servo_.step(start + d * s, d * speed);
     s += speed * dt;
+    check_solid();
     const auto r = read(c);
     if (r.overtravel) break;
     if (r.contact && r.deflection.norm() >= trigger) {
@@ -235,6 +357,8 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   else
     c = in_plane(path.plane);
   ScanOutcome out;
+  std::optional<Operation> op;
+  if (!path.space()) op.emplace(*this, path.plane);
   const double L = path.length(), dt = servo_.options().dt(), a = o_.path_acceleration;
   const auto p0 = path.at(0);
   // Approach: from outside the path, along the normal, until the probe is pushed by Ep.
@@ -245,6 +369,7 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   for (;;) {
     servo_.step(p0.p + cnorm * p0.normal, -approach_speed * p0.normal);
     cnorm -= approach_speed * dt;
+    check_solid();
     const auto r = read(c);
     Sample smp = sample(r, 0);
     smp.delta_l = (servo_.position() + r.deflection - p0.p).dot(p0.normal) - st.pushing;
@@ -265,8 +390,8 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   std::vector<double> begin(ns + 1, 0.0), entry(ns + 1, 0.0);
   for (std::size_t i = 0; i < ns; ++i) begin[i + 1] = begin[i] + path.segments[i].length;
   for (std::size_t i = ns; i-- > 0;)
-    entry[i] = std::min(path.segments[i].speed,
-                        std::sqrt(entry[i + 1] * entry[i + 1] + 2 * a * path.segments[i].length));
+    entry[i] = std::min({path.segments[i].speed, path.segments[i].corner_speed,
+                         std::sqrt(entry[i + 1] * entry[i + 1] + 2 * a * path.segments[i].length)});
   std::size_t seg = 0;
   double s = 0, v = 0, next_record = 0;
   auto here = path.at(s);
@@ -277,6 +402,7 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
     v = std::min({here.speed, v + a * dt, ahead});
     servo_.step(here.p + cnorm * here.normal, here.tangent * v);
     s = std::min(L, s + v * dt);
+    check_solid();
     here = path.at(s);  // where the path is now, and where the next tick starts
     const auto& now = here;
     const auto r = read(c);
@@ -314,6 +440,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
                                      bool closed, double length, double speed,
                                      const ScanSettings& st) {
   const auto c = in_plane(plane);
+  const Operation op(*this, plane);
   const Eigen::Vector3d n = plane.normal.normalized();
   const double dt = servo_.options().dt(), gain = 40;
   ScanOutcome out;
@@ -325,6 +452,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
   for (;;) {
     servo_.step(start + s * dir, dir * o_.approach_speed);
     s += o_.approach_speed * dt;
+    check_solid();
     r = read(c);
     if (r.contact && r.deflection.norm() >= st.pushing) break;
     if (s > 2 * (st.approach_clearance + st.approach_limit) + 10) {
@@ -348,6 +476,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
     v = std::min(speed, v + o_.path_acceleration * dt);
     const Eigen::Vector3d vel = v * d + gain * e * dhat;
     servo_.step(servo_.position(), vel);
+    check_solid();
     r = read(c);
     Sample smp = sample(r, arc);
     if (r.contact) {

@@ -43,6 +43,20 @@ struct Nurbs {
 enum class Side { Left, Right };
 const char* to_string(Side s);
 
+// The orientation of the probe on an indexing head (as Renishaw's PH10 family): A tilts the
+// stylus from pointing straight down (A = 0°) towards horizontal (A = 90°, at most 105°); B turns
+// it about the vertical, B = 0° pointing towards −Y, B = 90° towards +X (±180°). Both in steps of
+// 7.5°.
+struct ProbeOrientation {
+  double a_deg = 0, b_deg = 0;
+  bool vertical() const { return a_deg == 0; }
+};
+constexpr double kHeadStep = 7.5, kHeadMaxA = 105;  // degrees
+// The stylus axis: the unit vector from the ball towards the head (machine frame; +Z for A = 0).
+Eigen::Vector3d stylus_axis(const ProbeOrientation& o);
+// What keeps the head from taking the orientation ("" if it can).
+std::string head_refusal(const ProbeOrientation& o);
+
 struct Section {
   std::string name;
   Plane plane;
@@ -59,10 +73,16 @@ struct Section {
   // A section cut from CAD: the largest gap between the cut's edges (or between its last edge and
   // its first) that was closed to join them into one curve (mm; 0 when they met exactly).
   double joined_gap = 0;
+  // The probe orientation the section is scanned in (default: the stylus vertical).
+  ProbeOrientation probe;
 };
 
 struct Design {
   std::vector<Section> sections;
+  // The part's solid: the STEP file the sections were cut from (a path; design.json holds it
+  // relative to its own folder). Scanning plans every move against it and the virtual CMM
+  // detects collisions with it. Empty for design data written by hand.
+  std::string solid;
 };
 
 // Planarity tolerance: every control point or polyline vertex within this of its plane (mm).
@@ -97,6 +117,12 @@ std::optional<Section> as_plane_section(const Section& s, std::string* why = nul
 // Arc length of a section's curve (mm): exact for a polyline, by OCCT's Gauss integration for a
 // NURBS.
 double length(const Section& s);
+
+// The stretch of a plane section's curve from arc length `from` to `to` (mm, from < to; on a
+// closed curve `to` may pass its end, the stretch then running on from its start), as an open
+// section of the same plane, material side and probe, named `name`. Throws Error for a space
+// curve or arcs outside the curve.
+Section piece(const Section& s, double from, double to, const std::string& name);
 
 // Points along the curve at (about) `spacing` mm, with their unit surface normals (in the plane,
 // away from the material; a space curve's own normals, interpolated): 3 × m each. Closed curves do
@@ -164,7 +190,8 @@ struct PathOptions {
   double chordal_tolerance = 1e-3;  // max distance of the PCC from the exact offset curve (mm)
   double max_speed = 100;           // scanning speed on straight or gently curved parts (mm/s)
   double min_speed = 5;             // never slower than this (mm/s)
-  double max_normal_acceleration = 2000;  // v²/R limit that sets the speed on curves (mm/s²)
+  double max_normal_acceleration = 2000;  // v²/R limit that sets the speed on curves and at
+                                          // sharp corners (mm/s²)
   // Throws Error naming the option if a value is out of range (pushing must be below the tip
   // radius; speeds positive, min ≤ max; tolerance 1e-7..1 mm).
   void validate() const;
@@ -176,6 +203,10 @@ struct PccSegment {
   double length = 0;                  // arc length (mm)
   double speed = 0;                   // scanning speed on this segment (mm/s)
   double curvature = 0;               // largest curvature of the offset curve on it (1/mm)
+  // The speed allowed where the segment starts, at a sharp corner of the path (the ball passing
+  // from one wall to the other in a concave corner): the speed of the arc that cuts the corner
+  // by a third of the pushing amount, at the normal-acceleration limit (mm/s; +inf: no corner).
+  double corner_speed = INFINITY;
   Eigen::Vector3d point(double u) const {
     return coeff.col(0) + u * (coeff.col(1) + u * (coeff.col(2) + u * coeff.col(3)));
   }

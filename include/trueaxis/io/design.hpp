@@ -4,7 +4,10 @@
 //   "closed": bool, "curve": {"nurbs": {"degree": int, "knots": [...], "weights": [...],
 //   "control_points": [[x, y, z], ...]}} or {"polyline": [[x, y, z], ...]},
 //   "material": "left" | "right", "joined_gap_mm": the largest gap closed to join the edges of
-//   a cut from CAD (optional, 0 to 1 mm)}, ...]}
+//   a cut from CAD (optional, 0 to 1 mm), "probe": {"a_deg", "b_deg"} (optional: the probe
+//   head's orientation for this section, default vertical)}, ...],
+//   "solid": {"step": "part.stp"}}  (optional: the part's STEP file, relative to design.json's
+//   folder, which scanning plans its moves against; it must exist)
 // mm, part coordinates. A space curve (a scan path that need not lie in a plane, e.g. a spiral
 // over a sphere) is written instead as {"name", "closed", "curve": {"polyline": [...]},
 // "normals": [[i, j, k], ...]}: one surface normal per point, away from the material, and no

@@ -1,12 +1,16 @@
 // trueaxis::io — results of a scanning run.
 //
-// scan.json: {"kind": "scan", "strategy", "tolerance_mm", "ok", "summary", "cmm": {"tip_radius_mm",
-//   "probe_noise_um", "geometric_errors" (the machine's name, or null), "part_origin_mm"
-//   ([x, y, z] in machine coordinates, with geometric errors)}, "machine_time_s": {"total",
-//   "design", "touch", "autonomous", "moves"}, "sections": [{"name", "status" ("ok" | "error"),
-//   "reason", "machine_time_s": {…}, "corrections": [{"type", "parameters": {name: value},
-//   "accepted", "residual_before_mm", "residual_after_mm"}], "autonomous_count",
-//   "trajectory_errors", "points": [[x, y, z], …]}]}
+// scan.json: {"kind": "scan", "strategy", "tolerance_mm", "ok", "summary", "stopped" (why the
+//   run stopped early, e.g. a collision, or null), "cmm": {"tip_radius_mm", "probe_noise_um",
+//   "geometric_errors" (the machine's name, or null), "part_origin_mm" ([x, y, z] in machine
+//   coordinates, with geometric errors)}, "machine_time_s": {"total", "design", "touch",
+//   "autonomous", "moves"}, "sections": [{"name", "stretch_of" (the section a reachable stretch
+//   was cut from; only for stretches), "status" ("ok" | "error"), "reason", "machine_time_s":
+//   {…}, "corrections": [{"type", "parameters": {name: value}, "accepted",
+//   "residual_before_mm", "residual_after_mm"}], "autonomous_count", "trajectory_errors",
+//   "points": [[x, y, z], …]}], "not_reachable": [{"section", "from_arc_mm", "to_arc_mm",
+//   "start_mm", "end_mm", "reason"}]}: written also when the run stops early, with what was
+//   measured until then.
 // points.csv: section,x,y,z,nx,ny,nz,t — workpiece surface points (mm, tip-compensated), the
 //   measured normal, machine time (s).
 // events.csv: t,section,arc_mm,delta_l_mm,mode,event,decision — every decision of the flow.

@@ -17,10 +17,19 @@
 //  4. stop with an error after `max_autonomous` autonomous corrections of one section.
 // The corrected design data are returned, so that the next part of a batch scans with them.
 //
+// With the part's solid (the design's STEP file), every free move is planned against it
+// (planner.hpp), the run's first move rises along the stylus before it goes anywhere (a machine
+// is not trusted to stand anywhere in particular), and each section is scanned in its probe
+// orientation only where the stylus reaches: a section the stylus reaches in stretches is
+// scanned as those stretches (open sections named "<name>:1", "<name>:2", ...), and the rest is
+// reported as not reachable, with why. A collision (or any failure of the machine) stops the
+// run; the result keeps what was measured and says where and why it stopped.
+//
 // Units: mm, s (machine time). Every decision is logged as an Event.
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <functional>
 #include <string>
 #include <utility>
@@ -52,6 +61,10 @@ struct ControllerOptions {
   double autonomous_speed = 12;  // mm/s
   double accept = 0.05;          // a correction must leave every touch point within this (mm)
   double record_spacing = 0.2;   // mm between recorded surface points
+  Stylus stylus;                 // what carries the ball (for planning against the solid)
+  // Free moves keep the ball, stylus and probe body this far from the design's solid (mm): room
+  // for a part that is off its design by about the tolerance.
+  double margin = 2.0;
   // Throws Error naming the option when out of range.
   void validate() const;
 };
@@ -72,6 +85,8 @@ struct Correction {
   std::vector<std::pair<std::string, double>> parameters;  // named values (mm, °, factor)
   double residual_before = 0, residual_after = 0;  // max |distance| of the touch points (mm)
   bool accepted = false;
+  // The correction as a map of the design data: x -> transform · x (mm, part frame).
+  Eigen::Affine3d transform = Eigen::Affine3d::Identity();
 };
 
 // Machine time by activity (s). `moves` are the free moves between operations (safe-height
@@ -91,6 +106,7 @@ struct Trace {
 
 struct SectionResult {
   std::string name;
+  std::string source;  // the design section a stretch was cut from ("" for a whole section)
   bool ok = false;
   std::string reason;  // why it ended in an error ("" when ok)
   MachineTime time;
@@ -100,19 +116,37 @@ struct SectionResult {
   std::vector<Trace> traces;   // ΔL of every design-value scan of the section, in order
 };
 
+// A stretch of a section's contour the stylus cannot reach in the section's probe orientation.
+struct NotReachable {
+  std::string section;
+  double from = 0, to = 0;  // arc along the section's contour from its start (mm)
+  Eigen::Vector3d start = Eigen::Vector3d::Zero(), end = Eigen::Vector3d::Zero();  // on it (mm)
+  std::string why;
+};
+
 struct Result {
   std::vector<SectionResult> sections;
+  std::vector<NotReachable> unreachable;
   std::vector<Event> events;
   MachineTime time;
   design::Design design;  // the design data after the corrections: input for the next part
-  bool ok() const;
+  // What each entry of `sections` set out to scan: the design's section, or the reachable
+  // stretch of it, before the run corrected it (one to one with `sections`).
+  design::Design planned;
+  std::string stopped;  // why the run stopped before its end ("" when it did not)
+  bool ok() const;      // every section scanned (stretches not reachable aside)
   std::string summary() const;
 };
 
-// Scans every section of `design` on `machine`. `progress(section index, count)` is called as
-// each section starts (may be empty).
+// A place to start a run from: above the design's first section, clear of the part by the
+// clearance (the stylus vertical).
+Eigen::Vector3d start_position(const design::Design& design, const ControllerOptions& options);
+
+// Scans every section of `design` on `machine`. `progress(index, count, name)` is called as each
+// section (or reachable stretch) starts (may be empty).
+using Progress = std::function<void(std::size_t, std::size_t, const std::string&)>;
 Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
-            const std::function<void(std::size_t, std::size_t)>& progress = {});
+            const Progress& progress = {});
 
 // The geometric-correction menu on its own. `touched` (3 × m, mm) are surface points found by
 // touching along the design normals at `feet` (3 × m, points of the design curve). Returns every

@@ -12,7 +12,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -20,6 +22,7 @@
 #include "trueaxis/sim/cmm.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/part.hpp"
+#include "trueaxis/solid/mesh.hpp"
 
 namespace trueaxis::scan {
 
@@ -58,9 +61,30 @@ struct ScanSettings {
   double approach_limit = 3.0;      // give up if no surface this far inside the path (mm)
 };
 
+// The stylus that carries the ball and the probe above it: a straight stem from the ball along the
+// stylus axis (towards the head) to the probe's body, a cylinder with a round nose (mm). Both are
+// checked as capsules: the stem from the ball to the nose's tip, the body from there.
+struct Stylus {
+  double length = 50;        // ball centre to the tip of the probe body's nose
+  double shaft_radius = 0;   // the stem; 0: half the tip radius (a Ø1 mm stem on a Ø2 mm ball)
+  double body_radius = 6.5;  // the probe body (Ø13 mm)
+  double body_length = 40;   // from the nose's tip (at least the body's radius)
+  // The stem's radius for a ball of this radius.
+  double shaft(double tip_radius) const {
+    return shaft_radius > 0 ? shaft_radius : 0.5 * tip_radius;
+  }
+  // Throws Error naming the value: a stem thinner than the ball, a length of at least twice the
+  // ball's radius, positive sizes within 1000 mm.
+  void validate(double tip_radius) const;
+};
+
 class Machine {
  public:
   virtual ~Machine() = default;
+  // Turns the stylus so that its axis (the unit vector from the ball towards the head) is
+  // `axis`; the operations after it use that orientation. Throws Error if this machine cannot.
+  virtual void orient(const Eigen::Vector3d& axis) { axis_ = axis.normalized(); }
+  const Eigen::Vector3d& stylus_axis() const { return axis_; }
   virtual double time() const = 0;  // machine seconds so far
   virtual Eigen::Vector3d position() const = 0;
   // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s, in a straight line.
@@ -83,12 +107,20 @@ class Machine {
                                    const Eigen::Vector3d& approach, design::Side material,
                                    bool closed, double length, double speed,
                                    const ScanSettings& settings) = 0;
+
+ protected:
+  Eigen::Vector3d axis_ = Eigen::Vector3d::UnitZ();
 };
 
 // The virtual CMM: a servo-controlled carriage and a scanning probe in front of a simulated
-// part. The part's section whose design plane contains an operation's plane is the surface the
-// probe meets (each section's true contour, built once). A space-curve path meets the part's
-// space-curve section of the same name (sim::SpaceCurve: its tangent planes along the curve).
+// part. With the part's solid (its design's STEP file, or VirtualCmmOptions::solid), every servo
+// tick checks the ball, the stylus and the probe body against the real part (the solid moved
+// with the part's deviations) and the table under it: the ball may touch the faces that cross
+// the plane it measures in, and nothing else; the stylus and the body touch nothing. A collision
+// stops the machine and throws Error saying what hit where. The part's section whose design plane
+// contains an operation's plane is the surface the probe meets (each section's true contour, built
+// once). A space-curve path meets the part's space-curve section of the same name (sim::SpaceCurve:
+// its tangent planes along the curve).
 //
 // Optionally the CMM has the 21 geometric errors of a sim::Machine: the servo runs on the
 // scale readings, and the ball centre really is where the erroneous axes put it. With the
@@ -109,6 +141,12 @@ struct VirtualCmmOptions {
   // centred in the machine's travel.
   std::optional<Eigen::Vector3d> part_origin;
   double clearance = 30;  // the part's box grown by this must fit in the travel (mm)
+  // The part as a solid, in its design frame, when its design names no STEP file (otherwise
+  // that file's). The CMM moves it with the part's deviations and stops at any collision of
+  // the ball, the stylus or the probe body with it, or with the table it stands on.
+  std::shared_ptr<const solid::Mesh> solid;
+  Stylus stylus;
+  bool table = true;  // the part stands on the machine's table (a plane at its lowest point)
 };
 
 class VirtualCmm : public Machine {
@@ -117,6 +155,7 @@ class VirtualCmm : public Machine {
              const Eigen::Vector3d& home = Eigen::Vector3d::Zero());
   double time() const override { return servo_.time(); }
   Eigen::Vector3d position() const override { return servo_.position(); }
+  void orient(const Eigen::Vector3d& axis) override;
   void move(const Eigen::Vector3d& to, double speed) override;
   std::optional<Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
                              const Eigen::Vector3d& direction, double distance, double speed,
@@ -139,6 +178,11 @@ class VirtualCmm : public Machine {
   // error (real − read ball centre, mm) at scale position p (part frame). Zero without.
   const Eigen::Vector3d& part_origin() const { return origin_; }
   Eigen::Vector3d machine_error(const Eigen::Vector3d& p) const;
+  // The real part's solid (moved with its deviations; null without a solid), and the solid
+  // checks made so far (a tick whose motion since the last check is less than the clearance
+  // then found needs none).
+  const std::shared_ptr<const solid::Mesh>& solid() const { return solid_; }
+  long solid_checks() const { return solid_checks_; }
 
  private:
   sim::Part part_;
@@ -162,6 +206,24 @@ class VirtualCmm : public Machine {
   double penetration() const;
   // Brings the carriage to rest where it is (the end of a scan or touch, before retracting).
   void settle();
+
+  // The solid: the real part, the table's height, the faces the ball may touch (those crossing
+  // the plane of the operation under way), how far the ball may enter the others, and where and
+  // how much clearance the last check found.
+  std::shared_ptr<const solid::Mesh> solid_;
+  double table_z_ = -INFINITY;
+  std::vector<char> touchable_;
+  double ball_allowance_ = 0;
+  // Per element (ball, stylus, body): where it was last checked and the clearance found then
+  // (< 0: check at the next tick).
+  std::array<Eigen::Vector3d, 3> guard_at_{};
+  std::array<double, 3> guard_clear_{-1, -1, -1};
+  long solid_checks_ = 0;
+  // The operation in `plane`: its faces may be touched by the ball (null: none, a free move).
+  void touch_faces(const design::Plane* plane);
+  // Checks the ball, stylus and body at the carriage's position; throws Error at a collision.
+  void check_solid();
+  struct Operation;  // sets and restores the touchable faces
 };
 
 }  // namespace trueaxis::scan

@@ -35,6 +35,9 @@ detail::OcctApi make_api() {
   api.nurbs_length = [](const Section& s, double& out) {
     return guarded([&] { out = occt::length(s); });
   };
+  api.nurbs_piece = [](const Section& s, double from, double to, Section& out) {
+    return guarded([&] { out = occt::piece(s, from, to); });
+  };
   api.nurbs_sample = [](const Section& s, double spacing, Samples& out) {
     return guarded([&] { out = occt::sample(s, spacing); });
   };

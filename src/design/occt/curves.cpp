@@ -2,6 +2,7 @@
 #include <GCPnts_AbscissaPoint.hxx>
 #include <GCPnts_UniformAbscissa.hxx>
 #include <GeomAdaptor_Curve.hxx>
+#include <GeomConvert_CompCurveToBSplineCurve.hxx>
 #include <algorithm>
 #include <cmath>
 
@@ -19,6 +20,35 @@ void ends(const Section& s, Eigen::Vector3d& first, Eigen::Vector3d& last) {
 double length(const Section& s) {
   GeomAdaptor_Curve a(curve(s));
   return GCPnts_AbscissaPoint::Length(a);
+}
+
+Section piece(const Section& s, double from, double to) {
+  Handle(Geom_BSplineCurve) c = curve(s);
+  GeomAdaptor_Curve a(c);
+  const double total = GCPnts_AbscissaPoint::Length(a);
+  auto param = [&](double arc) {
+    GCPnts_AbscissaPoint ap(a, arc, c->FirstParameter());
+    if (!ap.IsDone()) throw Error("cannot find arc length " + std::to_string(arc) + " mm");
+    return ap.Parameter();
+  };
+  Handle(Geom_BSplineCurve) out;
+  if (to <= total + 1e-9) {
+    out = Handle(Geom_BSplineCurve)::DownCast(c->Copy());
+    out->Segment(param(from), param(std::min(to, total)));
+  } else {  // across the start of a closed curve
+    Handle(Geom_BSplineCurve) tail = Handle(Geom_BSplineCurve)::DownCast(c->Copy());
+    tail->Segment(param(from), c->LastParameter());
+    Handle(Geom_BSplineCurve) head = Handle(Geom_BSplineCurve)::DownCast(c->Copy());
+    head->Segment(c->FirstParameter(), param(to - total));
+    GeomConvert_CompCurveToBSplineCurve joined(tail);
+    if (!joined.Add(head, 1e-6, Standard_True))
+      throw Error("the stretch across the curve's start does not join");
+    out = joined.BSplineCurve();
+  }
+  Section p = s;
+  p.closed = false;
+  p.nurbs = nurbs(*out);
+  return p;
 }
 
 Samples sample(const Section& s, double spacing) {

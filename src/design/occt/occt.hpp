@@ -77,6 +77,8 @@ Eigen::Vector3d away_from_material(const Section& s, const Geom_BSplineCurve& c,
 void ends(const Section& s, Eigen::Vector3d& first, Eigen::Vector3d& last);
 // design::length of a NURBS section (mm).
 double length(const Section& s);
+// design::piece of a NURBS section (0 ≤ from < to ≤ from + length, to ≤ length if open).
+Section piece(const Section& s, double from, double to);
 // design::sample of a NURBS section; spacing > 0 (mm).
 Samples sample(const Section& s, double spacing);
 // design::make_path of a checked plane section whose plane normal has unit length, with validated

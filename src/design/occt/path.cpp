@@ -101,6 +101,21 @@ ScanPath plane_path(const Section& s, const PathOptions& o) {
     GeomAdaptor_Curve a(sp.curve, sp.a, sp.b);
     fit(a, sp.a, sp.b, 0, o, path.segments, path.chordal_error);
   }
+  // Sharp corners of the path (where the offset is trimmed in a concave corner): the ball turns
+  // there as on an arc of radius R that cuts the corner by δ = pushing / 3, R = δ / (1/cos(θ/2)
+  // − 1) for a turn of θ, at no more than the speed v = √(a R) of the normal-acceleration limit.
+  auto& g = path.segments;
+  const double delta = o.pushing / 3;
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (i == 0 && !s.closed) continue;
+    const PccSegment& before = g[(i + g.size() - 1) % g.size()];
+    const Eigen::Vector3d t0 = before.tangent(1).normalized(), t1 = g[i].tangent(0).normalized();
+    const double theta = std::acos(std::clamp(t0.dot(t1), -1.0, 1.0));
+    if (!(theta > 1e-3)) continue;
+    const double R = delta / (1 / std::cos(0.5 * std::min(theta, 3.0)) - 1);
+    g[i].corner_speed =
+        std::clamp(std::sqrt(o.max_normal_acceleration * R), o.min_speed, o.max_speed);
+  }
   return path;
 }
 

@@ -1,0 +1,78 @@
+// trueaxis::scan — motion planning against the part's solid: free moves of the stylus that never
+// pass through the part, and the stretches of a scanning path the stylus can reach in a given
+// orientation.
+//
+// What a CMM program does: a free move goes straight when the ball, the stylus and the probe body
+// keep a margin from the part all the way; otherwise the stylus retracts along its own axis to a
+// clearance level above everything under the move, crosses there, and comes back down along its
+// axis. A stretch of a path is reachable when, with the ball on the path, nothing but the faces
+// the ball measures comes within a margin of the ball, and nothing at all within a margin of the
+// stylus or the body (a vertical stylus cannot reach under the part).
+//
+// Units: mm. Frame: the part's design frame (the solid is the design's, not the real part: the
+// margins absorb what the part may be off). Stylus positions are ball centres; `axis` is the unit
+// vector from the ball towards the head.
+#pragma once
+
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "trueaxis/design/design.hpp"
+#include "trueaxis/scan/machine.hpp"
+#include "trueaxis/solid/mesh.hpp"
+
+namespace trueaxis::scan {
+
+class Planner {
+ public:
+  // `part` may be null (design data without a solid): then route() always goes over the top, at
+  // `fallback_top` along the axis plus the clearance, and clear() finds every move clear (the
+  // caller keeps clear of the sections it knows).
+  Planner(std::shared_ptr<const solid::Mesh> part, double tip_radius, const Stylus& stylus,
+          double margin, double clearance, double fallback_top);
+
+  // The least clearance of the ball, stylus and body (and the table under the part) with the
+  // ball centre at c: how far any of them is from the part (mm; negative: inside). Faces with
+  // skip[face] set do not count for the ball.
+  double clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
+                   const std::vector<char>& skip = {}) const;
+  // Whether the straight move from a to b keeps every element `margin` from the part (checked
+  // by conservative advancement: a step never longer than the clearance less the margin).
+  bool clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
+             double margin) const;
+  // The way from a to b as the points to move to (b last). `rise` forces the retract along the
+  // axis first (the start of a run: a machine is not trusted to stand anywhere in particular).
+  // Throws Error saying which leg the part blocks.
+  std::vector<Eigen::Vector3d> route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                     const Eigen::Vector3d& axis, bool rise = false) const;
+
+  // Arcs of a scanning path (mm along it) the stylus cannot reach in orientation `axis`, each
+  // with the reason, every `step` mm; the ball may touch the faces crossing the path's plane.
+  struct Blocked {
+    double from = 0, to = 0;
+    std::string why;
+  };
+  std::vector<Blocked> unreachable(const design::ScanPath& path, const Eigen::Vector3d& axis,
+                                   double step = 0.5) const;
+
+  // The same planner for the part moved by x -> t·x (what a geometric correction learnt of it).
+  Planner moved(const Eigen::Affine3d& t) const;
+
+  // The faces of the part that cross a plane (the ones a ball scanning in it may touch).
+  std::vector<char> faces_crossing(const design::Plane& plane) const;
+  const std::shared_ptr<const solid::Mesh>& part() const { return part_; }
+  double margin() const { return margin_; }
+
+ private:
+  std::shared_ptr<const solid::Mesh> part_;
+  double r_, margin_, clearance_, fallback_top_;
+  Stylus stylus_;
+  double table_z_ = -INFINITY;
+  // Clearance of each element: 0 ball, 1 stylus, 2 body.
+  double element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
+                 const std::vector<char>& skip) const;
+};
+
+}  // namespace trueaxis::scan

@@ -1,0 +1,182 @@
+// Motion planning against the part's solid (planner.hpp).
+#include "trueaxis/scan/planner.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::scan {
+namespace {
+
+// Distances are looked for this far beyond the margin (mm): farther counts as this far.
+constexpr double kLookout = 20;
+// Steps of a conservative advance are at least this long (mm): a clearance within it of the
+// margin counts as touching it.
+constexpr double kLeast = 1e-3;
+
+std::string at(const Eigen::Vector3d& p) {
+  return fmt::format("({:.2f}, {:.2f}, {:.2f})", p.x(), p.y(), p.z());
+}
+
+}  // namespace
+
+Planner::Planner(std::shared_ptr<const solid::Mesh> part, double tip_radius, const Stylus& stylus,
+                 double margin, double clearance, double fallback_top)
+    : part_(std::move(part)),
+      r_(tip_radius),
+      margin_(margin),
+      clearance_(clearance),
+      fallback_top_(fallback_top),
+      stylus_(stylus) {
+  stylus_.validate(r_);
+  if (part_ && part_->empty()) part_.reset();
+  if (part_) table_z_ = part_->box().min().z();
+}
+
+Planner Planner::moved(const Eigen::Affine3d& t) const {
+  Planner p = *this;
+  if (part_) {
+    p.part_ = std::make_shared<const solid::Mesh>(part_->transformed(t));
+    p.table_z_ = table_z_;  // the table stays where it is
+  }
+  return p;
+}
+
+double Planner::element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& u,
+                        const std::vector<char>& skip) const {
+  const double rs = stylus_.shaft(r_), rb = stylus_.body_radius, look = margin_ + kLookout;
+  // As the virtual CMM checks it: the stem up to the probe's round nose.
+  const Eigen::Vector3d s0 = c + r_ * u, s1 = c + (stylus_.length + rb) * u,
+                        b1 = c + (stylus_.length + stylus_.body_length) * u;
+  if (k == 0) return std::min(part_->distance(c, r_ + look, skip) - r_, c.z() - r_ - table_z_);
+  if (k == 1)
+    return std::min(part_->distance(s0, s1, rs + look) - rs,
+                    std::min(s0.z(), s1.z()) - rs - table_z_);
+  return std::min(part_->distance(s1, b1, rb + look) - rb,
+                  std::min(s1.z(), b1.z()) - rb - table_z_);
+}
+
+double Planner::clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
+                          const std::vector<char>& skip) const {
+  if (!part_) return INFINITY;
+  return std::min(
+      {element(0, c, axis, skip), element(1, c, axis, skip), element(2, c, axis, skip)});
+}
+
+bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
+                    double margin) const {
+  if (!part_) return true;
+  const double L = (b - a).norm();
+  const Eigen::Vector3d d = L > 0 ? Eigen::Vector3d((b - a) / L) : Eigen::Vector3d::Zero();
+  // Every point of the stylus moves as far as its ball: the clearance cannot fall by more than
+  // the distance moved.
+  for (double t = 0;;) {
+    const double c = clearance(a + t * d, axis);
+    if (c < margin + kLeast) return false;
+    if (t >= L) return true;
+    t = std::min(L, t + (c - margin));
+  }
+}
+
+std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                            const Eigen::Vector3d& axis, bool rise) const {
+  const Eigen::Vector3d u = axis.normalized();
+  // Without the solid the part is known only by its sections: always over the top.
+  if (!rise && part_ && clear(a, b, u, margin_)) return {b};
+  // The level along the axis the stylus crosses at: the part's highest point under the move
+  // (within the probe body's reach of its line), the ball's radius and the clearance above it.
+  const double reach = std::max(r_, stylus_.body_radius) + margin_;
+  const double top = part_ ? part_->highest_near(u, a, b, reach) : fallback_top_;
+  const double level = std::max({a.dot(u), b.dot(u), top + r_ + clearance_});
+  const Eigen::Vector3d a1 = a + (level - a.dot(u)) * u, b1 = b + (level - b.dot(u)) * u;
+  // The retract may start nearer the part than the margin (the ball just left a surface); it
+  // must not come nearer than it starts.
+  const double start = std::min(margin_, clearance(a, u) - 2 * kLeast);
+  if (!clear(a, a1, u, start))
+    throw Error(
+        fmt::format("no free way from {} to {} mm: the part is in the way of the retract "
+                    "along the stylus to {}",
+                    at(a), at(b), at(a1)));
+  if (!clear(a1, b1, u, margin_))
+    throw Error(
+        fmt::format("no free way from {} to {} mm: the part is in the way at the "
+                    "clearance level, between {} and {}",
+                    at(a), at(b), at(a1), at(b1)));
+  if (!clear(b1, b, u, margin_))
+    throw Error(
+        fmt::format("no free way to {} mm: the part is in the way of the approach along "
+                    "the stylus from {}",
+                    at(b), at(b1)));
+  std::vector<Eigen::Vector3d> out;
+  if ((a1 - a).norm() > 1e-9) out.push_back(a1);
+  if ((b1 - a1).norm() > 1e-9) out.push_back(b1);
+  out.push_back(b);
+  return out;
+}
+
+std::vector<char> Planner::faces_crossing(const design::Plane& plane) const {
+  if (!part_) return {};
+  std::vector<char> out(static_cast<std::size_t>(part_->face_count()), 0);
+  const Eigen::Vector3d n = plane.normal.normalized();
+  for (int f = 0; f < part_->face_count(); ++f) {
+    const Eigen::AlignedBox3d& b = part_->face_box(f);
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+      const double h =
+          (b.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - plane.origin).dot(n);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+    out[static_cast<std::size_t>(f)] = lo <= 1e-6 && hi >= -1e-6;
+  }
+  return out;
+}
+
+std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
+                                                   const Eigen::Vector3d& axis, double step) const {
+  std::vector<Blocked> out;
+  if (!part_ || path.space()) return out;
+  const std::vector<char> skip = faces_crossing(path.plane);
+  const Eigen::Vector3d u = axis.normalized();
+  // The stylus and body keep a tenth of a millimetre from everything (a Ø1 stem beside a wall it
+  // scans has 0.2 mm); the ball, from what it does not measure.
+  constexpr double kReach = 0.1;
+  static const char* why[3] = {
+      "the ball would touch the part off the section's plane",
+      "the stylus would run into the part",
+      "the probe body would run into the part",
+  };
+  auto blocked = [&](double s) -> int {
+    const Eigen::Vector3d c = path.at(s).p;
+    for (int k = 0; k < 3; ++k)
+      if (element(k, c, u, skip) < kReach) return k;
+    return -1;
+  };
+  const double L = path.length();
+  const int n = std::max(2, static_cast<int>(std::ceil(L / step)));
+  // The boundary between a blocked and a clear arc, to a hundredth of the step.
+  auto edge = [&](double clear, double stuck) {
+    for (int i = 0; i < 7; ++i) {
+      const double mid = 0.5 * (clear + stuck);
+      (blocked(mid) < 0 ? clear : stuck) = mid;
+    }
+    return 0.5 * (clear + stuck);
+  };
+  double prev_s = 0;
+  int prev = blocked(0);
+  if (prev >= 0) out.push_back({0, L, why[prev]});
+  for (int i = 1; i <= n; ++i) {
+    const double s = L * i / n;
+    const int now = blocked(s);
+    if (now >= 0 && prev < 0) out.push_back({edge(prev_s, s), L, why[now]});
+    if (now < 0 && prev >= 0) out.back().to = edge(s, prev_s);
+    prev = now;
+    prev_s = s;
+  }
+  return out;
+}
+
+}  // namespace trueaxis::scan

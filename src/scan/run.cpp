@@ -1,0 +1,272 @@
+// A scanning run over all sections of a design: each section in its probe orientation, whole or
+// in the stretches the stylus reaches, and a result that keeps what was measured when the run
+// stops early.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "section.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/scan/controller.hpp"
+#include "trueaxis/scan/planner.hpp"
+
+namespace trueaxis::scan {
+namespace {
+
+// Blocked stretches of a contour are widened by this on each side (mm): the ball keeps off the
+// place where the stylus stops fitting.
+constexpr double kWiden = 0.5;
+// A reachable stretch shorter than this is not scanned (mm): nothing to follow.
+constexpr double kShortest = 2.0;
+
+std::string orientation(const design::ProbeOrientation& p) {
+  return fmt::format("A{:g}° B{:g}°", p.a_deg, p.b_deg);
+}
+
+// The stretches of a section to scan (the section itself when the stylus reaches all of it),
+// recording what it cannot reach. Throws Error when nothing of it can be scanned.
+std::vector<design::Section> stretches(const design::Section& s, const Planner& planner,
+                                       const ControllerOptions& o, double approach, Result& res) {
+  if (const std::string why = design::head_refusal(s.probe); !why.empty())
+    throw Error("the probe head cannot take " + why);
+  if (s.space_curve() || !planner.part()) return {s};
+  const Eigen::Vector3d u = design::stylus_axis(s.probe);
+  const design::ScanPath path = design::make_path(s, o.path);
+  const auto blocked = planner.unreachable(path, u);
+  if (blocked.empty()) return {s};
+  // Each blocked stretch of the path, on the design contour: the contour points the ball's
+  // centre stands over at its ends.
+  const double L = design::length(s);
+  const auto smp = design::sample(s, 0.05);
+  auto arc_of = [&](const Eigen::Vector3d& q) {
+    Eigen::Index best = 0;
+    (smp.points.colwise() - q).colwise().squaredNorm().minCoeff(&best);
+    return smp.arc[best];
+  };
+  auto foot = [&](double along) {
+    const auto p = path.at(along);
+    return Eigen::Vector3d(p.p - path.offset * p.normal);
+  };
+  struct Span {
+    double from, length;
+    std::string why;
+  };
+  std::vector<Span> spans;
+  for (const auto& b : blocked) {
+    double a0 = arc_of(foot(b.from)), a1 = arc_of(foot(b.to));
+    if (b.from <= 0) a0 = s.closed ? a0 : 0;
+    if (b.to >= path.length()) a1 = s.closed ? a1 : L;
+    double len = a1 - a0;
+    if (s.closed) len = std::fmod(len + 2 * L, L);
+    if (s.closed && b.from <= 0 && b.to >= path.length()) len = L;
+    spans.push_back({a0 - kWiden, std::max(0.0, len) + 2 * kWiden, b.why});
+  }
+  // Merge, in order along the contour (a closed one wraps).
+  std::sort(spans.begin(), spans.end(),
+            [](const Span& a, const Span& b) { return a.from < b.from; });
+  std::vector<Span> merged;
+  for (const auto& sp : spans) {
+    if (!merged.empty() && sp.from <= merged.back().from + merged.back().length)
+      merged.back().length =
+          std::max(merged.back().length, sp.from + sp.length - merged.back().from);
+    else
+      merged.push_back(sp);
+  }
+  if (s.closed && merged.size() > 1 &&
+      merged.back().from + merged.back().length >= merged.front().from + L) {
+    merged.front().length = std::max(
+        merged.front().length + merged.front().from + L - merged.back().from, merged.back().length);
+    merged.front().from = merged.back().from - L;
+    merged.pop_back();
+  }
+  auto point_at = [&](double arc) {
+    const double a = s.closed ? std::fmod(std::fmod(arc, L) + L, L) : std::clamp(arc, 0.0, L);
+    Eigen::Index i = 0;
+    (smp.arc.array() - a).abs().minCoeff(&i);
+    return Eigen::Vector3d(smp.points.col(i));
+  };
+  for (const auto& m : merged) {
+    const double from = s.closed ? std::fmod(m.from + L, L) : std::max(0.0, m.from);
+    const double to = s.closed ? from + std::min(m.length, L) : std::min(L, m.from + m.length);
+    res.unreachable.push_back(
+        {s.name, from, to, point_at(from), point_at(to),
+         fmt::format("{} with the probe at {}", m.why, orientation(s.probe))});
+  }
+  // What is left, as open stretches, each with a clear approach and retract.
+  std::vector<std::pair<double, double>> free;
+  if (s.closed) {
+    for (std::size_t i = 0; i < merged.size(); ++i) {
+      const double a = merged[i].from + merged[i].length;
+      const double b = i + 1 < merged.size() ? merged[i + 1].from : merged.front().from + L;
+      if (merged[i].length < L) free.emplace_back(a, b);
+    }
+  } else {
+    double at = 0;
+    for (const auto& m : merged) {
+      free.emplace_back(at, m.from);
+      at = m.from + m.length;
+    }
+    free.emplace_back(at, L);
+  }
+  std::vector<design::Section> out;
+  for (auto [a, b] : free) {
+    if (s.closed) {
+      const double shift = std::floor(a / L) * L;
+      a -= shift;
+      b -= shift;
+    }
+    a = std::max(a, 0.0);
+    if (!s.closed) b = std::min(b, L);
+    // Move the ends in until the ball can come in along the normal from the approach distance
+    // and leave the same way.
+    for (int k = 0; k < 40 && b - a >= kShortest; ++k) {
+      const auto p = design::make_path(design::piece(s, a, b, s.name), o.path);
+      const auto p0 = p.at(0), p1 = p.at(p.length());
+      const bool in = planner.clearance(p0.p + approach * p0.normal, u) >= planner.margin();
+      const bool out_ok = planner.clearance(p1.p + approach * p1.normal, u) >= planner.margin();
+      if (in && out_ok) break;
+      if (!in) a += 0.5;
+      if (!out_ok) b -= 0.5;
+    }
+    if (b - a < kShortest) continue;
+    out.push_back(design::piece(s, a, b, fmt::format("{}:{}", s.name, out.size() + 1)));
+  }
+  if (out.empty())
+    throw Error(fmt::format("not reachable with the probe at {}: {}", orientation(s.probe),
+                            merged.front().why));
+  return out;
+}
+
+}  // namespace
+
+bool Result::ok() const {
+  if (!stopped.empty()) return false;
+  for (const auto& s : sections)
+    if (!s.ok) return false;
+  return true;
+}
+
+std::string Result::summary() const {
+  int ok = 0, errors = 0, aut = 0, corr = 0;
+  for (const auto& s : sections) {
+    ok += s.ok;
+    errors += s.trajectory_errors;
+    aut += s.autonomous_count;
+    for (const auto& c : s.corrections) corr += c.accepted;
+  }
+  double blocked = 0;
+  for (const auto& u : unreachable) blocked += u.to - u.from;
+  return fmt::format(
+      "{} of {} sections scanned{}{}; {} trajectory errors, {} geometric corrections, {} "
+      "autonomous scans; machine time {:.1f} s (design {:.1f}, touch {:.1f}, autonomous {:.1f}, "
+      "moves {:.1f}){}",
+      ok, sections.size(),
+      unreachable.empty() ? ""
+                          : fmt::format(" ({} stretches, {:.1f} mm of contour, not reachable)",
+                                        unreachable.size(), blocked),
+      stopped.empty() ? "" : "; the run stopped early", errors, corr, aut, time.total, time.design,
+      time.touch, time.autonomous, time.moves, stopped.empty() ? "" : ": " + stopped);
+}
+
+Eigen::Vector3d start_position(const design::Design& design, const ControllerOptions& options) {
+  double top = -INFINITY;
+  for (const auto& s : design.sections)
+    top = std::max(top, design::sample(s, 1.0).points.row(2).maxCoeff());
+  if (!design.solid.empty()) top = std::max(top, solid::load_step(design.solid)->box().max().z());
+  const auto first = design::sample(design.sections.front(), 1.0);
+  return Eigen::Vector3d(first.points(0, 0), first.points(1, 0),
+                         top + options.clearance + options.path.tip_radius);
+}
+
+Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
+            const Progress& progress) {
+  options.validate();
+  Result res;
+  res.design.solid = res.planned.solid = design.solid;
+  std::shared_ptr<const solid::Mesh> part;
+  if (!design.solid.empty()) part = solid::load_step(design.solid);
+  double top = -INFINITY;
+  for (const auto& s : design.sections)
+    top = std::max(top, design::sample(s, 1.0).points.row(2).maxCoeff());
+  const Planner planner(part, options.path.tip_radius, options.stylus, options.margin,
+                        options.clearance, top);
+  // The approach starts this far outside the path (as the section flow sets it).
+  const double approach = options.tolerance + 1.5;
+
+  // What to scan: each section whole, or the stretches of it the stylus reaches.
+  struct Item {
+    design::Section section;
+    std::string source, refusal;
+  };
+  std::vector<Item> items;
+  for (const auto& s : design.sections) {
+    try {
+      const auto pieces = stretches(s, planner, options, approach, res);
+      for (const auto& p : pieces) items.push_back({p, p.name == s.name ? "" : s.name, ""});
+    } catch (const Error& e) {
+      items.push_back({s, "", e.what()});
+    }
+  }
+  for (const auto& u : res.unreachable)
+    res.events.push_back({machine.time(), u.section, u.from, 0, "section", "not_reachable",
+                          fmt::format("{:.1f} to {:.1f} mm along the contour not scanned: {}",
+                                      u.from, u.to, u.why)});
+
+  bool first_move = true;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    Item& it = items[i];
+    if (progress) progress(i, items.size(), it.section.name);
+    res.planned.sections.push_back(it.section);
+    SectionResult r;
+    r.name = it.section.name;
+    r.source = it.source;
+    if (!res.stopped.empty() || !it.refusal.empty()) {
+      r.reason = !it.refusal.empty() ? it.refusal : "not scanned: " + res.stopped;
+      res.events.push_back({machine.time(), r.name, 0, 0, "section", "error_exit", r.reason});
+      res.design.sections.push_back(it.section);
+      res.sections.push_back(std::move(r));
+      continue;
+    }
+    const double t0 = machine.time();
+    try {
+      // Turn the head where the stylus is clear: retracted along its axis above the part.
+      const Eigen::Vector3d axis = design::stylus_axis(it.section.probe);
+      if ((axis - machine.stylus_axis()).norm() > 1e-12) {
+        const Eigen::Vector3d u = machine.stylus_axis(), p = machine.position();
+        const double level =
+            (part ? part->highest(u) : top) + options.path.tip_radius + options.clearance;
+        if (p.dot(u) < level) machine.move(p + (level - p.dot(u)) * u, options.move_speed);
+        machine.orient(axis);
+        first_move = true;
+      }
+      SectionResult partial;
+      try {
+        r = detail::run_section({machine, options, planner, res.events, first_move, partial},
+                                it.section);
+      } catch (...) {
+        r = std::move(partial);
+        throw;
+      }
+    } catch (const Error& e) {
+      r.name = it.section.name;
+      r.ok = false;
+      r.reason = e.what();
+      r.time.total = machine.time() - t0;
+      res.stopped = fmt::format("section '{}': {}", r.name, e.what());
+      res.events.push_back({machine.time(), r.name, 0, 0, "section", "error_exit",
+                            "the run stops: " + std::string(e.what())});
+    }
+    r.source = it.source;
+    res.design.sections.push_back(it.section);
+    res.time.total += r.time.total;
+    res.time.design += r.time.design;
+    res.time.touch += r.time.touch;
+    res.time.autonomous += r.time.autonomous;
+    res.time.moves += r.time.moves;
+    res.sections.push_back(std::move(r));
+  }
+  return res;
+}
+
+}  // namespace trueaxis::scan
