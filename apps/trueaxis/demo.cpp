@@ -440,6 +440,8 @@ int run_demo(const DemoOptions& o) {
     tolerant_s.push_back(r.time.total);
     io::write_scan((dir / fmt::format("scan{}.json", k)).string(), r, sco,
                    {sco.path.tip_radius, vo.probe.noise * 1e3, machine.name, cmm.part_origin()});
+    std::vector<sim::Contour> truth;
+    for (const auto& s : part.design.sections) truth.push_back(sim::true_contour(part, s));
     std::vector<Eigen::VectorXd> truth_um;
     std::vector<Eigen::Matrix3Xd> true_part;
     // Each point's distance from the true part (µm) as measured, for the report; and the form
@@ -471,7 +473,16 @@ int run_demo(const DemoOptions& o) {
       }
       if (t.size()) worst = std::max(worst, t.cwiseAbs().maxCoeff());
       truth_um.push_back(std::move(t));
-      true_part.push_back(sim::true_contour(part, part.design.sections[i]).points());
+      // The true contour this section's points lie on (a section of the corrected design data
+      // may be a stretch of a contour, under another name).
+      const sim::Contour* on = nullptr;
+      double best = INFINITY;
+      for (const auto& c : truth) {
+        double sum = 0;
+        for (const auto& pt : r.sections[i].points) sum += std::abs(c.nearest(pt.surface).distance);
+        if (sum < best) best = sum, on = &c;
+      }
+      if (on) true_part.push_back(on->points());
     }
     // Gauss–Newton on the exact distances, linearised with the measured normals.
     std::array<double, 2> form{}, form_max{};  // RMS and max distance after the alignment (µm)

@@ -332,6 +332,30 @@ StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>&
   StepCut out;
   if (const std::string why = detail::occt_api().cut_step(path, planes, options, out); !why.empty())
     throw Error(why);
+  out.design.solid = std::filesystem::absolute(path).lexically_normal().string();
+  return out;
+}
+
+Samples sample(const Section& s, double spacing, double chord_tolerance) {
+  if (!(spacing > 0) || !(chord_tolerance > 0))
+    throw Error("the sample spacing and chord tolerance must be positive (mm)");
+  if (!s.nurbs) return sample_polyline(s, spacing);  // its vertices are points: chords exact
+  Samples out;
+  if (const std::string why =
+          detail::occt_api().nurbs_sample_fine(s, spacing, chord_tolerance, out);
+      !why.empty())
+    throw Error(why);
+  return out;
+}
+
+Design moved_sections(const std::string& step, const Eigen::Affine3d& t, const Plane& plane) {
+  double map[12];
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 4; ++c) map[4 * r + c] = t.matrix()(r, c);
+  Design out;
+  if (const std::string why = detail::occt_api().moved_sections(step, map, plane, out);
+      !why.empty())
+    throw Error(fmt::format("{}: the part moved as simulated: {}", step, why));
   return out;
 }
 

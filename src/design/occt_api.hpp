@@ -42,6 +42,13 @@ struct OcctApi {
   std::string (*nurbs_piece)(const Section& s, double from, double to, Section& out) = nullptr;
   // A NURBS section sampled at about `spacing` mm (> 0), as design::sample.
   std::string (*nurbs_sample)(const Section& s, double spacing, Samples& out) = nullptr;
+  // The same with every knot a sample and chords within `tolerance` (> 0) of the curve.
+  std::string (*nurbs_sample_fine)(const Section& s, double spacing, double tolerance,
+                                   Samples& out) = nullptr;
+  // The sections of a STEP file's part moved by x -> linear·x + translation (a row-major 3 × 4
+  // matrix), in one plane: as cut_step's, unnamed.
+  std::string (*moved_sections)(const std::string& path, const double (&map)[12],
+                                const Plane& plane, Design& out) = nullptr;
   // The scanning path of a plane section (checked, its plane normal of unit length, options
   // validated), as design::make_path.
   std::string (*plane_path)(const Section& s, const PathOptions& o, ScanPath& out) = nullptr;

@@ -60,6 +60,33 @@ void PathOptions::validate() const {
     bad("maximum normal acceleration", max_normal_acceleration, "must be in (0, 1e6] mm/s²");
 }
 
+namespace {
+// Arc length of a segment from u = 0 to u (5-point Gauss–Legendre on |p'|, as its length).
+double arc_to(const PccSegment& g, double u) {
+  static const double x[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831,
+                              0.9061798459386640};
+  static const double w[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889,
+                              0.4786286704993665, 0.2369268850561891};
+  double l = 0;
+  for (int i = 0; i < 5; ++i) l += w[i] * g.tangent(0.5 * u * (x[i] + 1)).norm();
+  return 0.5 * u * l;
+}
+// The parameter at arc length `a` along the segment (Newton's method from the linear guess): a
+// cubic's parameter need not run evenly with its arc, and a scan that takes it for arc length
+// commands a carriage that runs ahead of or behind its feed.
+double u_at(const PccSegment& g, double a) {
+  double u = std::clamp(a / g.length, 0.0, 1.0);
+  for (int it = 0; it < 6; ++it) {
+    const double speed = g.tangent(u).norm();
+    if (!(speed > 0)) break;
+    const double step = (arc_to(g, u) - a) / speed;
+    u = std::clamp(u - step, 0.0, 1.0);
+    if (std::abs(step) < 1e-12) break;
+  }
+  return u;
+}
+}  // namespace
+
 double ScanPath::length() const {
   double l = 0;
   for (const auto& s : segments) l += s.length;
@@ -77,7 +104,7 @@ PathPoint ScanPath::at(double s) const {
   if (last_ >= segments.size() || s < cumulative_[last_]) last_ = 0;
   while (last_ + 1 < segments.size() && s >= cumulative_[last_ + 1]) ++last_;
   const PccSegment& g = segments[last_];
-  const double u = g.length > 0 ? std::clamp((s - cumulative_[last_]) / g.length, 0.0, 1.0) : 0.0;
+  const double u = g.length > 0 ? u_at(g, s - cumulative_[last_]) : 0.0;
   PathPoint r;
   r.p = g.point(u);
   r.tangent = g.tangent(u).normalized();

@@ -50,7 +50,9 @@ void need(const JsonFile& f, const ptr& p, const char* key) {
 }
 
 design::Section read_section(const JsonFile& f, const ptr& p) {
-  only(f, p, {"name", "plane", "closed", "curve", "material", "normals", "joined_gap_mm", "probe"});
+  only(f, p,
+       {"name", "plane", "closed", "curve", "material", "normals", "joined_gap_mm", "probe",
+        "solid_placement"});
   // A space curve (surface normals per point) has no plane and no material side.
   const bool space = f.has(p / "normals");
   for (const char* k : {"name", "closed", "curve"}) need(f, p, k);
@@ -79,6 +81,25 @@ design::Section read_section(const JsonFile& f, const ptr& p) {
     if (f.has(p / "probe" / "b_deg")) s.probe.b_deg = f.number(p / "probe" / "b_deg");
     if (const std::string why = design::head_refusal(s.probe); !why.empty())
       f.fail(p / "probe", fmt::format("section '{}': the probe head cannot take {}", s.name, why));
+  }
+  if (f.has(p / "solid_placement")) {
+    // Three rows of four numbers: x_part = [A | t] · [x_solid; 1], A with a positive determinant.
+    const ptr q = p / "solid_placement";
+    const auto& rows = f.root()[q];
+    if (!rows.is_array() || rows.size() != 3)
+      f.fail(q, "'solid_placement' is three rows of four numbers (a 3 × 4 matrix [A | t], mm)");
+    Eigen::Matrix<double, 3, 4> m;
+    for (int r = 0; r < 3; ++r) {
+      const Eigen::VectorXd row = f.numbers(q / std::to_string(r));
+      if (row.size() != 4) f.fail(q / std::to_string(r), "each row has four numbers");
+      m.row(r) = row.transpose();
+    }
+    const double det = m.leftCols<3>().determinant();
+    if (!(det > 1e-3 && det < 1e3))
+      f.fail(q, fmt::format("the placement's 3 × 3 part has determinant {:.6g}: it must keep the "
+                            "solid's handedness and scale it by 0.1 to 10",
+                            det));
+    s.solid_placement.matrix().topRows<3>() = m;
   }
   if (f.has(p / "joined_gap_mm")) {
     s.joined_gap = f.number(p / "joined_gap_mm");
@@ -308,6 +329,15 @@ ojson design_json(const design::Design& d, const std::filesystem::path& folder) 
     if (s.joined_gap > 1e-9) o["joined_gap_mm"] = s.joined_gap;
     if (!s.probe.vertical() || s.probe.b_deg != 0)
       o["probe"] = {{"a_deg", s.probe.a_deg}, {"b_deg", s.probe.b_deg}};
+    if (!s.solid_placement.isApprox(Eigen::Affine3d::Identity(), 1e-15)) {
+      ojson rows = ojson::array();
+      for (int r = 0; r < 3; ++r) {
+        ojson row = ojson::array();
+        for (int c = 0; c < 4; ++c) row.push_back(s.solid_placement.matrix()(r, c));
+        rows.push_back(row);
+      }
+      o["solid_placement"] = rows;
+    }
     secs.push_back(std::move(o));
   }
   ojson out{{"sections", secs}};

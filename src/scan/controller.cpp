@@ -31,7 +31,12 @@ auto timed(Machine& m, double& bucket, Fn&& fn) {
   return fn();
 }
 
-// The measured section as design data: surface points every ~0.5 mm as a polyline in the plane.
+// The measured section as design data: the surface points as a polyline in the plane, thinned
+// to the vertices that keep every measured point within kThinning of it (Douglas & Peucker
+// 1973). A convex corner, where the ball rolls about the edge and the points stand still, keeps
+// its vertex: a polyline of evenly spaced points would cut it, and the next part's path would
+// then run into the corner.
+constexpr double kThinning = 0.002;  // mm: four times a good probe's 0.5 µm noise
 design::Section overwrite(const design::Section& s, const std::vector<Sample>& samples) {
   design::Section out = s;
   out.nurbs.reset();
@@ -39,15 +44,41 @@ design::Section overwrite(const design::Section& s, const std::vector<Sample>& s
   std::vector<Eigen::Vector3d> pts;
   for (const auto& x : samples) {
     const Eigen::Vector3d p = x.surface - (x.surface - s.plane.origin).dot(n) * n;
-    if (pts.empty() || (p - pts.back()).norm() >= 0.5) pts.push_back(p);
+    if (pts.empty() || (p - pts.back()).norm() >= 1e-4) pts.push_back(p);
   }
   if (s.closed) {
     while (pts.size() > 2 && (pts.back() - pts.front()).norm() < 0.25) pts.pop_back();
     pts.push_back(pts.front());
   }
-  out.polyline.resize(3, static_cast<Eigen::Index>(pts.size()));
+  std::vector<char> keep(pts.size(), 0);
+  if (!pts.empty()) keep.front() = keep.back() = 1;
+  std::vector<std::pair<std::size_t, std::size_t>> todo;
+  if (pts.size() > 2) todo.emplace_back(0, pts.size() - 1);
+  while (!todo.empty()) {
+    const auto [a, b] = todo.back();
+    todo.pop_back();
+    const Eigen::Vector3d d = pts[b] - pts[a];
+    const double len2 = d.squaredNorm();
+    double worst = -1;
+    std::size_t at = a;
+    for (std::size_t i = a + 1; i < b; ++i) {
+      const Eigen::Vector3d v = pts[i] - pts[a];
+      const double t = len2 > 0 ? std::clamp(v.dot(d) / len2, 0.0, 1.0) : 0.0;
+      const double e = (v - t * d).norm();
+      if (e > worst) worst = e, at = i;
+    }
+    if (worst > kThinning) {
+      keep[at] = 1;
+      if (at - a > 1) todo.emplace_back(a, at);
+      if (b - at > 1) todo.emplace_back(at, b);
+    }
+  }
+  std::vector<Eigen::Vector3d> kept;
   for (std::size_t i = 0; i < pts.size(); ++i)
-    out.polyline.col(static_cast<Eigen::Index>(i)) = pts[i];
+    if (keep[i]) kept.push_back(pts[i]);
+  out.polyline.resize(3, static_cast<Eigen::Index>(kept.size()));
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    out.polyline.col(static_cast<Eigen::Index>(i)) = kept[i];
   return out;
 }
 
@@ -318,7 +349,10 @@ struct SectionRun {
     safe_move(p + reach * nn);
     const auto out = timed(m, r.time.autonomous, [&] {
       return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
-                            current.closed ? L : L - smp.arc[best], o.autonomous_speed, settings());
+                            // an open stretch: stop 1 mm short of its end, which may border
+                            // on what the stylus cannot reach
+                            current.closed ? L : std::max(1.0, L - smp.arc[best] - 1),
+                            o.autonomous_speed, settings());
     });
     ++r.autonomous_count;
     if (!out.completed || out.samples.size() < 10) {
@@ -393,8 +427,13 @@ struct SectionRun {
             if (c.type != "none") r.corrections.push_back(c);
           if (corrected) {
             current = fixed;
+            Eigen::Affine3d step = Eigen::Affine3d::Identity();
             for (const auto& c : tried)
-              if (c.accepted) learnt = c.transform * learnt;
+              if (c.accepted) step = c.transform * step;
+            learnt = step * learnt;
+            // The design's solid follows the corrected curve (the nominal planner already
+            // stands it at the section's placement).
+            current.solid_placement = step * current.solid_placement;
             moved_planner.emplace(nominal.moved(learnt));
           }
         } else {
@@ -470,6 +509,9 @@ void ControllerOptions::validate() const {
     bad("move speed", move_speed, "must be in (0, 1000] mm/s");
   if (!(clearance >= 1 && clearance <= 1000))
     bad("clearance", clearance, "must be in [1, 1000] mm");
+  if (!(margin >= 0 && margin <= 100))
+    bad("margin", margin, "must be in [0, 100] mm (0: automatic)");
+  stylus.validate(path.tip_radius);
   if (!(autonomous_speed > 0 && autonomous_speed <= 100))
     bad("autonomous speed", autonomous_speed, "must be in (0, 100] mm/s");
   if (!(accept > 0 && accept < tolerance))

@@ -38,7 +38,8 @@ Planner::Planner(std::shared_ptr<const solid::Mesh> part, double tip_radius, con
 
 Planner Planner::moved(const Eigen::Affine3d& t) const {
   Planner p = *this;
-  if (part_) {
+  p.placement_ = t * placement_;
+  if (part_ && !t.isApprox(Eigen::Affine3d::Identity(), 1e-15)) {
     p.part_ = std::make_shared<const solid::Mesh>(part_->transformed(t));
     p.table_z_ = table_z_;  // the table stays where it is
   }
@@ -53,9 +54,9 @@ double Planner::element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& 
                         b1 = c + (stylus_.length + stylus_.body_length) * u;
   if (k == 0) return std::min(part_->distance(c, r_ + look, skip) - r_, c.z() - r_ - table_z_);
   if (k == 1)
-    return std::min(part_->distance(s0, s1, rs + look) - rs,
+    return std::min(part_->distance(s0, s1, rs + look, skip) - rs,
                     std::min(s0.z(), s1.z()) - rs - table_z_);
-  return std::min(part_->distance(s1, b1, rb + look) - rb,
+  return std::min(part_->distance(s1, b1, rb + look, skip) - rb,
                   std::min(s1.z(), b1.z()) - rb - table_z_);
 }
 
@@ -84,34 +85,58 @@ bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
 std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                             const Eigen::Vector3d& axis, bool rise) const {
   const Eigen::Vector3d u = axis.normalized();
+  std::vector<Eigen::Vector3d> out;
+  // Back away from the part first if the ball stands nearer than the margin: in small steps up
+  // the clearance's slope (its gradient by central differences).
+  Eigen::Vector3d from = a;
+  if (part_) {
+    for (int k = 0; k < 100; ++k) {
+      const double c = clearance(from, u);
+      if (c >= margin_) break;
+      constexpr double h = 0.02;
+      Eigen::Vector3d g;
+      for (int i = 0; i < 3; ++i) {
+        Eigen::Vector3d e = Eigen::Vector3d::Zero();
+        e[i] = h;
+        g[i] = (clearance(from + e, u) - clearance(from - e, u)) / (2 * h);
+      }
+      if (!(g.norm() > 1e-6)) break;
+      const Eigen::Vector3d next = from + std::min(0.25, margin_ - c + kLeast) * g.normalized();
+      if (clearance(next, u) <= c) break;
+      from = next;
+      out.push_back(from);
+    }
+  }
   // Without the solid the part is known only by its sections: always over the top.
-  if (!rise && part_ && clear(a, b, u, margin_)) return {b};
+  if (!rise && part_ && clear(from, b, u, margin_)) {
+    out.push_back(b);
+    return out;
+  }
+  const Eigen::Vector3d start = from;
   // The level along the axis the stylus crosses at: the part's highest point under the move
   // (within the probe body's reach of its line), the ball's radius and the clearance above it.
   const double reach = std::max(r_, stylus_.body_radius) + margin_;
-  const double top = part_ ? part_->highest_near(u, a, b, reach) : fallback_top_;
-  const double level = std::max({a.dot(u), b.dot(u), top + r_ + clearance_});
-  const Eigen::Vector3d a1 = a + (level - a.dot(u)) * u, b1 = b + (level - b.dot(u)) * u;
-  // The retract may start nearer the part than the margin (the ball just left a surface); it
-  // must not come nearer than it starts.
-  const double start = std::min(margin_, clearance(a, u) - 2 * kLeast);
-  if (!clear(a, a1, u, start))
-    throw Error(
+  const double top = part_ ? part_->highest_near(u, start, b, reach) : fallback_top_;
+  const double level = std::max({start.dot(u), b.dot(u), top + r_ + clearance_});
+  const Eigen::Vector3d a1 = start + (level - start.dot(u)) * u, b1 = b + (level - b.dot(u)) * u;
+  // If backing away could not reach the margin, the retract must at least not come nearer.
+  const double leave = std::min(margin_, clearance(start, u) - 2 * kLeast);
+  if (!clear(start, a1, u, leave))
+    throw NoWay(
         fmt::format("no free way from {} to {} mm: the part is in the way of the retract "
                     "along the stylus to {}",
                     at(a), at(b), at(a1)));
   if (!clear(a1, b1, u, margin_))
-    throw Error(
+    throw NoWay(
         fmt::format("no free way from {} to {} mm: the part is in the way at the "
                     "clearance level, between {} and {}",
                     at(a), at(b), at(a1), at(b1)));
   if (!clear(b1, b, u, margin_))
-    throw Error(
+    throw NoWay(
         fmt::format("no free way to {} mm: the part is in the way of the approach along "
                     "the stylus from {}",
                     at(b), at(b1)));
-  std::vector<Eigen::Vector3d> out;
-  if ((a1 - a).norm() > 1e-9) out.push_back(a1);
+  if ((a1 - start).norm() > 1e-9) out.push_back(a1);
   if ((b1 - a1).norm() > 1e-9) out.push_back(b1);
   out.push_back(b);
   return out;
@@ -135,6 +160,13 @@ std::vector<char> Planner::faces_crossing(const design::Plane& plane) const {
   return out;
 }
 
+bool Planner::from_above(const Eigen::Vector3d& c, const Eigen::Vector3d& axis) const {
+  if (!part_) return true;
+  const Eigen::Vector3d u = axis.normalized();
+  const double level = std::max(c.dot(u), part_->highest(u) + r_ + clearance_);
+  return clear(c + (level - c.dot(u)) * u, c, u, margin_);
+}
+
 std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
                                                    const Eigen::Vector3d& axis, double step) const {
   std::vector<Blocked> out;
@@ -149,12 +181,14 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
       "the stylus would run into the part",
       "the probe body would run into the part",
   };
+  // Faces the ball does not measure keep `band` more from every element.
   auto blocked = [&](double s) -> int {
     const Eigen::Vector3d c = path.at(s).p;
     for (int k = 0; k < 3; ++k)
-      if (element(k, c, u, skip) < kReach) return k;
+      if (element(k, c, u, k == 0 ? skip : std::vector<char>{}) < kReach) return k;
     return -1;
   };
+
   const double L = path.length();
   const int n = std::max(2, static_cast<int>(std::ceil(L / step)));
   // The boundary between a blocked and a clear arc, to a hundredth of the step.

@@ -123,8 +123,8 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
     for (int k = 0; k < 40 && b - a >= kShortest; ++k) {
       const auto p = design::make_path(design::piece(s, a, b, s.name), o.path);
       const auto p0 = p.at(0), p1 = p.at(p.length());
-      const bool in = planner.clearance(p0.p + approach * p0.normal, u) >= planner.margin();
-      const bool out_ok = planner.clearance(p1.p + approach * p1.normal, u) >= planner.margin();
+      const bool in = planner.from_above(p0.p + approach * p0.normal, u);
+      const bool out_ok = planner.from_above(p1.p + approach * p1.normal, u);
       if (in && out_ok) break;
       if (!in) a += 0.5;
       if (!out_ok) b -= 0.5;
@@ -189,23 +189,36 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
   double top = -INFINITY;
   for (const auto& s : design.sections)
     top = std::max(top, design::sample(s, 1.0).points.row(2).maxCoeff());
-  const Planner planner(part, options.path.tip_radius, options.stylus, options.margin,
+  const Planner planner(part, options.path.tip_radius, options.stylus,
+                        options.margin > 0 ? options.margin : options.tolerance + 1.0,
                         options.clearance, top);
   // The approach starts this far outside the path (as the section flow sets it).
   const double approach = options.tolerance + 1.5;
 
   // What to scan: each section whole, or the stretches of it the stylus reaches.
+  // Each section is planned against the solid where its curve says the part stands (moved
+  // with the curve by the corrections of an earlier part of the batch); sections that share a
+  // placement share a planner.
+  std::vector<std::shared_ptr<const Planner>> placed;
+  auto planner_for = [&](const design::Section& s) {
+    for (const auto& p : placed)
+      if (p->placement().isApprox(s.solid_placement, 1e-12)) return p;
+    placed.push_back(std::make_shared<const Planner>(planner.moved(s.solid_placement)));
+    return placed.back();
+  };
   struct Item {
     design::Section section;
     std::string source, refusal;
+    std::shared_ptr<const Planner> planner;
   };
   std::vector<Item> items;
   for (const auto& s : design.sections) {
+    const auto sp = planner_for(s);
     try {
-      const auto pieces = stretches(s, planner, options, approach, res);
-      for (const auto& p : pieces) items.push_back({p, p.name == s.name ? "" : s.name, ""});
+      const auto pieces = stretches(s, *sp, options, approach, res);
+      for (const auto& p : pieces) items.push_back({p, p.name == s.name ? "" : s.name, "", sp});
     } catch (const Error& e) {
-      items.push_back({s, "", e.what()});
+      items.push_back({s, "", e.what(), sp});
     }
   }
   for (const auto& u : res.unreachable)
@@ -242,12 +255,20 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       }
       SectionResult partial;
       try {
-        r = detail::run_section({machine, options, planner, res.events, first_move, partial},
+        r = detail::run_section({machine, options, *it.planner, res.events, first_move, partial},
                                 it.section);
       } catch (...) {
         r = std::move(partial);
         throw;
       }
+    } catch (const NoWay& e) {
+      // No free way to go on with this section: the machine stands where it was; the next
+      // section starts from there.
+      r.name = it.section.name;
+      r.ok = false;
+      r.reason = e.what();
+      r.time.total = machine.time() - t0;
+      res.events.push_back({machine.time(), r.name, 0, 0, "section", "error_exit", e.what()});
     } catch (const Error& e) {
       r.name = it.section.name;
       r.ok = false;

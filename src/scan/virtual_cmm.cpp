@@ -143,39 +143,43 @@ void VirtualCmm::touch_faces(const design::Plane* plane) {
 
 void VirtualCmm::check_solid() {
   if (!solid_) return;
-  const Eigen::Vector3d c = free_ball_centre();
+  // The probe's body rides on the carriage; the stylus and its ball move with the deflection.
+  const Eigen::Vector3d c = free_ball_centre(), ball = c + deflection_;
   const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
   const Eigen::Vector3d& u = axis_;
   // The stem from the ball to the probe's nose; the body a capsule whose round nose ends where
   // the stem does.
   const double rb = o_.stylus.body_radius;
-  const Eigen::Vector3d s0 = c + r * u, s1 = c + (o_.stylus.length + rb) * u,
+  const Eigen::Vector3d s0 = ball + r * u, s1 = ball + (o_.stylus.length + rb) * u,
+                        n0 = c + (o_.stylus.length + rb) * u,
                         b1 = c + (o_.stylus.length + o_.stylus.body_length) * u;
   const char* what[3] = {"ball", "stylus", "probe body"};
   for (int k = 0; k < 3; ++k) {
-    // Nothing can have been reached since the last check if the carriage moved less than the
+    // Nothing can have been reached since the last check if the element moved less than the
     // clearance found then (every point of a translated element moves as far).
-    if (guard_clear_[k] > 0 && (c - guard_at_[k]).norm() < guard_clear_[k]) continue;
+    const Eigen::Vector3d& at = k < 2 ? ball : c;
+    if (guard_clear_[k] > 0 && (at - guard_at_[k]).norm() < guard_clear_[k]) continue;
     ++solid_checks_;
     double clear = 0, table = INFINITY;
     if (k == 0) {
-      clear = solid_->distance(c, r + kSolidLookout, touchable_) - (r - ball_allowance_);
-      table = c.z() - r - table_z_;
+      clear = solid_->distance(ball, r + kSolidLookout, touchable_) - (r - ball_allowance_);
+      table = ball.z() - r - table_z_;
     } else if (k == 1) {
       clear = solid_->distance(s0, s1, rs + kSolidLookout) - rs;
       table = std::min(s0.z(), s1.z()) - rs - table_z_;
     } else {
-      clear = solid_->distance(s1, b1, rb + kSolidLookout) - rb;
-      table = std::min(s1.z(), b1.z()) - rb - table_z_;
+      clear = solid_->distance(n0, b1, rb + kSolidLookout) - rb;
+      table = std::min(n0.z(), b1.z()) - rb - table_z_;
     }
     if (clear < 0 || table < -(k == 0 ? ball_allowance_ : 0)) {
       settle();  // the machine stops
       throw Error(fmt::format(
           "collision: the {} ran into the {} with the ball centre at ({:.2f}, {:.2f}, {:.2f}) mm "
           "and the stylus along ({:.3f}, {:.3f}, {:.3f})",
-          what[k], clear < 0 ? "part" : "table", c.x(), c.y(), c.z(), u.x(), u.y(), u.z()));
+          what[k], clear < 0 ? "part" : "table", ball.x(), ball.y(), ball.z(), u.x(), u.y(),
+          u.z()));
     }
-    guard_at_[k] = c;
+    guard_at_[k] = at;
     guard_clear_[k] = std::min(clear, table);
   }
 }
@@ -222,7 +226,11 @@ sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part)
   // The ball meets the nearest contour of the plane: the one met last is usually it, and the
   // others only need looking at within that distance.
   const Eigen::Vector3d pos = free_ball_centre();
-  if (space_) return probe_.read(space_->nearest(pos));
+  if (space_) {
+    const sim::ProbeReading reading = probe_.read(space_->nearest(pos));
+    deflection_ = reading.true_deflection;
+    return reading;
+  }
   std::size_t first = 0;
   for (std::size_t k = 0; k < part.size(); ++k)
     if (part[k] == last_contour_) first = k;
@@ -236,7 +244,9 @@ sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part)
       last_contour_ = part[k];
     }
   }
-  return probe_.read(best);
+  const sim::ProbeReading reading = probe_.read(best);
+  deflection_ = reading.true_deflection;
+  return reading;
 }
 
 Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
@@ -253,14 +263,18 @@ Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
   return s;
 }
 
-double VirtualCmm::penetration() const {
+double VirtualCmm::penetration(Eigen::Vector3d* push) const {
   // The ball against every section whose plane it straddles (the part is known there only).
   const Eigen::Vector3d pos = free_ball_centre();
   const double r = probe_.options().tip_radius;
   double worst = 0;
+  if (push) push->setZero();
   for (const auto& [pl, c] : contours_) {
     if (std::abs((pos - pl.origin).dot(pl.normal)) > r) continue;
-    if (const auto n = c.nearest_within(pos, r)) worst = std::max(worst, r - n->distance);
+    if (const auto n = c.nearest_within(pos, r); n && r - n->distance > worst) {
+      worst = r - n->distance;
+      if (push) *push = worst * n->normal;
+    }
   }
   return worst;
 }
@@ -302,8 +316,10 @@ void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
     v = at_end ? 0 : std::min({speed, v + a * dt, std::sqrt(2 * a * std::max(0.0, L - s))});
     servo_.step(from + dir * std::min(s, L), dir * v);
     s = std::min(L, s + v * dt);
-    check_solid();
-    if (penetration() > start + kCollision) {
+    // The stylus leaves a surface deflected by it (a retract), then free.
+    const double depth = penetration(&deflection_);
+    if (depth <= probe_.options().range) check_solid();
+    if (depth > start + kCollision) {
       const Eigen::Vector3d p = servo_.position();
       settle();  // the machine stops
       throw Error(fmt::format(
@@ -328,8 +344,8 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
   while (s <= distance) {
     servo_.step(start + d * s, d * speed);
     s += speed * dt;
-    check_solid();
     const auto r = read(c);
+    if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
     if (r.overtravel) break;
     if (r.contact && r.deflection.norm() >= trigger) {
       const Sample smp = sample(r, 0);
@@ -369,8 +385,8 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   for (;;) {
     servo_.step(p0.p + cnorm * p0.normal, -approach_speed * p0.normal);
     cnorm -= approach_speed * dt;
-    check_solid();
     const auto r = read(c);
+    if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
     Sample smp = sample(r, 0);
     smp.delta_l = (servo_.position() + r.deflection - p0.p).dot(p0.normal) - st.pushing;
     if (r.contact && r.deflection.norm() >= st.pushing) break;
@@ -402,10 +418,10 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
     v = std::min({here.speed, v + a * dt, ahead});
     servo_.step(here.p + cnorm * here.normal, here.tangent * v);
     s = std::min(L, s + v * dt);
-    check_solid();
     here = path.at(s);  // where the path is now, and where the next tick starts
     const auto& now = here;
     const auto r = read(c);
+    if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
     Sample smp = sample(r, s);
     // On a perfect part the ball centre runs Ep outside the (pushed-in) path.
     smp.delta_l = (servo_.position() + r.deflection - now.p).dot(now.normal) - st.pushing;
@@ -452,8 +468,8 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
   for (;;) {
     servo_.step(start + s * dir, dir * o_.approach_speed);
     s += o_.approach_speed * dt;
-    check_solid();
     r = read(c);
+    if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
     if (r.contact && r.deflection.norm() >= st.pushing) break;
     if (s > 2 * (st.approach_clearance + st.approach_limit) + 10) {
       out.fault = "autonomous scan: no surface found on the approach";
@@ -476,8 +492,8 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
     v = std::min(speed, v + o_.path_acceleration * dt);
     const Eigen::Vector3d vel = v * d + gain * e * dhat;
     servo_.step(servo_.position(), vel);
-    check_solid();
     r = read(c);
+    if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
     Sample smp = sample(r, arc);
     if (r.contact) {
       arc += (smp.surface - last_surface).norm();

@@ -9,6 +9,11 @@
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::sim {
+namespace {
+// The true contour's chords stay this close to the part's curve (mm): at corners the polyline
+// has the corner itself, so a ball is never told a corner is cut.
+constexpr double kChordTolerance = 1e-5;
+}  // namespace
 
 void Part::validate() const {
   const PartDeviation& v = deviation;
@@ -117,14 +122,67 @@ Eigen::VectorXd form_deviation(const Part& part, const design::Section& s,
 }
 }  // namespace
 
+namespace {
+
+// The contour of the moved solid that stands for design section `s`: of the contours the moved
+// part has in the section's plane, the one nearest to the moved design curve.
+design::Section moved_contour(const Part& part, const design::Section& s,
+                              const Eigen::Affine3d& T) {
+  design::Plane plane = s.plane;
+  plane.normal.normalize();
+  const design::Design cut = design::moved_sections(part.design.solid, T, plane);
+  const auto probe = design::sample(s, 2.0);
+  Eigen::Matrix3Xd moved(3, probe.points.cols());
+  for (Eigen::Index i = 0; i < probe.points.cols(); ++i) {
+    const Eigen::Vector3d x = T * probe.points.col(i);
+    moved.col(i) = x - (x - plane.origin).dot(plane.normal) * plane.normal;
+  }
+  double best = INFINITY;
+  const design::Section* chosen = nullptr;
+  for (const auto& c : cut.sections) {
+    const auto smp = design::sample(c, 0.5);
+    const Contour cc(smp.points, plane.normal, c.closed, c.material == design::Side::Left);
+    double sum = 0;
+    for (Eigen::Index i = 0; i < moved.cols(); ++i)
+      sum += std::abs(cc.nearest(moved.col(i)).distance);
+    if (sum < best) {
+      best = sum;
+      chosen = &c;
+    }
+  }
+  if (!chosen)
+    throw Error(
+        fmt::format("section '{}': the simulated part has no contour in its plane", s.name));
+  return *chosen;
+}
+
+}  // namespace
+
 Contour true_contour(const Part& part, const design::Section& s, double spacing) {
   if (s.space_curve())
     throw Error("section '" + s.name + "' is a space curve, not a contour in a plane");
-  const auto smp = design::sample(s, spacing);
+  const Eigen::Affine3d T = transform(part);
+  const Eigen::Vector3d normal = s.plane.normal.normalized();
+  if (!part.design.solid.empty()) {
+    // The exact section of the moved solid, then the local form deviations along its normals,
+    // placed by the design arc each point comes from.
+    const design::Section real = moved_contour(part, s, T);
+    design::Samples smp = design::sample(real, spacing, kChordTolerance);
+    const auto fine = design::sample(s, std::min(spacing, 0.05));
+    const Contour design_curve(fine.points, normal, s.closed, s.material == design::Side::Left);
+    const Eigen::Affine3d back = T.inverse();
+    design::Samples at_design = smp;
+    for (Eigen::Index i = 0; i < smp.points.cols(); ++i)
+      at_design.arc[i] = design_curve.nearest(back * smp.points.col(i)).arc;
+    const Eigen::VectorXd dev = form_deviation(part, s, at_design);
+    Eigen::Matrix3Xd p(3, smp.points.cols());
+    for (Eigen::Index i = 0; i < smp.points.cols(); ++i)
+      p.col(i) = smp.points.col(i) + dev[i] * smp.normals.col(i);
+    return Contour(std::move(p), normal, real.closed, real.material == design::Side::Left);
+  }
+  const auto smp = design::sample(s, spacing, kChordTolerance);
   const Eigen::Index n = smp.points.cols();
   const Eigen::VectorXd dev = form_deviation(part, s, smp);
-  const Eigen::Affine3d T = transform(part);
-  Eigen::Vector3d normal = s.plane.normal.normalized();
   Eigen::Matrix3Xd p(3, n);
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Vector3d x = T * (smp.points.col(i) + dev[i] * smp.normals.col(i));

@@ -12,6 +12,7 @@
 #include <TopExp_Explorer.hxx>
 #include <TopoDS.hxx>
 #include <cmath>
+#include <filesystem>
 #include <gp_Pln.hxx>
 
 #include "../../src/design/occt_api.hpp"
@@ -343,7 +344,12 @@ TEST(Design, BsplineSolidFromStep) {
 }
 
 TEST(Design, JsonRoundTripAndOptionRefusals) {
-  const auto d = design::from_step(kIpp, {{"mid", z_plane(kHoleMid)}});
+  auto d = design::from_step(kIpp, {{"mid", z_plane(kHoleMid)}});
+  // What a scan writes back: the solid where the corrected curve says the part stands, and a
+  // probe orientation.
+  d.sections[0].solid_placement =
+      Eigen::Translation3d(1.8, -1.1, 0) * Eigen::AngleAxisd(0.005, Eigen::Vector3d::UnitZ());
+  d.sections[1].probe = {30, -90};
   const std::string path = test::temp_dir() + "/design.json";
   io::write_design(path, d);
   const auto back = io::read_design(path);
@@ -352,7 +358,12 @@ TEST(Design, JsonRoundTripAndOptionRefusals) {
     EXPECT_EQ(back.sections[i].name, d.sections[i].name);
     EXPECT_EQ(back.sections[i].material, d.sections[i].material);
     EXPECT_NEAR(design::length(back.sections[i]), design::length(d.sections[i]), 1e-12);
+    EXPECT_TRUE(back.sections[i].solid_placement.isApprox(d.sections[i].solid_placement, 1e-15));
+    EXPECT_EQ(back.sections[i].probe.a_deg, d.sections[i].probe.a_deg);
+    EXPECT_EQ(back.sections[i].probe.b_deg, d.sections[i].probe.b_deg);
   }
+  EXPECT_EQ(std::filesystem::path(back.solid).filename(), "ipp_simple.stp");
+  EXPECT_TRUE(std::filesystem::exists(back.solid)) << back.solid;
   design::PathOptions o;
   o.pushing = 2;
   EXPECT_NE(test::error_of([&] { o.validate(); }).find("less than the tip radius"),
@@ -425,6 +436,27 @@ TEST(Design, ReaderRefusesBadDesignsWithTheirPlace) {
   EXPECT_NE(
       test::error_of([] { io::parse_design(R"({"sections": []})", "d.json"); }).find("no sections"),
       std::string::npos);
+  // A placement that mirrors the solid, one of the wrong shape, a head angle beyond the head.
+  auto with = [](const std::string& key) {
+    return test::error_of([&] {
+      io::parse_design(R"({"sections": [{"name": "s", "plane": {"origin": [0, 0, 0], "normal": )"
+                       R"([0, 0, 1]}, "closed": false, "curve": {"polyline": [[0, 0, 0], )"
+                       R"([1, 0, 0]]}, "material": "left",)"
+                       "\n" +
+                           key + "}]}",
+                       "d.json");
+    });
+  };
+  EXPECT_EQ(with(R"("solid_placement": [[1, 0, 0, 2], [0, 1, 0, 0], [0, 0, 1, 0]])"), "(no error)");
+  const std::string m = with(R"("solid_placement": [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]])");
+  EXPECT_NE(m.find("d.json:2:20: the placement's 3 × 3 part has determinant -1"), std::string::npos)
+      << m;
+  EXPECT_NE(with(R"("solid_placement": [[1, 0, 0], [0, 1, 0], [0, 0, 1]])").find("four numbers"),
+            std::string::npos);
+  EXPECT_NE(with(R"("solid_placement": [1, 0, 0, 0])").find("three rows"), std::string::npos);
+  const std::string h = with(R"("probe": {"a_deg": 120, "b_deg": 0})");
+  EXPECT_NE(h.find("d.json:2:10: section 's': the probe head cannot take"), std::string::npos) << h;
+  EXPECT_NE(with(R"("probe": {"a": 10})").find("unknown key 'a'"), std::string::npos);
   EXPECT_NE(
       test::error_of([] { io::read_design("/nonexistent/design.json"); }).find("no such file"),
       std::string::npos);

@@ -384,7 +384,7 @@ TEST(Controller, BsplineSolidFromStepScannedEndToEnd) {
   {
     scan::VirtualCmm cmm(sim::Part{d, {}}, {}, Eigen::Vector3d(0, -60, 40));
     const auto r = scan::scan(cmm, d, {});
-    ASSERT_TRUE(r.ok()) << r.summary();
+    ASSERT_TRUE(r.ok()) << r.summary() << (r.unreachable.empty() ? "" : r.unreachable[0].why);
     EXPECT_EQ(count(r, "trajectory_error"), 0);
     EXPECT_LT(worst_distance(cmm, d.sections[0], r.sections[0].points), kRoundoff);
   }

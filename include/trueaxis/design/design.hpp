@@ -75,6 +75,11 @@ struct Section {
   double joined_gap = 0;
   // The probe orientation the section is scanned in (default: the stylus vertical).
   ProbeOrientation probe;
+  // Where the design's solid stands for this section: x_part = solid_placement · x_solid (mm).
+  // The identity for data cut from the solid; a scan that corrects the section's curve by a
+  // rigid or affine move (a part off in its fixture) moves it too, so that the next part of a
+  // batch is planned against the solid where the corrected curve says the part is.
+  Eigen::Affine3d solid_placement = Eigen::Affine3d::Identity();
 };
 
 struct Design {
@@ -133,6 +138,16 @@ struct Samples {
   Eigen::VectorXd arc;  // arc length of each point from the curve's start (mm)
 };
 Samples sample(const Section& s, double spacing);
+// The same as a polyline that is the curve within `chord_tolerance` (mm, > 0): every corner (a
+// polyline's vertices, a NURBS's knots) among the points, the others at most `spacing` apart and
+// added where a chord would leave the curve by more than the tolerance. `arc` is then the
+// length along the polyline.
+Samples sample(const Section& s, double spacing, double chord_tolerance);
+
+// The sections of the part of a STEP file moved by x -> t·x, cut by `plane` (as cut_step makes
+// them, named "", ".1", ...): the exact contours of a part that is off its design. Throws Error
+// when the file cannot be read or the plane gives no contour.
+Design moved_sections(const std::string& step, const Eigen::Affine3d& t, const Plane& plane);
 
 // Sections of a STEP (AP203/AP214) part, cut by planes. The part is the union of every solid in
 // the file (solids that share volume are named in `notes`). Each closed contour of a cut becomes a
@@ -190,7 +205,7 @@ struct PathOptions {
   double chordal_tolerance = 1e-3;  // max distance of the PCC from the exact offset curve (mm)
   double max_speed = 100;           // scanning speed on straight or gently curved parts (mm/s)
   double min_speed = 5;             // never slower than this (mm/s)
-  double max_normal_acceleration = 2000;  // v²/R limit that sets the speed on curves and at
+  double max_normal_acceleration = 1000;  // v²/R limit that sets the speed on curves and at
                                           // sharp corners (mm/s²)
   // Throws Error naming the option if a value is out of range (pushing must be below the tip
   // radius; speeds positive, min ≤ max; tolerance 1e-7..1 mm).
@@ -240,7 +255,8 @@ struct ScanPath {
   double length() const;
   // Design time along the path at each segment's speed (s), without acceleration phases.
   double nominal_time() const;
-  // The point at arc length s (clamped to [0, length()]); within a segment u ∝ arc.
+  // The point at arc length s (clamped to [0, length()]): the segment's parameter found from its
+  // arc length.
   PathPoint at(double s) const;
 
  private:

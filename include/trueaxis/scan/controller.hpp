@@ -62,9 +62,10 @@ struct ControllerOptions {
   double accept = 0.05;          // a correction must leave every touch point within this (mm)
   double record_spacing = 0.2;   // mm between recorded surface points
   Stylus stylus;                 // what carries the ball (for planning against the solid)
-  // Free moves keep the ball, stylus and probe body this far from the design's solid (mm): room
-  // for a part that is off its design by about the tolerance.
-  double margin = 2.0;
+  // Free moves keep the ball, stylus and probe body this far from the design's solid (mm); 0:
+  // the tolerance + 1 mm, room for a part that is off its design by about the tolerance (touch
+  // and scan starts lie 1.5 mm beyond it).
+  double margin = 0;
   // Throws Error naming the option when out of range.
   void validate() const;
 };

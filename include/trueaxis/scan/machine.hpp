@@ -203,7 +203,8 @@ class VirtualCmm : public Machine {
   Eigen::Vector3d free_ball_centre() const;
   // How far the ball sinks into the part's sections it straddles (mm; 0 when free). Space
   // curves, whose surface model holds only near them, are not checked.
-  double penetration() const;
+  // `push` (if given) receives the deflection the deepest of them gives the ball.
+  double penetration(Eigen::Vector3d* push = nullptr) const;
   // Brings the carriage to rest where it is (the end of a scan or touch, before retracting).
   void settle();
 
@@ -214,6 +215,7 @@ class VirtualCmm : public Machine {
   double table_z_ = -INFINITY;
   std::vector<char> touchable_;
   double ball_allowance_ = 0;
+  Eigen::Vector3d deflection_ = Eigen::Vector3d::Zero();  // the probe's, as last read (true)
   // Per element (ball, stylus, body): where it was last checked and the clearance found then
   // (< 0: check at the next tick).
   std::array<Eigen::Vector3d, 3> guard_at_{};

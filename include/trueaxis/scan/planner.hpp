@@ -20,10 +20,18 @@
 #include <vector>
 
 #include "trueaxis/design/design.hpp"
+#include "trueaxis/error.hpp"
 #include "trueaxis/scan/machine.hpp"
 #include "trueaxis/solid/mesh.hpp"
 
 namespace trueaxis::scan {
+
+// A move the planner finds no free way for: the machine has not moved, the section cannot be
+// scanned, the run can go on.
+class NoWay : public Error {
+ public:
+  using Error::Error;
+};
 
 class Planner {
  public:
@@ -44,7 +52,9 @@ class Planner {
              double margin) const;
   // The way from a to b as the points to move to (b last). `rise` forces the retract along the
   // axis first (the start of a run: a machine is not trusted to stand anywhere in particular).
-  // Throws Error saying which leg the part blocks.
+  // A start nearer the part than the margin (the ball just left a surface) first backs away from
+  // the part, up the clearance's slope, until the margin is reached. Throws NoWay saying which
+  // leg the part blocks.
   std::vector<Eigen::Vector3d> route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                      const Eigen::Vector3d& axis, bool rise = false) const;
 
@@ -56,9 +66,14 @@ class Planner {
   };
   std::vector<Blocked> unreachable(const design::ScanPath& path, const Eigen::Vector3d& axis,
                                    double step = 0.5) const;
+  // Whether the ball can come down along the axis from above the part to c, keeping the margin.
+  bool from_above(const Eigen::Vector3d& c, const Eigen::Vector3d& axis) const;
 
   // The same planner for the part moved by x -> t·x (what a geometric correction learnt of it).
+  // The identity map moves nothing (the same mesh is shared).
   Planner moved(const Eigen::Affine3d& t) const;
+  // Where this planner stands the design's solid: the product of the moves made so far.
+  const Eigen::Affine3d& placement() const { return placement_; }
 
   // The faces of the part that cross a plane (the ones a ball scanning in it may touch).
   std::vector<char> faces_crossing(const design::Plane& plane) const;
@@ -70,6 +85,7 @@ class Planner {
   double r_, margin_, clearance_, fallback_top_;
   Stylus stylus_;
   double table_z_ = -INFINITY;
+  Eigen::Affine3d placement_ = Eigen::Affine3d::Identity();
   // Clearance of each element: 0 ball, 1 stylus, 2 body.
   double element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
                  const std::vector<char>& skip) const;

@@ -5,10 +5,10 @@
 // point, a scale along one direction about the same point, a rotation about the design's centroid
 // (degrees about x, then y, then z: R = Rz·Ry·Rx) and a translation (mm).
 //
-// Each section's true contour is that real curve seen in the design's section plane: the
-// distorted curve projected into the plane. That is exact for rotations about the plane's normal
-// and for translations, and for a part whose walls are perpendicular to the plane it is what a
-// probe in the plane touches (to first order in the tilt otherwise).
+// Each section's true contour is where the real part meets the design's section plane: with the
+// part's solid, the exact cut of the moved solid; without, the distorted curve projected into the
+// plane (exact for rotations about the plane's normal and for translations; for a part whose
+// walls are perpendicular to the plane, to first order in the tilt otherwise).
 #pragma once
 
 #include <Eigen/Core>
@@ -61,9 +61,12 @@ Eigen::Vector3d centroid(const design::Design& d);
 // The rigid-and-scale part of the deviation: x_real = T · x_design.
 Eigen::Affine3d transform(const Part& part);
 
-// The true contour of `section` (a section of part.design), sampled every `spacing` mm of design
-// arc (chords within spacing²/8R of a curve of radius R: 0.05 µm at R = 25 mm), ready for the
-// probe. Material side as in the design.
+// The true contour of `section` (a section of part.design) as a polyline ready for the probe:
+// points at most `spacing` mm apart, every corner of the curve among them, and chords within
+// 0.01 µm of the part's curve. When the design names its solid (a STEP file), the contour is the
+// exact section of the moved solid in the section's plane (the contour of that cut nearest to the
+// moved design curve), with the local form deviations along its normals; otherwise the design
+// curve moved and projected into its plane, which is exact for moves within the plane.
 // Throws Error for a space-curve section.
 Contour true_contour(const Part& part, const design::Section& section, double spacing = 0.1);
 

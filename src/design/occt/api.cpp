@@ -38,6 +38,13 @@ detail::OcctApi make_api() {
   api.nurbs_piece = [](const Section& s, double from, double to, Section& out) {
     return guarded([&] { out = occt::piece(s, from, to); });
   };
+  api.nurbs_sample_fine = [](const Section& s, double spacing, double tolerance, Samples& out) {
+    return guarded([&] { out = occt::sample_fine(s, spacing, tolerance); });
+  };
+  api.moved_sections = [](const std::string& path, const double(&map)[12], const Plane& plane,
+                          Design& out) {
+    return guarded([&] { out = occt::moved_sections(path, map, plane); });
+  };
   api.nurbs_sample = [](const Section& s, double spacing, Samples& out) {
     return guarded([&] { out = occt::sample(s, spacing); });
   };

@@ -79,6 +79,8 @@ void ends(const Section& s, Eigen::Vector3d& first, Eigen::Vector3d& last);
 double length(const Section& s);
 // design::piece of a NURBS section (0 ≤ from < to ≤ from + length, to ≤ length if open).
 Section piece(const Section& s, double from, double to);
+// design::sample of a NURBS section with a chord tolerance (> 0, mm).
+Samples sample_fine(const Section& s, double spacing, double tolerance);
 // design::sample of a NURBS section; spacing > 0 (mm).
 Samples sample(const Section& s, double spacing);
 // design::make_path of a checked plane section whose plane normal has unit length, with validated
@@ -92,6 +94,10 @@ struct StepPart {
   Bnd_Box box;
 };
 StepPart read_step(const std::string& path, const StepCutOptions& o, StepCut& info);
+
+// The sections of the part of a STEP file (read once per process) moved by the row-major 3 × 4
+// affine map, in `plane`.
+Design moved_sections(const std::string& path, const double (&map)[12], const Plane& plane);
 
 // design::cut_step.
 StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>& planes,

@@ -8,7 +8,9 @@
 #include <BRepAlgoAPI_Fuse.hxx>
 #include <BRepAlgoAPI_Section.hxx>
 #include <BRepBndLib.hxx>
+#include <BRepBuilderAPI_GTransform.hxx>
 #include <BRepBuilderAPI_MakeVertex.hxx>
+#include <BRepBuilderAPI_Transform.hxx>
 #include <BRepExtrema_DistShapeShape.hxx>
 #include <BRepGProp.hxx>
 #include <BRepTools_WireExplorer.hxx>
@@ -37,7 +39,11 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <gp_GTrsf.hxx>
 #include <gp_Pln.hxx>
+#include <gp_Trsf.hxx>
+#include <map>
+#include <mutex>
 
 #include "occt.hpp"
 #include "trueaxis/design/design.hpp"
@@ -375,6 +381,50 @@ std::vector<Section> cut(const StepPart& part, const StepSectionRequest& rq,
 }
 
 }  // namespace
+
+Design moved_sections(const std::string& path, const double (&map)[12], const Plane& plane) {
+  // The part is read once per process (a batch cuts the same part for every simulated piece).
+  static std::mutex mutex;
+  static std::map<std::string, StepPart> parts;
+  StepPart part;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    auto it = parts.find(path);
+    if (it == parts.end()) {
+      StepCut info;
+      it = parts.emplace(path, read_step(path, StepCutOptions{}, info)).first;
+    }
+    part = it->second;
+  }
+  // A rigid move with a uniform scale keeps the exact surfaces; any other affine map turns
+  // them into B-splines first.
+  const Eigen::Matrix3d A =
+      Eigen::Map<const Eigen::Matrix<double, 3, 4, Eigen::RowMajor>>(map).leftCols<3>();
+  const double det = A.determinant();
+  const double k = std::cbrt(std::abs(det));
+  const bool similar =
+      det > 0 && (A.transpose() * A - k * k * Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <
+                     1e-12 * k * k;
+  if (similar) {
+    gp_Trsf t;
+    t.SetValues(map[0], map[1], map[2], map[3], map[4], map[5], map[6], map[7], map[8], map[9],
+                map[10], map[11]);
+    part.shape = BRepBuilderAPI_Transform(part.shape, t, true).Shape();
+  } else {
+    gp_GTrsf g;
+    for (int r = 0; r < 3; ++r) {
+      for (int c = 0; c < 3; ++c) g.SetValue(r + 1, c + 1, map[4 * r + c]);
+      g.SetValue(r + 1, 4, map[4 * r + 3]);
+    }
+    part.shape = BRepBuilderAPI_GTransform(part.shape, g, true).Shape();
+  }
+  part.box = Bnd_Box();
+  BRepBndLib::Add(part.shape, part.box);
+  std::vector<std::string> refused;
+  Design out;
+  out.sections = cut(part, {"", plane}, refused);
+  return out;
+}
 
 StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>& planes,
                  const StepCutOptions& options) {
