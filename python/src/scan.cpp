@@ -79,7 +79,12 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
       cd["parameters"] = params;
       cd["accepted"] = c.accepted;
       cd["residual_before_mm"] = c.residual_before;
-      cd["residual_after_mm"] = c.residual_after;
+      if (c.diverged.empty()) {
+        cd["residual_after_mm"] = c.residual_after;
+      } else {
+        cd["residual_after_mm"] = py::none();  // never applied: the fit diverged
+        cd["diverged"] = c.diverged;
+      }
       corr.append(cd);
     }
     py::dict sd;

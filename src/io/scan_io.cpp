@@ -39,11 +39,16 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
     for (const auto& c : s.corrections) {
       ojson params = ojson::object();
       for (const auto& [k, v] : c.parameters) params[k] = v;
-      corr.push_back({{"type", c.type},
-                      {"parameters", params},
-                      {"accepted", c.accepted},
-                      {"residual_before_mm", c.residual_before},
-                      {"residual_after_mm", c.residual_after}});
+      ojson one{{"type", c.type},
+                {"parameters", params},
+                {"accepted", c.accepted},
+                {"residual_before_mm", c.residual_before}};
+      // A fit that diverged has no residual: it was never applied to the design.
+      if (c.diverged.empty())
+        one["residual_after_mm"] = c.residual_after;
+      else
+        one.update(ojson{{"residual_after_mm", nullptr}, {"diverged", c.diverged}});
+      corr.push_back(std::move(one));
     }
     ojson pts = ojson::array();
     for (const auto& p : s.points) pts.push_back({p.surface.x(), p.surface.y(), p.surface.z()});

@@ -259,10 +259,19 @@ struct SectionRun {
       Eigen::Index j = 0;
       (smp.arc.array() - arc).abs().minCoeff(&j);
       const Eigen::Vector3d p = smp.points.col(j), nn = smp.normals.col(j);
-      if (last < 0)
-        safe_move(p + reach * nn);
-      else
-        route(smp, outline, reach, last, j);
+      try {
+        if (last < 0)
+          safe_move(p + reach * nn);
+        else
+          route(smp, outline, reach, last, j);
+      } catch (const NoWay& e) {
+        // The next touch point is tried with a free move planned from wherever the machine
+        // stands (a route may have stopped part way).
+        log(arc, 0, "touch", "touch",
+            fmt::format("touch point left out: no free way to its start ({})", e.what()));
+        last = -1;
+        continue;
+      }
       last = j;
       const auto t = timed(m, r.time.touch, [&] {
         auto got =
@@ -417,10 +426,15 @@ struct SectionRun {
             std::string params;
             for (const auto& [k, v] : c.parameters)
               if (k.rfind("centre", 0) != 0) params += fmt::format(" {}={:.6g}", k, v);
-            log(stop.arc, stop.delta_l, "correction",
-                c.accepted ? "correction_applied" : "correction_rejected",
-                fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f})", c.type, params,
-                            c.residual_after, c.residual_before));
+            if (!c.diverged.empty())
+              log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+                  fmt::format("{}: the fit diverged ({}); where it stopped:{}", c.type, c.diverged,
+                              params));
+            else
+              log(stop.arc, stop.delta_l, "correction",
+                  c.accepted ? "correction_applied" : "correction_rejected",
+                  fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f})", c.type, params,
+                              c.residual_after, c.residual_before));
             if (c.accepted) corrected = true;
           }
           for (const auto& c : tried)

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/QR>
+#include <Eigen/SVD>
 #include <cmath>
 
 #include "trueaxis/scan/controller.hpp"
@@ -174,6 +175,11 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     t.push_back(f.to2(touched.col(i)));
   }
   const Eigen::VectorXd before = distances(design_curve, touched);
+  double extent = 0;  // the contour's size in its plane (mm)
+  {
+    const Eigen::Matrix3Xd& q = design_curve.points();
+    extent = (q.rowwise().maxCoeff() - q.rowwise().minCoeff()).norm();
+  }
   const double worst_before = before.cwiseAbs().maxCoeff();
   std::vector<Correction> out;
   if (worst_before <= accept) {
@@ -203,9 +209,32 @@ std::vector<Correction> fit_corrections(const design::Section& section,
       }
     }
     if (best.size() == 0) continue;
+    // A fit that ran away is reported as such, and its design data are never built (a scale of
+    // 1e-3 or 1e3 would make a curve nothing can sample).
+    auto runaway = [&](const Eigen::VectorXd& q) -> std::string {
+      if (!q.allFinite()) return "the fit did not converge";
+      const Affine2 a = model(k, q);
+      const Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.A);
+      const auto sv = svd.singularValues();
+      if (!(sv.minCoeff() >= 0.5 && sv.maxCoeff() <= 2) || a.A.determinant() <= 0)
+        return fmt::format("a scale of {:.4g} to {:.4g}: no fixture or size error is that large",
+                           sv.minCoeff(), sv.maxCoeff());
+      const Eigen::Matrix2d R = svd.matrixU() * svd.matrixV().transpose();
+      const double turn = std::abs(std::atan2(R(1, 0), R(0, 0))) * 180 / M_PI;
+      if (turn > 45) return fmt::format("a turn of {:.4g}°: more than 45°", turn);
+      double moved = 0;
+      for (const auto& x : p0) moved = std::max(moved, (a.A * x + a.t - x).norm());
+      if (moved > std::max(10.0, extent))
+        return fmt::format(
+            "design points moved by up to {:.4g} mm, more than the contour's "
+            "{:.4g} mm size",
+            moved, extent);
+      return "";
+    };
+    std::string why = runaway(best);
     // Refine on the exact curve: take each touched point's nearest point on the corrected design
     // as its new foot (mapped back to the design), and fit again, until the feet settle.
-    for (int it = 0; it < 8; ++it) {
+    for (int it = 0; it < 8 && why.empty(); ++it) {
       const Affine2 a = model(k, best);
       const design::Section moved = apply(section, f, a);
       const sim::Contour mc = curve_of(moved);
@@ -220,13 +249,19 @@ std::vector<Correction> fit_corrections(const design::Section& section,
         m[i] = (a.A.transpose() * n2).normalized();
       }
       best = gauss_newton(k, best, p, m, t);
+      why = runaway(best);
       if (shift < 1e-7) break;
     }
     const Affine2 a = model(k, best);
-    const design::Section cand = apply(section, f, a);
-    const Eigen::VectorXd after = distances(curve_of(cand), touched);
+    design::Section cand;
+    Eigen::VectorXd after = Eigen::VectorXd::Constant(touched.cols(), NAN);
+    if (why.empty()) {
+      cand = apply(section, f, a);
+      after = distances(curve_of(cand), touched);
+    }
     Correction c;
     c.type = name(k);
+    c.diverged = why;
     {
       // The same map in 3-D: in the plane A about the frame's origin, then t; along the normal
       // nothing.
@@ -237,7 +272,7 @@ std::vector<Correction> fit_corrections(const design::Section& section,
       c.transform.translation() = f.o + E * a.t - lin * f.o;
     }
     c.residual_before = worst_before;
-    c.residual_after = after.cwiseAbs().maxCoeff();
+    c.residual_after = why.empty() ? after.cwiseAbs().maxCoeff() : NAN;
     const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();
     if (k == Kind::Rotation || k == Kind::ScaleRotation)
       c.parameters.push_back({"rotation_deg", best[k == Kind::Rotation ? 2 : 3] * 180 / M_PI});
@@ -257,7 +292,7 @@ std::vector<Correction> fit_corrections(const design::Section& section,
       c.parameters.push_back({"centre_y_mm", f.o.y()});
       c.parameters.push_back({"centre_z_mm", f.o.z()});
     }
-    bool closer = c.residual_after <= accept;
+    bool closer = why.empty() && c.residual_after <= accept;
     for (Eigen::Index i = 0; closer && i < after.size(); ++i)
       closer = std::abs(after[i]) <= std::max(std::abs(before[i]), accept);
     if (!done && closer) {

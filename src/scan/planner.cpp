@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "trueaxis/error.hpp"
 
@@ -52,7 +53,13 @@ double Planner::element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& 
   // As the virtual CMM checks it: the stem up to the probe's round nose.
   const Eigen::Vector3d s0 = c + r_ * u, s1 = c + (stylus_.length + rb) * u,
                         b1 = c + (stylus_.length + stylus_.body_length) * u;
-  if (k == 0) return std::min(part_->distance(c, r_ + look, skip) - r_, c.z() - r_ - table_z_);
+  if (k == 0) {
+    // Signed: a ball whose centre is inside the solid (a real part off its design lets the ball
+    // stand where the design has material) is that far in, so that backing away leads out.
+    double d = part_->distance(c, r_ + look, skip);
+    if (skip.empty() && part_->inside(c)) d = -d;
+    return std::min(d - r_, c.z() - r_ - table_z_);
+  }
   if (k == 1)
     return std::min(part_->distance(s0, s1, rs + look, skip) - rs,
                     std::min(s0.z(), s1.z()) - rs - table_z_);
@@ -176,16 +183,45 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
   // The stylus and body keep a tenth of a millimetre from everything (a Ø1 stem beside a wall it
   // scans has 0.2 mm); the ball, from what it does not measure.
   constexpr double kReach = 0.1;
-  static const char* why[3] = {
+  // Until a trajectory error stops it, the ball follows the design path while the real part may
+  // stand off its design by up to the margin in any direction in the plane: from every such
+  // place the ball can get to without crossing the contour, the ball must stay clear of the
+  // faces it does not measure and the stylus and body of every face.
+  static const char* why[6] = {
       "the ball would touch the part off the section's plane",
       "the stylus would run into the part",
       "the probe body would run into the part",
+      "the ball would touch the part off the section's plane if the part stood off its design",
+      "the stylus would run into the part if the part stood off its design",
+      "the probe body would run into the part if the part stood off its design",
   };
-  // Faces the ball does not measure keep `band` more from every element.
+  const Eigen::Vector3d pn = path.plane.normal.normalized();
+  std::vector<char> contour(skip.size());  // every face but those the plane crosses
+  for (std::size_t i = 0; i < skip.size(); ++i) contour[i] = !skip[i];
+  const double contact = std::max(0.0, path.offset - 0.05);
   auto blocked = [&](double s) -> int {
-    const Eigen::Vector3d c = path.at(s).p;
+    const design::PathPoint q = path.at(s);
+    const Eigen::Vector3d c = q.p;
     for (int k = 0; k < 3; ++k)
       if (element(k, c, u, k == 0 ? skip : std::vector<char>{}) < kReach) return k;
+    const Eigen::Vector3d a = q.normal, b = pn.cross(q.normal).normalized();
+    for (int j = -1; j < 8; ++j) {
+      const double t = std::numbers::pi / 4 * j;
+      const Eigen::Vector3d shift =
+          j < 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero())
+                : Eigen::Vector3d(margin_ * (std::cos(t) * a + std::sin(t) * b));
+      // The ball where the part, off by `shift`, leaves it: on the path, or pushed on towards
+      // the material side where the part is not there (up to the margin, before the trajectory
+      // error stops it). A place inside the part, or nearer the contour than the ball stands
+      // from it while scanning, is a contact, not a free place: the ball stops on the surface.
+      for (const double push : {0.0, margin_}) {
+        if (j < 0 && push == 0) continue;
+        const Eigen::Vector3d x = c + shift - push * a;
+        if (part_->inside(x) || part_->distance(x, contact, contour) < contact) continue;
+        for (int k = 0; k < 3; ++k)
+          if (element(k, x, u, k == 0 ? skip : std::vector<char>{}) < kReach) return 3 + k;
+      }
+    }
     return -1;
   };
 

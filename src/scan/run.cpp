@@ -34,7 +34,31 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
   const Eigen::Vector3d u = design::stylus_axis(s.probe);
   const design::ScanPath path = design::make_path(s, o.path);
   const auto blocked = planner.unreachable(path, u);
-  if (blocked.empty()) return {s};
+  if (blocked.empty()) {
+    // All of it is reachable: start where the ball can come down to it from above, at the
+    // approach distance off the path (a closed contour is started again there).
+    auto way_in = [&](double along) {
+      const auto q = path.at(along);
+      return planner.from_above(q.p + approach * q.normal, u);
+    };
+    if (way_in(0)) return {s};
+    if (s.closed) {
+      const double L = design::length(s);
+      for (double a = 1; a < L; a += 1) {
+        const auto start = design::piece(s, a, a + L, s.name);
+        const auto p = design::make_path(start, o.path);
+        const auto q = p.at(0);
+        if (!planner.from_above(q.p + approach * q.normal, u)) continue;
+        design::Section again = start;
+        again.closed = true;
+        return {again};
+      }
+    }
+    throw Error(
+        fmt::format("not reachable with the probe at {}: the part covers it, no way "
+                    "down to it from above",
+                    orientation(s.probe)));
+  }
   // Each blocked stretch of the path, on the design contour: the contour points the ball's
   // centre stands over at its ends.
   const double L = design::length(s);
@@ -119,8 +143,9 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
     a = std::max(a, 0.0);
     if (!s.closed) b = std::min(b, L);
     // Move the ends in until the ball can come in along the normal from the approach distance
-    // and leave the same way.
-    for (int k = 0; k < 40 && b - a >= kShortest; ++k) {
+    // and leave the same way; what is cut off is not reachable either.
+    const double a_was = a, b_was = b;
+    while (b - a >= kShortest) {
       const auto p = design::make_path(design::piece(s, a, b, s.name), o.path);
       const auto p0 = p.at(0), p1 = p.at(p.length());
       const bool in = planner.from_above(p0.p + approach * p0.normal, u);
@@ -129,7 +154,17 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
       if (!in) a += 0.5;
       if (!out_ok) b -= 0.5;
     }
-    if (b - a < kShortest) continue;
+    const std::string covered =
+        fmt::format("the part covers it, no way down to it from above with the probe at {}",
+                    orientation(s.probe));
+    if (b - a < kShortest) {
+      res.unreachable.push_back({s.name, a_was, b_was, point_at(a_was), point_at(b_was), covered});
+      continue;
+    }
+    if (a > a_was)
+      res.unreachable.push_back({s.name, a_was, a, point_at(a_was), point_at(a), covered});
+    if (b < b_was)
+      res.unreachable.push_back({s.name, b, b_was, point_at(b), point_at(b_was), covered});
     out.push_back(design::piece(s, a, b, fmt::format("{}:{}", s.name, out.size() + 1)));
   }
   if (out.empty())

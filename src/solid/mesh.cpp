@@ -198,6 +198,58 @@ Mesh Mesh::transformed(const Eigen::Affine3d& t) const {
   return Mesh(std::move(v), tri_, face_);
 }
 
+bool Mesh::inside(const V& p) const {
+  // Parity of the crossings of a ray from p (Jordan's theorem for a closed surface), in a
+  // direction no CAD part is likely to have edges or faces along; a ray through an edge or a
+  // vertex is cast again in another.
+  static const V dirs[3] = {V(0.5772, 0.5781, 0.5768).normalized(),
+                            V(-0.3117, 0.8263, 0.4691).normalized(),
+                            V(0.7219, -0.2894, 0.6286).normalized()};
+  if (nodes_.empty() || !box_.contains(p)) return false;
+  for (const V& d : dirs) {
+    const V inv = d.cwiseInverse();
+    int crossings = 0;
+    bool grazed = false;
+    int stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0 && !grazed) {
+      const Node& n = nodes_[stack[--top]];
+      // Slab test of the ray against the node's box.
+      const V t0 = (n.box.min() - p).cwiseProduct(inv), t1 = (n.box.max() - p).cwiseProduct(inv);
+      const double enter = t0.cwiseMin(t1).maxCoeff(), leave = t0.cwiseMax(t1).minCoeff();
+      if (leave < std::max(enter, 0.0)) continue;
+      if (n.left >= 0) {
+        if (top + 2 > 128) throw Error("solid mesh: the hierarchy is too deep");
+        stack[top++] = n.left;
+        stack[top++] = n.right;
+        continue;
+      }
+      for (int i = n.first; i < n.first + n.count; ++i) {
+        const int t = order_[i];
+        // Möller & Trumbore (1997), with the barycentric coordinates kept off the edges.
+        const V a = v_.col(tri_(0, t)), e1 = v_.col(tri_(1, t)) - a, e2 = v_.col(tri_(2, t)) - a;
+        const V q = d.cross(e2);
+        const double det = e1.dot(q);
+        if (std::abs(det) < 1e-14 * e1.norm() * e2.norm()) continue;  // parallel to the ray
+        const V s = p - a;
+        const double u = s.dot(q) / det;
+        const V r = s.cross(e1);
+        const double v = d.dot(r) / det, w = e2.dot(r) / det;
+        constexpr double kEdge = 1e-9;
+        if (u < -kEdge || v < -kEdge || u + v > 1 + kEdge || w < 0) continue;
+        if (u < kEdge || v < kEdge || u + v > 1 - kEdge) {
+          grazed = true;
+          break;
+        }
+        ++crossings;
+      }
+    }
+    if (!grazed) return crossings % 2 == 1;
+  }
+  return false;
+}
+
 double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) const {
   if (nodes_.empty()) return limit;
   double best2 = limit * limit;

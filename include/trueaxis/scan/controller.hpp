@@ -86,6 +86,10 @@ struct Correction {
   std::vector<std::pair<std::string, double>> parameters;  // named values (mm, °, factor)
   double residual_before = 0, residual_after = 0;  // max |distance| of the touch points (mm)
   bool accepted = false;
+  // Why the fit is not a correction at all (empty when it is one): it diverged to a map no
+  // fixture error explains (a scale outside 0.5 to 2, a turn over 45°, a move larger than the
+  // contour). residual_after is NaN then, and `parameters` are where the fit stopped.
+  std::string diverged;
   // The correction as a map of the design data: x -> transform · x (mm, part frame).
   Eigen::Affine3d transform = Eigen::Affine3d::Identity();
 };

@@ -44,6 +44,8 @@ class Mesh {
   // which skip[face] is true are left out (skip may be empty).
   double distance(const Eigen::Vector3d& p, double limit = INFINITY,
                   const std::vector<char>& skip = {}) const;
+  // Whether p lies inside the part (the mesh is closed: the tessellation of a solid).
+  bool inside(const Eigen::Vector3d& p) const;
   // Distance from the segment a–b to the surface (0 if it crosses it), or `limit`.
   double distance(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double limit = INFINITY,
                   const std::vector<char>& skip = {}) const;
