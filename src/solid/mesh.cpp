@@ -250,7 +250,12 @@ bool Mesh::inside(const V& p) const {
   return false;
 }
 
-double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) const {
+// Best-first descent of the hierarchy for the least squared distance from something (a point,
+// a segment) to the faces not skipped: box_d2(box) bounds it from below for a node, tri_d2(t)
+// is it for triangle t. `limit` when nothing is nearer.
+template <class BoxD2, class TriD2>
+double Mesh::nearest(double limit, const std::vector<char>& skip, BoxD2 box_d2,
+                     TriD2 tri_d2) const {
   if (nodes_.empty()) return limit;
   double best2 = limit * limit;
   int stack[128];
@@ -258,20 +263,17 @@ double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) c
   stack[top++] = 0;
   while (top > 0) {
     const Node& n = nodes_[stack[--top]];
-    if (box_point2(n.box, p) >= best2) continue;
+    if (box_d2(n.box) >= best2) continue;
     if (n.left < 0) {
       for (int i = n.first; i < n.first + n.count; ++i) {
         const int t = order_[i];
         if (!skip.empty() && skip[face_[t]]) continue;
-        const double d2 =
-            (closest_on_triangle(p, v_.col(tri_(0, t)), v_.col(tri_(1, t)), v_.col(tri_(2, t))) - p)
-                .squaredNorm();
-        best2 = std::min(best2, d2);
+        best2 = std::min(best2, tri_d2(t));
       }
       continue;
     }
     // The nearer child last, so that it is searched first.
-    const double dl = box_point2(nodes_[n.left].box, p), dr = box_point2(nodes_[n.right].box, p);
+    const double dl = box_d2(nodes_[n.left].box), dr = box_d2(nodes_[n.right].box);
     if (top + 2 > 128) throw Error("solid mesh: the hierarchy is too deep");
     if (dl < dr) {
       stack[top++] = n.right;
@@ -284,36 +286,22 @@ double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) c
   return std::min(limit, std::sqrt(best2));
 }
 
+double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) const {
+  return nearest(
+      limit, skip, [&](const Eigen::AlignedBox3d& box) { return box_point2(box, p); },
+      [&](int t) {
+        return (closest_on_triangle(p, v_.col(tri_(0, t)), v_.col(tri_(1, t)), v_.col(tri_(2, t))) -
+                p)
+            .squaredNorm();
+      });
+}
+
 double Mesh::distance(const V& a, const V& b, double limit, const std::vector<char>& skip) const {
-  if (nodes_.empty()) return limit;
-  double best2 = limit * limit;
-  int stack[128];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& n = nodes_[stack[--top]];
-    if (box_segment2(n.box, a, b) >= best2) continue;
-    if (n.left < 0) {
-      for (int i = n.first; i < n.first + n.count; ++i) {
-        const int t = order_[i];
-        if (!skip.empty() && skip[face_[t]]) continue;
-        best2 = std::min(best2, segment_triangle2(a, b, v_.col(tri_(0, t)), v_.col(tri_(1, t)),
-                                                  v_.col(tri_(2, t))));
-      }
-      continue;
-    }
-    const double dl = box_segment2(nodes_[n.left].box, a, b),
-                 dr = box_segment2(nodes_[n.right].box, a, b);
-    if (top + 2 > 128) throw Error("solid mesh: the hierarchy is too deep");
-    if (dl < dr) {
-      stack[top++] = n.right;
-      stack[top++] = n.left;
-    } else {
-      stack[top++] = n.left;
-      stack[top++] = n.right;
-    }
-  }
-  return std::min(limit, std::sqrt(best2));
+  return nearest(
+      limit, skip, [&](const Eigen::AlignedBox3d& box) { return box_segment2(box, a, b); },
+      [&](int t) {
+        return segment_triangle2(a, b, v_.col(tri_(0, t)), v_.col(tri_(1, t)), v_.col(tri_(2, t)));
+      });
 }
 
 double Mesh::highest(const V& up) const {

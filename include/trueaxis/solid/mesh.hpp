@@ -66,6 +66,8 @@ class Mesh {
   };
   void build();
   int build(int first, int count);
+  template <class BoxD2, class TriD2>
+  double nearest(double limit, const std::vector<char>& skip, BoxD2 box_d2, TriD2 tri_d2) const;
   Eigen::Matrix3Xd v_;
   Eigen::Matrix3Xi tri_;
   std::vector<int> face_;
