@@ -603,11 +603,13 @@ std::optional<SyntaxError> check(const Command& c) {
     const Value& m = c.method;
     const auto it = table().find(m.text);
     if (it == table().end()) bad(kCommand, m, fmt::format("unknown command '{}'", m.text));
+    it->second(m);
+    // The tag last: a server may still run a fast-queue command sent with an ordinary tag
+    // (ippdme::Engine does, as an abort must abort), once its arguments are right.
     if (is_event_command(m.text) && !c.tag.event)
       bad(kTag, m, fmt::format("{} goes through the fast queue: it needs an E tag", m.text));
     if (!is_event_command(m.text) && c.tag.event)
       bad(kTag, m, fmt::format("{} is not a fast-queue command: no E tag", m.text));
-    it->second(m);
   } catch (const Bad& b) {
     return b.e;
   }

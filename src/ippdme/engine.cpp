@@ -18,6 +18,10 @@ namespace {
 
 constexpr double kDeg = M_PI / 180;
 
+// The method name of a queued completion: a fast-queue command sent with an ordinary tag ends
+// when the transactions before it have (no command read from a line can have this name).
+constexpr const char* kCompletion = "%";
+
 // An error a command ends with: the specification's number (its text and default severity go
 // with it).
 struct Fail {
@@ -252,7 +256,8 @@ struct Engine::State {
   }
   // `cause` (the method, or what is wrong with a line) becomes the error's third field: a
   // string, so its quotes become apostrophes and anything unprintable a '?'.
-  void error(const Tag& t, int number, std::string cause) {
+  // `latch`: false for a notice that stops nothing (an error the command ran despite).
+  void error(const Tag& t, int number, std::string cause, bool latch = true) {
     const auto info = error_info(number);
     const int severity = info ? info->severity : 3;
     for (char& ch : cause)
@@ -264,7 +269,7 @@ struct Engine::State {
          fmt::format("Error({}, {:04d}, \"{}\", \"{}\")", severity, number,
                      cause.empty() ? std::string("Server") : cause,
                      info ? std::string(info->text) : std::string("Error")));
-    if (severity >= 2 && !latched) latched = number;
+    if (latch && severity >= 2 && !latched) latched = number;
   }
 
   // ---- machine time, abort, daemons ------------------------------------------------------
@@ -1301,6 +1306,11 @@ void Engine::receive(std::string_view text) {
     bad = parsed.error;
   else
     bad = check(*parsed.value);
+  // A fast-queue command with an ordinary tag (error 0001 of the check) runs all the same,
+  // reported on E0000 below.
+  if (bad && parsed && bad->error == 1 && is_event_command(parsed.value->method.text) &&
+      !parsed.value->tag.event)
+    bad.reset();
   if (bad) {
     // The cause names the column and the reason, e.g. "column 18: GoTo: X is given twice".
     const Tag t = parsed ? parsed.value->tag : parse_tag(text).value_or(Tag{true, 0});
@@ -1318,11 +1328,29 @@ void Engine::receive(std::string_view text) {
     s.cv.notify_all();
     return;
   }
-  // The fast queue.
+  // The fast queue, whatever the tag. A command sent with an ordinary tag is reported on
+  // E0000 (error 0001, which stops nothing here: the command runs), and its completion waits
+  // for the transactions before it, so that a '%' never comes before an earlier one's.
+  const bool ordinary = !c.tag.event;
+  if (ordinary)
+    s.error(Tag{true, 0}, 1,
+            fmt::format("{} with tag {}: a fast-queue command, run at once", n, c.tag.text()),
+            false);
+  auto complete = [&] {
+    if (ordinary && (s.running || !s.queue.empty())) {
+      Command done;
+      done.tag = c.tag;
+      done.method.text = kCompletion;
+      s.queue.push_back(std::move(done));
+      s.cv.notify_all();
+      return;
+    }
+    s.line(c.tag, '%');
+  };
   if (n == "AbortE") {
     if (!s.running && s.queue.empty()) {
       if (s.session) s.latched = 6;
-      s.line(c.tag, '%');
+      complete();
       return;
     }
     s.abort_tag = c.tag;
@@ -1333,7 +1361,7 @@ void Engine::receive(std::string_view text) {
   }
   if (!s.session) {
     s.error(c.tag, 8, n);
-    s.line(c.tag, '%');
+    complete();
     return;
   }
   try {
@@ -1367,7 +1395,7 @@ void Engine::receive(std::string_view text) {
                                      [&](const Daemon& e) { return e.tag == d.tag; }),
                       s.daemons.end());
       s.daemons.push_back(d);
-      s.line(c.tag, '%');
+      complete();
       // The first report tells where the machine is now.
       s.report_move(s.daemons.back(), true);
       return;
@@ -1375,7 +1403,7 @@ void Engine::receive(std::string_view text) {
   } catch (const Fail& f) {
     s.error(c.tag, f.number, n);
   }
-  s.line(c.tag, '%');
+  complete();
 }
 
 void Engine::refuse_overlong(std::string_view start) {
@@ -1390,7 +1418,7 @@ bool Engine::execute_next(bool wait) {
   auto finish_abort = [&] {
     if (!s.abort_tag) return;
     for (const auto& q : s.queue) {
-      s.error(q.tag, 6, q.method.text);
+      if (q.method.text != kCompletion) s.error(q.tag, 6, q.method.text);
       s.line(q.tag, '%');
     }
     s.queue.clear();
@@ -1405,6 +1433,13 @@ bool Engine::execute_next(bool wait) {
   }
   const Command c = std::move(s.queue.front());
   s.queue.pop_front();
+  if (c.method.text == kCompletion) {
+    // A fast-queue command's completion, in its turn.
+    s.line(c.tag, '%');
+    finish_abort();
+    s.cv.notify_all();
+    return true;
+  }
   s.running = true;
   s.pace_start();
   try {
@@ -1426,7 +1461,7 @@ bool Engine::execute_next(bool wait) {
     const Command& q = s.queue.front();
     const std::string& n = q.method.text;
     if (n == "ClearAllErrors" || n == "EndSession" || n == "GetXtdErrStatus") break;
-    s.error(q.tag, 6, n);
+    if (n != kCompletion) s.error(q.tag, 6, n);
     s.line(q.tag, '%');
     s.queue.pop_front();
   }

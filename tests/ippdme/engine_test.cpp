@@ -481,5 +481,61 @@ TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
   EXPECT_LT(e.machine_time() - t_abort, 1.0) << "the carriage stops in the servo's lag";
 }
 
+// A widely used Python client sends the fast-queue commands with ordinary tags. They still run
+// at once (an abort must abort), the server says so on E0000 without stopping anything, and a
+// completion never comes before an earlier transaction's.
+TEST(IppEngine, FastQueueCommandsWithOrdinaryTagsRunAtOnceAndCompleteInOrder) {
+  EngineOptions o;
+  o.time_scale = 0.02;
+  std::mutex m;
+  std::vector<std::string> out;
+  Engine e(o, [&](const std::string& l) {
+    std::lock_guard lk(m);
+    out.push_back(l);
+  });
+  std::thread worker([&] {
+    while (e.execute_next(true)) {
+    }
+  });
+  auto wait_for = [&](const std::string& line) {
+    for (int i = 0; i < 4000; ++i) {
+      {
+        std::lock_guard lk(m);
+        if (std::find(out.begin(), out.end(), line) != out.end()) return true;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return false;
+  };
+  auto index = [&](const std::string& line) {
+    std::lock_guard lk(m);
+    return std::find(out.begin(), out.end(), line) - out.begin();
+  };
+  e.receive("00001 StartSession()");
+  e.receive("00002 Home()");
+  e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
+  e.receive("00004 GoTo(X(400))");  // 40 s of machine time, 0.8 s of wall time
+  std::this_thread::sleep_for(std::chrono::milliseconds(150));
+  e.receive("00005 GetErrStatusE()");
+  ASSERT_TRUE(wait_for("00005 # ErrStatus(0)"));  // answered while the GoTo runs
+  const double t_abort = e.machine_time();
+  e.receive("00006 AbortE()");
+  ASSERT_TRUE(wait_for("00006 %"));
+  e.stop();
+  worker.join();
+  // Reported on E0000, and not an error that stops the session (the GoTo ended by the abort).
+  EXPECT_LT(index("E0000 ! Error(2, 0001, \"GetErrStatusE with tag 00005: a fast-queue command, "
+                  "run at once\", \"Illegal tag\")"),
+            index("00005 # ErrStatus(0)"));
+  EXPECT_TRUE(
+      wait_for("00004 ! Error(2, 0006, \"GoTo\", \"Transaction aborted (Use ClearAllErrors To "
+               "Continue)\")"));
+  // In order: the GoTo's completion, then GetErrStatusE's, then the abort's.
+  EXPECT_LT(index("00004 %"), index("00005 %"));
+  EXPECT_LT(index("00005 %"), index("00006 %"));
+  EXPECT_LT(e.machine_time() - t_abort, 1.0) << "the abort stopped the GoTo";
+  EXPECT_LT(e.cmm().position().x(), 100);
+}
+
 }  // namespace
 }  // namespace trueaxis
