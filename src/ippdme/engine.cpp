@@ -576,6 +576,9 @@ class Executor {
                     std::vector<Value>* items, std::vector<Value>* bare);
   void scan(
       const std::function<void(const std::function<void(const SimulatedCmm::Point&)>&)>& body);
+  // A warning (0504) when the points asked for are closer than the probe moves in one servo
+  // tick at the scan's speed: the server records at most one point per tick.
+  void density_cap(double step, double speed);
   void ptmeas();
   void goto_();
   void scan_on_line();
@@ -765,6 +768,15 @@ void Executor::check_arguments() {
   }
 }
 
+void Executor::density_cap(double step, double speed) {
+  const double per_tick = speed * s_.cmm.options().servo.dt();
+  if (step < per_tick)
+    s_.error(c_.tag, 504,
+             fmt::format("{}: a point every {:.4g} mm asked for, but at {:g} mm/s the probe moves "
+                         "{:.4g} mm per servo tick: one point per tick is recorded",
+                         name_, step, speed, per_tick));
+}
+
 void Executor::scan_on_line() {
   need_measuring();
   check_arguments();
@@ -781,6 +793,7 @@ void Executor::scan_on_line() {
   Surface surface = s_.world();
   if (!surface) surface = plane_surface(S, n);
   const double speed = s_.par("ScanPar", "Speed"), retract = s_.par("ScanPar", "Retract");
+  density_cap(step, speed);
   SimulatedCmm::ScanEnd end;
   scan([&](const auto& emit) {
     Unlocked u(lk_);
@@ -821,6 +834,7 @@ void Executor::scan_on_circle() {
   const Eigen::Vector3d u0 = rc / rho;
   const double speed = s_.par("ScanPar", "Speed"), retract = s_.par("ScanPar", "Retract");
   const Eigen::Vector3d hint = (delta > 0 ? 1.0 : -1.0) * ax.cross(u0);
+  density_cap(rho * stepw * kDeg, speed);
   SimulatedCmm::ScanEnd end;
   scan([&](const auto& emit) {
     Unlocked u(lk_);
@@ -895,6 +909,7 @@ void Executor::scan_on_curve() {
   }
   const double speed = s_.par("ScanPar", "Speed"), retract = s_.par("ScanPar", "Retract");
   const double go_speed = s_.par("GoToPar", "Speed"), go_accel = s_.par("GoToPar", "Accel");
+  density_cap(s_.curve_density, speed);
   SimulatedCmm::ScanEnd end;
   scan([&](const auto& emit) {
     Unlocked u(lk_);
@@ -971,6 +986,7 @@ void Executor::scan_unknown() {
   const double rho = rc.norm();
   if (in_cyl && !(rho > 0)) throw Fail{509};
   const double speed = s_.par("ScanPar", "Speed"), retract = s_.par("ScanPar", "Retract");
+  density_cap(step, speed);
   const double start_gap = (D - S).norm();
   SimulatedCmm::ScanEnd end;
   scan([&](const auto& emit) {

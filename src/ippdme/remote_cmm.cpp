@@ -5,8 +5,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "trueaxis/error.hpp"
+#include "trueaxis/scan/planner.hpp"
 
 namespace trueaxis::ippdme {
 namespace {
@@ -58,6 +60,27 @@ RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
   client_ = std::make_unique<Client>(o_.client);
   t0_ = std::chrono::steady_clock::now();
   must("StartSession()");
+  // What the server speaks: DMEVersion("1.4.3").
+  {
+    const auto tr = run("GetDMEVersion()");
+    for (const auto& d : tr.data)
+      for (const auto& it : d.items)
+        if (it.is_call("DMEVersion") && !it.args.empty()) version_ = it.args[0].text;
+    int major = 0, minor = 0, patch = 0;
+    const bool known =
+        tr.errors.empty() && std::sscanf(version_.c_str(), "%d.%d.%d", &major, &minor, &patch) >= 2;
+    const int v = 10000 * major + 100 * minor + patch;
+    if (!known || v < 10402)
+      throw Error(fmt::format(
+          "I++ DME server at {}:{} speaks I++ DME {}: scanning along the design needs 1.4.2 or "
+          "later (ScanOnCurve, Tool.ScanPar, Tool.AvrRadius); trueaxis does not scan point by "
+          "point over I++ DME",
+          o_.client.host, o_.client.port,
+          known               ? version_
+          : tr.errors.empty() ? "(no version given)"
+                              : "(GetDMEVersion refused: " + describe(tr.errors.front()) + ")"));
+    in_plane_scans_ = v >= 10403;
+  }
   const auto homed = must("IsHomed()").numbers();
   if (homed.empty() || homed[0] == 0) must("Home()");
   if (!o_.tool.empty()) must(fmt::format("ChangeTool(\"{}\")", o_.tool));
@@ -141,6 +164,16 @@ Eigen::Vector3d RemoteCmm::position() const {
   const auto v = call("Get(X(), Y(), Z())").numbers();
   if (v.size() < 3) throw Error("I++ DME: Get(X(), Y(), Z()) returned no position");
   return Eigen::Vector3d(v[0], v[1], v[2]);
+}
+
+void RemoteCmm::orient(const Eigen::Vector3d& axis) {
+  const Eigen::Vector3d u = axis.normalized();
+  if ((u - Eigen::Vector3d::UnitZ()).norm() > 1e-9)
+    throw scan::NoWay(fmt::format(
+        "the stylus along ({:.3f}, {:.3f}, {:.3f}): over I++ DME trueaxis scans with the server's "
+        "tool as it is, taken to be vertical; turning a probe head is not supported",
+        u.x(), u.y(), u.z()));
+  scan::Machine::orient(u);
 }
 
 double RemoteCmm::tool_radius() {
@@ -286,6 +319,12 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
                                           bool closed, double length, double speed,
                                           const scan::ScanSettings& settings) {
   scan::ScanOutcome out;
+  if (!in_plane_scans_) {
+    out.fault = fmt::format(
+        "autonomous scanning needs ScanInPlaneEndIsSphere of I++ DME 1.4.3; the server speaks {}",
+        version_);
+    return out;
+  }
   const Eigen::Vector3d a = approach.normalized(), N = plane.normal.normalized();
   const auto first =
       touch(plane, start, a, 2 * (settings.approach_clearance + settings.approach_limit) + 10, 10,

@@ -161,7 +161,8 @@ SimulatedCmm::ScanEnd SimulatedCmm::follow(const Surface& surface, const Constra
                              ? Eigen::Vector3d(r.deflection.normalized())
                              : Eigen::Vector3d(0, 0, 1);
   Eigen::Vector3d last = servo_.position() + r.deflection;
-  double arc = 0, next = 0, lost = 0, v = 0;
+  // The contact the scan starts from is the caller's first point: the next is `step` on.
+  double arc = 0, next = step, lost = 0, v = 0;
   Eigen::Vector3d prev = hint;
   ScanEnd end = ScanEnd::TooLong;
   for (long k = 0; k < kMaxTicks; ++k) {

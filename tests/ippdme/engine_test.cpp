@@ -431,6 +431,23 @@ TEST(IppEngine, ScansFollowTheNominalSurfaceAndStreamThePointsInTheReportsFormat
   }
   const Eigen::Vector3d last(all[6 * (n - 1)], all[6 * (n - 1) + 1], 0);
   EXPECT_NEAR(std::atan2(last.y(), last.x()) * 180 / M_PI, 90, 1.5);
+  // No point twice: each a step (1° of 20 mm, 0.35 mm) from the one before, within a tick.
+  for (std::size_t i = 1; i < n; ++i) {
+    const Eigen::Vector3d a(all[6 * (i - 1)], all[6 * (i - 1) + 1], all[6 * (i - 1) + 2]);
+    const Eigen::Vector3d b(all[6 * i], all[6 * i + 1], all[6 * i + 2]);
+    EXPECT_GT((b - a).norm(), 0.3) << i;
+  }
+  // A point every 0.01° (of the ball centre's 21 mm radius) is closer than the probe moves in a
+  // servo tick: the server says so
+  // (a warning, 0504) and records one point per tick.
+  const auto dense = s("00005 ScanOnCircle(0, 0, -50, 20, 0, -50, 0, 0, 1, 90, 0, 0.01)");
+  ASSERT_GE(dense.size(), 3u);
+  EXPECT_NE(dense[1].find("00005 ! Error(1, 0504, \"ScanOnCircle: a point every 0.003665 mm asked "
+                          "for, but at"),
+            std::string::npos)
+      << dense[0] << "\n"
+      << dense[1];
+  EXPECT_EQ(dense.back(), "00005 %");
 }
 
 TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {

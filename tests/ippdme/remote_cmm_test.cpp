@@ -7,6 +7,7 @@
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "serving.hpp"
+#include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/scan/controller.hpp"
 
@@ -149,6 +150,61 @@ TEST(RemoteCmm, CollisionsAndMissedSurfacesAreReportedAsTheControllerExpects) {
   const auto none = cmm.touch(s.plane, kHome, Eigen::Vector3d::UnitZ(), 5, 10, 0.3);
   EXPECT_FALSE(none.has_value());
   EXPECT_NEAR((cmm.position() - kHome).norm(), 0, 1e-3);
+}
+
+// A real CMM keeps its position between sessions: the second scan on the same server starts
+// where the first ended (down in NIST's part's hole), and its first move must rise clear of the
+// part's solid before it goes across.
+TEST(RemoteCmm, TwoSessionsInARowOnOneServer) {
+  const std::string step = std::string(TRUEAXIS_TEST_DATA) + "/ippdme/ipp_simple.stp";
+  const auto d =
+      design::from_step(step, {{"mid", {Eigen::Vector3d(0, 0, 37.5), Eigen::Vector3d::UnitZ()}}});
+  sim::Part part{d, {}};
+  part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  ServerOptions so = serving(part);
+  so.engine.cmm.home = scan::start_position(d, {});
+  Running r(so);
+  for (int session = 1; session <= 2; ++session) {
+    RemoteCmm cmm(remote(r));
+    const auto res = scan::scan(cmm, d, {});
+    ASSERT_TRUE(res.ok()) << session << ": " << res.summary();
+    if (session == 1) {
+      // It ended in the hole, below the part's top.
+      EXPECT_LT(cmm.position().z(), 50) << cmm.position().transpose();
+    }
+  }
+}
+
+// Servers that speak older versions of I++ DME: scanning along the design needs 1.4.2, an
+// autonomous scan 1.4.3; each is refused with the reason, never sent.
+TEST(RemoteCmm, OlderServersAreAskedTheirVersionAndRefusedWithTheReason) {
+  const auto d = test::square_and_hole();
+  sim::Part part{d, {}};
+  {
+    ServerOptions so = serving(part);
+    so.engine.version = "1.4.1";
+    Running r(so);
+    const auto err = test::error_of([&] { RemoteCmm cmm(remote(r)); });
+    EXPECT_NE(err.find("speaks I++ DME 1.4.1: scanning along the design needs 1.4.2"),
+              std::string::npos)
+        << err;
+  }
+  part.deviation.bumps = {{"outer", 150, 2.0, 30}};  // needs an autonomous scan
+  ServerOptions so = serving(part);
+  so.engine.version = "1.4.2";
+  Running r(so);
+  RemoteCmm cmm(remote(r));
+  EXPECT_EQ(cmm.version(), "1.4.2");
+  const auto res = scan::scan(cmm, d, {});
+  EXPECT_FALSE(res.sections[0].ok);
+  EXPECT_NE(res.sections[0].reason.find("needs ScanInPlaneEndIsSphere of I++ DME 1.4.3"),
+            std::string::npos)
+      << res.sections[0].reason;
+  EXPECT_TRUE(res.sections[1].ok) << res.sections[1].reason;  // the hole needs none
+  // The head is not turned over I++ DME: a section with a probe orientation is refused, the
+  // run goes on.
+  EXPECT_NE(test::error_of([&] { cmm.orient(Eigen::Vector3d(1, 0, 0)); }).find("not supported"),
+            std::string::npos);
 }
 
 TEST(RemoteCmm, ABadAddressOrOptionIsNamed) {

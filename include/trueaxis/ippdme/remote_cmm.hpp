@@ -15,6 +15,10 @@
 //   scan_unknown  PtMeas for the first contact, then ScanInPlaneEndIsSphere in the section's
 //                 plane from it: closed contours end in a sphere around that contact (the server
 //                 ends the scan), open ones after `length` mm of points (AbortE from here).
+// Versions: the server is asked its I++ DME version first. Design-value scanning needs 1.4.2
+// (ScanOnCurve, Tool.ScanPar, Tool.AvrRadius): an older server is refused with the reason when
+// the session starts. Autonomous scanning needs 1.4.3's ScanInPlaneEndIsSphere: on a 1.4.2
+// server an autonomous scan ends its section with the reason.
 // Frame: with `part_origin`, PartCsy is set to the part's design frame (SetCsyTransformation, a
 // translation) and every command and point is in it; without, the server's current coordinate
 // system is used as it is.
@@ -74,6 +78,13 @@ class RemoteCmm : public scan::Machine {
                                  bool closed, double length, double speed,
                                  const scan::ScanSettings& settings) override;
 
+  // The stylus stays as the server's tool has it (taken to be vertical): any other orientation
+  // is refused (scan::NoWay: the section is not scanned, the machine has not moved).
+  void orient(const Eigen::Vector3d& axis) override;
+
+  // The I++ DME version the server reports (GetDMEVersion), e.g. "1.4.3".
+  const std::string& version() const { return version_; }
+
   // The active tool's mean tip radius as the server knows it (GetProp(Tool.AvrRadius()), mm).
   double tool_radius();
   // The tip radius in use (options.tip_radius, or the server's when that was 0), mm.
@@ -87,6 +98,8 @@ class RemoteCmm : public scan::Machine {
   RemoteCmmOptions o_;
   std::unique_ptr<Client> client_;
   std::chrono::steady_clock::time_point t0_;
+  std::string version_;
+  bool in_plane_scans_ = true;  // ScanInPlaneEndIsSphere in its 1.4.3 form
   double goto_speed_ = -1, scan_speed_ = -1;
   double touch_search_ = -1, touch_speed_ = -1;  // PtMeasPar as last set by touch()
   mutable long commands_ = 0;

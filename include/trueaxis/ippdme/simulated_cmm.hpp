@@ -94,7 +94,8 @@ class SimulatedCmm {
   // centre kept on a constraint surface, along the line where the two meet (the constraint's
   // normal × the measured normal), at `speed`: first in the sense of `hint`, then continuing
   // the way it goes. After every tick `stop(point, arc)` decides whether the scan is done; a
-  // point is recorded every `step` mm of arc and passed to `emit`. At most `max_length` mm.
+  // point is recorded every `step` mm of arc from the start (the starting contact itself is the
+  // caller's to record) and passed to `emit`. At most `max_length` mm.
   struct Point {
     Eigen::Vector3d centre, normal;  // ball centre as read (mm), measured surface normal
     double q = 0;                    // quality 0 (good) .. 100 (bad)
