@@ -136,7 +136,11 @@ int run_scan(ScanArgs& a) {
       fmt::print(
           "{}: {} — {} points, {} trajectory errors, {} corrections, {} autonomous scans, "
           "{:.1f} s\n",
-          s.name, s.ok ? "ok" : "ERROR: " + s.reason, s.points.size(), s.trajectory_errors,
+          s.name,
+          s.ok              ? "ok"
+          : s.not_reachable ? "NOT REACHABLE: " + s.reason
+                            : "ERROR: " + s.reason,
+          s.points.size(), s.trajectory_errors,
           std::count_if(s.corrections.begin(), s.corrections.end(),
                         [](const auto& c) { return c.accepted; }),
           s.autonomous_count, s.time.total);

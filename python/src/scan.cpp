@@ -89,7 +89,7 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
     }
     py::dict sd;
     sd["name"] = s.name;
-    sd["status"] = s.ok ? "ok" : "error";
+    sd["status"] = s.status();
     sd["reason"] = s.reason;
     sd["machine_time_s"] = times(s.time);
     sd["corrections"] = corr;

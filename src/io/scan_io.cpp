@@ -54,7 +54,7 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
     for (const auto& p : s.points) pts.push_back({p.surface.x(), p.surface.y(), p.surface.z()});
     ojson sec{{"name", s.name}};
     if (!s.source.empty()) sec["stretch_of"] = s.source;
-    sec.update(ojson{{"status", s.ok ? "ok" : "error"},
+    sec.update(ojson{{"status", s.status()},
                      {"reason", s.reason},
                      {"machine_time_s", times(s.time)},
                      {"corrections", corr},

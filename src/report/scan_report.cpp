@@ -41,7 +41,7 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     std::string truth = "not known";
     if (i < truth_um.size() && truth_um[i].size())
       truth = fmt::format("{:.2f}", truth_um[i].cwiseAbs().maxCoeff());
-    s.table.push_back({sec.name, sec.ok ? "ok" : "error", fmt::format("{:.1f}", sec.time.total),
+    s.table.push_back({sec.name, sec.status(), fmt::format("{:.1f}", sec.time.total),
                        fmt::format("{:.1f} / {:.1f} / {:.1f} / {:.1f}", sec.time.design,
                                    sec.time.touch, sec.time.autonomous, sec.time.moves),
                        std::to_string(sec.trajectory_errors), applied,

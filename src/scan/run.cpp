@@ -271,6 +271,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
     r.source = it.source;
     if (!res.stopped.empty() || !it.refusal.empty()) {
       r.reason = !it.refusal.empty() ? it.refusal : "not scanned: " + res.stopped;
+      r.not_reachable = !it.refusal.empty();
       res.events.push_back({machine.time(), r.name, 0, 0, "section", "error_exit", r.reason});
       res.design.sections.push_back(it.section);
       res.sections.push_back(std::move(r));

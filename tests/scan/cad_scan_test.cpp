@@ -40,8 +40,8 @@ void expect_finished(const scan::Result& r, const std::string& label) {
   EXPECT_TRUE(r.stopped.empty()) << label << ": " << r.stopped;
   for (const auto& s : r.sections)
     if (!s.ok) {
-      EXPECT_NE(s.reason.find("not reachable"), std::string::npos)
-          << label << ": " << s.name << ": " << s.reason;
+      EXPECT_TRUE(s.not_reachable) << label << ": " << s.name << ": " << s.reason;
+      EXPECT_NE(s.reason.find("not reachable"), std::string::npos) << s.reason;
     }
 }
 

@@ -119,6 +119,11 @@ struct SectionResult {
   int autonomous_count = 0, trajectory_errors = 0;
   std::vector<Sample> points;  // the final scan's surface points
   std::vector<Trace> traces;   // ΔL of every design-value scan of the section, in order
+  // The stylus reaches none of it in its probe orientation (or the head cannot take that
+  // orientation): refused before any move, `reason` says why.
+  bool not_reachable = false;
+  // "ok", "not_reachable" or "error" (as scan.json writes it).
+  const char* status() const { return ok ? "ok" : not_reachable ? "not_reachable" : "error"; }
 };
 
 // A stretch of a section's contour the stylus cannot reach in the section's probe orientation.
