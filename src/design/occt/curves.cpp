@@ -4,6 +4,9 @@
 #include <GeomConvert_CompCurveToBSplineCurve.hxx>
 #include <algorithm>
 #include <cmath>
+#include <list>
+#include <memory>
+#include <mutex>
 
 #include "occt.hpp"
 #include "trueaxis/error.hpp"
@@ -105,13 +108,46 @@ Dense dense(const Geom_BSplineCurve& c, double spacing, double tolerance) {
   return d;
 }
 
+// The dense polyline of a section's curve, remembered for the last few curves: a scan samples
+// the same design curve many times (touch points, corrections, paths, the simulated part), and
+// building the polyline to 1e-7 mm was most of a scan's computing time.
+std::shared_ptr<const Dense> cached_dense(const Section& s, const Geom_BSplineCurve& c,
+                                          double spacing, double tolerance) {
+  std::vector<double> key;
+  const Nurbs& nu = *s.nurbs;
+  key.reserve(
+      static_cast<std::size_t>(4 + nu.knots.size() + nu.weights.size() + nu.control_points.size()));
+  key.insert(key.end(), {static_cast<double>(nu.degree), spacing, tolerance});
+  key.insert(key.end(), nu.knots.data(), nu.knots.data() + nu.knots.size());
+  key.insert(key.end(), nu.weights.data(), nu.weights.data() + nu.weights.size());
+  key.insert(key.end(), nu.control_points.data(),
+             nu.control_points.data() + nu.control_points.size());
+  static std::mutex mutex;
+  static std::list<std::pair<std::vector<double>, std::shared_ptr<const Dense>>> recent;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto it = recent.begin(); it != recent.end(); ++it)
+      if (it->first == key) {
+        recent.splice(recent.begin(), recent, it);
+        return recent.front().second;
+      }
+  }
+  auto d = std::make_shared<const Dense>(dense(c, spacing, tolerance));
+  std::lock_guard<std::mutex> lock(mutex);
+  recent.emplace_front(std::move(key), d);
+  constexpr std::size_t kRemembered = 32;
+  if (recent.size() > kRemembered) recent.pop_back();
+  return d;
+}
+
 }  // namespace
 
 Samples sample_fine(const Section& s, double spacing, double tolerance) {
   Handle(Geom_BSplineCurve) c = curve(s);
   Section unit = s;
   unit.plane.normal.normalize();
-  const Dense d = dense(*c, spacing, tolerance);
+  const auto dp = cached_dense(s, *c, spacing, tolerance);
+  const Dense& d = *dp;
   const std::size_t n = s.closed && d.p.size() > 1 ? d.p.size() - 1 : d.p.size();
   Samples out;
   out.points.resize(3, static_cast<Eigen::Index>(n));
@@ -130,7 +166,8 @@ Samples sample(const Section& s, double spacing) {
   // lengths then within 1e-12 of the arcs): the parameter between its points by linear
   // interpolation, the point and its normal on the curve itself.
   Handle(Geom_BSplineCurve) c = curve(s);
-  const Dense d = dense(*c, std::min(spacing, 1.0), 1e-7);
+  const auto dp = cached_dense(s, *c, std::min(spacing, 1.0), 1e-7);
+  const Dense& d = *dp;
   const double total = d.arc.back();
   const int n = std::max(2, static_cast<int>(std::ceil(total / spacing)) + 1);
   const int m = s.closed ? n - 1 : n;
