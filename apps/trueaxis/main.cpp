@@ -16,12 +16,14 @@
 #include "trueaxis/io/positioning.hpp"
 #include "trueaxis/io/probes.hpp"
 #include "trueaxis/io/results.hpp"
+#include "trueaxis/io/scan.hpp"
 #include "trueaxis/io/surface.hpp"
 #include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/report/fit.hpp"
 #include "trueaxis/report/guideway.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/report/positioning.hpp"
+#include "trueaxis/report/scan.hpp"
 #include "trueaxis/report/surface.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
@@ -167,14 +169,16 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
   } else if (kind == "fit") {
     title = "trueaxis fit report";
     section = report::fit_section(name, io::read_fit(input));
+  } else if (kind == "scan") {
+    title = "trueaxis scanning report";
+    const auto f = io::read_scan(input);
+    section = report::scan_section(name, f.result, f.result.planned, f.tolerance);
   } else {
-    throw Error(fmt::format(
-        "{}: a '{}' file has no report of its own{}", input, kind,
-        kind == "parametric model" ? " (it is drawn with its map: 'trueaxis ballgauge --parametric "
-                                     "model.json --report map.html')"
-        : kind == "scan"           ? " (the scanning report needs the run's traces and design: "
-                                     "'trueaxis scan ... --report scan.html')"
-                                   : ""));
+    throw Error(fmt::format("{}: a '{}' file has no report of its own{}", input, kind,
+                            kind == "parametric model"
+                                ? " (it is drawn with its map: 'trueaxis ballgauge --parametric "
+                                  "model.json --report map.html')"
+                                : ""));
   }
   report::write(output, report::render(title, {section}, 4000, cli::report_meta()));
   if (!quiet) fmt::print("wrote {} ({})\n", output, kind);

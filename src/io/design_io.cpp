@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <set>
 
+#include "design_json.hpp"
 #include "grid_json.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/design.hpp"
@@ -253,6 +254,15 @@ sim::Part part_from(const JsonFile& f) {
 }
 
 }  // namespace
+
+namespace detail {
+nlohmann::ordered_json design_object(const design::Design& d, const std::filesystem::path& folder) {
+  return design_json(d, folder);
+}
+design::Design design_object_at(const JsonFile& f, const JsonFile::pointer& at) {
+  return design_at(f, at);
+}
+}  // namespace detail
 
 design::Design parse_design(std::string text, const std::string& path) {
   return design_from(JsonFile::parse(std::move(text), path));

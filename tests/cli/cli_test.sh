@@ -452,7 +452,9 @@ expect_ok "$T" scan --design design2.json --part bumped2.json -o scan2.json --lo
 grep -q ",trajectory_error," events2.csv && bad "second part still has trajectory errors" || ok
 expect_err "section 'mid.1': trajectory error" "$T" scan --design design.json --part bumped.json --strategy design -o scan3.json -q
 expect_code 2 "$T" scan --design design.json --part bumped.json --strategy fast -o s.json
-expect_err "scan.json: a 'scan' file has no report of its own" "$T" report scan.json -o scan.html
+# scan.json carries what its report needs: the same tables and plots as the run's own report.
+expect_ok "$T" report scan.json -o scan-from-json.html
+grep -q "every decision of the flow" scan-from-json.html && grep -q "trajectory error ΔL along each design-value scan" scan-from-json.html && ok || bad "report scan.json"
 expect_code 2 "$T" scan --design design.json --part bumped.json --tolerance 0 -o s.json
 # A CMM with geometric errors: the part scans as before, and its points carry the machine's errors.
 expect_ok "$T" scan --design design2.json --part bumped2.json --machine machine.json -o scan4.json --truth truth4.csv

@@ -8,6 +8,8 @@
 
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
+#include "trueaxis/io/files.hpp"
+#include "trueaxis/io/scan.hpp"
 #include "trueaxis/report/scan.hpp"
 
 namespace trueaxis {
@@ -427,6 +429,58 @@ TEST(Controller, BsplineSolidFromStepScannedEndToEnd) {
 
 namespace trueaxis {
 namespace {
+
+// scan.json carries what the report needs: read back, the run is the same to the report, and a
+// file with a missing or bad value is refused at its place.
+TEST(Controller, ScanJsonReadsBackForItsReport) {
+  const auto d = square_and_hole();
+  sim::Part part{d, {}};
+  part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  part.deviation.bumps = {{"outer", 150, 2.0, 30}};
+  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  const auto r = scan::scan(cmm, d, {});
+  const std::string path = test::temp_dir() + "/scan.json";
+  io::write_scan(path, r, {});
+  const auto back = io::read_scan(path);
+  EXPECT_EQ(back.tolerance, scan::ControllerOptions{}.tolerance);
+  EXPECT_EQ(back.result.summary(), r.summary());
+  ASSERT_EQ(back.result.sections.size(), r.sections.size());
+  for (std::size_t i = 0; i < r.sections.size(); ++i) {
+    const auto &a = r.sections[i], &b = back.result.sections[i];
+    EXPECT_EQ(b.status(), std::string(a.status()));
+    ASSERT_EQ(b.points.size(), a.points.size());
+    EXPECT_LT((b.points.back().normal - a.points.back().normal).norm(), 1e-12);
+    ASSERT_EQ(b.traces.size(), a.traces.size());
+    EXPECT_EQ(b.traces[0].delta_l, a.traces[0].delta_l);
+    EXPECT_EQ(b.corrections.size(), a.corrections.size());
+  }
+  EXPECT_EQ(back.result.events.size(), r.events.size());
+  EXPECT_EQ(back.result.design.sections.size(), r.design.sections.size());
+  const auto s1 = report::scan_section("scan", r, r.planned, 1.5);
+  const auto s2 = report::scan_section("scan", back.result, back.result.planned, 1.5);
+  EXPECT_EQ(s1.table, s2.table);
+  EXPECT_EQ(s1.plots.size(), s2.plots.size());
+
+  // Bad files: each refused with its place.
+  const std::string text = test::read_file(path);
+  auto refused = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    if (at == std::string::npos) return std::string("(not found: ") + from + ")";
+    t.replace(at, from.size(), to);
+    const std::string bad = test::temp_dir() + "/bad-scan.json";
+    io::write_text(bad, t);
+    return test::error_of([&] { io::read_scan(bad); });
+  };
+  EXPECT_NE(refused("\"status\": \"ok\"", "\"status\": \"fine\"").find("status 'fine'"),
+            std::string::npos);
+  EXPECT_NE(refused("\"events\":", "\"happenings\":").find("'events' is missing"),
+            std::string::npos);
+  EXPECT_NE(refused("\"tolerance_mm\": 1.5", "\"tolerance_mm\": -1").find("bad-scan.json:"),
+            std::string::npos);
+  EXPECT_NE(refused("\"kind\": \"scan\"", "\"kind\": \"fit\"").find("not a scan result"),
+            std::string::npos);
+}
 
 TEST(Controller, ReportShowsEveryScanAndEveryDecision) {
   const auto d = square_and_hole();
