@@ -450,19 +450,32 @@ TEST(IppEngine, ScansFollowTheNominalSurfaceAndStreamThePointsInTheReportsFormat
   EXPECT_EQ(dense.back(), "00005 %");
 }
 
-TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
-  EngineOptions o;
-  o.time_scale = 0.02;  // 50 times faster than real time
+// An engine 50 times faster than real time with its worker thread, collecting what it sends.
+struct Threaded {
   std::mutex m;
   std::vector<std::string> out;
-  Engine e(o, [&](const std::string& l) {
-    std::lock_guard lk(m);
-    out.push_back(l);
-  });
-  std::thread worker([&] {
-    while (e.execute_next(true)) {
-    }
-  });
+  Engine e;
+  std::thread worker;
+  Threaded()
+      : e(faster(),
+          [this](const std::string& l) {
+            std::lock_guard lk(m);
+            out.push_back(l);
+          }),
+        worker([this] {
+          while (e.execute_next(true)) {
+          }
+        }) {}
+  static EngineOptions faster() {
+    EngineOptions o;
+    o.time_scale = 0.02;
+    return o;
+  }
+};
+
+TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
+  Threaded th;
+  auto& [m, out, e, worker] = th;
   e.receive("00001 StartSession()");
   e.receive("00002 Home()");
   e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
@@ -502,18 +515,8 @@ TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
 // at once (an abort must abort), the server says so on E0000 without stopping anything, and a
 // completion never comes before an earlier transaction's.
 TEST(IppEngine, FastQueueCommandsWithOrdinaryTagsRunAtOnceAndCompleteInOrder) {
-  EngineOptions o;
-  o.time_scale = 0.02;
-  std::mutex m;
-  std::vector<std::string> out;
-  Engine e(o, [&](const std::string& l) {
-    std::lock_guard lk(m);
-    out.push_back(l);
-  });
-  std::thread worker([&] {
-    while (e.execute_next(true)) {
-    }
-  });
+  Threaded th;
+  auto& [m, out, e, worker] = th;
   auto wait_for = [&](const std::string& line) {
     for (int i = 0; i < 4000; ++i) {
       {

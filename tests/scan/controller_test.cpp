@@ -432,12 +432,17 @@ namespace {
 
 // scan.json carries what the report needs: read back, the run is the same to the report, and a
 // file with a missing or bad value is refused at its place.
-TEST(Controller, ScanJsonReadsBackForItsReport) {
-  const auto d = square_and_hole();
+// NIST's part 1.8 mm off with a 2 mm bump on its outline: a correction and an autonomous scan.
+sim::Part moved_and_bumped(const design::Design& d) {
   sim::Part part{d, {}};
   part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
   part.deviation.bumps = {{"outer", 150, 2.0, 30}};
-  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  return part;
+}
+
+TEST(Controller, ScanJsonReadsBackForItsReport) {
+  const auto d = square_and_hole();
+  scan::VirtualCmm cmm(moved_and_bumped(d), {}, Eigen::Vector3d(50, -20, 40));
   const auto r = scan::scan(cmm, d, {});
   const std::string path = test::temp_dir() + "/scan.json";
   io::write_scan(path, r, {});
@@ -484,10 +489,7 @@ TEST(Controller, ScanJsonReadsBackForItsReport) {
 
 TEST(Controller, ReportShowsEveryScanAndEveryDecision) {
   const auto d = square_and_hole();
-  sim::Part part{d, {}};
-  part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
-  part.deviation.bumps = {{"outer", 150, 2.0, 30}};
-  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  scan::VirtualCmm cmm(moved_and_bumped(d), {}, Eigen::Vector3d(50, -20, 40));
   const auto r = scan::scan(cmm, d, {});
   ASSERT_TRUE(r.ok()) << r.summary();
   // ΔL traces: the outer section was scanned three times (design, after the correction, after
