@@ -481,8 +481,10 @@ TEST(Controller, ScanJsonReadsBackForItsReport) {
             std::string::npos);
   EXPECT_NE(refused("\"events\":", "\"happenings\":").find("'events' is missing"),
             std::string::npos);
-  EXPECT_NE(refused("\"tolerance_mm\": 1.5", "\"tolerance_mm\": -1").find("bad-scan.json:"),
-            std::string::npos);
+  // The place (file:line:col) and the reason.
+  const std::string tol = refused("\"tolerance_mm\": 1.5", "\"tolerance_mm\": -1");
+  EXPECT_NE(tol.find("bad-scan.json:"), std::string::npos) << tol;
+  EXPECT_NE(tol.find("the tolerance must be positive"), std::string::npos) << tol;
   EXPECT_NE(refused("\"kind\": \"scan\"", "\"kind\": \"fit\"").find("not a scan result"),
             std::string::npos);
 }
