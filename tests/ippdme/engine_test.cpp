@@ -475,7 +475,11 @@ struct Threaded {
 
 TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
   Threaded th;
-  auto& [m, out, e, worker] = th;
+  // Plain references, not a structured binding: clang 14 cannot capture those in a lambda.
+  auto& m = th.m;
+  auto& out = th.out;
+  auto& e = th.e;
+  auto& worker = th.worker;
   e.receive("00001 StartSession()");
   e.receive("00002 Home()");
   e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
@@ -516,7 +520,11 @@ TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
 // completion never comes before an earlier transaction's.
 TEST(IppEngine, FastQueueCommandsWithOrdinaryTagsRunAtOnceAndCompleteInOrder) {
   Threaded th;
-  auto& [m, out, e, worker] = th;
+  // Plain references, not a structured binding: clang 14 cannot capture those in a lambda.
+  auto& m = th.m;
+  auto& out = th.out;
+  auto& e = th.e;
+  auto& worker = th.worker;
   auto wait_for = [&](const std::string& line) {
     for (int i = 0; i < 4000; ++i) {
       {
