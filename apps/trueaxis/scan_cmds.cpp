@@ -132,9 +132,14 @@ int run_scan(ScanArgs& a) {
           "CMM with the geometric errors of '{}'; part origin at ({:.1f}, {:.1f}, {:.1f}) mm in "
           "machine coordinates\n",
           rec.machine, rec.part_origin->x(), rec.part_origin->y(), rec.part_origin->z());
-    for (const auto& s : r.sections)
+    for (const auto& s : r.sections) {
+      std::string carried;
+      for (const auto& c : s.corrections)
+        if (!c.found_on.empty() && carried.find(c.found_on) == std::string::npos)
+          carried += (carried.empty() ? " (and the part's move found on " : ", ") + c.found_on;
+      if (!carried.empty()) carried += ")";
       fmt::print(
-          "{}: {} — {} points, {} trajectory errors, {} corrections, {} autonomous scans, "
+          "{}: {} — {} points, {} trajectory errors, {} corrections{}, {} autonomous scans, "
           "{:.1f} s\n",
           s.name,
           s.ok              ? "ok"
@@ -142,8 +147,9 @@ int run_scan(ScanArgs& a) {
                             : "ERROR: " + s.reason,
           s.points.size(), s.trajectory_errors,
           std::count_if(s.corrections.begin(), s.corrections.end(),
-                        [](const auto& c) { return c.accepted; }),
-          s.autonomous_count, s.time.total);
+                        [](const auto& c) { return c.accepted && c.found_on.empty(); }),
+          carried, s.autonomous_count, s.time.total);
+    }
     fmt::print("{}\n", r.summary());
     if (!a.truth.empty())
       fmt::print("measured points against the simulated part: max |distance| {:.2f} µm -> {}\n",

@@ -85,6 +85,7 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
         cd["residual_after_mm"] = py::none();  // never applied: the fit diverged
         cd["diverged"] = c.diverged;
       }
+      if (!c.found_on.empty()) cd["found_on"] = c.found_on;  // carried over from that section
       corr.append(cd);
     }
     py::dict sd;

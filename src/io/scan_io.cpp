@@ -51,6 +51,8 @@ void write_scan(const std::string& path, const scan::Result& r, const scan::Cont
         one["residual_after_mm"] = c.residual_after;
       else
         one.update(ojson{{"residual_after_mm", nullptr}, {"diverged", c.diverged}});
+      // Carried over from the section whose touch points found it (the residuals are theirs).
+      if (!c.found_on.empty()) one["found_on"] = c.found_on;
       corr.push_back(std::move(one));
     }
     ojson pts = ojson::array(), nrm = ojson::array(), ts = ojson::array();
@@ -220,6 +222,7 @@ ScanFile read_scan(const std::string& path) {
       } else {
         x.residual_after = finite(f, c / "residual_after_mm");
       }
+      if (f.has(c / "found_on")) x.found_on = f.string(c / "found_on");
       for (const auto& [name, v] : f.root()[c / "parameters"].items()) {
         (void)v;
         x.parameters.push_back({name, finite(f, c / "parameters" / name)});

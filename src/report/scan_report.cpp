@@ -31,13 +31,15 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
   for (std::size_t i = 0; i < r.sections.size(); ++i) {
     const auto& sec = r.sections[i];
     if (!sec.ok) s.warnings.push_back(fmt::format("section '{}': {}", sec.name, sec.reason));
-    std::string applied = "none";
+    std::string applied;
     for (const auto& c : sec.corrections)
       if (c.accepted) {
-        applied = c.type;
+        applied += (applied.empty() ? "" : "; ") + c.type;
         for (const auto& [k, v] : c.parameters)
           if (k.rfind("centre", 0) != 0) applied += fmt::format(" {}={:.5g}", k, v);
+        if (!c.found_on.empty()) applied += fmt::format(" (found on {})", c.found_on);
       }
+    if (applied.empty()) applied = "none";
     std::string truth = "not known";
     if (i < truth_um.size() && truth_um[i].size())
       truth = fmt::format("{:.2f}", truth_um[i].cwiseAbs().maxCoeff());

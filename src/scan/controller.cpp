@@ -84,18 +84,21 @@ design::Section overwrite(const design::Section& s, const std::vector<Sample>& s
 
 struct SectionRun {
   SectionRun(Machine& machine, const ControllerOptions& options, const Planner& planner,
-             std::vector<Event>& log, bool& first, design::Section section)
+             std::vector<Event>& log, bool& first, std::vector<Correction>& part,
+             design::Section section)
       : m(machine),
         o(options),
         nominal(planner),
         events(log),
         first_move(first),
+        part_move(part),
         current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
   const Planner& nominal;  // against the design's solid
   std::vector<Event>& events;
   bool& first_move;  // the run's first free move rises along the stylus whatever is around
+  std::vector<Correction>& part_move;  // the run's rigid corrections so far (section.hpp)
   SectionResult r;
   design::Section current;
   // Against the solid moved by the corrections accepted for this section so far (what the
@@ -121,8 +124,10 @@ struct SectionRun {
   // the design, the edge of the band the real surface is searched in), around the outside of
   // the design kRouteMargin beyond that: along the design's offset, cutting straight wherever
   // the chord keeps clear of the design.
+  // The ball stands on the last touch's approach line, between the surface and `back_to` (that
+  // touch's start).
   void route(const design::Samples& smp, const sim::Contour& design, double reach,
-             Eigen::Index from, Eigen::Index to) {
+             Eigen::Index from, Eigen::Index to, const Eigen::Vector3d& back_to) {
     const Eigen::Index n = smp.points.cols();
     const Eigen::Vector3d next_start = smp.points.col(to) + reach * smp.normals.col(to);
     // Waypoints kRouteMargin beyond the touch starts; chords between them may cut in to half
@@ -167,13 +172,18 @@ struct SectionRun {
       at = best;
     }
     legs.push_back(next_start);
-    // The first leg leaves the surface just touched: it may start nearer than the margin, but
-    // must not come nearer than it starts.
+    // The first leg leaves the surface just touched, out along the approach line through the
+    // touch's start: it may start nearer than the margin, but must not come nearer than it starts.
     Eigen::Vector3d leg_start = m.position();
     double margin =
         std::min(planner().margin(), planner().clearance(leg_start, m.stylus_axis()) - 0.01);
     for (const auto& p : legs) {
       if (!planner().clear(leg_start, p, m.stylus_axis(), margin)) {
+        // The planner's way (over the part), from the touch's start, outside the band.
+        timed(m, r.time.moves, [&] {
+          m.move(back_to, o.move_speed);
+          return 0;
+        });
         safe_move(next_start);
         return;
       }
@@ -254,6 +264,7 @@ struct SectionRun {
     const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
                                current.material == design::Side::Left);
     Eigen::Index last = -1;
+    Eigen::Vector3d last_start = Eigen::Vector3d::Zero();
     for (int i = 0; i < k; ++i) {
       const double arc = current.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / (k - 1)) * L;
       Eigen::Index j = 0;
@@ -263,7 +274,7 @@ struct SectionRun {
         if (last < 0)
           safe_move(p + reach * nn);
         else
-          route(smp, outline, reach, last, j);
+          route(smp, outline, reach, last, j, last_start);
       } catch (const NoWay& e) {
         // The next touch point is tried with a free move planned from wherever the machine
         // stands (a route may have stopped part way).
@@ -273,13 +284,16 @@ struct SectionRun {
         continue;
       }
       last = j;
+      last_start = p + reach * nn;
       const auto t = timed(m, r.time.touch, [&] {
         auto got =
-            m.touch(current.plane, p + reach * nn, -nn,
-                    2 * (o.tolerance + kMargin) + o.touch_trigger, o.touch_speed, o.touch_trigger);
-        // Back the way the ball came, to the touch's start: outside the band the part may be
-        // in, where the next move can be planned against the design's solid.
-        m.move(p + reach * nn, o.move_speed);
+            m.touch(current.plane, last_start, -nn, 2 * (o.tolerance + kMargin) + o.touch_trigger,
+                    o.touch_speed, o.touch_trigger);
+        // After the last touch (or a search that found nothing, and went through the band),
+        // back the way the ball came, to the touch's start: outside the band the part may be
+        // in, where the next move can be planned against the design's solid. Before another
+        // touch, the route to it leaves along that line anyway.
+        if (i + 1 == k || !got) m.move(last_start, o.move_speed);
         return got;
       });
       if (!t) {
@@ -382,9 +396,77 @@ struct SectionRun {
     return true;
   }
 
+  // Applies accepted corrections to the section's design data and to where the planner stands
+  // the solid.
+  void correct_by(const Eigen::Affine3d& step) {
+    auto map = [&](Eigen::Matrix3Xd& pts) {
+      for (Eigen::Index i = 0; i < pts.cols(); ++i) pts.col(i) = step * pts.col(i);
+    };
+    if (current.nurbs)
+      map(current.nurbs->control_points);
+    else
+      map(current.polyline);
+    learnt = step * learnt;
+    // The design's solid follows the corrected curve (the nominal planner already stands it at
+    // the section's placement).
+    current.solid_placement = step * current.solid_placement;
+    moved_planner.emplace(nominal.moved(learnt));
+  }
+
+  // A correction keeps this section's plane: it maps the plane onto itself (a translation in it,
+  // a rotation about its normal), as a correction found on a parallel section does.
+  bool keeps_plane(const Correction& c) const {
+    const Eigen::Vector3d n = current.plane.normal.normalized(), o = current.plane.origin;
+    return (c.transform.linear() * n - n).norm() < 1e-9 &&
+           std::abs((c.transform * o - o).dot(n)) < 1e-9;
+  }
+
+  // Before the first scan: where the part stands, as the corrections an earlier section found.
+  void carry_part_move() {
+    if (part_move.empty() || current.space_curve() ||
+        !std::all_of(part_move.begin(), part_move.end(),
+                     [&](const Correction& c) { return keeps_plane(c); }))
+      return;
+    Eigen::Affine3d step = Eigen::Affine3d::Identity();
+    std::string what;
+    for (const auto& c : part_move) {
+      step = c.transform * step;
+      r.corrections.push_back(c);
+      std::string params;
+      for (const auto& [k, v] : c.parameters)
+        if (k.rfind("centre", 0) != 0) params += fmt::format(" {}={:.6g}", k, v);
+      what += fmt::format("{}{} ({}:{})", what.empty() ? "" : ", ", c.found_on, c.type, params);
+    }
+    correct_by(step);
+    log(0, 0, "correction", "correction_carried",
+        fmt::format("the part is where the touch points of {} found it: corrections applied "
+                    "before the first scan",
+                    what));
+  }
+
+  // After the section: its rigid corrections are where the part stands, for the sections after
+  // it (all of them rigid, at least one its own).
+  void hand_on_part_move() const {
+    std::vector<Correction> rigid;
+    bool own = false;
+    for (const auto& c : r.corrections) {
+      if (!c.accepted) continue;
+      const Eigen::Matrix3d R = c.transform.linear();
+      if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9 || R.determinant() < 0)
+        return;
+      rigid.push_back(c);
+      if (c.found_on.empty()) {
+        rigid.back().found_on = current.name;
+        own = true;
+      }
+    }
+    if (own) part_move = std::move(rigid);
+  }
+
   void run() {
     r.name = current.name;
     const double t0 = m.time();
+    if (o.strategy == Strategy::ErrorTolerant) carry_part_move();
     if (o.strategy == Strategy::Autonomous) {
       r.ok = autonomous();
       if (r.ok) log(0, 0, "section", "section_done", "measured by autonomous scanning only");
@@ -440,15 +522,13 @@ struct SectionRun {
           for (const auto& c : tried)
             if (c.type != "none") r.corrections.push_back(c);
           if (corrected) {
-            current = fixed;
             Eigen::Affine3d step = Eigen::Affine3d::Identity();
             for (const auto& c : tried)
               if (c.accepted) step = c.transform * step;
-            learnt = step * learnt;
-            // The design's solid follows the corrected curve (the nominal planner already
-            // stands it at the section's placement).
-            current.solid_placement = step * current.solid_placement;
-            moved_planner.emplace(nominal.moved(learnt));
+            // The fit's own corrected curve (the same map, applied as the fit did).
+            correct_by(step);
+            current.polyline = fixed.polyline;
+            current.nurbs = fixed.nurbs;
           }
         } else {
           log(stop.arc, stop.delta_l, "correction", "correction_rejected",
@@ -470,6 +550,7 @@ struct SectionRun {
       flag = 0;
       log(0, 0, "design", "rescan", "rescan in design mode with the measured design data");
     }
+    hand_on_part_move();
     r.time.total = m.time() - t0;
   }
 };
@@ -478,7 +559,7 @@ struct SectionRun {
 
 namespace detail {
 SectionResult run_section(const SectionContext& c, design::Section& section) {
-  SectionRun run(c.machine, c.options, c.planner, c.events, c.first_move, section);
+  SectionRun run(c.machine, c.options, c.planner, c.events, c.first_move, c.part_move, section);
   try {
     run.run();
   } catch (...) {

@@ -183,25 +183,31 @@ bool Result::ok() const {
 }
 
 std::string Result::summary() const {
-  int ok = 0, errors = 0, aut = 0, corr = 0;
+  int ok = 0, errors = 0, aut = 0, corr = 0, carried = 0;
   for (const auto& s : sections) {
     ok += s.ok;
     errors += s.trajectory_errors;
     aut += s.autonomous_count;
-    for (const auto& c : s.corrections) corr += c.accepted;
+    bool got = false;
+    for (const auto& c : s.corrections) {
+      corr += c.accepted && c.found_on.empty();
+      got = got || !c.found_on.empty();
+    }
+    carried += got;
   }
   double blocked = 0;
   for (const auto& u : unreachable) blocked += u.to - u.from;
   return fmt::format(
-      "{} of {} sections scanned{}{}; {} trajectory errors, {} geometric corrections, {} "
+      "{} of {} sections scanned{}{}; {} trajectory errors, {} geometric corrections{}, {} "
       "autonomous scans; machine time {:.1f} s (design {:.1f}, touch {:.1f}, autonomous {:.1f}, "
       "moves {:.1f}){}",
       ok, sections.size(),
       unreachable.empty() ? ""
                           : fmt::format(" ({} stretches, {:.1f} mm of contour, not reachable)",
                                         unreachable.size(), blocked),
-      stopped.empty() ? "" : "; the run stopped early", errors, corr, aut, time.total, time.design,
-      time.touch, time.autonomous, time.moves, stopped.empty() ? "" : ": " + stopped);
+      stopped.empty() ? "" : "; the run stopped early", errors, corr,
+      carried ? fmt::format(" (carried to {} more sections)", carried) : "", aut, time.total,
+      time.design, time.touch, time.autonomous, time.moves, stopped.empty() ? "" : ": " + stopped);
 }
 
 Eigen::Vector3d start_position(const design::Design& design, const ControllerOptions& options) {
@@ -262,6 +268,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
                                       u.from, u.to, u.why)});
 
   bool first_move = true;
+  std::vector<Correction> part_move;
   for (std::size_t i = 0; i < items.size(); ++i) {
     Item& it = items[i];
     if (progress) progress(i, items.size(), it.section.name);
@@ -291,8 +298,9 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       }
       SectionResult partial;
       try {
-        r = detail::run_section({machine, options, *it.planner, res.events, first_move, partial},
-                                it.section);
+        r = detail::run_section(
+            {machine, options, *it.planner, res.events, first_move, partial, part_move},
+            it.section);
       } catch (...) {
         r = std::move(partial);
         throw;

@@ -16,6 +16,10 @@ struct SectionContext {
   std::vector<Event>& events;
   bool& first_move;        // the run's first free move rises along the stylus first
   SectionResult& partial;  // receives what was measured when the section throws
+  // Where the part stands, as the rigid corrections (translation, rotation) the last corrected
+  // section accepted: carried to a section whose plane they keep before it is first scanned, and
+  // replaced by that section's when it accepts corrections of its own that are all rigid.
+  std::vector<Correction>& part_move;
 };
 
 // Scans `section` (its design data are corrected in place) and returns its result. Throws what

@@ -16,6 +16,10 @@
 //     (tip radius and pushing amount compensated), set flag = 0 and rescan in design mode;
 //  4. stop with an error after `max_autonomous` autonomous corrections of one section.
 // The corrected design data are returned, so that the next part of a batch scans with them.
+// A part is one rigid body: a translation or rotation accepted on one section is where the whole
+// part stands, so it is carried to the sections after it whose plane it keeps (parallel
+// sections), before they are first scanned (event correction_carried). A carried correction that
+// is wrong costs one trajectory error there, and that section's own touch points then correct it.
 //
 // With the part's solid (the design's STEP file), every free move is planned against it
 // (planner.hpp), the run's first move rises along the stylus before it goes anywhere (a machine
@@ -76,6 +80,7 @@ struct Event {
   double arc = 0, delta_l = 0;  // where on the path, and the trajectory error there (mm)
   std::string mode;             // design, touch, autonomous, correction, section
   std::string event;            // trajectory_error, touch, correction_applied, correction_rejected,
+                                // correction_carried,
                       // autonomous_scan, design_overwritten, rescan, section_done, error_exit,
                       // loop_limit, two_dimensional (a space curve found to lie in a plane)
   std::string decision;  // in words
@@ -92,6 +97,9 @@ struct Correction {
   std::string diverged;
   // The correction as a map of the design data: x -> transform · x (mm, part frame).
   Eigen::Affine3d transform = Eigen::Affine3d::Identity();
+  // The section whose touch points found it, when it was carried over from there ("" when this
+  // section's own touch points found it); the residuals are then those of that section.
+  std::string found_on;
 };
 
 // Machine time by activity (s). `moves` are the free moves between operations (safe-height
