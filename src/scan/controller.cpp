@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <optional>
 
 #include "section.hpp"
@@ -109,10 +110,36 @@ struct SectionRun {
 
   // A free move the planner finds: straight when clear of the part, else retract along the
   // stylus to the clearance level, across, and down.
+  // Where the planner finds no way (the ball stands under an overhang, where a scan ended), it
+  // first moves out sideways, across the stylus, to where it does (the nearest of 8 directions
+  // and 4 distances, in order).
   void safe_move(const Eigen::Vector3d& to) {
     const Eigen::Vector3d from = m.position();
     if ((to - from).norm() < 1e-6) return;
-    const auto way = planner().route(from, to, m.stylus_axis(), first_move);
+    const Eigen::Vector3d u = m.stylus_axis();
+    std::vector<Eigen::Vector3d> way;
+    try {
+      way = planner().route(from, to, u, first_move);
+    } catch (const NoWay&) {
+      // Not on the run's first move: where the machine stands then is not trusted.
+      if (first_move) throw;
+      const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+      const double margin = std::min(planner().margin(), planner().clearance(from, u) - 0.01);
+      for (const double d : {5.0, 10.0, 20.0, 40.0}) {
+        for (int k = 0; k < 8 && way.empty(); ++k) {
+          const double t = std::numbers::pi / 4 * k;
+          const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
+          if (!planner().clear(from, side, u, margin)) continue;
+          try {
+            way = planner().route(side, to, u, false);
+            way.insert(way.begin(), side);
+          } catch (const NoWay&) {
+          }
+        }
+        if (!way.empty()) break;
+      }
+      if (way.empty()) throw;
+    }
     first_move = false;
     timed(m, r.time.moves, [&] {
       for (const auto& p : way) m.move(p, o.move_speed);

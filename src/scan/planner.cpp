@@ -183,6 +183,9 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
   // The stylus and body keep a tenth of a millimetre from everything (a Ø1 stem beside a wall it
   // scans has 0.2 mm); the ball, from what it does not measure.
   constexpr double kReach = 0.1;
+  // The least advance of a pushed ball between checks (mm): a stem or lip thinner than this
+  // between two checks is the only thing the push could step over.
+  constexpr double kPushStep = 0.05;
   // Until a trajectory error stops it, the ball follows the design path while the real part may
   // stand off its design by up to the margin in any direction in the plane: from every such
   // place the ball can get to without crossing the contour, the ball must stay clear of the
@@ -210,16 +213,26 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
       const Eigen::Vector3d shift =
           j < 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero())
                 : Eigen::Vector3d(margin_ * (std::cos(t) * a + std::sin(t) * b));
-      // The ball where the part, off by `shift`, leaves it: on the path, or pushed on towards
-      // the material side where the part is not there (up to the margin, before the trajectory
-      // error stops it). A place inside the part, or nearer the contour than the ball stands
-      // from it while scanning, is a contact, not a free place: the ball stops on the surface.
-      for (const double push : {0.0, margin_}) {
-        if (j < 0 && push == 0) continue;
+      // The ball where the part, off by `shift`, leaves it: on the path, and pushed on from
+      // there towards the material side where the part is not there (up to the margin, before
+      // the trajectory error stops it). A place inside the part, or nearer the contour than the
+      // ball stands from it while scanning, is a contact: the ball stops on the surface there,
+      // and goes no further. Every place on the way counts (a stem can meet a lip above a
+      // groove the ball is pushed into before the ball meets anything): the push advances by
+      // no more than the stylus and body have room for, nor than the ball has before contact.
+      for (double push = j < 0 ? kPushStep : 0.0;;) {
         const Eigen::Vector3d x = c + shift - push * a;
-        if (part_->inside(x) || part_->distance(x, contact, contour) < contact) continue;
-        for (int k = 0; k < 3; ++k)
-          if (element(k, x, u, k == 0 ? skip : std::vector<char>{}) < kReach) return 3 + k;
+        if (part_->inside(x)) break;
+        const double to_contact = part_->distance(x, contact + margin_, contour) - contact;
+        if (to_contact < 0) break;
+        double room = to_contact;
+        for (int k = 0; k < 3; ++k) {
+          const double e = element(k, x, u, k == 0 ? skip : std::vector<char>{});
+          if (e < kReach) return 3 + k;
+          room = std::min(room, e - kReach);
+        }
+        if (push >= margin_) break;
+        push = std::min(margin_, push + std::max(room, kPushStep));
       }
     }
     return -1;

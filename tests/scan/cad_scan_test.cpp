@@ -1,7 +1,7 @@
 // Error-tolerant scanning of real CAD parts (public STEP files of NIST in tests/data/cad/):
 // the DaimlerChrysler test part's eight contours at z = 19.98 mm around tabs with sloping
 // undersides, bosses and a slot the part covers from above, and the B-spline walls of MBE PMI
-// CTC 05 (inch). Parts moved, scaled or bumped off their design: every reachable stretch is
+// CTC 05 (inch), and FTC 10 in a vertical plane. Parts moved, scaled or bumped off their design: every reachable stretch is
 // scanned, the rest is reported, nothing runs into the part, and every point lies on the moved
 // solid as Open CASCADE computes it independently (the STEP file read again, moved with gp_Trsf,
 // and each point's distance to its faces).
@@ -134,6 +134,22 @@ TEST(CadScan, NistCtc05BsplineWallsMovedAndScaled) {
   cases[1].dev.scale = 1 + 2.5 / 279.5;
   golden(std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ctc_05_asme1_rd.stp",
          {Eigen::Vector3d(0, 0, 178.5675), Eigen::Vector3d::UnitZ()}, cases, 1);
+}
+
+// NIST MBE PMI FTC 10 cut in a vertical plane (y = 15.83 mm) and scanned with a vertical
+// stylus: the walls along the stylus are scanned, the undersides and the grooves the stem cannot
+// enter are reported. Moved 2 mm down, the part brings a lip down over the wall below a narrow
+// groove: where the ball, pushed on into the groove to look for the surface, would bring the
+// stem under that lip, the wall is not scanned (it once was, and the stem hit the lip).
+TEST(CadScan, NistFtc10VerticalPlaneMovedAlongTheWalls) {
+  std::vector<ScanCase> cases(2);
+  cases[0].label = "moved 2 mm down";
+  cases[0].dev.translation = Eigen::Vector3d(0, 0, -2);
+  cases[1].label = "turned 0.5 degrees about the plane's normal";
+  cases[1].dev.rotation_deg = Eigen::Vector3d(0, 0.5, 0);
+  const auto runs = golden(std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ftc_10_asme1_rb.stp",
+                           {Eigen::Vector3d(0, 15.83, 0), Eigen::Vector3d::UnitY()}, cases, 2);
+  for (const auto& r : runs) EXPECT_FALSE(r.unreachable.empty()) << r.summary();
 }
 
 }  // namespace
