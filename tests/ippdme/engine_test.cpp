@@ -475,31 +475,26 @@ struct Threaded {
 
 TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
   Threaded th;
-  // Plain references, not a structured binding: clang 14 cannot capture those in a lambda.
-  auto& m = th.m;
-  auto& out = th.out;
-  auto& e = th.e;
-  auto& worker = th.worker;
-  e.receive("00001 StartSession()");
-  e.receive("00002 Home()");
-  e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
-  e.receive("00004 GoTo(X(400))");  // 40 s of machine time, 0.8 s of wall time
-  e.receive("00005 Get(X())");      // pending: aborted too
+  th.e.receive("00001 StartSession()");
+  th.e.receive("00002 Home()");
+  th.e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
+  th.e.receive("00004 GoTo(X(400))");  // 40 s of machine time, 0.8 s of wall time
+  th.e.receive("00005 Get(X())");      // pending: aborted too
   std::this_thread::sleep_for(std::chrono::milliseconds(200));
-  const double t_abort = e.machine_time();
-  e.receive("E0006 AbortE()");
+  const double t_abort = th.e.machine_time();
+  th.e.receive("E0006 AbortE()");
   for (int i = 0; i < 2000; ++i) {
     {
-      std::lock_guard lk(m);
-      if (!out.empty() && out.back() == "E0006 %") break;
+      std::lock_guard lk(th.m);
+      if (!th.out.empty() && th.out.back() == "E0006 %") break;
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
-  e.stop();
-  worker.join();
-  std::lock_guard lk(m);
+  th.e.stop();
+  th.worker.join();
+  std::lock_guard lk(th.m);
   auto has = [&](const std::string& l) {
-    return std::find(out.begin(), out.end(), l) != out.end();
+    return std::find(th.out.begin(), th.out.end(), l) != th.out.end();
   };
   EXPECT_TRUE(
       has("00004 ! Error(2, 0006, \"GoTo\", \"Transaction aborted (Use ClearAllErrors "
@@ -507,12 +502,12 @@ TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
   EXPECT_TRUE(
       has("00005 ! Error(2, 0006, \"Get\", \"Transaction aborted (Use ClearAllErrors "
           "To Continue)\")"));
-  ASSERT_EQ(out.back(), "E0006 %");
+  ASSERT_EQ(th.out.back(), "E0006 %");
   // It stopped where it was: at 10 mm/s, within the distance of the abort's delivery.
-  const double x = e.cmm().position().x();
+  const double x = th.e.cmm().position().x();
   EXPECT_GT(x, 1);
-  EXPECT_LT(x, 10 * (e.machine_time() - t_abort) + 10 * t_abort + 0.1);
-  EXPECT_LT(e.machine_time() - t_abort, 1.0) << "the carriage stops in the servo's lag";
+  EXPECT_LT(x, 10 * (th.e.machine_time() - t_abort) + 10 * t_abort + 0.1);
+  EXPECT_LT(th.e.machine_time() - t_abort, 1.0) << "the carriage stops in the servo's lag";
 }
 
 // A widely used Python client sends the fast-queue commands with ordinary tags. They still run
@@ -520,37 +515,32 @@ TEST(IppEngine, AbortEStopsALongMoveAtTheNextServoTick) {
 // completion never comes before an earlier transaction's.
 TEST(IppEngine, FastQueueCommandsWithOrdinaryTagsRunAtOnceAndCompleteInOrder) {
   Threaded th;
-  // Plain references, not a structured binding: clang 14 cannot capture those in a lambda.
-  auto& m = th.m;
-  auto& out = th.out;
-  auto& e = th.e;
-  auto& worker = th.worker;
   auto wait_for = [&](const std::string& line) {
     for (int i = 0; i < 4000; ++i) {
       {
-        std::lock_guard lk(m);
-        if (std::find(out.begin(), out.end(), line) != out.end()) return true;
+        std::lock_guard lk(th.m);
+        if (std::find(th.out.begin(), th.out.end(), line) != th.out.end()) return true;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
     return false;
   };
   auto index = [&](const std::string& line) {
-    std::lock_guard lk(m);
-    return std::find(out.begin(), out.end(), line) - out.begin();
+    std::lock_guard lk(th.m);
+    return std::find(th.out.begin(), th.out.end(), line) - th.out.begin();
   };
-  e.receive("00001 StartSession()");
-  e.receive("00002 Home()");
-  e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
-  e.receive("00004 GoTo(X(400))");  // 40 s of machine time, 0.8 s of wall time
+  th.e.receive("00001 StartSession()");
+  th.e.receive("00002 Home()");
+  th.e.receive("00003 SetProp(Tool.GoToPar.Speed(10))");
+  th.e.receive("00004 GoTo(X(400))");  // 40 s of machine time, 0.8 s of wall time
   std::this_thread::sleep_for(std::chrono::milliseconds(150));
-  e.receive("00005 GetErrStatusE()");
+  th.e.receive("00005 GetErrStatusE()");
   ASSERT_TRUE(wait_for("00005 # ErrStatus(0)"));  // answered while the GoTo runs
-  const double t_abort = e.machine_time();
-  e.receive("00006 AbortE()");
+  const double t_abort = th.e.machine_time();
+  th.e.receive("00006 AbortE()");
   ASSERT_TRUE(wait_for("00006 %"));
-  e.stop();
-  worker.join();
+  th.e.stop();
+  th.worker.join();
   // Reported on E0000, and not an error that stops the session (the GoTo ended by the abort).
   EXPECT_LT(index("E0000 ! Error(2, 0001, \"GetErrStatusE with tag 00005: a fast-queue command, "
                   "run at once\", \"Illegal tag\")"),
@@ -561,8 +551,8 @@ TEST(IppEngine, FastQueueCommandsWithOrdinaryTagsRunAtOnceAndCompleteInOrder) {
   // In order: the GoTo's completion, then GetErrStatusE's, then the abort's.
   EXPECT_LT(index("00004 %"), index("00005 %"));
   EXPECT_LT(index("00005 %"), index("00006 %"));
-  EXPECT_LT(e.machine_time() - t_abort, 1.0) << "the abort stopped the GoTo";
-  EXPECT_LT(e.cmm().position().x(), 100);
+  EXPECT_LT(th.e.machine_time() - t_abort, 1.0) << "the abort stopped the GoTo";
+  EXPECT_LT(th.e.cmm().position().x(), 100);
 }
 
 }  // namespace
