@@ -472,8 +472,12 @@ struct SectionRun {
   }
 
   // After the section: its rigid corrections are where the part stands, for the sections after
-  // it (all of them rigid, at least one its own).
+  // it (all of them rigid, at least one its own), when the section is a whole closed contour.
+  // The touch points of an open stretch do not tell a move from a scale, nor see a move along
+  // a straight wall: a wall of a scaled part fits a translation, which is wrong for the wall
+  // opposite (carried there, it put the planned moves 4 mm off the part).
   void hand_on_part_move() const {
+    if (!current.closed) return;
     std::vector<Correction> rigid;
     bool own = false;
     for (const auto& c : r.corrections) {

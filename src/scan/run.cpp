@@ -206,8 +206,10 @@ std::string Result::summary() const {
                           : fmt::format(" ({} stretches, {:.1f} mm of contour, not reachable)",
                                         unreachable.size(), blocked),
       stopped.empty() ? "" : "; the run stopped early", errors, corr,
-      carried ? fmt::format(" (carried to {} more sections)", carried) : "", aut, time.total,
-      time.design, time.touch, time.autonomous, time.moves, stopped.empty() ? "" : ": " + stopped);
+      carried ? fmt::format(" (carried to {} more section{})", carried, carried > 1 ? "s" : "")
+              : "",
+      aut, time.total, time.design, time.touch, time.autonomous, time.moves,
+      stopped.empty() ? "" : ": " + stopped);
 }
 
 Eigen::Vector3d start_position(const design::Design& design, const ControllerOptions& options) {

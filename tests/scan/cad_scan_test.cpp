@@ -140,13 +140,17 @@ TEST(CadScan, NistCtc05BsplineWallsMovedAndScaled) {
 // stylus: the walls along the stylus are scanned, the undersides and the grooves the stem cannot
 // enter are reported. Moved 2 mm down, the part brings a lip down over the wall below a narrow
 // groove: where the ball, pushed on into the groove to look for the surface, would bring the
-// stem under that lip, the wall is not scanned (it once was, and the stem hit the lip).
+// stem under that lip, the wall is not scanned (it once was, and the stem hit the lip). Scaled,
+// each outer wall's touch points fit a translation, which is no move of the whole part (carried
+// to the opposite wall, it once put the planned moves 4 mm off the part).
 TEST(CadScan, NistFtc10VerticalPlaneMovedAlongTheWalls) {
-  std::vector<ScanCase> cases(2);
+  std::vector<ScanCase> cases(3);
   cases[0].label = "moved 2 mm down";
   cases[0].dev.translation = Eigen::Vector3d(0, 0, -2);
   cases[1].label = "turned 0.5 degrees about the plane's normal";
   cases[1].dev.rotation_deg = Eigen::Vector3d(0, 0.5, 0);
+  cases[2].label = "scaled 2.5 mm at its half-length";
+  cases[2].dev.scale = 1 + 2.5 / 79.74;
   const auto runs = golden(std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ftc_10_asme1_rb.stp",
                            {Eigen::Vector3d(0, 15.83, 0), Eigen::Vector3d::UnitY()}, cases, 2);
   for (const auto& r : runs) EXPECT_FALSE(r.unreachable.empty()) << r.summary();

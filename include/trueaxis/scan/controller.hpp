@@ -16,9 +16,10 @@
 //     (tip radius and pushing amount compensated), set flag = 0 and rescan in design mode;
 //  4. stop with an error after `max_autonomous` autonomous corrections of one section.
 // The corrected design data are returned, so that the next part of a batch scans with them.
-// A part is one rigid body: a translation or rotation accepted on one section is where the whole
-// part stands, so it is carried to the sections after it whose plane it keeps (parallel
-// sections), before they are first scanned (event correction_carried). A carried correction that
+// A part is one rigid body: a translation or rotation accepted on a closed section (whose touch
+// points surround the part, and so tell a move from a scale) is where the whole part stands, so
+// it is carried to the sections after it whose plane it keeps (parallel sections), before they
+// are first scanned (event correction_carried). A carried correction that
 // is wrong costs one trajectory error there, and that section's own touch points then correct it.
 //
 // With the part's solid (the design's STEP file), every free move is planned against it
@@ -81,8 +82,8 @@ struct Event {
   std::string mode;             // design, touch, autonomous, correction, section
   std::string event;            // trajectory_error, touch, correction_applied, correction_rejected,
                                 // correction_carried,
-                      // autonomous_scan, design_overwritten, rescan, section_done, error_exit,
-                      // loop_limit, two_dimensional (a space curve found to lie in a plane)
+  // autonomous_scan, design_overwritten, rescan, section_done, error_exit,
+  // loop_limit, two_dimensional (a space curve found to lie in a plane)
   std::string decision;  // in words
 };
 
