@@ -84,15 +84,14 @@ design::Section overwrite(const design::Section& s, const std::vector<Sample>& s
 }
 
 struct SectionRun {
-  SectionRun(Machine& machine, const ControllerOptions& options, const Planner& planner,
-             std::vector<Event>& log, bool& first, std::vector<Correction>& part,
-             design::Section section)
-      : m(machine),
-        o(options),
-        nominal(planner),
-        events(log),
-        first_move(first),
-        part_move(part),
+  SectionRun(const detail::SectionContext& c, design::Section section)
+      : m(c.machine),
+        o(c.options),
+        nominal(c.planner),
+        events(c.events),
+        first_move(c.first_move),
+        part_move(c.part_move),
+        unreachable(c.unreachable),
         current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
@@ -100,6 +99,7 @@ struct SectionRun {
   std::vector<Event>& events;
   bool& first_move;  // the run's first free move rises along the stylus whatever is around
   std::vector<Correction>& part_move;  // the run's rigid corrections so far (section.hpp)
+  std::vector<NotReachable>& unreachable;
   SectionResult r;
   design::Section current;
   // Against the solid moved by the corrections accepted for this section so far (what the
@@ -236,6 +236,64 @@ struct SectionRun {
   void log(double arc, double dl, const std::string& mode, const std::string& ev,
            const std::string& decision) {
     events.push_back({m.time(), current.name, arc, dl, mode, ev, decision});
+  }
+
+  // Before a design-value scan: the ball must come down from above to where the scan starts
+  // and ends (the reachability of the run's stretches was decided for the design data as they
+  // were; a correction may have moved an end under the part, or down to the table). A closed
+  // contour is started again where it can, an open stretch trimmed to where it can, the rest
+  // reported as not reachable. False (the section not reachable) when nothing is left.
+  bool reach_ends() {
+    if (!planner().part() || current.space_curve()) return true;
+    const double approach = settings().approach_clearance;
+    const std::string covered =
+        "the part, where the corrections put it, covers it: no way down to it from above";
+    if (current.closed) {
+      const auto a = detail::reachable_start(current, planner(), o, approach);
+      if (!a) {
+        r.not_reachable = true;
+        r.reason = "not reachable: " + covered;
+        log(0, 0, "section", "error_exit", r.reason);
+        return false;
+      }
+      if (*a > 0) {
+        log(*a, 0, "section", "restart",
+            fmt::format("the contour is scanned from {:.0f} mm along it, where the ball can come "
+                        "down to it",
+                        *a));
+        current = detail::started_at(current, *a);
+      }
+      return true;
+    }
+    const double L = design::length(current);
+    const auto ends = detail::reachable_ends(current, 0, L, planner(), o, approach);
+    const auto smp = design::sample(current, 0.05);
+    auto at = [&](double arc) {
+      Eigen::Index i = 0;
+      (smp.arc.array() - arc).abs().minCoeff(&i);
+      return Eigen::Vector3d(smp.points.col(i));
+    };
+    if (!ends) {
+      unreachable.push_back({current.name, 0, L, at(0), at(L), covered});
+      r.not_reachable = true;
+      r.reason = "not reachable: " + covered;
+      log(0, 0, "section", "error_exit", r.reason);
+      return false;
+    }
+    const auto [a, b] = *ends;
+    if (a == 0 && b == L) return true;
+    // Each piece cut off is reported, as the run reports the stretches it leaves out.
+    auto cut = [&](double from, double to) {
+      unreachable.push_back({current.name, from, to, at(from), at(to), covered});
+      log(from, 0, "section", "not_reachable",
+          fmt::format("{:.1f} to {:.1f} mm along the stretch not scanned: its end moved out of "
+                      "reach ({})",
+                      from, to, covered));
+    };
+    if (a > 0) cut(0, a);
+    if (b < L) cut(b, L);
+    current = design::piece(current, a, b, current.name);
+    return true;
   }
 
   // Design-value scan; true when it ran through within the tolerance.
@@ -508,6 +566,7 @@ struct SectionRun {
     for (int loop = 0;; ++loop) {
       Sample stop;
       std::string why;
+      if (!reach_ends()) break;
       if (design_scan(stop, why)) {
         r.ok = true;
         log(stop.arc, stop.delta_l, "design", "section_done",
@@ -590,7 +649,7 @@ struct SectionRun {
 
 namespace detail {
 SectionResult run_section(const SectionContext& c, design::Section& section) {
-  SectionRun run(c.machine, c.options, c.planner, c.events, c.first_move, c.part_move, section);
+  SectionRun run(c, section);
   try {
     run.run();
   } catch (...) {

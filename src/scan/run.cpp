@@ -5,6 +5,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <tuple>
 
 #include "section.hpp"
 #include "trueaxis/error.hpp"
@@ -17,8 +19,48 @@ namespace {
 // Blocked stretches of a contour are widened by this on each side (mm): the ball keeps off the
 // place where the stylus stops fitting.
 constexpr double kWiden = 0.5;
-// A reachable stretch shorter than this is not scanned (mm): nothing to follow.
-constexpr double kShortest = 2.0;
+
+}  // namespace
+
+namespace detail {
+
+std::optional<std::pair<double, double>> reachable_ends(const design::Section& s, double a,
+                                                        double b, const Planner& planner,
+                                                        const ControllerOptions& o,
+                                                        double approach) {
+  const Eigen::Vector3d u = design::stylus_axis(s.probe);
+  while (b - a >= kShortest) {
+    const auto p = design::make_path(design::piece(s, a, b, s.name), o.path);
+    const auto p0 = p.at(0), p1 = p.at(p.length());
+    const bool in = planner.from_above(p0.p + approach * p0.normal, u);
+    const bool out = planner.from_above(p1.p + approach * p1.normal, u);
+    if (in && out) return std::pair{a, b};
+    if (!in) a += 0.5;
+    if (!out) b -= 0.5;
+  }
+  return std::nullopt;
+}
+
+std::optional<double> reachable_start(const design::Section& s, const Planner& planner,
+                                      const ControllerOptions& o, double approach) {
+  const double L = design::length(s);
+  for (double a = 0; a < L; a += 1) {
+    const auto q = design::make_path(started_at(s, a), o.path).at(0);
+    if (planner.from_above(q.p + approach * q.normal, design::stylus_axis(s.probe))) return a;
+  }
+  return std::nullopt;
+}
+
+design::Section started_at(const design::Section& s, double a) {
+  if (a == 0) return s;
+  design::Section again = design::piece(s, a, a + design::length(s), s.name);
+  again.closed = true;
+  return again;
+}
+
+}  // namespace detail
+
+namespace {
 
 std::string orientation(const design::ProbeOrientation& p) {
   return fmt::format("A{:g}° B{:g}°", p.a_deg, p.b_deg);
@@ -34,30 +76,20 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
   const Eigen::Vector3d u = design::stylus_axis(s.probe);
   const design::ScanPath path = design::make_path(s, o.path);
   const auto blocked = planner.unreachable(path, u);
-  if (blocked.empty()) {
-    // All of it is reachable: start where the ball can come down to it from above, at the
-    // approach distance off the path (a closed contour is started again there).
-    auto way_in = [&](double along) {
-      const auto q = path.at(along);
-      return planner.from_above(q.p + approach * q.normal, u);
-    };
-    if (way_in(0)) return {s};
-    if (s.closed) {
-      const double L = design::length(s);
-      for (double a = 1; a < L; a += 1) {
-        const auto start = design::piece(s, a, a + L, s.name);
-        const auto p = design::make_path(start, o.path);
-        const auto q = p.at(0);
-        if (!planner.from_above(q.p + approach * q.normal, u)) continue;
-        design::Section again = start;
-        again.closed = true;
-        return {again};
-      }
-    }
+  // All of it is reachable: start where the ball can come down to it from above, at the
+  // approach distance off the path (a closed contour is started again there; an open one whose
+  // ends the ball cannot come down to is trimmed below, like any stretch).
+  if (blocked.empty() && s.closed) {
+    if (const auto a = detail::reachable_start(s, planner, o, approach))
+      return {detail::started_at(s, *a)};
     throw Error(
         fmt::format("not reachable with the probe at {}: the part covers it, no way "
                     "down to it from above",
                     orientation(s.probe)));
+  }
+  if (blocked.empty()) {
+    const auto ends = detail::reachable_ends(s, 0, design::length(s), planner, o, approach);
+    if (ends && ends->first == 0 && ends->second == design::length(s)) return {s};
   }
   // Each blocked stretch of the path, on the design contour: the contour points the ball's
   // centre stands over at its ends.
@@ -142,25 +174,19 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
     }
     a = std::max(a, 0.0);
     if (!s.closed) b = std::min(b, L);
+    if (b <= a) continue;  // between two blocked spans that overlap once widened
     // Move the ends in until the ball can come in along the normal from the approach distance
     // and leave the same way; what is cut off is not reachable either.
     const double a_was = a, b_was = b;
-    while (b - a >= kShortest) {
-      const auto p = design::make_path(design::piece(s, a, b, s.name), o.path);
-      const auto p0 = p.at(0), p1 = p.at(p.length());
-      const bool in = planner.from_above(p0.p + approach * p0.normal, u);
-      const bool out_ok = planner.from_above(p1.p + approach * p1.normal, u);
-      if (in && out_ok) break;
-      if (!in) a += 0.5;
-      if (!out_ok) b -= 0.5;
-    }
     const std::string covered =
         fmt::format("the part covers it, no way down to it from above with the probe at {}",
                     orientation(s.probe));
-    if (b - a < kShortest) {
+    const auto ends = detail::reachable_ends(s, a, b, planner, o, approach);
+    if (!ends) {
       res.unreachable.push_back({s.name, a_was, b_was, point_at(a_was), point_at(b_was), covered});
       continue;
     }
+    std::tie(a, b) = *ends;
     if (a > a_was)
       res.unreachable.push_back({s.name, a_was, a, point_at(a_was), point_at(a), covered});
     if (b < b_was)
@@ -168,8 +194,9 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
     out.push_back(design::piece(s, a, b, fmt::format("{}:{}", s.name, out.size() + 1)));
   }
   if (out.empty())
-    throw Error(fmt::format("not reachable with the probe at {}: {}", orientation(s.probe),
-                            merged.front().why));
+    throw Error(fmt::format(
+        "not reachable with the probe at {}: {}", orientation(s.probe),
+        merged.empty() ? "the part covers it, no way down to it from above" : merged.front().why));
   return out;
 }
 
@@ -300,9 +327,9 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       }
       SectionResult partial;
       try {
-        r = detail::run_section(
-            {machine, options, *it.planner, res.events, first_move, partial, part_move},
-            it.section);
+        r = detail::run_section({machine, options, *it.planner, res.events, first_move, partial,
+                                 part_move, res.unreachable},
+                                it.section);
       } catch (...) {
         r = std::move(partial);
         throw;

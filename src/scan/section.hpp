@@ -2,6 +2,8 @@
 // the run over all sections (run.cpp).
 #pragma once
 
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "trueaxis/scan/controller.hpp"
@@ -20,7 +22,26 @@ struct SectionContext {
   // section accepted: carried to a section whose plane they keep before it is first scanned, and
   // replaced by that section's when it accepts corrections of its own that are all rigid.
   std::vector<Correction>& part_move;
+  // The run's stretches not reachable: a section adds what a correction moved out of reach.
+  std::vector<NotReachable>& unreachable;
 };
+
+// A reachable stretch shorter than this is not scanned (mm): nothing to follow.
+inline constexpr double kShortest = 2.0;
+
+// Where the ball can come down along the stylus, from above the part, to the approach distance
+// off a stretch's path at both its ends: [a, b] (mm along the section's contour) moved in from
+// the given ends, 0.5 mm at a time, until it can. Nothing when less than kShortest is left.
+std::optional<std::pair<double, double>> reachable_ends(const design::Section& s, double a,
+                                                        double b, const Planner& planner,
+                                                        const ControllerOptions& o,
+                                                        double approach);
+// Where along a closed contour (mm from its start, in 1 mm steps) the ball can come down to it
+// to start scanning; nothing when it can nowhere.
+std::optional<double> reachable_start(const design::Section& s, const Planner& planner,
+                                      const ControllerOptions& o, double approach);
+// The closed contour s started `a` mm along it (s itself at 0).
+design::Section started_at(const design::Section& s, double a);
 
 // Scans `section` (its design data are corrected in place) and returns its result. Throws what
 // the machine throws (a collision); `partial` then holds what was measured until then.
