@@ -109,10 +109,9 @@ struct SectionRun {
   const Planner& planner() const { return moved_planner ? *moved_planner : nominal; }
 
   // A free move the planner finds: straight when clear of the part, else retract along the
-  // stylus to the clearance level, across, and down.
-  // Where the planner finds no way (the ball stands under an overhang, where a scan ended), it
-  // first moves out sideways, across the stylus, to where it does (the nearest of 8 directions
-  // and 4 distances, in order).
+  // stylus to the clearance level, across, and down. Where the planner finds no way (the ball
+  // stands under an overhang, where a scan ended), it first moves out sideways, across the
+  // stylus, to where it does (the nearest of 8 directions and 4 distances, in order).
   void safe_move(const Eigen::Vector3d& to) {
     const Eigen::Vector3d from = m.position();
     if ((to - from).norm() < 1e-6) return;
@@ -501,9 +500,9 @@ struct SectionRun {
   // A correction keeps this section's plane: it maps the plane onto itself (a translation in it,
   // a rotation about its normal), as a correction found on a parallel section does.
   bool keeps_plane(const Correction& c) const {
-    const Eigen::Vector3d n = current.plane.normal.normalized(), o = current.plane.origin;
+    const Eigen::Vector3d n = current.plane.normal.normalized(), at = current.plane.origin;
     return (c.transform.linear() * n - n).norm() < 1e-9 &&
-           std::abs((c.transform * o - o).dot(n)) < 1e-9;
+           std::abs((c.transform * at - at).dot(n)) < 1e-9;
   }
 
   // Before the first scan: where the part stands, as the corrections an earlier section found.
