@@ -424,36 +424,45 @@ struct SectionRun {
       if ((current.closed || j > i) && smp.normals.col(i).dot(smp.normals.col(j)) < std::cos(0.2))
         corners.push_back(smp.arc[i]);
     }
-    Eigen::Index best = 0;
-    double best_gap = -1;
     const double L = design::length(current);
-    // An open contour is followed from near its start to its end: the first smooth place at
-    // least 1 mm in (and a tenth of the way at most).
+    // Where to start, best first. A closed contour: the samples farthest from any corner. An
+    // open one is followed from near its start to its end: the smooth places from 1 mm in (a
+    // tenth of the way at most), in order, up to a quarter of the way. The first the ball can
+    // be brought to is taken (a start far off the design may lie under an overhang).
     const double lead = std::min(1.0, 0.1 * L);
+    std::vector<std::pair<double, Eigen::Index>> order;  // (rank, sample)
     for (Eigen::Index i = 0; i < n; ++i) {
-      if (!current.closed) {
-        bool near_corner = false;
-        for (double c : corners) near_corner = near_corner || std::abs(smp.arc[i] - c) < 1;
-        if (smp.arc[i] >= lead && !near_corner) {
-          best = i;
-          break;
-        }
-        continue;
-      }
       double gap = L;
       for (double c : corners) {
         double d = std::abs(smp.arc[i] - c);
         if (current.closed) d = std::min(d, L - d);
         gap = std::min(gap, d);
       }
-      if (gap > best_gap) {
-        best_gap = gap;
+      if (current.closed)
+        order.emplace_back(-gap, i);
+      else if (smp.arc[i] >= lead && gap >= 1 && smp.arc[i] <= std::max(lead, 0.25 * L))
+        order.emplace_back(smp.arc[i], i);
+    }
+    std::stable_sort(order.begin(), order.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    if (order.empty()) order.emplace_back(0, 0);
+    const double reach = o.path.tip_radius + o.tolerance + 3;
+    Eigen::Index best = -1;
+    std::string no_way;
+    // Up to 12 candidates, every 8th of the ranked samples (not the neighbours of one that
+    // failed).
+    for (std::size_t k = 0; k < order.size() && k < 8 * 12; k += 8) {
+      const Eigen::Index i = order[k].second;
+      try {
+        safe_move(smp.points.col(i) + reach * smp.normals.col(i));
         best = i;
+        break;
+      } catch (const NoWay& e) {
+        no_way = e.what();
       }
     }
+    if (best < 0) throw NoWay(no_way);
     const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
-    const double reach = o.path.tip_radius + o.tolerance + 3;
-    safe_move(p + reach * nn);
     const auto out = timed(m, r.time.autonomous, [&] {
       return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
                             // an open stretch: stop 1 mm short of its end, which may border
