@@ -231,6 +231,36 @@ TEST(Design, PathAroundTheIppSectionKeepsTheOffset) {
   EXPECT_GT(outer.nominal_time(), outer.length() / o.max_speed);
 }
 
+// A measured contour: a wall, a concave 90° fillet of radius 1 mm given as 9 chords of 10°, and
+// another wall (material on the left, the ball inside the turn). Each 10° turn of the path is
+// harmless alone, but together they turn the ball through 90° within a millimetre: the corner
+// speeds keep v²/R within the limit for the radius the turns fit on (once the path ran through
+// at 100 mm/s and the probe over-travelled there).
+TEST(Design, ConcaveFilletOfShortChordsIsTakenAtTheSpeedOfItsRadius) {
+  design::Section s;
+  s.name = "fillet";
+  s.closed = false;
+  s.plane = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()};
+  s.material = design::Side::Left;
+  std::vector<Eigen::Vector3d> pts{{20, 0, 0}};
+  // Travelling in -x along y = 0 (material at y < 0, on the left), then up x = 0 in +y.
+  for (int k = 0; k <= 9; ++k) {
+    const double a = -M_PI / 2 - k * M_PI / 18;  // about (1, 1): from (1, 0) to (0, 1)
+    pts.emplace_back(1 + std::cos(a), 1 + std::sin(a), 0);
+  }
+  pts.emplace_back(0, 20, 0);
+  s.polyline.resize(3, static_cast<Eigen::Index>(pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    s.polyline.col(static_cast<Eigen::Index>(i)) = pts[i];
+  design::PathOptions o;
+  const auto path = design::make_path(s, o);
+  double slowest = INFINITY;
+  for (const auto& g : path.segments) slowest = std::min({slowest, g.speed, g.corner_speed});
+  // The offset of a 1 mm concave fillet by 0.7 mm turns on a radius of about 0.3 mm.
+  EXPECT_LT(slowest, std::sqrt(o.max_normal_acceleration * 0.5));
+  EXPECT_GE(slowest, o.min_speed);
+}
+
 // A 50-edge star polygon (concave corners trimmed, convex ones rounded) and an open polyline.
 TEST(Design, PolylinePathsStayAtTheOffsetOnTheFreeSide) {
   design::Section s;

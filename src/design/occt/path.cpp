@@ -104,6 +104,9 @@ ScanPath plane_path(const Section& s, const PathOptions& o) {
   // Sharp corners of the path (where the offset is trimmed in a concave corner): the ball turns
   // there as on an arc of radius R that cuts the corner by δ = pushing / 3, R = δ / (1/cos(θ/2)
   // − 1) for a turn of θ, at no more than the speed v = √(a R) of the normal-acceleration limit.
+  // The arc must also fit on the segments it joins (its tangent length R·tan(θ/2) at most half
+  // of each): a concave fillet given as many short chords (a measured contour) turns 90° within
+  // half a millimetre in 10° steps, each harmless alone, and is taken at the speed of its radius.
   auto& g = path.segments;
   const double delta = o.pushing / 3;
   for (std::size_t i = 0; i < g.size(); ++i) {
@@ -112,7 +115,9 @@ ScanPath plane_path(const Section& s, const PathOptions& o) {
     const Eigen::Vector3d t0 = before.tangent(1).normalized(), t1 = g[i].tangent(0).normalized();
     const double theta = std::acos(std::clamp(t0.dot(t1), -1.0, 1.0));
     if (!(theta > 1e-3)) continue;
-    const double R = delta / (1 / std::cos(0.5 * std::min(theta, 3.0)) - 1);
+    const double half = 0.5 * std::min(theta, 3.0);
+    const double R = std::min(delta / (1 / std::cos(half) - 1),
+                              0.5 * std::min(before.length, g[i].length) / std::tan(half));
     g[i].corner_speed =
         std::clamp(std::sqrt(o.max_normal_acceleration * R), o.min_speed, o.max_speed);
   }
