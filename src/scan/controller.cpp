@@ -106,6 +106,9 @@ struct SectionRun {
   // controller knows of where the part really is).
   std::optional<Planner> moved_planner;
   Eigen::Affine3d learnt = Eigen::Affine3d::Identity();
+  // The design data changed (a correction, an overwrite) since the run checked that the ball can
+  // come down to the section's ends.
+  bool moved = false;
   const Planner& planner() const { return moved_planner ? *moved_planner : nominal; }
 
   // A free move the planner finds: straight when clear of the part, else retract along the
@@ -243,7 +246,8 @@ struct SectionRun {
   // contour is started again where it can, an open stretch trimmed to where it can, the rest
   // reported as not reachable. False (the section not reachable) when nothing is left.
   bool reach_ends() {
-    if (!planner().part() || current.space_curve()) return true;
+    if (!planner().part() || current.space_curve() || !moved) return true;
+    moved = false;
     const double approach = settings().approach_clearance;
     const std::string covered =
         "the part, where the corrections put it, covers it: no way down to it from above";
@@ -482,6 +486,7 @@ struct SectionRun {
     r.points = out.samples;
     if (o.strategy == Strategy::Autonomous) return true;
     current = overwrite(current, out.samples);
+    moved = true;
     log(0, 0, "autonomous", "design_overwritten",
         fmt::format("the section's design data replaced by the measured contour ({} points, "
                     "tip radius and pushing amount compensated)",
@@ -500,6 +505,7 @@ struct SectionRun {
     else
       map(current.polyline);
     learnt = step * learnt;
+    moved = true;
     // The design's solid follows the corrected curve (the nominal planner already stands it at
     // the section's placement).
     current.solid_placement = step * current.solid_placement;

@@ -475,8 +475,13 @@ TEST(Controller, ScanJsonReadsBackForItsReport) {
     EXPECT_LT((b.points.back().normal - a.points.back().normal).norm(), 1e-12);
     ASSERT_EQ(b.traces.size(), a.traces.size());
     EXPECT_EQ(b.traces[0].delta_l, a.traces[0].delta_l);
-    EXPECT_EQ(b.corrections.size(), a.corrections.size());
+    ASSERT_EQ(b.corrections.size(), a.corrections.size());
+    for (std::size_t k = 0; k < a.corrections.size(); ++k)
+      EXPECT_EQ(b.corrections[k].found_on, a.corrections[k].found_on);
   }
+  // The hole takes the move the outline's touch points found.
+  ASSERT_FALSE(back.result.sections[1].corrections.empty());
+  EXPECT_EQ(back.result.sections[1].corrections[0].found_on, "outer");
   EXPECT_EQ(back.result.events.size(), r.events.size());
   EXPECT_EQ(back.result.design.sections.size(), r.design.sections.size());
   const auto s1 = report::scan_section("scan", r, r.planned, 1.5);
@@ -499,6 +504,9 @@ TEST(Controller, ScanJsonReadsBackForItsReport) {
             std::string::npos);
   EXPECT_NE(refused("\"events\":", "\"happenings\":").find("'events' is missing"),
             std::string::npos);
+  const std::string found = refused("\"found_on\": \"outer\"", "\"found_on\": 7");
+  EXPECT_NE(found.find("bad-scan.json:"), std::string::npos) << found;
+  EXPECT_NE(found.find("found_on"), std::string::npos) << found;
   // The place (file:line:col) and the reason.
   const std::string tol = refused("\"tolerance_mm\": 1.5", "\"tolerance_mm\": -1");
   EXPECT_NE(tol.find("bad-scan.json:"), std::string::npos) << tol;
