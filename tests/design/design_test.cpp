@@ -219,15 +219,19 @@ TEST(Design, PathAroundTheIppSectionKeepsTheOffset) {
             1e-6);
   const Eigen::Vector3d t_design = s0.points.col(1) - s0.points.col(0);
   EXPECT_GT(outer.segments.front().tangent(0).dot(t_design), 0);
-  // Speeds: full speed on the sides, slower round the tight corner arcs, v²/R within the limit.
+  // Speeds: full speed on the sides, slower round the tight corner arcs: v²/R within the limit
+  // for the arc through the corner's tangents that cuts it by a third of the pushing amount,
+  // R = off + δ/(1/cos 45° − 1).
+  const double R = off + (o.pushing / 3) / (std::sqrt(2.0) - 1);
   double vmin = 1e9, vmax = 0;
   for (const auto& seg : outer.segments) {
     vmin = std::min(vmin, seg.speed);
     vmax = std::max(vmax, seg.speed);
-    EXPECT_LE(seg.speed * seg.speed * seg.curvature, o.max_normal_acceleration * (1 + 1e-9));
+    EXPECT_LE(seg.speed * seg.speed * seg.curvature,
+              o.max_normal_acceleration * R / off * (1 + 1e-9));
   }
   EXPECT_DOUBLE_EQ(vmax, o.max_speed);
-  EXPECT_NEAR(vmin, std::sqrt(o.max_normal_acceleration * off), 1e-6);
+  EXPECT_NEAR(vmin, std::sqrt(o.max_normal_acceleration * R), 1e-6);
   EXPECT_GT(outer.nominal_time(), outer.length() / o.max_speed);
 }
 
@@ -259,6 +263,42 @@ TEST(Design, ConcaveFilletOfShortChordsIsTakenAtTheSpeedOfItsRadius) {
   // The offset of a 1 mm concave fillet by 0.7 mm turns on a radius of about 0.3 mm.
   EXPECT_LT(slowest, std::sqrt(o.max_normal_acceleration * 0.5));
   EXPECT_GE(slowest, o.min_speed);
+}
+
+// A rounded rectangle (120 × 80 mm, corners of radius 10 mm) given as a polyline, its fillets in
+// chords of 3° (a design exported as points, or one overwritten with a measured contour). The
+// ball rolls round each chord's end on an arc of 0.7 mm, but all of them together turn it on the
+// fillet's radius: the path runs round the fillets at the speed of that radius, not at that of
+// 0.7 mm (26 mm/s).
+TEST(Design, ConvexFilletOfShortChordsIsTakenAtTheSpeedOfItsRadius) {
+  design::Section s;
+  s.name = "rounded";
+  s.closed = true;
+  s.plane = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitZ()};
+  s.material = design::Side::Left;  // counter-clockwise round the material
+  std::vector<Eigen::Vector3d> pts;
+  const double r = 10;
+  const Eigen::Vector2d centres[4] = {{50, -30}, {50, 30}, {-50, 30}, {-50, -30}};
+  for (int c = 0; c < 4; ++c)
+    for (int k = 0; k <= 30; ++k) {
+      const double a = -M_PI / 2 + c * M_PI / 2 + k * M_PI / 60;
+      pts.emplace_back(centres[c].x() + r * std::cos(a), centres[c].y() + r * std::sin(a), 0);
+    }
+  pts.push_back(pts.front());
+  s.polyline.resize(3, static_cast<Eigen::Index>(pts.size()));
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    s.polyline.col(static_cast<Eigen::Index>(i)) = pts[i];
+  design::PathOptions o;
+  const auto path = design::make_path(s, o);
+  // The chords' ends turn the path by 3°; the widest arc through their tangents that fits on
+  // half of the 0.52 mm chords beside it has a radius of about 10 mm, so v = √(a·R) ≈ 100 mm/s.
+  const double chord = 2 * r * std::sin(M_PI / 120);
+  const double R = o.tip_radius - o.pushing + 0.5 * chord / std::tan(M_PI / 120);
+  const double expected = std::min(o.max_speed, std::sqrt(o.max_normal_acceleration * R));
+  double slowest = INFINITY;
+  for (const auto& g : path.segments) slowest = std::min({slowest, g.speed, g.corner_speed});
+  EXPECT_NEAR(slowest, expected, 1e-6 * expected);
+  EXPECT_GT(slowest, 3 * std::sqrt(o.max_normal_acceleration * (o.tip_radius - o.pushing)));
 }
 
 // A 50-edge star polygon (concave corners trimmed, convex ones rounded) and an open polyline.

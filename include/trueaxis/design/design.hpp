@@ -216,7 +216,10 @@ struct PathOptions {
 struct PccSegment {
   Eigen::Matrix<double, 3, 4> coeff;  // columns a, b, c, d (mm)
   double length = 0;                  // arc length (mm)
-  double speed = 0;                   // scanning speed on this segment (mm/s)
+  // Scanning speed on this segment (mm/s): v²·curvature within the normal-acceleration limit;
+  // on the arc round a convex corner, that of the widest arc through the same tangents that cuts
+  // the corner by at most a third of the pushing amount and fits on the spans beside it.
+  double speed = 0;
   double curvature = 0;               // largest curvature of the offset curve on it (1/mm)
   // The speed allowed where the segment starts, at a sharp corner of the path (the ball passing
   // from one wall to the other in a concave corner): the speed of the arc that cuts the corner
