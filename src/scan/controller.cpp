@@ -111,6 +111,15 @@ struct SectionRun {
   bool moved = false;
   const Planner& planner() const { return moved_planner ? *moved_planner : nominal; }
 
+  // Free moves through waypoints whose legs the planner found clear by its margin: without a
+  // stop at each waypoint where the margin leaves room for the corner the machine cuts there.
+  void through(const std::vector<Eigen::Vector3d>& way) {
+    if (planner().margin() >= 2 * Machine::kCornerCut)
+      m.move_through(way, o.move_speed);
+    else
+      for (const auto& p : way) m.move(p, o.move_speed);
+  }
+
   // A free move the planner finds: straight when clear of the part, else retract along the
   // stylus to the clearance level, across, and down. Where the planner finds no way (the ball
   // stands under an overhang, where a scan ended), it first moves out sideways, across the
@@ -144,7 +153,7 @@ struct SectionRun {
     }
     first_move = false;
     timed(m, r.time.moves, [&] {
-      for (const auto& p : way) m.move(p, o.move_speed);
+      through(way);
       return 0;
     });
   }
@@ -220,7 +229,7 @@ struct SectionRun {
       margin = planner().margin();
     }
     timed(m, r.time.moves, [&] {
-      for (const auto& p : legs) m.move(p, o.move_speed);
+      through(legs);
       return 0;
     });
   }
@@ -238,6 +247,36 @@ struct SectionRun {
   void log(double arc, double dl, const std::string& mode, const std::string& ev,
            const std::string& decision) {
     events.push_back({m.time(), current.name, arc, dl, mode, ev, decision});
+    if (ev == "trajectory_error" || ev == "touch") seen = std::max(seen, std::abs(dl));
+  }
+  // How far off its design this section's surface was found so far: the largest trajectory
+  // error and touch deviation (mm).
+  double seen = 0;
+
+  // Where along the section's contour (mm, [from, to] pieces in order) the stylus keeps
+  // `margin` from the design's solid where the corrections put it, the ball on the path.
+  std::vector<std::pair<double, double>> room_with(double margin) const {
+    const double L = design::length(current);
+    const design::ScanPath path = design::make_path(current, o.path);
+    const auto blocked = planner().with_margin(margin).unreachable(path, m.stylus_axis());
+    const auto smp = design::sample(current, 0.05);
+    auto arc_of = [&](double along) {
+      const auto p = path.at(along);
+      const Eigen::Vector3d q = p.p - path.offset * p.normal;
+      Eigen::Index best = 0;
+      (smp.points.colwise() - q).colwise().squaredNorm().minCoeff(&best);
+      return smp.arc[best];
+    };
+    std::vector<std::pair<double, double>> free;
+    double at = 0;
+    for (const auto& b : blocked) {
+      const double a0 = b.from <= 0 ? 0 : arc_of(b.from) - 0.5;
+      const double a1 = b.to >= path.length() ? L : arc_of(b.to) + 0.5;
+      if (a0 > at) free.emplace_back(at, a0);
+      at = std::max(at, a1);
+    }
+    if (at < L) free.emplace_back(at, L);
+    return free;
   }
 
   // Before a design-value scan: the ball must come down from above to where the scan starts
@@ -429,11 +468,56 @@ struct SectionRun {
         corners.push_back(smp.arc[i]);
     }
     const double L = design::length(current);
+    // The stylus's room was decided for the design with the planner's margin; a surface found
+    // further off its design than that (less 1 mm) may stand nearer the stylus or the probe
+    // body than the margin wherever the ball follows it. The scan then keeps to where the
+    // stylus has that much room, and 1 mm more, from the design's solid (an open stretch: the
+    // longest such piece, the rest reported not reachable), or is not made (a closed contour
+    // the stylus could not follow all round).
+    double from = 0, to = L;
+    if (planner().part() && !current.space_curve() && seen + 1 > planner().margin()) {
+      const auto free = room_with(seen + 1);
+      double best_len = 0;
+      for (const auto& [a, b] : free)
+        if (b - a > best_len) {
+          best_len = b - a;
+          from = a;
+          to = b;
+        }
+      const std::string why = fmt::format(
+          "the part is {:.2f} mm off its design here, and the stylus would come within {:.1f} "
+          "mm of where the design puts it",
+          seen, seen + 1);
+      if (best_len < detail::kShortest || (current.closed && best_len < L - 1e-9)) {
+        r.not_reachable = true;
+        r.reason = "not scanned autonomously: " + why;
+        log(0, seen, "autonomous", "error_exit", r.reason);
+        return false;
+      }
+      if (from > 0 || to < L) {
+        log(from, seen, "section", "not_reachable",
+            fmt::format("the autonomous scan keeps to {:.1f} to {:.1f} mm along the contour: {}",
+                        from, to, why));
+        const auto smp_cut = design::sample(current, 0.05);
+        auto at = [&](double arc) {
+          Eigen::Index i = 0;
+          (smp_cut.arc.array() - arc).abs().minCoeff(&i);
+          return Eigen::Vector3d(smp_cut.points.col(i));
+        };
+        if (from > 0) unreachable.push_back({current.name, 0, from, at(0), at(from), why});
+        if (to < L) unreachable.push_back({current.name, to, L, at(to), at(L), why});
+      }
+    }
     // Where to start, best first. A closed contour: the samples farthest from any corner. An
-    // open one is followed from near its start to its end: the smooth places from 1 mm in (a
-    // tenth of the way at most), in order, up to a quarter of the way. The first the ball can
-    // be brought to is taken (a start far off the design may lie under an overhang).
-    const double lead = std::min(1.0, 0.1 * L);
+    // open one is followed from near its start to its end: the smooth places from `keep` in (a
+    // tenth of the way at most), in order, up to a quarter of the way, each `keep` from a
+    // corner: 1 mm, or as far as the part may be off its design along the contour (the
+    // planner's margin, or what was found) where a solid tells what lies beyond the stretch's
+    // ends (an approach 1 mm from an end of a part moved 2.7 mm along it passed the wall it was
+    // meant for and met the part beyond). The first the ball can be brought to is taken (a
+    // start far off the design may lie under an overhang).
+    const double keep = planner().part() ? std::max({1.0, planner().margin(), seen + 1}) : 1.0;
+    const double lead = std::min(keep, 0.1 * (to - from));
     std::vector<std::pair<double, Eigen::Index>> order;  // (rank, sample)
     for (Eigen::Index i = 0; i < n; ++i) {
       double gap = L;
@@ -442,14 +526,20 @@ struct SectionRun {
         if (current.closed) d = std::min(d, L - d);
         gap = std::min(gap, d);
       }
+      const double in = smp.arc[i] - from;
       if (current.closed)
         order.emplace_back(-gap, i);
-      else if (smp.arc[i] >= lead && gap >= 1 && smp.arc[i] <= std::max(lead, 0.25 * L))
+      else if (in >= lead && gap >= std::min(keep, 0.1 * (to - from)) &&
+               in <= std::max(lead, 0.25 * (to - from)))
         order.emplace_back(smp.arc[i], i);
     }
     std::stable_sort(order.begin(), order.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
-    if (order.empty()) order.emplace_back(0, 0);
+    if (order.empty()) {
+      Eigen::Index i = 0;
+      (smp.arc.array() - (from + lead)).abs().minCoeff(&i);
+      order.emplace_back(0, i);
+    }
     const double reach = o.path.tip_radius + o.tolerance + 3;
     Eigen::Index best = -1;
     std::string no_way;
@@ -471,7 +561,7 @@ struct SectionRun {
       return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
                             // an open stretch: stop 1 mm short of its end, which may border
                             // on what the stylus cannot reach
-                            current.closed ? L : std::max(1.0, L - smp.arc[best] - 1),
+                            current.closed ? L : std::max(1.0, to - smp.arc[best] - 1),
                             o.autonomous_speed, settings());
     });
     ++r.autonomous_count;

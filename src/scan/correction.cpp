@@ -119,7 +119,16 @@ Eigen::VectorXd gauss_newton(Kind k, Eigen::VectorXd q, const std::vector<Eigen:
       h[j] -= 2 * step;
       J.col(j) = (rp - residuals(k, h, p, m, touched)) / (2 * step);
     }
-    const Eigen::VectorXd dq = J.colPivHouseholderQr().solve(-r);
+    // The least-norm step on columns scaled to unit length (mm, rad and scale columns differ by
+    // the contour's size), singular values below 1e-6 of the largest left out: touch points on
+    // one straight wall do not see a move along it, and a rotation then fits the tilt and the
+    // move across the wall and leaves the move along it at 0 (a pivoted QR took the round-off
+    // of the numerical derivative for that column and moved the design by 10⁶ mm).
+    const Eigen::VectorXd norms = J.colwise().norm().transpose().cwiseMax(1e-300);
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * norms.cwiseInverse().asDiagonal(),
+                                          Eigen::ComputeThinU | Eigen::ComputeThinV);
+    svd.setThreshold(1e-6);
+    const Eigen::VectorXd dq = norms.cwiseInverse().asDiagonal() * svd.solve(-r);
     if (!dq.allFinite()) break;
     q += dq;
     if (dq.norm() < 1e-12) break;

@@ -288,7 +288,13 @@ void VirtualCmm::settle() {
 }
 
 void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
-  if (!(speed > 0) || !to.allFinite()) throw Error("move: bad target or speed");
+  move_through({to}, speed);
+}
+
+void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double speed) {
+  if (!(speed > 0) || way.empty() ||
+      std::any_of(way.begin(), way.end(), [](const auto& p) { return !p.allFinite(); }))
+    throw Error("move: bad target or speed");
   const Eigen::Vector3d from = servo_.position();
   // The ball may leave a surface it touches (a retract) but enter none: it may be as deep in a
   // face as it starts, and kCollision more.
@@ -306,26 +312,71 @@ void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
   // A free move must not push the ball into the part's sections either: more than the deflection
   // it started with (a retract starts in contact) and kCollision is a collision.
   const double start = penetration();
-  const double L = (to - from).norm();
-  const Eigen::Vector3d dir = L > 0 ? Eigen::Vector3d((to - from) / L) : Eigen::Vector3d::Zero();
+  // The legs (waypoints where the last one is left out), the arc length at each waypoint, and
+  // the speed allowed there: 0 at the end, and at a turn of θ that of the arc of radius R that
+  // cuts the corner by kCornerCut, R = kCornerCut / (1/cos(θ/2) − 1), and fits on half of each
+  // leg, R·tan(θ/2) — at the path's acceleration as normal acceleration.
   const double a = o_.path_acceleration, dt = servo_.options().dt();
+  std::vector<Eigen::Vector3d> pts{from};
+  for (const auto& p : way)
+    if ((p - pts.back()).norm() > 1e-9) pts.push_back(p);
+  const std::size_t legs = pts.size() - 1;
+  std::vector<double> arc(pts.size(), 0.0), turn_speed(pts.size(), 0.0);
+  std::vector<Eigen::Vector3d> dir(std::max<std::size_t>(legs, 1), Eigen::Vector3d::Zero());
+  for (std::size_t i = 0; i < legs; ++i) {
+    const double l = (pts[i + 1] - pts[i]).norm();
+    arc[i + 1] = arc[i] + l;
+    dir[i] = (pts[i + 1] - pts[i]) / l;
+  }
+  for (std::size_t i = 1; i < legs; ++i) {
+    const double theta = std::acos(std::clamp(dir[i - 1].dot(dir[i]), -1.0, 1.0));
+    if (theta < 1e-9) {
+      turn_speed[i] = INFINITY;
+      continue;
+    }
+    if (theta > 3.0) continue;  // a reversal: stop there
+    const double half = 0.5 * theta;
+    const double shortest = std::min(arc[i] - arc[i - 1], arc[i + 1] - arc[i]);
+    const double R =
+        std::min(kCornerCut / (1 / std::cos(half) - 1), 0.5 * shortest / std::tan(half));
+    // The carriage lags its command by about the drive's time constant and 1/kp: a turn at v
+    // changes the velocity by 2v·sin(θ/2), and the carriage runs on about that times the lag
+    // beyond the corner; that too within kCornerCut.
+    const double tau = servo_.options().lag + 1 / servo_.options().position_gain;
+    turn_speed[i] = std::min(std::sqrt(a * R), kCornerCut / (2 * std::sin(half) * tau));
+  }
+  const double L = arc.back();
+  const Eigen::Vector3d to = pts.back();
   double s = 0, v = 0;
+  std::size_t leg = 0;
   for (long k = 0; k < kMaxTicks; ++k) {
     const bool at_end = s >= L;
     if (at_end && (servo_.position() - to).norm() < 1e-4 && servo_.velocity().norm() < 1) return;
-    v = at_end ? 0 : std::min({speed, v + a * dt, std::sqrt(2 * a * std::max(0.0, L - s))});
-    servo_.step(from + dir * std::min(s, L), dir * v);
+    while (leg + 1 < legs && s >= arc[leg + 1]) ++leg;
+    if (at_end) {
+      v = 0;
+    } else {
+      v = std::min(speed, v + a * dt);
+      // Slow enough to brake to the speed allowed at every waypoint ahead.
+      for (std::size_t j = leg + 1; j <= legs; ++j)
+        v = std::min(v,
+                     std::sqrt(turn_speed[j] * turn_speed[j] + 2 * a * std::max(0.0, arc[j] - s)));
+    }
+    const Eigen::Vector3d target =
+        legs ? Eigen::Vector3d(pts[leg] + dir[leg] * (std::min(s, L) - arc[leg])) : to;
+    servo_.step(target, dir[leg] * v);
     s = std::min(L, s + v * dt);
     // The stylus leaves a surface deflected by it (a retract), then free.
     const double depth = penetration(&deflection_);
     if (depth <= probe_.options().range) check_solid();
     if (depth > start + kCollision) {
       const Eigen::Vector3d p = servo_.position();
+      const Eigen::Vector3d a0 = pts[legs ? leg : 0], b0 = pts[legs ? leg + 1 : 0];
       settle();  // the machine stops
       throw Error(fmt::format(
           "collision: a free move from ({:.2f}, {:.2f}, {:.2f}) to ({:.2f}, {:.2f}, {:.2f}) mm "
           "ran the stylus into the part at ({:.2f}, {:.2f}, {:.2f}) mm",
-          from.x(), from.y(), from.z(), to.x(), to.y(), to.z(), p.x(), p.y(), p.z()));
+          a0.x(), a0.y(), a0.z(), b0.x(), b0.y(), b0.z(), p.x(), p.y(), p.z()));
     }
   }
   throw Error("move: the carriage did not settle");

@@ -90,6 +90,15 @@ class Machine {
   // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s, in a straight line.
   // Throws Error if it runs the stylus into the part (a collision).
   virtual void move(const Eigen::Vector3d& to, double speed) = 0;
+  // Free move through the waypoints in turn, straight from each to the next, at up to `speed`.
+  // A machine that can (the virtual CMM) does not stop at a waypoint: it turns there at the
+  // speed of an arc that cuts the corner by at most kCornerCut and fits on half of each leg, so
+  // every point of the motion stays within kCornerCut (and the servo's following error) of the
+  // legs. By default, one move() per waypoint.
+  static constexpr double kCornerCut = 0.2;  // mm
+  virtual void move_through(const std::vector<Eigen::Vector3d>& way, double speed) {
+    for (const auto& p : way) move(p, speed);
+  }
   // From `start` (stylus centre), approach along unit `direction` at `speed` until the deflection
   // reaches `trigger`; then retract 1 mm along the approach (no further than `start`). Nothing if
   // no contact within `distance` mm.
@@ -157,6 +166,7 @@ class VirtualCmm : public Machine {
   Eigen::Vector3d position() const override { return servo_.position(); }
   void orient(const Eigen::Vector3d& axis) override;
   void move(const Eigen::Vector3d& to, double speed) override;
+  void move_through(const std::vector<Eigen::Vector3d>& way, double speed) override;
   std::optional<Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
                              const Eigen::Vector3d& direction, double distance, double speed,
                              double trigger) override;

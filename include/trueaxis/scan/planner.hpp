@@ -72,6 +72,13 @@ class Planner {
   // The same planner for the part moved by x -> t·x (what a geometric correction learnt of it).
   // The identity map moves nothing (the same mesh is shared).
   Planner moved(const Eigen::Affine3d& t) const;
+  // The same planner keeping `margin` instead (mm > 0): room for a part found further off its
+  // design than the margin it was made with allowed for.
+  Planner with_margin(double margin) const {
+    Planner p = *this;
+    p.margin_ = margin;
+    return p;
+  }
   // Where this planner stands the design's solid: the product of the moves made so far.
   const Eigen::Affine3d& placement() const { return placement_; }
 
