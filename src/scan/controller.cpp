@@ -249,8 +249,9 @@ struct SectionRun {
     events.push_back({m.time(), current.name, arc, dl, mode, ev, decision});
     if (ev == "trajectory_error" || ev == "touch") seen = std::max(seen, std::abs(dl));
   }
-  // How far off its design this section's surface was found so far: the largest trajectory
-  // error and touch deviation (mm).
+  // How far off its design (where the corrections put it) this section's surface was found so
+  // far: the largest trajectory error and touch deviation since the last accepted correction,
+  // or what that correction left at its touch points (mm).
   double seen = 0;
 
   // Where along the section's contour (mm, [from, to] pieces in order) the stylus keeps
@@ -260,23 +261,25 @@ struct SectionRun {
     const design::ScanPath path = design::make_path(current, o.path);
     const auto blocked = planner().with_margin(margin).unreachable(path, m.stylus_axis());
     const auto smp = design::sample(current, 0.05);
-    auto arc_of = [&](double along) {
-      const auto p = path.at(along);
-      const Eigen::Vector3d q = p.p - path.offset * p.normal;
-      Eigen::Index best = 0;
-      (smp.points.colwise() - q).colwise().squaredNorm().minCoeff(&best);
-      return smp.arc[best];
-    };
     std::vector<std::pair<double, double>> free;
     double at = 0;
     for (const auto& b : blocked) {
-      const double a0 = b.from <= 0 ? 0 : arc_of(b.from) - 0.5;
-      const double a1 = b.to >= path.length() ? L : arc_of(b.to) + 0.5;
+      const double a0 = b.from <= 0 ? 0 : detail::contour_arc(smp, path, b.from) - 0.5;
+      const double a1 = b.to >= path.length() ? L : detail::contour_arc(smp, path, b.to) + 0.5;
       if (a0 > at) free.emplace_back(at, a0);
       at = std::max(at, a1);
     }
     if (at < L) free.emplace_back(at, L);
     return free;
+  }
+
+  // Reports [from, to] (mm along the section) as not scanned, and why.
+  void cut_off(double from, double to, const std::string& why) {
+    const auto smp = design::sample(current, 0.05);
+    unreachable.push_back({current.name, from, to, detail::point_at(current, smp, from),
+                           detail::point_at(current, smp, to), why});
+    log(from, 0, "section", "not_reachable",
+        fmt::format("{:.1f} to {:.1f} mm along the stretch not scanned: {}", from, to, why));
   }
 
   // Before a design-value scan: the ball must come down from above to where the scan starts
@@ -309,14 +312,10 @@ struct SectionRun {
     }
     const double L = design::length(current);
     const auto ends = detail::reachable_ends(current, 0, L, planner(), o, approach);
-    const auto smp = design::sample(current, 0.05);
-    auto at = [&](double arc) {
-      Eigen::Index i = 0;
-      (smp.arc.array() - arc).abs().minCoeff(&i);
-      return Eigen::Vector3d(smp.points.col(i));
-    };
     if (!ends) {
-      unreachable.push_back({current.name, 0, L, at(0), at(L), covered});
+      const auto smp = design::sample(current, 0.05);
+      unreachable.push_back({current.name, 0, L, detail::point_at(current, smp, 0),
+                             detail::point_at(current, smp, L), covered});
       r.not_reachable = true;
       r.reason = "not reachable: " + covered;
       log(0, 0, "section", "error_exit", r.reason);
@@ -325,15 +324,8 @@ struct SectionRun {
     const auto [a, b] = *ends;
     if (a == 0 && b == L) return true;
     // Each piece cut off is reported, as the run reports the stretches it leaves out.
-    auto cut = [&](double from, double to) {
-      unreachable.push_back({current.name, from, to, at(from), at(to), covered});
-      log(from, 0, "section", "not_reachable",
-          fmt::format("{:.1f} to {:.1f} mm along the stretch not scanned: its end moved out of "
-                      "reach ({})",
-                      from, to, covered));
-    };
-    if (a > 0) cut(0, a);
-    if (b < L) cut(b, L);
+    if (a > 0) cut_off(0, a, covered);
+    if (b < L) cut_off(b, L, covered);
     current = design::piece(current, a, b, current.name);
     return true;
   }
@@ -455,6 +447,38 @@ struct SectionRun {
     return false;
   }
 
+  // The stretch [from, to] (mm along the section, initially all of it) an autonomous scan keeps
+  // to. The stylus's room was decided for the design with the planner's margin; a surface found
+  // further off its design than that (less 1 mm) may stand nearer the stylus or the probe body
+  // than the margin wherever the ball follows it. The scan then keeps to where the stylus has
+  // that much room, and 1 mm more, from the design's solid (an open stretch: the longest such
+  // piece, the rest reported not reachable), or is not made (false: a closed contour the stylus
+  // could not follow all round, or nothing long enough left).
+  bool autonomous_range(double& from, double& to) {
+    if (!planner().part() || current.space_curve() || seen + 1 <= planner().margin()) return true;
+    const double L = to;
+    double best_len = 0;
+    for (const auto& [a, b] : room_with(seen + 1))
+      if (b - a > best_len) {
+        best_len = b - a;
+        from = a;
+        to = b;
+      }
+    const std::string why = fmt::format(
+        "the part is {:.2f} mm off its design here, and the stylus would come within {:.1f} mm "
+        "of where the design puts it",
+        seen, seen + 1);
+    if (best_len < detail::kShortest || (current.closed && best_len < L - 1e-9)) {
+      r.not_reachable = true;
+      r.reason = "not scanned autonomously: " + why;
+      log(0, seen, "autonomous", "error_exit", r.reason);
+      return false;
+    }
+    if (from > 0) cut_off(0, from, why);
+    if (to < L) cut_off(to, L, why);
+    return true;
+  }
+
   bool autonomous() {
     if (!two_dimensional(0, 0)) return false;
     // Approach where the design is smooth: the sample farthest (in arc) from any corner, so
@@ -468,46 +492,8 @@ struct SectionRun {
         corners.push_back(smp.arc[i]);
     }
     const double L = design::length(current);
-    // The stylus's room was decided for the design with the planner's margin; a surface found
-    // further off its design than that (less 1 mm) may stand nearer the stylus or the probe
-    // body than the margin wherever the ball follows it. The scan then keeps to where the
-    // stylus has that much room, and 1 mm more, from the design's solid (an open stretch: the
-    // longest such piece, the rest reported not reachable), or is not made (a closed contour
-    // the stylus could not follow all round).
     double from = 0, to = L;
-    if (planner().part() && !current.space_curve() && seen + 1 > planner().margin()) {
-      const auto free = room_with(seen + 1);
-      double best_len = 0;
-      for (const auto& [a, b] : free)
-        if (b - a > best_len) {
-          best_len = b - a;
-          from = a;
-          to = b;
-        }
-      const std::string why = fmt::format(
-          "the part is {:.2f} mm off its design here, and the stylus would come within {:.1f} "
-          "mm of where the design puts it",
-          seen, seen + 1);
-      if (best_len < detail::kShortest || (current.closed && best_len < L - 1e-9)) {
-        r.not_reachable = true;
-        r.reason = "not scanned autonomously: " + why;
-        log(0, seen, "autonomous", "error_exit", r.reason);
-        return false;
-      }
-      if (from > 0 || to < L) {
-        log(from, seen, "section", "not_reachable",
-            fmt::format("the autonomous scan keeps to {:.1f} to {:.1f} mm along the contour: {}",
-                        from, to, why));
-        const auto smp_cut = design::sample(current, 0.05);
-        auto at = [&](double arc) {
-          Eigen::Index i = 0;
-          (smp_cut.arc.array() - arc).abs().minCoeff(&i);
-          return Eigen::Vector3d(smp_cut.points.col(i));
-        };
-        if (from > 0) unreachable.push_back({current.name, 0, from, at(0), at(from), why});
-        if (to < L) unreachable.push_back({current.name, to, L, at(to), at(L), why});
-      }
-    }
+    if (!autonomous_range(from, to)) return false;
     // Where to start, best first. A closed contour: the samples farthest from any corner. An
     // open one is followed from near its start to its end: the smooth places from `keep` in (a
     // tenth of the way at most), in order, up to a quarter of the way, each `keep` from a
@@ -529,8 +515,7 @@ struct SectionRun {
       const double in = smp.arc[i] - from;
       if (current.closed)
         order.emplace_back(-gap, i);
-      else if (in >= lead && gap >= std::min(keep, 0.1 * (to - from)) &&
-               in <= std::max(lead, 0.25 * (to - from)))
+      else if (in >= lead && gap >= lead && in <= std::max(lead, 0.25 * (to - from)))
         order.emplace_back(smp.arc[i], i);
     }
     std::stable_sort(order.begin(), order.end(),
@@ -721,6 +706,12 @@ struct SectionRun {
               if (c.accepted) step = c.transform * step;
             // The fit's own corrected curve (the same map, applied as the fit did).
             correct_by(step);
+            // Where the planner now stands the part, what is left known of its offset is what
+            // the accepted corrections left at the touch points (a later trajectory error adds
+            // what they could not see).
+            seen = 0;
+            for (const auto& c : tried)
+              if (c.accepted) seen = std::max(seen, c.residual_after);
             current.polyline = fixed.polyline;
             current.nurbs = fixed.nurbs;
           }

@@ -2,7 +2,6 @@
 // touched points by Gauss–Newton on their normal distances.
 #include <fmt/format.h>
 
-#include <Eigen/QR>
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -108,6 +107,10 @@ Eigen::VectorXd residuals(Kind k, const Eigen::VectorXd& q, const std::vector<Ei
 Eigen::VectorXd gauss_newton(Kind k, Eigen::VectorXd q, const std::vector<Eigen::Vector2d>& p,
                              const std::vector<Eigen::Vector2d>& m,
                              const std::vector<Eigen::Vector2d>& touched) {
+  // The contour's size about the frame's origin (its centroid), at least 1 mm.
+  double size = 0;
+  for (const auto& x : p) size += x.squaredNorm();
+  size = std::max(1.0, std::sqrt(size / static_cast<double>(std::max<std::size_t>(1, p.size()))));
   for (int it = 0; it < 30; ++it) {
     const Eigen::VectorXd r = residuals(k, q, p, m, touched);
     Eigen::MatrixXd J(r.size(), q.size());
@@ -119,16 +122,18 @@ Eigen::VectorXd gauss_newton(Kind k, Eigen::VectorXd q, const std::vector<Eigen:
       h[j] -= 2 * step;
       J.col(j) = (rp - residuals(k, h, p, m, touched)) / (2 * step);
     }
-    // The least-norm step on columns scaled to unit length (mm, rad and scale columns differ by
-    // the contour's size), singular values below 1e-6 of the largest left out: touch points on
-    // one straight wall do not see a move along it, and a rotation then fits the tilt and the
-    // move across the wall and leaves the move along it at 0 (a pivoted QR took the round-off
-    // of the numerical derivative for that column and moved the design by 10⁶ mm).
-    const Eigen::VectorXd norms = J.colwise().norm().transpose().cwiseMax(1e-300);
-    Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * norms.cwiseInverse().asDiagonal(),
+    // The least-norm step, singular values below 1e-6 of the largest left out, on columns in
+    // comparable units: a translation moves a point by 1 mm per mm, a turn or a scale by the
+    // contour's size per radian or unit. Touch points on one straight wall do not see a move
+    // along it: its column is the numerical derivative's round-off, left out, and a rotation
+    // fits the tilt and the move across the wall and leaves the move along it at 0 (a pivoted QR
+    // took that round-off for a column and moved the design by 10⁶ mm).
+    Eigen::VectorXd unit = Eigen::VectorXd::Ones(q.size());
+    unit.tail(q.size() - 2).setConstant(size);
+    Eigen::JacobiSVD<Eigen::MatrixXd> svd(J * unit.cwiseInverse().asDiagonal(),
                                           Eigen::ComputeThinU | Eigen::ComputeThinV);
     svd.setThreshold(1e-6);
-    const Eigen::VectorXd dq = norms.cwiseInverse().asDiagonal() * svd.solve(-r);
+    const Eigen::VectorXd dq = unit.cwiseInverse().asDiagonal() * svd.solve(-r);
     if (!dq.allFinite()) break;
     q += dq;
     if (dq.norm() < 1e-12) break;

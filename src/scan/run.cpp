@@ -51,6 +51,23 @@ std::optional<double> reachable_start(const design::Section& s, const Planner& p
   return std::nullopt;
 }
 
+Eigen::Vector3d point_at(const design::Section& s, const design::Samples& smp, double arc) {
+  const double L = smp.arc.size() ? smp.arc[smp.arc.size() - 1] : 0.0;
+  const double a =
+      s.closed && L > 0 ? std::fmod(std::fmod(arc, L) + L, L) : std::clamp(arc, 0.0, L);
+  Eigen::Index i = 0;
+  (smp.arc.array() - a).abs().minCoeff(&i);
+  return smp.points.col(i);
+}
+
+double contour_arc(const design::Samples& smp, const design::ScanPath& path, double along) {
+  const auto p = path.at(along);
+  const Eigen::Vector3d foot = p.p - path.offset * p.normal;
+  Eigen::Index best = 0;
+  (smp.points.colwise() - foot).colwise().squaredNorm().minCoeff(&best);
+  return smp.arc[best];
+}
+
 design::Section started_at(const design::Section& s, double a) {
   if (a == 0) return s;
   design::Section again = design::piece(s, a, a + design::length(s), s.name);
@@ -95,22 +112,13 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
   // centre stands over at its ends.
   const double L = design::length(s);
   const auto smp = design::sample(s, 0.05);
-  auto arc_of = [&](const Eigen::Vector3d& q) {
-    Eigen::Index best = 0;
-    (smp.points.colwise() - q).colwise().squaredNorm().minCoeff(&best);
-    return smp.arc[best];
-  };
-  auto foot = [&](double along) {
-    const auto p = path.at(along);
-    return Eigen::Vector3d(p.p - path.offset * p.normal);
-  };
   struct Span {
     double from, length;
     std::string why;
   };
   std::vector<Span> spans;
   for (const auto& b : blocked) {
-    double a0 = arc_of(foot(b.from)), a1 = arc_of(foot(b.to));
+    double a0 = detail::contour_arc(smp, path, b.from), a1 = detail::contour_arc(smp, path, b.to);
     if (b.from <= 0) a0 = s.closed ? a0 : 0;
     if (b.to >= path.length()) a1 = s.closed ? a1 : L;
     double len = a1 - a0;
@@ -136,12 +144,7 @@ std::vector<design::Section> stretches(const design::Section& s, const Planner& 
     merged.front().from = merged.back().from - L;
     merged.pop_back();
   }
-  auto point_at = [&](double arc) {
-    const double a = s.closed ? std::fmod(std::fmod(arc, L) + L, L) : std::clamp(arc, 0.0, L);
-    Eigen::Index i = 0;
-    (smp.arc.array() - a).abs().minCoeff(&i);
-    return Eigen::Vector3d(smp.points.col(i));
-  };
+  auto point_at = [&](double arc) { return detail::point_at(s, smp, arc); };
   for (const auto& m : merged) {
     const double from = s.closed ? std::fmod(m.from + L, L) : std::max(0.0, m.from);
     const double to = s.closed ? from + std::min(m.length, L) : std::min(L, m.from + m.length);

@@ -42,6 +42,12 @@ std::optional<double> reachable_start(const design::Section& s, const Planner& p
                                       const ControllerOptions& o, double approach);
 // The closed contour s started `a` mm along it (s itself at 0).
 design::Section started_at(const design::Section& s, double a);
+// The point of s's samples nearest `arc` mm along it (wrapped round a closed contour, clamped to
+// an open one's ends).
+Eigen::Vector3d point_at(const design::Section& s, const design::Samples& smp, double arc);
+// Where along the contour (mm, its samples' arc) the ball's centre stands `along` mm along the
+// path offset from it: the sample nearest the path point's foot on the contour.
+double contour_arc(const design::Samples& smp, const design::ScanPath& path, double along);
 
 // Scans `section` (its design data are corrected in place) and returns its result. Throws what
 // the machine throws (a collision); `partial` then holds what was measured until then.

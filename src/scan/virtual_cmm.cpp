@@ -345,6 +345,10 @@ void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double sp
     const double tau = servo_.options().lag + 1 / servo_.options().position_gain;
     turn_speed[i] = std::min(std::sqrt(a * R), kCornerCut / (2 * std::sin(half) * tau));
   }
+  // The speed allowed at each waypoint also lets the carriage brake to the next one's.
+  for (std::size_t i = legs; i-- > 1;)
+    turn_speed[i] = std::min(turn_speed[i], std::sqrt(turn_speed[i + 1] * turn_speed[i + 1] +
+                                                      2 * a * (arc[i + 1] - arc[i])));
   const double L = arc.back();
   const Eigen::Vector3d to = pts.back();
   double s = 0, v = 0;
@@ -356,11 +360,10 @@ void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double sp
     if (at_end) {
       v = 0;
     } else {
-      v = std::min(speed, v + a * dt);
-      // Slow enough to brake to the speed allowed at every waypoint ahead.
-      for (std::size_t j = leg + 1; j <= legs; ++j)
-        v = std::min(v,
-                     std::sqrt(turn_speed[j] * turn_speed[j] + 2 * a * std::max(0.0, arc[j] - s)));
+      // Slow enough to brake to the speed allowed at the next waypoint.
+      const double next = turn_speed[leg + 1];
+      v = std::min(
+          {speed, v + a * dt, std::sqrt(next * next + 2 * a * std::max(0.0, arc[leg + 1] - s))});
     }
     const Eigen::Vector3d target =
         legs ? Eigen::Vector3d(pts[leg] + dir[leg] * (std::min(s, L) - arc[leg])) : to;

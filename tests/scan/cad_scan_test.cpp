@@ -154,6 +154,9 @@ TEST(CadScan, NistCtc05BsplineWallsMovedAndScaled) {
           if (k == "rotation_deg") {
             EXPECT_NEAR(v, 0.3, 1e-3);
           }
+          if (k == "dx_mm") {  // along the wall (x)
+            EXPECT_NEAR(v, 0, 1e-6);
+          }
         }
       }
     }
