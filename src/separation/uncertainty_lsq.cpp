@@ -23,7 +23,6 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
       r.xw.size(), r.xg.size(), ReferenceAlgebra::pitch_points(r.xt.size(), with_pitch, D.pitch),
       uw, ug, ut);
   const ReferenceAlgebra ra(r, with_pitch, D.pitch, st.h);
-  const int k = ra.k;
   // Each reported point's variance is u·S·u + s²·Z_uu − 2s·u·(ZV)_u (see point_uncertainty), with
   // S = VᵀZV. S comes from the solve's forward rows (their Gram matrix) and is complete before
   // the backward solve hands out (ZV)_u and Z_uu row by row (the selected inversion runs
@@ -34,75 +33,64 @@ void lsq_uncertainties(LsqState& st, const Raw& r, bool with_pitch, double noise
   // VᵀZV restricted to each profile's columns: workpiece, guide, pitch.
   std::array<Eigen::Matrix3d, 3> S;
   const double inv_h = 1.0 / st.h;  // the pitch unknown is θ·h
-  // The column count and the parabola's and pitch's columns (−1: none) as compile-time
+  // V here always has six columns, the parabola's at 4 and the pitch's at 5, as compile-time
   // constants: the rows of V and ZV are then indexed by constants only and stay in registers in
   // the solve's loops (which inline both callbacks, each called up to three times per station).
-  auto solve = [&]<int Cols, int KPhi, int KT>() {
-    // ReferenceAlgebra's cw, cg, ct as constants (the padding column's u is 0).
-    constexpr int phi = KPhi >= 0 ? KPhi : 0;
-    static constexpr ReferenceAlgebra::Cols cw{ReferenceAlgebra::kW0, ReferenceAlgebra::kW0 + 1,
-                                               phi};
-    static constexpr ReferenceAlgebra::Cols cg{ReferenceAlgebra::kG0, ReferenceAlgebra::kG0 + 1,
-                                               phi};
-    static constexpr ReferenceAlgebra::Cols ct{KT >= 0 ? KT : 0, phi, 0};
-    Eigen::Matrix<double, Cols, Cols, Eigen::RowMajor> gram;
-    gram.setZero();
-    // The guide's and pitch's rows' share of the Gram matrix from their moments, when every one
-    // of those unknowns is free (make_design pins only workpiece points and offsets).
-    const bool locals_free = std::none_of(D.pins.begin(), D.pins.end(), [&](const auto& pin) {
-      const Kind kind = D.place(pin.first).kind;
-      return kind == Kind::g || kind == Kind::t;
-    });
-    const auto local_vv = ra.local_gram<Cols>(KPhi, KT);
-    // A point's uncertainty from its Z_uu and row of ZV (null for a pinned unknown).
-    auto use = [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
-      const auto [kind, i] = D.place(id);
-      switch (kind) {
-        case Kind::w:
-          uw[i] = ReferenceAlgebra::point_uncertainty<false>(ra.uw(i), cw, S[0], zuu, zv, 1.0,
+  // Without a parabola or a reported pitch, that column is zero (φ's coefficients are zero, and
+  // no point lies on an empty pitch grid) and its u entries too: the numbers are those of the
+  // narrower V. One instantiation of the solve's normal-row pass instead of one per column count:
+  // the zero columns cost a two-probe layout ~(6/4)² of that pass, and the file compiles in a
+  // quarter of the time.
+  constexpr int kCols = ReferenceAlgebra::kMaxCols, kPhi = 4, kT = 5;
+  static constexpr ReferenceAlgebra::Cols cw{ReferenceAlgebra::kW0, ReferenceAlgebra::kW0 + 1,
+                                             kPhi};
+  static constexpr ReferenceAlgebra::Cols cg{ReferenceAlgebra::kG0, ReferenceAlgebra::kG0 + 1,
+                                             kPhi};
+  static constexpr ReferenceAlgebra::Cols ct{kT, kPhi, 0};
+  Eigen::Matrix<double, kCols, kCols, Eigen::RowMajor> gram;
+  gram.setZero();
+  // The guide's and pitch's rows' share of the Gram matrix from their moments, when every one
+  // of those unknowns is free (make_design pins only workpiece points and offsets).
+  const bool locals_free = std::none_of(D.pins.begin(), D.pins.end(), [&](const auto& pin) {
+    const Kind kind = D.place(pin.first).kind;
+    return kind == Kind::g || kind == Kind::t;
+  });
+  const auto local_vv = ra.local_gram<kCols>(kPhi, kT);
+  // A point's uncertainty from its Z_uu and row of ZV (null for a pinned unknown).
+  auto use = [&](int id, const double* zv, double zuu) __attribute__((always_inline)) {
+    const auto [kind, i] = D.place(id);
+    switch (kind) {
+      case Kind::w:
+        uw[i] =
+            ReferenceAlgebra::point_uncertainty<false>(ra.uw(i), cw, S[0], zuu, zv, 1.0, noise_var);
+        break;
+      case Kind::g:
+        ug[i] =
+            ReferenceAlgebra::point_uncertainty<false>(ra.ug(i), cg, S[1], zuu, zv, 1.0, noise_var);
+        break;
+      case Kind::t:
+        if (i < ra.mt)
+          ut[i] = ReferenceAlgebra::point_uncertainty<false>(ra.ut(i), ct, S[2], zuu, zv, inv_h,
                                                              noise_var);
-          break;
-        case Kind::g:
-          ug[i] = ReferenceAlgebra::point_uncertainty<false>(ra.ug(i), cg, S[1], zuu, zv, 1.0,
-                                                             noise_var);
-          break;
-        case Kind::t:
-          if constexpr (KT >= 0)
-            if (i < ra.mt)
-              ut[i] = ReferenceAlgebra::point_uncertainty<false>(ra.ut(i), ct, S[2], zuu, zv, inv_h,
-                                                                 noise_var);
-          break;
-        default:
-          break;  // an offset: no row of V
-      }
-    };
-    st.engine->solve_normal_rows<Cols>(
-        [&](int id, double* out) __attribute__((always_inline)) {
-          const auto [kind, i] = D.place(id);
-          ra.v_into<Cols>(kind, i, KPhi, KT, out);
-        },
-        use, gram.data(),
-        [&] {
-          Eigen::Matrix<double, ReferenceAlgebra::kMaxCols, ReferenceAlgebra::kMaxCols> VZV;
-          VZV.setZero();
-          VZV.template topLeftCorner<Cols, Cols>() = gram;
-          S[0] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cw);
-          S[1] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.cg);
-          S[2] = ReferenceAlgebra::restrict(VZV.topLeftCorner(k, k), ra.ct);
-        },
-        locals_free ? local_vv.data() : nullptr);
-    for (const auto& pin : D.pins) use(pin.first, nullptr, 0.0);
+        break;
+      default:
+        break;  // an offset: no row of V
+    }
   };
-  // ReferenceAlgebra numbers its columns 0–3 for the lines, then the parabola's, then the
-  // pitch's: k and the two columns follow from which of the two there are.
-  if (ra.kPhi >= 0 && ra.kT >= 0)
-    solve.template operator()<6, 4, 5>();
-  else if (ra.kPhi >= 0)
-    solve.template operator()<5, 4, -1>();
-  else if (ra.kT >= 0)
-    solve.template operator()<5, -1, 4>();
-  else
-    solve.template operator()<4, -1, -1>();
+  st.engine->solve_normal_rows<kCols>(
+      [&](int id, double* out) __attribute__((always_inline)) {
+        const auto [kind, i] = D.place(id);
+        ra.v_into<kCols>(kind, i, kPhi, kT, out);
+      },
+      use, gram.data(),
+      [&] {
+        const Eigen::MatrixXd VZV = gram;
+        S[0] = ReferenceAlgebra::restrict(VZV, cw);
+        S[1] = ReferenceAlgebra::restrict(VZV, cg);
+        S[2] = ReferenceAlgebra::restrict(VZV, ct);
+      },
+      locals_free ? local_vv.data() : nullptr);
+  for (const auto& pin : D.pins) use(pin.first, nullptr, 0.0);
   take_square_roots(uw, ug, ut);
 }
 
