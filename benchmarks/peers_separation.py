@@ -5,7 +5,7 @@ same run.
   /usr/bin/python3 benchmarks/peers_separation.py [STATIONS]   (default 1000000)
 
 Peers (numpy/scipy from Debian's python3-numpy / python3-scipy, benchmark-only):
-  * three-point: the same recurrence as two numpy cumulative sums (the seed's double summation),
+  * three-point: the same recurrence as two numpy cumulative sums (the patent's double summation),
     and the closing fit, vectorised;
   * lsq: the same least-squares system (3 probes at 0, h, 2h; pins at the workpiece's first, middle
     and last positions and two probe offsets) built as a scipy sparse matrix and solved by sparse

@@ -213,7 +213,7 @@ int run_demo(const DemoOptions& o) {
           report::escape(machine.summary())) +
       sections.back().intro_html;
 
-  // Scenario 4: the five errors of the machine's X carriage from three QPDs (spec 03).
+  // Scenario 4: the five errors of the machine's X carriage from three QPDs.
   guideway::Layout layout;
   layout.detectors = {{"a", guideway::Kind::Position, {-60, 0, 0}, 0},
                       {"b", guideway::Kind::Position, {60, 0, 150}, 0},
@@ -340,7 +340,8 @@ int run_demo(const DemoOptions& o) {
     sections.push_back(std::move(ps));
   }
 
-  // Scenario 5: the CMM's error-vector map from a ball gauge (spec 04), checked with gauge blocks.
+  // Scenario 5: the CMM's error-vector map from a ball gauge (Oya, Hokari, Tamura 1988), checked
+  // with gauge blocks.
   say("ballgauge: probing a 5 x 4 x 2 ball frame in 3 stacked placements (0.5 um noise)...");
   const auto bgauge = sim::frame_gauge();
   auto poses = sim::stacked_poses(

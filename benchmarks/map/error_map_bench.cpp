@@ -75,9 +75,10 @@ void time_correct(benchmark::State& st, const map::ErrorMap& m, const Eigen::Mat
   st.SetItemsProcessed(st.iterations() * p.cols());
 }
 
-// The ball-gauge map of spec 04: the paper's 5 × 4 × 4 grid, calibrated on the virtual CMM from
-// 0.5 µm-noise probing, so its axes are cluster means (not exactly uniform: the cell is guessed
-// from the mean spacing and corrected), and 10^7 points spread over its 320 × 240 × 240 mm box.
+// The ball-gauge map of Oya, Hokari and Tamura (1988): their 5 × 4 × 4 grid, calibrated on the
+// virtual CMM from 0.5 µm-noise probing, so its axes are cluster means (not exactly uniform: the
+// cell is guessed from the mean spacing and corrected), and 10^7 points spread over its 320 × 240 ×
+// 240 mm box.
 void BM_CorrectBallGauge(benchmark::State& st) {
   static const map::ErrorMap m = [] {
     const auto g = sim::frame_gauge();

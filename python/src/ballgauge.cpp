@@ -1,5 +1,5 @@
-// Python bindings for the ball-gauge error map (spec 04): calibrate from gauge.json and
-// measurements.json (or their contents), and correct points with the resulting grid.
+// Python bindings for the ball-gauge error map (Oya, Hokari, Tamura 1988): calibrate from
+// gauge.json and measurements.json (or their contents), and correct points with the resulting grid.
 #include "trueaxis/ballgauge/ballgauge.hpp"
 
 #include <fmt/format.h>

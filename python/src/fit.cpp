@@ -1,4 +1,4 @@
-// Python bindings for the least-squares fits of geometric elements (spec 04).
+// Python bindings for the least-squares fits of geometric elements (ISO 10360-6; Shakarji 1998).
 #include "trueaxis/geometry/fit.hpp"
 
 #include <fmt/format.h>

@@ -1,4 +1,4 @@
-// Python bindings for the five guideway errors (spec 03) and the virtual carriage. Readings in µm
+// Python bindings for the five guideway errors and the virtual carriage. Readings in µm
 // (spots) as numpy arrays of shape (positions, 2m): dx, dy per detector in layout order.
 #include "trueaxis/guideway/guideway.hpp"
 

@@ -1,4 +1,5 @@
-// Python bindings for design data and error-tolerant scanning on the virtual CMM (spec 05).
+// Python bindings for design data and error-tolerant scanning on the virtual CMM (after JP 6484108
+// B2).
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>

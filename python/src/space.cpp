@@ -1,4 +1,4 @@
-// Python bindings for the virtual machine (spec 06), error surfaces and error spaces (spec 02)
+// Python bindings for the virtual machine, error surfaces and error spaces
 // and error maps. Points are numpy arrays of shape (n, 3) (or a single point of shape (3,)),
 // in mm; error vectors in µm; error functions in µm or µrad.
 #include "trueaxis/io/space.hpp"

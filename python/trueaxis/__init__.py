@@ -2,14 +2,14 @@
 
 Units follow trueaxis' files: positions in mm, deviations in µm, angles in µrad.
 
-Straightness separation (spec 01):
+Straightness separation (JPH0464003B2; Whitehouse 1976):
 
     >>> import trueaxis
     >>> sim = trueaxis.simulate_straightness(stations=200, offsets=[0, 10, 20])
     >>> r = trueaxis.separate(sim["x"], sim["readings"], offsets=sim["offsets"], method="three-point")
     >>> r["workpiece"]["value"]  # µm, residuals from the least-squares line
 
-Error space and compensation of a virtual machine (specs 02 and 06):
+Error space and compensation of a virtual machine:
 
     >>> m = trueaxis.Machine.random(seed=3)
     >>> s = trueaxis.measure_space(m, spacing=100, probe_noise=0.05, verify=1000)

@@ -126,9 +126,9 @@ using detail::clusters;
 using detail::fit_ball;
 using detail::kabsch;
 
-// The paper's 3-2-1 rotation (eqs. 11–12): columns c1, c2, c3 = gauge U, V, W in the machine
-// frame, from the measured centres of balls 0, 1, 2 and their gauge coordinates (a, 0, 0) and
-// (b, c, 0), such that ball 1 has no y, z error and ball 2 no z error relative to ball 0.
+// Oya, Hokari and Tamura's 3-2-1 rotation (eqs. 11–12): columns c1, c2, c3 = gauge U, V, W in the
+// machine frame, from the measured centres of balls 0, 1, 2 and their gauge coordinates (a, 0, 0)
+// and (b, c, 0), such that ball 1 has no y, z error and ball 2 no z error relative to ball 0.
 Eigen::Matrix3d rotation_321(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
                              const Eigen::Vector3d& x2, double a, double b, double c) {
   const double l2 = (x1.y() - x0.y()) / a, l3 = (x1.z() - x0.z()) / a;

@@ -21,8 +21,8 @@ constexpr int kFunctions = 18;  // 3 axes × 6 components
 // Singular values (column-scaled design, Chebyshev basis) below this fraction of the largest are
 // treated as undetermined. The exact problem's null directions (the map's rigid motion, functions
 // that do not move the tip) show up near 1e-5 because the model is linearised at the readings
-// rather than at the unknown true positions; the determined ones of the paper's layout lie above
-// 0.05.
+// rather than at the unknown true positions; the determined ones of Oya, Hokari and Tamura's layout
+// lie above 0.05.
 constexpr double kRankThreshold = 1e-3;
 
 Eigen::Index parameter_count(int degree) {

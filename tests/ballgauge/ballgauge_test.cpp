@@ -1,5 +1,5 @@
-// Ball-gauge calibration (spec 04) on the virtual CMM: the paper's 3-2-1 alignment, stitching
-// through several placements, and refusals.
+// Ball-gauge calibration (Oya, Hokari, Tamura 1988) on the virtual CMM: their 3-2-1 alignment,
+// stitching through several placements, and refusals.
 #include "trueaxis/ballgauge/ballgauge.hpp"
 
 #include <fmt/format.h>

@@ -1,6 +1,6 @@
-// Gauge-block verification (spec 04): exact correction of an affine distortion, repeat groups,
-// refusals, the gauge-block simulator, and the paper's before/after result on the virtual CMM
-// (must-show 3).
+// Gauge-block verification (ISO 10360-2 style): exact correction of an affine distortion, repeat
+// groups, refusals, the gauge-block simulator, and the paper's before/after result on the virtual
+// CMM (must-show 3).
 #include "trueaxis/ballgauge/lengths.hpp"
 
 #include <gtest/gtest.h>

@@ -1,5 +1,6 @@
-// Parametric identification of the 21 rigid-body errors from ball-gauge data (spec 04, beyond
-// the paper), and grid against parametric correction on held-out lengths (must-show 4).
+// Parametric identification of the 21 rigid-body errors from ball-gauge data (Oya, Hokari, Tamura
+// 1988, beyond the paper), and grid against parametric correction on held-out lengths (must-show
+// 4).
 #include "trueaxis/ballgauge/parametric.hpp"
 
 #include <fmt/format.h>
@@ -156,7 +157,7 @@ TEST(Parametric, GridOrParametricDependsOnWhetherTheModelHoldsTheMachine) {
       sim::MachineOptions mo;
       mo.seed = static_cast<std::uint64_t>(5 + s);
       sim::Machine m = sim::random_machine(mo);
-      if (bump) {  // a local 4 µm positioning error in X over 160 mm (spec 06's "bump in a guide")
+      if (bump) {  // a local 4 µm positioning error in X over 160 mm (a "bump in a guide")
         auto& f = m.errors[0][0];
         f.table_u = {0, 150, 230, 310, 800};
         f.table_value = {0, 0, 4e-3, 0, 0};

@@ -248,7 +248,7 @@ grep -q "section 1      ls " out.txt && ok || bad "ballgauge with the least-squa
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json:[0-9]*:[0-9]*: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 
-# Gauge-block verification, grid and parametric (spec 04, must-show 3 and 4).
+# Gauge-block verification, grid and parametric (grid map and parametric model).
 expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv --lengths bg-lengths.csv
 grep -q "105 gauge-block measurements" out.txt && head -1 bg-lengths.csv | grep -qx "x1,y1,z1,x2,y2,z2,nominal" && ok || bad "simulate ballgauge --lengths"
 expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output bg-ls-map.json --parametric bg-model.json --stylus-offset 0,0,-100 --report bg-map.html

@@ -50,6 +50,10 @@ struct Case {
   std::string dir;
   Element element;
 };
+// How a case shows in test lists and failures (NIST's folder name, not the object's bytes).
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.dir;
+}
 
 class NistReference : public testing::TestWithParam<Case> {};
 

@@ -1,4 +1,4 @@
-// Five guideway errors from QPD spots (spec 03): truth from smooth error motions, readings from
+// Five guideway errors from QPD spots: truth from smooth error motions, readings from
 // the spec's formulas written out independently of Layout::design().
 #include "trueaxis/guideway/guideway.hpp"
 

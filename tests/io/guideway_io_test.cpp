@@ -1,4 +1,4 @@
-// Guideway files and the QPD conversion (spec 03): located errors for every bad input, and the
+// Guideway files and the QPD conversion: located errors for every bad input, and the
 // calibration table against the linear gain for a Gaussian spot.
 #include <gtest/gtest.h>
 

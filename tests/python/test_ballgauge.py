@@ -1,4 +1,4 @@
-"""Python binding of the ball-gauge map (spec 04), on files written by the CLI's simulator."""
+"""Python binding of the ball-gauge map, on files written by the CLI's simulator."""
 import os
 import subprocess
 

@@ -1,4 +1,4 @@
-"""Python binding of the five guideway errors (spec 03) against the virtual carriage's truth."""
+"""Python binding of the five guideway errors against the virtual carriage's truth."""
 import numpy as np
 import pytest
 

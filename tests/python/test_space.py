@@ -1,4 +1,4 @@
-"""Python binding of the virtual machine, error surfaces, error spaces and maps (specs 02, 06).
+"""Python binding of the virtual machine, error surfaces, error spaces and maps.
 
 Known truths: a machine with one polynomial error, exactly linear error fields (which trilinear
 interpolation reproduces), a surface sampled from a known function, Moody's published tables,
@@ -202,7 +202,7 @@ def test_surface_recovers_a_known_plate():
     np.testing.assert_allclose(p["height"], want, atol=ROUND_OFF_UM)
     # Without a diagonal, lsq and seed agree with the truth up to plane and twist.
     for method in ("lsq", "boundary"):
-        # The seed's construction hangs the x lines on the two boundary y lines.
+        # The two-point patent's construction hangs the x lines on the two boundary y lines.
         y_lines = (0, 600) if method == "boundary" else (0, 300, 600)
         s = trueaxis.surface(network(rng, diagonal=False, y_lines=y_lines), method=method)
         assert "twist" in s["unobservable"]

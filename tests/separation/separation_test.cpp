@@ -275,7 +275,7 @@ TEST(Separation, DirectLsqEqualsTheBandedSolve) {
   }
 }
 
-// An independent implementation of the seed's equations (JPH0464003B2 eqs. 12–17), written
+// An independent implementation of the patent's equations (JPH0464003B2 eqs. 12–17), written
 // straight from the text in one pass with Cramer's rule on the γ/δ sums.
 TEST(Separation, SeedReferenceMatchesAnIndependentImplementation) {
   const auto so = carriage(60, {0, 10, 20}, 4);

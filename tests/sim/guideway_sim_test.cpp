@@ -1,4 +1,4 @@
-// The virtual guideway carriage (spec 03 on spec 06's machine): its truth is the axis' own
+// The virtual guideway carriage (one axis of the virtual machine): its truth is the axis' own
 // errors, its readings follow the spec's model (or the exact geometry), and the solver gets the
 // truth back.
 #include <gtest/gtest.h>

@@ -115,7 +115,7 @@ TEST(Space, WithoutDiagonalsTwistAndSquarenessAreUnobservableAndSaidSo) {
 }
 
 TEST(Space, TwoPointProbesCarryThePitchIntoTheMap) {
-  // The seed's two-point method assumes no pitch; ~10 µrad pitch integrates to µm along a line.
+  // The two-point patent's method assumes no pitch; ~10 µrad pitch integrates to µm along a line.
   const sim::Machine m = small_machine();
   SpacePlan p;
   p.probes = ProbeMethod::TwoPoint;

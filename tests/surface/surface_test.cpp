@@ -1,5 +1,5 @@
 // Error surfaces from line networks: Moody's published tables, and noise-free networks on a known
-// surface (spec 02, issue 3).
+// surface (Moody 1955; two-point networks).
 #include "trueaxis/surface/surface.hpp"
 
 #include <fmt/format.h>
@@ -176,7 +176,8 @@ TEST(Surface, AxisParallelNetworkLeavesTheTwistFreeAndSaysSo) {
 TEST(Surface, SeedConstructionMatchesTheTruthUpToPlaneAndTwist) {
   std::mt19937 rng(5);
   auto lines = grid_lines(false, rng);
-  lines.erase(lines.begin() + 8);  // the seed's layout: x family + two boundaries, no inner line
+  lines.erase(lines.begin() +
+              8);  // the two-point patent's layout: x family + two boundaries, no inner line
   ASSERT_EQ(lines[7].name, "left");
   ASSERT_EQ(lines[8].name, "right");
   surface::Options o;

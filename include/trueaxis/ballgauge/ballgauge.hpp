@@ -1,5 +1,6 @@
-// trueaxis::ballgauge — a CMM's error-vector map from 3-D ball gauges (spec 04, seed 004: Oya,
-// Hokari, Tamura 1988).
+// trueaxis::ballgauge — a CMM's error-vector map from 3-D ball gauges (M. Oya, H. Hokari,
+// H. Tamura, "A method of improving the accuracy of the three-coordinate measuring machine, 2nd
+// report: calibration method using the three-dimensional standard", Trans. JSME (C), 1988).
 //
 // A gauge carries balls whose centres U_i are known in the gauge frame P1-UVW: origin at ball 0,
 // U towards ball 1, W normal to the plane of balls 0, 1, 2 (any frame given in gauge.json is

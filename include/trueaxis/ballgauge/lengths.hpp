@@ -1,5 +1,5 @@
-// trueaxis::ballgauge — gauge-block verification of a corrected CMM (spec 04; ISO 10360-2 style,
-// the paper's figure 10).
+// trueaxis::ballgauge — gauge-block verification of a corrected CMM (in the manner of ISO 10360-2
+// and of figure 10 of Oya, Hokari, Tamura 1988).
 //
 // Each measurement holds the two end points of a calibrated length as the CMM measured them (mm,
 // machine frame, probe radius already compensated) and the length's calibrated value. The length

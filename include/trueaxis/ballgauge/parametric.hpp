@@ -1,21 +1,22 @@
-// trueaxis::ballgauge — the 21 rigid-body errors of a CMM identified from ball-gauge data (spec 04,
-// beyond the paper; the model is spec 06's, see sim/machine.hpp).
+// trueaxis::ballgauge — the 21 rigid-body errors of a CMM identified from ball-gauge data (beyond
+// Oya, Hokari, Tamura 1988, who map error vectors only; the errors are ISO 230-1's, the model that
+// of sim/machine.hpp).
 //
 // Every error function of axis k (E_Xk … E_Ck) is a polynomial of degree `degree` in the axis
 // coordinate, (u/1 m)^q for q = 0..degree, plus the three squareness errors. A ball measured at
 // reading x (machine frame, mm; its command is c = x − offset) whose true centre is X = R_p·U_i +
 // t_p (placement p's unknown pose, gauge coordinates U_i) obeys
 //
-//     x = X − e(c),   e(c) = actual(c) − nominal(c)   (spec 06, exact rotations),
+//     x = X − e(c),   e(c) = actual(c) − nominal(c)   (sim/machine.hpp, exact rotations),
 //
 // so the unknowns are the polynomial coefficients and six pose parameters per placement. The
-// equations are linearised about zero errors (first order, as spec 06 says identification fits:
-// the design columns are central differences of the exact model) and solved by Gauss–Newton on
-// the exact model until the step vanishes, with a rank-revealing SVD of the column-scaled design:
-// the data cannot tell a rigid motion of the whole map, nor an error function that does not move
-// this stylus tip (e.g. E_CZ, roll about the ram, when the stylus hangs straight down), and those
-// directions take the minimum-norm value. Placements need no overlap and no alignment type: each
-// one's pose is estimated with the errors.
+// equations are linearised about zero errors (first order, the usual small-error model of
+// identification: the design columns are central differences of the exact model) and solved by
+// Gauss–Newton on the exact model until the step vanishes, with a rank-revealing SVD of the
+// column-scaled design: the data cannot tell a rigid motion of the whole map, nor an error function
+// that does not move this stylus tip (e.g. E_CZ, roll about the ram, when the stylus hangs straight
+// down), and those directions take the minimum-norm value. Placements need no overlap and no
+// alignment type: each one's pose is estimated with the errors.
 //
 // Each axis must be sampled at more than `degree` distinct positions; otherwise a polynomial could
 // wiggle unseen between them, and identify() refuses. The identified machine's range is the span

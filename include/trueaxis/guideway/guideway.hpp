@@ -1,5 +1,6 @@
 // trueaxis::guideway — five motion errors of a guideway from laser spots on quadrant detectors
-// (spec 03, seed 002).
+// (after the Chinese patent application "一种数控机床导轨五自由度几何运动误差的测量方法", a
+// measuring method for the five geometric motion errors of a CNC machine-tool guideway).
 //
 // Carriage frame (mm): z along the travel, x horizontal, y vertical. At carriage position s the
 // carriage makes a small error motion: translation (δx, δy, δz) of the frame origin and rotation
@@ -46,8 +47,8 @@ struct Layout {
   std::vector<Detector> detectors;
   // Throws Error: no detectors, empty or duplicated names, non-finite positions, angle detectors
   // without a positive focal length, or position detectors that all lie on one line (the
-  // seed's triangle abc is degenerate; with two or fewer position detectors, at least one angle
-  // detector must complete the layout).
+  // patent application's triangle abc is degenerate; with two or fewer position detectors, at least
+  // one angle detector must complete the layout).
   void validate() const;
   // The design matrix A (2m × 5): readings (dx_1, dy_1, dx_2, dy_2, ...; mm) = A·q.
   Eigen::MatrixXd design() const;

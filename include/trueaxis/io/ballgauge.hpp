@@ -1,4 +1,4 @@
-// trueaxis::io — ball-gauge files (spec 04).
+// trueaxis::io — ball-gauge files (gauge.json, placements, lengths).
 //
 // gauge.json: {"ball_diameter": mm, "balls": [[u, v, w], ...]} (gauge frame, mm; balls 0, 1, 2
 //   define the frame).

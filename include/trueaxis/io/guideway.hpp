@@ -1,4 +1,4 @@
-// trueaxis::io — guideway files (spec 03): layout.json, spots.csv and result.json.
+// trueaxis::io — guideway files : layout.json, spots.csv and result.json.
 //
 // layout.json: {"detectors": [{"name": "a", "kind": "position", "position": [x, y, z]}, ...,
 //                             {"name": "f", "kind": "angle", "focal_length": mm}],

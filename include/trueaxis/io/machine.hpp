@@ -1,4 +1,4 @@
-// trueaxis::io — the virtual machine's JSON description and point lists (spec 06).
+// trueaxis::io — the virtual machine's JSON description and point lists (sim/machine.hpp).
 //
 // machine.json (units: mm for positions, µm for linear errors, µrad for angular errors):
 //   {"name": "...", "chain": "FYXZ",

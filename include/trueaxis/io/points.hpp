@@ -1,4 +1,4 @@
-// trueaxis::io — point sets for the geometric fits (spec 04).
+// trueaxis::io — point sets for the geometric fits (points.csv).
 //
 // NIST .ds (ASME B89.4.10 reference data): the first line is the number of points; every further
 // line holds x y z separated by spaces or tabs ("\r\n" accepted). Errors name file:line:col

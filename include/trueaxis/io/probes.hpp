@@ -1,4 +1,4 @@
-// trueaxis::io — readers and writers for the straightness separation (spec 01 file formats).
+// trueaxis::io — readers and writers for the straightness separation (probes.csv and its result).
 //
 // probes.csv: header row; first column `x` (mm, strictly increasing, equal steps); then one
 // column per probe (µm) in the order of the offsets; optionally an angle column (µrad) named by

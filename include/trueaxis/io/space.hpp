@@ -1,5 +1,5 @@
 // trueaxis::io — error-space files: plan.json, space.json, the generic CSV table and the
-// LinuxCNC per-joint compensation file (spec 02).
+// LinuxCNC per-joint compensation file.
 //
 // plan.json (every key optional): {"spacing": mm, "probes": "three-point" | "two-point",
 //   "probe_noise_um": µm, "laser_noise_um": µm, "profile_um": µm, "diagonals": true,

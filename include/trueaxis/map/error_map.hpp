@@ -1,5 +1,6 @@
 // trueaxis::map — error-vector maps on a rectilinear 3-D grid: interpolation, compensation and
-// correction (shared by the error space of spec 02 and the ball-gauge map of spec 04).
+// correction (shared by the error space of surface/space.hpp and the ball-gauge map of
+// ballgauge/ballgauge.hpp).
 //
 // An ErrorMap holds the error vector e = actual − nominal (mm) of a machine at the nodes of a
 // grid x_i × y_j × z_k (mm, machine coordinates), with an optional standard uncertainty per

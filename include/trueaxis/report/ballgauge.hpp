@@ -1,4 +1,5 @@
-// trueaxis::report — sections for the ball-gauge map and the length verification (spec 04).
+// trueaxis::report — sections for the ball-gauge map and the length verification (Oya, Hokari,
+// Tamura 1988; ISO 10360-2).
 #pragma once
 
 #include <string>

@@ -1,4 +1,4 @@
-// trueaxis::report — the section for the five guideway errors (spec 03).
+// trueaxis::report — the section for the five guideway errors (ISO 230-1 names).
 #pragma once
 
 #include <array>

@@ -1,4 +1,4 @@
-// trueaxis::report — sections for error surfaces and error spaces (spec 02).
+// trueaxis::report — sections for error surfaces and error spaces (Moody 1955; ISO 230-1).
 #pragma once
 
 #include <string>

@@ -1,5 +1,5 @@
 // trueaxis::scan — what the scanning controller needs from a CMM, and a virtual CMM that
-// provides it (servo-level simulation of spec 06).
+// provides it (a servo-level simulation).
 //
 // The interface is the small set of operations a CMM controller offers (and I++ DME carries:
 // GoTo, PtMeas, ScanOnCurve, ScanUnknownHint): move, touch a point along a direction, scan along

@@ -1,4 +1,5 @@
-// trueaxis::separation — straightness error separation with displacement probes (spec 01).
+// trueaxis::separation — straightness error separation with displacement probes (JPH0464003B2;
+// Whitehouse 1976).
 //
 // Physical model (library units: mm and rad). A carrier moving along x carries N probes at
 // offsets s_i (mm, s_0 = 0) from probe A. At station K (x_K = x_0 + K·h) probe i reads
@@ -23,13 +24,13 @@ namespace trueaxis::separation {
 
 enum class Method {
   TwoPoint,    // A: sequential two-point (probes at 0, h; no pitch)
-  ThreePoint,  // B: the seed's sequential three-point with pitch (probes at 0, h, 2h)
+  ThreePoint,  // B: JPH0464003B2's sequential three-point with pitch (probes at 0, h, 2h)
   Lsq,         // C: least-squares multi-probe solver (any whole-step offsets, angle channel)
 };
 
 enum class Reference {
   LeastSquares,  // w and g are residuals from their own LS lines; θ about its mean
-  Seed,          // three-point only: the seed's X_0 = 0, α, β by least squares, θ_0 = 0
+  Seed,          // three-point only: JPH0464003B2's X_0 = 0, α, β by least squares, θ_0 = 0
   MinZone,       // w and g relative to the middle line of their minimum zones; θ about its mean
 };
 

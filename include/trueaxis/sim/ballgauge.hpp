@@ -1,4 +1,4 @@
-// trueaxis::sim — a ball gauge probed on the virtual CMM (spec 04 on spec 06's machine).
+// trueaxis::sim — a ball gauge probed on the virtual CMM (sim/machine.hpp).
 //
 // Each placement sets the gauge at a pose (rotation, translation: X_i = R·U_i + t, mm). Every
 // ball is probed at `points_per_ball` directions spread over its upper hemisphere (the pole, then
@@ -44,8 +44,8 @@ struct BallGaugeCampaign {
   void bounds(Eigen::Vector3d& lo, Eigen::Vector3d& hi) const;
 };
 
-// A 3-D ball frame like the paper's: nx × ny × nz balls at `pitch` (mm); balls 0, 1, 2 at
-// (0,0,0), (pitch,0,0), (0,pitch,0), the rest in row order.
+// A 3-D ball frame like that of Oya, Hokari, Tamura (1988): nx × ny × nz balls at `pitch` (mm);
+// balls 0, 1, 2 at (0,0,0), (pitch,0,0), (0,pitch,0), the rest in row order.
 ballgauge::Gauge frame_gauge(int nx = 5, int ny = 4, int nz = 2, double pitch = 80,
                              double ball_diameter = 25);
 // `sections` placements of that frame stacked along z by (nz − 1)·pitch, each sharing a layer of

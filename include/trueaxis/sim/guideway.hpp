@@ -1,5 +1,5 @@
-// trueaxis::sim — the virtual guideway carriage of spec 03: one axis of the virtual machine
-// (spec 06) carrying quadrant detectors through fixed laser beams.
+// trueaxis::sim — a virtual guideway carriage for guideway/guideway.hpp: one axis of the virtual
+// machine (sim/machine.hpp) carrying quadrant detectors through fixed laser beams.
 //
 // Carriage frame (mm): z along the travel, x horizontal, y vertical, origin at the axis' reference
 // point (where its error functions are defined). For the machine's X axis the carriage axes are

@@ -1,4 +1,4 @@
-// trueaxis::sim — the rigid-body virtual 3-axis machine (spec 06, ISO 230-1 naming).
+// trueaxis::sim — the rigid-body virtual 3-axis machine (ISO 230-1 naming).
 //
 // Model. Each linear axis k ∈ {X, Y, Z} moves its carriage by its coordinate u_k (mm). The
 // carriage's actual motion relative to its nominal one is a small rigid transformation with six
@@ -102,7 +102,7 @@ struct Machine {
   std::string summary(const std::vector<std::string>& not_determined = {}) const;
 };
 
-// A seeded random machine with realistic magnitudes (spec 06). Straightness: bow plus cubic plus
+// A seeded random machine with realistic magnitudes. Straightness: bow plus cubic plus
 // one long-wave sinusoid, about `straightness` PV over 500 mm; angular: drift, bow and a wave of
 // about `angular`; positioning: about `positioning` mm per mm from the axis' start plus a small
 // bow (and, if `lead_amplitude` > 0, a lead-screw term of period `lead`); squareness: normal with
@@ -123,16 +123,16 @@ struct MachineOptions {
 
 Machine random_machine(const MachineOptions& options);
 
-// A virtual displacement-probe run on the machine (spec 01 data from spec 06's machine). The
-// carriage (the tool point) stops at c_K = start + K·step·d for K = 0..stations−1; probe i is
-// mounted on the tool at `offsets[i]` along d and reads along the sensing direction n (n ⟂ d) a
-// straightedge lying along the line with its own profile w:
+// A virtual displacement-probe run on the machine (the data of separation/separation.hpp from this
+// machine). The carriage (the tool point) stops at c_K = start + K·step·d for K = 0..stations−1;
+// probe i is mounted on the tool at `offsets[i]` along d and reads along the sensing direction n (n
+// ⟂ d) a straightedge lying along the line with its own profile w:
 //
 //     m_i(K) = w(x_K + s_i) + n·(actual(c_K, s_i) − nominal(c_K, s_i)) + o_i + noise,
 //
-// which is exactly spec 01's w + g + s_i·θ + o_i with g(K) = n·error(c_K) and θ(K) = n·(R_K d),
-// R_K the tool frame's actual rotation. The optional angle channel (an autocollimator or level on
-// the carriage) reads θ(K) + o_a + noise. Along-line coordinate: x_K = start·d + K·step.
+// which is exactly the separation's model w + g + s_i·θ + o_i with g(K) = n·error(c_K) and θ(K) =
+// n·(R_K d), R_K the tool frame's actual rotation. The optional angle channel (an autocollimator or
+// level on the carriage) reads θ(K) + o_a + noise. Along-line coordinate: x_K = start·d + K·step.
 struct ProbeRunOptions {
   Eigen::Vector3d start = Eigen::Vector3d::Zero();  // command of the first stop (mm)
   Eigen::Vector3d direction{1, 0, 0};               // motion direction (normalised)

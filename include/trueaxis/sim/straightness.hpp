@@ -1,10 +1,11 @@
-// trueaxis::sim — a seeded virtual carriage for straightness campaigns (spec 06, used by spec 01).
+// trueaxis::sim — a seeded virtual carriage for straightness campaigns (the data of
+// separation/separation.hpp).
 //
 // The carriage moves along x over a workpiece. Truth: workpiece profile w (sinusoids of random
 // wavelength and phase plus a fine random-walk texture), guide straightness g (a bow plus
 // sinusoids), pitch θ (a drift plus a sinusoid), probe zero offsets o_i and an angle-channel
-// offset. Readings follow spec 01: m_i(K) = w(x_K + s_i) + g(x_K) + s_i·θ(x_K) + o_i + noise.
-// Units: mm and rad. The same options and seed give the same data on the same build.
+// offset. Readings follow the separation's model: m_i(K) = w(x_K + s_i) + g(x_K) + s_i·θ(x_K) + o_i
+// + noise. Units: mm and rad. The same options and seed give the same data on the same build.
 #pragma once
 
 #include <Eigen/Core>

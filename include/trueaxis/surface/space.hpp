@@ -1,12 +1,14 @@
-// trueaxis::surface — the error space of a 3-axis machine from a measuring campaign (spec 02,
-// seed claims 2–4), run on the virtual machine of spec 06.
+// trueaxis::surface — the error space of a 3-axis machine from a measuring campaign (error
+// surfaces stacked into a space, as the sequential two-point patent's claims 2–4 do), run on the
+// virtual machine of sim/machine.hpp.
 //
 // Grid: every axis' range divided into equal steps of at most `Plan::spacing`; stations of every
 // run are grid nodes. For each error component c (ex, ey, ez) with (a, b) the other two axes:
 //  1. Straightness: virtual probe runs (sensing c) along a at every (b, c) node line and along b
 //     at every (a, c) node line, plus (if `diagonals`) one along the (a, b) diagonal of each
-//     level; each run separated (spec 01) and the lines of each level assembled into a surface
-//     S_k(a, b) by least squares (surface::build). A surface is known only up to a plane.
+//     level; each run separated (separation/separation.hpp) and the lines of each level assembled
+//     into a surface S_k(a, b) by least squares (surface::build). A surface is known only up to a
+//     plane.
 //  2. Stacking: virtual laser-interferometer positioning runs along c at the four corner columns
 //     give each level's plane P_k relative to the first level (least squares).
 //  3. Squareness: laser runs along the three face diagonals (if `diagonals`) fix the remaining

@@ -1,4 +1,6 @@
-// trueaxis::surface — error surfaces from networks of straightness lines (spec 02, seed 001).
+// trueaxis::surface — error surfaces from networks of straightness lines (Moody 1955 for
+// plates; straightness lines by the sequential two-point method, "Trend of straightness measuring
+// method and development of sequential two-point method", Seisan Kenkyu 34(6), 25–34, 1982).
 //
 // Frame: plane coordinates x, y in mm (right-handed; for a surface plate x from West to East and
 // y from South to North); heights z in mm along the plane normal, positive up. Each measured line
@@ -37,7 +39,8 @@ struct Line {
 Eigen::VectorXd heights_from_slopes(const Eigen::VectorXd& slopes, double spacing);
 
 enum class Method {
-  Seed,  // the seed's construction: X lines hung on the two boundary Y lines at their ends
+  Seed,  // the two-point patent's construction: X lines hung on the two boundary Y lines at their
+         // ends
   Lsq    // all offsets and tilts jointly, crossings agreeing in the least-squares sense
 };
 
@@ -94,7 +97,7 @@ struct MoodyData {
   std::map<std::string, Eigen::VectorXd> readings;  // arc-seconds, keys from kMoodyLines
   double foot_spacing = 0;                          // mm
 };
-// Classic worksheet (spec 02 appendix): heights with the lowest point at zero, exactly as Moody's
+// Classic worksheet (Moody 1955): heights with the lowest point at zero, exactly as Moody's
 // tables. `least_squares`: the same lines assembled by build() with Method::Lsq (closure at every
 // crossing, heights about the LS plane).
 Result moody(const MoodyData& data, bool least_squares = false);
