@@ -294,6 +294,29 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       items.push_back({s, "", e.what(), sp});
     }
   }
+  // A move of the part found on a whole closed contour is carried to the sections after it in
+  // parallel planes (run_section); an open stretch's touch points cannot tell one. So, among
+  // consecutive sections in parallel planes with one probe orientation, the whole closed contours
+  // are scanned first: the stretches of an outline that the stylus reaches only in pieces then
+  // start where the part stands, instead of each paying a trajectory error and its touch points.
+  if (options.strategy == Strategy::ErrorTolerant) {
+    auto same_setup = [](const Item& a, const Item& b) {
+      if (a.section.space_curve() || b.section.space_curve()) return false;
+      const Eigen::Vector3d na = a.section.plane.normal.normalized();
+      const Eigen::Vector3d nb = b.section.plane.normal.normalized();
+      return na.cross(nb).norm() < 1e-9 &&
+             (design::stylus_axis(a.section.probe) - design::stylus_axis(b.section.probe)).norm() <
+                 1e-12;
+    };
+    for (std::size_t b = 0; b < items.size();) {
+      std::size_t e = b + 1;
+      while (e < items.size() && same_setup(items[b], items[e])) ++e;
+      std::stable_partition(items.begin() + static_cast<std::ptrdiff_t>(b),
+                            items.begin() + static_cast<std::ptrdiff_t>(e),
+                            [](const Item& it) { return it.section.closed && it.refusal.empty(); });
+      b = e;
+    }
+  }
   for (const auto& u : res.unreachable)
     res.events.push_back({machine.time(), u.section, u.from, 0, "section", "not_reachable",
                           fmt::format("{:.1f} to {:.1f} mm along the contour not scanned: {}",

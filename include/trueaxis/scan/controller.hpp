@@ -21,6 +21,9 @@
 // it is carried to the sections after it whose plane it keeps (parallel sections), before they
 // are first scanned (event correction_carried). A carried correction that
 // is wrong costs one trajectory error there, and that section's own touch points then correct it.
+// So that the move reaches the open stretches too (whose touch points cannot tell it), the whole
+// closed contours among consecutive sections in parallel planes with one probe orientation are
+// scanned first; Result::sections is in the order scanned.
 //
 // With the part's solid (the design's STEP file), every free move is planned against it
 // (planner.hpp), the run's first move rises along the stylus before it goes anywhere (a machine
