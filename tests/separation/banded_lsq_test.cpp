@@ -147,18 +147,24 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
       Eigen::VectorXd got_diag = Eigen::VectorXd::Constant(nf, std::nan(""));
       std::vector<int> seen(static_cast<std::size_t>(nf), 0);
       Eigen::Matrix<double, 3, 3, Eigen::RowMajor> gram = Eigen::Matrix3d::Constant(1.0);
-      engine.solve_normal_rows<3>(
-          [&](int id, double* out) {
-            for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
-          },
-          [&](int id, const double* zv, double z) {
-            const int c = d.col[static_cast<std::size_t>(id)];
-            ASSERT_GE(c, 0) << L.name << ": a pinned unknown's row";
-            ++seen[static_cast<std::size_t>(c)];
-            for (int j = 0; j < 3; ++j) got(c, j) = zv[j];
-            got_diag[c] = z;
-          },
-          gram.data());
+      // The same callables for both solves below, so that the pass is compiled once (each
+      // callable type is an instantiation of it): `use` writes into `into`, and counts the rows
+      // of the first solve.
+      auto v_row = [&](int id, double* out) {
+        for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
+      };
+      Eigen::MatrixXd* into = &got;
+      bool first = true;
+      auto use = [&](int id, const double* zv, double z) {
+        const int c = d.col[static_cast<std::size_t>(id)];
+        ASSERT_GE(c, 0) << L.name << ": a pinned unknown's row";
+        for (int j = 0; j < 3; ++j) (*into)(c, j) = zv[j];
+        if (!first) return;
+        ++seen[static_cast<std::size_t>(c)];
+        got_diag[c] = z;
+      };
+      auto ready = [] {};
+      engine.solve_normal_rows<3>(v_row, use, gram.data(), ready);
       EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), nf) << L.name;
       EXPECT_LT((got - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff()) << L.name;
       EXPECT_LT((got_diag - zd).cwiseAbs().maxCoeff(), kAgree * zd.maxCoeff()) << L.name;
@@ -181,14 +187,9 @@ TEST(BandedLsq, EqualsADenseLeastSquaresSolve) {
       }
       Eigen::Matrix<double, 3, 3, Eigen::RowMajor> gram_given = Eigen::Matrix3d::Zero();
       Eigen::MatrixXd got_given = Eigen::MatrixXd::Constant(nf, 3, std::nan(""));
-      engine.solve_normal_rows<3>(
-          [&](int id, double* out) {
-            for (int j = 0; j < 3; ++j) out[j] = V(d.col[static_cast<std::size_t>(id)], j);
-          },
-          [&](int id, const double* zv, double) {
-            for (int j = 0; j < 3; ++j) got_given(d.col[static_cast<std::size_t>(id)], j) = zv[j];
-          },
-          gram_given.data(), [] {}, local_vv.data());
+      into = &got_given;
+      first = false;
+      engine.solve_normal_rows<3>(v_row, use, gram_given.data(), ready, local_vv.data());
       EXPECT_LT((got_given - ZV).cwiseAbs().maxCoeff(), kAgree * ZV.cwiseAbs().maxCoeff())
           << L.name;
       // The solve took the kept rotations' memory: a further refinement factorises again.
