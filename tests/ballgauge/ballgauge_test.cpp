@@ -33,7 +33,8 @@ ballgauge::Gauge frame_gauge() {
   return g;
 }
 
-// The paper's layout: four z sections from three placements, each shifted up by one pitch.
+// Oya, Hokari and Tamura's layout: four z sections from three placements, each shifted up by one
+// pitch.
 std::vector<sim::GaugePose> poses() {
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(0.004, Eigen::Vector3d(0.2, -0.1, 1).normalized()).toRotationMatrix();
@@ -61,7 +62,7 @@ TEST(BallGauge, NoiseFreeStitchedMapEqualsTheTruthUpToTheAlignmentFrame) {
   const auto g = frame_gauge();
   const auto c = sim::simulate_ballgauge(cmm(), g, poses(), {});
   const auto r = ballgauge::calibrate(g, c.placements);
-  ASSERT_EQ(r.points.size(), 80u);  // 5 × 4 × 4, as in the paper
+  ASSERT_EQ(r.points.size(), 80u);  // 5 × 4 × 4, as in Oya, Hokari and Tamura (1988)
   ASSERT_TRUE(r.grid.has_value());
   EXPECT_EQ(r.grid->size(0), 5);
   EXPECT_EQ(r.grid->size(2), 4);

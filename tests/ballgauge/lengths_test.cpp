@@ -1,6 +1,6 @@
 // Gauge-block verification (ISO 10360-2 style): exact correction of an affine distortion, repeat
-// groups, refusals, the gauge-block simulator, and the paper's before/after result on the virtual
-// CMM (must-show 3).
+// groups, refusals, the gauge-block simulator, and Oya, Hokari and Tamura's (1988) before/after
+// result on the virtual CMM.
 #include "trueaxis/ballgauge/lengths.hpp"
 
 #include <gtest/gtest.h>
@@ -22,8 +22,8 @@ namespace {
 
 constexpr double kRoundOff = 1e-12;  // mm
 
-// The paper's campaign: a 5 × 4 × 2 frame stacked in three sections, the first aligned by least
-// squares; gauge blocks in the mapped box.
+// Oya, Hokari and Tamura's campaign: a 5 × 4 × 2 frame stacked in three sections, the first aligned
+// by least squares; gauge blocks in the mapped box.
 struct Campaign {
   sim::Machine machine;
   ballgauge::Result map;
@@ -180,13 +180,14 @@ TEST(Lengths, GaugeBlocksOnAPerfectMachineMeasureTheirNominalLengths) {
 }
 
 TEST(Lengths, ThePaperResultAtHalfAMicrometreOfProbingNoise) {
-  // Must-show 3. Noise like the paper's (0.5 µm per coordinate) on the balls and on the blocks.
+  // Before and after correction. Noise like Oya, Hokari and Tamura's (0.5 µm per coordinate) on the
+  // balls and on the blocks.
   const Campaign noisy = campaign(0.5e-3, 11, 0.5e-3);
   const auto v =
       ballgauge::verify_lengths(noisy.blocks.lengths, ballgauge::grid_correction(*noisy.map.grid));
   ASSERT_EQ(v.rows.size(), 105u);
   EXPECT_EQ(v.positions, 35);
-  // Before: errors of several µm spread like the paper's −2 … +6 µm; after: within about ±2 µm.
+  // Before: errors of several µm spread like their −2 … +6 µm; after: within about ±2 µm.
   EXPECT_GT(v.before.range(), 8e-3);
   EXPECT_LT(v.after.range(), 0.5 * v.before.range());
   EXPECT_LT(std::max(-v.after.min, v.after.max), 2.5e-3);

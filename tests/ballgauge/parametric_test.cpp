@@ -1,6 +1,6 @@
-// Parametric identification of the 21 rigid-body errors from ball-gauge data (Oya, Hokari, Tamura
-// 1988, beyond the paper), and grid against parametric correction on held-out lengths (must-show
-// 4).
+// Parametric identification of the 21 rigid-body errors from ball-gauge data (beyond Oya, Hokari
+// and Tamura 1988, who map error vectors only), and grid against parametric correction on
+// held-out lengths.
 #include "trueaxis/ballgauge/parametric.hpp"
 
 #include <fmt/format.h>
@@ -43,7 +43,7 @@ sim::Machine smooth_machine(std::uint64_t seed) {
   return m;
 }
 
-std::vector<sim::GaugePose> paper_poses() {
+std::vector<sim::GaugePose> oya_poses() {
   auto p = sim::stacked_poses(
       sim::frame_gauge(), 3, {150, 120, 60},
       Eigen::AngleAxisd(0.004, Eigen::Vector3d(0.2, -0.1, 1).normalized()).toRotationMatrix());
@@ -56,7 +56,7 @@ std::vector<sim::GaugePose> paper_poses() {
 // the errors across a 28 mm hemisphere causes), so that the identification itself is tested.
 std::vector<ballgauge::Placement> exact_placements(const sim::Machine& m,
                                                    const ballgauge::Gauge& g) {
-  const auto c = sim::simulate_ballgauge(m, g, paper_poses(), {});
+  const auto c = sim::simulate_ballgauge(m, g, oya_poses(), {});
   auto pl = c.placements;
   for (std::size_t p = 0; p < pl.size(); ++p)
     for (std::size_t b = 0; b < pl[p].balls.size(); ++b) {
@@ -132,7 +132,7 @@ TEST(Parametric, NoisyEstimatesAgreeWithTheirStatedUncertainty) {
     sim::BallGaugeOptions bo;
     bo.noise = 0.5e-3;
     bo.seed = seed;
-    const auto c = sim::simulate_ballgauge(m, g, paper_poses(), bo);
+    const auto c = sim::simulate_ballgauge(m, g, oya_poses(), bo);
     const auto r = ballgauge::identify(g, c.placements, options(m));
     EXPECT_NEAR(r.sigma, 0.5e-3 * 0.55, 0.5e-3 * 0.35);  // a centre from 10 points on a hemisphere
     const auto v = ballgauge::verify_lengths(blocks(m, r, 0, seed).lengths,
@@ -148,7 +148,8 @@ TEST(Parametric, NoisyEstimatesAgreeWithTheirStatedUncertainty) {
 }
 
 TEST(Parametric, GridOrParametricDependsOnWhetherTheModelHoldsTheMachine) {
-  // Must-show 4, on held-out noise-free gauge blocks (105 per case), mean over seeds.
+  // Grid map against parametric model, on held-out noise-free gauge blocks (105 per case), mean
+  // over seeds.
   auto compare = [](bool bump, double& grid, double& param, double& u_grid, double& u_param,
                     double& residual) {
     grid = param = u_grid = u_param = residual = 0;
@@ -166,7 +167,7 @@ TEST(Parametric, GridOrParametricDependsOnWhetherTheModelHoldsTheMachine) {
       sim::BallGaugeOptions bo;
       bo.noise = 0.5e-3;
       bo.seed = static_cast<std::uint64_t>(s + 1);
-      const auto c = sim::simulate_ballgauge(m, g, paper_poses(), bo);
+      const auto c = sim::simulate_ballgauge(m, g, oya_poses(), bo);
       const auto map = ballgauge::calibrate(g, c.placements);
       const auto r = ballgauge::identify(g, c.placements, options(m));
       const auto L = blocks(m, r, 0, 7).lengths;
@@ -195,7 +196,7 @@ TEST(Parametric, GridOrParametricDependsOnWhetherTheModelHoldsTheMachine) {
 TEST(Parametric, RefusalsNameTheProblem) {
   const sim::Machine m = smooth_machine(3);
   const auto g = sim::frame_gauge();
-  auto pl = sim::simulate_ballgauge(m, g, paper_poses(), {}).placements;
+  auto pl = sim::simulate_ballgauge(m, g, oya_poses(), {}).placements;
   ballgauge::ParametricOptions o = options(m);
   // One section: z is measured at only 2 positions, too few for cubics.
   const std::vector<ballgauge::Placement> one{pl[0]};
@@ -236,8 +237,8 @@ TEST(Parametric, TheModelFileRoundTripsAndIsAMachineFile) {
   const auto g = sim::frame_gauge();
   sim::BallGaugeOptions bo;
   bo.noise = 0.3e-3;
-  const auto r = ballgauge::identify(g, sim::simulate_ballgauge(m, g, paper_poses(), bo).placements,
-                                     options(m));
+  const auto r =
+      ballgauge::identify(g, sim::simulate_ballgauge(m, g, oya_poses(), bo).placements, options(m));
   const std::string path = temp_dir() + "/model.json";
   io::write_parametric(path, r);
   const auto back = io::read_parametric(path);
@@ -310,7 +311,7 @@ TEST(Parametric, TheReportDrawsEachAxisErrorsWithBandsAndNamesTheUnseen) {
   const auto g = sim::frame_gauge();
   sim::BallGaugeOptions so;
   so.noise = 0.5e-3;
-  const auto c = sim::simulate_ballgauge(m, g, paper_poses(), so);
+  const auto c = sim::simulate_ballgauge(m, g, oya_poses(), so);
   const auto r = ballgauge::identify(g, c.placements, options(m));
   const auto map = ballgauge::calibrate(g, c.placements);
   const auto s = report::ballgauge_section("map", map, &r);

@@ -8,9 +8,9 @@
 // the probed stylus-tip centres gives the measured centre x_i (machine frame, mm). The error
 // vector at a ball is Δ_i = x_i − X_i (measured − true, mm); correction is X = x − Δ(x).
 //
-// The first placement fixes the frame by the paper's 3-2-1 alignment (eqs. 11–12): X_0 = x_0,
-// and the rotation C (gauge → machine) is chosen so that Δy_1 = Δz_1 = 0 and Δz_2 = 0; or by a
-// least-squares alignment: the rigid fit of the gauge to all its measured centres, so that the
+// The first placement fixes the frame by Oya, Hokari and Tamura's 3-2-1 alignment (eqs. 11–12): X_0
+// = x_0, and the rotation C (gauge → machine) is chosen so that Δy_1 = Δz_1 = 0 and Δz_2 = 0; or by
+// a least-squares alignment: the rigid fit of the gauge to all its measured centres, so that the
 // placement's errors have no rigid-body part (smaller lever arms, smaller uncertainty). Every
 // later placement is stitched (eqs. 13–14): its balls whose measured centres lie within the match
 // tolerance of already-mapped measured centres take those points' error vectors, so their true
@@ -22,7 +22,7 @@
 // Every error vector is kept as a first-order linear function of all measured centres (numerical
 // derivatives of each placement's result, chained through the tied points), so the correlations
 // that the 3-2-1 frame and each stitch create are carried, and the uncertainty grows with the
-// number of stitches, as the paper notes.
+// number of stitches, as Oya, Hokari and Tamura note.
 #pragma once
 
 #include <Eigen/Core>
@@ -39,12 +39,12 @@ struct Gauge {
   std::vector<Eigen::Vector3d> balls;  // centres in the gauge frame (mm)
   // Throws Error: fewer than 3 balls, non-finite values, balls 0, 1, 2 collinear or coincident.
   void validate() const;
-  // The centres in the paper's frame P1-UVW.
+  // The centres in Oya, Hokari and Tamura's frame P1-UVW.
   std::vector<Eigen::Vector3d> canonical() const;
 };
 
-// How a placement is placed in the map's frame: the paper's 3-2-1 alignment or a least-squares
-// one (first placement only), or stitched to the map (every later placement).
+// How a placement is placed in the map's frame: Oya, Hokari and Tamura's 3-2-1 alignment or a
+// least-squares one (first placement only), or stitched to the map (every later placement).
 enum class Alignment { ThreeTwoOne, LeastSquares, Stitch };
 
 struct BallPoints {
