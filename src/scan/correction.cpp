@@ -228,7 +228,7 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     auto runaway = [&](const Eigen::VectorXd& q) -> std::string {
       if (!q.allFinite()) return "the fit did not converge";
       const Affine2 a = model(k, q);
-      const Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.A);
+      const Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.A, Eigen::ComputeFullU | Eigen::ComputeFullV);
       const auto sv = svd.singularValues();
       if (!(sv.minCoeff() >= 0.5 && sv.maxCoeff() <= 2) || a.A.determinant() <= 0)
         return fmt::format("a scale of {:.4g} to {:.4g}: no fixture or size error is that large",

@@ -9,7 +9,7 @@
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/io/files.hpp"
-#include "trueaxis/io/scan.hpp"
+#include "trueaxis/io/scan/scan.hpp"
 #include "trueaxis/report/scan.hpp"
 
 namespace trueaxis {
@@ -131,6 +131,46 @@ TEST(Controller, RotatedAndScaledPartsGetTheirCorrections) {
   c = correction(scaled);
   EXPECT_EQ(c.type, "scale");
   EXPECT_NEAR(param(c, "scale"), 1.04, kParamTol);
+}
+
+// The menu's turn check reads the fit's rotation from its polar decomposition (Eigen's SVD with
+// both singular-vector sets): a turn within 45° is a correction, one beyond is refused by name.
+TEST(Controller, CorrectionMenuAcceptsTurnsUpTo45DegreesAndRefusesLarger) {
+  design::Section rect;
+  rect.name = "rectangle";
+  rect.plane = {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()};
+  rect.polyline.resize(3, 5);
+  rect.polyline << 0, 80, 80, 0, 0, 0, 0, 30, 30, 0, 10, 10, 10, 10, 10;
+  // Feet spread over the four sides; the touched points are the feet turned about the centre.
+  Eigen::Matrix3Xd feet(3, 16);
+  for (int i = 0; i < 16; ++i) {
+    const double u = (i % 4 + 0.5) / 4;
+    const Eigen::Vector3d a = rect.polyline.col(i / 4), b = rect.polyline.col(i / 4 + 1);
+    feet.col(i) = a + u * (b - a);
+  }
+  const Eigen::Vector3d centre(40, 15, 10);
+  auto turned = [&](double deg) {
+    const Eigen::Matrix3d R =
+        Eigen::AngleAxisd(deg * M_PI / 180, Eigen::Vector3d::UnitZ()).matrix();
+    return Eigen::Matrix3Xd((R * (feet.colwise() - centre)).colwise() + centre);
+  };
+  auto accepted = [](const std::vector<scan::Correction>& menu) {
+    for (const auto& c : menu)
+      if (c.accepted) return c;
+    return scan::Correction{};
+  };
+  design::Section corrected;
+  const auto small = scan::fit_corrections(rect, feet, turned(12), 0.01, &corrected);
+  const auto c = accepted(small);
+  EXPECT_EQ(c.type, "rotation");
+  EXPECT_NEAR(param(c, "rotation_deg"), 12, kParamTol);
+  for (const auto& m : small) EXPECT_EQ(m.diverged.find("a turn of"), std::string::npos) << m.type;
+  // 60°: whatever model the fit ends on, none is a correction, and any that found the turn says so.
+  const auto large = scan::fit_corrections(rect, feet, turned(60), 0.01, &corrected);
+  EXPECT_FALSE(accepted(large).accepted);
+  bool named = false;
+  for (const auto& m : large) named |= m.diverged.find("more than 45°") != std::string::npos;
+  EXPECT_TRUE(named);
 }
 
 TEST(Controller, LocalBumpFallsBackToAutonomousAndTheNextPartScansClean) {
