@@ -14,7 +14,7 @@
 #include "commands.hpp"
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/design/design.hpp"
 #include "trueaxis/io/files.hpp"
 #include "trueaxis/sim/part.hpp"
 

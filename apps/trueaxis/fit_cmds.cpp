@@ -7,7 +7,7 @@
 
 #include "commands.hpp"
 #include "trueaxis/geometry/fit.hpp"
-#include "trueaxis/io/points.hpp"
+#include "trueaxis/io/geometry/points.hpp"
 
 namespace trueaxis::cli {
 namespace {

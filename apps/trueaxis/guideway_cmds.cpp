@@ -10,8 +10,8 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/guideway/guideway.hpp"
 #include "trueaxis/io/csv.hpp"
-#include "trueaxis/io/guideway.hpp"
-#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/guideway/guideway.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/report/guideway.hpp"
 #include "trueaxis/sim/guideway.hpp"
 

@@ -12,9 +12,9 @@
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/ballgauge.hpp"
-#include "trueaxis/io/design.hpp"
-#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/design/design.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/ippdme/client.hpp"
 #include "trueaxis/ippdme/commands.hpp"
 #include "trueaxis/ippdme/protocol.hpp"

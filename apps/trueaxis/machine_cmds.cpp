@@ -9,8 +9,8 @@
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
-#include "trueaxis/io/machine.hpp"
-#include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/separation/probes.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::cli {

@@ -9,10 +9,10 @@
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/design/design.hpp"
 #include "trueaxis/io/files.hpp"
-#include "trueaxis/io/machine.hpp"
-#include "trueaxis/io/scan.hpp"
+#include "trueaxis/io/scan/scan.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/ippdme/remote_cmm.hpp"
 #include "trueaxis/report/scan.hpp"
 #include "trueaxis/scan/controller.hpp"

@@ -13,8 +13,8 @@
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/ballgauge/parametric.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/ballgauge.hpp"
-#include "trueaxis/io/space.hpp"
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/surface/space.hpp"
 
 namespace py = pybind11;
 

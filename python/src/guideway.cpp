@@ -8,7 +8,7 @@
 
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/guideway.hpp"
+#include "trueaxis/io/guideway/guideway.hpp"
 #include "trueaxis/sim/guideway.hpp"
 #include "trueaxis/sim/machine.hpp"
 

@@ -13,8 +13,8 @@
 
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/positioning.hpp"
-#include "trueaxis/io/renishaw.hpp"
+#include "trueaxis/io/positioning/positioning.hpp"
+#include "trueaxis/io/positioning/renishaw.hpp"
 #include "trueaxis/sim/positioning.hpp"
 
 namespace py = pybind11;

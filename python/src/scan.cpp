@@ -7,8 +7,8 @@
 #include "bindings.hpp"
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/design.hpp"
-#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/design/design.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/scan/controller.hpp"
 
 namespace py = pybind11;

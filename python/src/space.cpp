@@ -1,7 +1,7 @@
 // Python bindings for the virtual machine, error surfaces and error spaces
 // and error maps. Points are numpy arrays of shape (n, 3) (or a single point of shape (3,)),
 // in mm; error vectors in µm; error functions in µm or µrad.
-#include "trueaxis/io/space.hpp"
+#include "trueaxis/io/surface/space.hpp"
 
 #include <fmt/format.h>
 #include <pybind11/eigen.h>
@@ -12,8 +12,8 @@
 
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/machine.hpp"
-#include "trueaxis/io/surface.hpp"
+#include "trueaxis/io/sim/machine.hpp"
+#include "trueaxis/io/surface/surface.hpp"
 #include "trueaxis/map/error_map.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/surface/space.hpp"

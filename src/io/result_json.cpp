@@ -11,7 +11,7 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/separation/probes.hpp"
 
 namespace trueaxis::io {
 namespace {

@@ -14,9 +14,9 @@
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/ballgauge.hpp"
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
 

@@ -10,7 +10,7 @@
 #include <cstdint>
 
 #include "../test_util.hpp"
-#include "trueaxis/io/controller.hpp"
+#include "trueaxis/io/compensation/controller.hpp"
 #include "trueaxis/positioning/positioning.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/positioning.hpp"

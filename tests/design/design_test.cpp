@@ -18,7 +18,7 @@
 #include "../../src/design/occt_api.hpp"
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
-#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/design/design.hpp"
 
 namespace trueaxis {
 namespace {

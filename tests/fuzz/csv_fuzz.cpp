@@ -4,14 +4,14 @@
 #include <cstdint>
 
 #include "fuzz_util.hpp"
-#include "trueaxis/io/ballgauge.hpp"
-#include "trueaxis/io/controller.hpp"
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/compensation/controller.hpp"
 #include "trueaxis/io/csv.hpp"
-#include "trueaxis/io/guideway.hpp"
-#include "trueaxis/io/machine.hpp"
-#include "trueaxis/io/positioning.hpp"
-#include "trueaxis/io/probes.hpp"
-#include "trueaxis/io/renishaw.hpp"
+#include "trueaxis/io/guideway/guideway.hpp"
+#include "trueaxis/io/positioning/positioning.hpp"
+#include "trueaxis/io/positioning/renishaw.hpp"
+#include "trueaxis/io/separation/probes.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/separation/separation.hpp"
 
 using namespace trueaxis;

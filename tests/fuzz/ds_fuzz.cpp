@@ -3,7 +3,7 @@
 
 #include "fuzz_util.hpp"
 #include "trueaxis/geometry/fit.hpp"
-#include "trueaxis/io/points.hpp"
+#include "trueaxis/io/geometry/points.hpp"
 
 using namespace trueaxis;
 

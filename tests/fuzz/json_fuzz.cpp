@@ -3,15 +3,15 @@
 #include <cstdint>
 
 #include "fuzz_util.hpp"
-#include "trueaxis/io/ballgauge.hpp"
-#include "trueaxis/io/design.hpp"
-#include "trueaxis/io/guideway.hpp"
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/design/design.hpp"
+#include "trueaxis/io/guideway/guideway.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/machine.hpp"
-#include "trueaxis/io/positioning.hpp"
-#include "trueaxis/io/probes.hpp"
-#include "trueaxis/io/space.hpp"
-#include "trueaxis/io/surface.hpp"
+#include "trueaxis/io/positioning/positioning.hpp"
+#include "trueaxis/io/separation/probes.hpp"
+#include "trueaxis/io/sim/machine.hpp"
+#include "trueaxis/io/surface/space.hpp"
+#include "trueaxis/io/surface/surface.hpp"
 #include "trueaxis/surface/surface.hpp"
 
 using namespace trueaxis;

@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "fuzz_util.hpp"
-#include "trueaxis/io/surface.hpp"
+#include "trueaxis/io/surface/surface.hpp"
 #include "trueaxis/surface/surface.hpp"
 
 using namespace trueaxis;

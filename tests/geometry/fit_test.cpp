@@ -14,7 +14,7 @@
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/points.hpp"
+#include "trueaxis/io/geometry/points.hpp"
 
 using namespace trueaxis;
 using geometry::Element;

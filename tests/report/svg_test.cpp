@@ -8,7 +8,7 @@
 #include "../test_util.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/surface.hpp"
+#include "trueaxis/io/surface/surface.hpp"
 #include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/report/surface.hpp"

@@ -8,7 +8,7 @@
 
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
-#include "trueaxis/io/design.hpp"
+#include "trueaxis/io/design/design.hpp"
 
 namespace trueaxis {
 namespace {

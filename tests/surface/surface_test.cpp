@@ -15,7 +15,7 @@
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/surface.hpp"
+#include "trueaxis/io/surface/surface.hpp"
 
 using namespace trueaxis;
 using surface::Line;

@@ -1,12 +1,13 @@
 // Guideway files and the QPD conversion: located errors for every bad input, and the
 // calibration table against the linear gain for a Gaussian spot.
+#include "trueaxis/io/guideway/guideway.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "../test_util.hpp"
+#include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/guideway.hpp"
 
 using namespace trueaxis;
 

@@ -1,12 +1,13 @@
 // Results of a scanning run: scan.json, points.csv, events.csv.
+#include "trueaxis/io/scan/scan.hpp"
+
 #include <fmt/format.h>
 
 #include <filesystem>
 
-#include "design_json.hpp"
+#include "../design/design_json.hpp"
 #include "trueaxis/io/files.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/scan.hpp"
 
 namespace trueaxis::io {
 namespace {

@@ -1,10 +1,11 @@
+#include "trueaxis/io/guideway/guideway.hpp"
+
 #include <fmt/format.h>
 
 #include <set>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
-#include "trueaxis/io/guideway.hpp"
 #include "trueaxis/io/json.hpp"
 
 namespace trueaxis::io {

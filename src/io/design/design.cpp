@@ -1,14 +1,15 @@
 // design.json: planar section curves of a part.
+#include "trueaxis/io/design/design.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
 #include <filesystem>
 #include <set>
 
+#include "../grid_json.hpp"
 #include "design_json.hpp"
-#include "grid_json.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/design.hpp"
 #include "trueaxis/io/json.hpp"
 #include "trueaxis/sim/part.hpp"
 

@@ -1,12 +1,13 @@
+#include "trueaxis/io/surface/space.hpp"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <sstream>
 
-#include "../test_util.hpp"
+#include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/space.hpp"
 
 namespace trueaxis::io {
 namespace {

@@ -1,3 +1,5 @@
+#include "trueaxis/io/compensation/controller.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -6,9 +8,8 @@
 #include <cmath>
 #include <map>
 
-#include "fast_text.hpp"
+#include "../fast_text.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/controller.hpp"
 
 namespace trueaxis::io {
 

@@ -1,11 +1,12 @@
+#include "trueaxis/io/sim/machine.hpp"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <random>
 
-#include "../test_util.hpp"
+#include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/machine.hpp"
 
 namespace trueaxis::io {
 namespace {

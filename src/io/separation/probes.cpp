@@ -1,10 +1,10 @@
-#include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/separation/probes.hpp"
 
 #include <fmt/format.h>
 
 #include <cmath>
 
-#include "../common/memory.hpp"
+#include "../../common/memory.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 

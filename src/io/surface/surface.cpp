@@ -1,3 +1,5 @@
+#include "trueaxis/io/surface/surface.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -6,11 +8,10 @@
 #include <filesystem>
 #include <map>
 
-#include "fast_text.hpp"
+#include "../fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/probes.hpp"
-#include "trueaxis/io/surface.hpp"
+#include "trueaxis/io/separation/probes.hpp"
 
 namespace trueaxis::io {
 namespace {

@@ -1,9 +1,10 @@
 // Ball-gauge files: round trips and located errors for bad input.
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
+
 #include <gtest/gtest.h>
 
-#include "../test_util.hpp"
+#include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/ballgauge.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
 
 using namespace trueaxis;

@@ -1,13 +1,14 @@
+#include "trueaxis/io/ballgauge/ballgauge.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
 
-#include "grid_json.hpp"
+#include "../grid_json.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/ballgauge.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/machine.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 
 namespace trueaxis::io {
 namespace {

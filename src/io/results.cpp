@@ -1,11 +1,12 @@
+#include "trueaxis/io/results.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/results.hpp"
-#include "trueaxis/io/space.hpp"
+#include "trueaxis/io/surface/space.hpp"
 
 namespace trueaxis::io {
 namespace {

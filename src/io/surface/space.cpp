@@ -1,12 +1,13 @@
+#include "trueaxis/io/surface/space.hpp"
+
 #include <fmt/format.h>
 
-#include "fast_text.hpp"
-#include "grid_json.hpp"
+#include "../fast_text.hpp"
+#include "../grid_json.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/controller.hpp"
+#include "trueaxis/io/compensation/controller.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/space.hpp"
 
 namespace trueaxis::io {
 namespace {

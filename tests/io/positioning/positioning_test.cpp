@@ -1,12 +1,13 @@
 // runs.csv: what is read, what is refused (file:line:col), and the result JSON's keys.
+#include "trueaxis/io/positioning/positioning.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "../test_util.hpp"
-#include "trueaxis/io/positioning.hpp"
+#include "../../test_util.hpp"
 
 using namespace trueaxis;
 

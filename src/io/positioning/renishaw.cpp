@@ -1,3 +1,5 @@
+#include "trueaxis/io/positioning/renishaw.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -10,9 +12,8 @@
 #include <optional>
 #include <set>
 
-#include "fast_text.hpp"
+#include "../fast_text.hpp"
 #include "trueaxis/error.hpp"
-#include "trueaxis/io/renishaw.hpp"
 
 namespace trueaxis::io {
 namespace {

@@ -1,3 +1,5 @@
+#include "trueaxis/io/sim/machine.hpp"
+
 #include <fmt/format.h>
 
 #include <map>
@@ -5,7 +7,6 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/machine.hpp"
 
 namespace trueaxis::io {
 namespace {

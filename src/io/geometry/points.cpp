@@ -1,3 +1,5 @@
+#include "trueaxis/io/geometry/points.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -6,11 +8,10 @@
 #include <cmath>
 #include <vector>
 
-#include "fast_text.hpp"
+#include "../fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/machine.hpp"
-#include "trueaxis/io/points.hpp"
+#include "trueaxis/io/sim/machine.hpp"
 
 namespace trueaxis::io {
 

@@ -1,13 +1,14 @@
 // Renishaw .rtl files: what is read (sections, wrapped target lists, run directions from the
 // order the laser took the targets), the round trip through the writer, and every refusal with
 // file:line:col.
+#include "trueaxis/io/positioning/renishaw.hpp"
+
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "../test_util.hpp"
-#include "trueaxis/io/renishaw.hpp"
+#include "../../test_util.hpp"
 #include "trueaxis/positioning/positioning.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/positioning.hpp"

@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "trueaxis/io/positioning.hpp"
+#include "trueaxis/io/positioning/positioning.hpp"
 #include "trueaxis/positioning/positioning.hpp"
 
 namespace trueaxis::io {

@@ -1,4 +1,4 @@
-#include "trueaxis/io/probes.hpp"
+#include "trueaxis/io/separation/probes.hpp"
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -6,8 +6,8 @@
 #include <utility>
 #include <vector>
 
-#include "../../src/io/fast_text.hpp"
-#include "../test_util.hpp"
+#include "../../../src/io/fast_text.hpp"
+#include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 

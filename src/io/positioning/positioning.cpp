@@ -1,3 +1,5 @@
+#include "trueaxis/io/positioning/positioning.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -8,11 +10,10 @@
 #include <map>
 #include <tuple>
 
-#include "fast_text.hpp"
+#include "../fast_text.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/json.hpp"
-#include "trueaxis/io/positioning.hpp"
 
 namespace trueaxis::io {
 namespace {
