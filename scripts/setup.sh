@@ -21,7 +21,9 @@ if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
     chromium gawk clang-format >/dev/null
 fi
 (cd web && npm ci --no-audit --no-fund --silent)
-cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTRUEAXIS_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr/local
+# The GoogleTest program is built by scripts/test.sh, under the sanitizers (build-san).
+cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTRUEAXIS_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr/local \
+  -DTRUEAXIS_UNIT_TESTS=OFF
 cmake --build build
 $SUDO cmake --install build
 trueaxis demo

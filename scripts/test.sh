@@ -1,8 +1,26 @@
 #!/usr/bin/env bash
-# Runs every test (GoogleTest, the CLI end to end, the README examples, pytest with the browser
-# check) via ctest.
-# Expects scripts/setup.sh to have run (it builds ./build).
+# Runs every test, via ctest:
+#  1. on the Release build that scripts/setup.sh built and installed (./build): the CLI end to end,
+#     every README example, pytest with the report in headless Chromium, the repository's rules;
+#  2. on one clang build with AddressSanitizer + UBSan (./build-san, which also holds the libFuzzer
+#     targets of tests/fuzz/run.sh): the GoogleTest program and the CLI end to end again.
+# The GoogleTest program is compiled only there: the library is compiled twice (the installed
+# build and the checked one), not three times.
+# Expects scripts/setup.sh to have run. Installs clang and its sanitizer runtimes if missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+echo "== the Release build's tests"
 cmake --build build
 ctest --test-dir build --output-on-failure -j"$(nproc)"
+if ! command -v clang++ >/dev/null ||
+  ! ls /usr/lib/llvm-*/lib/clang/*/lib/linux/libclang_rt.fuzzer-x86_64.a >/dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+    clang libclang-rt-14-dev >/dev/null
+fi
+echo "== at ${SECONDS} s: the AddressSanitizer + UBSan build (clang) and its tests"
+TRUEAXIS_SAN_TARGETS="trueaxis_tests trueaxis" bash tests/fuzz/run.sh 0
+ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  LSAN_OPTIONS=suppressions="$(pwd)/tests/lsan.supp":print_suppressions=0 \
+  ctest --test-dir build-san --output-on-failure -j"$(nproc)"
+echo "== all tests passed in ${SECONDS} s"

@@ -53,9 +53,10 @@ for f in tests/data/ippdme/nist/*.prg tests/data/ippdme/nist/*.res; do
     n=$((n + 1)); printf '%s' "$l" > "$corpus/ippdme/$(basename "$f").$n"
   done
 done
-status=0
-for t in csv json ds moody ippdme; do
-  echo "== fuzz_$t for ${seconds} s"
+# The targets run side by side, as many at a time as there are processors, each for its own
+# `seconds`.
+fuzz_one() {
+  local t=$1
   mkdir -p "$build/findings/$t"
   if ! ASAN_OPTIONS=detect_leaks=1:allocator_may_return_null=0 UBSAN_OPTIONS=print_stacktrace=1 \
       LSAN_OPTIONS=suppressions="$(pwd)/tests/lsan.supp":print_suppressions=0 \
@@ -63,9 +64,21 @@ for t in csv json ds moody ippdme; do
       -seed=1 -rss_limit_mb=2048 -max_len=65536 -artifact_prefix="$build/findings/$t/" \
       -print_final_stats=1 >"$build/fuzz_$t.log" 2>&1; then
     echo "FINDING in fuzz_$t (reproducer in $build/findings/$t/):"; tail -40 "$build/fuzz_$t.log"
-    status=1
-  else
-    grep -E "stat::number_of_executed_units|Done [0-9]+ runs" "$build/fuzz_$t.log" | tail -1
+    return 1
+  fi
+  echo "== fuzz_$t for ${seconds} s: $(grep -E "stat::number_of_executed_units|Done [0-9]+ runs" \
+    "$build/fuzz_$t.log" | tail -1)"
+}
+status=0
+jobs_max=$(nproc)
+pids=()
+for t in csv json ds moody ippdme; do
+  fuzz_one "$t" &
+  pids+=($!)
+  if [ "${#pids[@]}" -ge "$jobs_max" ]; then
+    wait "${pids[0]}" || status=1
+    pids=("${pids[@]:1}")
   fi
 done
+for p in "${pids[@]}"; do wait "$p" || status=1; done
 exit $status
