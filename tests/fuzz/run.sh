@@ -46,13 +46,12 @@ cp tests/data/fuzz/*.ds "$corpus/ds/"
 for f in tests/data/moody/*.txt; do
   for r in 0 1 2 3 4 5 6 7 8; do printf "\\x$(printf %02x $r)" | cat - "$f" > "$corpus/moody/$(basename "$f").$r"; done
 done
-# I++ DME: every line of NIST's programs and recordings, one per file.
-n=0
-for f in tests/data/ippdme/nist/*.prg tests/data/ippdme/nist/*.res; do
-  tr -d '\r' < "$f" | grep -v -e '^\\\\$' -e '^:' | while IFS= read -r l; do
-    n=$((n + 1)); printf '%s' "$l" > "$corpus/ippdme/$(basename "$f").$n"
-  done
-done
+# I++ DME: every line of NIST's programs and recordings, one per file (one awk for the 5 000
+# lines: a shell loop forked once per line and took ~40 s).
+awk -v dir="$corpus/ippdme" '{
+  gsub(/\r/, ""); if ($0 ~ /^\\\\$/ || $0 ~ /^:/) next
+  b = FILENAME; sub(/.*\//, "", b); out = dir "/" b "." (++n[b]); printf "%s", $0 > out; close(out)
+}' tests/data/ippdme/nist/*.prg tests/data/ippdme/nist/*.res
 # The targets run side by side, as many at a time as there are processors, each for its own
 # `seconds`.
 fuzz_one() {
