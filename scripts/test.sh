@@ -4,8 +4,8 @@
 #     every README example, pytest with the report in headless Chromium, the repository's rules;
 #  2. on one clang build with AddressSanitizer + UBSan (./build-san, which also holds the libFuzzer
 #     targets of tests/fuzz/run.sh): the GoogleTest program and the CLI end to end again.
-# The GoogleTest program is compiled only there: the library is compiled twice (the installed
-# build and the checked one), not three times.
+# The GoogleTest program is compiled only there, once: the library is compiled twice (the
+# installed build and the checked one), the test program no longer in both.
 # Expects scripts/setup.sh to have run. Installs clang and its sanitizer runtimes if missing.
 set -euo pipefail
 cd "$(dirname "$0")/.."
