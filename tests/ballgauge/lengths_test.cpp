@@ -179,7 +179,7 @@ TEST(Lengths, GaugeBlocksOnAPerfectMachineMeasureTheirNominalLengths) {
             std::string::npos);
 }
 
-TEST(Lengths, ThePaperResultAtHalfAMicrometreOfProbingNoise) {
+TEST(Lengths, OyaHokariTamuraResultAtHalfAMicrometreOfProbingNoise) {
   // Before and after correction. Noise like Oya, Hokari and Tamura's (0.5 µm per coordinate) on the
   // balls and on the blocks.
   const Campaign noisy = campaign(0.5e-3, 11, 0.5e-3);
