@@ -126,31 +126,46 @@ using detail::clusters;
 using detail::fit_ball;
 using detail::kabsch;
 
-// Oya, Hokari and Tamura's 3-2-1 rotation (eqs. 11–12): columns c1, c2, c3 = gauge U, V, W in the
-// machine frame, from the measured centres of balls 0, 1, 2 and their gauge coordinates (a, 0, 0)
-// and (b, c, 0), such that ball 1 has no y, z error and ball 2 no z error relative to ball 0.
+// Oya, Hokari and Tamura's 3-2-1 alignment (eqs. 11–12), stated in the gauge's own frame so
+// that it holds however the gauge stands on the machine: ball 0 is fixed, ball 1 is free only
+// along the line 0→1 and ball 2 only in the plane of balls 0, 1, 2. Returns the columns
+// c1, c2, c3 = gauge U, V, W in the machine frame, from the measured centres of balls 0, 1, 2:
+// c1 along x1 − x0, c2 in the measured plane of the three balls, perpendicular to c1 and towards
+// ball 2, c3 = c1 × c2. Ball 1's error x1 − x0 − a·c1 then lies along c1 and ball 2's has no
+// component along c3, whatever the orientation. (The paper writes the conditions in machine
+// components, ball 1 "with no y, z error", which is the same alignment to first order when the
+// gauge's U and V lie along machine x and y, and no alignment at all otherwise: with ball 1
+// along machine y its x error was taken from √(1 − l₂² − l₃²), turning a 10⁻⁵ scale error into
+// a 4.5 mrad tilt.) Refuses, naming the reason, balls 0 and 1 measured at one place, three balls
+// measured on one line, or measured distances between them that differ from the gauge's by more
+// than `tolerance` mm (balls numbered differently from the gauge file, or a wrong gauge).
 Eigen::Matrix3d rotation_321(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
-                             const Eigen::Vector3d& x2, double a, double b, double c) {
-  const double l2 = (x1.y() - x0.y()) / a, l3 = (x1.z() - x0.z()) / a;
-  const double s1 = 1 - l2 * l2 - l3 * l3;
-  if (!(s1 > 0)) throw Error("3-2-1 alignment: ball 1 is not along x from ball 0");
-  const double l1 = (x1.x() >= x0.x() ? 1.0 : -1.0) * std::sqrt(s1);
-  const double m3 = (x2.z() - x0.z() - b * l3) / c;
-  // m1·l1 + m2·l2 = −m3·l3 and m1² + m2² = 1 − m3²: a line meets a circle.
-  const double k = -m3 * l3, q = l1 * l1 + l2 * l2, disc = (1 - m3 * m3) - k * k / q;
-  if (!(disc >= 0)) throw Error("3-2-1 alignment: balls 0, 1, 2 do not fit the gauge geometry");
-  const Eigen::Vector2d base = k / q * Eigen::Vector2d(l1, l2);
-  const Eigen::Vector2d perp = std::sqrt(disc / q) * Eigen::Vector2d(-l2, l1);
-  // The root whose V axis points from ball 0's U line towards ball 2 (as measured).
-  const Eigen::Vector3d c1(l1, l2, l3);
-  const Eigen::Vector3d towards = x2 - x0 - b * c1;
-  Eigen::Vector3d c2(base.x() + perp.x(), base.y() + perp.y(), m3);
-  const Eigen::Vector3d alt(base.x() - perp.x(), base.y() - perp.y(), m3);
-  if (alt.dot(towards) > c2.dot(towards)) c2 = alt;
+                             const Eigen::Vector3d& x2, const Eigen::Vector3d& u1,
+                             const Eigen::Vector3d& u2, double tolerance) {
+  const Eigen::Vector3d d1 = x1 - x0, d2 = x2 - x0;
+  const double n1 = d1.norm();
+  if (!(n1 > 1e-9 * std::max(1.0, u1.norm())))
+    throw Error("3-2-1 alignment: balls 0 and 1 are measured at the same place");
+  const struct {
+    const char* pair;
+    double measured, nominal;
+  } distances[] = {{"0 and 1", n1, u1.norm()},
+                   {"0 and 2", d2.norm(), u2.norm()},
+                   {"1 and 2", (x2 - x1).norm(), (u2 - u1).norm()}};
+  for (const auto& d : distances)
+    if (!(std::abs(d.measured - d.nominal) <= tolerance))
+      throw Error(fmt::format(
+          "3-2-1 alignment: balls {} are measured {:.4f} mm apart, the gauge says {:.4f} mm (more "
+          "than {} mm off: are the balls numbered as in the gauge file?)",
+          d.pair, d.measured, d.nominal, tolerance));
+  const Eigen::Vector3d c1 = d1 / n1;
+  const Eigen::Vector3d across = d2 - d2.dot(c1) * c1;
+  if (!(across.norm() > 1e-6 * d2.norm()))
+    throw Error("3-2-1 alignment: balls 0, 1 and 2 are measured on one line");
   Eigen::Matrix3d C;
   C.col(0) = c1;
-  C.col(1) = c2;
-  C.col(2) = c1.cross(c2);
+  C.col(1) = across.normalized();
+  C.col(2) = c1.cross(C.col(1));
   return C;
 }
 
@@ -317,7 +332,7 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
       errors = [&, k0, k1, k2](const Eigen::VectorXd& x) {
         auto at = [&](int k) { return Eigen::Vector3d(x.segment<3>(3 * k)); };
         const Eigen::Matrix3d C =
-            rotation_321(at(k0), at(k1), at(k2), U[1].x(), U[2].x(), U[2].y());
+            rotation_321(at(k0), at(k1), at(k2), U[1], U[2], o.match_tolerance);
         Eigen::VectorXd d(3 * static_cast<Eigen::Index>(nb));
         for (std::size_t k = 0; k < nb; ++k)
           d.segment<3>(3 * static_cast<Eigen::Index>(k)) =

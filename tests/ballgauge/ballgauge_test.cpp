@@ -170,6 +170,82 @@ TEST(BallGauge, LeastSquaresAlignmentHasNoRigidErrorAndSmallerUncertainty) {
   EXPECT_LT((moved - Xmap).cwiseAbs().maxCoeff(), 1e-11);
 }
 
+// The 3-2-1 alignment belongs to the gauge, not to the machine's axes: ball 0 fixed, ball 1 free
+// only along 0→1, ball 2 only in the plane of balls 0, 1, 2. With ball 0→1 along machine y the
+// machine-component form of the conditions reported 1.83 mm errors for balls whose true errors are
+// a few µm, with exit 0; vertical placements were refused. Every placement below, flat, on its
+// side, upright or oblique, must give the machine's errors up to the alignment's rigid motion.
+TEST(BallGauge, ThreeTwoOneHoldsInEveryOrientationOfTheGauge) {
+  constexpr double kRoundOff = 1e-10;  // mm: noise-free, exact rotations
+  const auto g = frame_gauge();
+  const auto machine = cmm();
+  const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),
+                        Z = Eigen::Vector3d::UnitZ();
+  auto frame = [](const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+    Eigen::Matrix3d R;  // gauge U, V, W → machine
+    R << u, v, u.cross(v);
+    return R;
+  };
+  const std::vector<std::pair<std::string, Eigen::Matrix3d>> orientations = {
+      {"U along x, V along y (the paper's)", frame(X, Y)},
+      {"U along y, V along -x", frame(Y, -X)},
+      {"U along -x, V along -y", frame(-X, -Y)},
+      {"XZ plate: U along x, V along z", frame(X, Z)},
+      {"YZ plate: U along y, V along z", frame(Y, Z)},
+      {"ZY plate: U along z, V along y", frame(Z, Y)},
+      {"oblique", Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix()},
+  };
+  for (const auto& [what, R] : orientations) {
+    SCOPED_TRACE(what);
+    // Placed inside the machine's volume: the rotated gauge's lowest corner at (100, 100, 60).
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e9);
+    for (const auto& b : g.balls) lo = lo.cwiseMin(R * b);
+    sim::GaugePose pose;
+    pose.name = "p";
+    pose.alignment = ballgauge::Alignment::ThreeTwoOne;
+    pose.rotation = R;
+    pose.translation = Eigen::Vector3d(100, 100, 60) - lo;
+    const auto c = sim::simulate_ballgauge(machine, g, {pose}, {});
+    const auto r = ballgauge::calibrate(g, c.placements);
+    ASSERT_EQ(r.points.size(), g.balls.size());
+    // The machine's own errors at the balls, and the map's.
+    double true_max = 0, map_max = 0;
+    const auto n = static_cast<Eigen::Index>(r.points.size());
+    Eigen::MatrixXd truth(3, n), nominal(3, n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto& mp = r.points[static_cast<std::size_t>(i)];
+      const auto b = static_cast<std::size_t>(i);
+      ASSERT_EQ(c.placements[0].balls[b].index, mp.ball);
+      truth.col(i) = c.true_centres[0][b];
+      nominal.col(i) = mp.nominal;
+      true_max = std::max(true_max, (mp.measured - c.true_centres[0][b]).norm());
+      map_max = std::max(map_max, mp.error.norm());
+    }
+    // The nominal positions are the true centres moved rigidly (the frame the alignment picks).
+    const Eigen::Matrix4d T = Eigen::umeyama(truth, nominal, false);
+    const Eigen::MatrixXd moved =
+        (T.topLeftCorner<3, 3>() * truth).colwise() + Eigen::Vector3d(T.topRightCorner<3, 1>());
+    EXPECT_LT((moved - nominal).cwiseAbs().maxCoeff(), kRoundOff);
+    // That motion is of the size of the machine's errors over the gauge, not millimetres: the
+    // map's errors stay within a few times the true ones (µm here).
+    EXPECT_GT(true_max, 1e-3);
+    EXPECT_LT(map_max, 10 * true_max) << "map " << map_max * 1e3 << " µm, true " << true_max * 1e3;
+    // The 3-2-1 conditions in the gauge's frame.
+    auto at = [&](int ball) {
+      for (const auto& mp : r.points)
+        if (mp.ball == ball) return mp;
+      ADD_FAILURE() << "ball " << ball << " not mapped";
+      return ballgauge::MapPoint{};
+    };
+    const auto b0 = at(0), b1 = at(1), b2 = at(2);
+    EXPECT_LT(b0.error.norm(), kRoundOff);
+    const Eigen::Vector3d u = (b1.measured - b0.measured).normalized();
+    EXPECT_LT(b1.error.cross(u).norm(), kRoundOff);  // along 0→1 only
+    const Eigen::Vector3d w = u.cross(b2.measured - b0.measured).normalized();
+    EXPECT_LT(std::abs(b2.error.dot(w)), kRoundOff);  // in the plane of balls 0, 1, 2
+  }
+}
+
 TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   const auto g = frame_gauge();
   auto c = sim::simulate_ballgauge(cmm(), g, poses(), {});
@@ -198,6 +274,11 @@ TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   p = c.placements;
   p[2].balls.push_back(p[2].balls[0]);
   EXPECT_NE(err(p).find("is measured twice"), std::string::npos);
+  p = c.placements;
+  std::swap(p[0].balls[1].index, p[0].balls[3].index);  // numbered unlike the gauge file
+  EXPECT_NE(err(p).find("3-2-1 alignment: balls 0 and 1 are measured"), std::string::npos)
+      << err(p);
+  EXPECT_NE(err(p).find("are the balls numbered as in the gauge file?"), std::string::npos);
   ballgauge::Gauge bad = g;
   bad.balls[2] = {160, 0, 0};
   EXPECT_NE(test::error_of([&] { bad.validate(); }).find("must span a plane"), std::string::npos);

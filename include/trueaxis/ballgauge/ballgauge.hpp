@@ -8,8 +8,10 @@
 // the probed stylus-tip centres gives the measured centre x_i (machine frame, mm). The error
 // vector at a ball is Δ_i = x_i − X_i (measured − true, mm); correction is X = x − Δ(x).
 //
-// The first placement fixes the frame by Oya, Hokari and Tamura's 3-2-1 alignment (eqs. 11–12): X_0
-// = x_0, and the rotation C (gauge → machine) is chosen so that Δy_1 = Δz_1 = 0 and Δz_2 = 0; or by
+// The first placement fixes the frame by Oya, Hokari and Tamura's 3-2-1 alignment (eqs. 11–12),
+// stated in the gauge's frame so that it holds in any placement (flat, upright, oblique): X_0 =
+// x_0, ball 1's error lies along the measured line 0→1 and ball 2's in the measured plane of balls
+// 0, 1, 2 (the paper's Δy_1 = Δz_1 = Δz_2 = 0 when the gauge's U, V lie along machine x, y); or by
 // a least-squares alignment: the rigid fit of the gauge to all its measured centres, so that the
 // placement's errors have no rigid-body part (smaller lever arms, smaller uncertainty). Every
 // later placement is stitched (eqs. 13–14): its balls whose measured centres lie within the match
@@ -98,8 +100,9 @@ struct Result {
 
 // Throws Error (naming the placement and ball): unknown ball index, a ball measured twice in a
 // placement, too few points on a ball, a first placement that is a stitch, a 3-2-1 placement
-// without balls 0, 1, 2, an aligned placement after the first, or a stitch with fewer than
-// three non-collinear shared balls.
+// without balls 0, 1, 2, or with balls 0, 1, 2 measured on one line or at distances more than the
+// match tolerance from the gauge's, an aligned placement after the first, or a stitch with fewer
+// than three non-collinear shared balls.
 Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements,
                  const Options& options = {});
 
