@@ -132,9 +132,9 @@ using detail::kabsch;
 // c1, c2, c3 = gauge U, V, W in the machine frame, from the measured centres of balls 0, 1, 2:
 // c1 along x1 − x0, c2 in the measured plane of the three balls, perpendicular to c1 and towards
 // ball 2, c3 = c1 × c2. Ball 1's error x1 − x0 − a·c1 then lies along c1 and ball 2's has no
-// component along c3, whatever the orientation. (The paper writes the conditions in machine
-// components, ball 1 "with no y, z error", which is the same alignment to first order when the
-// gauge's U and V lie along machine x and y, and no alignment at all otherwise: with ball 1
+// component along c3, whatever the orientation. (Oya, Hokari and Tamura write the conditions in
+// machine components, ball 1 "with no y, z error", which is the same alignment to first order when
+// the gauge's U and V lie along machine x and y, and no alignment at all otherwise: with ball 1
 // along machine y its x error was taken from √(1 − l₂² − l₃²), turning a 10⁻⁵ scale error into
 // a 4.5 mrad tilt.) Refuses, naming the reason, balls 0 and 1 measured at one place, three balls
 // measured on one line, or measured distances between them that differ from the gauge's by more

@@ -187,7 +187,7 @@ TEST(BallGauge, ThreeTwoOneHoldsInEveryOrientationOfTheGauge) {
     return R;
   };
   const std::vector<std::pair<std::string, Eigen::Matrix3d>> orientations = {
-      {"U along x, V along y (the paper's)", frame(X, Y)},
+      {"U along x, V along y (as in Oya, Hokari and Tamura)", frame(X, Y)},
       {"U along y, V along -x", frame(Y, -X)},
       {"U along -x, V along -y", frame(-X, -Y)},
       {"XZ plate: U along x, V along z", frame(X, Z)},

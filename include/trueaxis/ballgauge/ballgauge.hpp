@@ -11,12 +11,12 @@
 // The first placement fixes the frame by Oya, Hokari and Tamura's 3-2-1 alignment (eqs. 11–12),
 // stated in the gauge's frame so that it holds in any placement (flat, upright, oblique): X_0 =
 // x_0, ball 1's error lies along the measured line 0→1 and ball 2's in the measured plane of balls
-// 0, 1, 2 (the paper's Δy_1 = Δz_1 = Δz_2 = 0 when the gauge's U, V lie along machine x, y); or by
-// a least-squares alignment: the rigid fit of the gauge to all its measured centres, so that the
-// placement's errors have no rigid-body part (smaller lever arms, smaller uncertainty). Every
-// later placement is stitched (eqs. 13–14): its balls whose measured centres lie within the match
-// tolerance of already-mapped measured centres take those points' error vectors, so their true
-// positions X_i = x_i − Δ_i are known; the placement's rotation and translation follow by
+// 0, 1, 2 (Oya, Hokari and Tamura's Δy_1 = Δz_1 = Δz_2 = 0 when the gauge's U, V lie along machine
+// x, y); or by a least-squares alignment: the rigid fit of the gauge to all its measured centres,
+// so that the placement's errors have no rigid-body part (smaller lever arms, smaller uncertainty).
+// Every later placement is stitched (eqs. 13–14): its balls whose measured centres lie within the
+// match tolerance of already-mapped measured centres take those points' error vectors, so their
+// true positions X_i = x_i − Δ_i are known; the placement's rotation and translation follow by
 // closed-form least squares (Kabsch, SVD) over at least three non-collinear shared balls, and
 // the error vectors of its other balls follow.
 //
