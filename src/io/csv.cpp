@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <optional>
 
 #include "../common/memory.hpp"
 #include "fast_text.hpp"
@@ -82,7 +83,10 @@ const char* plain_row(const char* p, const char* end, std::size_t ncol, std::vec
   return *p == '\n' ? p + 1 : reject();
 }
 
-void parse_chunk(std::string_view text, const std::vector<std::string>& header, Chunk& out) {
+// `original`: the same bytes as the file has them (a dialect's text, converted, has the same length
+// and positions), for quoting a field in a message as the user wrote it.
+void parse_chunk(std::string_view text, std::string_view original,
+                 const std::vector<std::string>& header, Chunk& out) {
   const std::size_t ncol = header.size();
   out.values.reserve(text.size() / (ncol * 8 + 1) * ncol + ncol);
   trueaxis::detail::advise_huge_pages(out.values.data(), out.values.capacity() * sizeof(double));
@@ -132,7 +136,8 @@ void parse_chunk(std::string_view text, const std::vector<std::string>& header, 
         return fail(
             colno,
             fmt::format("'{}' is not a number (column '{}')",
-                        detail::quote_cut(std::string_view(b, static_cast<std::size_t>(e - b))),
+                        detail::quote_cut(original.substr(static_cast<std::size_t>(b - text.data()),
+                                                          static_cast<std::size_t>(e - b))),
                         header[c]));
       if (!std::isfinite(v))
         return fail(colno, fmt::format("{} is not allowed (column '{}')",
@@ -153,6 +158,21 @@ void parse_chunk(std::string_view text, const std::vector<std::string>& header, 
   }
 }
 
+// A header name as a spreadsheet on Windows may write it: a lone Latin-1 / Windows-1252 'µ'
+// (byte 0xB5) becomes UTF-8 "µ".
+std::string header_name(std::string_view field) {
+  std::string out;
+  for (std::size_t i = 0; i < field.size(); ++i) {
+    const auto c = static_cast<unsigned char>(field[i]);
+    const bool after_c2 = i > 0 && static_cast<unsigned char>(field[i - 1]) == 0xC2;
+    if (c == 0xB5 && !after_c2)
+      out += "\xC2\xB5";  // UTF-8 µ
+    else
+      out += field[i];
+  }
+  return out;
+}
+
 }  // namespace
 
 CsvTable CsvTable::parse(std::string text, std::string path) {
@@ -168,6 +188,17 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
   t.path_ = std::move(path);
   t.text_owner_ = std::move(owner);
   t.text_ = text;
+  const std::string_view original = text;
+  if (std::optional<std::string> plain = detail::plain_csv(text, t.path_)) {
+    // A spreadsheet's dialect, rewritten; the file's own text is kept for quoting fields.
+    struct Both {
+      std::shared_ptr<const void> file;
+      std::string plain;
+    };
+    auto both = std::make_shared<Both>(Both{std::move(t.text_owner_), std::move(*plain)});
+    t.text_ = both->plain;
+    t.text_owner_ = std::move(both);
+  }
   const std::string_view all(t.text_);
   std::size_t pos = 0, line = 0;
   auto next_line = [&](std::string_view& out, std::size_t& start) {
@@ -190,17 +221,15 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
     break;
   }
   if (!have_header) throw Error(fmt::format("{}:1:1: empty file: expected a header row", t.path_));
-  if (l.find(',') == std::string_view::npos && l.find('\t') != std::string_view::npos)
-    throw Error(fmt::format("{}:{}:1: the file is tab-separated: use commas between columns",
-                            t.path_, line));
   t.header_start_ = start;
   t.header_line_ = line;
   {
     std::size_t f0 = 0;
     while (true) {
       const std::size_t comma = l.find(',', f0);
-      const std::string_view field = trim_spaces(
-          l.substr(f0, comma == std::string_view::npos ? std::string_view::npos : comma - f0));
+      const std::string header_field = header_name(trim_spaces(
+          l.substr(f0, comma == std::string_view::npos ? std::string_view::npos : comma - f0)));
+      const std::string_view field = header_field;
       const int col = static_cast<int>(t.header_.size());
       if (field.empty())
         throw Error(
@@ -219,7 +248,7 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
 
   // Data rows: split at line boundaries into one chunk per worker, parse in parallel, then
   // gather into columns. The result (and the first error reported) is that of a sequential parse.
-  const std::string_view data = all.substr(pos);
+  const std::string_view data = all.substr(pos), data_original = original.substr(pos);
   const int w = detail::workers_for(data.size() / 64);
   std::vector<std::size_t> cut{0};
   for (int k = 1; k < w; ++k) {
@@ -232,7 +261,8 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
   std::vector<Chunk> chunks(static_cast<std::size_t>(w));
   detail::parallel_ranges(static_cast<std::size_t>(w), w, [&](int, std::size_t b, std::size_t e) {
     for (std::size_t k = b; k < e; ++k)
-      parse_chunk(data.substr(cut[k], cut[k + 1] - cut[k]), t.header_, chunks[k]);
+      parse_chunk(data.substr(cut[k], cut[k + 1] - cut[k]),
+                  data_original.substr(cut[k], cut[k + 1] - cut[k]), t.header_, chunks[k]);
   });
   std::size_t first_line = line + 1, rows = 0;
   std::vector<std::size_t> row0;

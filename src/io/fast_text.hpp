@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +27,12 @@ std::string read_text(const std::string& path);
 
 // Drops a UTF-8 byte-order mark and turns CRLF and lone CR line ends into LF, in place.
 void normalize_text(std::string& text);
+
+// A spreadsheet's CSV dialect as plain CSV, or nullopt when `text` is plain CSV already: Excel's
+// "sep=X" first line (blanked), ';' or tab separators with decimal commas, RFC 4180 quoted
+// fields. The rewrite has exactly the length of `text`, so lines and columns are the file's.
+// Throws Error (path:line:col) for a quoted field not closed on its line.
+std::optional<std::string> plain_csv(std::string_view text, const std::string& path);
 
 // A file's text as read_text gives it, without copying large files: a regular file of a
 // megabyte or more that needs no normalising (no byte-order mark, no CR) is mapped read-only and

@@ -192,7 +192,8 @@ TEST(Csv, LargeFilesReadFromDiskAsFromText) {
 
 // Found by fuzzing: CR-only files were read as one giant line (and the error quoted the whole
 // file), a UTF-8 byte-order mark made 'x' a missing column, tab-separated files were reported
-// as a missing column, and an error quoted a 4 MB token.
+// as a missing column (they are read now, see SpreadsheetDialectsReadAsPlainCsv), and an error
+// quoted a 4 MB token.
 TEST(Csv, LineEndsByteOrderMarkTabsAndLongTokens) {
   for (const char* text :
        {"x,a\r\n0,1\r\n10,2\r\n", "x,a\r0,1\r10,2\r", "\xEF\xBB\xBFx,a\n0,1\n10,2\n"}) {
@@ -202,8 +203,6 @@ TEST(Csv, LineEndsByteOrderMarkTabsAndLongTokens) {
     EXPECT_EQ(t.column(1)[1], 2);
   }
   EXPECT_EQ(error_of("x,a\r0,1\r10,q\r"), "f.csv:3:4: 'q' is not a number (column 'a')");
-  EXPECT_EQ(error_of("x\ta\n0\t1\n"),
-            "f.csv:1:1: the file is tab-separated: use commas between columns");
   const std::string huge = "x,a\n0," + std::string(4 << 20, 'q') + "\n";
   const std::string m = error_of(huge);
   EXPECT_LT(m.size(), 120u) << m.substr(0, 200);
@@ -282,4 +281,55 @@ TEST(Files, WriteTextReplacesWholeOrRefusesByName) {
   const std::string m = trueaxis::test::error_of([&] { trueaxis::io::write_text(missing, "x"); });
   EXPECT_NE(m.find("no-such-folder"), std::string::npos) << m;
   EXPECT_FALSE(std::filesystem::exists(missing));
+}
+
+// What Excel, LibreOffice and instruments write in other locales reads to the same numbers as a
+// plain file: ';' or tab separators with decimal commas, Excel's "sep=;" line, RFC 4180 quotes,
+// a byte-order mark, CRLF, a Latin-1 'µ' in a header. Messages name the file's own line and
+// column and quote the field as written.
+TEST(Csv, SpreadsheetDialectsReadAsPlainCsv) {
+  const auto plain = CsvTable::parse("x,a\n0,1.5\n10,-2.25\n", "plain.csv");
+  for (const char* text : {
+           "x;a\n0;1,5\n10;-2,25\n",                             // German Excel
+           "sep=;\nx;a\n0;1,5\n10;-2,25\n",                      // with Excel's sep line
+           "\xEF\xBB\xBFsep=;\r\nx;a\r\n0;1,5\r\n10;-2,25\r\n",  // BOM, CRLF
+           "x\ta\n0\t1,5\n10\t-2,25\n",                          // tab, decimal comma
+           "x\ta\n0\t1.5\n10\t-2.25\n",                          // tab, decimal point
+           "\"x\",\"a\"\n\"0\",\"1.5\"\n\"10\",\"-2.25\"\n",     // RFC 4180, all quoted
+           "x,a\n0,\"1,5\"\n10,\"-2,25\"\n",                     // quoted decimal commas
+           "\"x\";\"a\"\n0;\"1,5\"\n10;-2,25\n",                 // quoted ';' file
+       }) {
+    SCOPED_TRACE(text);
+    const auto t = CsvTable::parse(text, "f.csv");
+    ASSERT_EQ(t.header(), plain.header());
+    ASSERT_EQ(t.rows(), plain.rows());
+    for (int c = 0; c < 2; ++c) EXPECT_EQ(t.column(c), plain.column(c));
+  }
+  // Lines and columns are the file's (the sep line counts), the field quoted as written.
+  EXPECT_EQ(error_of("sep=;\nx;a\n0;1,5\n10;q\n"), "f.csv:4:4: 'q' is not a number (column 'a')");
+  EXPECT_EQ(error_of("x;a\n0;1.234,5\n"), "f.csv:2:3: '1.234,5' is not a number (column 'a')");
+  EXPECT_EQ(error_of("x,a\n0,\"1\n10,2\n"), "f.csv:2:3: a quoted field is not closed on its line");
+  EXPECT_EQ(error_of("x;a\n0;1,5;7\n"), "f.csv:2:7: extra field: the header has 2 columns");
+  EXPECT_EQ(error_of("sep=;\n\n"), "f.csv:1:1: empty file: expected a header row");
+  // A Latin-1 (Windows-1252) µ in a header is read as UTF-8 µ; a UTF-8 one is kept.
+  EXPECT_EQ(CsvTable::parse("x,dev_\xB5m\n0,1\n", "f.csv").header()[1], "dev_\xC2\xB5m");
+  EXPECT_EQ(CsvTable::parse("x,dev_\xC2\xB5m\n0,1\n", "f.csv").header()[1], "dev_\xC2\xB5m");
+}
+
+// The same through a file on disk (read() maps large files; a dialect is rewritten in a copy).
+TEST(Csv, SpreadsheetDialectFromDisk) {
+  const std::string dir = trueaxis::test::temp_dir();
+  const std::string p = dir + "/excel.csv";
+  std::string text = "\xEF\xBB\xBFsep=;\r\nx;a\r\n";
+  for (int i = 0; i < 60000; ++i) text += fmt::format("{};{},5\r\n", i, i % 7);
+  {
+    std::FILE* f = std::fopen(p.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  const auto t = CsvTable::read(p);
+  ASSERT_EQ(t.rows(), 60000u);
+  EXPECT_EQ(t.column(1)[59999], 59999 % 7 + 0.5);
+  EXPECT_EQ(t.where(2, 1), p + ":5:3: ");
 }

@@ -1,10 +1,12 @@
 // trueaxis::io — CSV tables with a header row.
 //
 // Format: first non-blank line is the header (comma-separated names); every further non-blank
-// line holds one number per column. Fields may be padded with spaces; "\r\n" line ends are
-// accepted. Readers reject anything malformed with an Error whose message names the file, the
-// 1-based line and the 1-based character column: non-numbers, NaN/Inf, missing or extra fields,
-// duplicated or empty column names.
+// line holds one number per column. Fields may be padded with spaces; "\r\n" and "\r" line ends
+// and a UTF-8 byte-order mark are accepted. What spreadsheets write in other locales reads to the
+// same numbers: Excel's "sep=;" first line, ';' or tab separators with decimal commas, RFC 4180
+// quoted fields, a Latin-1 'µ' in a header name (read as UTF-8). Readers reject anything malformed
+// with an Error whose message names the file, the 1-based line and the 1-based character column:
+// non-numbers, NaN/Inf, missing or extra fields, duplicated or empty column names.
 #pragma once
 
 #include <Eigen/Core>

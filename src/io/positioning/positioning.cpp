@@ -8,6 +8,7 @@
 #include <charconv>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <tuple>
 
 #include "../fast_text.hpp"
@@ -53,6 +54,8 @@ std::vector<std::pair<std::size_t, std::size_t>> split(std::string_view l) {
 
 PositioningRuns parse_runs(std::string text, const std::string& path) {
   detail::normalize_text(text);
+  // A spreadsheet's dialect (';' or tab with decimal commas, "sep=;", quotes) as plain CSV.
+  if (std::optional<std::string> plain = detail::plain_csv(text, path)) text = std::move(*plain);
   const std::string_view all(text);
   PositioningRuns out;
   int col_of[kColumns];

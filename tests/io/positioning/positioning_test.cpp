@@ -39,6 +39,33 @@ TEST(PositioningIo, ReadsRunsInAnyColumnOrder) {
   EXPECT_DOUBLE_EQ(r.readings[0].air_temperature, 20.1);
 }
 
+// A laser's runs saved from a German Excel: "sep=;", semicolons, decimal commas, quotes, CRLF.
+TEST(PositioningIo, RunsFromASpreadsheetReadAsThePlainFile) {
+  const auto plain = io::parse_runs(
+      "target_mm,cycle,direction,deviation_um,material_temp_c\n"
+      "0,1,+,0.5,20.5\n50.5,1,+,-1.25,20.6\n50.5,1,-,2,20.6\n",
+      "runs.csv");
+  for (const char* text : {
+           "sep=;\r\ntarget_mm;cycle;direction;deviation_um;material_temp_c\r\n"
+           "0;1;+;0,5;20,5\r\n50,5;1;+;-1,25;20,6\r\n50,5;1;-;2;20,6\r\n",
+           "\"target_mm\",\"cycle\",\"direction\",\"deviation_um\",\"material_temp_c\"\n"
+           "0,1,\"+\",\"0,5\",\"20,5\"\n\"50,5\",1,\"+\",\"-1,25\",\"20,6\"\n"
+           "\"50,5\",1,\"-\",2,\"20,6\"\n",
+       }) {
+    SCOPED_TRACE(text);
+    const auto r = io::parse_runs(text, "runs.csv");
+    ASSERT_EQ(r.readings.size(), plain.readings.size());
+    for (std::size_t i = 0; i < r.readings.size(); ++i) {
+      EXPECT_EQ(r.readings[i].target, plain.readings[i].target);
+      EXPECT_EQ(r.readings[i].deviation, plain.readings[i].deviation);
+      EXPECT_EQ(r.readings[i].direction, plain.readings[i].direction);
+      EXPECT_EQ(r.readings[i].material_temperature, plain.readings[i].material_temperature);
+    }
+  }
+  EXPECT_EQ(runs_error("target_mm;cycle;direction;deviation_um\n0;1;+;0,5\n50;1;+;x\n"),
+            "runs.csv:3:8: 'x' is not a number (column 'deviation_um')");
+}
+
 TEST(PositioningIo, BadRunsNameFileLineAndColumn) {
   const std::string h = "target_mm,cycle,direction,deviation_um\n";
   EXPECT_EQ(runs_error(""),
