@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "../../common/memory.hpp"
 #include "trueaxis/error.hpp"
@@ -68,11 +70,28 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
       throw Error(
           fmt::format("{}x = {} does not increase (previous {})", t.where(k, 0), x[k], x[k - 1]));
   }
+  // The step is the median spacing, so that one dropped reading is named where it is (at the
+  // line after the gap), not as an uneven first step against a mean the gap has shifted.
+  const double step = [&] {
+    std::vector<double> d(static_cast<std::size_t>(n - 1));
+    for (long k = 1; k < n; ++k) d[static_cast<std::size_t>(k - 1)] = x[k] - x[k - 1];
+    auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
+    std::nth_element(d.begin(), mid, d.end());
+    return *mid;
+  }();
   for (long k = 1; k < n; ++k) {
     const double d = x[k] - x[k - 1];
-    if (std::abs(d - h) > 1e-6 * h + 1e-12)
-      throw Error(fmt::format("{}uneven step: x goes from {} to {} ({} mm; the mean step is {} mm)",
-                              t.where(k, 0), x[k - 1], x[k], d, h));
+    if (std::abs(d - step) <= 1e-6 * step + 1e-12) continue;
+    const double m = std::round(d / step);
+    if (m >= 2 && std::abs(d - m * step) <= 1e-6 * d + 1e-12)
+      throw Error(fmt::format(
+          "{}x jumps from {:.6g} to {:.6g} mm: {} station{} missing at a step of {:.6g} mm (a "
+          "dropped reading? every station is needed, in order)",
+          t.where(k, 0), x[k - 1], x[k], m - 1, m - 1 > 1 ? "s" : "", step));
+    throw Error(
+        fmt::format("{}uneven step: x goes from {:.6g} to {:.6g} mm ({:.6g} mm; the "
+                    "step is {:.6g} mm elsewhere)",
+                    t.where(k, 0), x[k - 1], x[k], d, step));
   }
   // The data's arrays in huge pages where the kernel offers them (see common/memory.hpp).
   using trueaxis::detail::resize_in_huge_pages;

@@ -53,6 +53,17 @@ TEST(Probes, UnevenSpacing) {
             std::string::npos);
 }
 
+// A dropped reading is named at the line after the gap: the step is the median spacing, not the
+// mean (which the gap shifts, so every step looked uneven and the message pointed at line 3).
+TEST(Probes, ADroppedStationIsNamedWhereItIs) {
+  std::string text = "x,a,b\n";
+  for (int k = 0; k <= 20; ++k)
+    if (k != 7) text += fmt::format("{},1,2\n", 10 * k);
+  EXPECT_EQ(read_error(text),
+            "p.csv:9:1: x jumps from 60 to 80 mm: 1 station missing at a step of 10 mm (a dropped "
+            "reading? every station is needed, in order)");
+}
+
 TEST(Probes, TooFewStations) {
   EXPECT_NE(read_error("x,a,b\n0,1,2\n10,1,2\n").find("too few stations: 2"), std::string::npos);
 }
