@@ -14,12 +14,6 @@
 namespace trueaxis::io::detail {
 namespace {
 
-bool blank_line(std::string_view l) {
-  for (char c : l)
-    if (c != ' ' && c != '\t' && c != '\r') return false;
-  return true;
-}
-
 // The line "sep=X" that Excel writes before the header (X one character), or 0.
 char excel_separator(std::string_view line) {
   const std::string_view t = trim(line);
@@ -39,7 +33,8 @@ std::optional<std::string> plain_csv(std::string_view text, const std::string& p
     const std::size_t nl = std::min(text.find('\n', pos), text.size());
     const std::string_view l = text.substr(pos, nl - pos);
     ++line;
-    if (!blank_line(l) && trim(l).front() != '#') {  // '#': a comment line of the runs files
+    // (The text is normalised: no CR. '#' starts a comment line in the runs files.)
+    if (const std::string_view content = trim(l); !content.empty() && content.front() != '#') {
       const char excel = sep_start == std::string_view::npos ? excel_separator(l) : 0;
       if (excel) {
         separator = excel;

@@ -31,7 +31,8 @@ void normalize_text(std::string& text);
 // A spreadsheet's CSV dialect as plain CSV, or nullopt when `text` is plain CSV already: Excel's
 // "sep=X" first line (blanked), ';' or tab separators with decimal commas, RFC 4180 quoted
 // fields. The rewrite has exactly the length of `text`, so lines and columns are the file's.
-// Throws Error (path:line:col) for a quoted field not closed on its line.
+// Precondition: `text` is normalised (normalize_text: no CR, no byte-order mark). Throws Error
+// (path:line:col) for a quoted field not closed on its line.
 std::optional<std::string> plain_csv(std::string_view text, const std::string& path);
 
 // A file's text as read_text gives it, without copying large files: a regular file of a

@@ -70,28 +70,34 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
       throw Error(
           fmt::format("{}x = {} does not increase (previous {})", t.where(k, 0), x[k], x[k - 1]));
   }
-  // The step is the median spacing, so that one dropped reading is named where it is (at the
-  // line after the gap), not as an uneven first step against a mean the gap has shifted.
-  const double step = [&] {
-    std::vector<double> d(static_cast<std::size_t>(n - 1));
-    for (long k = 1; k < n; ++k) d[static_cast<std::size_t>(k - 1)] = x[k] - x[k - 1];
-    auto mid = d.begin() + static_cast<std::ptrdiff_t>(d.size() / 2);
-    std::nth_element(d.begin(), mid, d.end());
-    return *mid;
-  }();
-  for (long k = 1; k < n; ++k) {
-    const double d = x[k] - x[k - 1];
-    if (std::abs(d - step) <= 1e-6 * step + 1e-12) continue;
-    const double m = std::round(d / step);
-    if (m >= 2 && std::abs(d - m * step) <= 1e-6 * d + 1e-12)
-      throw Error(fmt::format(
-          "{}x jumps from {:.6g} to {:.6g} mm: {} station{} missing at a step of {:.6g} mm (a "
-          "dropped reading? every station is needed, in order)",
-          t.where(k, 0), x[k - 1], x[k], m - 1, m - 1 > 1 ? "s" : "", step));
-    throw Error(
-        fmt::format("{}uneven step: x goes from {:.6g} to {:.6g} mm ({:.6g} mm; the "
-                    "step is {:.6g} mm elsewhere)",
-                    t.where(k, 0), x[k - 1], x[k], d, step));
+  // Every step equal to the mean one, as in any valid file: nothing more to do. Otherwise the
+  // message compares each step with the median spacing, so that one dropped reading is named where
+  // it is (at the line after the gap), not as an uneven first step against a mean the gap shifted.
+  const auto off_by = [](double d, double step) {
+    return std::abs(d - step) > 1e-6 * step + 1e-12;
+  };
+  bool even = true;
+  for (long k = 1; k < n && even; ++k) even = !off_by(x[k] - x[k - 1], h);
+  if (!even) {
+    std::vector<double> steps(static_cast<std::size_t>(n - 1));
+    for (long k = 1; k < n; ++k) steps[static_cast<std::size_t>(k - 1)] = x[k] - x[k - 1];
+    const auto mid = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
+    std::nth_element(steps.begin(), mid, steps.end());
+    const double step = *mid;
+    for (long k = 1; k < n; ++k) {
+      const double d = x[k] - x[k - 1];
+      if (!off_by(d, step)) continue;
+      const double m = std::round(d / step);
+      if (m >= 2 && std::abs(d - m * step) <= 1e-6 * d + 1e-12)
+        throw Error(fmt::format(
+            "{}x jumps from {:.6g} to {:.6g} mm: {} station{} missing at a step of {:.6g} mm (a "
+            "dropped reading? every station is needed, in order)",
+            t.where(k, 0), x[k - 1], x[k], m - 1, m - 1 > 1 ? "s" : "", step));
+      throw Error(
+          fmt::format("{}uneven step: x goes from {:.6g} to {:.6g} mm ({:.6g} mm; the "
+                      "step is {:.6g} mm elsewhere)",
+                      t.where(k, 0), x[k - 1], x[k], d, step));
+    }
   }
   // The data's arrays in huge pages where the kernel offers them (see common/memory.hpp).
   using trueaxis::detail::resize_in_huge_pages;
