@@ -30,8 +30,9 @@ void refuse_outside(const map::ErrorMap& m, const Eigen::Matrix3Xd& p, const std
                     double tolerance) {
   for (Eigen::Index i = 0; i < p.cols(); ++i)
     if (!m.contains(p.col(i), tolerance)) {
-      const io::CsvTable t = io::CsvTable::read(input);
-      throw Error(fmt::format("{}point {} {}", t.where(static_cast<long>(i), t.require("x")), i + 1,
+      io::CsvTable t = io::CsvTable::read(input);
+      const int x = t.require("x", io::Unit::Millimetre);
+      throw Error(fmt::format("{}point {} {}", t.where(static_cast<long>(i), x), i + 1,
                               m.outside_message(p.col(i))));
     }
 }
@@ -136,8 +137,8 @@ int run_verify(const VerifyArgs& a) {
   // at fault (its x), reading the file again on that error path only.
   ballgauge::LengthOptions o = a.o;
   o.locate = [&](std::size_t index, int end) {
-    const auto table = io::CsvTable::read(a.input);
-    const int col = table.find(end == 2 ? "x2" : "x1");
+    auto table = io::CsvTable::read(a.input);
+    const int col = table.find(end == 2 ? "x2" : "x1", io::Unit::Millimetre);
     return index < table.rows() && col >= 0 ? table.where(static_cast<long>(index), col)
                                             : a.input + ": ";
   };

@@ -115,11 +115,16 @@ int run_positioning(const PositioningArgs& a) {
   positioning::Options o = a.o;
   o.expansion_coefficient = a.expansion_ppm * 1e-6;
   o.correct_temperature = !a.no_temperature;
+  if (runs.lines.size() == runs.readings.size())
+    o.locate = [&](std::size_t k) { return fmt::format("{}:{}:1: ", a.input, runs.lines[k]); };
   positioning::Result r;
   try {
     r = positioning::evaluate(runs.readings, o);
   } catch (const Error& e) {
-    throw Error(fmt::format("{}: {}", source, e.what()));
+    // A message that names its place in the file (file:line:col) already names the file.
+    const std::string what = e.what();
+    throw Error(
+        o.locate && what.rfind(a.input + ":", 0) == 0 ? what : fmt::format("{}: {}", source, what));
   }
   r.warnings.insert(r.warnings.begin(), source_warnings.begin(), source_warnings.end());
   const bool vdi = a.standard == "vdi3441";

@@ -297,6 +297,13 @@ CsvTable CsvTable::parse_text(std::shared_ptr<const void> owner, std::string_vie
 int CsvTable::find(std::string_view name) const {
   for (std::size_t i = 0; i < header_.size(); ++i)
     if (header_[i] == name) return static_cast<int>(i);
+  for (std::size_t i = 0; i < header_.size(); ++i) {
+    try {
+      if (column_matches(header_[i], name).holds) return static_cast<int>(i);
+    } catch (const Error&) {
+      // a name with something not a unit in brackets: not this column
+    }
+  }
   return -1;
 }
 
@@ -309,6 +316,83 @@ int CsvTable::require(std::string_view name) const {
                             name, have));
   }
   return c;
+}
+
+int CsvTable::find(std::string_view quantity, Unit unit) {
+  int found = -1;
+  std::optional<Unit> written;
+  for (std::size_t i = 0; i < header_.size(); ++i) {
+    ColumnMatch m;
+    try {
+      m = column_matches(header_[i], quantity);
+    } catch (const Error& e) {
+      throw Error(where(-1, static_cast<int>(i)) + e.what());
+    }
+    if (!m.holds) continue;
+    if (found >= 0)
+      throw Error(fmt::format("{}columns '{}' and '{}' both hold {}",
+                              where(-1, static_cast<int>(i)),
+                              header_[static_cast<std::size_t>(found)], header_[i], quantity));
+    found = static_cast<int>(i);
+    written = m.unit;
+  }
+  if (found < 0) return -1;
+  const auto c = static_cast<std::size_t>(found);
+  if (converted_.size() != header_.size()) {
+    converted_.assign(header_.size(), 0);
+    unit_.assign(header_.size(), std::nullopt);
+    written_.assign(header_.size(), std::nullopt);
+  }
+  if (converted_[c]) {
+    if (unit_[c] != unit)
+      throw Error(fmt::format("{}column '{}' was read in {} and is now asked for in {}",
+                              where(-1, found), header_[c], symbol(*unit_[c]), symbol(unit)));
+    return found;
+  }
+  if (written && kind_of(*written) != kind_of(unit)) {
+    const auto kind = [](Unit u) {
+      switch (kind_of(u)) {
+        case UnitKind::Length:
+          return "a length";
+        case UnitKind::Angle:
+          return "an angle";
+        case UnitKind::Time:
+          return "a time";
+        case UnitKind::Temperature:
+          return "a temperature";
+        case UnitKind::Count:
+          return "a plain number";
+      }
+      return "";
+    };
+    throw Error(fmt::format("{}column '{}' is in {}, {}; {} holds {}{}", where(-1, found),
+                            header_[c], symbol(*written), kind(*written), quantity, kind(unit),
+                            kind_of(unit) == UnitKind::Count
+                                ? " and takes no unit"
+                                : fmt::format(" (for example in {})", symbol(unit))));
+  }
+  if (written && *written != unit) columns_[c] *= unit_factor(*written, unit);
+  converted_[c] = 1;
+  unit_[c] = unit;
+  written_[c] = written;
+  return found;
+}
+
+int CsvTable::require(std::string_view quantity, Unit unit) {
+  const int c = find(quantity, unit);
+  if (c < 0) {
+    std::string have;
+    for (const auto& h : header_) have += (have.empty() ? "" : ", ") + h;
+    throw Error(fmt::format("{}:{}:1: missing column '{}' (header has: {})", path_, header_line_,
+                            quantity, have));
+  }
+  return c;
+}
+
+std::optional<Unit> CsvTable::written_unit(int c) const {
+  const auto i = static_cast<std::size_t>(c);
+  if (i < converted_.size() && converted_[i]) return written_[i];
+  return split_column_name(header_[i]).unit;
 }
 
 std::string CsvTable::where(long row, int col) const {

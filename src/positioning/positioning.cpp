@@ -51,6 +51,26 @@ double lo2(double a, double b) {
   return std::isnan(a) || std::isnan(b) ? kNaN : std::min(a, b);
 }
 
+// Where a missing reading (cycle c, direction d, at `target`) would have been: the place of the
+// reading of that run that follows the gap in the direction of travel, "file:line:col: ", or of
+// the run's last reading when the gap is at its end; empty without Options::locate.
+std::string gap_at(const std::vector<Reading>& readings, const Options& o, double target, int c,
+                   int d) {
+  if (!o.locate) return "";
+  std::size_t after = readings.size(), last = readings.size();
+  for (std::size_t k = 0; k < readings.size(); ++k) {
+    const Reading& r = readings[k];
+    if (r.cycle != c || (r.direction == Direction::Up ? 0 : 1) != d) continue;
+    last = k;
+    const bool beyond = d == 0 ? r.target > target : r.target < target;
+    const bool closer = after == readings.size() || (d == 0 ? r.target < readings[after].target
+                                                            : r.target > readings[after].target);
+    if (beyond && closer) after = k;
+  }
+  if (after < readings.size()) return o.locate(after);
+  return last < readings.size() ? o.locate(last) : "";
+}
+
 std::string um(double mm) {
   return std::isnan(mm) ? std::string("n/d") : fmt::format("{:.2f}", mm * 1e3);
 }
@@ -147,8 +167,13 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
     const int d = r.direction == Direction::Up ? 0 : 1;
     const auto [it, fresh] = seen.emplace(std::make_tuple(i, r.cycle, d), k);
     if (!fresh)
-      throw Error(fmt::format("readings {} and {} are both cycle {}, '{}' at target {} mm",
-                              it->second + 1, k + 1, r.cycle, sign(r.direction), positions[i]));
+      throw Error(
+          o.locate ? fmt::format("{}cycle {} '{}' at target {:g} mm again (first at {})",
+                                 o.locate(k), r.cycle, sign(r.direction), positions[i],
+                                 o.locate(it->second).substr(0, o.locate(it->second).size() - 2))
+                   : fmt::format("readings {} and {} are both cycle {}, '{}' at target "
+                                 "{} mm",
+                                 it->second + 1, k + 1, r.cycle, sign(r.direction), positions[i]));
     x[i][static_cast<std::size_t>(d)].push_back(res.readings[k].deviation);
     cycles_dir[d].insert(r.cycle);
   }
@@ -169,10 +194,10 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
         for (int c : cycles_dir[d])
           if (!seen.count(std::make_tuple(i, c, d)))
             throw Error(fmt::format(
-                "no '{}' reading at target {} mm in cycle {} (every target needs one reading per "
-                "cycle and direction; allow incomplete cycles to evaluate each target with the "
-                "readings it has)",
-                d == 0 ? '+' : '-', positions[i], c));
+                "{}no '{}' reading at target {:g} mm in cycle {} (every target needs one reading "
+                "per cycle and direction; allow incomplete cycles to evaluate each target with "
+                "the readings it has)",
+                gap_at(readings, o, positions[i], c, d), d == 0 ? '+' : '-', positions[i], c));
       }
       ++incomplete;
     }

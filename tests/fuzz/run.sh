@@ -27,6 +27,8 @@ printf 's,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy\n0,1,2,3,4,5,6\n10,1,2,3,4,5,6\n' > "$co
 printf 'target_mm,cycle,direction,deviation_um,material_temp_c\n0,1,+,1,20.5\n50,1,+,2,20.5\n50,1,-,3,20.6\n0,1,-,0.5,20.6\n0,2,+,1.2,20.7\n' > "$corpus/csv/runs.csv"
 printf 'sep=;\r\ntarget_mm;cycle;direction;deviation_um\r\n0;1;"+";1,5\r\n50,5;1;+;-2,25\r\n' > "$corpus/csv/runs_excel.csv"
 printf '"x";"a";"b";"c";"angle"\n0;1,5;2;3;4\n10;2;3,25;4;5\n' > "$corpus/csv/probes_excel.csv"
+printf 'target [m],Cycle,direction,deviation (\xc2\xb5m),air_temp [\xb0C]\n0,1,+,1,20\n0.05,1,+,2,20\n' > "$corpus/csv/runs_units.csv"
+printf 'x [mm],a / nm,b_um,c (\xce\xbcm),angle [urad]\n0,1,2,3,4\n10,2,3,4,5\n20,3,4,5,6\n' > "$corpus/csv/probes_units.csv"
 printf '0.000000 0.001380 -0.001723\n50.000000 0.002275 -0.000580\n' > "$corpus/csv/x.comp"
 printf '%%_N_AX_EEC_INI\nCHANDATA(1)\n$AA_ENC_COMP[0,0,X1]=0.003 ; 3 um\n$AA_ENC_COMP[0,1,X1]=-0.001\n$AA_ENC_COMP_STEP[0,X1]=1.0\n$AA_ENC_COMP_MIN[0,X1]=0\n$AA_ENC_COMP_MAX[0,X1]=1.0\n$AA_ENC_COMP_IS_MODULO[0,X1]=0\nM17\n' > "$corpus/csv/x_lec.mpf"
 printf 'BEGIN X.COM MM\nNR    AXISPOS         X               BACKLASH\n0     +0.0000         +0.0010         +0.0021\n1     +40.0000        +0.0011         -0.0019\n[END]\n' > "$corpus/csv/X.COM"

@@ -333,3 +333,85 @@ TEST(Csv, SpreadsheetDialectFromDisk) {
   EXPECT_EQ(t.column(1)[59999], 59999 % 7 + 0.5);
   EXPECT_EQ(t.where(2, 1), p + ":5:3: ");
 }
+
+// Column names that carry their unit, as instruments and spreadsheets write them: the values are
+// converted to the unit the reader asks for; a unit of another kind is refused at its place.
+TEST(Csv, UnitsInNamesConvertToTheReadersUnit) {
+  using trueaxis::io::Unit;
+  constexpr double kRoundOff = 1e-15;  // relative: one conversion factor's rounding
+  auto t = CsvTable::parse(
+      "x [m], a (nm), b_um, c / mm, d, e [\xC2\xB5rad], f_deg\n0.5,250,1.5,2,7,10,90\n", "f.csv");
+  EXPECT_EQ(t.find("x"), 0);  // by quantity, not converted
+  EXPECT_EQ(t.require("x", Unit::Millimetre), 0);
+  EXPECT_DOUBLE_EQ(t.column(0)[0], 500);
+  EXPECT_EQ(t.require("x", Unit::Millimetre), 0);  // asked again: converted once
+  EXPECT_DOUBLE_EQ(t.column(0)[0], 500);
+  EXPECT_EQ(t.require("a", Unit::Micrometre), 1);
+  EXPECT_NEAR(t.column(1)[0], 0.25, 0.25 * kRoundOff);
+  EXPECT_EQ(t.require("b", Unit::Micrometre), 2);
+  EXPECT_EQ(t.column(2)[0], 1.5);
+  EXPECT_EQ(t.require("c", Unit::Micrometre), 3);
+  EXPECT_EQ(t.column(3)[0], 2000);
+  EXPECT_EQ(t.require("d", Unit::Micrometre), 4);  // no unit written: the reader's unit
+  EXPECT_EQ(t.column(4)[0], 7);
+  EXPECT_FALSE(t.written_unit(4).has_value());
+  EXPECT_EQ(t.require("e", Unit::Radian), 5);
+  EXPECT_NEAR(t.column(5)[0], 1e-5, 1e-5 * kRoundOff);
+  EXPECT_EQ(t.require("f", Unit::Radian), 6);
+  EXPECT_NEAR(t.column(6)[0], M_PI / 2, M_PI / 2 * kRoundOff);
+  EXPECT_EQ(t.written_unit(6), Unit::Degree);
+  EXPECT_EQ(t.find("g", Unit::Millimetre), -1);
+
+  auto refused = [](const std::string& text, const char* quantity, Unit unit) {
+    try {
+      CsvTable::parse(text, "f.csv").require(quantity, unit);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_EQ(refused("x,t [s]\n1,2\n", "t", Unit::Millimetre),
+            "f.csv:1:3: column 't [s]' is in s, a time; t holds a length (for example in mm)");
+  EXPECT_EQ(refused("x,n [mm]\n1,2\n", "n", Unit::Count),
+            "f.csv:1:3: column 'n [mm]' is in mm, a length; n holds a plain number and takes no "
+            "unit");
+  EXPECT_EQ(refused("x, x [mm]\n1,2\n", "x", Unit::Millimetre),
+            "f.csv:1:4: columns 'x' and 'x [mm]' both hold x");
+  EXPECT_EQ(refused("y,x [furlong]\n1,2\n", "x", Unit::Millimetre).substr(0, 48),
+            "f.csv:1:3: column 'x [furlong]': 'furlong' is no");
+  // A column read in one unit is not then handed out in another.
+  auto u = CsvTable::parse("x [mm]\n1\n", "f.csv");
+  u.require("x", Unit::Millimetre);
+  EXPECT_THROW(u.require("x", Unit::Micrometre), Error);
+}
+
+// What a name means: the quantity/unit forms, and names whose last word only looks like a unit.
+TEST(Csv, ColumnNamesSplitIntoQuantityAndUnit) {
+  using trueaxis::io::split_column_name;
+  using trueaxis::io::Unit;
+  EXPECT_EQ(split_column_name("deviation [\xC2\xB5m]").quantity, "deviation");
+  EXPECT_EQ(split_column_name("deviation [\xC2\xB5m]").unit, Unit::Micrometre);
+  EXPECT_EQ(split_column_name("deviation (\xCE\xBCm)").unit, Unit::Micrometre);  // Greek mu
+  EXPECT_EQ(split_column_name("deviation [\xB5m]").unit, Unit::Micrometre);      // Latin-1
+  EXPECT_EQ(split_column_name("height / nm").unit, Unit::Nanometre);
+  EXPECT_EQ(split_column_name("target_mm").quantity, "target");
+  EXPECT_EQ(split_column_name("pitch_urad").unit, Unit::Microradian);
+  EXPECT_EQ(split_column_name("temp [\xC2\xB0"
+                              "C]")
+                .unit,
+            Unit::Celsius);
+  // Short last words stay part of the name unless the reader names the quantity.
+  for (const char* name : {"probe_c", "laser_in", "time_s", "b_m", "p1", "a_dx"}) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(split_column_name(name).quantity, name);
+    EXPECT_FALSE(split_column_name(name).unit.has_value());
+  }
+  EXPECT_EQ(trueaxis::io::column_matches("time_s", "time").unit, Unit::Second);
+  EXPECT_EQ(trueaxis::io::column_matches("Material_Temp_C", "material_temp").unit, Unit::Celsius);
+  EXPECT_FALSE(trueaxis::io::column_matches("times", "time").holds);
+  EXPECT_FALSE(trueaxis::io::column_matches("time_x", "time").holds);
+  EXPECT_THROW(split_column_name("x [furlong]"), Error);
+  EXPECT_NEAR(trueaxis::io::unit_factor(Unit::Inch, Unit::Millimetre), 25.4, 1e-14);
+  EXPECT_NEAR(trueaxis::io::unit_factor(Unit::Arcsecond, Unit::Microradian), 4.84813681109536,
+              1e-13);
+}

@@ -12,9 +12,12 @@
 #include <Eigen/Core>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
+
+#include "trueaxis/io/units.hpp"
 
 namespace trueaxis::io {
 
@@ -31,10 +34,22 @@ class CsvTable {
   std::size_t rows() const { return rows_; }
   std::size_t cols() const { return header_.size(); }
 
-  // Index of the column called `name`, or -1.
+  // Index of the column called `name`, or else of a column holding `name` with a unit in its name
+  // ("name [mm]"), or -1. Values are not converted: see find(quantity, unit).
   int find(std::string_view name) const;
   // Index of the column called `name`; throws Error naming the file and header line otherwise.
   int require(std::string_view name) const;
+  // Index of the column holding `quantity` in a unit of `unit`'s kind, or -1. Its name may carry
+  // the unit, "x [mm]", "x (µm)", "x / nm", "x_mm" (see units.hpp); the values are then
+  // converted to `unit` in place, once. A name without a unit is taken to be in `unit`. Throws
+  // Error naming the header field when the unit is of another kind ("deviation [s]"), or a plain
+  // number carries one, or two columns hold the quantity ("x" and "x [mm]").
+  int find(std::string_view quantity, Unit unit);
+  // As find(quantity, unit); throws Error naming the file and header line when there is none.
+  int require(std::string_view quantity, Unit unit);
+  // The unit column `c` was written in: nullopt for a name without one. Only for a column asked
+  // for with find/require(quantity, unit), or split with split_column_name.
+  std::optional<Unit> written_unit(int c) const;
   // Column values (length rows()).
   const Eigen::VectorXd& column(int c) const { return columns_[static_cast<std::size_t>(c)]; }
 
@@ -51,6 +66,9 @@ class CsvTable {
   std::string_view text_;
   std::vector<std::string> header_;
   std::vector<Eigen::VectorXd> columns_;
+  std::vector<std::optional<Unit>> unit_;     // the unit each column's values are in now
+  std::vector<std::optional<Unit>> written_;  // the unit each column's name gave
+  std::vector<char> converted_;               // 1 once find(quantity, unit) set the column's unit
   std::size_t header_start_ = 0, header_line_ = 1;  // byte offset and 1-based line of the header
   std::size_t data_start_ = 0;                      // byte offset just after the header line
   std::size_t rows_ = 0;

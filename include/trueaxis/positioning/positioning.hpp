@@ -41,6 +41,7 @@
 // temperature (wavelength compensation) is the laser's own business and is only recorded.
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <string>
 #include <utility>
@@ -70,7 +71,10 @@ struct Options {
   double datum = kNaN;              // mm, laser datum P₀ of the expansion correction; NaN: lowest
   bool correct_temperature = true;  // apply the correction when material temperatures are given
   bool allow_incomplete = false;    // evaluate targets with missing readings (see above)
-  void validate() const;            // throws Error
+  // Where reading k (0-based, input order) is, "file:line:col: ", for messages that name a
+  // reading; empty: messages count readings from 1 instead.
+  std::function<std::string(std::size_t)> locate;
+  void validate() const;  // throws Error
 };
 
 // Per-target statistics (mm). NaN marks what is not defined (see above).

@@ -181,10 +181,10 @@ void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
 }
 
 std::vector<ballgauge::LengthMeasurement> read_lengths(const std::string& path) {
-  const CsvTable t = CsvTable::read(path);
+  CsvTable t = CsvTable::read(path);
   const char* names[7] = {"x1", "y1", "z1", "x2", "y2", "z2", "nominal"};
   int c[7];
-  for (int k = 0; k < 7; ++k) c[k] = t.require(names[k]);
+  for (int k = 0; k < 7; ++k) c[k] = t.require(names[k], Unit::Millimetre);
   if (t.rows() == 0) throw Error(fmt::format("{}: no lengths", path));
   std::vector<ballgauge::LengthMeasurement> out(t.rows());
   for (std::size_t i = 0; i < t.rows(); ++i) {
@@ -220,8 +220,9 @@ void write_lengths(const std::string& path,
 }
 
 std::vector<sim::Ball> read_balls(const std::string& path) {
-  const CsvTable t = CsvTable::read(path);
-  const int c[4] = {t.require("x"), t.require("y"), t.require("z"), t.require("diameter")};
+  CsvTable t = CsvTable::read(path);
+  const int c[4] = {t.require("x", Unit::Millimetre), t.require("y", Unit::Millimetre),
+                    t.require("z", Unit::Millimetre), t.require("diameter", Unit::Millimetre)};
   if (t.rows() == 0) throw Error(fmt::format("{}: no balls", path));
   std::vector<sim::Ball> out(t.rows());
   for (std::size_t i = 0; i < t.rows(); ++i) {

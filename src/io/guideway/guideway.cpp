@@ -114,17 +114,24 @@ GuidewayLayout read_layout(const std::string& path) {
 }
 
 Spots read_spots(const std::string& path, const GuidewayLayout& g, bool skip_bad) {
-  const CsvTable t = CsvTable::read(path);
-  if (t.header().empty() || t.header()[0] != "s")
+  CsvTable t = CsvTable::read(path);
+  // Units may be written in the names ("s [mm]", "a_dx [µm]"); s is read in mm, spots in µm.
+  if (t.header().empty() || t.find("s", Unit::Millimetre) != 0)
     throw Error(
         fmt::format("{}the first column must be 's' (carriage position, mm)", t.where(-1, 0)));
   const auto& dets = g.layout.detectors;
   // Every column must belong to a known detector.
   for (std::size_t c = 1; c < t.cols(); ++c) {
     const std::string& h = t.header()[c];
-    const auto us = h.rfind('_');
-    const std::string name = us == std::string::npos ? h : h.substr(0, us);
-    const std::string suffix = us == std::string::npos ? "" : h.substr(us + 1);
+    std::string q;
+    try {
+      q = split_column_name(h).quantity;
+    } catch (const Error& e) {
+      throw Error(t.where(-1, static_cast<int>(c)) + e.what());
+    }
+    const auto us = q.rfind('_');
+    const std::string name = us == std::string::npos ? q : q.substr(0, us);
+    const std::string suffix = us == std::string::npos ? "" : q.substr(us + 1);
     bool known = false;
     for (const auto& d : dets) known |= d.name == name;
     if (!known)
@@ -143,11 +150,12 @@ Spots read_spots(const std::string& path, const GuidewayLayout& g, bool skip_bad
   Spots out;
   for (std::size_t i = 0; i < dets.size(); ++i) {
     const std::string& name = dets[i].name;
-    const int dx = t.find(name + "_dx"), dy = t.find(name + "_dy");
+    const int dx = t.find(name + "_dx", Unit::Micrometre),
+              dy = t.find(name + "_dy", Unit::Micrometre);
     int cur[4];
     bool any_current = false, all_current = true;
     for (int q = 0; q < 4; ++q) {
-      cur[q] = t.find(fmt::format("{}_i{}", name, q + 1));
+      cur[q] = t.find(fmt::format("{}_i{}", name, q + 1), Unit::Count);
       any_current |= cur[q] >= 0;
       all_current &= cur[q] >= 0;
     }

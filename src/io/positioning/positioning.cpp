@@ -24,8 +24,12 @@ using positioning::Reading;
 using ojson = nlohmann::ordered_json;
 
 enum Column { kTarget, kCycle, kDirection, kDeviation, kMaterial, kAir, kColumns };
-constexpr const char* kNames[kColumns] = {"target_mm",    "cycle",           "direction",
-                                          "deviation_um", "material_temp_c", "air_temp_c"};
+// Each column's quantity and the unit it is read in (a name may give another unit of the same
+// kind: "target [m]", "deviation (nm)"; see units.hpp). The direction is text: no unit.
+constexpr const char* kQuantities[kColumns] = {"target",    "cycle",         "direction",
+                                               "deviation", "material_temp", "air_temp"};
+constexpr Unit kColumnUnits[kColumns] = {Unit::Millimetre, Unit::Count,   Unit::Count,
+                                         Unit::Micrometre, Unit::Celsius, Unit::Celsius};
 constexpr double kMinTemperature = -50, kMaxTemperature = 100;
 
 using detail::is_blank;
@@ -60,6 +64,9 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
   PositioningRuns out;
   int col_of[kColumns];
   std::fill(std::begin(col_of), std::end(col_of), -1);
+  std::string name_of[kColumns];  // each column's name as the header writes it
+  double scale_of[kColumns];      // from the written unit to the column's unit
+  std::fill(std::begin(scale_of), std::end(scale_of), 1.0);
   std::size_t ncol = 0, header_line = 0;
   std::map<std::tuple<long long, int, int>, std::size_t> seen;  // (target in 0.1 µm, cycle, dir)
   std::size_t pos = 0, line = 0;
@@ -81,22 +88,46 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
       ncol = fields.size();
       for (std::size_t c = 0; c < fields.size(); ++c) {
         const auto [b, e] = fields[c];
-        const std::string name = lower(l.substr(b, e - b));
+        const std::string_view name = l.substr(b, e - b);
         int which = -1;
-        for (int k = 0; k < kColumns; ++k)
-          if (name == kNames[k]) which = k;
+        std::optional<Unit> written;
+        for (int k = 0; k < kColumns && which < 0; ++k) {
+          ColumnMatch m;
+          try {
+            m = column_matches(name, kQuantities[k]);
+          } catch (const Error& err) {
+            fail(b, err.what());
+          }
+          if (m.holds) {
+            which = k;
+            written = m.unit;
+          }
+        }
         if (which < 0)
           fail(b, fmt::format("unknown column '{}' (target_mm, cycle, direction, deviation_um, "
-                              "material_temp_c, air_temp_c)",
-                              detail::quote_cut(l.substr(b, e - b))));
-        if (col_of[which] >= 0) fail(b, fmt::format("column '{}' appears twice", kNames[which]));
+                              "material_temp_c, air_temp_c; a unit may be written in the name, "
+                              "as in 'target [m]' or 'deviation (nm)')",
+                              detail::quote_cut(name)));
+        if (col_of[which] >= 0)
+          fail(b, name == name_of[which]
+                      ? fmt::format("column '{}' appears twice", detail::quote_cut(name))
+                      : fmt::format("column '{}' holds the {} again (column '{}' before it)",
+                                    detail::quote_cut(name), kQuantities[which], name_of[which]));
+        if (written && kind_of(*written) != kind_of(kColumnUnits[which]))
+          fail(b, fmt::format("column '{}': {} is not a unit of {} ({})", detail::quote_cut(name),
+                              symbol(*written), kQuantities[which],
+                              kind_of(kColumnUnits[which]) == UnitKind::Count
+                                  ? std::string("it takes no unit")
+                                  : fmt::format("for example {}", symbol(kColumnUnits[which]))));
         col_of[which] = static_cast<int>(c);
+        name_of[which] = std::string(name);
+        scale_of[which] = written ? unit_factor(*written, kColumnUnits[which]) : 1.0;
       }
       for (int k = 0; k < kDeviation + 1; ++k)
         if (col_of[k] < 0)
           fail(0, fmt::format("the header has no '{}' column (target_mm, cycle, direction and "
-                              "deviation_um are needed)",
-                              kNames[k]));
+                              "deviation_um are needed; a unit may be written in the name)",
+                              kQuantities[k]));
       out.has_material = col_of[kMaterial] >= 0;
       out.has_air = col_of[kAir] >= 0;
       continue;
@@ -107,7 +138,7 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
     Reading r;
     auto number = [&](int k, double limit) {
       const auto [b, e] = fields[static_cast<std::size_t>(col_of[k])];
-      if (b == e) fail(b, fmt::format("empty field in column '{}'", kNames[k]));
+      if (b == e) fail(b, fmt::format("empty field in column '{}'", name_of[k]));
       const char* s = l.data() + b;
       const char* se = l.data() + e;
       if (*s == '+') ++s;
@@ -115,10 +146,13 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
       const auto res = std::from_chars(s, se, v);
       if (res.ec != std::errc() || res.ptr != se || !std::isfinite(v))
         fail(b, fmt::format("'{}' is not a number (column '{}')",
-                            detail::quote_cut(l.substr(b, e - b)), kNames[k]));
+                            detail::quote_cut(l.substr(b, e - b)), name_of[k]));
+      v *= scale_of[k];
       if (std::abs(v) > limit)
-        fail(b, fmt::format("{:g} is out of range in column '{}' (its size must be at most {:g})",
-                            v, kNames[k], limit));
+        fail(b,
+             fmt::format("{:g} {} is out of range in column '{}' (its size must be at most "
+                         "{:g} {})",
+                         v, symbol(kColumnUnits[k]), name_of[k], limit, symbol(kColumnUnits[k])));
       return v;
     };
     r.target = number(kTarget, kMaxTarget);
@@ -149,7 +183,7 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
       if (t < kMinTemperature || t > kMaxTemperature)
         fail(fields[static_cast<std::size_t>(col_of[k])].first,
              fmt::format("{:g} is not a plausible temperature in degrees Celsius (column '{}')", t,
-                         kNames[k]));
+                         name_of[k]));
       (k == kMaterial ? r.material_temperature : r.air_temperature) = t;
     }
     const auto key = std::make_tuple(std::llround(r.target * 1e4), r.cycle,
@@ -171,8 +205,8 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
 }
 
 positioning::Log read_log(const std::string& path) {
-  const CsvTable t = CsvTable::read(path);
-  const int ct = t.require("time_s"), cr = t.require("reading_mm");
+  CsvTable t = CsvTable::read(path);
+  const int ct = t.require("time", Unit::Second), cr = t.require("reading", Unit::Millimetre);
   if (t.cols() != 2)
     throw Error(fmt::format("{}:1:1: a log has two columns, time_s and reading_mm ({} found)", path,
                             t.cols()));

@@ -13,12 +13,15 @@
 namespace trueaxis::io {
 
 separation::ProbeData read_probes(const std::string& path, const ProbeReadOptions& opt) {
-  const CsvTable t = CsvTable::read(path);
-  if (t.cols() < 1 || t.header()[0] != "x")
+  CsvTable t = CsvTable::read(path);
+  // Units may be written in the names ("x [mm]", "A (µm)", "pitch_urad"); values are read in mm
+  // for x, µm for probes and µrad for the angle channel (see units.hpp).
+  const std::string first = t.cols() ? split_column_name(t.header()[0]).quantity : "";
+  if (t.cols() < 1 || first != "x" || t.find("x", Unit::Millimetre) != 0)
     throw Error(fmt::format("{}first column must be 'x' (station position, mm), found '{}'",
                             t.where(-1, 0), t.cols() ? t.header()[0] : ""));
   int angle_col = -1;
-  if (opt.angle_column) angle_col = t.require(*opt.angle_column);
+  if (opt.angle_column) angle_col = t.require(*opt.angle_column, Unit::Microradian);
   std::vector<int> probe_cols;
   if (!opt.probe_columns.empty()) {
     // Named probes: exactly these columns, in this order; any other column is left alone.
@@ -29,6 +32,7 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
                                 name, c == 0 ? "station position" : "angle channel"));
       for (int q : probe_cols)
         if (q == c) throw Error(fmt::format("--probes names column '{}' twice", name));
+      t.require(name, Unit::Micrometre);  // converts a column named with its unit
       probe_cols.push_back(c);
     }
   } else {
@@ -37,14 +41,22 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
       // A column that reads as an angle channel is never taken for a probe silently: an angle
       // in µrad read as a displacement in µm would wreck the separation with no sign of it.
       const std::string& name = t.header()[static_cast<std::size_t>(c)];
-      const bool looks_angle = name == "angle" || name == "pitch" ||
-                               name.find("_urad") != std::string::npos ||
-                               name.find("angle") != std::string::npos;
+      ColumnName split;
+      try {
+        split = split_column_name(name);
+      } catch (const Error& e) {
+        throw Error(t.where(-1, c) + e.what());
+      }
+      const bool looks_angle = (split.unit && kind_of(*split.unit) == UnitKind::Angle) ||
+                               split.quantity == "angle" || split.quantity == "pitch" ||
+                               split.quantity.find("angle") != std::string::npos;
       if (looks_angle)
         throw Error(fmt::format(
             "{}column '{}' looks like an angle channel, not a probe: give --angle {} to use it "
             "(urad), or --probes to list the probe columns",
-            t.where(-1, c), name, name));
+            t.where(-1, c), name, split.quantity));
+      if (t.find(split.quantity, Unit::Micrometre) != c)
+        throw Error(fmt::format("{}column '{}' is not a probe reading", t.where(-1, c), name));
       probe_cols.push_back(c);
     }
     if (!opt.offsets.empty() && probe_cols.size() > opt.offsets.size())

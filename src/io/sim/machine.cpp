@@ -191,8 +191,9 @@ nlohmann::ordered_json machine_json(const sim::Machine& m) {
 }
 
 Eigen::Matrix3Xd read_points(const std::string& path, const sim::Machine* machine) {
-  const CsvTable t = CsvTable::read(path);
-  const int cols[3] = {t.require("x"), t.require("y"), t.require("z")};
+  CsvTable t = CsvTable::read(path);
+  const int cols[3] = {t.require("x", Unit::Millimetre), t.require("y", Unit::Millimetre),
+                       t.require("z", Unit::Millimetre)};
   if (t.rows() == 0) throw Error(fmt::format("{}: no points", path));
   Eigen::Matrix3Xd p(3, static_cast<Eigen::Index>(t.rows()));
   for (int k = 0; k < 3; ++k) p.row(k) = t.column(cols[k]).transpose();

@@ -46,6 +46,29 @@ TEST(GuidewayIo, ReadsLayoutAndSpots) {
   EXPECT_DOUBLE_EQ(sp.s[1], 10);
 }
 
+// Spot columns that carry their unit read as the plain file.
+TEST(GuidewayIo, SpotsWithUnitsInTheHeaderReadAsThePlainFile) {
+  const auto g = io::read_layout(test::temp_file("layout.json", kLayout));
+  const auto plain = io::read_spots(test::temp_file("spots.csv",
+                                                    "s,a_dx,a_dy,b_dx,b_dy,c_dx,c_dy\n"
+                                                    "0,1,2,3,4,5,6\n10,7,8,9,10,11,12\n"),
+                                    g);
+  const auto units = io::read_spots(
+      test::temp_file("spots_units.csv",
+                      "s [m],a_dx [\xC2\xB5m],a_dy (um),b_dx / nm,b_dy,c_dx [mm],c_dy\n"
+                      "0,1,2,3000,4,0.005,6\n0.01,7,8,9000,10,0.011,12\n"),
+      g);
+  EXPECT_LT((units.spots - plain.spots).cwiseAbs().maxCoeff(), 1e-18);
+  EXPECT_EQ(units.s, plain.s);
+  const std::string e = test::error_of([&] {
+    io::read_spots(test::temp_file("spots_bad.csv",
+                                   "s,a_dx [s],a_dy,b_dx,b_dy,c_dx,c_dy\n"
+                                   "0,1,2,3,4,5,6\n"),
+                   g);
+  });
+  EXPECT_NE(e.find("spots_bad.csv:1:3: column 'a_dx [s]' is in s, a time"), std::string::npos) << e;
+}
+
 TEST(GuidewayIo, BadLayoutsNameFileLineAndColumn) {
   std::string t = kLayout;
   t.replace(t.find("\"b\""), 3, "\"a\"");

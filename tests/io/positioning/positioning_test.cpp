@@ -1,6 +1,7 @@
 // runs.csv: what is read, what is refused (file:line:col), and the result JSON's keys.
 #include "trueaxis/io/positioning/positioning.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../../test_util.hpp"
+#include "trueaxis/positioning/positioning.hpp"
 
 using namespace trueaxis;
 
@@ -66,6 +68,85 @@ TEST(PositioningIo, RunsFromASpreadsheetReadAsThePlainFile) {
             "runs.csv:3:8: 'x' is not a number (column 'deviation_um')");
 }
 
+// Units written in the header, as instruments and spreadsheets write them, read to the same
+// readings as the plain file; a unit of the wrong kind, or none a table can hold, is refused.
+TEST(PositioningIo, UnitsInTheHeaderConvertOrAreRefused) {
+  constexpr double kRoundOff = 1e-12;  // mm: a unit conversion's rounding on 0.05 .. 500 mm
+  const auto plain = io::parse_runs(
+      "target_mm,cycle,direction,deviation_um,air_temp_c\n"
+      "0,1,+,0.5,20.5\n250,1,+,-1.25,20.6\n250,1,-,2,20.6\n",
+      "runs.csv");
+  for (const char* text : {
+           "target [mm],cycle,direction,deviation [\xC2\xB5m],air_temp [\xC2\xB0"
+           "C]\n"
+           "0,1,+,0.5,20.5\n250,1,+,-1.25,20.6\n250,1,-,2,20.6\n",
+           "Target (m),Cycle,Direction,Deviation / nm,Air_Temp (C)\n"
+           "0,1,+,500,20.5\n0.25,1,+,-1250,20.6\n0.25,1,-,2000,20.6\n",
+           "target_mm,cycle,direction,deviation (\xCE\xBCm),air_temp_degC\n"  // Greek mu
+           "0,1,+,0.5,20.5\n250,1,+,-1.25,20.6\n250,1,-,2,20.6\n",
+           "sep=;\ntarget [mm];cycle;direction;deviation [\xB5m];air_temp [\xB0"
+           "C]\n"  // Latin-1
+           "0;1;+;0,5;20,5\n250;1;+;-1,25;20,6\n250;1;-;2;20,6\n",
+           "target [in],cycle,direction,deviation [mm],air_temp_c\n"
+           "0,1,+,0.0005,20.5\n9.842519685039370,1,+,-0.00125,20.6\n"
+           "9.842519685039370,1,-,0.002,20.6\n",
+       }) {
+    SCOPED_TRACE(text);
+    const auto r = io::parse_runs(text, "runs.csv");
+    ASSERT_EQ(r.readings.size(), plain.readings.size());
+    for (std::size_t i = 0; i < r.readings.size(); ++i) {
+      EXPECT_NEAR(r.readings[i].target, plain.readings[i].target, kRoundOff);
+      EXPECT_NEAR(r.readings[i].deviation, plain.readings[i].deviation, kRoundOff);
+      EXPECT_EQ(r.readings[i].air_temperature, plain.readings[i].air_temperature);
+    }
+  }
+  EXPECT_EQ(runs_error("target_mm,cycle,direction,deviation [s]\n0,1,+,1\n"),
+            "runs.csv:1:27: column 'deviation [s]': s is not a unit of deviation (for example "
+            "\xC2\xB5m)");
+  EXPECT_EQ(runs_error("target_mm,cycle [mm],direction,deviation_um\n0,1,+,1\n"),
+            "runs.csv:1:11: column 'cycle [mm]': mm is not a unit of cycle (it takes no unit)");
+  EXPECT_EQ(runs_error("target [furlong],cycle,direction,deviation_um\n0,1,+,1\n"),
+            "runs.csv:1:1: column 'target [furlong]': 'furlong' is not a unit this table can "
+            "hold (lengths mm, \xC2\xB5m, nm, m, in; angles rad, mrad, \xC2\xB5rad, deg, arcsec; "
+            "times s, ms, min; temperatures \xC2\xB0"
+            "C)");
+  EXPECT_EQ(runs_error("target_mm,target [m],cycle,direction,deviation_um\n"),
+            "runs.csv:1:11: column 'target [m]' holds the target again (column 'target_mm' "
+            "before it)");
+  // The range check is on the converted value: 2 km of axis is refused in mm.
+  EXPECT_EQ(runs_error("target [m],cycle,direction,deviation_um\n2000,1,+,1\n"),
+            "runs.csv:2:1: 2e+06 mm is out of range in column 'target [m]' (its size must be at "
+            "most 1e+06 mm)");
+}
+
+// A dropped reading is named at the line where the run skips the target, not by its count.
+TEST(PositioningIo, AMissingReadingIsNamedWhereTheRunSkipsIt) {
+  const std::string text =
+      "target_mm,cycle,direction,deviation_um\n"
+      "0,1,+,1\n100,1,+,2\n200,1,+,3\n"   // lines 2-4
+      "200,1,-,3\n100,1,-,2\n0,1,-,1\n"   // lines 5-7
+      "0,2,+,1\n200,2,+,3\n"              // lines 8-9: 100 mm dropped before line 9
+      "200,2,-,3\n100,2,-,2\n0,2,-,1\n";  // lines 10-12
+  const auto runs = io::parse_runs(text, "runs.csv");
+  positioning::Options o;
+  o.locate = [&](std::size_t k) { return fmt::format("runs.csv:{}:1: ", runs.lines[k]); };
+  EXPECT_EQ(test::error_of([&] { positioning::evaluate(runs.readings, o); }),
+            "runs.csv:9:1: no '+' reading at target 100 mm in cycle 2 (every target needs one "
+            "reading per cycle and direction; allow incomplete cycles to evaluate each target "
+            "with the readings it has)");
+  // The last target of a '-' run dropped: named at the run's last reading.
+  std::string full = text;
+  full.insert(full.find("200,2,+,3"), "100,2,+,2\n");
+  const auto tail = io::parse_runs(full.substr(0, full.rfind("0,2,-,1\n")), "runs.csv");
+  o.locate = [&](std::size_t k) { return fmt::format("runs.csv:{}:1: ", tail.lines[k]); };
+  const std::string e = test::error_of([&] { positioning::evaluate(tail.readings, o); });
+  EXPECT_EQ(e.substr(0, e.find(" (")), "runs.csv:12:1: no '-' reading at target 0 mm in cycle 2");
+  // Without a place, as from Python with readings made in memory, the message stands alone.
+  o.locate = nullptr;
+  const std::string bare = test::error_of([&] { positioning::evaluate(runs.readings, o); });
+  EXPECT_EQ(bare.substr(0, bare.find(" (")), "no '+' reading at target 100 mm in cycle 2");
+}
+
 TEST(PositioningIo, BadRunsNameFileLineAndColumn) {
   const std::string h = "target_mm,cycle,direction,deviation_um\n";
   EXPECT_EQ(runs_error(""),
@@ -73,10 +154,11 @@ TEST(PositioningIo, BadRunsNameFileLineAndColumn) {
   EXPECT_EQ(runs_error(h), "runs.csv:1:1: no readings after the header");
   EXPECT_EQ(runs_error("target_mm,cycle,dir,deviation_um\n"),
             "runs.csv:1:17: unknown column 'dir' (target_mm, cycle, direction, deviation_um, "
-            "material_temp_c, air_temp_c)");
+            "material_temp_c, air_temp_c; a unit may be written in the name, as in 'target [m]' "
+            "or 'deviation (nm)')");
   EXPECT_EQ(runs_error("target_mm,cycle,direction\n0,1,+\n"),
-            "runs.csv:1:1: the header has no 'deviation_um' column (target_mm, cycle, direction "
-            "and deviation_um are needed)");
+            "runs.csv:1:1: the header has no 'deviation' column (target_mm, cycle, direction "
+            "and deviation_um are needed; a unit may be written in the name)");
   EXPECT_EQ(runs_error("target_mm,cycle,cycle,deviation_um\n"),
             "runs.csv:1:17: column 'cycle' appears twice");
   EXPECT_EQ(runs_error(h + "0,1,+\n"), "runs.csv:2:6: 3 fields, the header has 4 columns");
@@ -92,8 +174,8 @@ TEST(PositioningIo, BadRunsNameFileLineAndColumn) {
             "runs.csv:2:7: 'nan' is not a number (column 'deviation_um')");
   EXPECT_EQ(runs_error(h + "0,1,+,\n"), "runs.csv:2:7: empty field in column 'deviation_um'");
   EXPECT_EQ(runs_error(h + "2e6,1,+,1\n"),
-            "runs.csv:2:1: 2e+06 is out of range in column 'target_mm' (its size must be at most "
-            "1e+06)");
+            "runs.csv:2:1: 2e+06 mm is out of range in column 'target_mm' (its size must be at "
+            "most 1e+06 mm)");
   EXPECT_EQ(runs_error(h + "0,1,+,1\n\n10,1,+,1\n0,1,+,2\n"),
             "runs.csv:5:1: cycle 1 '+' at target 0 mm was already read on line 2");
   EXPECT_EQ(runs_error("target_mm,cycle,direction,deviation_um,material_temp_c\n0,1,+,1,200\n"),
@@ -213,5 +295,13 @@ TEST(PositioningIo, LogReadsAndRefuses) {
   EXPECT_EQ(err("time_s,reading_mm,x\n0,1,2\n1,2,3\n"),
             "bad.csv:1:1: a log has two columns, time_s and reading_mm (3 found)");
   EXPECT_EQ(err("time_s,reading_mm\n0,1\n"), "bad.csv: a log needs at least two samples");
-  EXPECT_NE(err("time,reading_mm\n0,1\n1,2\n").find("time_s"), std::string::npos);
+  EXPECT_NE(err("stamp,reading_mm\n0,1\n1,2\n").find("missing column 'time'"), std::string::npos);
+  // Units written in the names convert; a unit of another kind is refused at its place.
+  const auto ms =
+      io::read_log(test::temp_file("log_ms.csv", "time [ms],reading (um)\n0,1\n100,2\n200,500\n"));
+  EXPECT_DOUBLE_EQ(ms.time[1], 0.1);
+  EXPECT_DOUBLE_EQ(ms.reading[2], 0.5);
+  EXPECT_EQ(err("time_s,reading [s]\n0,1\n1,2\n"),
+            "bad.csv:1:8: column 'reading [s]' is in s, a time; reading holds a length (for "
+            "example in mm)");
 }

@@ -194,6 +194,36 @@ TEST(Probes, AngleColumnIsNeverASilentProbe) {
   EXPECT_NE(read_error(with_angle, named).find("zz"), std::string::npos);
 }
 
+// Units written in the names read to the same data as the plain file; an angle channel is known
+// by its unit as well as by its name.
+TEST(Probes, UnitsInTheHeaderReadAsThePlainFile) {
+  constexpr double kRoundOff = 1e-15;  // mm: a nm → µm → mm conversion of a few µm
+  io::ProbeReadOptions o;
+  o.angle_column = "pitch";
+  const auto plain = io::read_probes(
+      test::temp_file("u0.csv", "x,a,b,c,pitch\n0,1,2,3,10\n10,1.5,2,3,11\n20,1,2.5,3,12\n"), o);
+  const auto units = io::read_probes(
+      test::temp_file("u1.csv",
+                      "x [m],a (\xC2\xB5m),b / nm,c_um,pitch [mrad]\n0,1,2000,3,0.010\n"
+                      "0.01,1.5,2000,3,0.011\n0.02,1,2500,3,0.012\n"),
+      o);
+  ASSERT_EQ(units.readings.cols(), plain.readings.cols());
+  EXPECT_TRUE(units.x.isApprox(plain.x, kRoundOff));
+  EXPECT_LT((units.readings - plain.readings).cwiseAbs().maxCoeff(), kRoundOff);
+  EXPECT_LT((units.angle - plain.angle).cwiseAbs().maxCoeff(), 1e-18);
+  EXPECT_EQ(read_error("x,a,b,c,tilt [arcsec]\n0,1,2,3,1\n10,1,2,3,1\n20,1,2,3,1\n"),
+            "p.csv:1:9: column 'tilt [arcsec]' looks like an angle channel, not a probe: give "
+            "--angle tilt to use it (urad), or --probes to list the probe columns");
+  EXPECT_EQ(read_error("x [s],a,b\n0,1,2\n10,1,2\n20,1,2\n"),
+            "p.csv:1:1: column 'x [s]' is in s, a time; x holds a length (for example in mm)");
+  EXPECT_EQ(read_error("x,a,b [\xC2\xB0"
+                       "C]\n0,1,2\n10,1,2\n20,1,2\n"),
+            "p.csv:1:5: column 'b [\xC2\xB0"
+            "C]' is in \xC2\xB0"
+            "C, a temperature; b holds a "
+            "length (for example in \xC2\xB5m)");
+}
+
 // A large file's arrays are asked for in transparent huge pages before they are written (a page
 // fault per 4 KB of new memory was a third of a 10⁶-station run): the parsed columns, the probe
 // data, and the text pieces numbers are formatted into.
