@@ -65,15 +65,23 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
   out["workpiece"] = profile(r.workpiece, 1e3);
   out["guide"] = profile(r.guide, 1e3);
   out["pitch"] = r.pitch ? py::object(profile(*r.pitch, 1e6)) : py::object(py::none());
-  py::dict s, sw, sg;
-  sw["ls"] = r.workpiece_straightness.ls * 1e3;
-  sw["min_zone"] = r.workpiece_straightness.min_zone * 1e3;
-  sg["ls"] = r.guide_straightness.ls * 1e3;
-  sg["min_zone"] = r.guide_straightness.min_zone * 1e3;
-  s["workpiece"] = sw;
-  s["guide"] = sg;
+  // Each figure with its expanded uncertainty (k = 2) and whether the data resolve it; None when
+  // no uncertainty can be stated, the reason in 'no_uncertainty'.
+  const auto figure = [](const separation::Straightness& st) {
+    py::dict d;
+    d["ls"] = st.ls * 1e3;
+    d["min_zone"] = st.min_zone * 1e3;
+    d["U_um"] = st.U ? py::object(py::float_(*st.U * 1e3)) : py::object(py::none());
+    d["resolved"] = st.resolved() ? py::object(py::bool_(*st.resolved())) : py::object(py::none());
+    return d;
+  };
+  py::dict s;
+  s["workpiece"] = figure(r.workpiece_straightness);
+  s["guide"] = figure(r.guide_straightness);
   out["straightness"] = s;
   out["sigma"] = r.sigma ? py::object(py::float_(*r.sigma * 1e3)) : py::object(py::none());
+  out["no_uncertainty"] =
+      r.no_uncertainty.empty() ? py::object(py::none()) : py::object(py::str(r.no_uncertainty));
   out["sigma_estimated"] = r.sigma_estimated;
   out["dof"] = r.dof;
   out["summary"] = r.summary();

@@ -110,12 +110,23 @@ void write_result(const std::string& path, const Result& r) {
   arrays.profile("guide", r.guide, 1e3);
   if (r.pitch) arrays.profile("pitch", *r.pitch, 1e6);
   b.clear();
+  // Each figure with its expanded uncertainty (k = 2) and whether the data resolve it; null
+  // when no uncertainty can be stated, the reason in "no_uncertainty".
+  const auto figure = [](const separation::Straightness& st) {
+    return fmt::format("{{\"ls\": {}, \"min_zone\": {}, \"U_um\": {}, \"resolved\": {}}}",
+                       st.ls * 1e3, st.min_zone * 1e3,
+                       st.U ? fmt::format("{}", *st.U * 1e3) : "null",
+                       st.resolved() ? (*st.resolved() ? "true" : "false") : "null");
+  };
   fmt::format_to(std::back_inserter(b),
-                 "  \"straightness\": {{\"workpiece\": {{\"ls\": {}, \"min_zone\": {}}}, "
-                 "\"guide\": {{\"ls\": {}, \"min_zone\": {}}}}},\n",
-                 r.workpiece_straightness.ls * 1e3, r.workpiece_straightness.min_zone * 1e3,
-                 r.guide_straightness.ls * 1e3, r.guide_straightness.min_zone * 1e3);
-  if (r.sigma) fmt::format_to(std::back_inserter(b), "  \"sigma_um\": {},\n", *r.sigma * 1e3);
+                 "  \"straightness\": {{\"workpiece\": {}, \"guide\": {}}},\n",
+                 figure(r.workpiece_straightness), figure(r.guide_straightness));
+  if (r.sigma)
+    fmt::format_to(std::back_inserter(b), "  \"sigma_um\": {},\n", *r.sigma * 1e3);
+  else
+    fmt::format_to(std::back_inserter(b), "  \"sigma_um\": null,\n");
+  if (!r.no_uncertainty.empty())
+    fmt::format_to(std::back_inserter(b), "  \"no_uncertainty\": {},\n", quoted(r.no_uncertainty));
   if (r.noise_gain && std::isfinite(*r.noise_gain))
     fmt::format_to(std::back_inserter(b), "  \"noise_gain\": {},\n", *r.noise_gain);
   fmt::format_to(std::back_inserter(b),
@@ -179,10 +190,18 @@ Result read_result(const std::string& path) {
     auto get = [&](const char* a, const char* b) {
       return doc.number(P("/straightness") / a / b) * 1e-3;
     };
-    r.workpiece_straightness = {get("workpiece", "ls"), get("workpiece", "min_zone")};
-    r.guide_straightness = {get("guide", "ls"), get("guide", "min_zone")};
+    auto U = [&](const char* a) -> std::optional<double> {
+      const P at = P("/straightness") / a / "U_um";
+      if (!doc.has(at) || doc.root().at(at).is_null()) return std::nullopt;
+      return doc.number(at) * 1e-3;
+    };
+    r.workpiece_straightness = {get("workpiece", "ls"), get("workpiece", "min_zone"),
+                                U("workpiece")};
+    r.guide_straightness = {get("guide", "ls"), get("guide", "min_zone"), U("guide")};
   }
-  if (doc.has(P("/sigma_um"))) r.sigma = doc.number(P("/sigma_um")) * 1e-3;
+  if (doc.has(P("/sigma_um")) && !doc.root().at(P("/sigma_um")).is_null())
+    r.sigma = doc.number(P("/sigma_um")) * 1e-3;
+  if (doc.has(P("/no_uncertainty"))) r.no_uncertainty = doc.string(P("/no_uncertainty"));
   if (doc.has(P("/sigma_estimated"))) {
     if (!j["sigma_estimated"].is_boolean())
       doc.fail(P("/sigma_estimated"), "'sigma_estimated' must be true or false");

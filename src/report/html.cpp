@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string_view>
 
+#include "../common/figures.hpp"
 #include "../io/fast_text.hpp"
 #include "trueaxis/error.hpp"
 
@@ -374,26 +375,38 @@ Section separation_section(const std::string& title, const separation::Result& r
       "<p>Method <b>{}</b>, reference <b>{}</b>. {}.<br>Not determined by the data: {}.</p>",
       escape(separation::to_string(r.method)), escape(separation::to_string(r.reference)),
       escape(r.gauge), escape(unobs));
-  s.table.push_back(
-      {"profile", "LS straightness (µm)", "min-zone straightness (µm)", "max u (µm)"});
-  auto maxu = [](const separation::Profile& p) {
-    return p.uncertainty.size() ? fmt::format("{:.4f}", p.uncertainty.maxCoeff() * 1e3)
-                                : std::string("-");
+  // Each figure beside its expanded uncertainty; one the data cannot resolve is not shown as a
+  // number, and one without an uncertainty says so.
+  s.table.push_back({"profile", "LS straightness (µm)", "min-zone straightness (µm)",
+                     "U (µm, k = 2)", "max u (µm)"});
+  auto row = [&](const char* name, const separation::Straightness& st,
+                 const separation::Profile& p) {
+    const std::string maxu = p.uncertainty.size()
+                                 ? trueaxis::detail::two_digits(p.uncertainty.maxCoeff() * 1e3)
+                                 : std::string("-");
+    if (st.U && !*st.resolved())
+      return std::vector<std::string>{name, "not resolved", "not resolved",
+                                      trueaxis::detail::two_digits(*st.U * 1e3), maxu};
+    if (st.U)
+      return std::vector<std::string>{name, trueaxis::detail::rounded_to(st.ls * 1e3, *st.U * 1e3),
+                                      trueaxis::detail::rounded_to(st.min_zone * 1e3, *st.U * 1e3),
+                                      trueaxis::detail::two_digits(*st.U * 1e3), maxu};
+    return std::vector<std::string>{name, fmt::format("{:.4g}", st.ls * 1e3),
+                                    fmt::format("{:.4g}", st.min_zone * 1e3), "not stated", maxu};
   };
-  s.table.push_back({"workpiece", fmt::format("{:.4f}", r.workpiece_straightness.ls * 1e3),
-                     fmt::format("{:.4f}", r.workpiece_straightness.min_zone * 1e3),
-                     maxu(r.workpiece)});
-  s.table.push_back({"guide", fmt::format("{:.4f}", r.guide_straightness.ls * 1e3),
-                     fmt::format("{:.4f}", r.guide_straightness.min_zone * 1e3), maxu(r.guide)});
+  s.table.push_back(row("workpiece", r.workpiece_straightness, r.workpiece));
+  s.table.push_back(row("guide", r.guide_straightness, r.guide));
+  if (!r.no_uncertainty.empty())
+    s.intro_html += fmt::format("<p>No uncertainty is stated: {}.</p>", escape(r.no_uncertainty));
   if (truth) {
     auto err = [](const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
       return a.size() == b.size() ? fmt::format("{:.3g}", (a - b).cwiseAbs().maxCoeff() * 1e3)
                                   : std::string("-");
     };
     s.table.push_back({"max |recovered − true| workpiece (µm)",
-                       err(r.workpiece.value, truth->workpiece.value), "", ""});
+                       err(r.workpiece.value, truth->workpiece.value), "", "", ""});
     s.table.push_back(
-        {"max |recovered − true| guide (µm)", err(r.guide.value, truth->guide.value), "", ""});
+        {"max |recovered − true| guide (µm)", err(r.guide.value, truth->guide.value), "", "", ""});
   }
   auto plot = [&](const char* name, const separation::Profile& p, const separation::Profile* t,
                   double scale, const char* unit) {

@@ -13,12 +13,16 @@
 #include <string>
 #include <vector>
 
+#include "../common/figures.hpp"
 #include "../geometry/profile_min_zone.hpp"
 #include "solution.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/straightness.hpp"
 
 namespace trueaxis::separation {
+// A noise estimate below this fraction of the readings' size is round-off, not probe noise.
+constexpr double kRoundOffNoise = 1e-9;
+
 namespace {
 
 constexpr double kStepTolerance = 1e-6;  // relative tolerance for equal steps / whole multiples
@@ -186,8 +190,10 @@ using detail::two_point;
 // `ls`: the least-squares straightness when already known (not NaN). x is one of separate()'s
 // grids, strictly increasing by construction from the checked stations.
 Straightness straightness_of(const Eigen::VectorXd& x, const Eigen::VectorXd& v, double ls) {
-  return {std::isnan(ls) ? geometry::ls_straightness(x, v) : ls,
-          geometry::detail::min_zone_of_increasing(x, v).width};
+  Straightness s;
+  s.ls = std::isnan(ls) ? geometry::ls_straightness(x, v) : ls;
+  s.min_zone = geometry::detail::min_zone_of_increasing(x, v).width;
+  return s;
 }
 
 }  // namespace
@@ -306,9 +312,29 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
       // Every row (probe, or angle scaled by its weight) carries the probe noise, so the
       // residual variance estimates the probe variance directly.
       s2 = st.ssr / static_cast<double>(st.dof);
-      res.sigma = std::sqrt(s2);
-      res.sigma_estimated = true;
+      // Residuals at round-off level are no noise estimate: readings that agree to a part in
+      // 10⁹ of their size come from a simulation or a copy, not from probes.
+      const double size = data.readings.size() ? data.readings.cwiseAbs().maxCoeff() : 0.0;
+      if (std::sqrt(s2) > kRoundOffNoise * size) {
+        res.sigma = std::sqrt(s2);
+        res.sigma_estimated = true;
+      } else {
+        res.no_uncertainty =
+            "noise-free input: the redundant readings agree to round-off, so there is no noise "
+            "to estimate an uncertainty from (give --sigma for the probes' noise)";
+      }
     }
+    if (!res.sigma && res.no_uncertainty.empty())
+      res.no_uncertainty =
+          opt.method == Method::Lsq
+              ? "the probes' noise is unknown: no --sigma was given and the layout has no "
+                "redundant readings to estimate it from (add a probe or an angle channel, or "
+                "give --sigma)"
+              : fmt::format(
+                    "the probes' noise is unknown: no --sigma was given, and the {} "
+                    "method cannot estimate it (give --sigma, or use --method lsq with "
+                    "redundant probes)",
+                    to_string(opt.method));
     // Standard uncertainties; without a noise level, those for unit noise.
     const double noise_var = res.sigma ? s2 : 1.0;
     if (st.propagation.valid()) {  // the direct solve's, launched with it
@@ -330,6 +356,14 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
   }
   if (st.engine && st.dof > 0) res.residual_rms = std::sqrt(st.ssr / static_cast<double>(st.rows));
 
+  if (!unc_possible)
+    res.no_uncertainty =
+        !opt.compute_uncertainty ? "uncertainties were not asked for"
+        : opt.filter_cutoff > 0
+            ? "the profiles were filtered (ISO 16610-21), and uncertainties are not carried "
+              "through the filter"
+            : "the patent's reference (seed) depends on the readings themselves; use the "
+              "least-squares or minimum-zone reference for uncertainties";
   if (opt.filter_cutoff > 0) {
     raw.w = geometry::gaussian_filter(raw.w, h, opt.filter_cutoff);
     raw.g = geometry::gaussian_filter(raw.g, h, opt.filter_cutoff);
@@ -342,6 +376,8 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
     res.workpiece_straightness = straightness_of(raw.xw, raw.w, widths.w);
     res.guide_straightness = guide.get();
   }
+  if (uw.size() && uw.allFinite()) res.workpiece_straightness.U = 2 * uw.maxCoeff();
+  if (ug.size() && ug.allFinite()) res.guide_straightness.U = 2 * ug.maxCoeff();
   res.workpiece = {std::move(raw.xw), std::move(raw.w), std::move(uw)};
   res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
   if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
@@ -354,47 +390,66 @@ Result separate(const ProbeData& data, const Options& opt) {
 
 std::vector<std::string> Result::warnings() const {
   std::vector<std::string> w;
-  const auto check = [&](const char* what, const Profile& p, const Straightness& st) {
-    if (p.uncertainty.size() == 0 || !p.uncertainty.allFinite()) return;
-    const double expanded = 2 * p.uncertainty.maxCoeff();
-    if (!(expanded > st.ls)) return;
+  const auto check = [&](const char* what, const Straightness& st) {
+    if (st.resolved().value_or(true)) return;
+    std::string advice = "use more probes, an angle channel (--angle) or a known zero difference";
+    if (method != Method::Lsq) advice += ", or --method lsq with redundant probes";
     w.push_back(fmt::format(
-        "the {} straightness {:.3g} um is smaller than its own expanded uncertainty (k = 2, up "
-        "to {:.3g} um): this probe layout cannot resolve it. Use more probes, an angle channel "
-        "(--angle), a known zero difference, or --method lsq with redundant probes",
-        what, st.ls * 1e3, expanded * 1e3));
+        "the {} straightness is not resolved: its expanded uncertainty (k = 2) is {} um, as large "
+        "as the {} um the profile spans, so this probe layout cannot tell it from noise. To "
+        "resolve it, {}",
+        what, trueaxis::detail::two_digits(*st.U * 1e3),
+        trueaxis::detail::two_digits(st.min_zone * 1e3), advice));
   };
-  check("workpiece", workpiece, workpiece_straightness);
-  check("guide", guide, guide_straightness);
-  if (workpiece.uncertainty.size() == 0 && noise_gain && std::isfinite(*noise_gain) &&
-      *noise_gain > 0) {
-    const double st = std::min(workpiece_straightness.ls, guide_straightness.ls);
-    w.push_back(fmt::format(
-        "no uncertainty is stated: without redundant readings the probe noise cannot be "
-        "estimated. This layout multiplies probe noise by up to {:.3g} along the profiles, so "
-        "probe noise above {:.2g} um (standard deviation) would hide a straightness of {:.3g} um. "
-        "Give --sigma UM (the probes' noise) for uncertainties, or use more probes or an angle "
-        "channel",
-        *noise_gain, st / (2 * *noise_gain) * 1e3, st * 1e3));
+  check("workpiece", workpiece_straightness);
+  check("guide", guide_straightness);
+  if (!no_uncertainty.empty()) {
+    std::string s = "no uncertainty is stated: " + no_uncertainty;
+    if (noise_gain && std::isfinite(*noise_gain) && *noise_gain > 0) {
+      const double st = std::min(workpiece_straightness.ls, guide_straightness.ls);
+      s += fmt::format(
+          ". This layout multiplies probe noise by up to {} along the profiles, so probe noise "
+          "above {} um (standard deviation) would hide a straightness of {} um",
+          trueaxis::detail::two_digits(*noise_gain),
+          trueaxis::detail::two_digits(st / (2 * *noise_gain) * 1e3),
+          trueaxis::detail::two_digits(st * 1e3));
+    }
+    w.push_back(s);
   }
   return w;
 }
 
 std::string Result::summary() const {
   std::string s = fmt::format("method {}, reference {}\n", to_string(method), to_string(reference));
-  s += fmt::format("  workpiece straightness: {:.4f} um (LS), {:.4f} um (min-zone), {} points\n",
-                   workpiece_straightness.ls * 1e3, workpiece_straightness.min_zone * 1e3,
-                   workpiece.x.size());
-  s += fmt::format("  guide straightness:     {:.4f} um (LS), {:.4f} um (min-zone), {} stations\n",
-                   guide_straightness.ls * 1e3, guide_straightness.min_zone * 1e3, guide.x.size());
+  const auto line = [&](const char* what, const Straightness& st, long n, const char* points) {
+    const std::string label = fmt::format("  {} straightness:", what);
+    if (st.U && !*st.resolved())
+      return fmt::format("{:<26}not resolved (U = {} um, k = 2), {} {}\n", label,
+                         trueaxis::detail::two_digits(*st.U * 1e3), n, points);
+    if (st.U)
+      return fmt::format("{:<26}{} um (LS), {} um (min-zone), U = {} um (k = 2), {} {}\n", label,
+                         trueaxis::detail::rounded_to(st.ls * 1e3, *st.U * 1e3),
+                         trueaxis::detail::rounded_to(st.min_zone * 1e3, *st.U * 1e3),
+                         trueaxis::detail::two_digits(*st.U * 1e3), n, points);
+    return fmt::format("{:<26}{:.4g} um (LS), {:.4g} um (min-zone), no uncertainty stated, {} {}\n",
+                       label, st.ls * 1e3, st.min_zone * 1e3, n, points);
+  };
+  s += line("workpiece", workpiece_straightness, static_cast<long>(workpiece.x.size()), "points");
+  s += line("guide", guide_straightness, static_cast<long>(guide.x.size()), "stations");
   if (pitch && pitch->value.size())
-    s += fmt::format("  pitch range:            {:.4f} urad\n",
+    s += fmt::format("  pitch range:            {:.4g} urad\n",
                      (pitch->value.maxCoeff() - pitch->value.minCoeff()) * 1e6);
   if (workpiece.uncertainty.size())
     s += fmt::format(
-        "  max standard uncertainty: workpiece {:.4f} um, guide {:.4f} um (sigma {:.4f} um{})\n",
-        workpiece.uncertainty.maxCoeff() * 1e3, guide.uncertainty.maxCoeff() * 1e3,
-        sigma.value_or(0) * 1e3, sigma_estimated ? ", estimated from residuals" : "");
+        "  max standard uncertainty: workpiece {} um, guide {} um (probe noise sigma {} um{})\n",
+        trueaxis::detail::two_digits(workpiece.uncertainty.maxCoeff() * 1e3),
+        trueaxis::detail::two_digits(guide.uncertainty.maxCoeff() * 1e3),
+        sigma ? trueaxis::detail::two_digits(*sigma * 1e3) : std::string("not known"),
+        sigma_estimated
+            ? fmt::format(", estimated from the residuals with {} degrees of freedom", dof)
+            : "");
+  else
+    s += fmt::format("  no uncertainty: {}\n", no_uncertainty);
   std::string u;
   for (const auto& m : unobservable) u += (u.empty() ? "" : ", ") + m;
   s += fmt::format("  unobservable: {}\n  gauge: {}\n", u, gauge);

@@ -293,7 +293,11 @@ expect_ok "$T" separate --input pa.csv --output pa.json --angle angle --sigma 0.
 expect_ok "$T" separate --input pa.csv --output pa3.json --probes a,b,c --method three-point
 expect_ok "$T" simulate straightness --stations 500 --offsets 0,10,20 --noise 0.05 -o rd.csv --truth rd-truth.csv
 expect_ok "$T" separate --input rd.csv --method lsq --sigma 0.05 --output rd.json
-grep -q "cannot resolve it" err.txt && grep -q "cannot resolve it" rd.json && ok || bad "separate warns when u exceeds the straightness"
+grep -q "is not resolved" err.txt && grep -q "is not resolved" rd.json && ok || bad "separate warns when u exceeds the straightness"
+# The unresolved figure is not printed as a number: "not resolved (U = ...)" on stdout, and
+# resolved false beside U_um in the JSON.
+grep -q "workpiece straightness: not resolved (U = " out.txt && ok || bad "separate: stdout says not resolved"
+python3 -c "import json,sys; s=json.load(open('rd.json'))['straightness']['workpiece']; sys.exit(0 if s['resolved'] is False and s['U_um'] > s['min_zone'] else 1)" && ok || bad "separate: JSON resolved false with U_um"
 expect_ok "$T" report rd.json -o rd.html
 grep -q 'class="warn"' rd.html && ok || bad "the report shows the warning"
 

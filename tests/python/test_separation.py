@@ -28,6 +28,17 @@ def test_methods_and_straightness_values():
     s = trueaxis.straightness(b["workpiece"]["x"], b["workpiece"]["value"])
     assert s["ls"] == pytest.approx(b["straightness"]["workpiece"]["ls"], rel=1e-12)
     assert s["min_zone"] <= s["ls"] + 1e-12
+    # Three probes at 0.1 um noise over 80 stations do not resolve the profile: said, with U.
+    w = b["straightness"]["workpiece"]
+    assert w["U_um"] == pytest.approx(2 * np.max(b["workpiece"]["uncertainty"]), rel=1e-12)
+    assert w["resolved"] is (w["U_um"] < w["min_zone"])
+    # Noise-free redundant readings: no uncertainty, and the reason, never a zero.
+    q = trueaxis.simulate_straightness(stations=80, offsets=[0, 10, 30, 60], seed=2)
+    r = trueaxis.separate(q["x"], q["readings"], offsets=q["offsets"])
+    assert r["sigma"] is None
+    assert r["straightness"]["workpiece"]["U_um"] is None
+    assert r["straightness"]["workpiece"]["resolved"] is None
+    assert r["no_uncertainty"].startswith("noise-free input")
 
 
 def test_errors_are_trueaxis_errors():

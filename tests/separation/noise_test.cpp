@@ -1,10 +1,13 @@
 // Noisy data: the reported uncertainty must describe the actual errors.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
+#include "../../src/common/figures.hpp"
 #include "../../src/separation/banded_lsq.hpp"
+#include "trueaxis/geometry/straightness.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
 
@@ -155,8 +158,23 @@ TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
   EXPECT_FALSE(r.noise_gain.has_value());
   const auto w = r.warnings();
   ASSERT_GE(w.size(), 1u);
-  EXPECT_NE(w[0].find("cannot resolve it"), std::string::npos) << w[0];
-  EXPECT_GT(2 * r.workpiece.uncertainty.maxCoeff(), r.workpiece_straightness.ls);
+  EXPECT_NE(w[0].find("workpiece straightness is not resolved"), std::string::npos) << w[0];
+  EXPECT_NE(w[0].find("--method lsq"), std::string::npos) << w[0];  // the user used threepoint
+  ASSERT_TRUE(r.workpiece_straightness.U.has_value());
+  EXPECT_EQ(*r.workpiece_straightness.U, 2 * r.workpiece.uncertainty.maxCoeff());
+  EXPECT_GT(*r.workpiece_straightness.U, r.workpiece_straightness.ls);
+  EXPECT_EQ(r.workpiece_straightness.resolved(), false);
+  // The summary gives no number for it: "not resolved (U = … um, k = 2)".
+  const std::string sum = r.summary();
+  EXPECT_NE(sum.find("workpiece straightness: not resolved (U = "), std::string::npos) << sum;
+  EXPECT_EQ(sum.find(fmt::format("{:.4f}", r.workpiece_straightness.ls * 1e3)), std::string::npos)
+      << sum;
+  // With --method lsq on the same three probes, the advice no longer offers lsq.
+  Options lsq;
+  lsq.sigma = 0.05e-3;
+  const auto wl = separation::separate(camp.data, lsq).warnings();
+  ASSERT_GE(wl.size(), 1u);
+  EXPECT_EQ(wl[0].find("--method lsq"), std::string::npos) << wl[0];
 
   // Five probes and an angle channel on the same surface resolve it: no warning.
   so.offsets = {0, 10, 30, 60, 100};
@@ -169,4 +187,44 @@ TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
   lo.angle_sigma = 0.2e-6;
   const separation::Result rg = separation::separate(good.data, lo);
   EXPECT_TRUE(rg.warnings().empty()) << rg.warnings()[0];
+  EXPECT_EQ(rg.workpiece_straightness.resolved(), true);
+  EXPECT_EQ(rg.guide_straightness.resolved(), true);
+  // The true profile's straightness lies within U of the figure (k = 2).
+  const separation::Result truth = good.truth.like(rg);
+  EXPECT_LT(std::abs(rg.workpiece_straightness.ls -
+                     geometry::ls_straightness(truth.workpiece.x, truth.workpiece.value)),
+            *rg.workpiece_straightness.U);
+  EXPECT_NE(
+      rg.summary().find(fmt::format(
+          "U = {} um (k = 2)", trueaxis::detail::two_digits(*rg.workpiece_straightness.U * 1e3))),
+      std::string::npos)
+      << rg.summary();
+}
+
+// Readings that agree to round-off carry no noise: the uncertainty is absent with that reason,
+// never a zero (and no "sigma 0.0000 um, estimated from residuals").
+TEST(Noise, NoiseFreeReadingsStateNoUncertaintyAndSayWhy) {
+  sim::StraightnessOptions so;
+  so.stations = 200;
+  so.step = 5;
+  so.offsets = {0, 5, 15, 30};  // redundant: the residuals would estimate the noise
+  so.noise = 0;
+  const auto camp = sim::simulate_straightness(so);
+  const separation::Result r = separation::separate(camp.data);
+  EXPECT_GT(r.dof, 0);
+  EXPECT_FALSE(r.sigma.has_value());
+  EXPECT_FALSE(r.sigma_estimated);
+  EXPECT_EQ(r.workpiece.uncertainty.size(), 0);
+  EXPECT_FALSE(r.workpiece_straightness.U.has_value());
+  EXPECT_FALSE(r.workpiece_straightness.resolved().has_value());
+  EXPECT_EQ(r.no_uncertainty.rfind("noise-free input", 0), 0u) << r.no_uncertainty;
+  EXPECT_EQ(r.summary().find("0.0000"), std::string::npos) << r.summary();
+  EXPECT_NE(r.summary().find("no uncertainty stated"), std::string::npos) << r.summary();
+  // The same layout with probe noise estimates it from the residuals.
+  so.noise = 0.05e-3;
+  const separation::Result noisy = separation::separate(sim::simulate_straightness(so).data);
+  ASSERT_TRUE(noisy.sigma.has_value());
+  EXPECT_TRUE(noisy.sigma_estimated);
+  EXPECT_TRUE(noisy.no_uncertainty.empty());
+  EXPECT_NEAR(*noisy.sigma, so.noise, 0.3 * so.noise);  // ~600 degrees of freedom
 }

@@ -83,6 +83,16 @@ struct Profile {
 struct Straightness {
   double ls = 0;        // peak-to-valley about the least-squares line (mm)
   double min_zone = 0;  // minimum-zone width (mm)
+  // Expanded uncertainty (k = 2) the figure is judged against (mm): that of the profile at its
+  // least-determined point, 2·max u_i. Absent when the result states no uncertainty (see
+  // Result::no_uncertainty for why).
+  std::optional<double> U;
+  // Whether the data resolve the figure: U below the minimum-zone width (so below both
+  // figures). Absent with U.
+  std::optional<bool> resolved() const {
+    if (!U) return std::nullopt;
+    return *U < min_zone;
+  }
 };
 
 struct Result {
@@ -95,6 +105,9 @@ struct Result {
   std::string gauge;                      // how they were fixed
   std::optional<double> sigma;            // probe noise behind the uncertainties (mm)
   bool sigma_estimated = false;
+  // Why no uncertainty is stated, in words, when the profiles carry none ("noise-free input:
+  // ..."); empty when they do.
+  std::string no_uncertainty;
   long dof = 0;             // redundancy: equations − free unknowns
   double residual_rms = 0;  // RMS of weighted residuals (mm); 0 without redundancy
   // When no noise level is known (no sigma given, no redundancy): the largest standard
@@ -102,7 +115,9 @@ struct Result {
   // layout amplifies noise. Absent when uncertainties were computed or not computable.
   std::optional<double> noise_gain;
 
-  // Human-readable multi-line summary (µm / µrad).
+  // Human-readable multi-line summary (µm / µrad). A straightness the data do not resolve is
+  // printed as "not resolved (U = … µm, k = 2)", not as a number; figures are rounded to the
+  // resolution their uncertainty supports.
   std::string summary() const;
   // Plain-language warnings about what the result cannot support, one sentence each: a
   // straightness smaller than the expanded uncertainty (k = 2) of the profile it describes (the

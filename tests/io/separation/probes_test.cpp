@@ -111,9 +111,22 @@ TEST(ResultJson, RoundTripAndBadInput) {
   r.pitch =
       separation::Profile{Eigen::VectorXd::LinSpaced(2, 0, 1), Eigen::VectorXd{{1e-6, -1e-6}}, {}};
   r.unobservable = {"line", "parabola"};
+  r.workpiece_straightness.ls = 3e-3;
+  r.workpiece_straightness.min_zone = 2.5e-3;
+  r.workpiece_straightness.U = 0.4e-3;
+  r.no_uncertainty = "the guide's: none";
   const std::string p = test::temp_file("r.json", "");
   io::write_result(p, r);
   const auto back = io::read_result(p);
+  ASSERT_TRUE(back.workpiece_straightness.U.has_value());
+  EXPECT_DOUBLE_EQ(*back.workpiece_straightness.U, 0.4e-3);
+  EXPECT_EQ(back.workpiece_straightness.resolved(), true);
+  EXPECT_FALSE(back.guide_straightness.U.has_value());  // written as null
+  EXPECT_FALSE(back.sigma.has_value());                 // written as null
+  EXPECT_EQ(back.no_uncertainty, r.no_uncertainty);
+  const std::string text = test::read_file(p);
+  EXPECT_NE(text.find("\"U_um\": null, \"resolved\": null"), std::string::npos) << text;
+  EXPECT_NE(text.find("\"resolved\": true"), std::string::npos) << text;
   EXPECT_EQ(back.method, separation::Method::ThreePoint);
   EXPECT_TRUE(back.workpiece.value.isApprox(r.workpiece.value, 1e-15));
   EXPECT_TRUE(back.workpiece.uncertainty.isApprox(r.workpiece.uncertainty, 1e-15));

@@ -41,8 +41,10 @@ void write_probes(const std::string& path, const separation::ProbeData& data,
 // result.json: {"method", "reference", "gauge", "unobservable": [...],
 //   "workpiece": {"x": [mm], "value": [µm], "uncertainty": [µm]?}, "guide": {...},
 //   "pitch": {"x": [mm], "value": [µrad], "uncertainty": [µrad]?}?,
-//   "straightness": {"workpiece": {"ls": µm, "min_zone": µm}, "guide": {...}},
-//   "sigma_um"?, "sigma_estimated", "dof", "residual_rms_um"}
+//   "straightness": {"workpiece": {"ls": µm, "min_zone": µm, "U_um": µm|null,
+//                                  "resolved": bool|null}, "guide": {...}},
+//   "sigma_um": µm|null, "no_uncertainty"?: why no uncertainty is stated, "noise_gain"?,
+//   "sigma_estimated", "dof", "residual_rms_um"}
 void write_result(const std::string& path, const separation::Result& result);
 // Reads a result.json written by write_result (or by hand in the same shape); validates it.
 separation::Result read_result(const std::string& path);
