@@ -80,10 +80,16 @@ void bind_guideway(py::module_& m) {
           unc[guideway::kErrorNames[j]] = have && r.sigma > 0
                                               ? py::object(py::float_(r.uncertainty[k] * sc))
                                               : py::object(py::none());
-          sum[guideway::kErrorNames[j]] = have
-                                              ? py::object(py::dict(py::arg("pv") = r.pv[k] * sc,
-                                                                    py::arg("rms") = r.rms[k] * sc))
-                                              : py::object(py::none());
+          const std::optional<double> U = r.pv_U(k);
+          const std::optional<bool> resolved = r.resolved(k);
+          sum[guideway::kErrorNames[j]] =
+              have
+                  ? py::object(py::dict(
+                        py::arg("pv") = r.pv[k] * sc, py::arg("rms") = r.rms[k] * sc,
+                        py::arg("U") = U ? py::object(py::float_(*U * sc)) : py::object(py::none()),
+                        py::arg("resolved") =
+                            resolved ? py::object(py::bool_(*resolved)) : py::object(py::none())))
+                  : py::object(py::none());
         }
         d["residual"] = Eigen::VectorXd(r.residual * 1e3);
         d["straightness"] = py::dict(
@@ -101,7 +107,9 @@ void bind_guideway(py::module_& m) {
         d["condition_number"] = r.layout.condition_number;
         d["observable_condition_number"] = r.layout.observable_condition_number;
         d["singular_values"] = r.layout.singular_values;
-        d["sigma"] = r.sigma * 1e3;
+        d["sigma"] = r.sigma > 0 ? py::object(py::float_(r.sigma * 1e3)) : py::object(py::none());
+        d["no_uncertainty"] = r.no_uncertainty.empty() ? py::object(py::none())
+                                                       : py::object(py::str(r.no_uncertainty));
         d["sigma_estimated"] = r.sigma_estimated;
         d["message"] = r.layout.message;
         d["report"] = r.summary();

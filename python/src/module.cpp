@@ -65,7 +65,7 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
   out["workpiece"] = profile(r.workpiece, 1e3);
   out["guide"] = profile(r.guide, 1e3);
   out["pitch"] = r.pitch ? py::object(profile(*r.pitch, 1e6)) : py::object(py::none());
-  // Each figure with its expanded uncertainty (k = 2) and whether the data resolve it; None when
+  // Each figure with its expanded uncertainty (95 %) and whether the data resolve it; None when
   // no uncertainty can be stated, the reason in 'no_uncertainty'.
   const auto figure = [](const separation::Straightness& st) {
     py::dict d;

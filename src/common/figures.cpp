@@ -24,4 +24,15 @@ std::string rounded_to(double value, double u) {
   return fmt::format("{:.{}f}", value, decimals_for(u));
 }
 
+double peak_to_valley_U(double u_max, long n) {
+  // z with P(|N(0,1)| > z) = 0.05/n: bisection on erfc(z/√2), monotone on [0, 40].
+  const double tail = 0.05 / static_cast<double>(std::max(n, 1L));
+  double lo = 0, hi = 40;
+  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
+    const double z = 0.5 * (lo + hi);
+    (std::erfc(z / std::sqrt(2.0)) > tail ? lo : hi) = z;
+  }
+  return 2 * 0.5 * (lo + hi) * u_max;
+}
+
 }  // namespace trueaxis::detail

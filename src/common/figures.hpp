@@ -14,4 +14,12 @@ std::string two_digits(double u);
 // `value` rounded to the decimal places of two_digits(u).
 std::string rounded_to(double value, double u);
 
+// Expanded uncertainty (95 % coverage) of a peak-to-valley figure (straightness, flatness, PV)
+// read off n points whose largest standard uncertainty is `u_max`. The figure's error is at most
+// max eᵢ − min eᵢ ≤ 2·max|eᵢ|, and every |eᵢ| ≤ z·uᵢ at once with probability ≥ 95 % when
+// z = Φ⁻¹(1 − 0.025/n) (Bonferroni's inequality: it holds however the points are correlated).
+// So U = 2·z·u_max: 2·3.9·u for 500 points. The largest value of n independent noisy points
+// grows with n, which a plain 2u ignores.
+double peak_to_valley_U(double u_max, long n);
+
 }  // namespace trueaxis::detail

@@ -9,9 +9,14 @@
 #include <set>
 
 #include "../common/eigen_instances.hpp"
+#include "../common/figures.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::guideway {
+
+// A noise estimate below this fraction of the readings' size is round-off, not detector noise.
+constexpr double kRoundOffNoise = 1e-9;
+
 namespace {
 
 std::vector<int> indices(const std::array<bool, kErrors>& keep) {
@@ -311,8 +316,21 @@ Result solve(const Layout& layout, const Eigen::VectorXd& s, const Eigen::Matrix
   const Eigen::Index dof = 2 * m - k;
   r.sigma = options.sigma;
   if (r.sigma == 0 && dof > 0 && s.size() > 0) {
-    r.sigma = std::sqrt(ss_res / static_cast<double>(n * dof));
-    r.sigma_estimated = true;
+    const double estimate = std::sqrt(ss_res / static_cast<double>(n * dof));
+    // Residuals at round-off level are no noise estimate: spots that agree to a part in 10⁹ of
+    // their size come from a simulation or a copy, not from detectors.
+    if (estimate > kRoundOffNoise * spots.cwiseAbs().maxCoeff()) {
+      r.sigma = estimate;
+      r.sigma_estimated = true;
+    } else {
+      r.no_uncertainty =
+          "noise-free input: the redundant readings agree to round-off, so there is no noise to "
+          "estimate an uncertainty from (give --sigma for the detectors' noise)";
+    }
+  } else if (r.sigma == 0) {
+    r.no_uncertainty =
+        "the reading noise is unknown: no --sigma was given and the layout has no redundant "
+        "readings to estimate it from";
   }
   const Eigen::MatrixXd cov = p * p.transpose();  // (AᵀA)⁻¹ for unit reading noise
   for (Eigen::Index c = 0; c < k; ++c) {
@@ -336,6 +354,18 @@ Result solve(const Layout& layout, const Eigen::VectorXd& s, const Eigen::Matrix
   return r;
 }
 
+std::optional<double> Result::pv_U(std::size_t j) const {
+  if (j >= kErrors || value[j].size() == 0 || !(sigma > 0) || !std::isfinite(uncertainty[j]))
+    return std::nullopt;
+  return trueaxis::detail::peak_to_valley_U(uncertainty[j], value[j].size());
+}
+
+std::optional<bool> Result::resolved(std::size_t j) const {
+  const std::optional<double> U = pv_U(j);
+  if (!U) return std::nullopt;
+  return *U < pv[j];
+}
+
 std::string Result::summary() const {
   std::string out =
       fmt::format("guideway: {} positions, condition number {:.3g} (observable part)\n", s.size(),
@@ -347,10 +377,27 @@ std::string Result::summary() const {
       continue;
     }
     const double sc = angle ? 1e6 : 1e3;
-    out += fmt::format("  {:<10} PV {:8.3f} {}  RMS {:8.3f}{}\n", kErrorNames[j], pv[j] * sc,
-                       angle ? "urad" : "um  ", rms[j] * sc,
-                       sigma > 0 ? fmt::format("  u {:.3f}", uncertainty[j] * sc) : "");
+    const char* unit = angle ? "urad" : "um";
+    if (const std::optional<double> U = pv_U(j)) {
+      if (!*resolved(j))
+        out += fmt::format("  {:<10} PV not resolved (U = {} {}, 95 %)\n", kErrorNames[j],
+                           trueaxis::detail::two_digits(*U * sc), unit);
+      else
+        out += fmt::format("  {:<10} PV {} {}, RMS {} {}, U = {} {} (95 %)\n", kErrorNames[j],
+                           trueaxis::detail::rounded_to(pv[j] * sc, *U * sc), unit,
+                           trueaxis::detail::rounded_to(rms[j] * sc, *U * sc), unit,
+                           trueaxis::detail::two_digits(*U * sc), unit);
+    } else {
+      out += fmt::format("  {:<10} PV {:.4g} {}, RMS {:.4g} {}\n", kErrorNames[j], pv[j] * sc, unit,
+                         rms[j] * sc, unit);
+    }
   }
+  if (sigma > 0)
+    out +=
+        fmt::format("  reading noise sigma {} um ({})\n", trueaxis::detail::two_digits(sigma * 1e3),
+                    sigma_estimated ? "estimated from the residuals" : "given");
+  else if (!no_uncertainty.empty())
+    out += "  no uncertainty: " + no_uncertainty + "\n";
   if (!layout.message.empty()) out += "  " + layout.message + "\n";
   return out;
 }

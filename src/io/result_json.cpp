@@ -110,7 +110,7 @@ void write_result(const std::string& path, const Result& r) {
   arrays.profile("guide", r.guide, 1e3);
   if (r.pitch) arrays.profile("pitch", *r.pitch, 1e6);
   b.clear();
-  // Each figure with its expanded uncertainty (k = 2) and whether the data resolve it; null
+  // Each figure with its expanded uncertainty (95 %) and whether the data resolve it; null
   // when no uncertainty can be stated, the reason in "no_uncertainty".
   const auto figure = [](const separation::Straightness& st) {
     return fmt::format("{{\"ls\": {}, \"min_zone\": {}, \"U_um\": {}, \"resolved\": {}}}",

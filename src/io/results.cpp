@@ -189,9 +189,11 @@ guideway::Result read_guideway_result(const std::string& path) {
   r.layout.condition_number = std::isfinite(cond) ? cond : INFINITY;
   if (f.has(P("/observable_condition_number")))
     r.layout.observable_condition_number = f.number(P("/observable_condition_number"));
-  if (f.has(P("/sigma_um"))) r.sigma = f.number(P("/sigma_um")) * 1e-3;
+  if (f.has(P("/sigma_um")) && !f.root().at(P("/sigma_um")).is_null())
+    r.sigma = f.number(P("/sigma_um")) * 1e-3;
   if (f.has(P("/sigma_estimated")) && f.root().at(P("/sigma_estimated")).is_boolean())
     r.sigma_estimated = f.root().at(P("/sigma_estimated")).get<bool>();
+  if (f.has(P("/no_uncertainty"))) r.no_uncertainty = f.string(P("/no_uncertainty"));
   if (f.has(P("/message"))) r.layout.message = f.string(P("/message"));
   return r;
 }

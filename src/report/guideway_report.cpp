@@ -1,5 +1,6 @@
 #include <fmt/format.h>
 
+#include "../common/figures.hpp"
 #include "trueaxis/report/guideway.hpp"
 
 namespace trueaxis::report {
@@ -10,12 +11,14 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
   s.title = title;
   s.references = {refs::kIso230, refs::kGum};
   s.intro_html = fmt::format(
-      "<p>{} positions; condition number of the layout's observable part {:.3g}; reading noise "
-      "{:.3f} µm ({}).{}</p>",
-      r.s.size(), r.layout.observable_condition_number, r.sigma * 1e3,
-      r.sigma_estimated ? "estimated from the residuals" : "given",
+      "<p>{} positions; condition number of the layout's observable part {:.3g}; {}.{}</p>",
+      r.s.size(), r.layout.observable_condition_number,
+      r.sigma > 0
+          ? fmt::format("reading noise {} µm ({})", trueaxis::detail::two_digits(r.sigma * 1e3),
+                        r.sigma_estimated ? "estimated from the residuals" : "given")
+          : "no uncertainty is stated: " + escape(r.no_uncertainty),
       r.layout.message.empty() ? "" : " " + escape(r.layout.message) + ".");
-  std::vector<std::string> head{"error", "observable", "PV", "RMS", "u (1σ)"};
+  std::vector<std::string> head{"error", "observable", "PV", "RMS", "U of PV (95 %)", "u (1σ)"};
   if (truth) head.push_back("max |recovered − true|");
   s.table.push_back(head);
   for (std::size_t j = 0; j < guideway::kErrors; ++j) {
@@ -25,14 +28,25 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
     const bool have = r.value[j].size() > 0;
     std::vector<std::string> row{guideway::kErrorNames[j], have ? "yes" : "no"};
     if (have) {
-      row.push_back(fmt::format("{:.3f} {}", r.pv[j] * sc, unit));
-      row.push_back(fmt::format("{:.3f} {}", r.rms[j] * sc, unit));
-      row.push_back(r.sigma > 0 ? fmt::format("{:.3f} {}", r.uncertainty[j] * sc, unit) : "-");
+      // A PV the data cannot resolve is not shown as a number; figures to the resolution their
+      // uncertainty supports.
+      const std::optional<double> U = r.pv_U(j);
+      const auto fig = [&](double v) {
+        return U ? fmt::format("{} {}", trueaxis::detail::rounded_to(v * sc, *U * sc), unit)
+                 : fmt::format("{:.4g} {}", v * sc, unit);
+      };
+      row.push_back(U && !*r.resolved(j) ? std::string("not resolved") : fig(r.pv[j]));
+      row.push_back(fig(r.rms[j]));
+      row.push_back(U ? fmt::format("{} {}", trueaxis::detail::two_digits(*U * sc), unit)
+                      : std::string("not stated"));
+      row.push_back(
+          U ? fmt::format("{} {}", trueaxis::detail::two_digits(r.uncertainty[j] * sc), unit)
+            : std::string("-"));
       if (truth && (*truth)[j].size() == r.value[j].size())
         row.push_back(
             fmt::format("{:.3g} {}", (r.value[j] - (*truth)[j]).cwiseAbs().maxCoeff() * sc, unit));
     } else {
-      row.insert(row.end(), {"-", "-", "-"});
+      row.insert(row.end(), {"-", "-", "-", "-"});
       if (truth) row.push_back("-");
     }
     s.table.push_back(row);

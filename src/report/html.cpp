@@ -378,7 +378,7 @@ Section separation_section(const std::string& title, const separation::Result& r
   // Each figure beside its expanded uncertainty; one the data cannot resolve is not shown as a
   // number, and one without an uncertainty says so.
   s.table.push_back({"profile", "LS straightness (µm)", "min-zone straightness (µm)",
-                     "U (µm, k = 2)", "max u (µm)"});
+                     "U (µm, 95 %)", "max u (µm)"});
   auto row = [&](const char* name, const separation::Straightness& st,
                  const separation::Profile& p) {
     const std::string maxu = p.uncertainty.size()

@@ -376,8 +376,10 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
     res.workpiece_straightness = straightness_of(raw.xw, raw.w, widths.w);
     res.guide_straightness = guide.get();
   }
-  if (uw.size() && uw.allFinite()) res.workpiece_straightness.U = 2 * uw.maxCoeff();
-  if (ug.size() && ug.allFinite()) res.guide_straightness.U = 2 * ug.maxCoeff();
+  if (uw.size() && uw.allFinite())
+    res.workpiece_straightness.U = trueaxis::detail::peak_to_valley_U(uw.maxCoeff(), uw.size());
+  if (ug.size() && ug.allFinite())
+    res.guide_straightness.U = trueaxis::detail::peak_to_valley_U(ug.maxCoeff(), ug.size());
   res.workpiece = {std::move(raw.xw), std::move(raw.w), std::move(uw)};
   res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
   if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
@@ -395,7 +397,7 @@ std::vector<std::string> Result::warnings() const {
     std::string advice = "use more probes, an angle channel (--angle) or a known zero difference";
     if (method != Method::Lsq) advice += ", or --method lsq with redundant probes";
     w.push_back(fmt::format(
-        "the {} straightness is not resolved: its expanded uncertainty (k = 2) is {} um, as large "
+        "the {} straightness is not resolved: its expanded uncertainty (95 %) is {} um, as large "
         "as the {} um the profile spans, so this probe layout cannot tell it from noise. To "
         "resolve it, {}",
         what, trueaxis::detail::two_digits(*st.U * 1e3),
@@ -424,10 +426,10 @@ std::string Result::summary() const {
   const auto line = [&](const char* what, const Straightness& st, long n, const char* points) {
     const std::string label = fmt::format("  {} straightness:", what);
     if (st.U && !*st.resolved())
-      return fmt::format("{:<26}not resolved (U = {} um, k = 2), {} {}\n", label,
+      return fmt::format("{:<26}not resolved (U = {} um, 95 %), {} {}\n", label,
                          trueaxis::detail::two_digits(*st.U * 1e3), n, points);
     if (st.U)
-      return fmt::format("{:<26}{} um (LS), {} um (min-zone), U = {} um (k = 2), {} {}\n", label,
+      return fmt::format("{:<26}{} um (LS), {} um (min-zone), U = {} um (95 %), {} {}\n", label,
                          trueaxis::detail::rounded_to(st.ls * 1e3, *st.U * 1e3),
                          trueaxis::detail::rounded_to(st.min_zone * 1e3, *st.U * 1e3),
                          trueaxis::detail::two_digits(*st.U * 1e3), n, points);

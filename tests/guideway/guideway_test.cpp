@@ -91,6 +91,15 @@ TEST(Guideway, NoiseFreeRecoversAllFiveErrorsToRoundOff) {
   // Straightness against the LS line: PV of the detrended truth.
   EXPECT_NEAR(r.pv[0], r.horizontal_straightness.maxCoeff() - r.horizontal_straightness.minCoeff(),
               1e-18);
+  // Readings that agree to round-off: no noise to estimate, so no uncertainty (never "u 0.000"),
+  // and the reason.
+  EXPECT_EQ(r.sigma, 0);
+  EXPECT_FALSE(r.sigma_estimated);
+  EXPECT_EQ(r.no_uncertainty.rfind("noise-free input", 0), 0u) << r.no_uncertainty;
+  EXPECT_FALSE(r.pv_U(0).has_value());
+  EXPECT_FALSE(r.resolved(0).has_value());
+  EXPECT_EQ(r.summary().find("0.000"), std::string::npos) << r.summary();
+  EXPECT_NE(r.summary().find("no uncertainty: noise-free input"), std::string::npos) << r.summary();
 }
 
 TEST(Guideway, CoplanarLayoutLosesPitchAndYawButKeepsRollAndStraightness) {
@@ -159,8 +168,22 @@ TEST(Guideway, NoisyErrorsAgreeWithTheirPropagatedUncertainty) {
       EXPECT_GT(inside, 0.93) << guideway::kErrorNames[j];
       EXPECT_LT(inside, 0.975) << guideway::kErrorNames[j];
       EXPECT_NEAR(rms_z, 1.0, 0.08) << guideway::kErrorNames[j];
+      // Each PV beside its U = 2u; the summary names one the noise hides instead of printing it.
+      ASSERT_TRUE(r.pv_U(j).has_value());
+      // U = 2·z·u with z = Φ⁻¹(1 − 0.025/n): z = 4.3687 for 4000 positions.
+      EXPECT_NEAR(*r.pv_U(j) / (2 * r.uncertainty[j]), 4.368680, 1e-6);
+      EXPECT_EQ(*r.resolved(j), *r.pv_U(j) < r.pv[j]);
+      const std::string line = r.summary().substr(r.summary().find(guideway::kErrorNames[j]));
+      EXPECT_EQ(line.find("not resolved") < line.find('\n'), !*r.resolved(j)) << line;
     }
   }
+  // Ten times the noise hides the straightness: the PV is then mostly the noise's own extremes
+  // over 4000 positions, not resolved, said in words.
+  for (Eigen::Index i = 0; i < m.size(); ++i) m.data()[i] += 10 * noise(rng);
+  const auto loud = guideway::solve(l, t.s, m);
+  EXPECT_EQ(loud.resolved(0), false);
+  EXPECT_NE(loud.summary().find("horizontal PV not resolved (U = "), std::string::npos)
+      << loud.summary();
 }
 
 TEST(Guideway, BadLayoutsAndReadingsAreRefused) {

@@ -46,6 +46,14 @@ def test_noisy_errors_within_their_uncertainty():
     for name in NAMES:
         z = (r[name] - sim["truth"][name]) / r["uncertainty"][name]
         assert np.sqrt(np.mean(z**2)) == pytest.approx(1.0, abs=0.08), name
+        pv = r["summary"][name]
+        assert pv["resolved"] is (pv["U"] < pv["pv"]), name
+    # Noise-free spots: no sigma and no uncertainty, with the reason (never 0).
+    clean = trueaxis.simulate_guideway(m, LAYOUT, positions=100)
+    q = trueaxis.guideway(LAYOUT, clean["s"], clean["readings"])
+    assert q["sigma"] is None and q["uncertainty"]["roll"] is None
+    assert q["summary"]["roll"]["U"] is None and q["summary"]["roll"]["resolved"] is None
+    assert q["no_uncertainty"].startswith("noise-free input")
 
 
 def test_bad_layouts_and_readings():

@@ -30,7 +30,10 @@ def test_methods_and_straightness_values():
     assert s["min_zone"] <= s["ls"] + 1e-12
     # Three probes at 0.1 um noise over 80 stations do not resolve the profile: said, with U.
     w = b["straightness"]["workpiece"]
-    assert w["U_um"] == pytest.approx(2 * np.max(b["workpiece"]["uncertainty"]), rel=1e-12)
+    # U = 2 z max u, z = inverse normal at 1 - 0.025/n (Bonferroni over the n points).
+    from statistics import NormalDist
+    z = NormalDist().inv_cdf(1 - 0.025 / len(b["workpiece"]["x"]))
+    assert w["U_um"] == pytest.approx(2 * z * np.max(b["workpiece"]["uncertainty"]), rel=1e-6)
     assert w["resolved"] is (w["U_um"] < w["min_zone"])
     # Noise-free redundant readings: no uncertainty, and the reason, never a zero.
     q = trueaxis.simulate_straightness(stations=80, offsets=[0, 10, 30, 60], seed=2)

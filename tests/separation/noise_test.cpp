@@ -161,12 +161,15 @@ TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
   EXPECT_NE(w[0].find("workpiece straightness is not resolved"), std::string::npos) << w[0];
   EXPECT_NE(w[0].find("--method lsq"), std::string::npos) << w[0];  // the user used threepoint
   ASSERT_TRUE(r.workpiece_straightness.U.has_value());
-  EXPECT_EQ(*r.workpiece_straightness.U, 2 * r.workpiece.uncertainty.maxCoeff());
+  // U = 2·z·max u with z = Φ⁻¹(1 − 0.025/n): z = 3.89 for 500 points.
+  EXPECT_NEAR(*r.workpiece_straightness.U / (2 * r.workpiece.uncertainty.maxCoeff()), 3.890592,
+              1e-6);
   EXPECT_GT(*r.workpiece_straightness.U, r.workpiece_straightness.ls);
   EXPECT_EQ(r.workpiece_straightness.resolved(), false);
   // The summary gives no number for it: "not resolved (U = … um, k = 2)".
   const std::string sum = r.summary();
   EXPECT_NE(sum.find("workpiece straightness: not resolved (U = "), std::string::npos) << sum;
+  EXPECT_NE(sum.find(", 95 %)"), std::string::npos) << sum;
   EXPECT_EQ(sum.find(fmt::format("{:.4f}", r.workpiece_straightness.ls * 1e3)), std::string::npos)
       << sum;
   // With --method lsq on the same three probes, the advice no longer offers lsq.
@@ -196,7 +199,7 @@ TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
             *rg.workpiece_straightness.U);
   EXPECT_NE(
       rg.summary().find(fmt::format(
-          "U = {} um (k = 2)", trueaxis::detail::two_digits(*rg.workpiece_straightness.U * 1e3))),
+          "U = {} um (95 %)", trueaxis::detail::two_digits(*rg.workpiece_straightness.U * 1e3))),
       std::string::npos)
       << rg.summary();
 }

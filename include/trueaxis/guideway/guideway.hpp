@@ -24,6 +24,7 @@
 
 #include <Eigen/Core>
 #include <array>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -108,13 +109,25 @@ struct Result {
   LayoutAnalysis layout;
   double sigma = 0;  // mm, the reading noise used (given or estimated; 0 if none)
   bool sigma_estimated = false;
+  // Why no uncertainty is stated (sigma 0), in words: no redundant readings, or readings that
+  // agree to round-off ("noise-free input: ..."); empty when one is.
+  std::string no_uncertainty;
   // Horizontal and vertical straightness against their least-squares lines over s (mm), when
   // observable and at least two positions.
   Eigen::VectorXd horizontal_straightness, vertical_straightness;
   // Peak-to-valley and RMS per error (of the straightness for δx, δy; of the raw values for the
   // angles), 0 if unobservable.
   std::array<double, kErrors> pv{}, rms{};
-  std::string summary() const;  // µm, µrad
+  // Expanded uncertainty (95 % coverage) of the PV of error j: 2·z·u with z = Φ⁻¹(1 − 0.025/n)
+  // over the n positions (every position is solved alike, so u is the same at each; a PV is off
+  // by at most twice the largest position error). Absent when no uncertainty is stated or j is
+  // not observable.
+  std::optional<double> pv_U(std::size_t j) const;
+  // Whether the data resolve the PV of error j (pv_U below it); absent with pv_U.
+  std::optional<bool> resolved(std::size_t j) const;
+  // µm, µrad; a PV the data do not resolve reads "not resolved (U = …)", figures are rounded to
+  // what their uncertainty supports.
+  std::string summary() const;
 };
 
 // Solves every position: `spots` is positions × 2m (columns dx_1, dy_1, dx_2, dy_2, ... in the

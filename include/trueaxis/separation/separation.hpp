@@ -83,9 +83,10 @@ struct Profile {
 struct Straightness {
   double ls = 0;        // peak-to-valley about the least-squares line (mm)
   double min_zone = 0;  // minimum-zone width (mm)
-  // Expanded uncertainty (k = 2) the figure is judged against (mm): that of the profile at its
-  // least-determined point, 2·max u_i. Absent when the result states no uncertainty (see
-  // Result::no_uncertainty for why).
+  // Expanded uncertainty (95 % coverage) of the figure (mm): 2·z·max uᵢ with z = Φ⁻¹(1 −
+  // 0.025/n) over the profile's n points (Bonferroni: every point's error within z·uᵢ at once),
+  // since a peak-to-valley is off by at most twice the largest point error. Absent when the result
+  // states no uncertainty (see Result::no_uncertainty for why).
   std::optional<double> U;
   // Whether the data resolve the figure: U below the minimum-zone width (so below both
   // figures). Absent with U.
@@ -116,13 +117,12 @@ struct Result {
   std::optional<double> noise_gain;
 
   // Human-readable multi-line summary (µm / µrad). A straightness the data do not resolve is
-  // printed as "not resolved (U = … µm, k = 2)", not as a number; figures are rounded to the
+  // printed as "not resolved (U = … µm, 95 %)", not as a number; figures are rounded to the
   // resolution their uncertainty supports.
   std::string summary() const;
   // Plain-language warnings about what the result cannot support, one sentence each: a
-  // straightness smaller than the expanded uncertainty (k = 2) of the profile it describes (the
-  // layout cannot resolve it); no stated uncertainty, with the layout's noise gain. Empty when
-  // the result is sound.
+  // straightness not resolved (its U reaches it: the layout cannot tell it from noise); no stated
+  // uncertainty, with the reason and the layout's noise gain. Empty when the result is sound.
   std::vector<std::string> warnings() const;
 };
 

@@ -228,16 +228,25 @@ void write_guideway_result(const std::string& path, const guideway::Result& r) {
     const bool have = r.value[k].size() > 0;
     unc[guideway::kErrorNames[e]] =
         have && r.sigma > 0 ? ojson(r.uncertainty[k] * sc) : ojson(nullptr);
+    // Each PV with its expanded uncertainty (95 %) and whether the data resolve it; null when
+    // no uncertainty is stated (the reason in "no_uncertainty").
+    const std::optional<double> U = r.pv_U(k);
+    const std::optional<bool> resolved = r.resolved(k);
     sum[guideway::kErrorNames[e]] =
-        have ? ojson({{"pv", r.pv[k] * sc}, {"rms", r.rms[k] * sc}}) : ojson(nullptr);
+        have ? ojson({{"pv", r.pv[k] * sc},
+                      {"rms", r.rms[k] * sc},
+                      {"U", U ? ojson(*U * sc) : ojson(nullptr)},
+                      {"resolved", resolved ? ojson(*resolved) : ojson(nullptr)}})
+             : ojson(nullptr);
   }
   j["observable"] = obs;
   j["condition_number"] =
       std::isfinite(r.layout.condition_number) ? ojson(r.layout.condition_number) : ojson(nullptr);
   j["observable_condition_number"] = r.layout.observable_condition_number;
   j["singular_values"] = array_or_null(r.layout.singular_values, 1.0);
-  j["sigma_um"] = r.sigma * 1e3;
+  j["sigma_um"] = r.sigma > 0 ? ojson(r.sigma * 1e3) : ojson(nullptr);
   j["sigma_estimated"] = r.sigma_estimated;
+  if (!r.no_uncertainty.empty()) j["no_uncertainty"] = r.no_uncertainty;
   j["uncertainty"] = unc;
   j["summary"] = sum;
   j["message"] = r.layout.message;
