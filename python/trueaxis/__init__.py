@@ -15,28 +15,98 @@ Error space and compensation of a virtual machine:
     >>> s = trueaxis.measure_space(m, spacing=100, probe_noise=0.05, verify=1000)
     >>> s["map"].compensate([[400.0, 300.0, 250.0]])  # commands (mm) that hit the wanted points
 """
-from ._trueaxis import (
-    Error,
-    ErrorMap,
-    Machine,
-    analyze_layout,
-    ballgauge,
-    identify,
-    fit,
-    guideway,
-    measure_space,
-    moody,
-    positioning,
-    scan,
-    separate,
-    simulate_guideway,
-    simulate_positioning,
-    simulate_straightness,
-    straightness,
-    surface,
-    verify_compensation,
-    verify_lengths,
-)
+import difflib as _difflib
+import functools as _functools
+import os as _os
+import re as _re
+
+from . import _trueaxis
+from ._trueaxis import Error, ErrorMap, Machine
+
+# Parameters that take a table of named columns (a dict of sequences): a pandas DataFrame there
+# becomes {column: values}. Anywhere else a DataFrame or Series becomes its numpy array.
+_TABLE_PARAMETERS = {"runs"}
+
+
+def _signatures(fn):
+    """Parameter names of each overload, from the signature lines pybind11 writes in __doc__."""
+    name = fn.__name__
+    out = []
+    for line in (fn.__doc__ or "").splitlines():
+        m = _re.match(r"^(?:\d+\. )?" + _re.escape(name) + r"\((.*)\)( -> .*)?$", line.strip())
+        if not m or m.group(1) == "*args, **kwargs":
+            continue
+        names, depth, cur = [], 0, ""
+        for ch in m.group(1) + ",":
+            if ch in "([{":
+                depth += 1
+            elif ch in ")]}":
+                depth -= 1
+            if ch == "," and depth == 0:
+                p = cur.split(":")[0].split("=")[0].strip()
+                if p and p not in ("*", "self", "/"):
+                    names.append(p)
+                cur = ""
+            else:
+                cur += ch
+        out.append(names)
+    return out
+
+
+def _is_pandas(value, kind):
+    t = type(value)
+    return t.__name__ == kind and t.__module__.split(".")[0] == "pandas"
+
+
+def _plain(value, parameter):
+    """What the compiled module takes: a path as str, a DataFrame as a table or an array."""
+    if isinstance(value, _os.PathLike):
+        return _os.fspath(value)
+    if _is_pandas(value, "DataFrame"):
+        if parameter in _TABLE_PARAMETERS:
+            return {str(c): value[c].to_numpy() for c in value.columns}
+        return value.to_numpy()
+    if _is_pandas(value, "Series"):
+        return value.to_numpy()
+    return value
+
+
+def _friendly(fn, method=False):
+    """`fn` taking pathlib paths and pandas tables, and naming a misspelt keyword in one line."""
+    overloads = _signatures(fn)
+    known = sorted({n for names in overloads for n in names})
+
+    @_functools.wraps(fn)
+    def call(*args, **kwargs):
+        for k in kwargs:
+            if overloads and k not in known:
+                close = _difflib.get_close_matches(k, known, 1)
+                hint = f" (did you mean '{close[0]}'?)" if close else f" (it takes: {', '.join(known)})"
+                raise TypeError(f"{fn.__name__}(): no keyword '{k}'{hint}")
+        names = overloads[0] if len(overloads) == 1 else []
+        first = 1 if method else 0
+        args = [a if i < first else _plain(a, names[i - first] if i - first < len(names) else None)
+                for i, a in enumerate(args)]
+        kwargs = {k: _plain(v, k) for k, v in kwargs.items()}
+        return fn(*args, **kwargs)
+
+    return call
+
+
+for _name in dir(_trueaxis):
+    _obj = getattr(_trueaxis, _name)
+    if _name.startswith("_") or _name in ("Error",):
+        continue
+    if isinstance(_obj, type):
+        for _attr, _member in list(vars(_obj).items()):
+            if _attr.startswith("__") or not callable(getattr(_obj, _attr, None)):
+                continue
+            if isinstance(_member, staticmethod) or type(_member).__name__ == "builtin_function_or_method":
+                setattr(_obj, _attr, staticmethod(_friendly(getattr(_obj, _attr))))
+            elif type(_member).__name__ == "instancemethod":
+                setattr(_obj, _attr, _friendly(getattr(_obj, _attr), method=True))
+    elif callable(_obj):
+        globals()[_name] = _friendly(_obj)
 
 __all__ = [
     "Error",
