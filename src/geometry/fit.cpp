@@ -835,6 +835,19 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       break;
     }
   }
+  if (element == Element::Plane || element == Element::Circle) {
+    // Points that share one coordinate exactly (a 2-D set written as x, y, z with z fixed) lie
+    // in that coordinate plane: the element lies there exactly, not to the round-off of the
+    // centroid and the rotation into the fitted plane (7e-15 of z = −867.2 otherwise).
+    for (int k = 0; k < 3; ++k) {
+      const double v = p(k, 0);
+      if (!(p.row(k).array() == v).all()) continue;
+      f.point[k] = v;
+      const double sign = f.direction[k] < 0 ? -1.0 : 1.0;
+      f.direction = sign * Eigen::Vector3d::Unit(k);
+      break;
+    }
+  }
   if (f.condition_number > kIllConditioned)
     f.warnings.push_back(fmt::format(
         "the fit is numerically ill-conditioned (condition number {:.2g}): the points barely "

@@ -126,6 +126,27 @@ TEST_P(NistReference, EverySetMatchesItsReferenceFit) {
               c.dir.c_str(), compared, worst_size, worst_dir, worst_pos);
 }
 
+// NIST's 2-D circles lie in a coordinate plane (x, y or z the same in every point, e.g. z =
+// −867.2): the fitted circle lies in it exactly, its normal is that axis exactly.
+TEST(Fit, CirclesAndPlanesOfA2DSetLieExactlyInItsCoordinatePlane) {
+  int sets = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(kNist + "/Circle2d")) {
+    if (entry.path().extension() != ".ds") continue;
+    const Eigen::Matrix3Xd p = io::read_ds(entry.path().string());
+    int k = 0;
+    while (k < 3 && !(p.row(k).array() == p(k, 0)).all()) ++k;
+    ASSERT_LT(k, 3) << entry.path();
+    for (Element e : {Element::Circle, Element::Plane}) {
+      const geometry::Fit f = geometry::fit(e, p);
+      EXPECT_EQ(f.point[k], p(k, 0)) << entry.path() << " " << geometry::to_string(e);
+      EXPECT_EQ(std::abs(f.direction[k]), 1.0) << entry.path();
+      EXPECT_EQ(f.direction.squaredNorm(), 1.0) << entry.path();
+    }
+    ++sets;
+  }
+  EXPECT_EQ(sets, 15);
+}
+
 INSTANTIATE_TEST_SUITE_P(Fits, NistReference,
                          testing::Values(Case{"Plane", Element::Plane},
                                          Case{"Circle2d", Element::Circle},
