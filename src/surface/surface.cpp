@@ -360,10 +360,10 @@ Result moody(const MoodyData& data, bool least_squares) {
   require_eq("NW_SW", nh, "NE_SE (the opposite edge)");
   require_eq("N_S", nh, "NE_SE (the parallel edge)");
   require_eq("NE_SW", n("NW_SE"), "NW_SE (the other diagonal)");
-  if (nw % 2 || nh % 2 || n("NW_SE") % 2)
-    throw Error(
-        "Moody: every line needs an even number of readings (the centre lines and "
-        "diagonals cross at middle stations)");
+  // An odd number of readings puts a line's middle between two stations: the worksheet's
+  // middle heights (diagonals' zero, the edge midpoints the centre lines hang on, the centre
+  // lines' closure) are then the mean of the two stations beside it (mid() below), the linear
+  // interpolation at the middle, as the worksheet does for any line.
   // Geometry in station units of the edges; the diagonals' stations are evenly spaced between
   // corners.
   const Eigen::Vector2d NW(0, static_cast<double>(nh)),

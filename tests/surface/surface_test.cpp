@@ -152,6 +152,72 @@ TEST(MoodySurface, LeastSquaresReportsClosureAndAgreesWithTheWorksheet) {
               classic.closure_max * 1e3, lsq.closure_rms * 1e3, lsq.closure_max * 1e3);
 }
 
+// Lines of an odd number of readings: a middle falls between two stations, and its height is
+// interpolated there (the mean of the two beside it), as the worksheet does. Even counts recover
+// a known surface exactly (up to the plane the method cannot see); odd counts to the accuracy of
+// that interpolation, h²/8·|z''| per middle (h the station spacing), two of them compounding.
+TEST(MoodySurface, OddAndEvenReadingCountsRecoverAKnownSurface) {
+  constexpr double kArcsec = M_PI / 648000;      // rad
+  constexpr double kFoot = 50;                   // mm
+  constexpr double kExact = 1e-12;               // mm: round-off of sums of ~20 readings
+  constexpr double kCurvature = 2.1e-7;          // 1/mm: bound of z'' along any line, for z below
+  constexpr double kMiddles = 2;                 // interpolated middles one height depends on
+  const auto z = [](const Eigen::Vector2d& p) {  // mm, a few µm of bow and waviness
+    return 2e-3 * std::sin(p.x() / 170) * std::cos(p.y() / 230) + 1e-6 * p.x() * p.y() / 100;
+  };
+  struct Counts {
+    long nw, nh, nd;
+  };
+  for (const Counts c : {Counts{7, 5, 9}, Counts{8, 6, 10}, Counts{9, 6, 11}, Counts{6, 5, 8}}) {
+    SCOPED_TRACE(fmt::format("{} x {} readings, diagonals {}", c.nw, c.nh, c.nd));
+    const double W = static_cast<double>(c.nw), H = static_cast<double>(c.nh);
+    const Eigen::Vector2d NW(0, H), NE(W, H), SE(W, 0), SW(0, 0);
+    const std::map<std::string, std::pair<Eigen::Vector2d, Eigen::Vector2d>> ends{
+        {"NW_SE", {NW, SE}},
+        {"NE_SW", {NE, SW}},
+        {"NE_NW", {NE, NW}},
+        {"SE_SW", {SE, SW}},
+        {"E_W", {(NE + SE) / 2, (NW + SW) / 2}},
+        {"NE_SE", {NE, SE}},
+        {"NW_SW", {NW, SW}},
+        {"N_S", {(NW + NE) / 2, (SW + SE) / 2}}};
+    surface::MoodyData d;
+    d.foot_spacing = kFoot;
+    for (const auto& [name, ab] : ends) {
+      const long n = name == "NW_SE" || name == "NE_SW"                    ? c.nd
+                     : name == "NE_SE" || name == "NW_SW" || name == "N_S" ? c.nh
+                                                                           : c.nw;
+      const Eigen::Vector2d a = ab.first * kFoot, b = ab.second * kFoot;
+      Eigen::VectorXd r(n);
+      for (long j = 0; j < n; ++j) {
+        const Eigen::Vector2d p0 = a + (b - a) * static_cast<double>(j) / static_cast<double>(n);
+        const Eigen::Vector2d p1 =
+            a + (b - a) * static_cast<double>(j + 1) / static_cast<double>(n);
+        r[j] = (z(p1) - z(p0)) / (kArcsec * kFoot);  // the reading as the worksheet scales it
+      }
+      d.readings[name] = r;
+    }
+    for (const bool lsq : {false, true}) {
+      const auto res = surface::moody(d, lsq);
+      // Heights minus the truth, less their least-squares plane: zero.
+      const auto m = static_cast<Eigen::Index>(res.points.size());
+      Eigen::MatrixXd A(m, 3);
+      Eigen::VectorXd e(m);
+      for (Eigen::Index i = 0; i < m; ++i) {
+        const auto& p = res.points[static_cast<std::size_t>(i)];
+        A.row(i) << 1, p.xy.x(), p.xy.y();
+        e[i] = p.height - z(p.xy);
+      }
+      const Eigen::VectorXd plane = A.colPivHouseholderQr().solve(e);
+      const bool even = c.nw % 2 == 0 && c.nh % 2 == 0 && c.nd % 2 == 0;
+      const double h = kFoot * std::max(1.0, std::hypot(W, H) / static_cast<double>(c.nd));
+      const double bound = even ? kExact : kMiddles * h * h / 8 * kCurvature;
+      EXPECT_LT((e - A * plane).cwiseAbs().maxCoeff(), bound)
+          << (lsq ? "least squares" : "worksheet");
+    }
+  }
+}
+
 TEST(Surface, LsqWithADiagonalRecoversTheSurfaceIncludingTwist) {
   for (int seed = 1; seed <= 3; ++seed) {
     std::mt19937 rng(seed);
