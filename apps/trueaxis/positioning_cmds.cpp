@@ -142,6 +142,10 @@ int run_positioning(const PositioningArgs& a) {
   for (const auto& v : verdicts) {
     if (v.pass) continue;
     pass = false;
+    if (!v.not_judged.empty()) {
+      failed = "not judged: " + v.not_judged;
+      break;
+    }
     failed += fmt::format("{}{} {} (tolerance {:g} um)", failed.empty() ? "" : "; ", v.name,
                           std::isnan(v.value) ? std::string("is not defined by these runs")
                                               : fmt::format("= {:.2f} um", v.value * 1e3),
@@ -149,11 +153,15 @@ int run_positioning(const PositioningArgs& a) {
   }
   if (!a.quiet) {
     fmt::print("{}", r.summary(vdi));
-    if (!verdicts.empty()) fmt::print("  tolerances: {}\n", pass ? "all met" : "NOT MET");
+    if (!verdicts.empty())
+      fmt::print("  tolerances: {}\n", pass                     ? "all met"
+                                       : !r.implausible.empty() ? "NOT JUDGED (see below)"
+                                                                : "NOT MET");
     fmt::print("wrote {}{}\n", a.output, a.report.empty() ? "" : " and " + a.report);
   }
   if (!pass) {
-    std::fprintf(stderr, "trueaxis positioning: out of tolerance: %s\n", failed.c_str());
+    std::fprintf(stderr, "trueaxis positioning: %s%s\n",
+                 r.implausible.empty() ? "out of tolerance: " : "", failed.c_str());
     return 1;
   }
   return 0;

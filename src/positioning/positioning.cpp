@@ -12,6 +12,10 @@
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::positioning {
+// Magnitudes no real positioning test has (see evaluate()): mm of travel, mm of deviation range.
+constexpr double kShortestAxis = 5.0;
+constexpr double kSmallestDeviationRange = 5e-5;  // 0.05 µm
+
 namespace {
 
 char sign(Direction d) {
@@ -322,6 +326,27 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
         "the material temperature changed by {:.2f} K during the test: the correction to {:g} C "
         "assumes the whole axis follows its sensor",
         res.material_max - res.material_min, o.reference_temperature));
+
+  // A unit mix-up passes every check above and every tolerance: look at the magnitudes. A
+  // machine axis is tested over more than 5 mm, and its deviations vary by more than the
+  // resolution of any laser interferometer (about 1 nm) along it.
+  if (m >= 2 && travel < kShortestAxis)
+    res.implausible = fmt::format(
+        "the targets span only {:.3g} mm: no machine axis is tested over less than {:g} mm. Are "
+        "they in metres? Name the column 'target [m]' (or write millimetres)",
+        travel, kShortestAxis);
+  double lo = INFINITY, hi = -INFINITY;
+  for (const Reading& r : res.readings) {
+    lo = std::min(lo, r.deviation);
+    hi = std::max(hi, r.deviation);
+  }
+  if (res.implausible.empty() && m >= 2 && hi - lo < kSmallestDeviationRange)
+    res.implausible = fmt::format(
+        "the deviations vary by only {:.2g} um along {:g} mm of axis, below the resolution of "
+        "any laser interferometer: they look like millimetres in a micrometre column. Name the "
+        "column 'deviation [mm]' (or write micrometres)",
+        (hi - lo) * 1e3, travel);
+  if (!res.implausible.empty()) res.warnings.insert(res.warnings.begin(), res.implausible);
   return res;
 }
 
@@ -358,7 +383,8 @@ std::vector<Verdict> check(const Result& r,
     v.name = name;
     v.value = parameter(r, name);
     v.limit = limit;
-    v.pass = !std::isnan(v.value) && std::abs(v.value) <= limit;
+    v.pass = !std::isnan(v.value) && std::abs(v.value) <= limit && r.implausible.empty();
+    if (!r.implausible.empty()) v.not_judged = r.implausible;
     out.push_back(v);
   }
   return out;

@@ -62,9 +62,10 @@ Section positioning_section(const std::string& title, const positioning::Result&
     const auto* v = verdict_of(name);
     s.table.push_back({what, symbol, um_text(value),
                        v ? fmt::format("{:g} µm", v->limit * 1e3) : "",
-                       v ? (v->pass                ? "pass"
-                            : std::isnan(v->value) ? "FAIL (not defined)"
-                                                   : "FAIL")
+                       v ? (v->pass                  ? "pass"
+                            : !v->not_judged.empty() ? "not judged (see the warning)"
+                            : std::isnan(v->value)   ? "FAIL (not defined)"
+                                                     : "FAIL")
                          : ""});
   };
   if (vdi) {

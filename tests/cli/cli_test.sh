@@ -151,6 +151,10 @@ grep -q '"pass": false' pos-bad.json && ok || bad "positioning writes its result
 "$T" positioning --input pos.csv --tolerance X=1 >out.txt 2>err.txt; [ $? -eq 2 ] && grep -q "unknown parameter 'X'" err.txt && ok || bad "unknown tolerance name is a usage error (exit 2)"
 printf 'target_mm,cycle,direction,deviation_um\n0,1,+,1\n0,1,up,2\n' > pos-dup.csv
 expect_err "pos-dup.csv:3:1: cycle 1 '+' at target 0 mm was already read on line 2" "$T" positioning --input pos-dup.csv
+# Millimetres written in the micrometre column: named, and the tolerance is not judged PASS.
+awk -F, 'NR == 1 { print; next } { printf "%s,%s,%s,%.9f\n", $1, $2, $3, $4 / 1000 }' pos.csv > pos-mm.csv
+expect_err "not judged: the deviations vary by only" "$T" positioning --input pos-mm.csv --tolerance A=25 --output pos-mm.json
+grep -q '"not_judged"' pos-mm.json && grep -q '"pass": false' pos-mm.json && ok || bad "positioning: a unit mix-up is not judged"
 grep -v '^200,3,-' pos.csv > pos-gap.csv
 # The dropped reading is named at the line where the '-' run of cycle 3 jumps from 240 to 160 mm.
 gap_line=$(grep -n '^160,3,-' pos-gap.csv | cut -d: -f1)

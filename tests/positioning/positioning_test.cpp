@@ -221,6 +221,44 @@ TEST(Positioning, SimulatedRunsAgainstTruth) {
 
 // A warming axis: readings carry the material temperature; corrected to 20 °C the evaluation
 // finds the truth, uncorrected it finds the expansion too.
+// A unit mix-up passes every structural check: the magnitudes give it away, and no tolerance is
+// judged PASS on such data.
+TEST(Positioning, AUnitMixUpIsNamedAndNoToleranceIsJudged) {
+  sim::MachineOptions mo;
+  mo.seed = 5;
+  const sim::Machine m = sim::random_machine(mo);
+  sim::PositioningRunOptions o;
+  for (int i = 0; i <= 16; ++i) o.targets.push_back(50.0 * i);
+  o.backlash = 3e-3;
+  o.noise = 0.5e-3;
+  const auto run = sim::simulate_positioning(m, o);
+  const std::vector<std::pair<std::string, double>> tol{{"A", 25e-3}};
+  const auto good = positioning::evaluate(run.readings);
+  EXPECT_TRUE(good.implausible.empty()) << good.implausible;
+  EXPECT_TRUE(positioning::check(good, tol)[0].pass);
+  // Deviations written in mm into the µm column: read 1000 times too small.
+  std::vector<Reading> mm = run.readings;
+  for (Reading& r : mm) r.deviation *= 1e-3;
+  const auto small = positioning::evaluate(mm);
+  EXPECT_NE(small.implausible.find("look like millimetres in a micrometre column"),
+            std::string::npos)
+      << small.implausible;
+  EXPECT_EQ(small.warnings.front(), small.implausible);
+  const auto v = positioning::check(small, tol);
+  EXPECT_FALSE(v[0].pass);  // A of a few nm would "pass" 25 um
+  EXPECT_EQ(v[0].not_judged, small.implausible);
+  // Targets in metres: 0 .. 0.8 "mm" of travel.
+  std::vector<Reading> metres = run.readings;
+  for (Reading& r : metres) r.target *= 1e-3;
+  positioning::Options eo;
+  eo.target_tolerance = 1e-7;
+  const auto tiny = positioning::evaluate(metres, eo);
+  EXPECT_NE(tiny.implausible.find("the targets span only 0.8 mm"), std::string::npos)
+      << tiny.implausible;
+  EXPECT_NE(tiny.implausible.find("'target [m]'"), std::string::npos);
+  EXPECT_FALSE(positioning::check(tiny, tol)[0].pass);
+}
+
 TEST(Positioning, TemperatureCorrectionRemovesTheExpansion) {
   sim::MachineOptions mo;
   mo.seed = 8;

@@ -121,6 +121,10 @@ struct Result {
   std::vector<Reading> readings;
   // Departures from the standard's test conditions and what could not be evaluated, in words.
   std::vector<std::string> warnings;
+  // Non-empty when the data look like a unit mix-up (targets spanning under 5 mm, deviations
+  // varying by less than 0.05 µm along the axis): what looks wrong and which unit the data look
+  // like. Also the first warning; no tolerance is judged on such data.
+  std::string implausible;
 
   // A few lines for the terminal: the ISO 230-2 (or VDI 3441) parameters in µm.
   std::string summary(bool vdi = false) const;
@@ -140,9 +144,11 @@ struct Verdict {
   std::string name;
   double value = kNaN, limit = 0;
   bool pass = false;
+  std::string not_judged;  // why the tolerance was not judged (Result::implausible), or empty
 };
 // Checks |value| <= limit for each (name, limit) pair; throws Error for unknown names or limits
-// that are not finite and positive.
+// that are not finite and positive. On implausible data nothing passes: each verdict says why
+// it was not judged.
 std::vector<Verdict> check(const Result& result,
                            const std::vector<std::pair<std::string, double>>& tolerances);
 

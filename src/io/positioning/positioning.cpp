@@ -365,6 +365,7 @@ void write_positioning_result(const std::string& path, const positioning::Result
   bool pass = true;
   for (const auto& v : verdicts) {
     tol[v.name] = {{"limit", v.limit * 1e3}, {"value", um(v.value)}, {"pass", v.pass}};
+    if (!v.not_judged.empty()) tol[v.name]["not_judged"] = v.not_judged;
     pass = pass && v.pass;
   }
   j["tolerances"] = tol;

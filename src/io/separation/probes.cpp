@@ -127,6 +127,17 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
     if (d.offsets[0] != 0)
       throw Error(
           fmt::format("offsets: the first offset must be 0 (probe A), got {}", d.offsets[0]));
+    // Probes farther apart than the whole traverse never read one point twice: nothing can be
+    // separated. It is what x in metres with offsets in mm looks like.
+    const double reach = *std::max_element(d.offsets.begin(), d.offsets.end()) -
+                         *std::min_element(d.offsets.begin(), d.offsets.end());
+    const double span = x[n - 1] - x[0];
+    if (reach >= span)
+      throw Error(fmt::format(
+          "{}x spans only {:.6g} mm but the probes are {:.6g} mm apart: no point of the "
+          "workpiece is read by two probes. Is x in metres? Name the column 'x [m]' (or write "
+          "millimetres)",
+          t.where(-1, 0), span, reach));
     for (std::size_t i = 0; i < d.offsets.size(); ++i) {
       const double r = d.offsets[i] / h;
       if (std::abs(r - std::round(r)) > 1e-6 * std::max(1.0, std::abs(r)))

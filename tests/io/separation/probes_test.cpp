@@ -227,6 +227,16 @@ TEST(Probes, UnitsInTheHeaderReadAsThePlainFile) {
   EXPECT_EQ(read_error("x,a,b,c,tilt [arcsec]\n0,1,2,3,1\n10,1,2,3,1\n20,1,2,3,1\n"),
             "p.csv:1:9: column 'tilt [arcsec]' looks like an angle channel, not a probe: give "
             "--angle tilt to use it (urad), or --probes to list the probe columns");
+  // x written in metres against offsets in mm: named, with the unit it looks like.
+  io::ProbeReadOptions mm;
+  mm.offsets = {0, 10, 20};
+  std::string metres = "x,a,b,c\n";
+  for (int k = 0; k < 50; ++k) metres += fmt::format("{},1,2,3\n", 0.01 * k);
+  EXPECT_EQ(read_error(metres, mm),
+            "p.csv:1:1: x spans only 0.49 mm but the probes are 20 mm apart: no point of the "
+            "workpiece is read by two probes. Is x in metres? Name the column 'x [m]' (or write "
+            "millimetres)");
+  EXPECT_EQ(read_error(metres.replace(0, 1, "x [m]"), mm), "");  // said so: read as 0 .. 490 mm
   EXPECT_EQ(read_error("x [s],a,b\n0,1,2\n10,1,2\n20,1,2\n"),
             "p.csv:1:1: column 'x [s]' is in s, a time; x holds a length (for example in mm)");
   EXPECT_EQ(read_error("x,a,b [\xC2\xB0"
