@@ -44,7 +44,8 @@ Section surface_section(const std::string& title, const surface::Result& r,
              {"method", r.method},
              {"lines / stations", fmt::format("{} / {}", r.lines.size(), r.points.size())},
              {"flatness, least squares (µm)", um_3f(r.flatness_ls)},
-             {"flatness, minimum zone (µm)", um_3f(r.flatness_min_zone)}};
+             {"flatness, minimum zone (µm)", um_3f(r.flatness_min_zone)},
+             {"uncertainty of the flatness", "not stated: " + r.no_uncertainty()}};
   if (!r.crossings.empty()) {
     s.table.push_back({"crossings", fmt::format("{}", r.crossings.size())});
     s.table.push_back({"closure RMS / max (µm)",

@@ -460,11 +460,21 @@ Result moody(const MoodyData& data, bool least_squares) {
   return res;
 }
 
+std::string Result::no_uncertainty() const {
+  std::string s =
+      "the line readings come without a noise level, so the flatness carries no stated "
+      "uncertainty";
+  if (!crossings.empty())
+    s += fmt::format("; the lines disagree where they cross by {:.2g} um RMS ({:.2g} um at most)",
+                     closure_rms * 1e3, closure_max * 1e3);
+  return s;
+}
+
 std::string Result::summary() const {
   std::string s = fmt::format("surface ({}): {} lines, {} points, {} crossings\n", method,
                               lines.size(), points.size(), crossings.size());
-  s += fmt::format("  flatness: {:.4f} um (LS plane), {:.4f} um (min-zone)\n", flatness_ls * 1e3,
-                   flatness_min_zone * 1e3);
+  s += fmt::format("  flatness: {:.4g} um (LS plane), {:.4g} um (min-zone); {}\n",
+                   flatness_ls * 1e3, flatness_min_zone * 1e3, no_uncertainty());
   s += fmt::format("  closure at crossings: RMS {:.4f} um, max {:.4f} um\n", closure_rms * 1e3,
                    closure_max * 1e3);
   s += fmt::format("  unobservable: {}\n  gauge: {}\n", fmt::join(unobservable, ", "), gauge);

@@ -148,6 +148,18 @@ TEST(MoodySurface, LeastSquaresReportsClosureAndAgreesWithTheWorksheet) {
   EXPECT_LT(lsq.closure_max, classic.closure_max);
   // The two surfaces differ by about the closure, not more (compare about their LS planes).
   EXPECT_NEAR(lsq.flatness_ls, classic.flatness_ls, 3 * classic.closure_max);
+  // No noise level comes with the readings: the flatness is said to carry no uncertainty (never
+  // a zero), the closure shown instead; null in the JSON.
+  EXPECT_NE(lsq.summary().find("carries no stated uncertainty; the lines disagree where they "
+                               "cross by"),
+            std::string::npos)
+      << lsq.summary();
+  const std::string out = test::temp_dir() + "/moody-lsq.json";
+  io::write_surface(out, lsq);
+  const std::string json = test::read_file(out);
+  EXPECT_NE(json.find("\"U_um\": null"), std::string::npos);
+  EXPECT_NE(json.find("\"no_uncertainty\": \"the line readings come without a noise level"),
+            std::string::npos);
   std::printf("Moody closure: worksheet max %.4f um; least squares RMS %.4f um, max %.4f um\n",
               classic.closure_max * 1e3, lsq.closure_rms * 1e3, lsq.closure_max * 1e3);
 }

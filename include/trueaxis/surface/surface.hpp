@@ -81,6 +81,9 @@ struct Result {
   std::vector<std::string> unobservable;          // e.g. "plane", "twist"
   std::string gauge;                              // how the free modes were fixed
   std::optional<Grid> grid;
+  // Why the flatness carries no uncertainty, in words: the lines come without a noise level, and
+  // their closure at the crossings is shown instead (never a zero uncertainty).
+  std::string no_uncertainty() const;
   std::string summary() const;  // human-readable, µm
 };
 

@@ -216,7 +216,12 @@ void write_surface(const std::string& path, const surface::Result& r) {
   } else {
     j["grid"] = nullptr;
   }
-  j["flatness"] = {{"ls", r.flatness_ls * 1e3}, {"min_zone", r.flatness_min_zone * 1e3}};
+  // No uncertainty can be stated for lines without a noise level: null, with the reason.
+  j["flatness"] = {{"ls", r.flatness_ls * 1e3},
+                   {"min_zone", r.flatness_min_zone * 1e3},
+                   {"U_um", nullptr},
+                   {"resolved", nullptr},
+                   {"no_uncertainty", r.no_uncertainty()}};
   j["closure"] = {{"rms", r.closure_rms * 1e3}, {"max", r.closure_max * 1e3}};
   auto& cs = j["crossings"] = nlohmann::ordered_json::array();
   for (const auto& c : r.crossings)
