@@ -380,13 +380,7 @@ int CsvTable::find(std::string_view quantity, Unit unit) {
 
 int CsvTable::require(std::string_view quantity, Unit unit) {
   const int c = find(quantity, unit);
-  if (c < 0) {
-    std::string have;
-    for (const auto& h : header_) have += (have.empty() ? "" : ", ") + h;
-    throw Error(fmt::format("{}:{}:1: missing column '{}' (header has: {})", path_, header_line_,
-                            quantity, have));
-  }
-  return c;
+  return c < 0 ? require(quantity) : c;  // require(name) names what the header has
 }
 
 std::optional<Unit> CsvTable::written_unit(int c) const {
