@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <cctype>
 
 #include "fast_text.hpp"
 #include "trueaxis/error.hpp"
@@ -122,15 +123,19 @@ std::string unit_folded(std::string_view s) {
   return out;
 }
 
-// "q [u]", "q (u)", "q / u": the quantity and the unit text; nullopt for a name without one.
+// "q [u]", "q (u)", "q / u": the quantity and the unit text; nullopt for a name without one. A
+// parenthesis that holds no unit ("probe A (front)") is part of the name: nullopt. Square
+// brackets and " / " are only ever a unit, so what they hold is returned to be checked.
 std::optional<std::pair<std::string_view, std::string_view>> unit_bracketed(std::string_view name) {
   const std::string_view n = detail::trim(name);
   if (n.size() >= 3 && (n.back() == ']' || n.back() == ')')) {
-    const char open = n.back() == ']' ? '[' : '(';
-    const std::size_t at = n.rfind(open);
-    if (at != std::string_view::npos && at > 0)
-      return std::pair{detail::trim(n.substr(0, at)),
-                       detail::trim(n.substr(at + 1, n.size() - at - 2))};
+    const bool paren = n.back() == ')';
+    const std::size_t at = n.rfind(paren ? '(' : '[');
+    if (at != std::string_view::npos && at > 0) {
+      const std::string_view inside = detail::trim(n.substr(at + 1, n.size() - at - 2));
+      if (paren && !parse_unit(inside)) return std::nullopt;
+      return std::pair{detail::trim(n.substr(0, at)), inside};
+    }
   }
   if (const std::size_t slash = n.rfind(" / "); slash != std::string_view::npos && slash > 0)
     return std::pair{detail::trim(n.substr(0, slash)), detail::trim(n.substr(slash + 3))};

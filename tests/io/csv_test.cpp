@@ -411,6 +411,9 @@ TEST(Csv, ColumnNamesSplitIntoQuantityAndUnit) {
   EXPECT_FALSE(trueaxis::io::column_matches("times", "time").holds);
   EXPECT_FALSE(trueaxis::io::column_matches("time_x", "time").holds);
   EXPECT_THROW(split_column_name("x [furlong]"), Error);
+  EXPECT_THROW(split_column_name("x / furlong"), Error);
+  EXPECT_EQ(split_column_name("probe A (front)").quantity, "probe A (front)");  // not a unit
+  EXPECT_FALSE(split_column_name("probe A (front)").unit.has_value());
   EXPECT_NEAR(trueaxis::io::unit_factor(Unit::Inch, Unit::Millimetre), 25.4, 1e-14);
   EXPECT_NEAR(trueaxis::io::unit_factor(Unit::Arcsecond, Unit::Microradian), 4.84813681109536,
               1e-13);

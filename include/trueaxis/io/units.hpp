@@ -55,8 +55,9 @@ struct ColumnName {
   std::string unit_text;     // the unit as written ("µm"), for messages
 };
 
-// Splits a column name written "q [u]", "q[u]", "q (u)", "q / u" or "q_u". A bracketed or slashed
-// unit that is not a unit ("x [furlong]") throws Error naming it. The "q_u" form is split only for
+// Splits a column name written "q [u]", "q[u]", "q (u)", "q / u" or "q_u". Square brackets or a
+// slash holding no unit ("x [furlong]") throw Error naming it; a parenthesis holding no unit is
+// part of the name ("probe A (front)"). The "q_u" form is split only for
 // units no one uses as a name's last word (mm, um, µm, nm, urad, µrad, mrad, arcsec, deg, inch):
 // a probe called "probe_c" or a detector "laser_in" keeps its name. A name the reader already
 // knows, "material_temp_c" or "time_s", is matched by column_matches below with any symbol.
