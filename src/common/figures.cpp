@@ -35,4 +35,15 @@ double peak_to_valley_U(double u_max, long n) {
   return 2 * 0.5 * (lo + hi) * u_max;
 }
 
+bool is_round_off(double noise, double readings_size) {
+  return !(noise > 1e-9 * readings_size);
+}
+
+std::string noise_free_reason(std::string_view instrument) {
+  return fmt::format(
+      "noise-free input: the redundant readings agree to round-off, so there is no noise to "
+      "estimate an uncertainty from (give --sigma for {} noise)",
+      instrument);
+}
+
 }  // namespace trueaxis::detail

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 namespace trueaxis::detail {
 
@@ -21,5 +22,12 @@ std::string rounded_to(double value, double u);
 // So U = 2·z·u_max: 2·3.9·u for 500 points. The largest value of n independent noisy points
 // grows with n, which a plain 2u ignores.
 double peak_to_valley_U(double u_max, long n);
+
+// Whether a noise level estimated from residuals is round-off rather than noise: below 1e-9 of
+// the readings' largest size, readings that agree so well come from a simulation or a copy.
+bool is_round_off(double noise, double readings_size);
+// Why no uncertainty is stated for such readings; `instrument` names whose noise --sigma gives
+// ("the probes'").
+std::string noise_free_reason(std::string_view instrument);
 
 }  // namespace trueaxis::detail

@@ -14,9 +14,6 @@
 
 namespace trueaxis::guideway {
 
-// A noise estimate below this fraction of the readings' size is round-off, not detector noise.
-constexpr double kRoundOffNoise = 1e-9;
-
 namespace {
 
 std::vector<int> indices(const std::array<bool, kErrors>& keep) {
@@ -317,15 +314,12 @@ Result solve(const Layout& layout, const Eigen::VectorXd& s, const Eigen::Matrix
   r.sigma = options.sigma;
   if (r.sigma == 0 && dof > 0 && s.size() > 0) {
     const double estimate = std::sqrt(ss_res / static_cast<double>(n * dof));
-    // Residuals at round-off level are no noise estimate: spots that agree to a part in 10⁹ of
-    // their size come from a simulation or a copy, not from detectors.
-    if (estimate > kRoundOffNoise * spots.cwiseAbs().maxCoeff()) {
+    // Residuals at round-off level are no noise estimate.
+    if (!trueaxis::detail::is_round_off(estimate, spots.cwiseAbs().maxCoeff())) {
       r.sigma = estimate;
       r.sigma_estimated = true;
     } else {
-      r.no_uncertainty =
-          "noise-free input: the redundant readings agree to round-off, so there is no noise to "
-          "estimate an uncertainty from (give --sigma for the detectors' noise)";
+      r.no_uncertainty = trueaxis::detail::noise_free_reason("the detectors'");
     }
   } else if (r.sigma == 0) {
     r.no_uncertainty =

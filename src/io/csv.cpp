@@ -338,55 +338,24 @@ int CsvTable::find(std::string_view quantity, Unit unit) {
   }
   if (found < 0) return -1;
   const auto c = static_cast<std::size_t>(found);
-  if (converted_.size() != header_.size()) {
-    converted_.assign(header_.size(), 0);
-    unit_.assign(header_.size(), std::nullopt);
-    written_.assign(header_.size(), std::nullopt);
-  }
-  if (converted_[c]) {
-    if (unit_[c] != unit)
+  if (unit_.size() != header_.size()) unit_.assign(header_.size(), std::nullopt);
+  if (unit_[c]) {
+    if (*unit_[c] != unit)
       throw Error(fmt::format("{}column '{}' was read in {} and is now asked for in {}",
                               where(-1, found), header_[c], symbol(*unit_[c]), symbol(unit)));
     return found;
   }
-  if (written && kind_of(*written) != kind_of(unit)) {
-    const auto kind = [](Unit u) {
-      switch (kind_of(u)) {
-        case UnitKind::Length:
-          return "a length";
-        case UnitKind::Angle:
-          return "an angle";
-        case UnitKind::Time:
-          return "a time";
-        case UnitKind::Temperature:
-          return "a temperature";
-        case UnitKind::Count:
-          return "a plain number";
-      }
-      return "";
-    };
-    throw Error(fmt::format("{}column '{}' is in {}, {}; {} holds {}{}", where(-1, found),
-                            header_[c], symbol(*written), kind(*written), quantity, kind(unit),
-                            kind_of(unit) == UnitKind::Count
-                                ? " and takes no unit"
-                                : fmt::format(" (for example in {})", symbol(unit))));
-  }
+  if (written)
+    if (const std::string why = unit_refusal(header_[c], *written, quantity, unit); !why.empty())
+      throw Error(where(-1, found) + why);
   if (written && *written != unit) columns_[c] *= unit_factor(*written, unit);
-  converted_[c] = 1;
   unit_[c] = unit;
-  written_[c] = written;
   return found;
 }
 
 int CsvTable::require(std::string_view quantity, Unit unit) {
   const int c = find(quantity, unit);
   return c < 0 ? require(quantity) : c;  // require(name) names what the header has
-}
-
-std::optional<Unit> CsvTable::written_unit(int c) const {
-  const auto i = static_cast<std::size_t>(c);
-  if (i < converted_.size() && converted_[i]) return written_[i];
-  return split_column_name(header_[i]).unit;
 }
 
 std::string CsvTable::where(long row, int col) const {

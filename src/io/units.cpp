@@ -171,6 +171,31 @@ std::optional<Unit> parse_unit(std::string_view symbol) {
   return std::nullopt;
 }
 
+std::string unit_refusal(std::string_view header, Unit written, std::string_view quantity,
+                         Unit wanted) {
+  if (kind_of(written) == kind_of(wanted)) return "";
+  const auto kind = [](Unit u) {
+    switch (kind_of(u)) {
+      case UnitKind::Length:
+        return "a length";
+      case UnitKind::Angle:
+        return "an angle";
+      case UnitKind::Time:
+        return "a time";
+      case UnitKind::Temperature:
+        return "a temperature";
+      case UnitKind::Count:
+        break;
+    }
+    return "a plain number";
+  };
+  return fmt::format("column '{}' is in {}, {}; {} holds {}{}", header, symbol(written),
+                     kind(written), quantity, kind(wanted),
+                     kind_of(wanted) == UnitKind::Count
+                         ? " and takes no unit"
+                         : fmt::format(" (for example in {})", symbol(wanted)));
+}
+
 ColumnName split_column_name(std::string_view name) {
   ColumnName out;
   if (const auto b = unit_bracketed(name); b && !b->first.empty()) {

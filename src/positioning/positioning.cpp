@@ -170,14 +170,15 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
     const std::size_t i = target_of(r.target);
     const int d = r.direction == Direction::Up ? 0 : 1;
     const auto [it, fresh] = seen.emplace(std::make_tuple(i, r.cycle, d), k);
-    if (!fresh)
-      throw Error(
-          o.locate ? fmt::format("{}cycle {} '{}' at target {:g} mm again (first at {})",
-                                 o.locate(k), r.cycle, sign(r.direction), positions[i],
-                                 o.locate(it->second).substr(0, o.locate(it->second).size() - 2))
-                   : fmt::format("readings {} and {} are both cycle {}, '{}' at target "
-                                 "{} mm",
-                                 it->second + 1, k + 1, r.cycle, sign(r.direction), positions[i]));
+    if (!fresh) {
+      if (!o.locate)
+        throw Error(fmt::format("readings {} and {} are both cycle {}, '{}' at target {} mm",
+                                it->second + 1, k + 1, r.cycle, sign(r.direction), positions[i]));
+      const std::string first = o.locate(it->second);  // "file:line:col: "
+      throw Error(fmt::format("{}cycle {} '{}' at target {:g} mm again (first at {})", o.locate(k),
+                              r.cycle, sign(r.direction), positions[i],
+                              first.substr(0, first.size() - 2)));
+    }
     x[i][static_cast<std::size_t>(d)].push_back(res.readings[k].deviation);
     cycles_dir[d].insert(r.cycle);
   }

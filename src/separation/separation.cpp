@@ -20,9 +20,6 @@
 #include "trueaxis/geometry/straightness.hpp"
 
 namespace trueaxis::separation {
-// A noise estimate below this fraction of the readings' size is round-off, not probe noise.
-constexpr double kRoundOffNoise = 1e-9;
-
 namespace {
 
 constexpr double kStepTolerance = 1e-6;  // relative tolerance for equal steps / whole multiples
@@ -312,16 +309,13 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
       // Every row (probe, or angle scaled by its weight) carries the probe noise, so the
       // residual variance estimates the probe variance directly.
       s2 = st.ssr / static_cast<double>(st.dof);
-      // Residuals at round-off level are no noise estimate: readings that agree to a part in
-      // 10⁹ of their size come from a simulation or a copy, not from probes.
+      // Residuals at round-off level are no noise estimate.
       const double size = data.readings.size() ? data.readings.cwiseAbs().maxCoeff() : 0.0;
-      if (std::sqrt(s2) > kRoundOffNoise * size) {
+      if (!trueaxis::detail::is_round_off(std::sqrt(s2), size)) {
         res.sigma = std::sqrt(s2);
         res.sigma_estimated = true;
       } else {
-        res.no_uncertainty =
-            "noise-free input: the redundant readings agree to round-off, so there is no noise "
-            "to estimate an uncertainty from (give --sigma for the probes' noise)";
+        res.no_uncertainty = trueaxis::detail::noise_free_reason("the probes'");
       }
     }
     if (!res.sigma && res.no_uncertainty.empty())
@@ -362,8 +356,8 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
         : opt.filter_cutoff > 0
             ? "the profiles were filtered (ISO 16610-21), and uncertainties are not carried "
               "through the filter"
-            : "the patent's reference (seed) depends on the readings themselves; use the "
-              "least-squares or minimum-zone reference for uncertainties";
+            : "the reference of JPH0464003B2 (--reference patent) depends on the readings "
+              "themselves; use the least-squares or minimum-zone reference for uncertainties";
   if (opt.filter_cutoff > 0) {
     raw.w = geometry::gaussian_filter(raw.w, h, opt.filter_cutoff);
     raw.g = geometry::gaussian_filter(raw.g, h, opt.filter_cutoff);

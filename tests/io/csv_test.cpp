@@ -354,12 +354,12 @@ TEST(Csv, UnitsInNamesConvertToTheReadersUnit) {
   EXPECT_EQ(t.column(3)[0], 2000);
   EXPECT_EQ(t.require("d", Unit::Micrometre), 4);  // no unit written: the reader's unit
   EXPECT_EQ(t.column(4)[0], 7);
-  EXPECT_FALSE(t.written_unit(4).has_value());
+  EXPECT_FALSE(trueaxis::io::split_column_name(t.header()[4]).unit.has_value());
   EXPECT_EQ(t.require("e", Unit::Radian), 5);
   EXPECT_NEAR(t.column(5)[0], 1e-5, 1e-5 * kRoundOff);
   EXPECT_EQ(t.require("f", Unit::Radian), 6);
   EXPECT_NEAR(t.column(6)[0], M_PI / 2, M_PI / 2 * kRoundOff);
-  EXPECT_EQ(t.written_unit(6), Unit::Degree);
+  EXPECT_EQ(trueaxis::io::split_column_name(t.header()[6]).unit, Unit::Degree);
   EXPECT_EQ(t.find("g", Unit::Millimetre), -1);
 
   auto refused = [](const std::string& text, const char* quantity, Unit unit) {

@@ -47,9 +47,6 @@ class CsvTable {
   int find(std::string_view quantity, Unit unit);
   // As find(quantity, unit); throws Error naming the file and header line when there is none.
   int require(std::string_view quantity, Unit unit);
-  // The unit column `c` was written in: nullopt for a name without one. Only for a column asked
-  // for with find/require(quantity, unit), or split with split_column_name.
-  std::optional<Unit> written_unit(int c) const;
   // Column values (length rows()).
   const Eigen::VectorXd& column(int c) const { return columns_[static_cast<std::size_t>(c)]; }
 
@@ -66,9 +63,9 @@ class CsvTable {
   std::string_view text_;
   std::vector<std::string> header_;
   std::vector<Eigen::VectorXd> columns_;
-  std::vector<std::optional<Unit>> unit_;     // the unit each column's values are in now
-  std::vector<std::optional<Unit>> written_;  // the unit each column's name gave
-  std::vector<char> converted_;               // 1 once find(quantity, unit) set the column's unit
+  // The unit each column's values are in once find(quantity, unit) converted them; nullopt
+  // before.
+  std::vector<std::optional<Unit>> unit_;
   std::size_t header_start_ = 0, header_line_ = 1;  // byte offset and 1-based line of the header
   std::size_t data_start_ = 0;                      // byte offset just after the header line
   std::size_t rows_ = 0;

@@ -63,6 +63,12 @@ struct ColumnName {
 // knows, "material_temp_c" or "time_s", is matched by column_matches below with any symbol.
 ColumnName split_column_name(std::string_view name);
 
+// Why the column `header`, written in `written`, cannot hold `quantity` read in `wanted`: a unit
+// of another kind ("column 't [s]' is in s, a time; t holds a length (for example in mm)"), or
+// any unit on a plain number. Empty when it can.
+std::string unit_refusal(std::string_view header, Unit written, std::string_view quantity,
+                         Unit wanted);
+
 // Whether the column called `header` holds `quantity`, and in what unit. It does when `header` is
 // `quantity` itself (no unit written), `quantity` with a bracketed or slashed unit, or `quantity`
 // + "_" + a symbol; case aside.

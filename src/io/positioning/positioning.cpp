@@ -113,12 +113,11 @@ PositioningRuns parse_runs(std::string text, const std::string& path) {
                       ? fmt::format("column '{}' appears twice", detail::quote_cut(name))
                       : fmt::format("column '{}' holds the {} again (column '{}' before it)",
                                     detail::quote_cut(name), kQuantities[which], name_of[which]));
-        if (written && kind_of(*written) != kind_of(kColumnUnits[which]))
-          fail(b, fmt::format("column '{}': {} is not a unit of {} ({})", detail::quote_cut(name),
-                              symbol(*written), kQuantities[which],
-                              kind_of(kColumnUnits[which]) == UnitKind::Count
-                                  ? std::string("it takes no unit")
-                                  : fmt::format("for example {}", symbol(kColumnUnits[which]))));
+        if (written)
+          if (const std::string why = unit_refusal(detail::quote_cut(name), *written,
+                                                   kQuantities[which], kColumnUnits[which]);
+              !why.empty())
+            fail(b, why);
         col_of[which] = static_cast<int>(c);
         name_of[which] = std::string(name);
         scale_of[which] = written ? unit_factor(*written, kColumnUnits[which]) : 1.0;

@@ -16,8 +16,7 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   CsvTable t = CsvTable::read(path);
   // Units may be written in the names ("x [mm]", "A (µm)", "pitch_urad"); values are read in mm
   // for x, µm for probes and µrad for the angle channel (see units.hpp).
-  const std::string first = t.cols() ? split_column_name(t.header()[0]).quantity : "";
-  if (t.cols() < 1 || first != "x" || t.find("x", Unit::Millimetre) != 0)
+  if (t.cols() < 1 || t.find("x", Unit::Millimetre) != 0)
     throw Error(fmt::format("{}first column must be 'x' (station position, mm), found '{}'",
                             t.where(-1, 0), t.cols() ? t.header()[0] : ""));
   int angle_col = -1;
@@ -55,8 +54,7 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
             "{}column '{}' looks like an angle channel, not a probe: give --angle {} to use it "
             "(urad), or --probes to list the probe columns",
             t.where(-1, c), name, split.quantity));
-      if (t.find(split.quantity, Unit::Micrometre) != c)
-        throw Error(fmt::format("{}column '{}' is not a probe reading", t.where(-1, c), name));
+      t.find(split.quantity, Unit::Micrometre);  // converts a column named with its unit
       probe_cols.push_back(c);
     }
     if (!opt.offsets.empty() && probe_cols.size() > opt.offsets.size())

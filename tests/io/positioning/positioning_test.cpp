@@ -101,10 +101,11 @@ TEST(PositioningIo, UnitsInTheHeaderConvertOrAreRefused) {
     }
   }
   EXPECT_EQ(runs_error("target_mm,cycle,direction,deviation [s]\n0,1,+,1\n"),
-            "runs.csv:1:27: column 'deviation [s]': s is not a unit of deviation (for example "
-            "\xC2\xB5m)");
+            "runs.csv:1:27: column 'deviation [s]' is in s, a time; deviation holds a length "
+            "(for example in \xC2\xB5m)");
   EXPECT_EQ(runs_error("target_mm,cycle [mm],direction,deviation_um\n0,1,+,1\n"),
-            "runs.csv:1:11: column 'cycle [mm]': mm is not a unit of cycle (it takes no unit)");
+            "runs.csv:1:11: column 'cycle [mm]' is in mm, a length; cycle holds a plain number "
+            "and takes no unit");
   EXPECT_EQ(runs_error("target [furlong],cycle,direction,deviation_um\n0,1,+,1\n"),
             "runs.csv:1:1: column 'target [furlong]': 'furlong' is not a unit this table can "
             "hold (lengths mm, \xC2\xB5m, nm, m, in; angles rad, mrad, \xC2\xB5rad, deg, arcsec; "
@@ -141,6 +142,14 @@ TEST(PositioningIo, AMissingReadingIsNamedWhereTheRunSkipsIt) {
   o.locate = [&](std::size_t k) { return fmt::format("runs.csv:{}:1: ", tail.lines[k]); };
   const std::string e = test::error_of([&] { positioning::evaluate(tail.readings, o); });
   EXPECT_EQ(e.substr(0, e.find(" (")), "runs.csv:12:1: no '-' reading at target 0 mm in cycle 2");
+  // A reading given twice (as a Renishaw file can list it) is named at both places.
+  std::vector<positioning::Reading> twice = runs.readings;
+  std::vector<std::size_t> lines = runs.lines;
+  twice.push_back(runs.readings[0]);
+  lines.push_back(13);
+  o.locate = [&](std::size_t k) { return fmt::format("runs.csv:{}:1: ", lines[k]); };
+  EXPECT_EQ(test::error_of([&] { positioning::evaluate(twice, o); }),
+            "runs.csv:13:1: cycle 1 '+' at target 0 mm again (first at runs.csv:2:1)");
   // Without a place, as from Python with readings made in memory, the message stands alone.
   o.locate = nullptr;
   const std::string bare = test::error_of([&] { positioning::evaluate(runs.readings, o); });

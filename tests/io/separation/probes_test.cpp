@@ -152,6 +152,13 @@ TEST(ResultJson, RoundTripAndBadInput) {
   EXPECT_EQ(err("{\"workpiece\": {\n  \"x\": [0, \"a\"], \"value\": [1, 2]}}"),
             bad + ":2:12: 'workpiece.x[1]' must be a number");
   EXPECT_EQ(err("{\"method\": \"five-point\", \"workpiece\": {}}").rfind(bad + ":1:12: ", 0), 0u);
+  // A figure's uncertainty that is neither a number nor null is named where it stands.
+  const std::string two = "{\"x\": [0, 1], \"value\": [1, 2]}";
+  const std::string with_u = "{\"workpiece\": " + two + ", \"guide\": " + two +
+                             ",\n \"straightness\": {\"workpiece\": {\"ls\": 1, \"min_zone\": 1, "
+                             "\"U_um\": \"big\"}, \"guide\": {\"ls\": 1, \"min_zone\": 1}}}";
+  EXPECT_EQ(err(with_u).rfind(bad + ":2:", 0), 0u) << err(with_u);
+  EXPECT_NE(err(with_u).find("U_um"), std::string::npos) << err(with_u);
 }
 
 // x arrays that repeat the previous one or its start reuse its text: the file must read back
