@@ -84,7 +84,16 @@ int run_calibrate(const CalArgs& a) {
                        4000, cli::report_meta()));
     if (!a.quiet) fmt::print("wrote {}\n", a.report);
   }
-  if (!r.grid)
+  if (!r.grid && r.frames > 1)
+    fmt::print(stderr,
+               "trueaxis ballgauge: the {} aligned placements map in {} separate frames, so "
+               "map.json holds their points but no common grid for 'trueaxis correct'{}\n",
+               r.frames, r.frames,
+               a.parametric.empty()
+                   ? "; --parametric model.json --stylus-offset x,y,z joins them in the 21-error "
+                     "model"
+                   : fmt::format(": use the 21-error model ({})", a.parametric));
+  else if (!r.grid)
     std::fprintf(stderr,
                  "trueaxis ballgauge: the mapped points do not form a full lattice; map.json has "
                  "the points but no grid, so 'trueaxis correct' cannot use it\n");
@@ -109,7 +118,8 @@ int run_correct(const CorrectArgs& a) {
   }
   io::write_points(a.output, p);
   if (!a.quiet && a.output != "-")
-    fmt::print("corrected {} points (X = x - error(x), trilinear): wrote {}\n", p.cols(), a.output);
+    fmt::print("corrected {} points (X = x - error(x), {}): wrote {}\n", p.cols(),
+               m.plane >= 0 ? "bilinear on the plate's plane" : "trilinear", a.output);
   return 0;
 }
 
@@ -177,8 +187,9 @@ struct SimArgs {
   MachineSource machine;
   std::string gauge = "gauge.json", measurements = "measurements.json",
               truth = "ballgauge-truth.csv";
-  std::string alignment = "321", lengths, balls, cmm;
+  std::string alignment = "321", lengths, balls, cmm, plate;
   int sections = 3, repeats = 3;
+  double pitch = 100;
   double length_noise_um = -1;
   std::vector<double> origin{150, 120, 60};
   double misalignment_urad = 4000, noise_um = 0;
@@ -186,17 +197,49 @@ struct SimArgs {
   bool quiet = false;
 };
 
+// "5x5" → rows 5, columns 5; {0, 0} when the text is not ROWSxCOLUMNS with 2..100 of each.
+std::pair<int, int> plate_size(const std::string& text) {
+  int rows = 0, columns = 0;
+  char x = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &rows, &x, &columns, &rest) != 3 ||
+      (x != 'x' && x != 'X') || rows < 2 || columns < 2 || rows > 100 || columns > 100)
+    return {0, 0};
+  return {rows, columns};
+}
+
 int run_simulate(const SimArgs& a) {
   std::pair<std::string, unsigned short> address;
   if (!a.cmm.empty()) address = parse_ipp_address(a.cmm);  // a usage error before any work
   const sim::Machine m = a.machine.load();
   if (a.origin.size() != 3) throw Error("--origin needs x,y,z (mm)");
-  const auto g = sim::frame_gauge();
   const Eigen::Matrix3d R =
       Eigen::AngleAxisd(a.misalignment_urad * 1e-6, Eigen::Vector3d(0.2, -0.1, 1).normalized())
           .toRotationMatrix();
-  auto poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
-  if (a.alignment == "ls") poses.front().alignment = ballgauge::Alignment::LeastSquares;
+  ballgauge::Gauge g;
+  std::vector<sim::GaugePose> poses;
+  if (a.plate.empty()) {
+    g = sim::frame_gauge();
+    poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
+    if (a.alignment == "ls") poses.front().alignment = ballgauge::Alignment::LeastSquares;
+  } else {
+    // A plate campaign in the machine's reach (command range + stylus offset, 30 mm inside).
+    const auto [rows, columns] = plate_size(a.plate);
+    g = sim::plate_gauge(rows, columns, a.pitch);
+    Eigen::Vector3d lo, hi;
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = m.range[static_cast<std::size_t>(k)][0] + m.offset[k] + 30;
+      hi[k] = m.range[static_cast<std::size_t>(k)][1] + m.offset[k] - 30;
+    }
+    poses = sim::plate_poses(g, lo, hi, R);
+    for (auto& q : poses)
+      if (a.alignment == "ls") q.alignment = ballgauge::Alignment::LeastSquares;
+  }
+  const std::string what = a.plate.empty()
+                               ? fmt::format("a {}-ball frame gauge", g.balls.size())
+                               : fmt::format(
+                                     "a {} ball plate at {:g} mm pitch (flat low and high, "
+                                     "upright along X and along Y, each aligned by itself)",
+                                     a.plate, a.pitch);
   sim::BallGaugeOptions o = a.o;
   o.noise = a.noise_um * 1e-3;
   if (!a.balls.empty()) {
@@ -258,12 +301,12 @@ int run_simulate(const SimArgs& a) {
   if (!a.cmm.empty()) {
     if (!a.quiet)
       fmt::print(
-          "measured {} placements of a {}-ball frame gauge through the I++ DME server at {} ({} "
+          "measured {} placements of {} through the I++ DME server at {} ({} "
           "points per ball, tip radius {} mm, {} commands): wrote {} and {}; {} holds where "
           "the balls should be and the errors of {} there (the truth if the server runs that "
           "machine)\n",
-          c.placements.size(), g.balls.size(), a.cmm, o.points_per_ball, o.tip_radius, commands,
-          a.gauge, a.measurements, a.truth,
+          c.placements.size(), what, a.cmm, o.points_per_ball, o.tip_radius, commands, a.gauge,
+          a.measurements, a.truth,
           a.machine.path.empty() ? fmt::format("the random machine of seed {}", a.machine.seed)
                                  : a.machine.path);
     return 0;
@@ -284,10 +327,9 @@ int run_simulate(const SimArgs& a) {
   }
   if (!a.quiet)
     fmt::print(
-        "simulated {} placements of a {}-ball frame gauge ({} points per ball, noise {} "
+        "simulated {} placements of {} ({} points per ball, noise {} "
         "um): wrote {}, {} and {}\n",
-        c.placements.size(), g.balls.size(), o.points_per_ball, a.noise_um, a.gauge, a.measurements,
-        a.truth);
+        c.placements.size(), what, o.points_per_ball, a.noise_um, a.gauge, a.measurements, a.truth);
   return 0;
 }
 
@@ -314,6 +356,11 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
                 "mm: a ball is shared with the map when its centre is this close to a mapped one")
       ->capture_default_str();
   c->add_option("--min-points", ca->o.min_points, "fewest probed points accepted per ball")
+      ->capture_default_str();
+  c->add_option("--plane-band", ca->o.plane_band,
+                "mm: a plate's map (all balls in one plane) is used this far either side of its "
+                "plane")
+      ->check(CLI::PositiveNumber)
       ->capture_default_str();
   c->add_option("--outlier-tolerance", ca->o.outlier_tolerance,
                 "mm: a probed point this far off the sphere through the ball's other points "
@@ -402,7 +449,23 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       "sections (Oya et al.'s layout), each ball probed at points spread over its upper "
       "hemisphere.\nExample: trueaxis simulate ballgauge --machine machine.json --noise 0.5");
   sa->machine.add_options(c);
-  c->add_option("--sections", sa->sections, "placements stacked in z")->capture_default_str();
+  auto* sections =
+      c->add_option("--sections", sa->sections, "placements stacked in z")->capture_default_str();
+  auto* plate = c->add_option(
+      "--plate", sa->plate,
+      "a ball plate of ROWSxCOLUMNS balls instead of the frame (e.g. 5x5), measured in the "
+      "campaign that identifies the 21 errors: flat near the bottom and near the top of the "
+      "volume, upright along X and along Y, each placement aligned by itself");
+  plate->check([](const std::string& t) {
+    return plate_size(t).first > 0
+               ? std::string()
+               : fmt::format("--plate {}: give ROWSxCOLUMNS, e.g. 5x5 (2 to 100 each)", t);
+  });
+  c->add_option("--pitch", sa->pitch, "ball plate pitch, mm")
+      ->needs(plate)
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  plate->excludes(sections);
   c->add_option("--alignment", sa->alignment,
                 "the first placement's alignment: 321 (3-2-1 on balls 0, 1, 2) or ls (least "
                 "squares over all its balls)")

@@ -127,7 +127,8 @@ using detail::fit_ball;
 using detail::kabsch;
 
 // Oya, Hokari and Tamura's 3-2-1 alignment (eqs. 11–12), stated in the gauge's own frame so
-// that it holds however the gauge stands on the machine: ball 0 is fixed, ball 1 is free only
+// that it holds however the gauge stands on the machine (balls 0, 1, 2 here are the gauge's
+// three frame balls, Gauge::frame_balls): ball 0 is fixed, ball 1 is free only
 // along the line 0→1 and ball 2 only in the plane of balls 0, 1, 2. Returns the columns
 // c1, c2, c3 = gauge U, V, W in the machine frame, from the measured centres of balls 0, 1, 2:
 // c1 along x1 − x0, c2 in the measured plane of the three balls, perpendicular to c1 and towards
@@ -141,27 +142,30 @@ using detail::kabsch;
 // than `tolerance` mm (balls numbered differently from the gauge file, or a wrong gauge).
 Eigen::Matrix3d rotation_321(const Eigen::Vector3d& x0, const Eigen::Vector3d& x1,
                              const Eigen::Vector3d& x2, const Eigen::Vector3d& u1,
-                             const Eigen::Vector3d& u2, double tolerance) {
+                             const Eigen::Vector3d& u2, const std::array<int, 3>& balls,
+                             double tolerance) {
   const Eigen::Vector3d d1 = x1 - x0, d2 = x2 - x0;
   const double n1 = d1.norm();
   if (!(n1 > 1e-9 * std::max(1.0, u1.norm())))
-    throw Error("3-2-1 alignment: balls 0 and 1 are measured at the same place");
+    throw Error(fmt::format("3-2-1 alignment: balls {} and {} are measured at the same place",
+                            balls[0], balls[1]));
   const struct {
-    const char* pair;
+    int a, b;
     double measured, nominal;
-  } distances[] = {{"0 and 1", n1, u1.norm()},
-                   {"0 and 2", d2.norm(), u2.norm()},
-                   {"1 and 2", (x2 - x1).norm(), (u2 - u1).norm()}};
+  } distances[] = {{balls[0], balls[1], n1, u1.norm()},
+                   {balls[0], balls[2], d2.norm(), u2.norm()},
+                   {balls[1], balls[2], (x2 - x1).norm(), (u2 - u1).norm()}};
   for (const auto& d : distances)
     if (!(std::abs(d.measured - d.nominal) <= tolerance))
       throw Error(fmt::format(
-          "3-2-1 alignment: balls {} are measured {:.4f} mm apart, the gauge says {:.4f} mm (more "
-          "than {} mm off: are the balls numbered as in the gauge file?)",
-          d.pair, d.measured, d.nominal, tolerance));
+          "3-2-1 alignment: balls {} and {} are measured {:.4f} mm apart, the gauge says {:.4f} mm "
+          "(more than {} mm off: are the balls numbered as in the gauge file?)",
+          d.a, d.b, d.measured, d.nominal, tolerance));
   const Eigen::Vector3d c1 = d1 / n1;
   const Eigen::Vector3d across = d2 - d2.dot(c1) * c1;
   if (!(across.norm() > 1e-6 * d2.norm()))
-    throw Error("3-2-1 alignment: balls 0, 1 and 2 are measured on one line");
+    throw Error(fmt::format("3-2-1 alignment: balls {}, {} and {} are measured on one line",
+                            balls[0], balls[1], balls[2]));
   Eigen::Matrix3d C;
   C.col(0) = c1;
   C.col(1) = across.normalized();
@@ -187,32 +191,84 @@ Eigen::MatrixXd jacobian(const std::function<Eigen::VectorXd(const Eigen::Vector
   return J;
 }
 
-std::optional<map::ErrorMap> as_grid(const std::vector<MapPoint>& pts, double tol) {
+// The map as a grid when its nominal positions form a full lattice. A plate's map, whose points
+// share one coordinate (one cluster on that axis), becomes a grid on its plane: that axis gets
+// two nodes, the plane ± `band`, carrying the same errors (held constant across the band).
+std::optional<map::ErrorMap> as_grid(const std::vector<MapPoint>& pts, double tol, double band) {
   std::vector<int> w[3];
   std::vector<double> axes[3];
+  int plane = -1;
   for (int a = 0; a < 3; ++a) {
     std::vector<double> v;
     for (const auto& p : pts) v.push_back(p.nominal[a]);
     axes[a] = clusters(v, tol, w[a]);
-    if (axes[a].size() < 2) return std::nullopt;
+    if (axes[a].size() == 1 && plane < 0 && band > 0) {
+      plane = a;
+      axes[a] = {axes[a][0] - band, axes[a][0] + band};
+    } else if (axes[a].size() < 2) {
+      return std::nullopt;
+    }
   }
   map::ErrorMap m;
   for (int a = 0; a < 3; ++a)
     m.axes[static_cast<std::size_t>(a)] = Eigen::Map<const Eigen::VectorXd>(
         axes[a].data(), static_cast<Eigen::Index>(axes[a].size()));
-  if (m.nodes() != static_cast<Eigen::Index>(pts.size())) return std::nullopt;
+  m.plane = plane;
+  const Eigen::Index copies = plane < 0 ? 1 : 2;
+  if (m.nodes() != copies * static_cast<Eigen::Index>(pts.size())) return std::nullopt;
   m.error = Eigen::Matrix3Xd::Constant(3, m.nodes(), NAN);
   m.uncertainty.resize(3, m.nodes());
-  for (std::size_t i = 0; i < pts.size(); ++i) {
-    const Eigen::Index n = m.index(w[0][i], w[1][i], w[2][i]);
-    if (!std::isnan(m.error(0, n))) return std::nullopt;  // two points on one node
-    m.error.col(n) = pts[i].error;
-    m.uncertainty.col(n) = pts[i].uncertainty;
-  }
+  bool stated = true;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (Eigen::Index c = 0; c < copies; ++c) {
+      Eigen::Index ijk[3] = {w[0][i], w[1][i], w[2][i]};
+      if (plane >= 0) ijk[plane] = c;
+      const Eigen::Index n = m.index(ijk[0], ijk[1], ijk[2]);
+      if (!std::isnan(m.error(0, n))) return std::nullopt;  // two points on one node
+      m.error.col(n) = pts[i].error;
+      m.uncertainty.col(n) = pts[i].uncertainty;
+      stated = stated && pts[i].uncertainty.allFinite();
+    }
+  if (!stated) m.uncertainty.resize(3, 0);  // not stated: the map carries none
   return m;
 }
 
 }  // namespace
+
+std::array<int, 3> Gauge::frame_balls() const {
+  if (!frame.empty()) {
+    if (frame.size() != 3)
+      throw Error(fmt::format("gauge: 'frame' names {} balls; it needs three (origin, axis, plane)",
+                              frame.size()));
+    return {frame[0], frame[1], frame[2]};
+  }
+  if (balls.size() < 3)
+    throw Error(fmt::format("gauge: needs at least 3 balls, has {}", balls.size()));
+  double size = 0;
+  for (const auto& b : balls) size = std::max(size, (b - balls[0]).norm());
+  const double tol = 1e-6 * std::max(1.0, size);
+  const Eigen::Vector3d a = balls[1] - balls[0];
+  if (!(a.norm() > tol)) return {0, 1, 2};  // validate() says why
+  const Eigen::Vector3d u = a.normalized();
+  auto off_line = [&](const Eigen::Vector3d& b) { return (b - balls[0]).cross(u).norm(); };
+  if (off_line(balls[2]) > tol) return {0, 1, 2};
+  // A row: its far end along 0→1, then the ball farthest from the row's line.
+  int axis = 1, plane = -1;
+  double far = 0, most = tol;
+  for (std::size_t i = 1; i < balls.size(); ++i) {
+    const double along = (balls[i] - balls[0]).dot(u), off = off_line(balls[i]);
+    if (off <= tol && along > far + tol) {
+      far = along;
+      axis = static_cast<int>(i);
+    }
+    if (off > most + tol) {
+      most = off;
+      plane = static_cast<int>(i);
+    }
+  }
+  if (plane < 0) return {0, 1, 2};  // all on one line: validate() says so
+  return {0, axis, plane};
+}
 
 void Gauge::validate() const {
   if (!(ball_diameter > 0) || !std::isfinite(ball_diameter))
@@ -222,21 +278,52 @@ void Gauge::validate() const {
   for (std::size_t i = 0; i < balls.size(); ++i)
     if (!balls[i].allFinite())
       throw Error(fmt::format("gauge: ball {} has a non-finite centre", i));
-  const Eigen::Vector3d a = balls[1] - balls[0], b = balls[2] - balls[0];
+  // Two balls at one place: a gauge file with a ball listed twice.
+  {
+    std::vector<std::size_t> order(balls.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return balls[a].x() < balls[b].x(); });
+    constexpr double kSame = 1e-6;  // mm
+    for (std::size_t a = 0; a < order.size(); ++a)
+      for (std::size_t b = a + 1;
+           b < order.size() && balls[order[b]].x() - balls[order[a]].x() <= kSame; ++b)
+        if ((balls[order[a]] - balls[order[b]]).norm() <= kSame)
+          throw Error(fmt::format("gauge: balls {} and {} are at the same place",
+                                  std::min(order[a], order[b]), std::max(order[a], order[b])));
+  }
+  const auto f = frame_balls();
+  for (int i : f)
+    if (i < 0 || i >= static_cast<int>(balls.size()))
+      throw Error(
+          fmt::format("gauge: frame ball {} is not in the gauge (0..{})", i, balls.size() - 1));
+  if (f[0] == f[1] || f[0] == f[2] || f[1] == f[2])
+    throw Error(fmt::format("gauge: the frame balls {}, {}, {} must be three different balls", f[0],
+                            f[1], f[2]));
+  const Eigen::Vector3d a = balls[static_cast<std::size_t>(f[1])] -
+                            balls[static_cast<std::size_t>(f[0])],
+                        b = balls[static_cast<std::size_t>(f[2])] -
+                            balls[static_cast<std::size_t>(f[0])];
   if (!(a.norm() > 0) || !(a.cross(b).norm() > 1e-9 * a.norm() * std::max(1.0, b.norm())))
-    throw Error("gauge: balls 0, 1 and 2 must span a plane (they define the gauge frame)");
+    throw Error(fmt::format(
+        "gauge: balls {}, {} and {} must span a plane (they define the gauge frame){}", f[0], f[1],
+        f[2],
+        frame.empty() ? "; all the balls lie on one line (a ball bar or step gauge fixes no plane)"
+                      : ""));
 }
 
 std::vector<Eigen::Vector3d> Gauge::canonical() const {
   validate();
-  const Eigen::Vector3d u = (balls[1] - balls[0]).normalized();
-  const Eigen::Vector3d w = u.cross(balls[2] - balls[0]).normalized();
+  const auto f = frame_balls();
+  const Eigen::Vector3d o = balls[static_cast<std::size_t>(f[0])];
+  const Eigen::Vector3d u = (balls[static_cast<std::size_t>(f[1])] - o).normalized();
+  const Eigen::Vector3d w = u.cross(balls[static_cast<std::size_t>(f[2])] - o).normalized();
   Eigen::Matrix3d F;
   F.col(0) = u;
   F.col(1) = w.cross(u);
   F.col(2) = w;
   std::vector<Eigen::Vector3d> out;
-  for (const auto& b : balls) out.push_back(F.transpose() * (b - balls[0]));
+  for (const auto& b : balls) out.push_back(F.transpose() * (b - o));
   return out;
 }
 
@@ -249,17 +336,16 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
   // (u_all) are independent. Tied points carry their dependence on earlier placements.
   Eigen::VectorXd u_all(0);
   std::vector<Eigen::MatrixXd> sens;
+  int frame = -1;
   for (std::size_t pi = 0; pi < placements.size(); ++pi) {
     const Placement& pl = placements[pi];
     const std::string pname = pl.name.empty() ? fmt::format("placement {}", pi) : pl.name;
     if (pi == 0 && pl.alignment == Alignment::Stitch)
       throw Error(fmt::format(
           "{}: the first placement must define the frame (\"321\" or \"ls\" alignment)", pname));
-    if (pi > 0 && pl.alignment != Alignment::Stitch)
-      throw Error(
-          fmt::format("{}: only the first placement may define the frame (3-2-1 or least "
-                      "squares); later ones are stitched to the map",
-                      pname));
+    // Every aligned placement starts a frame of its own (a plate campaign: each plate placement
+    // is aligned by itself); stitched placements join the frame of the last aligned one.
+    if (pl.alignment != Alignment::Stitch) ++frame;
     // Measured centres of this placement's balls.
     std::vector<int> idx;
     std::vector<Centre> cen;
@@ -267,24 +353,36 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
     PlacementReport rep;
     rep.name = pname;
     rep.alignment = pl.alignment;
+    rep.frame = frame;
     for (const auto& b : pl.balls) {
       if (b.index < 0 || b.index >= static_cast<int>(U.size()))
         throw Error(fmt::format("{}: ball index {} is not in the gauge (0..{})", pname, b.index,
                                 U.size() - 1));
       if (!seen.insert(b.index).second)
         throw Error(fmt::format("{}: ball {} is measured twice", pname, b.index));
-      if (b.points.cols() < o.min_points)
-        throw Error(fmt::format("{}: ball {} has {} probed points; at least {} are needed", pname,
-                                b.index, b.points.cols(), o.min_points));
       Centre c;
-      try {
-        c = fit_ball(b.points, o.outlier_tolerance, o.drop_outliers);
-      } catch (const Error& e) {
-        throw Error(fmt::format("{}: ball {}: {}", pname, b.index, e.what()));
+      if (b.centre) {
+        if (!b.centre->allFinite())
+          throw Error(fmt::format("{}: ball {} has a non-finite centre", pname, b.index));
+        c.x = *b.centre;
+        c.u = b.centre_u;
+        c.diameter = NAN;
+        rep.given_centres++;
+      } else {
+        if (b.points.cols() < o.min_points)
+          throw Error(fmt::format("{}: ball {} has {} probed points; at least {} are needed", pname,
+                                  b.index, b.points.cols(), o.min_points));
+        try {
+          c = fit_ball(b.points, o.outlier_tolerance, o.drop_outliers);
+        } catch (const Error& e) {
+          throw Error(fmt::format("{}: ball {}: {}", pname, b.index, e.what()));
+        }
+        for (const auto& d : c.dropped)
+          rep.dropped.push_back(fmt::format("ball {}: {}", b.index, d));
+        rep.diameter_error_max =
+            std::max(rep.diameter_error_max,
+                     std::abs(c.diameter - (gauge.ball_diameter + 2 * pl.tip_radius)));
       }
-      for (const auto& d : c.dropped) rep.dropped.push_back(fmt::format("ball {}: {}", b.index, d));
-      rep.diameter_error_max = std::max(
-          rep.diameter_error_max, std::abs(c.diameter - (gauge.ball_diameter + 2 * pl.tip_radius)));
       idx.push_back(b.index);
       cen.push_back(c);
     }
@@ -321,18 +419,22 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
         return d;
       };
     } else if (pl.alignment == Alignment::ThreeTwoOne) {
+      const auto fb = gauge.frame_balls();
       int k0 = -1, k1 = -1, k2 = -1;
       for (std::size_t k = 0; k < nb; ++k) {
-        if (idx[k] == 0) k0 = static_cast<int>(k);
-        if (idx[k] == 1) k1 = static_cast<int>(k);
-        if (idx[k] == 2) k2 = static_cast<int>(k);
+        if (idx[k] == fb[0]) k0 = static_cast<int>(k);
+        if (idx[k] == fb[1]) k1 = static_cast<int>(k);
+        if (idx[k] == fb[2]) k2 = static_cast<int>(k);
       }
       if (k0 < 0 || k1 < 0 || k2 < 0)
-        throw Error(fmt::format("{}: the 3-2-1 alignment needs balls 0, 1 and 2 measured", pname));
-      errors = [&, k0, k1, k2](const Eigen::VectorXd& x) {
+        throw Error(fmt::format(
+            "{}: the 3-2-1 alignment needs the gauge's frame balls {}, {} and {} measured", pname,
+            fb[0], fb[1], fb[2]));
+      errors = [&, k0, k1, k2, fb](const Eigen::VectorXd& x) {
         auto at = [&](int k) { return Eigen::Vector3d(x.segment<3>(3 * k)); };
         const Eigen::Matrix3d C =
-            rotation_321(at(k0), at(k1), at(k2), U[1], U[2], o.match_tolerance);
+            rotation_321(at(k0), at(k1), at(k2), U[static_cast<std::size_t>(fb[1])],
+                         U[static_cast<std::size_t>(fb[2])], fb, o.match_tolerance);
         Eigen::VectorXd d(3 * static_cast<Eigen::Index>(nb));
         for (std::size_t k = 0; k < nb; ++k)
           d.segment<3>(3 * static_cast<Eigen::Index>(k)) =
@@ -345,6 +447,7 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
       for (std::size_t k = 0; k < nb; ++k) {
         double best = o.match_tolerance;
         for (std::size_t m = 0; m < res.points.size(); ++m) {
+          if (res.points[m].frame != frame) continue;  // another frame's errors: no tie
           const double d = (res.points[m].measured - cen[k].x).norm();
           if (d <= best) {
             best = d;
@@ -368,9 +471,10 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
       }
       if (!spread)
         throw Error(fmt::format(
-            "{}: {} of its balls lie within {} mm of mapped points; stitching needs at least "
-            "three that are not collinear (move the gauge so it overlaps the map, or raise "
-            "--match-tolerance)",
+            "{}: {} of its balls lie within {} mm of points mapped in its frame; stitching needs "
+            "at least three that are not collinear (move the gauge so it overlaps the map, or "
+            "raise --match-tolerance; a placement that does not overlap is aligned by itself: "
+            "\"321\" or \"ls\")",
             pname, ks.size(), o.match_tolerance));
       // Inputs: this placement's centres, then the tied points' error vectors.
       const Eigen::Index base = in.size();
@@ -424,6 +528,7 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
       const Eigen::Vector3d u = (G * u_all.asDiagonal()).rowwise().squaredNorm().cwiseSqrt();
       MapPoint mp;
       mp.placement = pname;
+      mp.frame = frame;
       mp.ball = idx[k];
       mp.measured = cen[k].x;
       mp.error = d.segment<3>(3 * static_cast<Eigen::Index>(k));
@@ -434,25 +539,43 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
     }
     res.placements.push_back(rep);
   }
-  res.grid = as_grid(res.points, o.match_tolerance);
+  res.frames = frame + 1;
+  if (res.frames == 1) res.grid = as_grid(res.points, o.match_tolerance, o.plane_band);
   return res;
 }
 
 std::string Result::summary() const {
   double emax = 0, umax = 0;
+  bool stated = true;
   for (const auto& p : points) {
     emax = std::max(emax, p.error.norm());
-    umax = std::max(umax, p.uncertainty.maxCoeff());
+    if (p.uncertainty.allFinite())
+      umax = std::max(umax, p.uncertainty.maxCoeff());
+    else
+      stated = false;
+  }
+  std::string where;
+  if (grid && grid->plane >= 0) {
+    const auto& x = grid->axes[static_cast<std::size_t>(grid->plane)];
+    const int a = grid->plane == 0 ? 1 : 0, b = grid->plane == 2 ? 1 : 2;
+    where = fmt::format(" on a {} x {} grid in the plane {} = {:.3f} mm", grid->size(a),
+                        grid->size(b), "xyz"[grid->plane], (x[0] + x[1]) / 2);
+  } else if (grid) {
+    where = fmt::format(" on a {} x {} x {} grid", grid->size(0), grid->size(1), grid->size(2));
+  } else if (frames > 1) {
+    where = fmt::format(" in {} separate frames (each aligned placement starts its own)", frames);
   }
   std::string s = fmt::format(
-      "ball gauge: {} placements, {} mapped points{}; largest |error| {:.3f} um, largest "
-      "uncertainty {:.3f} um\n",
-      placements.size(), points.size(),
-      grid ? fmt::format(" on a {} x {} x {} grid", grid->size(0), grid->size(1), grid->size(2))
-           : "",
-      emax * 1e3, umax * 1e3);
-  for (const auto& r : placements)
-    s += fmt::format("  {:<14} {:<6} {} balls{}, sphere diameter error max {:.3f} um\n", r.name,
+      "ball gauge: {} placements, {} mapped points{}; largest |error| {:.3f} um, {}\n",
+      placements.size(), points.size(), where, emax * 1e3,
+      stated ? fmt::format("largest uncertainty {:.3f} um", umax * 1e3)
+             : std::string("uncertainty not stated (centres given without their uncertainty)"));
+  for (const auto& r : placements) {
+    std::string fitted;
+    if (r.given_centres < r.balls)
+      fitted = fmt::format(", sphere diameter error max {:.3f} um", r.diameter_error_max * 1e3);
+    if (r.given_centres > 0) fitted += fmt::format(", {} centres given", r.given_centres);
+    s += fmt::format("  {:<14} {:<6} {} balls{}{}\n", r.name,
                      r.alignment == Alignment::ThreeTwoOne    ? "321"
                      : r.alignment == Alignment::LeastSquares ? "ls"
                                                               : "stitch",
@@ -461,7 +584,8 @@ std::string Result::summary() const {
                          ? fmt::format(" ({} shared, registration RMS {:.3f} um)", r.shared,
                                        r.registration_rms * 1e3)
                          : "",
-                     r.diameter_error_max * 1e3);
+                     fitted);
+  }
   for (const auto& r : placements)
     for (const auto& d : r.dropped) s += fmt::format("  {}: {}\n", r.name, d);
   return s;

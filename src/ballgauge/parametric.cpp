@@ -149,13 +149,19 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
         throw Error(fmt::format("{}: no ball {} in the gauge ({} balls)", name, b.index, U.size()));
       if (!seen.insert(b.index).second)
         throw Error(fmt::format("{}: ball {} is measured twice", name, b.index));
-      if (b.points.cols() < o.min_points)
-        throw Error(fmt::format("{}, ball {}: {} points; at least {} are needed", name, b.index,
-                                b.points.cols(), o.min_points));
-      try {
-        x.push_back(detail::fit_ball(b.points, o.outlier_tolerance, o.drop_outliers).x);
-      } catch (const Error& e) {
-        throw Error(fmt::format("{}, ball {}: {}", name, b.index, e.what()));
+      if (b.centre) {
+        if (!b.centre->allFinite())
+          throw Error(fmt::format("{}, ball {}: a non-finite centre", name, b.index));
+        x.push_back(*b.centre);
+      } else {
+        if (b.points.cols() < o.min_points)
+          throw Error(fmt::format("{}, ball {}: {} points; at least {} are needed", name, b.index,
+                                  b.points.cols(), o.min_points));
+        try {
+          x.push_back(detail::fit_ball(b.points, o.outlier_tolerance, o.drop_outliers).x);
+        } catch (const Error& e) {
+          throw Error(fmt::format("{}, ball {}: {}", name, b.index, e.what()));
+        }
       }
       u.push_back(U[static_cast<std::size_t>(b.index)]);
       which.push_back(static_cast<int>(pi));

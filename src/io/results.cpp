@@ -210,7 +210,9 @@ ballgauge::Result read_ballgauge_map(const std::string& path) {
     q.nominal = vec3(f, at / "nominal");
     q.measured = vec3(f, at / "measured");
     q.error = vec3(f, at / "error", 1e-3);
-    q.uncertainty = vec3(f, at / "uncertainty", 1e-3);
+    q.uncertainty = f.root().at(at / "uncertainty").is_null() ? Eigen::Vector3d::Constant(NAN)
+                                                              : vec3(f, at / "uncertainty", 1e-3);
+    if (f.has(at / "frame")) q.frame = static_cast<int>(f.number(at / "frame"));
     r.points.push_back(q);
   }
   const auto& pl = f.array(P("/placements"));
@@ -225,9 +227,14 @@ ballgauge::Result read_ballgauge_map(const std::string& path) {
     p.balls = static_cast<int>(f.number(at / "balls"));
     p.shared = static_cast<int>(f.number(at / "shared"));
     p.registration_rms = f.number(at / "registration_rms_um") * 1e-3;
-    p.diameter_error_max = f.number(at / "diameter_error_max_um") * 1e-3;
+    if (f.has(at / "frame")) p.frame = static_cast<int>(f.number(at / "frame"));
+    if (f.has(at / "given_centres"))
+      p.given_centres = static_cast<int>(f.number(at / "given_centres"));
+    if (!f.root().at(at / "diameter_error_max_um").is_null())
+      p.diameter_error_max = f.number(at / "diameter_error_max_um") * 1e-3;
     r.placements.push_back(p);
   }
+  if (f.has(P("/frames"))) r.frames = static_cast<int>(f.number(P("/frames")));
   if (f.has(P("/grid"))) r.grid = read_error_map(path);
   return r;
 }

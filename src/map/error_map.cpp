@@ -89,6 +89,16 @@ Eigen::Vector3d ErrorMap::node(Eigen::Index n) const {
 
 std::string ErrorMap::outside_message(const Eigen::Vector3d& p) const {
   const auto& a = axes;
+  if (plane >= 0 && plane < 3) {
+    const auto& x = a[static_cast<std::size_t>(plane)];
+    const double at = (x[0] + x[x.size() - 1]) / 2, band = (x[x.size() - 1] - x[0]) / 2;
+    if (std::abs(p[plane] - at) > band)
+      return fmt::format(
+          "({:.3f}, {:.3f}, {:.3f}) mm is {:.3f} mm off the plane {} = {:.3f} mm that the map "
+          "holds (a ball plate's map, used within {:g} mm of its plane; give --clamp, or "
+          "clamp=True in Python, to use the plane's errors there anyway)",
+          p.x(), p.y(), p.z(), std::abs(p[plane] - at), kNames[plane], at, band);
+  }
   return fmt::format(
       "({:.3f}, {:.3f}, {:.3f}) mm is outside the map's grid x [{:.3f}, {:.3f}], y [{:.3f}, "
       "{:.3f}], z [{:.3f}, {:.3f}] mm (give --clamp, or clamp=True in Python, to hold the edge "
@@ -121,6 +131,21 @@ void ErrorMap::validate() const {
     throw Error(
         fmt::format("the map has {} error vectors for {} grid nodes", error.cols(), nodes()));
   if (!error.allFinite()) throw Error("the map's errors must be finite");
+  if (plane >= 0) {
+    if (plane > 2 || size(plane) != 2)
+      throw Error("a plane map needs two nodes (the plane's band) on its normal axis");
+    for (Eigen::Index n = 0; n < nodes(); ++n) {
+      const Eigen::Index i = n % size(0), j = (n / size(0)) % size(1), k = n / (size(0) * size(1));
+      Eigen::Index ijk[3] = {i, j, k};
+      if (ijk[plane] != 0) continue;
+      ijk[plane] = 1;
+      if (error.col(n) != error.col(index(ijk[0], ijk[1], ijk[2])))
+        throw Error(
+            fmt::format("a plane map holds one error per node of its plane; the two {} "
+                        "nodes differ",
+                        kNames[plane]));
+    }
+  }
   if (uncertainty.size() != 0 && (uncertainty.cols() != nodes() || !uncertainty.allFinite()))
     throw Error("the map's uncertainties must be finite, one per node");
 }

@@ -86,21 +86,35 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
   s.title = title;
   s.references = {refs::kOya, refs::kIso230, refs::kGum};
   double emax = 0, umax = 0;
+  bool stated = true;
   for (const auto& p : r.points) {
     emax = std::max(emax, p.error.norm());
-    umax = std::max(umax, p.uncertainty.maxCoeff());
+    if (p.uncertainty.allFinite())
+      umax = std::max(umax, p.uncertainty.maxCoeff());
+    else
+      stated = false;
   }
   s.intro_html = fmt::format(
       "<p>Error vectors Δ = measured − true ball centre at {} mapped points from {} "
-      "placements; largest |Δ| {} µm, largest standard uncertainty {} µm (it grows with every "
-      "stitch). Measured points are corrected by X = x − Δ(x), trilinear.</p>",
-      r.points.size(), r.placements.size(), um_2f(emax), um_2f(umax));
+      "placements; largest |Δ| {} µm, {}. {}</p>",
+      r.points.size(), r.placements.size(), um_2f(emax),
+      stated ? fmt::format("largest standard uncertainty {} µm (it grows with every stitch)",
+                           um_2f(umax))
+             : std::string("uncertainty not stated (ball centres were given without theirs)"),
+      r.frames > 1
+          ? fmt::format("The {} aligned placements each map in their own frame: their errors "
+                        "differ by rigid motions no ball ties down, so they form no common map.",
+                        r.frames)
+      : r.grid && r.grid->plane >= 0
+          ? "The map holds the plate's plane: measured points on it are corrected by X = x − "
+            "Δ(x), bilinear in the plane."
+          : "Measured points are corrected by X = x − Δ(x), trilinear.");
   s.table = {{"placement", "alignment", "balls", "shared", "registration RMS (µm)",
               "sphere diameter error max (µm)"}};
   for (const auto& p : r.placements)
     s.table.push_back({p.name, alignment(p.alignment), std::to_string(p.balls),
                        std::to_string(p.shared), um_2f(p.registration_rms),
-                       um_2f(p.diameter_error_max)});
+                       p.given_centres < p.balls ? um_2f(p.diameter_error_max) : "centres given"});
   if (pr) {
     s.table.push_back({"parametric model (residual RMS, σ)", fmt::format("degree {}", pr->degree),
                        std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),

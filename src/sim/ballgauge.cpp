@@ -90,6 +90,57 @@ std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections
   return p;
 }
 
+ballgauge::Gauge plate_gauge(int rows, int columns, double pitch, double ball_diameter) {
+  if (rows < 2 || columns < 2 || !(pitch > 0) || !(ball_diameter > 0))
+    throw Error("ball plate: needs at least 2 x 2 balls, a positive pitch and diameter");
+  ballgauge::Gauge g;
+  g.ball_diameter = ball_diameter;
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) g.balls.emplace_back(pitch * i, pitch * j, 0.0);
+  return g;
+}
+
+std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Eigen::Vector3d& lo,
+                                   const Eigen::Vector3d& hi, const Eigen::Matrix3d& rotation) {
+  Eigen::Vector3d size = Eigen::Vector3d::Zero();
+  for (const auto& b : plate.balls) size = size.cwiseMax(b);
+  const Eigen::Vector3d mid = (lo + hi) / 2, room = hi - lo;
+  const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),
+                        Z = Eigen::Vector3d::UnitZ();
+  struct Plane {
+    const char* name;
+    Eigen::Vector3d u, v;
+    double level;  // where along the normal, as a fraction of the room (0.5: centred)
+  };
+  const Plane planes[] = {
+      {"XY low", X, Y, 0.1}, {"XY high", X, Y, 0.9}, {"XZ", X, Z, 0.5}, {"YZ", Y, Z, 0.5}};
+  std::vector<GaugePose> out;
+  for (const auto& p : planes) {
+    Eigen::Matrix3d F;
+    F << p.u, p.v, p.u.cross(p.v);
+    const Eigen::Vector3d extent = (F * size).cwiseAbs();
+    for (int a = 0; a < 3; ++a)
+      if (extent[a] > room[a])
+        throw Error(fmt::format(
+            "ball plate campaign: the {:.0f} x {:.0f} mm plate does not fit the {} placement "
+            "({:.0f} mm of room along {})",
+            size.x(), size.y(), p.name, room[a], "xyz"[a]));
+    const Eigen::Vector3d n = p.u.cross(p.v);
+    Eigen::Vector3d at = mid - F * size / 2;  // centred in its plane
+    const int normal = n.cwiseAbs().maxCoeff() == std::abs(n.x()) ? 0
+                       : std::abs(n.y()) > std::abs(n.z())        ? 1
+                                                                  : 2;
+    at[normal] = lo[normal] + p.level * room[normal];
+    GaugePose q;
+    q.name = p.name;
+    q.alignment = ballgauge::Alignment::ThreeTwoOne;
+    q.rotation = rotation * F;
+    q.translation = at;
+    out.push_back(q);
+  }
+  return out;
+}
+
 void BallGaugeOptions::validate() const {
   if (points_per_ball < 5) throw Error("ball gauge simulation: at least 5 points per ball");
   if (!(tip_radius >= 0) || !(noise >= 0))

@@ -262,15 +262,30 @@ TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   p[0].alignment = ballgauge::Alignment::Stitch;
   EXPECT_NE(err(p).find("first placement must define the frame"), std::string::npos);
   p = c.placements;
-  p[1].alignment = ballgauge::Alignment::LeastSquares;
-  EXPECT_NE(err(p).find("z1: only the first placement may define the frame"), std::string::npos);
-  p = c.placements;
   std::swap(p[1], p[2]);  // z2 does not overlap z0
-  EXPECT_NE(err(p).find("z2: 0 of its balls lie within 1 mm of mapped points"), std::string::npos)
+  EXPECT_NE(err(p).find("z2: 0 of its balls lie within 1 mm of points mapped in its frame"),
+            std::string::npos)
+      << err(p);
+  // An aligned placement after the first starts a frame of its own, and the stitch after it
+  // joins that frame only.
+  p = c.placements;
+  p[1].alignment = ballgauge::Alignment::LeastSquares;
+  {
+    const auto r = ballgauge::calibrate(g, p);
+    EXPECT_EQ(r.frames, 2);
+    EXPECT_EQ(r.points.back().frame, 1);
+    EXPECT_FALSE(r.grid);
+  }
+  // z0 aligned, z2 aligned anew, then z0 again stitched: it overlaps the first frame only.
+  p = {c.placements[0], c.placements[2], c.placements[0]};
+  p[1].alignment = ballgauge::Alignment::LeastSquares;
+  p[2].alignment = ballgauge::Alignment::Stitch;
+  EXPECT_NE(err(p).find("z0: 0 of its balls lie within 1 mm of points mapped in its frame"),
+            std::string::npos)
       << err(p);
   p = c.placements;
   p[0].balls.erase(p[0].balls.begin() + 1);  // ball 1 missing from the 3-2-1 placement
-  EXPECT_NE(err(p).find("needs balls 0, 1 and 2"), std::string::npos);
+  EXPECT_NE(err(p).find("needs the gauge's frame balls 0, 1 and 2 measured"), std::string::npos);
   p = c.placements;
   p[2].balls.push_back(p[2].balls[0]);
   EXPECT_NE(err(p).find("is measured twice"), std::string::npos);
@@ -280,8 +295,10 @@ TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
       << err(p);
   EXPECT_NE(err(p).find("are the balls numbered as in the gauge file?"), std::string::npos);
   ballgauge::Gauge bad = g;
-  bad.balls[2] = {160, 0, 0};
-  EXPECT_NE(test::error_of([&] { bad.validate(); }).find("must span a plane"), std::string::npos);
+  bad.balls[2] = {160, 0, 0};  // where another ball of the frame is
+  EXPECT_NE(test::error_of([&] { bad.validate(); }).find("balls 2 and "), std::string::npos);
+  EXPECT_NE(test::error_of([&] { bad.validate(); }).find("are at the same place"),
+            std::string::npos);
 }
 
 // Found by fuzzing: one wrong touch (a probed point 11 m off) gave a map with 11 m errors and

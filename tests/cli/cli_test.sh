@@ -254,6 +254,30 @@ grep -q "section 1      ls " out.txt && ok || bad "ballgauge with the least-squa
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json:[0-9]*:[0-9]*: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 
+# Ball plates: a campaign of four placements (each aligned by itself) identifies the 21 errors;
+# one placement alone is a map of its plane, used on that plane only.
+expect_ok "$T" simulate ballgauge --plate 5x5 --pitch 100 --noise 0.3 --gauge bp-gauge.json --measurements bp-meas.json --truth bp-truth.csv --lengths bp-lengths.csv
+grep -q "4 placements of a 5x5 ball plate at 100 mm pitch" out.txt && ok || bad "simulate ballgauge --plate"
+expect_ok "$T" ballgauge --gauge bp-gauge.json --measurements bp-meas.json --output bp-map.json --parametric bp-model.json --stylus-offset 0,0,-100
+grep -q "100 mapped points in 4 separate frames" out.txt && grep -q "use the 21-error model (bp-model.json)" err.txt && ! grep -q '"grid"' bp-map.json && ok || bad "ballgauge on a plate campaign"
+expect_ok "$T" verify-lengths --model bp-model.json -i bp-lengths.csv -o bp-verify.json
+grep -q "parametric correction: 105 lengths" out.txt && ok || bad "verify-lengths with a plate campaign's model"
+"$T" simulate ballgauge --plate 5y5 >out.txt 2>err.txt; [ $? -eq 2 ] && grep -q "give ROWSxCOLUMNS" err.txt && ok || bad "--plate 5y5 is a usage error"
+/usr/bin/python3 - <<'PY' && ok || bad "one plate placement"
+import json
+m = json.load(open("bp-meas.json"))
+m["placements"] = m["placements"][2:3]  # the XZ placement alone
+json.dump(m, open("bp-xz.json", "w"))
+PY
+expect_ok "$T" ballgauge --gauge bp-gauge.json --measurements bp-xz.json --output bp-xz-map.json
+grep -q "25 mapped points on a 5 x 5 grid in the plane y = " out.txt && grep -q '"plane"' bp-xz-map.json && ok || bad "a plate's map on its plane"
+Y=$(/usr/bin/python3 -c 'import json; print(json.load(open("bp-xz-map.json"))["grid"]["plane"]["at"])')
+printf 'x,y,z\n350,%s,200\n350,%s,200\n' "$Y" "$(/usr/bin/python3 -c "print($Y + 2)")" > bp-on.csv
+expect_ok "$T" correct --map bp-xz-map.json --input bp-on.csv --output bp-corr.csv
+grep -q "bilinear on the plate's plane" out.txt && ok || bad "correct on a plate's plane"
+printf 'x,y,z\n350,%s,200\n' "$(/usr/bin/python3 -c "print($Y + 40)")" > bp-off.csv
+expect_err "bp-off.csv:2:1: point 1 .* is 40.000 mm off the plane y = " "$T" correct --map bp-xz-map.json --input bp-off.csv --output o.csv
+
 # Gauge-block verification, grid and parametric (grid map and parametric model).
 expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv --lengths bg-lengths.csv
 grep -q "105 gauge-block measurements" out.txt && head -1 bg-lengths.csv | grep -qx "x1,y1,z1,x2,y2,z2,nominal" && ok || bad "simulate ballgauge --lengths"

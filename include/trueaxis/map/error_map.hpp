@@ -27,6 +27,10 @@ struct ErrorMap {
   std::array<Eigen::VectorXd, 3> axes;  // node coordinates per axis (mm), strictly increasing, ≥ 2
   Eigen::Matrix3Xd error;               // mm, column n = node (i, j, k), n = i + nx·(j + ny·k)
   Eigen::Matrix3Xd uncertainty;         // mm, same layout, or empty
+  // ≥ 0: the map holds one plane normal to this axis (0 x, 1 y, 2 z; a ball plate's map): the
+  // axis has two nodes, the plane ± a band, with equal errors, so a point within the band takes
+  // the plane's error and a point outside it is refused as off the plane.
+  int plane = -1;
 
   Eigen::Index size(int axis) const { return axes[static_cast<std::size_t>(axis)].size(); }
   Eigen::Index nodes() const { return size(0) * size(1) * size(2); }

@@ -55,6 +55,19 @@ std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections
                                      const Eigen::Vector3d& origin,
                                      const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity());
 
+// A ball plate: rows × columns balls at `pitch` (mm) in the gauge's UV plane, numbered row by
+// row from ball 0 (its 3-2-1 frame: ball 0, the end of the first row, the first ball of the last
+// row; ballgauge::Gauge::frame_balls).
+ballgauge::Gauge plate_gauge(int rows = 5, int columns = 5, double pitch = 133,
+                             double ball_diameter = 22);
+// A plate campaign in the box [lo, hi] (true positions, mm): the plate flat (XY) near the bottom
+// and near the top of the box, upright along X (XZ) and along Y (YZ), each centred in the box and
+// aligned 3-2-1 by itself; `rotation` is each placement's small misalignment. Throws Error when
+// the plate does not fit the box in one of those planes.
+std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Eigen::Vector3d& lo,
+                                   const Eigen::Vector3d& hi,
+                                   const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity());
+
 // `gauge.balls` are used as given (gauge frame); poses map them into the machine.
 BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
                                      const std::vector<GaugePose>& poses,

@@ -35,18 +35,64 @@ ballgauge::Gauge read_gauge(const std::string& path) {
   const JsonFile f = JsonFile::read(path);
   ballgauge::Gauge g;
   for (const auto& [key, value] : f.object(ptr()).items())
-    if (key != "ball_diameter" && key != "balls")
-      f.fail(ptr() / key, fmt::format("unknown key '{}' (ball_diameter, balls)", key));
+    if (key != "ball_diameter" && key != "balls" && key != "plate" && key != "frame")
+      f.fail(ptr() / key,
+             fmt::format("unknown key '{}' (ball_diameter, balls or plate, frame)", key));
   if (!f.has(ptr() / "ball_diameter")) f.fail(ptr(), "'ball_diameter' is missing");
   g.ball_diameter = f.number(ptr() / "ball_diameter");
   if (!(g.ball_diameter > 0)) f.fail(ptr() / "ball_diameter", "ball_diameter must be > 0 (mm)");
-  if (!f.has(ptr() / "balls")) f.fail(ptr(), "'balls' is missing");
-  const auto& balls = f.array(ptr() / "balls");
-  for (std::size_t i = 0; i < balls.size(); ++i) g.balls.push_back(triple(f, ptr() / "balls" / i));
+  const bool has_balls = f.has(ptr() / "balls"), has_plate = f.has(ptr() / "plate");
+  if (has_balls && has_plate)
+    f.fail(ptr() / "plate", "give the balls or a plate's layout, not both");
+  if (!has_balls && !has_plate) f.fail(ptr(), "'balls' (or a 'plate' layout) is missing");
+  ptr where = ptr() / "balls";
+  if (has_balls) {
+    const auto& balls = f.array(where);
+    for (std::size_t i = 0; i < balls.size(); ++i) g.balls.push_back(triple(f, where / i));
+  } else {
+    // A ball plate: rows × columns balls at a pitch, numbered row by row from ball 0.
+    where = ptr() / "plate";
+    int count[2] = {0, 0};
+    double pitch[2] = {0, 0};
+    for (const auto& [key, value] : f.object(where).items()) {
+      const ptr k = where / key;
+      if (key == "rows" || key == "columns") {
+        const double v = f.number(k);
+        if (!(v >= 2 && v <= 100 && v == std::floor(v)))
+          f.fail(k, fmt::format("{} must be a whole number from 2 to 100", key));
+        count[key == "rows" ? 1 : 0] = static_cast<int>(v);
+      } else if (key == "pitch") {
+        const Eigen::VectorXd v =
+            f.root().at(k).is_number() ? Eigen::VectorXd::Constant(1, f.number(k)) : f.numbers(k);
+        if (v.size() != 1 && v.size() != 2)
+          f.fail(k, "pitch is one number (mm) or [along a row, between rows] (mm)");
+        pitch[0] = v[0];
+        pitch[1] = v[v.size() - 1];
+        if (!(pitch[0] > 0 && pitch[1] > 0)) f.fail(k, "pitch must be > 0 (mm)");
+      } else {
+        f.fail(k, fmt::format("unknown key '{}' (rows, columns, pitch)", key));
+      }
+    }
+    if (count[0] == 0 || count[1] == 0 || pitch[0] == 0)
+      f.fail(where, "a plate needs rows, columns and pitch");
+    for (int j = 0; j < count[1]; ++j)
+      for (int i = 0; i < count[0]; ++i) g.balls.emplace_back(pitch[0] * i, pitch[1] * j, 0.0);
+  }
+  if (f.has(ptr() / "frame")) {
+    const Eigen::VectorXd v = f.numbers(ptr() / "frame");
+    if (v.size() != 3) f.fail(ptr() / "frame", "frame names three balls: [origin, axis, plane]");
+    for (Eigen::Index i = 0; i < 3; ++i) {
+      if (!(v[i] >= 0 && v[i] < static_cast<double>(g.balls.size()) && v[i] == std::floor(v[i])))
+        f.fail(ptr() / "frame" / static_cast<std::size_t>(i),
+               fmt::format("frame ball {:g} is not a ball of the gauge (0..{})", v[i],
+                           g.balls.size() - 1));
+      g.frame.push_back(static_cast<int>(v[i]));
+    }
+  }
   try {
     g.validate();
   } catch (const Error& e) {
-    f.fail(ptr() / "balls", e.what());
+    f.fail(f.has(ptr() / "frame") ? ptr() / "frame" : where, e.what());
   }
   return g;
 }
@@ -54,7 +100,9 @@ ballgauge::Gauge read_gauge(const std::string& path) {
 void write_gauge(const std::string& path, const ballgauge::Gauge& g) {
   ojson balls = ojson::array();
   for (const auto& b : g.balls) balls.push_back(xyz(b));
-  write_json(path, ojson{{"ball_diameter", g.ball_diameter}, {"balls", balls}});
+  ojson j{{"ball_diameter", g.ball_diameter}, {"balls", balls}};
+  if (!g.frame.empty()) j["frame"] = g.frame;
+  write_json(path, j);
 }
 
 std::vector<ballgauge::Placement> read_measurements(const std::string& path,
@@ -118,11 +166,25 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path,
               B.points.resize(3, static_cast<Eigen::Index>(pts.size()));
               for (std::size_t q = 0; q < pts.size(); ++q)
                 B.points.col(static_cast<Eigen::Index>(q)) = triple(f, bp / bk / q);
+            } else if (bk == "centre" || bk == "center") {
+              if (B.centre) f.fail(bp / bk, "the centre is given twice");
+              B.centre = triple(f, bp / bk);
+            } else if (bk == "u_um") {
+              const Eigen::Vector3d u = triple(f, bp / bk);
+              if (!(u.minCoeff() > 0))
+                f.fail(bp / bk, "u_um (the centre's standard uncertainty, um) must be > 0");
+              B.centre_u = u * 1e-3;
             } else {
-              f.fail(bp / bk, fmt::format("unknown key '{}' (index, points)", bk));
+              f.fail(bp / bk, fmt::format("unknown key '{}' (index, points or centre, u_um)", bk));
             }
           }
           if (!has_index) f.fail(bp, "ball without an 'index'");
+          if (B.centre && B.points.cols() > 0)
+            f.fail(bp, "give the probed points or the fitted centre, not both");
+          if (!B.centre && B.points.cols() == 0)
+            f.fail(bp, "ball without 'points' (probed tip centres) or a 'centre'");
+          if (!B.centre && f.has(bp / "u_um"))
+            f.fail(bp / "u_um", "u_um belongs to a given centre; probed points give their own");
           P.balls.push_back(std::move(B));
         }
       } else {
@@ -141,6 +203,12 @@ void write_measurements(const std::string& path, const std::vector<ballgauge::Pl
     ojson balls = ojson::array();
     for (const auto& b : p.balls) {
       ojson pts = ojson::array();
+      if (b.centre) {
+        ojson ball{{"index", b.index}, {"centre", xyz(*b.centre)}};
+        if (b.centre_u.allFinite()) ball["u_um"] = xyz(b.centre_u, 1e3);
+        balls.push_back(ball);
+        continue;
+      }
       for (Eigen::Index q = 0; q < b.points.cols(); ++q) pts.push_back(xyz(b.points.col(q)));
       balls.push_back({{"index", b.index}, {"points", pts}});
     }
@@ -154,26 +222,40 @@ void write_measurements(const std::string& path, const std::vector<ballgauge::Pl
 
 void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
   ojson pts = ojson::array();
-  for (const auto& p : r.points)
+  bool stated = true;
+  for (const auto& p : r.points) {
+    const bool u = p.uncertainty.allFinite();
+    stated = stated && u;
     pts.push_back({{"placement", p.placement},
+                   {"frame", p.frame},
                    {"ball", p.ball},
                    {"nominal", xyz(p.nominal)},
                    {"measured", xyz(p.measured)},
                    {"error", xyz(p.error, 1e3)},
-                   {"uncertainty", xyz(p.uncertainty, 1e3)}});
+                   {"uncertainty", u ? xyz(p.uncertainty, 1e3) : ojson(nullptr)}});
+  }
   ojson pl = ojson::array();
   for (const auto& p : r.placements)
-    pl.push_back({{"name", p.name},
-                  {"alignment", alignment_name(p.alignment)},
-                  {"balls", p.balls},
-                  {"shared", p.shared},
-                  {"registration_rms_um", p.registration_rms * 1e3},
-                  {"diameter_error_max_um", p.diameter_error_max * 1e3}});
+    pl.push_back(
+        {{"name", p.name},
+         {"alignment", alignment_name(p.alignment)},
+         {"frame", p.frame},
+         {"balls", p.balls},
+         {"shared", p.shared},
+         {"given_centres", p.given_centres},
+         {"registration_rms_um", p.registration_rms * 1e3},
+         {"diameter_error_max_um",
+          p.given_centres < p.balls ? ojson(p.diameter_error_max * 1e3) : ojson(nullptr)}});
   ojson j;
   j["kind"] = "ballgauge map";
   j["frame"] =
       "machine coordinates (mm); error = measured - true ball centre (um); correct with X = x - "
       "error(x)";
+  j["frames"] = r.frames;
+  if (!stated)
+    j["no_uncertainty"] =
+        "some ball centres were given without their uncertainty: the errors that depend on them "
+        "have none stated (null)";
   j["points"] = pts;
   j["placements"] = pl;
   if (r.grid) j["grid"] = detail::grid_json(*r.grid);

@@ -30,6 +30,15 @@ ojson grid_json(const map::ErrorMap& m) {
   for (int a = 0; a < 3; ++a)
     g[names[a]] = scaled(m.axes[static_cast<std::size_t>(a)].transpose(), 1.0);
   g["layout"] = "node n = i + nx*(j + ny*k) for x[i], y[j], z[k]";
+  if (m.plane >= 0) {
+    const auto& x = m.axes[static_cast<std::size_t>(m.plane)];
+    g["plane"] = {{"normal", names[m.plane]},
+                  {"at", (x[0] + x[1]) / 2},
+                  {"band_mm", (x[1] - x[0]) / 2},
+                  {"meaning",
+                   "a ball plate's map: it holds the plane only; the two nodes along its normal "
+                   "are the plane +- band, with the plane's errors"}};
+  }
   const char* en[3] = {"ex", "ey", "ez"};
   const char* un[3] = {"ux", "uy", "uz"};
   for (int c = 0; c < 3; ++c) g[en[c]] = scaled(m.error.row(c), 1e3);
@@ -170,6 +179,17 @@ map::ErrorMap read_error_map(const std::string& path) {
         f.fail(g / names[a] / static_cast<std::size_t>(i),
                fmt::format("grid {} nodes must increase strictly", names[a]));
   }
+  if (f.has(g / "plane")) {
+    const ptr pl = g / "plane";
+    const std::string normal = f.string(pl / "normal");
+    for (int a = 0; a < 3; ++a)
+      if (normal == names[a]) m.plane = a;
+    if (m.plane < 0)
+      f.fail(pl / "normal", fmt::format("normal must be x, y or z, not '{}'", normal));
+    if (m.axes[static_cast<std::size_t>(m.plane)].size() != 2)
+      f.fail(g / names[m.plane],
+             fmt::format("a plane map has two {} nodes (the plane's band)", normal));
+  }
   const char* en[3] = {"ex", "ey", "ez"};
   const char* un[3] = {"ux", "uy", "uz"};
   // The node count is checked against the values the file holds before anything is allocated:
@@ -199,6 +219,13 @@ map::ErrorMap read_error_map(const std::string& path) {
         f.fail(g / un[c], fmt::format("'{}' has {} values for {} grid nodes", dotted(g / un[c]),
                                       u.size(), m.nodes()));
       m.uncertainty.row(c) = u.transpose();
+    }
+  }
+  if (m.plane >= 0) {
+    try {
+      m.validate();
+    } catch (const Error& e) {
+      f.fail(g / "plane", e.what());
     }
   }
   return m;

@@ -67,10 +67,11 @@ TEST(BallGaugeIo, BadFilesNameFileLineAndColumn) {
                 .find("m.json:1:38: ball index 12 is not in the gauge (0..11)"),
             std::string::npos)
       << gmerr(R"({"placements": [{"balls": [{"index": 12, "points": []}]}]})");
-  EXPECT_NE(gmerr(R"({"placements": [{"balls": [{"index": 3}, {"index": 3}]}]})")
-                .find("m.json:1:52: ball 3 is measured twice"),
-            std::string::npos)
-      << gmerr(R"({"placements": [{"balls": [{"index": 3}, {"index": 3}]}]})");
+  EXPECT_NE(
+      gmerr(R"({"placements": [{"balls": [{"index": 3, "centre": [0, 0, 0]}, {"index": 3}]}]})")
+          .find("m.json:1:73: ball 3 is measured twice"),
+      std::string::npos)
+      << gmerr(R"({"placements": [{"balls": [{"index": 3, "centre": [0, 0, 0]}, {"index": 3}]}]})");
   // Found by fuzzing: 1e10 was converted first and reported as "ball index -2147483648".
   EXPECT_NE(gmerr(R"({"placements": [{"balls": [{"index": 1e10, "points": []}]}]})")
                 .find("m.json:1:38: ball index 1e+10 is not in the gauge (0..11)"),
@@ -101,4 +102,79 @@ TEST(BallGaugeIo, BallsRoundTripAndBadFilesAreLocated) {
   EXPECT_NE(err("x,y,z,diameter\n").find("no balls"), std::string::npos);
   EXPECT_NE(err("x,y,z,diameter\n1,2,abc,25\n").find("balls.csv:2:5:"), std::string::npos)
       << err("x,y,z,diameter\n1,2,abc,25\n");
+}
+
+// Ball plates as their users describe them: a layout instead of 25 coordinates, the 3-2-1 frame
+// balls named, and centres the CMM's software already fitted, with or without their uncertainty.
+TEST(BallGaugeIo, PlatesFramesAndGivenCentres) {
+  const auto plate = io::read_gauge(test::temp_file(
+      "gauge.json", R"({"ball_diameter": 22, "plate": {"rows": 4, "columns": 5, "pitch": [100, 80]},
+                        "frame": [0, 4, 15]})"));
+  ASSERT_EQ(plate.balls.size(), 20u);
+  EXPECT_EQ(plate.balls[7], Eigen::Vector3d(200, 80, 0));
+  EXPECT_EQ(plate.frame_balls(), (std::array<int, 3>{0, 4, 15}));
+  const std::string gp = test::temp_file("written.json", "");
+  io::write_gauge(gp, plate);
+  EXPECT_EQ(io::read_gauge(gp).frame, plate.frame);
+  // Centres, with and without their standard uncertainty, round trip.
+  ballgauge::Placement p;
+  p.name = "XY";
+  p.alignment = ballgauge::Alignment::ThreeTwoOne;
+  for (int i = 0; i < 3; ++i) {
+    ballgauge::BallPoints b;
+    b.index = i;
+    b.centre = Eigen::Vector3d(100.0 * i, 1, 2);
+    if (i == 1) b.centre_u = Eigen::Vector3d(0.3e-3, 0.3e-3, 0.5e-3);
+    p.balls.push_back(b);
+  }
+  const std::string mp = test::temp_file("m.json", "");
+  io::write_measurements(mp, {p});
+  const auto back = io::read_measurements(mp, &plate);
+  ASSERT_EQ(back[0].balls.size(), 3u);
+  EXPECT_EQ(*back[0].balls[2].centre, Eigen::Vector3d(200, 1, 2));
+  EXPECT_FALSE(back[0].balls[0].centre_u.allFinite());
+  EXPECT_NEAR(back[0].balls[1].centre_u.z(), 0.5e-3, 1e-15);
+
+  auto gerr = [](const std::string& t) {
+    const std::string f = test::temp_file("gauge.json", t);
+    return test::error_of([&] { io::read_gauge(f); });
+  };
+  EXPECT_NE(gerr(R"({"ball_diameter": 22, "plate": {"rows": 1, "columns": 5, "pitch": 100}})")
+                .find("gauge.json:1:41: rows must be a whole number from 2 to 100"),
+            std::string::npos)
+      << gerr(R"({"ball_diameter": 22, "plate": {"rows": 1, "columns": 5, "pitch": 100}})");
+  EXPECT_NE(gerr(R"({"ball_diameter": 22, "plate": {"rows": 5, "columns": 5}})")
+                .find("a plate needs rows, columns and pitch"),
+            std::string::npos);
+  EXPECT_NE(gerr(R"({"ball_diameter": 22, "balls": [[0,0,0]], "plate": {"rows": 2}})")
+                .find("give the balls or a plate's layout, not both"),
+            std::string::npos);
+  EXPECT_NE(gerr(R"({"ball_diameter": 22, "plate": {"rows": 2, "columns": 2, "pitch": 50},
+                     "frame": [0, 1, 9]})")
+                .find("frame ball 9 is not a ball of the gauge (0..3)"),
+            std::string::npos);
+  EXPECT_NE(gerr(R"({"ball_diameter": 22, "plate": {"rows": 3, "columns": 3, "pitch": 50},
+                     "frame": [0, 1, 2]})")
+                .find("balls 0, 1 and 2 must span a plane"),
+            std::string::npos);
+  auto merr = [](const std::string& t) {
+    const std::string f = test::temp_file("m.json", t);
+    return test::error_of([&] { io::read_measurements(f); });
+  };
+  EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0, 0],
+                                                "points": [[1, 2, 3]]}]}]})")
+                .find("give the probed points or the fitted centre, not both"),
+            std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0, 0],
+                                                "u_um": [0.3, 0, 0.3]}]}]})")
+                .find("u_um (the centre's standard uncertainty, um) must be > 0"),
+            std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "points": [[1, 2, 3]],
+                                                "u_um": [0.3, 0.3, 0.3]}]}]})")
+                .find("u_um belongs to a given centre"),
+            std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0]}]}]})")
+                .find("'placements[0].balls[0].centre' needs [x, y, z]"),
+            std::string::npos)
+      << merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0]}]}]})");
 }

@@ -1,10 +1,16 @@
 // trueaxis::io — ball-gauge files (gauge.json, placements, lengths).
 //
-// gauge.json: {"ball_diameter": mm, "balls": [[u, v, w], ...]} (gauge frame, mm; balls 0, 1, 2
-//   define the frame).
+// gauge.json: {"ball_diameter": mm, "balls": [[u, v, w], ...]} (gauge frame, mm), or for a ball
+//   plate {"ball_diameter": mm, "plate": {"rows": n, "columns": m, "pitch": mm | [along a row,
+//   between rows]}} (balls numbered row by row from 0); optional "frame": [origin, axis, plane],
+//   the three balls of the 3-2-1 frame (default: Gauge::frame_balls, e.g. 0, 4, 20 on a 5 × 5
+//   plate).
 // measurements.json: {"placements": [{"name": str, "alignment": "321" | "ls" | "stitch",
 //   "tip_radius": mm, "balls": [{"index": i, "points": [[x, y, z], ...]}, ...]}, ...]}
-//   (probed stylus-tip centres, mm, machine frame; index into gauge.json, 0-based).
+//   (probed stylus-tip centres, mm, machine frame; index into gauge.json, 0-based). A ball the
+//   CMM's software already fitted: {"index": i, "centre": [x, y, z]} (mm; "center" too), with
+//   "u_um": [ux, uy, uz] its standard uncertainty when known. Each "321" or "ls" placement starts
+//   a frame of its own; "stitch" joins the last one.
 // map.json: {"points": [{"placement", "ball", "nominal": [mm], "measured": [mm], "error": [µm],
 //   "uncertainty": [µm]}], "placements": [...], "grid": {...} (as in space.json, when the points
 //   form a lattice)}. `trueaxis correct` reads its grid.
