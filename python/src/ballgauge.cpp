@@ -106,6 +106,25 @@ X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
         d["rank"] = r.rank;
         d["unknowns"] = r.unknowns;
         d["unobservable"] = r.unobservable;
+        // ISO 230-1 figures with their expanded uncertainties (k = 2).
+        py::dict st, st_u;
+        const char* names[3][2] = {{"EYX", "EZX"}, {"EXY", "EZY"}, {"EXZ", "EYZ"}};
+        for (std::size_t k = 0; k < 3; ++k)
+          for (std::size_t j = 0; j < 2; ++j) {
+            st[names[k][j]] = r.iso.lines.straightness[k][j] * 1e3;
+            st_u[names[k][j]] = 2e3 * r.iso.u_straightness[k][j];
+          }
+        py::dict sq, sq_u;
+        sq["EC0Y"] = r.iso.lines.c0y * 1e6;
+        sq["EB0Z"] = r.iso.lines.b0z * 1e6;
+        sq["EA0Z"] = r.iso.lines.a0z * 1e6;
+        sq_u["EC0Y"] = 2e6 * r.iso.u_c0y;
+        sq_u["EB0Z"] = 2e6 * r.iso.u_b0z;
+        sq_u["EA0Z"] = 2e6 * r.iso.u_a0z;
+        d["straightness_um"] = st;
+        d["straightness_U_um"] = st_u;
+        d["squareness_urad"] = sq;
+        d["squareness_U_urad"] = sq_u;
         d["summary"] = r.summary();
         return d;
       },
@@ -116,7 +135,9 @@ X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
 stylus_offset: the stylus tip's offset [x, y, z] (mm) from the ram, as in machine.json. Every
 error function is a polynomial of `degree` in its axis coordinate. Returns {'machine': the
 identified trueaxis.Machine (its range is the measured span), 'residual_rms', 'sigma' (µm),
-'rank', 'unknowns', 'unobservable' (error names the data cannot see), 'summary'}. With
+'rank', 'unknowns', 'unobservable' (error names the data cannot see), 'straightness_um',
+'squareness_urad' (ISO 230-1: about and between the axes' reference lines at the tool point,
+the other axes mid-span) with 'straightness_U_um', 'squareness_U_urad' (k = 2), 'summary'}. With
 output='model.json' the model and its covariance are written for verify_lengths(model=...).)doc");
 
   m.def(

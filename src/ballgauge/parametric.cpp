@@ -290,7 +290,47 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
       svd.matrixV().leftCols(k) * svd.singularValues().head(k).cwiseInverse().asDiagonal();
   const Eigen::MatrixXd cov = (r.sigma * r.sigma) * (Vk * Vk.transpose());
   r.covariance = scale.head(P).asDiagonal() * cov.topLeftCorner(P, P) * scale.head(P).asDiagonal();
+  r.iso = iso_figures(r);
   return r;
+}
+
+IsoFigures iso_figures(const ParametricResult& r) {
+  IsoFigures out;
+  // The model's machine restricted to the identified span, built from the parameters so that
+  // each one can be moved on its own.
+  auto machine = [&](Eigen::Index p, double delta) {
+    sim::Machine m = blank_machine(r.model.chain, r.model.offset);
+    m.range = r.model.range;
+    for (Eigen::Index q = 0; q < r.parameters.size(); ++q)
+      add_parameter(m, r.degree, r.centre, r.half_span, q, r.parameters[q] + (q == p ? delta : 0));
+    return m;
+  };
+  auto figures = [&](const sim::ReferenceLines& l) {
+    Eigen::VectorXd v(9);
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 2; ++j)
+        v[2 * k + j] = l.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)];
+    v[6] = l.c0y;
+    v[7] = l.b0z;
+    v[8] = l.a0z;
+    return v;
+  };
+  out.lines = sim::reference_lines(machine(-1, 0), r.centre);
+  const Eigen::Index P = r.parameters.size();
+  if (r.covariance.rows() != P || r.covariance.cols() != P) return out;
+  Eigen::MatrixXd G(9, P);
+  for (Eigen::Index p = 0; p < P; ++p)
+    G.col(p) = (figures(sim::reference_lines(machine(p, kStep), r.centre)) -
+                figures(sim::reference_lines(machine(p, -kStep), r.centre))) /
+               (2 * kStep);
+  const Eigen::VectorXd u = (G * r.covariance * G.transpose()).diagonal().cwiseMax(0).cwiseSqrt();
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 2; ++j)
+      out.u_straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)] = u[2 * k + j];
+  out.u_c0y = u[6];
+  out.u_b0z = u[7];
+  out.u_a0z = u[8];
+  return out;
 }
 
 std::string ParametricResult::summary() const {
@@ -308,7 +348,32 @@ std::string ParametricResult::summary() const {
     for (const auto& u : unobservable) names += (names.empty() ? "" : ", ") + u;
     s += fmt::format("  not seen by this stylus: {}\n", names);
   }
-  return s + model.summary(unobservable);
+  s += model.summary(unobservable);
+  // Expanded uncertainties (k = 2) of the ISO figures, and those the data cannot resolve.
+  const auto& L = iso.lines;
+  std::string st, unresolved;
+  for (int k = 0; k < 3; ++k) {
+    const int a = (k + 1) % 3, b = (k + 2) % 3;
+    const int across[2] = {std::min(a, b), std::max(a, b)};
+    st += fmt::format("{}{} {:.2f} {:.2f}", k ? ", " : "", "XYZ"[k],
+                      2e3 * iso.u_straightness[static_cast<std::size_t>(k)][0],
+                      2e3 * iso.u_straightness[static_cast<std::size_t>(k)][1]);
+    for (int j = 0; j < 2; ++j) {
+      const double v = L.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)],
+                   U = 2 *
+                       iso.u_straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)];
+      const std::string name = sim::error_name(k, static_cast<sim::Component>(across[j]));
+      if (U >= v && std::find(unobservable.begin(), unobservable.end(), name) == unobservable.end())
+        unresolved +=
+            fmt::format("{}{} (U {:.2f} um)", unresolved.empty() ? "" : ", ", name, U * 1e3);
+    }
+  }
+  s += fmt::format(
+      "  U (k = 2): straightness {} um; squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad\n",
+      st, 2e6 * iso.u_c0y, 2e6 * iso.u_b0z, 2e6 * iso.u_a0z);
+  if (!unresolved.empty())
+    s += fmt::format("  not resolved (U reaches the value): {}\n", unresolved);
+  return s;
 }
 
 Correction parametric_correction(const ParametricResult& result) {

@@ -119,24 +119,15 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
     s.table.push_back({"parametric model (residual RMS, σ)", fmt::format("degree {}", pr->degree),
                        std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),
                        um_2f(pr->residual_rms), "σ " + um_2f(pr->sigma)});
-    // Squareness, the last three parameters (rad), with U = 2u.
-    const Eigen::Index sq = 18 * (pr->degree + 1);
+    // Squareness as ISO 230-1 defines it (the angles between the axes' reference lines at the
+    // tool point), with U = 2u from the parameter covariance.
     const char* names[3] = {"EC0Y", "EB0Z", "EA0Z"};
-    const double values[3] = {pr->model.squareness_c0y, pr->model.squareness_b0z,
-                              pr->model.squareness_a0z};
-    for (int i = 0; i < 3; ++i) {
-      const Eigen::Index at = sq + i;
-      const bool have = pr->covariance.rows() > at;
-      const bool seen = std::find(pr->unobservable.begin(), pr->unobservable.end(), names[i]) ==
-                        pr->unobservable.end();
-      s.table.push_back({fmt::format("squareness {}", names[i]),
-                         seen ? fmt::format("{:.2f} µrad", values[i] * 1e6) : "not determined",
-                         seen && have
-                             ? fmt::format("U = {:.2f} µrad (k = 2)",
-                                           2e6 * std::sqrt(std::max(0.0, pr->covariance(at, at))))
-                             : "",
-                         "", "", ""});
-    }
+    const double values[3] = {pr->iso.lines.c0y, pr->iso.lines.b0z, pr->iso.lines.a0z};
+    const double u[3] = {pr->iso.u_c0y, pr->iso.u_b0z, pr->iso.u_a0z};
+    for (int i = 0; i < 3; ++i)
+      s.table.push_back({fmt::format("squareness {} (ISO 230-1)", names[i]),
+                         fmt::format("{:.2f} µrad", values[i] * 1e6),
+                         fmt::format("U = {:.2f} µrad (k = 2)", 2e6 * u[i]), "", "", ""});
   }
   if (pr) parametric_curves(*pr, s);
   if (r.grid) {

@@ -17,6 +17,10 @@ namespace {
 
 constexpr const char* kAxes = "XYZ";
 constexpr const char* kComponents = "XYZABC";
+// reference_lines: the angle asin(d_a · d_b) between reference lines, signed as the squareness
+// parameters act (positive EC0Y leans Y towards −X, EB0Z leans Z towards +X, EA0Z leans Z towards
+// −Y).
+constexpr double kSquarenessSign[3] = {-1, 1, -1};  // c0y, b0z, a0z
 
 bool finite(double v) {
   return std::isfinite(v);
@@ -160,11 +164,65 @@ Eigen::Matrix3Xd Machine::errors_at(const Eigen::Matrix3Xd& commands) const {
   return out;
 }
 
+ReferenceLines reference_lines(const Machine& m, const Eigen::Vector3d& at, int samples) {
+  if (samples < 3) throw Error("reference lines: at least 3 samples per axis");
+  ReferenceLines out;
+  for (int k = 0; k < 3; ++k) {
+    const auto& r = m.range[static_cast<std::size_t>(k)];
+    Eigen::Matrix3Xd c(3, samples);
+    Eigen::VectorXd u(samples);
+    for (int i = 0; i < samples; ++i) {
+      u[i] = r[0] + (r[1] - r[0]) * i / (samples - 1.0);
+      c.col(i) = at;
+      c(k, i) = u[i];
+    }
+    // The actual tool point along the axis, less its nominal: a line fitted to the errors is the
+    // reference line's departure from the axis direction (no cancellation against millimetres).
+    const Eigen::Matrix3Xd e = m.errors_at(c);
+    const double um = u.mean();
+    const Eigen::VectorXd du = u.array() - um;
+    const double suu = du.squaredNorm();
+    Eigen::Vector3d slope, mean = e.rowwise().mean();
+    for (int j = 0; j < 3; ++j) slope[j] = suu > 0 ? e.row(j).dot(du) / suu : 0.0;
+    Eigen::Vector3d d = slope;
+    d[k] += 1;
+    out.direction[static_cast<std::size_t>(k)] = d.normalized();
+    int across = 0;
+    for (int j = 0; j < 3; ++j) {
+      if (j == k) continue;
+      double lo = 0, hi = 0;
+      for (int i = 0; i < samples; ++i) {
+        const double dev = e(j, i) - mean[j] - slope[j] * du[i];
+        lo = i == 0 ? dev : std::min(lo, dev);
+        hi = i == 0 ? dev : std::max(hi, dev);
+      }
+      out.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(across++)] = hi - lo;
+    }
+  }
+  // Out of squareness: the angle between two reference lines less 90°, asin of minus the
+  // cosine; signs as the model's squareness parameters act (tests/sim/machine_test.cpp).
+  auto angle = [&](int a, int b) {
+    return std::asin(std::clamp(
+        out.direction[static_cast<std::size_t>(a)].dot(out.direction[static_cast<std::size_t>(b)]),
+        -1.0, 1.0));
+  };
+  out.c0y = kSquarenessSign[0] * angle(0, 1);
+  out.b0z = kSquarenessSign[1] * angle(0, 2);
+  out.a0z = kSquarenessSign[2] * angle(1, 2);
+  return out;
+}
+
 std::string Machine::summary(const std::vector<std::string>& not_determined) const {
   std::string s =
       fmt::format("{} (chain {}, ranges x [{:g}, {:g}], y [{:g}, {:g}], z [{:g}, {:g}] mm)\n",
                   name.empty() ? "machine" : name, chain, range[0][0], range[0][1], range[1][0],
                   range[1][1], range[2][0], range[2][1]);
+  // Straightness and squareness as ISO 230-1 defines them at the tool point, with the other
+  // axes mid-range: about the reference lines, not the error functions' own slopes.
+  Eigen::Vector3d mid;
+  for (int k = 0; k < 3; ++k)
+    mid[k] = (range[static_cast<std::size_t>(k)][0] + range[static_cast<std::size_t>(k)][1]) / 2;
+  const ReferenceLines lines = reference_lines(*this, mid);
   s += "  span over the axis range   positioning  straightness (2)     roll/pitch/yaw (3)\n";
   for (int k = 0; k < 3; ++k) {
     const auto& r = range[static_cast<std::size_t>(k)];
@@ -180,6 +238,8 @@ std::string Machine::summary(const std::vector<std::string>& not_determined) con
       span[c] = (hi - lo) * (c < 3 ? 1e3 : 1e6);
     }
     const int a = (k + 1) % 3, b = (k + 2) % 3;
+    span[std::min(a, b)] = lines.straightness[static_cast<std::size_t>(k)][0] * 1e3;
+    span[std::max(a, b)] = lines.straightness[static_cast<std::size_t>(k)][1] * 1e3;
     auto cell = [&](int c, int width, int digits) {
       const std::string name = error_name(k, static_cast<Component>(c));
       for (const auto& n : not_determined)
@@ -192,8 +252,11 @@ std::string Machine::summary(const std::vector<std::string>& not_determined) con
   }
   if (!not_determined.empty())
     s += "  n/d: not determined by the data (no effect on these measurements)\n";
-  s += fmt::format("  squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad\n",
-                   squareness_c0y * 1e6, squareness_b0z * 1e6, squareness_a0z * 1e6);
+  s += "  straightness: range about the axis' reference line (ISO 230-1), at the tool point\n";
+  s += fmt::format(
+      "  squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad (angles between the reference "
+      "lines, less 90 deg)\n",
+      lines.c0y * 1e6, lines.b0z * 1e6, lines.a0z * 1e6);
   return s;
 }
 

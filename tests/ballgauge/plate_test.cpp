@@ -241,6 +241,19 @@ TEST(BallPlate, CampaignOfFourPlacementsIdentifiesTheMachine) {
   constexpr double kSolved = 1e-9;  // mm: Gauss–Newton stops where its step vanishes (~1e-10 mm)
   EXPECT_LT(model.residual_rms, kSolved);
   EXPECT_EQ(model.unobservable, (std::vector<std::string>{"ECX", "ECZ"}));
+  // Its ISO 230-1 figures (straightness about the reference lines, squareness between them) are
+  // the machine's own over the same span, whatever split of slopes the identification chose.
+  sim::Machine truth = m;
+  truth.range = model.model.range;
+  const auto expected = sim::reference_lines(truth, model.centre);
+  EXPECT_NEAR(model.iso.lines.c0y, expected.c0y, 1e-9);
+  EXPECT_NEAR(model.iso.lines.b0z, expected.b0z, 1e-9);
+  EXPECT_NEAR(model.iso.lines.a0z, expected.a0z, 1e-9);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 2; ++j)
+      EXPECT_NEAR(
+          model.iso.lines.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)],
+          expected.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)], kSolved);
   sim::GaugeBlockOptions go;
   for (int k = 0; k < 3; ++k) {
     go.lo[k] = model.model.range[static_cast<std::size_t>(k)][0] + m.offset[k] + 1;
@@ -258,4 +271,40 @@ TEST(BallPlate, CampaignOfFourPlacementsIdentifiesTheMachine) {
   const auto w =
       ballgauge::verify_lengths(blocks.lengths, ballgauge::parametric_correction(probed));
   EXPECT_LT(w.after.rms, 0.05 * w.before.rms);
+}
+
+// With probing noise, the plate campaign's squareness estimates agree with the machine's ISO
+// squareness within their stated uncertainty.
+TEST(BallPlate, CampaignSquarenessAgreesWithItsStatedUncertainty) {
+  constexpr double kNoise = 0.3e-3;  // mm per coordinate of every probed point
+  double z2 = 0;
+  int n = 0;
+  for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+    const sim::Machine m = cubic_machine(30 + seed);
+    const auto plate = sim::plate_gauge(5, 5, 100);
+    Eigen::Vector3d lo, hi;
+    reach(m, 20, lo, hi);
+    sim::BallGaugeOptions bo;
+    bo.noise = kNoise;
+    bo.seed = seed;
+    const auto c = sim::simulate_ballgauge(m, plate, sim::plate_poses(plate, lo, hi), bo);
+    ballgauge::ParametricOptions po;
+    po.offset = m.offset;
+    const auto model = ballgauge::identify(plate, c.placements, po);
+    sim::Machine truth = m;
+    truth.range = model.model.range;
+    const auto expected = sim::reference_lines(truth, model.centre);
+    const double est[3] = {model.iso.lines.c0y, model.iso.lines.b0z, model.iso.lines.a0z};
+    const double tru[3] = {expected.c0y, expected.b0z, expected.a0z};
+    const double u[3] = {model.iso.u_c0y, model.iso.u_b0z, model.iso.u_a0z};
+    for (int i = 0; i < 3; ++i) {
+      ASSERT_GT(u[i], 0);
+      z2 += std::pow((est[i] - tru[i]) / u[i], 2);
+      ++n;
+    }
+  }
+  // The probing pattern's own bias adds a little to the noise; the z-scores' RMS stays near 1.
+  const double z_rms = std::sqrt(z2 / n);
+  EXPECT_LT(z_rms, 2.0);
+  EXPECT_GT(z_rms, 0.3);
 }

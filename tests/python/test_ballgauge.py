@@ -40,6 +40,10 @@ def test_gauge_blocks_grid_and_parametric(tmp_path):
     assert "ECZ" in p["unobservable"] and p["rank"] < p["unknowns"]
     assert 0.05 < p["sigma"] < 0.3  # centre noise from 0.2 µm probing
     assert isinstance(p["machine"], trueaxis.Machine)
+    # ISO 230-1 squareness with its expanded uncertainty, for every pair of axes.
+    assert set(p["squareness_urad"]) == {"EC0Y", "EB0Z", "EA0Z"}
+    assert all(u > 0 for u in p["squareness_U_urad"].values())
+    assert set(p["straightness_um"]) == {"EYX", "EZX", "EXY", "EZY", "EXZ", "EYZ"}
     grid, par = trueaxis.verify_lengths(lengths, map=em, model=model)
     assert grid["correction"] == "grid" and par["correction"] == "parametric"
     # Independent numpy check of the numbers: before = |b − a| − nominal; after with the grid =

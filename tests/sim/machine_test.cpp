@@ -120,6 +120,54 @@ TEST(Machine, SquarenessTiltsTheAxesExactly) {
   EXPECT_NEAR(m.error(c).y(), -250 * 40e-6, second_order);
 }
 
+// ISO 230-1's squareness is the angle between the axes' reference lines: a machine whose only
+// errors are squareness errors gives them back, and straightness slopes that amount to a rigid
+// rotation of the whole machine (EYX = ω·x, EXY = −ω·y) change neither squareness nor
+// straightness, while the error functions' own values do.
+TEST(Machine, ReferenceLinesGiveIsoSquarenessWhateverTheSplitOfTheSlopes) {
+  constexpr double kSecondOrder = 1e-8;  // rad: products of the 30–50 µrad angles
+  Machine m;
+  m.squareness_c0y = 50e-6;
+  m.squareness_b0z = -30e-6;
+  m.squareness_a0z = 40e-6;
+  const Eigen::Vector3d mid(400, 300, 250);
+  auto r = reference_lines(m, mid);
+  EXPECT_NEAR(r.c0y, 50e-6, kSecondOrder);
+  EXPECT_NEAR(r.b0z, -30e-6, kSecondOrder);
+  EXPECT_NEAR(r.a0z, 40e-6, kSecondOrder);
+  for (const auto& axis : r.straightness)
+    for (double s : axis) EXPECT_LT(s, kRoundOff);
+  // A random machine, then the same turned rigidly about z by ω through its straightness slopes.
+  MachineOptions o;
+  o.seed = 4;
+  Machine a = random_machine(o);
+  Machine b = a;
+  const double w = 30e-6;
+  // Slopes are a rigid rotation to first order only: ω times the machine's µrad angles over
+  // ~1 m leaves ~1e-7 mm.
+  constexpr double kFirstOrder = 1e-6;  // mm
+  b.errors[0][1].polynomial.resize(std::max<std::size_t>(2, b.errors[0][1].polynomial.size()));
+  b.errors[1][0].polynomial.resize(std::max<std::size_t>(2, b.errors[1][0].polynomial.size()));
+  b.errors[0][1].polynomial[1] += w * 1e3;  // EYX += ω·x (mm, x in m)
+  b.errors[1][0].polynomial[1] -= w * 1e3;  // EXY −= ω·y
+  const auto ra = reference_lines(a, mid), rb = reference_lines(b, mid);
+  EXPECT_NEAR(ra.c0y, rb.c0y, kSecondOrder);
+  EXPECT_NEAR(ra.b0z, rb.b0z, kSecondOrder);
+  EXPECT_NEAR(ra.a0z, rb.a0z, kSecondOrder);
+  for (int k = 0; k < 3; ++k)
+    for (int j = 0; j < 2; ++j)
+      EXPECT_NEAR(ra.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)],
+                  rb.straightness[static_cast<std::size_t>(k)][static_cast<std::size_t>(j)],
+                  kFirstOrder);
+  // The straightness is the bow about the reference line, not the slope: a linear EYX has none.
+  Machine c;
+  c.errors[0][1].polynomial = {0, 20e-3};  // 20 µm per metre
+  EXPECT_LT(reference_lines(c, mid).straightness[0][0], kRoundOff);
+  c.errors[0][1].polynomial = {0, 0,
+                               40e-3};  // a bow: 40 µm/m² · x², over 0.8 m: 6.4 µm about its line
+  EXPECT_NEAR(reference_lines(c, mid).straightness[0][0], 40e-3 * 0.8 * 0.8 / 4, 1e-9);
+}
+
 // The first-order (linearised) rigid-body model that identification fits, written out
 // independently for any chain: Σ δ_k + Σ ε_k × (downstream moves + offset) + squareness terms.
 Eigen::Vector3d first_order(const Machine& m, const Eigen::Vector3d& c) {

@@ -45,6 +45,18 @@ struct ParametricOptions {
   void validate() const;    // throws Error
 };
 
+// The identified machine's ISO 230-1 figures at the tool point (sim::reference_lines over the
+// identified span, the other axes mid-span): straightness about each axis' reference line and
+// squareness as the angles between reference lines, with standard uncertainties from the
+// parameter covariance (first order). Unlike the model's own squareness parameters, these do
+// not depend on how the data's unfixed rigid rotation splits between the straightness slopes and
+// the squareness parameters.
+struct IsoFigures {
+  sim::ReferenceLines lines;
+  std::array<std::array<double, 2>, 3> u_straightness{};  // mm, as lines.straightness
+  double u_c0y = 0, u_b0z = 0, u_a0z = 0;                 // rad
+};
+
 struct ParametricResult {
   sim::Machine model;  // identified errors (polynomials); range = the measured span per axis
   // The parameters: per axis k, per component j (X, Y, Z, A, B, C), the coefficients of the
@@ -60,6 +72,7 @@ struct ParametricResult {
   int balls = 0, placements = 0, unknowns = 0, rank = 0, iterations = 0;
   std::vector<std::string> unobservable;  // error functions with no effect on these data
   int degree = 3;
+  IsoFigures iso;               // from model and covariance (iso_figures)
   std::string summary() const;  // µm, µrad
 
   // The error e(c) = actual − nominal (mm) at commands c (3 × n) and its first-order design
@@ -71,6 +84,10 @@ struct ParametricResult {
 // unknown ball indices, an axis sampled at too few positions for the degree.
 ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& placements,
                           const ParametricOptions& options = {});
+
+// The ISO 230-1 figures of an identified model (its model, degree, centre, half_span,
+// parameters and covariance).
+IsoFigures iso_figures(const ParametricResult& result);
 
 // Correction X = x + e(x − offset) by the identified model, refusing points whose command lies
 // outside the identified span (tolerance 1e-6 mm); its length uncertainty comes from the

@@ -95,12 +95,31 @@ struct Machine {
   // Errors at many commands (3 × n, mm), in parallel for large n.
   Eigen::Matrix3Xd errors_at(const Eigen::Matrix3Xd& commands) const;
 
-  // A short table of the 21 errors: the span (max − min) of each function over its axis range
-  // (µm or µrad) and the squareness values.
-  // The error spans per axis. Errors named in `not_determined` (ISO names, e.g. "ECX": an
-  // identified model's functions the data cannot see) read "n/d" instead of a number.
+  // A short table of the 21 errors: per axis the span (max − min) of its positioning and
+  // angular error functions over its range (µm, µrad), its two straightness errors and the
+  // three squareness errors as ISO 230-1 defines them at the tool point (reference_lines).
+  // Errors named in `not_determined` (ISO names, e.g. "ECX": an identified model's functions the
+  // data cannot see) read "n/d" instead of a number.
   std::string summary(const std::vector<std::string>& not_determined = {}) const;
 };
+
+// The tool point's trajectories and their ISO 230-1 reference lines: each axis moved over its
+// range with the other two at `at` (commands, mm). The reference line of an axis is the
+// least-squares line of its trajectory; its straightness, in each of the two directions across
+// the axis, is the range of the trajectory's deviations from that line (mm); the squareness
+// errors are the angles between reference lines less 90° (rad), in the sign convention of
+// Machine::squareness_c0y, _b0z, _a0z, so that a machine whose only errors are squareness
+// errors gives them back. Unlike the error functions' own values, these figures do not depend on
+// how a straightness slope is split between the functions and the squareness parameters (a
+// split that data never fixes, since it is a rigid motion of the whole machine).
+struct ReferenceLines {
+  std::array<Eigen::Vector3d, 3> direction;  // unit vectors, per axis
+  // [axis][0, 1]: across directions in axis order (X: y, z; Y: x, z; Z: x, y), mm.
+  std::array<std::array<double, 2>, 3> straightness{};
+  double c0y = 0, b0z = 0, a0z = 0;  // rad
+};
+ReferenceLines reference_lines(const Machine& machine, const Eigen::Vector3d& at,
+                               int samples = 101);
 
 // A seeded random machine with realistic magnitudes. Straightness: bow plus cubic plus
 // one long-wave sinusoid, about `straightness` PV over 500 mm; angular: drift, bow and a wave of

@@ -409,6 +409,28 @@ void write_parametric(const std::string& path, const ballgauge::ParametricResult
       {"rank", r.rank},
       {"iterations", r.iterations},
       {"unobservable", unobs}};
+  // ISO 230-1 figures at the tool point, the other axes mid-span, with U (k = 2).
+  ojson iso;
+  const char* names[3][2] = {{"EYX", "EZX"}, {"EXY", "EZY"}, {"EXZ", "EYZ"}};
+  ojson st, su;
+  for (int k = 0; k < 3; ++k)
+    for (int jj = 0; jj < 2; ++jj) {
+      const auto K = static_cast<std::size_t>(k), J = static_cast<std::size_t>(jj);
+      st[names[k][jj]] = r.iso.lines.straightness[K][J] * 1e3;
+      su[names[k][jj]] = 2e3 * r.iso.u_straightness[K][J];
+    }
+  iso["meaning"] =
+      "straightness about each axis' least-squares reference line and squareness as the angles "
+      "between reference lines less 90 deg (ISO 230-1), of the tool point, the other axes "
+      "mid-span; U expanded, k = 2, from the parameter covariance";
+  iso["straightness_um"] = st;
+  iso["straightness_U_um"] = su;
+  iso["squareness_urad"] = {{"EC0Y", r.iso.lines.c0y * 1e6},
+                            {"EB0Z", r.iso.lines.b0z * 1e6},
+                            {"EA0Z", r.iso.lines.a0z * 1e6}};
+  iso["squareness_U_urad"] = {
+      {"EC0Y", 2e6 * r.iso.u_c0y}, {"EB0Z", 2e6 * r.iso.u_b0z}, {"EA0Z", 2e6 * r.iso.u_a0z}};
+  j["identification"]["iso_230_1"] = iso;
   write_json(path, j);
 }
 
@@ -448,6 +470,7 @@ ballgauge::ParametricResult read_parametric(const std::string& path) {
   if (f.has(id / "residual_rms_um")) r.residual_rms = f.number(id / "residual_rms_um") * 1e-3;
   if (f.has(id / "sigma_um"))  // null: no redundancy, the noise level is unknown
     r.sigma = f.root().at(id / "sigma_um").is_null() ? NAN : f.number(id / "sigma_um") * 1e-3;
+  r.iso = ballgauge::iso_figures(r);
   return r;
 }
 
