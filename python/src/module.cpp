@@ -43,6 +43,7 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
         x.size() > 1 ? (x[x.size() - 1] - x[0]) / static_cast<double>(x.size() - 1) : 1.0;
     for (Eigen::Index i = 0; i < readings.cols(); ++i)
       d.offsets.push_back(static_cast<double>(i) * h);
+    d.offsets_assumed = true;  // the result's warnings say so
   }
   if (angle) d.angle = *angle * 1e-6;
   separation::Options o;
@@ -84,6 +85,9 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
       r.no_uncertainty.empty() ? py::object(py::none()) : py::object(py::str(r.no_uncertainty));
   out["sigma_estimated"] = r.sigma_estimated;
   out["dof"] = r.dof;
+  out["offsets"] = r.offsets;
+  out["offsets_assumed"] = r.offsets_assumed;
+  out["warnings"] = r.warnings();
   out["summary"] = r.summary();
   return out;
 }

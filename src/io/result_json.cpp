@@ -129,6 +129,12 @@ void write_result(const std::string& path, const Result& r) {
     fmt::format_to(std::back_inserter(b), "  \"no_uncertainty\": {},\n", quoted(r.no_uncertainty));
   if (r.noise_gain && std::isfinite(*r.noise_gain))
     fmt::format_to(std::back_inserter(b), "  \"noise_gain\": {},\n", *r.noise_gain);
+  if (!r.offsets.empty()) {
+    fmt::format_to(std::back_inserter(b), "  \"offsets_mm\": [");
+    for (std::size_t i = 0; i < r.offsets.size(); ++i)
+      fmt::format_to(std::back_inserter(b), "{}{}", i ? ", " : "", r.offsets[i]);
+    fmt::format_to(std::back_inserter(b), "],\n  \"offsets_assumed\": {},\n", r.offsets_assumed);
+  }
   fmt::format_to(std::back_inserter(b),
                  "  \"sigma_estimated\": {},\n  \"dof\": {},\n  \"residual_rms_um\": {}\n}}\n",
                  r.sigma_estimated, r.dof, r.residual_rms * 1e3);
@@ -208,6 +214,12 @@ Result read_result(const std::string& path) {
     r.sigma_estimated = j["sigma_estimated"].get<bool>();
   }
   if (doc.has(P("/noise_gain"))) r.noise_gain = doc.number(P("/noise_gain"));
+  if (doc.has(P("/offsets_mm"))) {
+    const Eigen::VectorXd o = doc.numbers(P("/offsets_mm"));
+    r.offsets.assign(o.data(), o.data() + o.size());
+  }
+  if (doc.has(P("/offsets_assumed")))
+    r.offsets_assumed = doc.root().at(P("/offsets_assumed")).get<bool>();
   if (doc.has(P("/dof"))) r.dof = static_cast<long>(doc.number(P("/dof")));
   if (doc.has(P("/residual_rms_um"))) r.residual_rms = doc.number(P("/residual_rms_um")) * 1e-3;
   return r;

@@ -381,7 +381,10 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
 }
 
 Result separate(const ProbeData& data, const Options& opt) {
-  return detail::separate(data, opt, detail::LsqSolver::Automatic);
+  Result r = detail::separate(data, opt, detail::LsqSolver::Automatic);
+  r.offsets = data.offsets;
+  r.offsets_assumed = data.offsets_assumed;
+  return r;
 }
 
 std::vector<std::string> Result::warnings() const {
@@ -411,6 +414,15 @@ std::vector<std::string> Result::warnings() const {
           trueaxis::detail::two_digits(st * 1e3));
     }
     w.push_back(s);
+  }
+  if (offsets_assumed) {
+    std::string list;
+    for (double o : offsets) list += fmt::format("{}{:g}", list.empty() ? "" : ", ", o);
+    w.push_back(fmt::format(
+        "the probe offsets were not stated, so they were taken as {} mm (equal to the stations' "
+        "step); if the probes stand otherwise every figure above is wrong: give --offsets, or "
+        "name the probe columns with their offsets (a@0, b@10, ...)",
+        list));
   }
   return w;
 }

@@ -21,7 +21,7 @@ expect_ok "$T" separate --help
 grep -q "two-point" out.txt && ok || bad "separate --help lists the methods"
 
 expect_ok "$T" simulate straightness --stations 300 --offsets 0,10,20 --seed 3 --output p3.csv --truth t3.csv
-head -1 p3.csv | grep -qx "x,a,b,c" && ok || bad "probes header"
+head -1 p3.csv | grep -qx "x,a@0,b@10,c@20" && ok || bad "probes header (each probe's offset in its name)"
 head -1 t3.csv | grep -qx "x,workpiece_um,guide_um,pitch_urad" && ok || bad "truth header"
 for m in three-point lsq; do
   expect_ok "$T" separate --input p3.csv --method $m --output r-$m.json --csv r-$m.csv
@@ -75,7 +75,7 @@ expect_err "far.csv:3:9: z = 999 mm is outside the machine's range" "$T" machine
 printf '{"ranges": {"x": [0, 8], "y": [0, 6], "z": [0, 5]},\n "errors": {"EXQ": 1}}' > badm.json
 expect_err "badm.json:2:20: unknown error 'EXQ'" "$T" machine error badm.json pts.csv
 expect_ok "$T" simulate line --machine machine.json --start 0,300,250 --step 20 --offsets 0,20,40 --angle -o run.csv --truth run-truth.csv
-[ "$(wc -l <run.csv)" -eq 42 ] && head -1 run.csv | grep -qx "x,a,b,c,angle" && ok || bad "simulate line fills the x range (41 stops, 0..800 mm)"
+[ "$(wc -l <run.csv)" -eq 42 ] && head -1 run.csv | grep -qx "x,a@0,b@20,c@40,angle" && ok || bad "simulate line fills the x range (41 stops, 0..800 mm)"
 expect_ok "$T" separate --input run.csv --offsets 0,20,40 --angle angle -o run.json
 expect_err "leaves the machine's range" "$T" simulate line --machine machine.json --start 700,0,0 --stations 20 -o o.csv --truth t.csv
 
@@ -113,7 +113,18 @@ printf 'x,a,b\n0,1,2\n10,1\n20,1,2\n' > missing.csv
 expect_err "missing.csv:3:5: missing field for column 'b'" "$T" separate --input missing.csv --method two-point --output o.json
 printf 'x,a,b\n0,1,2\n10,1,2\n' > short.csv
 expect_err "too few stations" "$T" separate --input short.csv --method two-point --output o.json
-expect_err "not a whole multiple of the step" "$T" separate --input p3.csv --offsets 0,15,20 --output o.json
+expect_err "p3.csv:1:3: the column names state the probe offsets 0,10,20 mm, but --offsets says 0,15,20" "$T" separate --input p3.csv --offsets 0,15,20 --output o.json
+sed '1s/@[0-9]*//g' p3.csv > p3-plain.csv
+expect_err "not a whole multiple of the step" "$T" separate --input p3-plain.csv --offsets 0,15,20 --output o.json
+# A file that does not state its offsets: they are assumed equal to the step, and the result says so.
+expect_ok "$T" separate --input p3-plain.csv --output p3-plain.json
+grep -q "the probe offsets were not stated, so they were taken as 0, 10, 20 mm" err.txt && grep -q '"offsets_assumed": true' p3-plain.json && ok || bad "assumed offsets are stated"
+expect_ok "$T" separate --input p3.csv --output p3-named.json
+! grep -q "were not stated" err.txt && grep -q '"offsets_assumed": false' p3-named.json && ok || bad "offsets from the column names"
+printf 'x,a@0,b,c@20\n0,1,2,3\n10,1,2,3\n20,1,2,3\n30,1,2,3\n' > p3-mixed.csv
+expect_err "p3-mixed.csv:1:7: column 'b' states no probe offset while others do" "$T" separate --input p3-mixed.csv --output o.json
+printf 'x,a@0,b@ten\n0,1,2\n10,1,2\n20,1,2\n' > p3-badoff.csv
+expect_err "p3-badoff.csv:1:7: column 'b@ten': the probe offset after '@' must be a number of mm" "$T" separate --input p3-badoff.csv --output o.json
 expect_err "missing column 'level'" "$T" separate --input p3.csv --angle level --output o.json
 "$T" simulate straightness --stations 100 --offsets 0,20,40 --output chain.csv --truth tc.csv -q
 expect_err "chain offsets" "$T" separate --input chain.csv --offsets 0,20,40 --output o.json
@@ -315,8 +326,8 @@ grep -q "no command 'nosuchcommand'" err.txt && ok || bad "help on an unknown co
 
 # separate: an angle column is never a silent fourth probe; named columns work; warnings in words.
 expect_ok "$T" simulate straightness --stations 200 --angle --seed 4 -o pa.csv --truth pa-truth.csv
-expect_err "pa.csv:1:9: column 'angle' looks like an angle channel" "$T" separate --input pa.csv --output o.json
-expect_err "pa.csv:1:7: unexpected column 'c'" "$T" separate --input pa.csv --output o.json --offsets 0,10 --angle angle
+expect_err "pa.csv:1:17: column 'angle' looks like an angle channel" "$T" separate --input pa.csv --output o.json
+expect_err "pa.csv:1:12: unexpected column 'c@20'" "$T" separate --input pa.csv --output o.json --offsets 0,10 --angle angle
 expect_ok "$T" separate --input pa.csv --output pa.json --angle angle --sigma 0.05
 expect_ok "$T" separate --input pa.csv --output pa3.json --probes a,b,c --method three-point
 expect_ok "$T" simulate straightness --stations 500 --offsets 0,10,20 --noise 0.05 -o rd.csv --truth rd-truth.csv

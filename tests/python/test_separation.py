@@ -35,6 +35,9 @@ def test_methods_and_straightness_values():
     z = NormalDist().inv_cdf(1 - 0.025 / len(b["workpiece"]["x"]))
     assert w["U_um"] == pytest.approx(2 * z * np.max(b["workpiece"]["uncertainty"]), rel=1e-6)
     assert w["resolved"] is (w["U_um"] < w["min_zone"])
+    # No offsets given: taken as the step, and the result says so.
+    assert b["offsets"] == [0, 10, 20] and b["offsets_assumed"] is True
+    assert any("offsets were not stated" in m for m in b["warnings"])
     # Noise-free redundant readings: no uncertainty, and the reason, never a zero.
     q = trueaxis.simulate_straightness(stations=80, offsets=[0, 10, 30, 60], seed=2)
     r = trueaxis.separate(q["x"], q["readings"], offsets=q["offsets"])

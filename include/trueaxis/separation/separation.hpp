@@ -46,6 +46,9 @@ struct ProbeData {
   std::vector<double> offsets;  // N probe offsets from probe A (mm); offsets[0] == 0; whole
                                 // multiples of h; distinct
   Eigen::VectorXd angle;        // empty, or n pitch readings (rad)
+  // True when nobody stated the offsets and a reader took them as 0, h, 2h, … (the stations'
+  // step): the figures hold only if the probes really stand so, and the result says it.
+  bool offsets_assumed = false;
 
   double step() const;
   // Throws Error with a plain message if the data break the preconditions above.
@@ -115,6 +118,8 @@ struct Result {
   // uncertainty of a profile per unit of probe noise (dimensionless), i.e. how strongly the
   // layout amplifies noise. Absent when uncertainties were computed or not computable.
   std::optional<double> noise_gain;
+  std::vector<double> offsets;   // the probe offsets used (mm)
+  bool offsets_assumed = false;  // ProbeData::offsets_assumed
 
   // Human-readable multi-line summary (µm / µrad). A straightness the data do not resolve is
   // printed as "not resolved (U = … µm, 95 %)", not as a number; figures are rounded to the
@@ -122,7 +127,8 @@ struct Result {
   std::string summary() const;
   // Plain-language warnings about what the result cannot support, one sentence each: a
   // straightness not resolved (its U reaches it: the layout cannot tell it from noise); no stated
-  // uncertainty, with the reason and the layout's noise gain. Empty when the result is sound.
+  // uncertainty, with the reason and the layout's noise gain; probe offsets that were assumed,
+  // not stated. Empty when the result is sound.
   std::vector<std::string> warnings() const;
 };
 

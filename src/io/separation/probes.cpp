@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <optional>
 #include <vector>
 
 #include "../../common/memory.hpp"
@@ -11,6 +13,33 @@
 #include "trueaxis/io/csv.hpp"
 
 namespace trueaxis::io {
+namespace {
+
+std::string trimmed(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t") - b + 1);
+}
+
+// A probe's offset written in its column name after '@' ("b@10", "b @ 10 mm"; mm): the offset,
+// with `stem` the name before it; nullopt (stem = name) without '@'.
+std::optional<double> offset_in_name(const std::string& name, std::string& stem) {
+  const auto at = name.rfind('@');
+  stem = name;
+  if (at == std::string::npos) return std::nullopt;
+  stem = trimmed(name.substr(0, at));
+  std::string tail = trimmed(name.substr(at + 1));
+  if (tail.size() > 2 && tail.compare(tail.size() - 2, 2, "mm") == 0)
+    tail = trimmed(tail.substr(0, tail.size() - 2));
+  char* end = nullptr;
+  const double v = tail.empty() ? NAN : std::strtod(tail.c_str(), &end);
+  if (tail.empty() || end != tail.c_str() + tail.size() || !std::isfinite(v))
+    throw Error(fmt::format(
+        "column '{}': the probe offset after '@' must be a number of mm (e.g. b@10)", name));
+  return v;
+}
+
+}  // namespace
 
 separation::ProbeData read_probes(const std::string& path, const ProbeReadOptions& opt) {
   CsvTable t = CsvTable::read(path);
@@ -22,16 +51,39 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   int angle_col = -1;
   if (opt.angle_column) angle_col = t.require(*opt.angle_column, Unit::Microradian);
   std::vector<int> probe_cols;
+  // Per probe column: the offset its name states ("b@10"), and the unit its stem states.
+  std::vector<std::optional<double>> header_offsets;
+  std::vector<std::optional<Unit>> stem_units;
   if (!opt.probe_columns.empty()) {
     // Named probes: exactly these columns, in this order; any other column is left alone.
     for (const std::string& name : opt.probe_columns) {
-      const int c = t.require(name);
+      // A probe is named as written, or by the stem of a name that states its offset ("b" for
+      // "b@10").
+      int c = t.find(name);
+      for (int k = 1; c < 0 && k < static_cast<int>(t.cols()); ++k) {
+        std::string stem;
+        const std::string& h = t.header()[static_cast<std::size_t>(k)];
+        if (h.find('@') != std::string::npos && offset_in_name(h, stem) && stem == name) c = k;
+      }
+      if (c < 0) c = t.require(name);  // throws, naming the file and the missing column
       if (c == 0 || c == angle_col)
         throw Error(fmt::format("{}column '{}' cannot be a probe (it is the {})", t.where(-1, c),
                                 name, c == 0 ? "station position" : "angle channel"));
       for (int q : probe_cols)
         if (q == c) throw Error(fmt::format("--probes names column '{}' twice", name));
-      t.require(name, Unit::Micrometre);  // converts a column named with its unit
+      std::string stem;
+      const std::string& written = t.header()[static_cast<std::size_t>(c)];
+      try {
+        header_offsets.push_back(offset_in_name(written, stem));
+      } catch (const Error& e) {
+        throw Error(t.where(-1, c) + e.what());
+      }
+      if (header_offsets.back()) {
+        stem_units.push_back(split_column_name(stem).unit);  // converted below
+      } else {
+        t.require(name, Unit::Micrometre);  // converts a column named with its unit
+        stem_units.push_back(std::nullopt);
+      }
       probe_cols.push_back(c);
     }
   } else {
@@ -41,8 +93,10 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
       // in µrad read as a displacement in µm would wreck the separation with no sign of it.
       const std::string& name = t.header()[static_cast<std::size_t>(c)];
       ColumnName split;
+      std::string stem;
       try {
-        split = split_column_name(name);
+        header_offsets.push_back(offset_in_name(name, stem));
+        split = split_column_name(stem);
       } catch (const Error& e) {
         throw Error(t.where(-1, c) + e.what());
       }
@@ -54,7 +108,12 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
             "{}column '{}' looks like an angle channel, not a probe: give --angle {} to use it "
             "(urad), or --probes to list the probe columns",
             t.where(-1, c), name, split.quantity));
-      t.find(split.quantity, Unit::Micrometre);  // converts a column named with its unit
+      if (header_offsets.back()) {
+        stem_units.push_back(split.unit);  // converted below: the name is not the stem
+      } else {
+        t.find(split.quantity, Unit::Micrometre);  // converts a column named with its unit
+        stem_units.push_back(std::nullopt);
+      }
       probe_cols.push_back(c);
     }
     if (!opt.offsets.empty() && probe_cols.size() > opt.offsets.size())
@@ -114,14 +173,50 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   separation::ProbeData d;
   resize_in_huge_pages(d.x, n, 1);
   d.x = x;
-  if (opt.offsets.empty()) {
+  // Offsets: from --offsets, or from the column names ("a@0,b@10,c@30"; the two must agree
+  // when both are given), or else assumed 0, h, 2h, … and marked so.
+  const auto stated = std::count_if(header_offsets.begin(), header_offsets.end(),
+                                    [](const auto& o) { return o.has_value(); });
+  if (stated > 0 && stated < static_cast<long>(probe_cols.size())) {
+    for (std::size_t i = 0; i < probe_cols.size(); ++i)
+      if (!header_offsets[i])
+        throw Error(fmt::format(
+            "{}column '{}' states no probe offset while others do ('{}'): write it as name@mm",
+            t.where(-1, probe_cols[i]), t.header()[static_cast<std::size_t>(probe_cols[i])],
+            t.header()[static_cast<std::size_t>(probe_cols[static_cast<std::size_t>(
+                std::find_if(header_offsets.begin(), header_offsets.end(),
+                             [](const auto& o) { return o.has_value(); }) -
+                header_offsets.begin())])]));
+  }
+  std::vector<double> given = opt.offsets;
+  if (stated > 0) {
+    std::vector<double> named;
+    for (const auto& o : header_offsets) named.push_back(*o);
+    if (!given.empty()) {
+      bool same = given.size() == named.size();
+      for (std::size_t i = 0; same && i < named.size(); ++i)
+        same = std::abs(given[i] - named[i]) <= 1e-9 * std::max(1.0, std::abs(named[i]));
+      if (!same) {
+        std::string a, b;
+        for (double v : given) a += fmt::format("{}{:g}", a.empty() ? "" : ",", v);
+        for (double v : named) b += fmt::format("{}{:g}", b.empty() ? "" : ",", v);
+        throw Error(fmt::format(
+            "{}the column names state the probe offsets {} mm, but --offsets says {}: which is "
+            "right?",
+            t.where(-1, probe_cols[0]), b, a));
+      }
+    }
+    given = named;
+  }
+  if (given.empty()) {
     for (std::size_t i = 0; i < probe_cols.size(); ++i)
       d.offsets.push_back(static_cast<double>(i) * h);
+    d.offsets_assumed = true;
   } else {
-    if (opt.offsets.size() != probe_cols.size())
+    if (given.size() != probe_cols.size())
       throw Error(fmt::format("{}{} probe columns but {} offsets given", t.where(-1, probe_cols[0]),
-                              probe_cols.size(), opt.offsets.size()));
-    d.offsets = opt.offsets;
+                              probe_cols.size(), given.size()));
+    d.offsets = given;
     if (d.offsets[0] != 0)
       throw Error(
           fmt::format("offsets: the first offset must be 0 (probe A), got {}", d.offsets[0]));
@@ -152,8 +247,17 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   }
   const double sign = opt.invert ? -1.0 : 1.0;
   resize_in_huge_pages(d.readings, n, static_cast<Eigen::Index>(probe_cols.size()));
-  for (std::size_t i = 0; i < probe_cols.size(); ++i)
-    d.readings.col(static_cast<Eigen::Index>(i)) = t.column(probe_cols[i]) * (sign * 1e-3);
+  for (std::size_t i = 0; i < probe_cols.size(); ++i) {
+    double unit = 1;  // a unit written in a stem before '@' ("a [nm]@10"), else µm already
+    if (stem_units[i]) {
+      if (kind_of(*stem_units[i]) != UnitKind::Length)
+        throw Error(fmt::format(
+            "{}probe column '{}': a probe reads a length, not {}", t.where(-1, probe_cols[i]),
+            t.header()[static_cast<std::size_t>(probe_cols[i])], symbol(*stem_units[i])));
+      unit = unit_factor(*stem_units[i], Unit::Micrometre);
+    }
+    d.readings.col(static_cast<Eigen::Index>(i)) = t.column(probe_cols[i]) * (unit * sign * 1e-3);
+  }
   if (angle_col >= 0) {
     resize_in_huge_pages(d.angle, n, 1);
     d.angle = t.column(angle_col) * 1e-6;
@@ -167,8 +271,11 @@ void write_probes(const std::string& path, const separation::ProbeData& d,
   std::vector<Eigen::VectorXd> cols;
   cols.reserve(static_cast<std::size_t>(d.readings.cols()) + 1);
   for (Eigen::Index i = 0; i < d.readings.cols(); ++i) {
-    header.push_back(i < 26 ? std::string(1, static_cast<char>('a' + i))
-                            : fmt::format("p{}", i + 1));
+    // Each probe's offset in its name ("b@10"), so the file says where its probes stood.
+    const std::string name =
+        i < 26 ? std::string(1, static_cast<char>('a' + i)) : fmt::format("p{}", i + 1);
+    const auto k = static_cast<std::size_t>(i);
+    header.push_back(k < d.offsets.size() ? fmt::format("{}@{:g}", name, d.offsets[k]) : name);
     cols.emplace_back(d.readings.col(i) * 1e3);
   }
   if (d.angle.size()) {

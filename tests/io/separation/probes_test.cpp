@@ -282,3 +282,40 @@ TEST(Probes, LargeArraysAskForHugePages) {
     EXPECT_NE(flags.find(" hg"), std::string::npos) << what << ": " << flags;
   }
 }
+
+// A file that states where its probes stood: "name@mm" in the probe columns' names. The offsets
+// come from the names (the same result as --offsets), --probes finds a column by its stem, a
+// unit written before '@' is converted, and a file that states nothing is marked as assumed.
+TEST(Probes, OffsetsWrittenInTheColumnNames) {
+  const std::string named =
+      test::temp_file("named.csv",
+                      "x,a@0,b [nm]@10,c @ 30 mm\n0,1,2000,3\n10,1,2000,3\n20,1,2000,3\n30,1,2000,"
+                      "3\n40,1,2000,3\n");
+  const auto d = io::read_probes(named);
+  EXPECT_EQ(d.offsets, (std::vector<double>{0, 10, 30}));
+  EXPECT_FALSE(d.offsets_assumed);
+  EXPECT_NEAR(d.readings(0, 1), 2e-3, 1e-15);  // 2000 nm = 2 µm = 0.002 mm
+  io::ProbeReadOptions o;
+  o.probe_columns = {"a", "c"};
+  const auto picked = io::read_probes(named, o);
+  EXPECT_EQ(picked.offsets, (std::vector<double>{0, 30}));
+  // Round trip: write_probes names the columns with their offsets.
+  separation::ProbeData w = d;
+  const std::string back = test::temp_file("back.csv", "");
+  io::write_probes(back, w);
+  EXPECT_EQ(io::read_probes(back).offsets, d.offsets);
+  const auto plain = io::read_probes(test::temp_file("plain.csv", kGood));
+  EXPECT_TRUE(plain.offsets_assumed);
+  EXPECT_NE(read_error("x,a@0,b@0.5.1\n0,1,2\n10,1,2\n20,1,2\n")
+                .find("column 'b@0.5.1': the probe offset after '@' must be a number of mm"),
+            std::string::npos);
+  const char* angle_named = "x,a@0,b [urad]@10\n0,1,2\n10,1,2\n20,1,2\n";
+  EXPECT_NE(read_error(angle_named).find("p.csv:1:7: column 'b [urad]@10' looks like an angle"),
+            std::string::npos)
+      << read_error(angle_named);
+  io::ProbeReadOptions both;
+  both.probe_columns = {"a", "b [urad]"};
+  EXPECT_NE(read_error(angle_named, both).find("a probe reads a length, not µrad"),
+            std::string::npos)
+      << read_error(angle_named, both);
+}
