@@ -384,6 +384,8 @@ Result separate(const ProbeData& data, const Options& opt) {
   Result r = detail::separate(data, opt, detail::LsqSolver::Automatic);
   r.offsets = data.offsets;
   r.offsets_assumed = data.offsets_assumed;
+  r.readings_span = data.readings.maxCoeff() - data.readings.minCoeff();
+  r.traverse = data.x[data.x.size() - 1] - data.x[0];
   return r;
 }
 
@@ -415,6 +417,16 @@ std::vector<std::string> Result::warnings() const {
     }
     w.push_back(s);
   }
+  // Probes over a traverse of millimetres read micrometres; readings that all lie within 50 nm
+  // are either a nanometre-flat surface on a nanometre-straight guide, or millimetres written
+  // where micrometres were expected (every figure then 1000 times too small).
+  constexpr double kUnitCheckSpan = 5e-5, kUnitCheckTraverse = 5;  // mm
+  if (readings_span > 0 && readings_span < kUnitCheckSpan && traverse >= kUnitCheckTraverse)
+    w.push_back(fmt::format(
+        "all probe readings lie within {:.3g} nm over {:.4g} mm of traverse: if they are "
+        "millimetres, every figure above is 1000 times too small; name the probe columns with "
+        "their unit (a [mm], b [mm], ...)",
+        readings_span * 1e6, traverse));
   if (offsets_assumed) {
     std::string list;
     for (double o : offsets) list += fmt::format("{}{:g}", list.empty() ? "" : ", ", o);

@@ -473,3 +473,28 @@ TEST(Separation, MinZoneReferenceCentresTheZone) {
               r.workpiece_straightness.min_zone, 1e-12);
   EXPECT_LE(r.workpiece_straightness.min_zone, r.workpiece_straightness.ls);
 }
+
+// Readings written in millimetres where micrometres are expected are 1000 times too small and
+// give figures 1000 times too small that look resolved; the result says what they look like.
+// Offsets nobody stated are said to be assumed.
+TEST(Separation, MillimetreReadingsAndAssumedOffsetsAreSaid) {
+  sim::StraightnessOptions so;
+  so.stations = 120;
+  so.noise = 0.02e-3;
+  so.angle = true;
+  auto camp = sim::simulate_straightness(so);
+  auto says = [](const separation::Result& r, const std::string& what) {
+    for (const auto& w : r.warnings())
+      if (w.find(what) != std::string::npos) return true;
+    return false;
+  };
+  const auto right = separation::separate(camp.data);
+  EXPECT_FALSE(says(right, "1000 times too small"));
+  EXPECT_FALSE(says(right, "offsets were not stated"));
+  camp.data.readings *= 1e-3;  // µm values read in mm, then taken as µm
+  camp.data.offsets_assumed = true;
+  const auto wrong = separation::separate(camp.data);
+  EXPECT_TRUE(says(wrong, "all probe readings lie within"));
+  EXPECT_TRUE(says(wrong, "1000 times too small"));
+  EXPECT_TRUE(says(wrong, "offsets were not stated, so they were taken as 0, 10, 20 mm"));
+}

@@ -120,6 +120,8 @@ struct Result {
   std::optional<double> noise_gain;
   std::vector<double> offsets;   // the probe offsets used (mm)
   bool offsets_assumed = false;  // ProbeData::offsets_assumed
+  double readings_span = 0;      // range of all probe readings (mm): a unit check
+  double traverse = 0;           // x range (mm)
 
   // Human-readable multi-line summary (µm / µrad). A straightness the data do not resolve is
   // printed as "not resolved (U = … µm, 95 %)", not as a number; figures are rounded to the
@@ -128,7 +130,8 @@ struct Result {
   // Plain-language warnings about what the result cannot support, one sentence each: a
   // straightness not resolved (its U reaches it: the layout cannot tell it from noise); no stated
   // uncertainty, with the reason and the layout's noise gain; probe offsets that were assumed,
-  // not stated. Empty when the result is sound.
+  // not stated; readings that span less than 50 nm over a traverse of 5 mm or more (millimetres
+  // read as micrometres?). Empty when the result is sound.
   std::vector<std::string> warnings() const;
 };
 
