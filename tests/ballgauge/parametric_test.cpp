@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../test_util.hpp"
+#include "test_machines.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/json.hpp"
@@ -26,22 +27,6 @@ using test::temp_dir;
 using test::temp_file;
 
 namespace {
-
-// A machine whose every error is a polynomial of degree ≤ 3 (the model's family): a random
-// machine without its sinusoids and tables.
-sim::Machine smooth_machine(std::uint64_t seed) {
-  sim::MachineOptions o;
-  o.seed = seed;
-  sim::Machine m = sim::random_machine(o);
-  for (auto& axis : m.errors)
-    for (auto& f : axis) {
-      f.sines.clear();
-      f.table_u.clear();
-      f.table_value.clear();
-      if (f.polynomial.size() > 4) f.polynomial.resize(4);
-    }
-  return m;
-}
 
 std::vector<sim::GaugePose> oya_poses() {
   auto p = sim::stacked_poses(
@@ -60,10 +45,7 @@ std::vector<ballgauge::Placement> exact_placements(const sim::Machine& m,
   auto pl = c.placements;
   for (std::size_t p = 0; p < pl.size(); ++p)
     for (std::size_t b = 0; b < pl[p].balls.size(); ++b) {
-      const Eigen::Vector3d X = c.true_centres[p][b];
-      Eigen::Vector3d cmd = X - m.offset;
-      for (int it = 0; it < 8; ++it) cmd = X - m.offset - m.error(cmd);
-      const Eigen::Vector3d x = cmd + m.offset;  // the reading of the true centre
+      const Eigen::Vector3d x = test::reading_of(m, c.true_centres[p][b]);
       auto& pts = pl[p].balls[b].points;
       const Eigen::Vector3d centre =
           pts.rowwise().mean();  // about the ball; only the shape matters
@@ -98,7 +80,7 @@ ballgauge::ParametricOptions options(const sim::Machine& m) {
 }  // namespace
 
 TEST(Parametric, NoiseFreeDataOfAPolynomialMachineAreReproducedExactly) {
-  const sim::Machine m = smooth_machine(3);
+  const sim::Machine m = test::cubic_machine(3);
   const auto g = sim::frame_gauge();
   const auto r = ballgauge::identify(g, exact_placements(m, g), options(m));
   EXPECT_LT(r.residual_rms, 1e-10);
@@ -127,7 +109,7 @@ TEST(Parametric, NoisyEstimatesAgreeWithTheirStatedUncertainty) {
   double z2 = 0;
   int n = 0;
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
-    const sim::Machine m = smooth_machine(seed + 10);
+    const sim::Machine m = test::cubic_machine(seed + 10);
     const auto g = sim::frame_gauge();
     sim::BallGaugeOptions bo;
     bo.noise = 0.5e-3;
@@ -194,7 +176,7 @@ TEST(Parametric, GridOrParametricDependsOnWhetherTheModelHoldsTheMachine) {
 }
 
 TEST(Parametric, RefusalsNameTheProblem) {
-  const sim::Machine m = smooth_machine(3);
+  const sim::Machine m = test::cubic_machine(3);
   const auto g = sim::frame_gauge();
   auto pl = sim::simulate_ballgauge(m, g, oya_poses(), {}).placements;
   ballgauge::ParametricOptions o = options(m);
@@ -233,7 +215,7 @@ TEST(Parametric, RefusalsNameTheProblem) {
 }
 
 TEST(Parametric, TheModelFileRoundTripsAndIsAMachineFile) {
-  const sim::Machine m = smooth_machine(3);
+  const sim::Machine m = test::cubic_machine(3);
   const auto g = sim::frame_gauge();
   sim::BallGaugeOptions bo;
   bo.noise = 0.3e-3;
@@ -307,7 +289,7 @@ TEST(LengthsIo, BadLengthFilesNameFileLineAndColumn) {
 // The report's per-axis curves of the identified model: every function the data see, with a
 // ±2u band from the parameter covariance; the ones they cannot see are named, not drawn as 0.
 TEST(Parametric, TheReportDrawsEachAxisErrorsWithBandsAndNamesTheUnseen) {
-  const sim::Machine m = smooth_machine(3);
+  const sim::Machine m = test::cubic_machine(3);
   const auto g = sim::frame_gauge();
   sim::BallGaugeOptions so;
   so.noise = 0.5e-3;

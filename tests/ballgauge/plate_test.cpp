@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "../test_util.hpp"
+#include "test_machines.hpp"
 #include "trueaxis/ballgauge/ballgauge.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/ballgauge/parametric.hpp"
@@ -58,22 +59,6 @@ std::vector<MslBall> read_msl_plate() {
 
 void write_text(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
-}
-
-// A machine whose errors the parametric model's cubics hold: a random machine without its
-// sinusoids and tables.
-sim::Machine cubic_machine(std::uint64_t seed) {
-  sim::MachineOptions o;
-  o.seed = seed;
-  sim::Machine m = sim::random_machine(o);
-  for (auto& axis : m.errors)
-    for (auto& f : axis) {
-      f.sines.clear();
-      f.table_u.clear();
-      f.table_value.clear();
-      if (f.polynomial.size() > 4) f.polynomial.resize(4);
-    }
-  return m;
 }
 
 // The box of true positions the machine reaches (command range + stylus offset), less a margin.
@@ -192,7 +177,7 @@ TEST(BallPlate, MslXzPlateMatchesItsPublishedPlateFrameDeviations) {
 // held-out gauge blocks anywhere in the box the plates span.
 TEST(BallPlate, CampaignOfFourPlacementsIdentifiesTheMachine) {
   constexpr double kRoundOff = 1e-10;  // mm: noise-free, exact rotations
-  const sim::Machine m = cubic_machine(21);
+  const sim::Machine m = test::cubic_machine(21);
   const auto plate = sim::plate_gauge(5, 5, 100);
   Eigen::Vector3d lo, hi;
   reach(m, 20, lo, hi);
@@ -228,10 +213,7 @@ TEST(BallPlate, CampaignOfFourPlacementsIdentifiesTheMachine) {
   auto exact = c.placements;
   for (std::size_t p = 0; p < exact.size(); ++p)
     for (std::size_t b = 0; b < exact[p].balls.size(); ++b) {
-      const Eigen::Vector3d X = c.true_centres[p][b];
-      Eigen::Vector3d cmd = X - m.offset;
-      for (int it = 0; it < 8; ++it) cmd = X - m.offset - m.error(cmd);
-      exact[p].balls[b].centre = cmd + m.offset;  // the reading of the true centre
+      exact[p].balls[b].centre = test::reading_of(m, c.true_centres[p][b]);
       exact[p].balls[b].points.resize(3, 0);
     }
   ballgauge::ParametricOptions po;
@@ -280,7 +262,7 @@ TEST(BallPlate, CampaignSquarenessAgreesWithItsStatedUncertainty) {
   double z2 = 0;
   int n = 0;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
-    const sim::Machine m = cubic_machine(30 + seed);
+    const sim::Machine m = test::cubic_machine(30 + seed);
     const auto plate = sim::plate_gauge(5, 5, 100);
     Eigen::Vector3d lo, hi;
     reach(m, 20, lo, hi);
