@@ -61,9 +61,9 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
       // "b@10").
       int c = t.find(name);
       for (int k = 1; c < 0 && k < static_cast<int>(t.cols()); ++k) {
-        std::string stem;
         const std::string& h = t.header()[static_cast<std::size_t>(k)];
-        if (h.find('@') != std::string::npos && offset_in_name(h, stem) && stem == name) c = k;
+        const auto at = h.rfind('@');
+        if (at != std::string::npos && trimmed(h.substr(0, at)) == name) c = k;
       }
       if (c < 0) c = t.require(name);  // throws, naming the file and the missing column
       if (c == 0 || c == angle_col)
@@ -178,15 +178,15 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
   const auto stated = std::count_if(header_offsets.begin(), header_offsets.end(),
                                     [](const auto& o) { return o.has_value(); });
   if (stated > 0 && stated < static_cast<long>(probe_cols.size())) {
-    for (std::size_t i = 0; i < probe_cols.size(); ++i)
-      if (!header_offsets[i])
-        throw Error(fmt::format(
-            "{}column '{}' states no probe offset while others do ('{}'): write it as name@mm",
-            t.where(-1, probe_cols[i]), t.header()[static_cast<std::size_t>(probe_cols[i])],
-            t.header()[static_cast<std::size_t>(probe_cols[static_cast<std::size_t>(
-                std::find_if(header_offsets.begin(), header_offsets.end(),
-                             [](const auto& o) { return o.has_value(); }) -
-                header_offsets.begin())])]));
+    const auto name_of = [&](std::size_t i) {
+      return t.header()[static_cast<std::size_t>(probe_cols[i])];
+    };
+    std::size_t with = 0, without = 0;
+    while (!header_offsets[with]) ++with;
+    while (header_offsets[without]) ++without;
+    throw Error(fmt::format(
+        "{}column '{}' states no probe offset while others do ('{}'): write it as name@mm",
+        t.where(-1, probe_cols[without]), name_of(without), name_of(with)));
   }
   std::vector<double> given = opt.offsets;
   if (stated > 0) {
