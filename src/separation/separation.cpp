@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <future>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -89,20 +90,28 @@ void check_shapes(const ProbeData& d) {
     throw Error(fmt::format("angle channel has {} values for {} stations", angle.size(), n));
 }
 
-void check_values(const ProbeData& data) {
+// Checks the values and returns the range of all probe readings (mm), found in the same pass.
+double check_values(const ProbeData& data) {
   const Eigen::Index n = data.x.size();
   const auto& x = data.x;
   const auto& readings = data.readings;
   const auto& angle = data.angle;
-  // One vectorised pass per array decides; only a failure looks for the first offender.
-  auto finite = [](const double* v, Eigen::Index m) {
-    // v·0 is NaN for a NaN or an infinity, else 0; Eigen's sum keeps several vector
-    // accumulators, so the pass runs at memory speed.
-    return (Eigen::Map<const Eigen::ArrayXd>(v, m) * 0.0).sum() == 0;
-  };
-  bool all_finite = finite(angle.data(), angle.size());
-  for (Eigen::Index j = 0; j < readings.cols() && all_finite; ++j)
-    all_finite = finite(readings.col(j).data(), n);
+  // One vectorised pass per array decides; only a failure looks for the first offender. v·0 is
+  // NaN for a NaN or an infinity, else 0; the reductions keep vector accumulators, so each pass
+  // runs at memory speed.
+  bool all_finite = (Eigen::Map<const Eigen::ArrayXd>(angle.data(), angle.size()) * 0.0).sum() == 0;
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (Eigen::Index j = 0; j < readings.cols() && all_finite; ++j) {
+    const double* v = readings.col(j).data();
+    double nonfinite = 0;
+#pragma omp simd reduction(min : lo) reduction(max : hi) reduction(+ : nonfinite)
+    for (Eigen::Index k = 0; k < n; ++k) {
+      nonfinite += v[k] * 0.0;
+      lo = v[k] < lo ? v[k] : lo;
+      hi = v[k] > hi ? v[k] : hi;
+    }
+    all_finite = nonfinite == 0;
+  }
   if (!all_finite) throw Error("non-finite value (NaN or Inf) in the data");
   // x's own check rides on the pass over its steps (which are used only once x is finite).
   const double* xp = x.data();
@@ -127,6 +136,7 @@ void check_values(const ProbeData& data) {
     if (std::abs(d - h) > tolerance)
       throw Error(fmt::format("uneven step at station {}: {} mm instead of {} mm", k, d, h));
   }
+  return n > 0 && readings.cols() > 0 ? hi - lo : 0.0;
 }
 
 void check_offsets(const ProbeData& d) {
@@ -209,14 +219,15 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
   // The values (finite, evenly stepped: one pass over all the data) are checked on another core
   // while the offsets, the layout and the method go on. Their error, if any, is the one reported,
   // as if they had been checked first, and nothing computed from the data is used before.
-  std::future<void> values =
+  std::future<double> values =
       std::async(n >= kTwoCorePoints ? std::launch::async : std::launch::deferred,
-                 [&data] { check_values(data); });
+                 [&data] { return check_values(data); });
   bool values_known = false;
+  double readings_span = 0;
   auto values_first = [&] {  // rethrows the values' error, once
     if (values_known) return;
     values_known = true;
-    values.get();
+    readings_span = values.get();
   };
   Result res;
   res.method = opt.method;
@@ -377,16 +388,15 @@ Result detail::separate(const ProbeData& data, const Options& opt, LsqSolver sol
   res.workpiece = {std::move(raw.xw), std::move(raw.w), std::move(uw)};
   res.guide = {std::move(raw.xg), std::move(raw.g), std::move(ug)};
   if (raw.theta.size()) res.pitch = Profile{std::move(raw.xt), std::move(raw.theta), std::move(ut)};
+  res.offsets = data.offsets;
+  res.offsets_assumed = data.offsets_assumed;
+  res.readings_span = readings_span;
+  res.traverse = data.x[n - 1] - data.x[0];
   return res;
 }
 
 Result separate(const ProbeData& data, const Options& opt) {
-  Result r = detail::separate(data, opt, detail::LsqSolver::Automatic);
-  r.offsets = data.offsets;
-  r.offsets_assumed = data.offsets_assumed;
-  r.readings_span = data.readings.maxCoeff() - data.readings.minCoeff();
-  r.traverse = data.x[data.x.size() - 1] - data.x[0];
-  return r;
+  return detail::separate(data, opt, detail::LsqSolver::Automatic);
 }
 
 std::vector<std::string> Result::warnings() const {
