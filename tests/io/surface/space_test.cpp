@@ -89,6 +89,16 @@ TEST(SpaceIo, BadGridsNameTheSpot) {
            {R"({"grid": {"x": [0], "y": [0, 1], "z": [0, 1]}})",
             "s.json:1:16: the grid needs at least two x nodes"},
            {R"({"map": {}})", "s.json:1:1: 'grid' is missing"},
+           // A ball plate's plane map: a normal that is no axis, a normal axis with three
+           // nodes, two band nodes with different errors.
+           {head + R"( "plane": {"normal": "w"},
+ "ex": [0,0,0,0,0,0,0,0], "ey": [0,0,0,0,0,0,0,0], "ez": [0,0,0,0,0,0,0,0]}})",
+            "s.json:1:70: normal must be x, y or z, not 'w'"},
+           {R"({"grid": {"x": [0, 1], "y": [0, 1, 2], "z": [0, 1], "plane": {"normal": "y"}}})",
+            "s.json:1:29: a plane map has two y nodes (the plane's band)"},
+           {head + R"( "plane": {"normal": "z"},
+ "ex": [0,0,0,0,5,0,0,0], "ey": [0,0,0,0,0,0,0,0], "ez": [0,0,0,0,0,0,0,0]}})",
+            "the two z nodes differ"},
            // Found by fuzzing: 5000 nodes per axis allocated 1.25e11 nodes (bad_alloc, exit 3).
            {"{\"grid\": {\"x\": [" +
                 [] {
