@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Geometry>
+#include <cmath>
 #include <memory>
 #include <optional>
 
@@ -222,15 +223,11 @@ int run_simulate(const SimArgs& a) {
     poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
     if (a.alignment == "ls") poses.front().alignment = ballgauge::Alignment::LeastSquares;
   } else {
-    // A plate campaign in the machine's reach (command range + stylus offset, 30 mm inside).
+    // A plate campaign in the machine's reach (30 mm inside the command range). On a CMM over
+    // I++ DME the server's stylus probes every placement from above.
     const auto [rows, columns] = plate_size(a.plate);
     g = sim::plate_gauge(rows, columns, a.pitch);
-    Eigen::Vector3d lo, hi;
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = m.range[static_cast<std::size_t>(k)][0] + m.offset[k] + 30;
-      hi[k] = m.range[static_cast<std::size_t>(k)][1] + m.offset[k] - 30;
-    }
-    poses = sim::plate_poses(g, lo, hi, R);
+    poses = sim::plate_poses(g, m, 30, R, a.cmm.empty());
     for (auto& q : poses)
       if (a.alignment == "ls") q.alignment = ballgauge::Alignment::LeastSquares;
   }
@@ -238,8 +235,11 @@ int run_simulate(const SimArgs& a) {
                                ? fmt::format("a {}-ball frame gauge", g.balls.size())
                                : fmt::format(
                                      "a {} ball plate at {:g} mm pitch (flat low and high, "
-                                     "upright along X and along Y, each aligned by itself)",
-                                     a.plate, a.pitch);
+                                     "upright along X and along Y{}, each aligned by itself)",
+                                     a.plate, a.pitch,
+                                     a.cmm.empty() ? " probed from the side with the stylus "
+                                                     "turned horizontal"
+                                                   : "");
   sim::BallGaugeOptions o = a.o;
   o.noise = a.noise_um * 1e-3;
   if (!a.balls.empty()) {
@@ -282,7 +282,10 @@ int run_simulate(const SimArgs& a) {
   for (std::size_t p = 0; p < c.placements.size(); ++p)
     for (std::size_t b = 0; b < c.placements[p].balls.size(); ++b) {
       const Eigen::Vector3d t = c.true_centres[p][b];
-      const Eigen::Vector3d e = m.error(t - m.offset) * 1e3;
+      // The machine's error at the tip of the stylus this placement was probed with.
+      sim::Machine ms = m;
+      if (c.placements[p].stylus_offset) ms.offset = *c.placements[p].stylus_offset;
+      const Eigen::Vector3d e = ms.error(t - ms.offset) * 1e3;
       const double v[8] = {static_cast<double>(p),
                            static_cast<double>(c.placements[p].balls[b].index),
                            t.x(),
@@ -312,9 +315,20 @@ int run_simulate(const SimArgs& a) {
     return 0;
   }
   if (!a.lengths.empty()) {
-    // Gauge blocks in the box of the mapped ball centres (ISO 10360-2 style, held out).
+    // Gauge blocks in the box of the mapped ball centres (ISO 10360-2 style, held out), probed
+    // with the machine's stylus within the span of axis positions the campaign covered (where
+    // a model identified from it holds; placements probed with other styli cover other spans).
     sim::GaugeBlockOptions go;
     c.bounds(go.lo, go.hi);
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
+    for (std::size_t p = 0; p < c.placements.size(); ++p)
+      for (const auto& X : c.true_centres[p]) {
+        const Eigen::Vector3d cmd = X - c.placements[p].stylus_offset.value_or(m.offset);
+        lo = lo.cwiseMin(cmd);
+        hi = hi.cwiseMax(cmd);
+      }
+    go.lo = go.lo.cwiseMax(lo + m.offset);
+    go.hi = go.hi.cwiseMin(hi + m.offset);
     go.repeats = a.repeats;
     go.tip_radius = o.tip_radius;
     go.noise = (a.length_noise_um >= 0 ? a.length_noise_um : a.noise_um) * 1e-3;

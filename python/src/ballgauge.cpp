@@ -106,6 +106,14 @@ X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
         d["rank"] = r.rank;
         d["unknowns"] = r.unknowns;
         d["unobservable"] = r.unobservable;
+        py::list styli;
+        for (const auto& st : r.styli) {
+          py::dict one;
+          one["offset"] = Eigen::Vector3d(st.offset);
+          one["placements"] = st.placements;
+          styli.append(one);
+        }
+        d["styli"] = styli;
         // ISO 230-1 figures with their expanded uncertainties (k = 2).
         py::dict st, st_u;
         const char* names[3][2] = {{"EYX", "EZX"}, {"EXY", "EZY"}, {"EXZ", "EYZ"}};
@@ -132,10 +140,13 @@ X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
       py::arg("degree") = 3, py::arg("chain") = "FYXZ", py::arg("output") = "",
       R"doc(The 21 rigid-body errors of the CMM from the ball-gauge data (parametric model).
 
-stylus_offset: the stylus tip's offset [x, y, z] (mm) from the ram, as in machine.json. Every
-error function is a polynomial of `degree` in its axis coordinate. Returns {'machine': the
+stylus_offset: the stylus tip's offset [x, y, z] (mm) from the ram, as in machine.json: the
+stylus of every placement that states none ("stylus_offset" in measurements.json, e.g. an upright
+plate probed from the side), and the one the model corrects for. Every error function is a
+polynomial of `degree` in its axis coordinate. Returns {'machine': the
 identified trueaxis.Machine (its range is the measured span), 'residual_rms', 'sigma' (µm),
-'rank', 'unknowns', 'unobservable' (error names the data cannot see), 'straightness_um',
+'rank', 'unknowns', 'unobservable' (error names the data cannot see), 'styli' (each stylus
+offset with the placements probed with it), 'straightness_um',
 'squareness_urad' (ISO 230-1: about and between the axes' reference lines at the tool point,
 the other axes mid-span) with 'straightness_U_um', 'squareness_U_urad' (k = 2), 'summary'}. With
 output='model.json' the model and its covariance are written for verify_lengths(model=...).)doc");

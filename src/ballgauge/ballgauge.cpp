@@ -337,6 +337,8 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
   Eigen::VectorXd u_all(0);
   std::vector<Eigen::MatrixXd> sens;
   int frame = -1;
+  std::optional<Eigen::Vector3d> frame_stylus;  // the stylus of the current frame, when stated
+  std::string frame_name;
   for (std::size_t pi = 0; pi < placements.size(); ++pi) {
     const Placement& pl = placements[pi];
     const std::string pname = pl.name.empty() ? fmt::format("placement {}", pi) : pl.name;
@@ -345,7 +347,22 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
           "{}: the first placement must define the frame (\"321\" or \"ls\" alignment)", pname));
     // Every aligned placement starts a frame of its own (a plate campaign: each plate placement
     // is aligned by itself); stitched placements join the frame of the last aligned one.
-    if (pl.alignment != Alignment::Stitch) ++frame;
+    if (pl.alignment != Alignment::Stitch) {
+      ++frame;
+      frame_stylus = pl.stylus_offset;
+      frame_name = pname;
+    } else if (pl.stylus_offset && frame_stylus &&
+               (*pl.stylus_offset - *frame_stylus).norm() > 1e-6) {
+      // The angular errors move each stylus' tip by its own Abbe arm: two styli map different
+      // errors, which no rigid motion ties.
+      const Eigen::Vector3d& a = *pl.stylus_offset;
+      const Eigen::Vector3d& b = *frame_stylus;
+      throw Error(fmt::format(
+          "{}: probed with the stylus offset ({:g}, {:g}, {:g}) mm, but its frame ({}) with ({:g}, "
+          "{:g}, {:g}) mm; the angular errors move each tip differently, so a stitch needs its "
+          "frame's stylus (align it by itself instead: \"321\" or \"ls\")",
+          pname, a.x(), a.y(), a.z(), frame_name, b.x(), b.y(), b.z()));
+    }
     // Measured centres of this placement's balls.
     std::vector<int> idx;
     std::vector<Centre> cen;

@@ -18,12 +18,19 @@ namespace {
 
 constexpr double kStep = 1e-5;  // central-difference step: mm or rad per (u/1 m)^q
 constexpr int kFunctions = 18;  // 3 axes × 6 components
-// Singular values (column-scaled design, Chebyshev basis) below this fraction of the largest are
-// treated as undetermined. The exact problem's null directions (the map's rigid motion, functions
-// that do not move the tip) show up near 1e-5 because the model is linearised at the readings
-// rather than at the unknown true positions; the determined ones of Oya, Hokari and Tamura's layout
-// lie above 0.05.
-constexpr double kRankThreshold = 1e-3;
+// Singular values of the column-scaled design (Chebyshev basis) below this fraction of the largest
+// are undetermined. The pose columns are taken at the measured centres (x − t rather than R·u, the
+// same to first order in the errors), so that the map's rigid motion, which the data cannot fix,
+// is an exact null direction rather than one near the machine's error gradients; functions that
+// move no tip are exact nulls too. Both then lie below 1e-9. The determined directions of Oya,
+// Hokari and Tamura's layout lie above 0.05; a stylus offset across the ram (an upright plate
+// probed from the side) adds roll and pitch terms seen only through its arm, near 1e-4. Below 1e-5
+// a direction would carry 10⁵ times the noise of the determined ones: not determined.
+constexpr double kRankThreshold = 1e-5;
+// An undetermined direction that moves the model's own stylus (beyond a rigid motion, which no
+// length sees) by more than this fraction of the largest singular value makes the model unusable
+// for that stylus (identify refuses).
+constexpr double kModelStylusLimit = 1e-4;
 
 Eigen::Index parameter_count(int degree) {
   return kFunctions * (degree + 1) + 3;
@@ -113,6 +120,56 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
   return s;
 }
 
+// The undetermined directions (`null`, columns in the column-scaled space of the design, the
+// parameters first; `scale` the parameters' column scales) are harmless to the model's own
+// stylus when they move its tip at the measured commands by a rigid motion at most, which no
+// length sees; with one stylus they do by construction. A campaign whose placements use other
+// styli (an upright plate probed from the side) can leave a combination of errors that moves none
+// of their tips but moves the model's: refused, naming the functions, since the model would
+// correct that stylus with errors the data never saw. `largest`: the design's largest singular
+// value.
+void refuse_if_model_stylus_unseen(const ParametricResult& r, const ParametricOptions& o,
+                                   const Eigen::Matrix3Xd& commands, const Eigen::MatrixXd& null,
+                                   const Eigen::VectorXd& scale, double largest) {
+  if (null.cols() == 0) return;
+  const Eigen::Index P = scale.size(), n = commands.cols();
+  const Eigen::MatrixXd Jm =
+      design_matrix(o.chain, o.offset, o.degree, r.centre, r.half_span, commands);
+  Eigen::MatrixXd D = Jm * (scale.asDiagonal() * null.topRows(P));  // 3n × nulls
+  // Less the best rigid motion ω × p + v of the model's tip positions p (centred).
+  Eigen::MatrixXd G(3 * n, 6);
+  const Eigen::Vector3d mid = commands.rowwise().mean();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    G.block<3, 3>(3 * i, 0) = -skew(commands.col(i) - mid);
+    G.block<3, 3>(3 * i, 3) = Eigen::Matrix3d::Identity();
+  }
+  D -= G * G.colPivHouseholderQr().solve(D);
+  Eigen::Index worst = 0;
+  const double moved = D.colwise().norm().maxCoeff(&worst);
+  if (!(moved > kModelStylusLimit * largest)) return;
+  // The functions that make up that direction (by their share of it in the scaled space).
+  const Eigen::Index per = o.degree + 1;
+  std::vector<std::pair<double, std::string>> share;
+  for (int f = 0; f < kFunctions; ++f)
+    share.emplace_back(null.col(worst).segment(f * per, per).norm(),
+                       sim::error_name(f / 6, static_cast<sim::Component>(f % 6)));
+  const char* squareness[3] = {"EC0Y", "EB0Z", "EA0Z"};
+  for (int q = 0; q < 3; ++q)
+    share.emplace_back(std::abs(null(kFunctions * per + q, worst)), squareness[q]);
+  std::sort(share.begin(), share.end(),
+            [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::string names;
+  for (const auto& [w, name] : share)
+    if (w >= 0.3 * share.front().first)
+      names += fmt::format("{}{}", names.empty() ? "" : ", ", name);
+  throw Error(fmt::format(
+      "parametric model: the placements' styli cannot tell {} apart (a combination of them moves "
+      "none of their tips), but it moves the tip of the stylus the model is for, ({:g}, {:g}, "
+      "{:g}) mm; measure some placements with that stylus too, or probe the upright placements "
+      "from both sides",
+      names, o.offset.x(), o.offset.y(), o.offset.z()));
+}
+
 }  // namespace
 
 void ParametricOptions::validate() const {
@@ -134,12 +191,20 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
   o.validate();
   const std::vector<Eigen::Vector3d> U = gauge.canonical();
   if (placements.empty()) throw Error("parametric model: no placements");
-  // Observations: measured centres with their gauge coordinates and placement.
+  // Observations: measured centres with their gauge coordinates, placement and stylus.
   std::vector<Eigen::Vector3d> x, u;
-  std::vector<int> which;
+  std::vector<int> which, stylus;
+  ParametricResult r;
   for (std::size_t pi = 0; pi < placements.size(); ++pi) {
     const Placement& pl = placements[pi];
     const std::string name = pl.name.empty() ? fmt::format("placement {}", pi) : pl.name;
+    const Eigen::Vector3d off = pl.stylus_offset.value_or(o.offset);
+    if (!off.allFinite()) throw Error(fmt::format("{}: the stylus offset must be finite", name));
+    auto same = [&](const ParametricResult::Stylus& s) { return s.offset == off; };
+    auto sty = std::find_if(r.styli.begin(), r.styli.end(), same);
+    if (sty == r.styli.end()) sty = r.styli.insert(r.styli.end(), {off, {}});
+    sty->placements.push_back(name);
+    const int si = static_cast<int>(sty - r.styli.begin());
     if (pl.balls.size() < 3)
       throw Error(fmt::format("{}: {} balls; a placement needs at least 3 for its pose", name,
                               pl.balls.size()));
@@ -165,13 +230,36 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
       }
       u.push_back(U[static_cast<std::size_t>(b.index)]);
       which.push_back(static_cast<int>(pi));
+      stylus.push_back(si);
     }
   }
   const auto n = static_cast<Eigen::Index>(x.size());
   const auto m = static_cast<Eigen::Index>(placements.size());
   Eigen::Matrix3Xd commands(3, n);
-  for (Eigen::Index i = 0; i < n; ++i) commands.col(i) = x[static_cast<std::size_t>(i)] - o.offset;
-  ParametricResult r;
+  for (Eigen::Index i = 0; i < n; ++i)
+    commands.col(i) = x[static_cast<std::size_t>(i)] -
+                      r.styli[static_cast<std::size_t>(stylus[static_cast<std::size_t>(i)])].offset;
+  // The observations of each stylus (indices into x), to evaluate the model at its offset.
+  std::vector<std::vector<Eigen::Index>> group(r.styli.size());
+  for (Eigen::Index i = 0; i < n; ++i)
+    group[static_cast<std::size_t>(stylus[static_cast<std::size_t>(i)])].push_back(i);
+  auto commands_of = [&](std::size_t g) {
+    Eigen::Matrix3Xd c(3, static_cast<Eigen::Index>(group[g].size()));
+    for (std::size_t j = 0; j < group[g].size(); ++j)
+      c.col(static_cast<Eigen::Index>(j)) = commands.col(group[g][j]);
+    return c;
+  };
+  // e(c) of `model` at every observation, each at its own stylus.
+  auto errors_at = [&](sim::Machine model) {
+    Eigen::Matrix3Xd e(3, n);
+    for (std::size_t g = 0; g < group.size(); ++g) {
+      model.offset = r.styli[g].offset;
+      const Eigen::Matrix3Xd eg = model.errors_at(commands_of(g));
+      for (std::size_t j = 0; j < group[g].size(); ++j)
+        e.col(group[g][j]) = eg.col(static_cast<Eigen::Index>(j));
+    }
+    return e;
+  };
   r.degree = o.degree;
   r.model = blank_machine(o.chain, o.offset);
   for (int k = 0; k < 3; ++k) {
@@ -205,8 +293,13 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
   }
 
   const Eigen::Index P = parameter_count(o.degree), N = P + 6 * m;
-  const Eigen::MatrixXd J =
-      design_matrix(o.chain, o.offset, o.degree, r.centre, r.half_span, commands);
+  Eigen::MatrixXd J(3 * n, P);
+  for (std::size_t g = 0; g < group.size(); ++g) {
+    const Eigen::MatrixXd Jg =
+        design_matrix(o.chain, r.styli[g].offset, o.degree, r.centre, r.half_span, commands_of(g));
+    for (std::size_t j = 0; j < group[g].size(); ++j)
+      J.middleRows(3 * group[g][j], 3) = Jg.middleRows(3 * static_cast<Eigen::Index>(j), 3);
+  }
   // Error functions that do not move this tip at any measured command.
   const Eigen::Index per = o.degree + 1;
   for (int f = 0; f < kFunctions; ++f) {
@@ -221,7 +314,7 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
     sim::Machine model = r.model;
     for (Eigen::Index p = 0; p < P; ++p)
       add_parameter(model, o.degree, r.centre, r.half_span, p, theta[p]);
-    const Eigen::Matrix3Xd e = model.errors_at(commands);
+    const Eigen::Matrix3Xd e = errors_at(model);
     for (Eigen::Index i = 0; i < n; ++i) {
       const auto p = static_cast<std::size_t>(which[static_cast<std::size_t>(i)]);
       res.segment<3>(3 * i) = x[static_cast<std::size_t>(i)] -
@@ -235,7 +328,8 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
     A.leftCols(P) = J;
     for (Eigen::Index i = 0; i < n; ++i) {
       const auto p = which[static_cast<std::size_t>(i)];
-      const Eigen::Vector3d v = R[static_cast<std::size_t>(p)] * u[static_cast<std::size_t>(i)];
+      // R·u to first order (see kRankThreshold).
+      const Eigen::Vector3d v = x[static_cast<std::size_t>(i)] - t[static_cast<std::size_t>(p)];
       A.block<3, 3>(3 * i, P + 6 * p) = skew(v);
       A.block<3, 3>(3 * i, P + 6 * p + 3) = -Eigen::Matrix3d::Identity();
     }
@@ -290,6 +384,8 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
       svd.matrixV().leftCols(k) * svd.singularValues().head(k).cwiseInverse().asDiagonal();
   const Eigen::MatrixXd cov = (r.sigma * r.sigma) * (Vk * Vk.transpose());
   r.covariance = scale.head(P).asDiagonal() * cov.topLeftCorner(P, P) * scale.head(P).asDiagonal();
+  refuse_if_model_stylus_unseen(r, o, commands, svd.matrixV().rightCols(N - k), scale.head(P),
+                                svd.singularValues()[0]);
   r.iso = iso_figures(r);
   return r;
 }
@@ -341,12 +437,29 @@ std::string ParametricResult::summary() const {
       "  residual RMS {:.3f} um per centre component (sigma {:.3f} um), {} Gauss-Newton "
       "iterations\n",
       model.chain, degree, balls, placements, unknowns, unknowns - 6 * placements, rank,
-      unknowns - rank, unobservable.empty() ? "" : " and functions that do not move this tip",
+      unknowns - rank,
+      unobservable.empty() ? ""
+      : styli.size() > 1   ? " and functions that move none of these tips"
+                           : " and functions that do not move this tip",
       residual_rms * 1e3, sigma * 1e3, iterations);
+  if (styli.size() > 1) {
+    std::string list;
+    for (const auto& st : styli) {
+      std::string names;
+      for (const auto& p : st.placements)
+        names += fmt::format("{}{}", names.empty() ? "" : ", ", p);
+      // (+ 0.0: no "-0" for a zero component)
+      list += fmt::format("{}({:g}, {:g}, {:g}) mm in {}", list.empty() ? "" : "; ",
+                          st.offset.x() + 0.0, st.offset.y() + 0.0, st.offset.z() + 0.0, names);
+    }
+    s += fmt::format("  {} styli: {}; the model corrects for ({:g}, {:g}, {:g}) mm\n", styli.size(),
+                     list, model.offset.x(), model.offset.y(), model.offset.z());
+  }
   if (!unobservable.empty()) {
     std::string names;
     for (const auto& u : unobservable) names += (names.empty() ? "" : ", ") + u;
-    s += fmt::format("  not seen by this stylus: {}\n", names);
+    s += fmt::format("  not seen by {}: {}\n", styli.size() > 1 ? "these styli" : "this stylus",
+                     names);
   }
   s += model.summary(unobservable);
   // Expanded uncertainties (k = 2) of the ISO figures, and those the data cannot resolve.

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -12,8 +13,8 @@
 namespace trueaxis::sim {
 namespace {
 
-// Probing directions over the upper hemisphere: the pole, then rings at 40° and 75° from it.
-std::vector<Eigen::Vector3d> directions(int n) {
+// Probing directions over the hemisphere of `pole`: the pole, then rings at 40° and 75° from it.
+std::vector<Eigen::Vector3d> directions(int n, const Eigen::Vector3d& pole) {
   std::vector<Eigen::Vector3d> d{Eigen::Vector3d::UnitZ()};
   const int rest = n - 1, ring1 = rest / 2, ring2 = rest - ring1;
   for (int ring = 0; ring < 2; ++ring) {
@@ -24,6 +25,11 @@ std::vector<Eigen::Vector3d> directions(int n) {
       d.emplace_back(std::sin(polar) * std::cos(az), std::sin(polar) * std::sin(az),
                      std::cos(polar));
     }
+  }
+  if (pole != Eigen::Vector3d::UnitZ()) {
+    const Eigen::Matrix3d R =
+        Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), pole).toRotationMatrix();
+    for (auto& v : d) v = R * v;
   }
   return d;
 }
@@ -100,43 +106,69 @@ ballgauge::Gauge plate_gauge(int rows, int columns, double pitch, double ball_di
   return g;
 }
 
-std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Eigen::Vector3d& lo,
-                                   const Eigen::Vector3d& hi, const Eigen::Matrix3d& rotation) {
+std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Machine& machine,
+                                   double margin, const Eigen::Matrix3d& rotation,
+                                   bool from_the_side) {
   Eigen::Vector3d size = Eigen::Vector3d::Zero();
   for (const auto& b : plate.balls) size = size.cwiseMax(b);
-  const Eigen::Vector3d mid = (lo + hi) / 2, room = hi - lo;
   const Eigen::Vector3d X = Eigen::Vector3d::UnitX(), Y = Eigen::Vector3d::UnitY(),
                         Z = Eigen::Vector3d::UnitZ();
   struct Plane {
     const char* name;
     Eigen::Vector3d u, v;
     double level;  // where along the normal, as a fraction of the room (0.5: centred)
+    bool upright;
   };
-  const Plane planes[] = {
-      {"XY low", X, Y, 0.1}, {"XY high", X, Y, 0.9}, {"XZ", X, Z, 0.5}, {"YZ", Y, Z, 0.5}};
+  const Plane planes[] = {{"XY low", X, Y, 0.1, false},
+                          {"XY high", X, Y, 0.9, false},
+                          {"XZ", X, Z, 0.5, true},
+                          {"YZ", Y, Z, 0.5, true}};
   std::vector<GaugePose> out;
   for (const auto& p : planes) {
+    const Eigen::Vector3d n = p.u.cross(p.v);  // XZ: −Y, YZ: +X
+    // The styli: the machine's, or the horizontal one from each side of an upright plate (the
+    // tip on the plate's side of the ram: offset −|offset|·pole).
+    std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> sides;  // pole, offset
+    if (p.upright && from_the_side)
+      for (double side : {1.0, -1.0})
+        sides.emplace_back(side * n, (-machine.offset.norm() * side * n).array() + 0.0);  // no −0
+    else
+      sides.emplace_back(Eigen::Vector3d::UnitZ(), machine.offset);
+    // The true tip positions every one of its styli reaches, `margin` inside the command range.
+    Eigen::Vector3d lo = Eigen::Vector3d::Constant(-HUGE_VAL),
+                    hi = Eigen::Vector3d::Constant(HUGE_VAL);
+    for (const auto& [pole, offset] : sides)
+      for (int k = 0; k < 3; ++k) {
+        lo[k] = std::max(lo[k], machine.range[static_cast<std::size_t>(k)][0] + offset[k] + margin);
+        hi[k] = std::min(hi[k], machine.range[static_cast<std::size_t>(k)][1] + offset[k] - margin);
+      }
+    const Eigen::Vector3d mid = (lo + hi) / 2, room = hi - lo;
     Eigen::Matrix3d F;
-    F << p.u, p.v, p.u.cross(p.v);
+    F << p.u, p.v, n;
     const Eigen::Vector3d extent = (F * size).cwiseAbs();
     for (int a = 0; a < 3; ++a)
-      if (extent[a] > room[a])
+      if (!(extent[a] <= room[a]))
         throw Error(fmt::format(
             "ball plate campaign: the {:.0f} x {:.0f} mm plate does not fit the {} placement "
             "({:.0f} mm of room along {})",
-            size.x(), size.y(), p.name, room[a], "xyz"[a]));
-    const Eigen::Vector3d n = p.u.cross(p.v);
+            size.x(), size.y(), p.name, std::max(room[a], 0.0), "xyz"[a]));
     Eigen::Vector3d at = mid - F * size / 2;  // centred in its plane
-    const int normal = n.cwiseAbs().maxCoeff() == std::abs(n.x()) ? 0
-                       : std::abs(n.y()) > std::abs(n.z())        ? 1
-                                                                  : 2;
+    const int normal = std::abs(n.x()) > 0.5 ? 0 : std::abs(n.y()) > 0.5 ? 1 : 2;
     at[normal] = lo[normal] + p.level * room[normal];
-    GaugePose q;
-    q.name = p.name;
-    q.alignment = ballgauge::Alignment::ThreeTwoOne;
-    q.rotation = rotation * F;
-    q.translation = at;
-    out.push_back(q);
+    for (const auto& [pole, offset] : sides) {
+      GaugePose q;
+      q.name = p.name;
+      if (sides.size() > 1) {
+        const int k = std::abs(pole.x()) > 0.5 ? 0 : 1;
+        q.name += fmt::format(" from {}{}", pole[k] > 0 ? '+' : '-', "XY"[k]);
+        q.pole = pole;
+        q.stylus_offset = offset;
+      }
+      q.alignment = ballgauge::Alignment::ThreeTwoOne;
+      q.rotation = rotation * F;
+      q.translation = at;
+      out.push_back(q);
+    }
   }
   return out;
 }
@@ -152,14 +184,17 @@ BallGaugeCampaign measure_ballgauge(const ballgauge::Gauge& gauge,
                                     const BallProbe& probe) {
   o.validate();
   gauge.validate();
-  const auto dirs = directions(o.points_per_ball);
   const double reach = gauge.ball_diameter / 2 + o.tip_radius;
   BallGaugeCampaign c;
   for (const auto& pose : poses) {
+    if (!(std::abs(pose.pole.norm() - 1) < 1e-9))
+      throw Error(fmt::format("ball gauge: {}: the probing pole must be a unit vector", pose.name));
+    const auto dirs = directions(o.points_per_ball, pose.pole);
     ballgauge::Placement pl;
     pl.name = pose.name;
     pl.alignment = pose.alignment;
     pl.tip_radius = o.tip_radius;
+    pl.stylus_offset = pose.stylus_offset;
     std::vector<Eigen::Vector3d> truth;
     for (const auto& [b, X] : placed_balls(gauge, pose)) {
       ballgauge::BallPoints bp;
@@ -181,19 +216,29 @@ BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Ga
                                      const std::vector<GaugePose>& poses,
                                      const BallGaugeOptions& o) {
   o.validate();
+  gauge.validate();
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> N(0.0, 1.0);
-  return measure_ballgauge(
-      gauge, poses, o,
-      [&](const Eigen::Vector3d& X, double reach, const Eigen::Vector3d& d,
-          const std::string& what) {
-        const Eigen::Vector3d cmd = command_to_reach(
-            machine, X + reach * d, fmt::format("ball gauge simulation: {}", what));
-        // Drawn z first, as GCC evaluated the three draws of earlier versions: the same seed
-        // gives the same campaign as before.
-        const double nz = N(rng), ny = N(rng), nx = N(rng);
-        return Eigen::Vector3d(cmd + machine.offset + o.noise * Eigen::Vector3d(nx, ny, nz));
-      });
+  BallGaugeCampaign c;
+  for (const auto& pose : poses) {
+    // The machine with this pose's stylus.
+    Machine m = machine;
+    if (pose.stylus_offset) m.offset = *pose.stylus_offset;
+    auto one = measure_ballgauge(
+        gauge, {pose}, o,
+        [&](const Eigen::Vector3d& X, double reach, const Eigen::Vector3d& d,
+            const std::string& what) {
+          const Eigen::Vector3d cmd =
+              command_to_reach(m, X + reach * d, fmt::format("ball gauge simulation: {}", what));
+          // Drawn z first, as GCC evaluated the three draws of earlier versions: the same seed
+          // gives the same campaign as before.
+          const double nz = N(rng), ny = N(rng), nx = N(rng);
+          return Eigen::Vector3d(cmd + m.offset + o.noise * Eigen::Vector3d(nx, ny, nz));
+        });
+    c.placements.push_back(std::move(one.placements.front()));
+    c.true_centres.push_back(std::move(one.true_centres.front()));
+  }
+  return c;
 }
 
 std::vector<Ball> gauge_balls(const ballgauge::Gauge& gauge, const std::vector<GaugePose>& poses) {

@@ -283,6 +283,17 @@ TEST(BallGauge, BadPlacementsAreRefusedWithTheReason) {
   EXPECT_NE(err(p).find("z0: 0 of its balls lie within 1 mm of points mapped in its frame"),
             std::string::npos)
       << err(p);
+  // A stitch probed with another stylus than its frame's sees other errors (the angular errors
+  // move each tip by its own arm): refused. The same stylus stated on both is accepted.
+  p = c.placements;
+  p[0].stylus_offset = Eigen::Vector3d(0, 0, -100);
+  p[1].stylus_offset = Eigen::Vector3d(0, 120, 0);
+  EXPECT_NE(err(p).find("z1: probed with the stylus offset (0, 120, 0) mm, but its frame (z0) with "
+                        "(0, 0, -100) mm"),
+            std::string::npos)
+      << err(p);
+  p[1].stylus_offset = p[0].stylus_offset;
+  EXPECT_EQ(ballgauge::calibrate(g, p).frames, 1);
   p = c.placements;
   p[0].balls.erase(p[0].balls.begin() + 1);  // ball 1 missing from the 3-2-1 placement
   EXPECT_NE(err(p).find("needs the gauge's frame balls 0, 1 and 2 measured"), std::string::npos);

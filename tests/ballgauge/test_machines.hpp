@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 
 #include "trueaxis/sim/machine.hpp"
 
@@ -24,8 +25,12 @@ inline sim::Machine cubic_machine(std::uint64_t seed) {
 }
 
 // What the CMM reads for a point whose true position is X (mm): the nominal tip position of the
-// command that puts the tip at X (fixed-point iteration, |∇e| ≪ 1).
-inline Eigen::Vector3d reading_of(const sim::Machine& m, const Eigen::Vector3d& X) {
+// command that puts the tip at X (fixed-point iteration, |∇e| ≪ 1), with the machine's stylus or
+// the one given (its offset, mm).
+inline Eigen::Vector3d reading_of(const sim::Machine& machine, const Eigen::Vector3d& X,
+                                  const std::optional<Eigen::Vector3d>& stylus = std::nullopt) {
+  sim::Machine m = machine;
+  if (stylus) m.offset = *stylus;
   Eigen::Vector3d cmd = X - m.offset;
   for (int it = 0; it < 8; ++it) cmd = X - m.offset - m.error(cmd);
   return cmd + m.offset;

@@ -265,19 +265,28 @@ grep -q "section 1      ls " out.txt && ok || bad "ballgauge with the least-squa
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json:[0-9]*:[0-9]*: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 
-# Ball plates: a campaign of four placements (each aligned by itself) identifies the 21 errors;
-# one placement alone is a map of its plane, used on that plane only.
+# Ball plates: a campaign of six placements (each aligned by itself; the upright plates probed
+# from both sides with a horizontal stylus) identifies the 21 errors; one placement alone is a map
+# of its plane, used on that plane only.
 expect_ok "$T" simulate ballgauge --plate 5x5 --pitch 100 --noise 0.3 --gauge bp-gauge.json --measurements bp-meas.json --truth bp-truth.csv --lengths bp-lengths.csv
-grep -q "4 placements of a 5x5 ball plate at 100 mm pitch" out.txt && ok || bad "simulate ballgauge --plate"
+grep -q "6 placements of a 5x5 ball plate at 100 mm pitch" out.txt && grep -q "probed from the side" out.txt && ok || bad "simulate ballgauge --plate"
+grep -q '"stylus_offset": \[' bp-meas.json && ok || bad "the upright placements state their stylus"
 expect_ok "$T" ballgauge --gauge bp-gauge.json --measurements bp-meas.json --output bp-map.json --parametric bp-model.json --stylus-offset 0,0,-100
-grep -q "100 mapped points in 4 separate frames" out.txt && grep -q "use the 21-error model (bp-model.json)" err.txt && ! grep -q '"grid"' bp-map.json && ok || bad "ballgauge on a plate campaign"
+grep -q "150 mapped points in 6 separate frames" out.txt && grep -q "use the 21-error model (bp-model.json)" err.txt && ! grep -q '"grid"' bp-map.json && grep -q "5 styli: (0, 0, -100) mm in XY low, XY high; (0, 100, 0) mm in XZ from -Y" out.txt && ok || bad "ballgauge on a plate campaign"
+/usr/bin/python3 - <<'PY' && ok || bad "upright plates from one side"
+import json
+m = json.load(open("bp-meas.json"))
+m["placements"] = [p for p in m["placements"] if p["name"] not in ("XZ from +Y", "YZ from -X")]
+json.dump(m, open("bp-one-side.json", "w"))
+PY
+expect_err "cannot tell EZZ, .* apart .* the stylus the model is for, (0, 0, -100) mm" "$T" ballgauge --gauge bp-gauge.json --measurements bp-one-side.json --output o.json --parametric o-model.json --stylus-offset 0,0,-100
 expect_ok "$T" verify-lengths --model bp-model.json -i bp-lengths.csv -o bp-verify.json
 grep -q "parametric correction: 105 lengths" out.txt && ok || bad "verify-lengths with a plate campaign's model"
 "$T" simulate ballgauge --plate 5y5 >out.txt 2>err.txt; [ $? -eq 2 ] && grep -q "give ROWSxCOLUMNS" err.txt && ok || bad "--plate 5y5 is a usage error"
 /usr/bin/python3 - <<'PY' && ok || bad "one plate placement"
 import json
 m = json.load(open("bp-meas.json"))
-m["placements"] = m["placements"][2:3]  # the XZ placement alone
+m["placements"] = m["placements"][2:3]  # the XZ placement (probed from -Y) alone
 json.dump(m, open("bp-xz.json", "w"))
 PY
 expect_ok "$T" ballgauge --gauge bp-gauge.json --measurements bp-xz.json --output bp-xz-map.json

@@ -70,6 +70,26 @@ def test_gauge_blocks_grid_and_parametric(tmp_path):
         trueaxis.identify(g, m, stylus_offset=[0, 0, -100], degree=9)
 
 
+def test_plate_campaign_with_a_horizontal_stylus(tmp_path):
+    import json
+    g, m, t = (str(tmp_path / n) for n in ("gauge.json", "meas.json", "truth.csv"))
+    subprocess.run([TRUEAXIS, "simulate", "ballgauge", "--plate", "5x5", "--pitch", "100",
+                    "--gauge", g, "--measurements", m, "--truth", t, "-q"], check=True)
+    p = trueaxis.identify(g, m, stylus_offset=[0, 0, -100])
+    # The upright plates, probed from both sides with the stylus turned horizontal, show the rolls
+    # that the vertical stylus cannot.
+    assert p["unobservable"] == []
+    assert [s["placements"] for s in p["styli"]][:2] == [["XY low", "XY high"], ["XZ from -Y"]]
+    np.testing.assert_array_equal(p["styli"][1]["offset"], [0, 100, 0])
+    # From one side only, the Z scale and the ram's pitch and yaw cannot be told apart.
+    d = json.load(open(m))
+    d["placements"] = [q for q in d["placements"] if q["name"] not in ("XZ from +Y", "YZ from -X")]
+    one = str(tmp_path / "one-side.json")
+    json.dump(d, open(one, "w"))
+    with pytest.raises(trueaxis.Error, match="cannot tell EZZ"):
+        trueaxis.identify(g, one, stylus_offset=[0, 0, -100])
+
+
 def test_a_wrong_touch_is_refused_or_left_out(tmp_path):
     import json
     g, m, t = (str(tmp_path / n) for n in ("gauge.json", "meas.json", "truth.csv"))

@@ -77,6 +77,12 @@ struct Placement {
   std::string name;
   Alignment alignment = Alignment::Stitch;
   double tip_radius = 0;  // mm
+  // The stylus this placement was probed with: its tip's offset from the ram's reference point
+  // (mm, machine frame, as sim::Machine::offset), when it is not the campaign's usual one (an
+  // upright plate is probed from the side with a horizontal stylus). Unset: the usual stylus
+  // (ParametricOptions::offset). The angular errors move a tip by their Abbe arm, so the errors a
+  // placement maps are those of its stylus: a stitch must use its frame's stylus.
+  std::optional<Eigen::Vector3d> stylus_offset;
   std::vector<BallPoints> balls;
 };
 

@@ -9,7 +9,10 @@
 //
 //     x = X − e(c),   e(c) = actual(c) − nominal(c)   (sim/machine.hpp, exact rotations),
 //
-// so the unknowns are the polynomial coefficients and six pose parameters per placement. The
+// so the unknowns are the polynomial coefficients and six pose parameters per placement. Each
+// placement may be probed with a stylus of its own (Placement::stylus_offset): its commands are
+// its readings less its offset, and its design columns are the model's at that offset, so that a
+// horizontal stylus lets the data see the roll errors a vertical one cannot. The
 // equations are linearised about zero errors (first order, the usual small-error model of
 // identification: the design columns are central differences of the exact model) and solved by
 // Gauss–Newton on the exact model until the step vanishes, with a rank-revealing SVD of the
@@ -34,8 +37,10 @@
 namespace trueaxis::ballgauge {
 
 struct ParametricOptions {
-  std::string chain = "FYXZ";                        // kinematic chain (sim/machine.hpp)
-  Eigen::Vector3d offset = Eigen::Vector3d::Zero();  // stylus offset of the measurements (mm)
+  std::string chain = "FYXZ";  // kinematic chain (sim/machine.hpp)
+  // The stylus offset (mm) of every placement that states none (Placement::stylus_offset), and the
+  // stylus the identified model corrects for (parametric_correction).
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
   int degree = 3;                   // polynomial degree of every error function, 1..8
   double position_tolerance = 1;    // mm: axis positions closer than this count as one
   long min_points = 5;              // probed points per ball
@@ -70,6 +75,13 @@ struct ParametricResult {
   double residual_rms = 0;     // mm, ball centre components after the fit
   double sigma = 0;            // mm, estimated standard deviation of a centre component
   int balls = 0, placements = 0, unknowns = 0, rank = 0, iterations = 0;
+  // The styli the placements were probed with (offsets, mm; model.offset is options.offset), in
+  // the order of first use, each with the names of the placements that used it.
+  struct Stylus {
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    std::vector<std::string> placements;
+  };
+  std::vector<Stylus> styli;
   std::vector<std::string> unobservable;  // error functions with no effect on these data
   int degree = 3;
   IsoFigures iso;               // from model and covariance (iso_figures)

@@ -1,15 +1,17 @@
 // trueaxis::sim — a ball gauge probed on the virtual CMM (sim/machine.hpp).
 //
 // Each placement sets the gauge at a pose (rotation, translation: X_i = R·U_i + t, mm). Every
-// ball is probed at `points_per_ball` directions spread over its upper hemisphere (the pole, then
-// rings); the stylus-tip centre must reach P = X_i + (ball radius + tip radius)·d, so the
-// machine is commanded to c with actual(c) = P (solved by fixed-point iteration, |∇e| ≪ 1), and
-// the CMM reports its nominal tip position c + offset, plus probing noise.
+// ball is probed at `points_per_ball` directions spread over a hemisphere (the pose's pole, from
+// above unless stated, then rings), with the pose's stylus; the stylus-tip centre must reach P =
+// X_i + (ball radius + tip radius)·d, so the machine is commanded to c with actual(c) = P (solved
+// by fixed-point iteration, |∇e| ≪ 1), and the CMM reports its nominal tip position c + offset,
+// plus probing noise.
 #pragma once
 
 #include <Eigen/Core>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +28,12 @@ struct GaugePose {
   Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();  // gauge frame → machine frame
   Eigen::Vector3d translation = Eigen::Vector3d::Zero();   // mm
   std::vector<int> balls;                                  // probed balls (empty: all)
+  // The hemisphere each ball is probed on: its pole (unit, machine frame). +Z: from above; an
+  // upright plate is probed from the side.
+  Eigen::Vector3d pole = Eigen::Vector3d::UnitZ();
+  // The stylus it is probed with: its tip's offset from the ram's reference point (mm, as
+  // Machine::offset). Unset: the machine's.
+  std::optional<Eigen::Vector3d> stylus_offset;
 };
 
 struct BallGaugeOptions {
@@ -60,13 +68,21 @@ std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections
 // row; ballgauge::Gauge::frame_balls).
 ballgauge::Gauge plate_gauge(int rows = 5, int columns = 5, double pitch = 133,
                              double ball_diameter = 22);
-// A plate campaign in the box [lo, hi] (true positions, mm): the plate flat (XY) near the bottom
-// and near the top of the box, upright along X (XZ) and along Y (YZ), each centred in the box and
-// aligned 3-2-1 by itself; `rotation` is each placement's small misalignment. Throws Error when
-// the plate does not fit the box in one of those planes.
-std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Eigen::Vector3d& lo,
-                                   const Eigen::Vector3d& hi,
-                                   const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity());
+// A plate campaign on `machine`: the plate flat (XY) near the bottom and near the top of the
+// box its stylus reaches, upright along X (XZ) and along Y (YZ), each aligned 3-2-1 by itself;
+// `rotation` is each placement's small misalignment. The flat placements are probed from above
+// with the machine's stylus. With `from_the_side`, each upright plate is probed as a real one is,
+// from the side with the stylus turned horizontal towards it (an articulating head at A = 90°:
+// the same length |offset|, its rotation centre at the ram's reference point), from both sides
+// (two placements, "XZ from -Y" and "XZ from +Y"): from one side only, a scale error along Z and
+// the ram's pitch and yaw growing along Z move the horizontal tip alike, and the vertical stylus
+// of the flat placements cannot tell them apart either. Otherwise the upright plates are probed
+// from above like the flat ones. Each plate stands in the middle of the box that all its styli
+// reach with `margin` (mm) to the command range. Throws Error when the plate does not fit.
+std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Machine& machine,
+                                   double margin = 30,
+                                   const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity(),
+                                   bool from_the_side = true);
 
 // `gauge.balls` are used as given (gauge frame); poses map them into the machine.
 BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
@@ -82,9 +98,10 @@ using BallProbe =
                                   const Eigen::Vector3d& direction, const std::string& what)>;
 
 // The same campaign with any probe (e.g. a CMM over I++ DME): each pose's balls in order, each
-// probed at options.points_per_ball directions over its upper hemisphere (the pole, then rings
-// at 40° and 75° from it, in order round each ring). options.noise and seed are not used: the
-// probe's readings are what they are.
+// probed at options.points_per_ball directions over the hemisphere of the pose's pole (the pole,
+// then rings at 40° and 75° from it, in order round each ring). The probe is the one stylus the
+// poses' stylus_offset names (it is copied into the placements, not applied). options.noise and
+// seed are not used: the probe's readings are what they are.
 BallGaugeCampaign measure_ballgauge(const ballgauge::Gauge& gauge,
                                     const std::vector<GaugePose>& poses,
                                     const BallGaugeOptions& options, const BallProbe& probe);

@@ -135,6 +135,8 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path,
       } else if (key == "tip_radius") {
         P.tip_radius = f.number(k);
         if (P.tip_radius < 0) f.fail(k, "tip_radius must be >= 0 (mm)");
+      } else if (key == "stylus_offset") {
+        P.stylus_offset = triple(f, k);
       } else if (key == "balls") {
         const auto& balls = f.array(k);
         for (std::size_t b = 0; b < balls.size(); ++b) {
@@ -188,7 +190,8 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path,
           P.balls.push_back(std::move(B));
         }
       } else {
-        f.fail(k, fmt::format("unknown key '{}' (name, alignment, tip_radius, balls)", key));
+        f.fail(k, fmt::format(
+                      "unknown key '{}' (name, alignment, tip_radius, stylus_offset, balls)", key));
       }
     }
     if (P.name.empty()) P.name = fmt::format("placement {}", i);
@@ -212,10 +215,11 @@ void write_measurements(const std::string& path, const std::vector<ballgauge::Pl
       for (Eigen::Index q = 0; q < b.points.cols(); ++q) pts.push_back(xyz(b.points.col(q)));
       balls.push_back({{"index", b.index}, {"points", pts}});
     }
-    arr.push_back({{"name", p.name},
-                   {"alignment", alignment_name(p.alignment)},
-                   {"tip_radius", p.tip_radius},
-                   {"balls", balls}});
+    ojson pl{
+        {"name", p.name}, {"alignment", alignment_name(p.alignment)}, {"tip_radius", p.tip_radius}};
+    if (p.stylus_offset) pl["stylus_offset"] = xyz(*p.stylus_offset);
+    pl["balls"] = balls;
+    arr.push_back(pl);
   }
   write_json(path, ojson{{"placements", arr}});
 }
@@ -409,6 +413,10 @@ void write_parametric(const std::string& path, const ballgauge::ParametricResult
       {"rank", r.rank},
       {"iterations", r.iterations},
       {"unobservable", unobs}};
+  ojson styli = ojson::array();
+  for (const auto& st : r.styli)
+    styli.push_back({{"offset", xyz(st.offset)}, {"placements", st.placements}});
+  j["identification"]["styli"] = styli;
   // ISO 230-1 figures at the tool point, the other axes mid-span, with U (k = 2).
   ojson iso;
   const char* names[3][2] = {{"EYX", "EZX"}, {"EXY", "EZY"}, {"EXZ", "EYZ"}};
@@ -470,6 +478,15 @@ ballgauge::ParametricResult read_parametric(const std::string& path) {
   if (f.has(id / "residual_rms_um")) r.residual_rms = f.number(id / "residual_rms_um") * 1e-3;
   if (f.has(id / "sigma_um"))  // null: no redundancy, the noise level is unknown
     r.sigma = f.root().at(id / "sigma_um").is_null() ? NAN : f.number(id / "sigma_um") * 1e-3;
+  if (f.has(id / "styli"))
+    for (std::size_t i = 0; i < f.array(id / "styli").size(); ++i) {
+      const ptr q = id / "styli" / i;
+      ballgauge::ParametricResult::Stylus st;
+      st.offset = triple(f, q / "offset");
+      for (std::size_t k = 0; k < f.array(q / "placements").size(); ++k)
+        st.placements.push_back(f.string(q / "placements" / k));
+      r.styli.push_back(std::move(st));
+    }
   r.iso = ballgauge::iso_figures(r);
   return r;
 }

@@ -127,9 +127,16 @@ TEST(BallGaugeIo, PlatesFramesAndGivenCentres) {
     if (i == 1) b.centre_u = Eigen::Vector3d(0.3e-3, 0.3e-3, 0.5e-3);
     p.balls.push_back(b);
   }
+  // A placement probed with a stylus of its own (an upright plate from the side) says so.
+  ballgauge::Placement side = p;
+  side.name = "XZ";
+  side.stylus_offset = Eigen::Vector3d(0, 130, -243.5);
   const std::string mp = test::temp_file("m.json", "");
-  io::write_measurements(mp, {p});
+  io::write_measurements(mp, {p, side});
   const auto back = io::read_measurements(mp, &plate);
+  EXPECT_FALSE(back[0].stylus_offset);
+  ASSERT_TRUE(back[1].stylus_offset);
+  EXPECT_EQ(*back[1].stylus_offset, Eigen::Vector3d(0, 130, -243.5));
   ASSERT_EQ(back[0].balls.size(), 3u);
   EXPECT_EQ(*back[0].balls[2].centre, Eigen::Vector3d(200, 1, 2));
   EXPECT_FALSE(back[0].balls[0].centre_u.allFinite());
@@ -172,6 +179,18 @@ TEST(BallGaugeIo, PlatesFramesAndGivenCentres) {
   EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "points": [[1, 2, 3]],
                                                 "u_um": [0.3, 0.3, 0.3]}]}]})")
                 .find("u_um belongs to a given centre"),
+            std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"stylus_offset": [0, 130],
+                                      "balls": [{"index": 0, "centre": [0, 0, 0]}]}]})")
+                .find("m.json:1:35: 'placements[0].stylus_offset' needs [x, y, z]"),
+            std::string::npos)
+      << merr(R"({"placements": [{"stylus_offset": [0, 130],
+                                      "balls": [{"index": 0, "centre": [0, 0, 0]}]}]})");
+  EXPECT_NE(
+      merr(R"({"placements": [{"stylus_offset": [0, "a", 1], "balls": []}]})").find("m.json:1:"),
+      std::string::npos);
+  EXPECT_NE(merr(R"({"placements": [{"stylus": [0, 0, 1], "balls": []}]})")
+                .find("unknown key 'stylus' (name, alignment, tip_radius, stylus_offset, balls)"),
             std::string::npos);
   EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0]}]}]})")
                 .find("'placements[0].balls[0].centre' needs [x, y, z]"),
