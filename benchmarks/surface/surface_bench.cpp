@@ -1,11 +1,11 @@
 // Surface assembly of a 100 × 100-line network (10⁴ crossings), with a same-run baseline: one
 // dense least-squares QR of the same size (see BENCHMARKS.md).
 #include <benchmark/benchmark.h>
-
 #include <fmt/format.h>
 
 #include <Eigen/QR>
 #include <cmath>
+#include <random>
 
 #include "trueaxis/surface/surface.hpp"
 
@@ -42,6 +42,31 @@ void BM_SurfaceGrid(benchmark::State& st) {
   st.SetItemsProcessed(st.iterations() * kLines * kLines);  // crossings
 }
 
+// The same network with 0.1 µm of noise on every height: the flatness's uncertainty is then
+// stated, from 200 noise trials that reuse the network's factorisation.
+void BM_SurfaceGridWithUncertainty(benchmark::State& st) {
+  auto lines = network();
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0, 1e-4);
+  for (auto& l : lines)
+    for (auto& h : l.heights) h += noise(rng);
+  for (auto _ : st) benchmark::DoNotOptimize(surface::build(lines));
+  st.SetItemsProcessed(st.iterations() * kLines * kLines);  // crossings
+}
+
+// Without it, the same noisy network (Options::uncertainty off): the same-run baseline.
+void BM_SurfaceGridNoisyWithoutUncertainty(benchmark::State& st) {
+  auto lines = network();
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> noise(0, 1e-4);
+  for (auto& l : lines)
+    for (auto& h : l.heights) h += noise(rng);
+  surface::Options o;
+  o.uncertainty = false;
+  for (auto _ : st) benchmark::DoNotOptimize(surface::build(lines, o));
+  st.SetItemsProcessed(st.iterations() * kLines * kLines);  // crossings
+}
+
 // Baseline: a dense Householder QR least-squares solve with the network's shape (one row per
 // crossing, two unknowns per line): the cost of the dense formulation itself.
 void BM_DenseQrSameShape(benchmark::State& st) {
@@ -54,3 +79,5 @@ void BM_DenseQrSameShape(benchmark::State& st) {
 
 BENCHMARK(BM_DenseQrSameShape)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_SurfaceGrid)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SurfaceGridWithUncertainty)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SurfaceGridNoisyWithoutUncertainty)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -259,10 +259,12 @@ py::dict surface_out(const surface::Result& r) {
   cross["y"] = cy;
   cross["residual"] = cr;
   d["crossings"] = cross;
-  d["flatness"] =
-      py::dict(py::arg("ls") = r.flatness_ls * 1e3, py::arg("min_zone") = r.flatness_min_zone * 1e3,
-               py::arg("U_um") = py::none(), py::arg("resolved") = py::none(),
-               py::arg("no_uncertainty") = r.no_uncertainty());
+  d["flatness"] = py::dict(
+      py::arg("ls") = r.flatness_ls * 1e3, py::arg("min_zone") = r.flatness_min_zone * 1e3,
+      py::arg("U_um") = r.U ? py::object(py::float_(*r.U * 1e3)) : py::object(py::none()),
+      py::arg("resolved") = r.U ? py::object(py::bool_(*r.resolved())) : py::object(py::none()),
+      py::arg("sigma") = r.U ? py::object(py::float_(r.sigma)) : py::object(py::none()),
+      py::arg("sigma_unit") = r.sigma_unit, py::arg("no_uncertainty") = r.no_uncertainty());
   d["closure"] =
       py::dict(py::arg("rms") = r.closure_rms * 1e3, py::arg("max") = r.closure_max * 1e3);
   d["reference"] = r.reference;
@@ -529,7 +531,7 @@ lines: a lines.json path, or a list of dicts {'name', 'start': [x, y] (mm), 'dir
 (all lines jointly) or 'boundary' (X lines hung on two boundary Y lines).
 
 Returns {'points': {'line', 'station', 'x', 'y', 'height' (µm)}, 'grid' ({'x', 'y', 'height'
-(len(y), len(x))} or None), 'flatness': {'ls', 'min_zone', 'U_um' and 'resolved' (None: no noise level is known), 'no_uncertainty'}, 'closure': {'rms', 'max'},
+(len(y), len(x))} or None), 'flatness': {'ls', 'min_zone', 'U_um' (95 %, from the readings' noise that the closure at the crossings shows) and 'resolved' (None: the network cannot show the noise, 'no_uncertainty' says why), 'sigma' (one reading's noise, in 'sigma_unit')}, 'closure': {'rms', 'max'},
 'crossings', 'unobservable', 'gauge', 'reference', 'summary'}.)doc");
   m.def(
       "moody",

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "../common/figures.hpp"
 #include "trueaxis/report/surface.hpp"
 
 namespace trueaxis::report {
@@ -40,12 +41,22 @@ Section surface_section(const std::string& title, const surface::Result& r,
   s.intro_html = intro_html +
                  fmt::format("<p>Heights in µm, {}. Not determined by the lines: {}; {}.</p>",
                              escape(r.reference), escape(joined(r.unobservable)), escape(r.gauge));
-  s.table = {{"quantity", "value"},
-             {"method", r.method},
-             {"lines / stations", fmt::format("{} / {}", r.lines.size(), r.points.size())},
-             {"flatness, least squares (µm)", um_3f(r.flatness_ls)},
-             {"flatness, minimum zone (µm)", um_3f(r.flatness_min_zone)},
-             {"uncertainty of the flatness", "not stated: " + r.no_uncertainty()}};
+  s.table = {
+      {"quantity", "value"},
+      {"method", r.method},
+      {"lines / stations", fmt::format("{} / {}", r.lines.size(), r.points.size())},
+      {"flatness, least squares (µm)",
+       r.U ? (*r.resolved() ? trueaxis::detail::rounded_to(r.flatness_ls * 1e3, *r.U * 1e3)
+                            : std::string("not resolved"))
+           : um_3f(r.flatness_ls)},
+      {"flatness, minimum zone (µm)",
+       r.U ? (*r.resolved() ? trueaxis::detail::rounded_to(r.flatness_min_zone * 1e3, *r.U * 1e3)
+                            : std::string("not resolved"))
+           : um_3f(r.flatness_min_zone)},
+      {"uncertainty of the flatness",
+       r.U ? fmt::format("U = {} µm (95 %): {}", trueaxis::detail::two_digits(*r.U * 1e3),
+                         r.uncertainty_basis())
+           : std::string("not stated: ") + r.no_uncertainty()}};
   if (!r.crossings.empty()) {
     s.table.push_back({"crossings", fmt::format("{}", r.crossings.size())});
     s.table.push_back({"closure RMS / max (µm)",

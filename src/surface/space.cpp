@@ -170,7 +170,9 @@ struct Campaign {
       lines.push_back(std::move(l));
       refs.push_back({2, 0});
     }
-    const Result s = build(lines, {});
+    Options so;
+    so.uncertainty = false;  // the level's heights only; the space states its own uncertainty
+    const Result s = build(lines, so);
     surfaces.push_back({c, axes[c][k], s.closure_rms, s.flatness_ls});
     if (std::find(s.unobservable.begin(), s.unobservable.end(), "twist") != s.unobservable.end() &&
         std::find(unobservable.begin(), unobservable.end(), "twist of every level") ==

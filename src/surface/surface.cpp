@@ -5,9 +5,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
+#include <random>
 #include <set>
 
+#include "../common/figures.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/flatness.hpp"
 
@@ -97,8 +100,10 @@ Eigen::VectorXd lsq_fit(const Eigen::MatrixXd& basis, const Eigen::VectorXd& z) 
   return basis.colPivHouseholderQr().solve(z);
 }
 
+// `figures`: also the flatness figures and the grid (a noise trial of state_uncertainty needs
+// only the heights and the closure).
 void finish(Result& r, const std::vector<Line>& lines, const std::vector<Eigen::VectorXd>& h,
-            bool subtract_plane) {
+            bool subtract_plane, bool figures = true) {
   r.lines.clear();
   for (const Line& l : lines) r.lines.push_back(l.name);
   r.points.clear();
@@ -118,7 +123,7 @@ void finish(Result& r, const std::vector<Line>& lines, const std::vector<Eigen::
     r.reference = "least-squares plane of all points";
   }
   r.flatness_ls = ls.width;
-  r.flatness_min_zone = geometry::min_zone_plane(x, y, z).width;
+  if (figures) r.flatness_min_zone = geometry::min_zone_plane(x, y, z).width;
   // Closure after assembly (the plane does not change differences at a crossing).
   double s2 = 0;
   r.closure_max = 0;
@@ -129,6 +134,7 @@ void finish(Result& r, const std::vector<Line>& lines, const std::vector<Eigen::
     r.closure_max = std::max(r.closure_max, std::abs(c.residual));
   }
   r.closure_rms = r.crossings.empty() ? 0 : std::sqrt(s2 / static_cast<double>(r.crossings.size()));
+  if (!figures) return;
   // Grid when the points cover a full lattice (coincident points averaged).
   auto key = [](double v) { return std::llround(v * 1e6); };  // nm
   std::map<long long, double> xs, ys;
@@ -156,32 +162,64 @@ void finish(Result& r, const std::vector<Line>& lines, const std::vector<Eigen::
   }
 }
 
-Result build_lsq(const std::vector<Line>& lines, const Options& o) {
+// The crossings' conditions on every line's offset a_i and tilt b_i (per `scale` mm): row k says
+// a_a + b_a·ta − a_b − b_b·tb = −(height on a − height on b) at crossing k. Lengths are scaled to
+// O(1) (the longest line) for the rank decision.
+// The network's geometry, factorised once (heights do not enter): the noise trials of
+// state_uncertainty reuse it.
+struct CrossingSystem {
+  std::vector<Crossing> crossings;
+  double scale = 1;
+  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
+};
+CrossingSystem crossing_system(const std::vector<Line>& lines, std::vector<Crossing> cs) {
+  CrossingSystem S;
+  const auto L = static_cast<Eigen::Index>(lines.size()), C = static_cast<Eigen::Index>(cs.size());
+  for (const Line& l : lines) S.scale = std::max(S.scale, l.length());
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(C, 2 * L);
+  for (Eigen::Index k = 0; k < C; ++k) {
+    const Crossing& c = cs[static_cast<std::size_t>(k)];
+    M(k, 2 * c.a) += 1;
+    M(k, 2 * c.a + 1) += c.ta / S.scale;
+    M(k, 2 * c.b) -= 1;
+    M(k, 2 * c.b + 1) -= c.tb / S.scale;
+  }
+  S.cod.setThreshold(1e-10);
+  S.cod.compute(M);
+  S.crossings = std::move(cs);
+  return S;
+}
+// The right-hand side: −(height on a − height on b) at every crossing.
+Eigen::VectorXd crossing_rhs(const std::vector<Line>& lines, const std::vector<Crossing>& cs) {
+  Eigen::VectorXd d(static_cast<Eigen::Index>(cs.size()));
+  for (std::size_t k = 0; k < cs.size(); ++k) {
+    const Line &a = lines[static_cast<std::size_t>(cs[k].a)],
+               &b = lines[static_cast<std::size_t>(cs[k].b)];
+    d[static_cast<Eigen::Index>(k)] =
+        -(height_at(a, a.heights, cs[k].ta) - height_at(b, b.heights, cs[k].tb));
+  }
+  return d;
+}
+
+// `system`: the network's factorisation when already known (a noise trial of the same lines).
+Result build_lsq(const std::vector<Line>& lines, const Options& o, bool figures,
+                 const CrossingSystem* system = nullptr) {
   Result r;
   r.method = "lsq";
-  r.crossings = find_crossings(lines, o.crossing_tolerance);
-  require_connected(lines, r.crossings, o.crossing_tolerance);
-  const int L = static_cast<int>(lines.size());
-  const int C = static_cast<int>(r.crossings.size());
-  // Unknowns: offset a_i and tilt b_i (per mm) of every line; one row per crossing.
-  // Lengths are scaled to O(1) for the rank decision.
-  double scale = 1;
-  for (const Line& l : lines) scale = std::max(scale, l.length());
-  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(C, 2 * L);
-  Eigen::VectorXd d(C);
-  for (int k = 0; k < C; ++k) {
-    const Crossing& c = r.crossings[static_cast<std::size_t>(k)];
-    const Line &a = lines[static_cast<std::size_t>(c.a)], &b = lines[static_cast<std::size_t>(c.b)];
-    M(k, 2 * c.a) += 1;
-    M(k, 2 * c.a + 1) += c.ta / scale;
-    M(k, 2 * c.b) -= 1;
-    M(k, 2 * c.b + 1) -= c.tb / scale;
-    d[k] = -(height_at(a, a.heights, c.ta) - height_at(b, b.heights, c.tb));
+  CrossingSystem own;
+  if (!system) {
+    auto cs = find_crossings(lines, o.crossing_tolerance);
+    require_connected(lines, cs, o.crossing_tolerance);
+    own = crossing_system(lines, std::move(cs));
+    system = &own;
   }
-  Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod;
-  cod.setThreshold(1e-10);
-  cod.compute(M);
+  r.crossings = system->crossings;
+  const int L = static_cast<int>(lines.size());
+  const auto& cod = system->cod;
+  const Eigen::VectorXd d = crossing_rhs(lines, r.crossings);
+  const double scale = system->scale;
   const long nullity = 2L * L - cod.rank();
+  r.redundancy = static_cast<int>(static_cast<long>(r.crossings.size()) - cod.rank());
   // Directions present (up to sign): with only two, the quadratic (n1·p)(n2·p) is linear along
   // every line and therefore invisible (the twist).
   std::vector<Eigen::Vector2d> dirs;
@@ -233,7 +271,7 @@ Result build_lsq(const std::vector<Line>& lines, const Options& o) {
         "; twist (unobservable: every line is parallel to one of two directions) fixed by taking "
         "the surface to have no twist component in the least-squares sense";
   }
-  finish(r, lines, h, true);
+  finish(r, lines, h, true, figures);
   return r;
 }
 
@@ -241,7 +279,7 @@ bool parallel(const Eigen::Vector2d& u, const Eigen::Vector2d& axis) {
   return std::abs(u.x() * axis.y() - u.y() * axis.x()) < 1e-9;
 }
 
-Result build_seed(const std::vector<Line>& lines, const Options& o) {
+Result build_seed(const std::vector<Line>& lines, const Options& o, bool figures) {
   Result r;
   r.method = "boundary";
   std::vector<int> xl, yl;
@@ -290,6 +328,9 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
                     xmin, xmax));
   r.crossings = find_crossings(lines, tol);
   require_connected(lines, r.crossings, tol);
+  if (figures)
+    r.redundancy = static_cast<int>(static_cast<long>(r.crossings.size()) -
+                                    crossing_system(lines, r.crossings).cod.rank());
   // Hang every x line on the boundary curves (their own heights, i.e. their own references).
   std::vector<Eigen::VectorXd> h(lines.size());
   for (std::size_t i = 0; i < lines.size(); ++i) h[i] = lines[i].heights;
@@ -317,7 +358,7 @@ Result build_seed(const std::vector<Line>& lines, const Options& o) {
       "boundary construction: x lines hung on the two boundary y lines, whose own reference lines "
       "fix "
       "the twist; heights are residuals from the least-squares plane of all points";
-  finish(r, lines, h, true);
+  finish(r, lines, h, true, figures);
   return r;
 }
 
@@ -330,13 +371,127 @@ Eigen::VectorXd heights_from_slopes(const Eigen::VectorXd& slopes, double spacin
   return h;
 }
 
+namespace {
+
+Result build_impl(std::vector<Line> lines, const Options& o, bool figures) {
+  if (!(o.crossing_tolerance >= 0)) throw Error("surface: crossing_tolerance must be >= 0");
+  validate(lines);
+  return o.method == Method::Seed ? build_seed(lines, o, figures) : build_lsq(lines, o, figures);
+}
+
+constexpr int kTrials = 200;  // Monte Carlo trials: u_max to a few per cent
+
+// States r.U (see Result::U): `trial(rng)` assembles the same network from readings that are
+// independent standard normal noise (one unit of the input: mm of height, or an arc-second of
+// slope) without the figures. The assembly is linear in the readings, so the closure a trial
+// shows per unit of noise scales the data's closure to the noise level, and the trials' heights
+// (about their least-squares plane) give every point's uncertainty. `display` converts the input
+// unit to `unit` for Result::sigma.
+void state_uncertainty(Result& r, const std::function<Result(std::mt19937_64&)>& trial,
+                       double display, const std::string& unit) {
+  const auto n = static_cast<Eigen::Index>(r.points.size());
+  double size = 0, data2 = 0;
+  for (const auto& p : r.points) size = std::max(size, std::abs(p.height));
+  for (const auto& c : r.crossings) data2 += c.residual * c.residual;
+  if (r.redundancy <= 0) {
+    r.no_uncertainty_reason = fmt::format(
+        "every one of the {} crossings is needed to assemble the lines, so no closure shows the "
+        "readings' noise: the flatness carries no stated uncertainty (add a line that crosses "
+        "the others)",
+        r.crossings.size());
+    return;
+  }
+  if (detail::is_round_off(r.closure_rms, size)) {
+    r.no_uncertainty_reason =
+        fmt::format("the lines agree at every crossing to round-off ({:.1e} um RMS): {}",
+                    r.closure_rms * 1e3, detail::noise_free_reason("the readings'"));
+    return;
+  }
+  // The least-squares plane of the points, as a projection (heights about it are what the
+  // flatness sees).
+  Eigen::MatrixXd B(n, 3);
+  for (Eigen::Index i = 0; i < n; ++i)
+    B.row(i) << 1, r.points[static_cast<std::size_t>(i)].xy.x(),
+        r.points[static_cast<std::size_t>(i)].xy.y();
+  const Eigen::Matrix3d N = B.transpose() * B;
+  const Eigen::MatrixXd G = N.inverse() * B.transpose();
+  std::mt19937_64 rng(1);
+  Eigen::VectorXd sum2 = Eigen::VectorXd::Zero(n);
+  double closure2 = 0;
+  for (int k = 0; k < kTrials; ++k) {
+    const Result t = trial(rng);
+    if (static_cast<Eigen::Index>(t.points.size()) != n || t.crossings.size() != r.crossings.size())
+      throw Error("surface: a noise trial assembled another network (internal error)");
+    Eigen::VectorXd h(n);
+    for (Eigen::Index i = 0; i < n; ++i) h[i] = t.points[static_cast<std::size_t>(i)].height;
+    h -= B * (G * h);
+    sum2 += h.cwiseAbs2();
+    for (const auto& c : t.crossings) closure2 += c.residual * c.residual;
+  }
+  if (!(closure2 > 0)) {
+    r.no_uncertainty_reason =
+        "this assembly leaves no closure at the crossings, so none shows the readings' noise: the "
+        "flatness carries no stated uncertainty (use --method lsq)";
+    return;
+  }
+  const double sigma = std::sqrt(data2 / (closure2 / kTrials));  // input units
+  r.u_max = sigma * std::sqrt(sum2.maxCoeff() / kTrials);
+  r.U = detail::peak_to_valley_U(r.u_max, static_cast<long>(n));
+  r.sigma = sigma * display;
+  r.sigma_unit = unit;
+  r.no_uncertainty_reason.clear();
+}
+
+Result moody_impl(const MoodyData& data, bool least_squares, bool figures);
+
+}  // namespace
+
 Result build(std::vector<Line> lines, const Options& o) {
   if (!(o.crossing_tolerance >= 0)) throw Error("surface: crossing_tolerance must be >= 0");
   validate(lines);
-  return o.method == Method::Seed ? build_seed(lines, o) : build_lsq(lines, o);
+  // Least squares: the network is factorised once, and the noise trials reuse it (the costly
+  // part at 10⁴ crossings); the boundary construction factorises nothing.
+  std::optional<CrossingSystem> system;
+  if (o.method == Method::Lsq) {
+    auto cs = find_crossings(lines, o.crossing_tolerance);
+    require_connected(lines, cs, o.crossing_tolerance);
+    system = crossing_system(lines, std::move(cs));
+  }
+  Result r = system ? build_lsq(lines, o, true, &*system) : build_seed(lines, o, true);
+  if (!o.uncertainty) {
+    r.no_uncertainty_reason = "not asked for";
+    return r;
+  }
+  std::normal_distribution<double> noise;
+  state_uncertainty(
+      r,
+      [&](std::mt19937_64& rng) {
+        for (Line& l : lines)
+          for (auto& v : l.heights) v = noise(rng);
+        return system ? build_lsq(lines, o, false, &*system) : build_impl(lines, o, false);
+      },
+      1e3, "um");
+  return r;
 }
 
 Result moody(const MoodyData& data, bool least_squares) {
+  Result r = moody_impl(data, least_squares, true);
+  MoodyData trial = data;
+  std::normal_distribution<double> noise;
+  state_uncertainty(
+      r,
+      [&](std::mt19937_64& rng) {
+        for (auto& [name, v] : trial.readings)
+          for (auto& x : v) x = noise(rng);
+        return moody_impl(trial, least_squares, false);
+      },
+      1.0, "arc-second");
+  return r;
+}
+
+namespace {
+
+Result moody_impl(const MoodyData& data, bool least_squares, bool figures) {
   const double d = data.foot_spacing;
   if (!(d > 0) || !std::isfinite(d)) throw Error("Moody: foot spacing must be positive");
   std::map<std::string, Eigen::VectorXd> r;
@@ -402,7 +557,7 @@ Result moody(const MoodyData& data, bool least_squares) {
   }
   if (least_squares) {
     for (Line& l : lines) l.heights = S[l.name] * (kArcsec * d);
-    Result res = build(lines, Options{});
+    Result res = build_impl(lines, Options{}, figures);
     res.method = "moody-lsq";
     return res;
   }
@@ -450,7 +605,10 @@ Result moody(const MoodyData& data, bool least_squares) {
   Result res;
   res.method = "moody";
   res.crossings = find_crossings(lines, 1e-6 * d);
-  finish(res, lines, hs, false);
+  if (figures)
+    res.redundancy = static_cast<int>(static_cast<long>(res.crossings.size()) -
+                                      crossing_system(lines, res.crossings).cod.rank());
+  finish(res, lines, hs, false, figures);
   res.reference = "Moody's worksheet: the lowest point is zero";
   res.unobservable = {"plane"};
   res.gauge = fmt::format(
@@ -460,21 +618,33 @@ Result moody(const MoodyData& data, bool least_squares) {
   return res;
 }
 
-std::string Result::no_uncertainty() const {
-  std::string s =
-      "the line readings come without a noise level, so the flatness carries no stated "
-      "uncertainty";
-  if (!crossings.empty())
-    s += fmt::format("; the lines disagree where they cross by {:.2g} um RMS ({:.2g} um at most)",
-                     closure_rms * 1e3, closure_max * 1e3);
-  return s;
+}  // namespace
+
+std::string Result::uncertainty_basis() const {
+  if (!U) return "";
+  return fmt::format(
+      "reading noise {} {} (one standard deviation, the same for every reading) from the closure "
+      "at {} crossings ({} degrees of freedom), propagated to every point (largest u {} um)",
+      detail::two_digits(sigma), sigma_unit, crossings.size(), redundancy,
+      detail::two_digits(u_max * 1e3));
 }
 
 std::string Result::summary() const {
   std::string s = fmt::format("surface ({}): {} lines, {} points, {} crossings\n", method,
                               lines.size(), points.size(), crossings.size());
-  s += fmt::format("  flatness: {:.4g} um (LS plane), {:.4g} um (min-zone); {}\n",
-                   flatness_ls * 1e3, flatness_min_zone * 1e3, no_uncertainty());
+  if (!U)
+    s += fmt::format("  flatness: {:.4g} um (LS plane), {:.4g} um (min-zone); {}\n",
+                     flatness_ls * 1e3, flatness_min_zone * 1e3, no_uncertainty());
+  else if (*resolved())
+    s += fmt::format("  flatness: {} um (LS plane), {} um (min-zone), U = {} um (95 %)\n  U: {}\n",
+                     detail::rounded_to(flatness_ls * 1e3, *U * 1e3),
+                     detail::rounded_to(flatness_min_zone * 1e3, *U * 1e3),
+                     detail::two_digits(*U * 1e3), uncertainty_basis());
+  else
+    s += fmt::format(
+        "  flatness: not resolved (U = {} um, 95 %, reaches the value): the readings' noise hides "
+        "the form\n  U: {}\n",
+        detail::two_digits(*U * 1e3), uncertainty_basis());
   s += fmt::format("  closure at crossings: RMS {:.4f} um, max {:.4f} um\n", closure_rms * 1e3,
                    closure_max * 1e3);
   s += fmt::format("  unobservable: {}\n  gauge: {}\n", fmt::join(unobservable, ", "), gauge);

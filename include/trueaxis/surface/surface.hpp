@@ -48,6 +48,9 @@ struct Options {
   Method method = Method::Lsq;
   // Two lines cross when their centre lines pass within this distance (mm) inside both extents.
   double crossing_tolerance = 1e-6;
+  // State the flatness's uncertainty (Result::U; 200 assemblies of noise, reusing the network's
+  // factorisation): off where only the heights are wanted.
+  bool uncertainty = true;
 };
 
 struct Point {
@@ -81,9 +84,27 @@ struct Result {
   std::vector<std::string> unobservable;          // e.g. "plane", "twist"
   std::string gauge;                              // how the free modes were fixed
   std::optional<Grid> grid;
-  // Why the flatness carries no uncertainty, in words: the lines come without a noise level, and
-  // their closure at the crossings is shown instead (never a zero uncertainty).
-  std::string no_uncertainty() const;
+  // The flatness's expanded uncertainty (95 %, mm), from the readings' noise as the lines'
+  // disagreement at the crossings shows it: every reading (a height, or a Moody slope) is taken
+  // independent, with one standard deviation for all lines, estimated from the closure and
+  // propagated through the same assembly by Monte Carlo (JCGM 101:2008, 200 trials); then
+  // U = detail::peak_to_valley_U(u_max, points). Unset when the network cannot show the noise
+  // (no redundant crossing, or lines that agree to round-off): no_uncertainty() says why.
+  std::optional<double> U;
+  double sigma = 0;        // estimated standard deviation of one reading, in sigma_unit
+  std::string sigma_unit;  // "um" (heights) or "arc-second" (Moody's slopes)
+  int redundancy = 0;      // independent closure conditions: crossings less the modes they fix
+  double u_max = 0;        // mm, the largest standard uncertainty of a point's height
+  std::optional<bool> resolved() const {
+    if (!U) return std::nullopt;
+    return *U < flatness_min_zone;
+  }
+  // Why the flatness carries no uncertainty, in words (empty when U is set); never a zero.
+  std::string no_uncertainty() const { return no_uncertainty_reason; }
+  std::string no_uncertainty_reason;
+  // How U was obtained, in words ("reading noise 0.12 um from the closure at 22 crossings, 9
+  // degrees of freedom"); empty without U.
+  std::string uncertainty_basis() const;
   std::string summary() const;  // human-readable, µm
 };
 

@@ -216,12 +216,22 @@ void write_surface(const std::string& path, const surface::Result& r) {
   } else {
     j["grid"] = nullptr;
   }
-  // No uncertainty can be stated for lines without a noise level: null, with the reason.
+  // U from the closure at the crossings; null with the reason when the network cannot show the
+  // readings' noise.
   j["flatness"] = {{"ls", r.flatness_ls * 1e3},
                    {"min_zone", r.flatness_min_zone * 1e3},
-                   {"U_um", nullptr},
-                   {"resolved", nullptr},
-                   {"no_uncertainty", r.no_uncertainty()}};
+                   {"U_um", r.U ? nlohmann::ordered_json(*r.U * 1e3) : nullptr},
+                   {"resolved", r.U ? nlohmann::ordered_json(*r.resolved()) : nullptr}};
+  if (r.U) {
+    j["flatness"]["uncertainty"] = {{"sigma", r.sigma},
+                                    {"sigma_unit", r.sigma_unit},
+                                    {"crossings", r.crossings.size()},
+                                    {"degrees_of_freedom", r.redundancy},
+                                    {"u_max_um", r.u_max * 1e3},
+                                    {"basis", r.uncertainty_basis()}};
+  } else {
+    j["flatness"]["no_uncertainty"] = r.no_uncertainty();
+  }
   j["closure"] = {{"rms", r.closure_rms * 1e3}, {"max", r.closure_max * 1e3}};
   auto& cs = j["crossings"] = nlohmann::ordered_json::array();
   for (const auto& c : r.crossings)
