@@ -374,7 +374,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--plane-band", ca->o.plane_band,
                 "mm: a plate's map (all balls in one plane) is used this far either side of its "
                 "plane")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   c->add_option("--outlier-tolerance", ca->o.outlier_tolerance,
                 "mm: a probed point this far off the sphere through the ball's other points "
@@ -477,7 +477,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   });
   c->add_option("--pitch", sa->pitch, "ball plate pitch, mm")
       ->needs(plate)
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   plate->excludes(sections);
   c->add_option("--alignment", sa->alignment,

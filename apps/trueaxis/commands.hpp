@@ -60,6 +60,10 @@ void refuse_outside(const map::ErrorMap& map, const Eigen::Matrix3Xd& points,
 // naming the expected form.
 std::pair<std::string, unsigned short> parse_ipp_address(const std::string& address);
 
+// Accepts a positive finite number; otherwise "must be a positive number, not '-1'" (CLI11's own
+// PositiveNumber names a range up to 1.8e308).
+CLI::Validator positive_number();
+
 // The default truth file of a simulation: the output's name with "-truth.csv" (probes.csv ->
 // probes-truth.csv), so that simulations never overwrite each other's truth.
 std::string truth_beside(const std::string& output);

@@ -15,12 +15,14 @@ namespace {
 struct FitArgs {
   std::string input, output;
   bool zone = false, quiet = false;
+  double point_u_um = NAN;  // the points' standard uncertainty along the normal
 };
 
 int run_fit(geometry::Element e, const FitArgs& a) {
   const Eigen::Matrix3Xd p = io::read_point_set(a.input);
   const geometry::Fit f = a.zone ? geometry::fit_min_zone(e, p) : geometry::fit(e, p);
-  io::write_fit(a.output, f);
+  const geometry::Form form = geometry::form_of(f, a.point_u_um * 1e-3);
+  io::write_fit(a.output, f, form);
   if (!a.quiet) {
     std::string size;
     const bool u = f.has_uncertainty;
@@ -35,6 +37,7 @@ int run_fit(geometry::Element e, const FitArgs& a) {
     fmt::print("{} {}fit to {} points{}: residual RMS {:.3g} mm, max {:.3g} mm -> {}\n",
                geometry::to_string(e), a.zone ? "minimum-zone " : "", p.cols(), size, f.rms, f.max,
                a.output);
+    fmt::print("  {}\n", form.summary());
   }
   for (const auto& w : f.warnings) fmt::print(stderr, "trueaxis: warning: {}\n", w);
   return 0;
@@ -71,6 +74,10 @@ std::vector<Command> add_fit_commands(CLI::App& app) {
       c->add_flag("--zone", a->zone,
                   "minimum-zone (Chebyshev) fit instead of least squares: the middle of the "
                   "thinnest zone holding all points; fit.json gets its width as \"zone\"");
+    c->add_option("--point-u", a->point_u_um,
+                  "um: the points' standard uncertainty along the surface normal (e.g. the CMM's "
+                  "probing uncertainty); gives the form figure its expanded uncertainty")
+        ->check(positive_number());
     c->add_flag("--quiet,-q", a->quiet, "print nothing on success");
     out.push_back({c, [e, a] { return run_fit(e, *a); }});
   }

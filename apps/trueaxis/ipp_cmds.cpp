@@ -306,7 +306,7 @@ std::vector<Command> add_ipp_commands(CLI::App& app) {
   run->add_option("--log", r->log, "session log: every line sent and received, with the time");
   run->add_option("--timeout", r->timeout, "seconds to wait for any one response")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(positive_number());
   run->add_flag("--quiet,-q", r->quiet, "print only the comparison");
   return {{c, [a] { return run_ipp_check(*a); }}, {run, [r] { return run_ipp_run(*r); }}};
 }

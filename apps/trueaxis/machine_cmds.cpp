@@ -3,6 +3,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 
@@ -41,6 +42,18 @@ std::vector<std::pair<std::string, std::string>> report_meta() {
     out.emplace_back(kv.substr(0, eq), kv.substr(eq + 1));
   }
   return out;
+}
+
+CLI::Validator positive_number() {
+  return CLI::Validator(
+      [](std::string& text) {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (end == text.c_str() || *end != '\0' || !(v > 0) || !std::isfinite(v))
+          return fmt::format("must be a positive number, not '{}'", text);
+        return std::string();
+      },
+      "POSITIVE");
 }
 
 std::string truth_beside(const std::string& output) {

@@ -7,6 +7,7 @@
 #include <pybind11/stl.h>
 
 #include <cmath>
+#include <optional>
 
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
@@ -19,7 +20,8 @@ void bind_fit(py::module_& m) {
   m.def(
       "fit",
       [](const std::string& element,
-         const py::array_t<double, py::array::c_style | py::array::forcecast>& points, bool zone) {
+         const py::array_t<double, py::array::c_style | py::array::forcecast>& points, bool zone,
+         std::optional<double> point_u) {
         if (points.ndim() != 2 || points.shape(1) != 3)
           throw Error("points must have shape (n, 3) (mm)");
         const Eigen::Matrix3Xd p =
@@ -46,6 +48,15 @@ void bind_fit(py::module_& m) {
           d["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
         }
         if (zone) d["zone"] = f.zone;
+        const geometry::Form form = geometry::form_of(f, point_u ? *point_u * 1e-3 : NAN);
+        d["form"] = py::dict(py::arg("name") = form.name, py::arg("reference") = form.reference,
+                             py::arg("value_um") = form.value * 1e3,
+                             py::arg("U_um") = form.U ? py::object(py::float_(*form.U * 1e3))
+                                                      : py::object(py::none()),
+                             py::arg("resolved") = form.U ? py::object(py::bool_(*form.resolved()))
+                                                          : py::object(py::none()),
+                             py::arg("no_uncertainty") = form.no_uncertainty,
+                             py::arg("summary") = form.summary());
         // Moved into the array (no copy of n doubles).
         d["residuals"] = py::cast(std::move(f.residuals), py::return_value_policy::move);
         if (f.has_uncertainty) {
@@ -66,12 +77,16 @@ void bind_fit(py::module_& m) {
         return d;
       },
       py::arg("element"), py::arg("points"), py::kw_only(), py::arg("zone") = false,
+      py::arg("point_u") = py::none(),
       R"doc(Least-squares fit of 'line', 'plane', 'circle', 'sphere', 'cylinder' or 'cone' to points
 of shape (n, 3) (mm), as NIST reports it: 'point' (centre, or a point on the line, plane or
 axis), 'direction' (unit: line or axis direction, or normal), 'diameter' (circle, sphere,
 cylinder), 'distance' and 'apex_angle_deg' (cone), 'residuals' (signed orthogonal distances),
 'rms', 'max'. zone=True (line, plane, circle): the minimum-zone (Chebyshev) fit instead, with
-its width as 'zone'. Raises trueaxis.Error for degenerate sets.)doc");
+its width as 'zone'. 'form': the element's form (straightness, flatness, roundness, ...) as
+{'name', 'reference', 'value_um', 'U_um' (95 %), 'resolved', 'no_uncertainty', 'summary'}; U needs
+point_u, the points' standard uncertainty along the normal (µm), since residuals alone cannot tell
+form from noise. Raises trueaxis.Error for degenerate sets.)doc");
 }
 
 }  // namespace trueaxis::python

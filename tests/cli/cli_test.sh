@@ -245,6 +245,12 @@ grep -q '"diameter": 2' ball.json && ok || bad "fit sphere from CSV"
 expect_ok "$T" fit plane --zone -i "$DATA/nist-l2/Plane/pla1.ds" -o pla.json
 grep -q '"zone"' pla.json && grep -q "minimum zone" out.txt && ok || bad "fit plane --zone"
 expect_err "" "$T" fit sphere --zone -i ball.csv -o o.json
+# The form figure: without the points' uncertainty no U (null, with why); with it, U beside it.
+expect_ok "$T" fit plane --zone -i "$DATA/nist-l2/Plane/pla1.ds" -o pla.json
+grep -q '"name": "flatness"' pla.json && grep -q '"U": null' pla.json && grep -q "flatness (minimum zone): .* no uncertainty: the points' own uncertainty is not stated" out.txt && ok || bad "fit: form without --point-u"
+expect_ok "$T" fit plane --zone --point-u 0.01 -i "$DATA/nist-l2/Plane/pla1.ds" -o pla-u.json
+grep -q "flatness (minimum zone): .* um, U = .* um (95 %)" out.txt && grep -q '"resolved": true' pla-u.json && ok || bad "fit --point-u states the form's U"
+expect_err "point-u: must be a positive number, not '-1'" "$T" fit plane --point-u -1 -i "$DATA/nist-l2/Plane/pla1.ds" -o o.json
 printf '3\n0 0 0\n1 1 1\n2 2 2\n' > line.ds
 expect_err "plane fit: the points are collinear" "$T" fit plane -i line.ds -o o.json
 printf '2\n0 0 0\n1 1 one\n' > bad.ds

@@ -72,3 +72,12 @@ def test_python_speaks_the_words_of_fit_json(tmp_path):
             if key in f:
                 np.testing.assert_allclose(f[key], from_file[key], rtol=1e-12, atol=1e-12)
         assert set(f["uncertainty"]) == set(from_file["uncertainty"]), element
+        # The form figure, the same in both; without the points' uncertainty no U (None/null).
+        assert f["form"]["name"] == from_file["form"]["name"]
+        np.testing.assert_allclose(f["form"]["value_um"], from_file["form"]["value"] * 1e3, rtol=1e-12)
+        assert f["form"]["U_um"] is None and from_file["form"]["U"] is None
+    # With it: U beside the value, and whether the form is resolved (1 µm noise on a flat
+    # plate: the flatness is all noise).
+    f = trueaxis.fit("plane", pts["plane"], point_u=1.0)
+    assert f["form"]["U_um"] > f["form"]["value_um"] and f["form"]["resolved"] is False
+    assert "not resolved" in f["form"]["summary"]

@@ -17,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -79,5 +80,32 @@ Fit fit_min_zone(Element element, const Eigen::Matrix3Xd& points);
 // Orthogonal distances from points to a fitted element: signed (outside positive; along the
 // normal for a plane) except for a line, where they are unsigned.
 Eigen::VectorXd distances(const Fit& f, const Eigen::Matrix3Xd& points);
+
+// The form of a fitted element, a peak-to-valley figure of its residuals: straightness (line),
+// flatness (plane), roundness (circle), sphericity (sphere), cylindricity (cylinder), conicity
+// (cone). About a least-squares element it is the range of the signed residuals (ISO 12781-1,
+// 12181-1, 12180-1: the least-squares reference; a line: the diameter of the cylinder about it,
+// twice the largest distance); of a minimum-zone fit, the zone.
+struct Form {
+  std::string name;       // "flatness", ...
+  std::string reference;  // "about the least-squares plane", "minimum zone"
+  double value = 0;       // mm
+  // Expanded uncertainty (95 %, mm) from the points' own standard uncertainty along the surface
+  // normal (the residuals alone cannot tell form from the points' noise):
+  // detail::peak_to_valley_U(point_u, points), as every peak-to-valley figure. Unset when the
+  // points' uncertainty is not stated; `no_uncertainty` says why.
+  std::optional<double> U;
+  std::string no_uncertainty;
+  std::optional<bool> resolved() const {
+    if (!U) return std::nullopt;
+    return *U < value;
+  }
+  // In words, µm, to the resolution U supports: "flatness (about the least-squares plane): 2.3
+  // um, U = 0.80 um (95 %)", "... not resolved (U = ...)", or the value with why no U.
+  std::string summary() const;
+};
+// `point_u`: the points' standard uncertainty along the normal (mm), > 0; NaN when not stated.
+// Throws Error for a point_u that is not a positive number or NaN.
+Form form_of(const Fit& f, double point_u);
 
 }  // namespace trueaxis::geometry

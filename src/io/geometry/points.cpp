@@ -73,7 +73,7 @@ Eigen::Matrix3Xd read_point_set(const std::string& path) {
   return ext == ".ds" ? read_ds(path) : read_points(path);
 }
 
-void write_fit(const std::string& path, const geometry::Fit& f) {
+void write_fit(const std::string& path, const geometry::Fit& f, const geometry::Form& form) {
   using geometry::Element;
   nlohmann::ordered_json j;
   j["kind"] = "fit";
@@ -93,6 +93,14 @@ void write_fit(const std::string& path, const geometry::Fit& f) {
     j["apex_angle_deg"] = f.apex_angle * 180 / M_PI;
   }
   if (f.zone > 0) j["zone"] = f.zone;
+  nlohmann::ordered_json fj{
+      {"name", form.name},
+      {"reference", form.reference},
+      {"value", form.value},
+      {"U", form.U ? nlohmann::ordered_json(*form.U) : nullptr},
+      {"resolved", form.U ? nlohmann::ordered_json(*form.resolved()) : nullptr}};
+  if (!form.U) fj["no_uncertainty"] = form.no_uncertainty;
+  j["form"] = fj;
   if (f.has_uncertainty) {
     // Standard uncertainties (k = 1) of the values above, same units.
     nlohmann::ordered_json u;

@@ -21,7 +21,8 @@ Eigen::Matrix3Xd read_point_set(const std::string& path);
 // "normal" (plane, circle) or "direction" (line, cylinder, cone; unit), "diameter" (circle,
 // sphere, cylinder; mm), "distance" (cone: from "point" to the surface, mm), "apex_angle_deg"
 // (cone), "zone" (minimum-zone fits: the zone's width, mm), "rms", "max" (residuals, mm),
-// "iterations"}.
-void write_fit(const std::string& path, const geometry::Fit& fit);
+// "iterations"}. `form`: the element's form figure (geometry::form_of), written as "form": {"name",
+// "reference", "value", "U" (95 %, null when not stated), "resolved", "no_uncertainty"} (mm).
+void write_fit(const std::string& path, const geometry::Fit& fit, const geometry::Form& form);
 
 }  // namespace trueaxis::io
