@@ -44,23 +44,24 @@ void BM_SurfaceGrid(benchmark::State& st) {
 
 // The same network with 0.1 µm of noise on every height: the flatness's uncertainty is then
 // stated, from 200 noise trials that reuse the network's factorisation.
-void BM_SurfaceGridWithUncertainty(benchmark::State& st) {
+std::vector<surface::Line> noisy_network() {
   auto lines = network();
   std::mt19937_64 rng(3);
   std::normal_distribution<double> noise(0, 1e-4);
   for (auto& l : lines)
     for (auto& h : l.heights) h += noise(rng);
+  return lines;
+}
+
+void BM_SurfaceGridWithUncertainty(benchmark::State& st) {
+  const auto lines = noisy_network();
   for (auto _ : st) benchmark::DoNotOptimize(surface::build(lines));
   st.SetItemsProcessed(st.iterations() * kLines * kLines);  // crossings
 }
 
 // Without it, the same noisy network (Options::uncertainty off): the same-run baseline.
 void BM_SurfaceGridNoisyWithoutUncertainty(benchmark::State& st) {
-  auto lines = network();
-  std::mt19937_64 rng(3);
-  std::normal_distribution<double> noise(0, 1e-4);
-  for (auto& l : lines)
-    for (auto& h : l.heights) h += noise(rng);
+  const auto lines = noisy_network();
   surface::Options o;
   o.uncertainty = false;
   for (auto _ : st) benchmark::DoNotOptimize(surface::build(lines, o));
