@@ -55,6 +55,10 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     solid_ = std::make_shared<const solid::Mesh>(design_solid->transformed(sim::transform(part_)));
     if (o_.table) table_z_ = solid_->box().min().z();
     touch_faces(nullptr);
+    // The part's dents (and its form noise, to 4 standard deviations) are in its contours, not
+    // in the solid: the stylus may enter the solid that deep (check_solid).
+    for (const auto& b : part_.deviation.bumps) dent_ = std::max(dent_, -b.height);
+    if (dent_ > 0 || part_.deviation.noise > 0) dent_ += 4 * part_.deviation.noise;
   }
   if (const auto& m = o_.geometry) {
     m->validate();
@@ -165,7 +169,11 @@ void VirtualCmm::check_solid() {
       clear = solid_->distance(ball, r + kSolidLookout, touchable_) - (r - ball_allowance_);
       table = ball.z() - r - table_z_;
     } else if (k == 1) {
-      clear = solid_->distance(s0, s1, rs + kSolidLookout) - rs;
+      // Beside a dent the stem follows the ball into the design solid: into the face the section
+      // cuts and past the edges beside it (the dent reaches through them, the solid holds none of
+      // it). So the stem may enter the solid as deep as the part's deepest dent (dent_): a stem
+      // driven into a face is caught that much later, a graze shallower than a dent not at all.
+      clear = solid_->distance(s0, s1, rs + kSolidLookout) - rs + dent_;
       table = std::min(s0.z(), s1.z()) - rs - table_z_;
     } else {
       clear = solid_->distance(n0, b1, rb + kSolidLookout) - rb;

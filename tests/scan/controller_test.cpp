@@ -618,5 +618,29 @@ TEST(Controller, ReportShowsEveryScanAndEveryDecision) {
   EXPECT_TRUE(s.warnings.empty());
 }
 
+// A dent deeper than the pushing amount on a part scanned with its STEP solid (NIST's simple
+// block): the ball follows the real, dented wall, and its stem beside it enters the undented
+// design solid, which holds no bumps. That is no collision: the scan runs through (the dent
+// within the tolerance) or corrects itself (beyond it), every point on the true contour. A move
+// into the other faces is still a collision (FreeMovesGoRoundThePartAndACollisionIsCaught).
+TEST(Controller, ADentDeeperThanThePushIsFollowedWithoutAFalseCollision) {
+  const auto d =
+      design::from_step(TRUEAXIS_TEST_DATA "/ippdme/ipp_simple.stp",
+                        {{"mid", {Eigen::Vector3d(0, 0, 37.5), Eigen::Vector3d::UnitZ()}}});
+  ASSERT_EQ(d.sections[0].name, "mid.1");
+  for (double depth : {0.6, 1.2, 2.0}) {
+    SCOPED_TRACE(depth);
+    sim::Part part{d, {}};
+    part.deviation.bumps = {{"mid.1", 50, -depth, 20}};
+    const scan::ControllerOptions o;
+    scan::VirtualCmm cmm(part, {}, scan::start_position(d, o));
+    const auto r = scan::scan(cmm, d, o);
+    ASSERT_TRUE(r.ok()) << r.summary();
+    for (std::size_t i = 0; i < r.sections.size(); ++i)
+      EXPECT_LT(worst_distance(cmm, d.sections[i], r.sections[i].points), kRoundoff);
+    EXPECT_EQ(count(r, "trajectory_error") > 0, depth > o.tolerance) << r.summary();
+  }
+}
+
 }  // namespace
 }  // namespace trueaxis

@@ -225,6 +225,9 @@ class VirtualCmm : public Machine {
   double table_z_ = -INFINITY;
   std::vector<char> touchable_;
   double ball_allowance_ = 0;
+  // How deep the real part lies inside the moved design solid where it is dented (its deepest
+  // dent and form noise, mm): the stylus may enter the solid that far.
+  double dent_ = 0;
   Eigen::Vector3d deflection_ = Eigen::Vector3d::Zero();  // the probe's, as last read (true)
   // Per element (ball, stylus, body): where it was last checked and the clearance found then
   // (< 0: check at the next tick).
