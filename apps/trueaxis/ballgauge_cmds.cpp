@@ -279,12 +279,12 @@ int run_simulate(const SimArgs& a) {
   // Truth: every probed ball's true centre and the machine's error there.
   Eigen::VectorXd pl, ball, X, Y, Z, ex, ey, ez;
   std::vector<double> cols[8];
-  for (std::size_t p = 0; p < c.placements.size(); ++p)
+  for (std::size_t p = 0; p < c.placements.size(); ++p) {
+    // The machine's error at the tip of the stylus this placement was probed with.
+    sim::Machine ms = m;
+    if (c.placements[p].stylus_offset) ms.offset = *c.placements[p].stylus_offset;
     for (std::size_t b = 0; b < c.placements[p].balls.size(); ++b) {
       const Eigen::Vector3d t = c.true_centres[p][b];
-      // The machine's error at the tip of the stylus this placement was probed with.
-      sim::Machine ms = m;
-      if (c.placements[p].stylus_offset) ms.offset = *c.placements[p].stylus_offset;
       const Eigen::Vector3d e = ms.error(t - ms.offset) * 1e3;
       const double v[8] = {static_cast<double>(p),
                            static_cast<double>(c.placements[p].balls[b].index),
@@ -296,6 +296,7 @@ int run_simulate(const SimArgs& a) {
                            e.z()};
       for (int k = 0; k < 8; ++k) cols[k].push_back(v[k]);
     }
+  }
   std::vector<Eigen::VectorXd> vc;
   for (auto& v : cols)
     vc.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));

@@ -132,6 +132,8 @@ void refuse_if_model_stylus_unseen(const ParametricResult& r, const ParametricOp
                                    const Eigen::Matrix3Xd& commands, const Eigen::MatrixXd& null,
                                    const Eigen::VectorXd& scale, double largest) {
   if (null.cols() == 0) return;
+  if (r.styli.size() == 1 && r.styli.front().offset == o.offset)
+    return;  // harmless by construction
   const Eigen::Index P = scale.size(), n = commands.cols();
   const Eigen::MatrixXd Jm =
       design_matrix(o.chain, o.offset, o.degree, r.centre, r.half_span, commands);

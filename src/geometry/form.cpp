@@ -14,7 +14,6 @@ Form form_of(const Fit& f, double point_u) {
         "the points' standard uncertainty must be a positive number of mm, not {}", point_u));
   static const char* const kNames[] = {"straightness", "flatness",     "roundness",
                                        "sphericity",   "cylindricity", "conicity"};
-  static const char* const kElements[] = {"line", "plane", "circle", "sphere", "cylinder", "cone"};
   Form out;
   out.name = kNames[static_cast<int>(f.element)];
   const auto n = f.residuals.size();
@@ -22,8 +21,7 @@ Form form_of(const Fit& f, double point_u) {
     out.reference = "minimum zone";
     out.value = f.zone;
   } else {
-    out.reference =
-        fmt::format("about the least-squares {}", kElements[static_cast<int>(f.element)]);
+    out.reference = fmt::format("about the least-squares {}", to_string(f.element));
     if (n == 0)
       out.value = 0;
     else if (f.element == Element::Line)  // unsigned distances: the cylinder about the line
@@ -34,9 +32,7 @@ Form form_of(const Fit& f, double point_u) {
   if (std::isnan(point_u)) {
     out.no_uncertainty =
         "the points' own uncertainty is not stated (--point-u; point_u= in Python): their "
-        "residuals "
-        "mix the form with "
-        "the points' noise, which nothing here separates";
+        "residuals mix the form with the points' noise, which nothing here separates";
     return out;
   }
   out.U = detail::peak_to_valley_U(point_u, static_cast<long>(n));

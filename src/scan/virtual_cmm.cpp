@@ -58,7 +58,7 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     // The part's dents (and its form noise, to 4 standard deviations) are in its contours, not
     // in the solid: the stylus may enter the solid that deep (check_solid).
     for (const auto& b : part_.deviation.bumps) dent_ = std::max(dent_, -b.height);
-    if (dent_ > 0 || part_.deviation.noise > 0) dent_ += 4 * part_.deviation.noise;
+    dent_ += 4 * part_.deviation.noise;
   }
   if (const auto& m = o_.geometry) {
     m->validate();

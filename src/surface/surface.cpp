@@ -373,9 +373,14 @@ Eigen::VectorXd heights_from_slopes(const Eigen::VectorXd& slopes, double spacin
 
 namespace {
 
-Result build_impl(std::vector<Line> lines, const Options& o, bool figures) {
+// The options' and lines' checks (the lines normalised), before any assembly.
+void check_network(std::vector<Line>& lines, const Options& o) {
   if (!(o.crossing_tolerance >= 0)) throw Error("surface: crossing_tolerance must be >= 0");
   validate(lines);
+}
+
+Result build_impl(std::vector<Line> lines, const Options& o, bool figures) {
+  check_network(lines, o);
   return o.method == Method::Seed ? build_seed(lines, o, figures) : build_lsq(lines, o, figures);
 }
 
@@ -447,8 +452,7 @@ Result moody_impl(const MoodyData& data, bool least_squares, bool figures);
 }  // namespace
 
 Result build(std::vector<Line> lines, const Options& o) {
-  if (!(o.crossing_tolerance >= 0)) throw Error("surface: crossing_tolerance must be >= 0");
-  validate(lines);
+  check_network(lines, o);
   // Least squares: the network is factorised once, and the noise trials reuse it (the costly
   // part at 10⁴ crossings); the boundary construction factorises nothing.
   std::optional<CrossingSystem> system;
@@ -468,7 +472,7 @@ Result build(std::vector<Line> lines, const Options& o) {
       [&](std::mt19937_64& rng) {
         for (Line& l : lines)
           for (auto& v : l.heights) v = noise(rng);
-        return system ? build_lsq(lines, o, false, &*system) : build_impl(lines, o, false);
+        return system ? build_lsq(lines, o, false, &*system) : build_seed(lines, o, false);
       },
       1e3, "um");
   return r;
