@@ -26,6 +26,11 @@ std::string parameter_text(const std::string& name, double v) {
 // (mm): room for a part that is off its design by more than that band somewhere between them.
 constexpr double kRouteMargin = 2.0;
 
+// A design-value scan stops as a trajectory error when the probe's deflection comes within this
+// fraction of the room the pushing leaves in its range (range − pushing): 0.07 mm of a 1 mm
+// probe pushed 0.3 mm, about one servo tick of a surface rising 45° at 70 mm/s.
+constexpr double kRangeGuard = 0.1;
+
 // Machine time of one operation, added to a category.
 template <class Fn>
 auto timed(Machine& m, double& bucket, Fn&& fn) {
@@ -342,10 +347,17 @@ struct SectionRun {
     const auto path = design::make_path(current, o.path);
     const auto start = path.at(0);
     safe_move(start.p + settings().approach_clearance * start.normal);
-    bool error = false;
+    bool error = false, range = false;
     Trace tr;
     tr.label = r.traces.empty() ? "design" : fmt::format("rescan {}", r.traces.size());
     double next = 0;
+    // The material side: a surface that comes nearer faster than the servo follows is taken up
+    // by the probe's deflection alone, and a probe pushed beyond its range stops the machine (on
+    // a real CMM an error state). So a deflection near the range is a trajectory error too, and
+    // the scan stops before the probe does.
+    const auto probe_range = m.probe_range();
+    const double near_range =
+        probe_range ? *probe_range - kRangeGuard * (*probe_range - o.path.pushing) : INFINITY;
     const auto out = timed(m, r.time.design, [&] {
       return m.scan_path(path, settings(), [&](const Sample& s) {
         if (s.arc >= next) {
@@ -353,7 +365,8 @@ struct SectionRun {
           tr.delta_l.push_back(s.delta_l);
           next = s.arc + 0.5;
         }
-        if (std::abs(s.delta_l) > o.tolerance || (!o.active && !s.contact)) {
+        range = s.contact && s.deflection >= near_range;
+        if (range || std::abs(s.delta_l) > o.tolerance || (!o.active && !s.contact)) {
           error = true;
           return false;
         }
@@ -370,6 +383,12 @@ struct SectionRun {
       return true;
     }
     why = !out.fault.empty() ? out.fault
+          : range
+              ? fmt::format(
+                    "the surface came nearer faster than the probe follows: its deflection "
+                    "reached {:.3f} mm of its {:g} mm measuring range at ΔL {:+.3f} mm (stopped "
+                    "before the probe's over-travel)",
+                    stop.deflection, *probe_range, stop.delta_l)
           : !o.active && !stop.contact
               ? "the probe lifted off the surface"
               : fmt::format("trajectory error {:+.3f} mm beyond the ±{:g} mm tolerance",

@@ -264,6 +264,7 @@ Sample VirtualCmm::sample(const sim::ProbeReading& r, double arc) const {
   s.contact = r.contact;
   s.overtravel = r.overtravel;
   const double m = r.deflection.norm();
+  if (r.contact) s.deflection = m;
   if (r.contact && m > 0) {
     s.normal = r.deflection / m;
     s.surface = servo_.position() + r.deflection - probe_.options().tip_radius * s.normal;

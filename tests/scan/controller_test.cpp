@@ -642,5 +642,59 @@ TEST(Controller, ADentDeeperThanThePushIsFollowedWithoutAFalseCollision) {
   }
 }
 
+// The tolerance holds on both sides. A surface that departs slowly from its design is followed
+// to the tolerance either way: just inside it scans along the design, just beyond it is a
+// trajectory error at the tolerance. One that rises faster than the servo follows is taken up by
+// the probe alone, so it is a trajectory error once the deflection nears the probe's range, before
+// the tolerance and before the probe's over-travel would stop the machine.
+TEST(Controller, TrajectoryToleranceHoldsOnBothSidesAndTheProbeRangeIsGuarded) {
+  const auto d = square_and_hole();
+  const scan::ControllerOptions o;
+  constexpr double kMargin = 0.05;    // mm either side of the tolerance
+  constexpr double kOneTick = 0.02;   // mm: ΔL moves less than this in a servo tick here
+  const double wide = 30, steep = 4;  // bump widths (mm): followed, and too fast to follow
+  for (double side : {1.0, -1.0}) {
+    for (double h : {o.tolerance - kMargin, o.tolerance + kMargin}) {
+      SCOPED_TRACE(side * h);
+      sim::Part part{d, {}};
+      part.deviation.bumps = {{"outer", 150, side * h, wide}};
+      scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+      const auto r = scan::scan(cmm, d, o);
+      ASSERT_TRUE(r.ok()) << r.summary();
+      EXPECT_LT(worst_distance(cmm, d.sections[0], r.sections[0].points), kRoundoff);
+      const bool beyond = h > o.tolerance;
+      ASSERT_EQ(count(r, "trajectory_error"), beyond ? 1 : 0) << r.summary();
+      for (const auto& e : r.events)
+        if (e.event == "trajectory_error") {
+          EXPECT_GT(side * e.delta_l, o.tolerance);
+          EXPECT_LT(side * e.delta_l, o.tolerance + kOneTick);
+        }
+    }
+  }
+  sim::Part part{d, {}};
+  part.deviation.bumps = {{"outer", 150, 1.0, steep}};
+  scan::VirtualCmm cmm(part, {}, Eigen::Vector3d(50, -20, 40));
+  const auto r = scan::scan(cmm, d, o);
+  ASSERT_TRUE(r.ok()) << r.summary();
+  EXPECT_LT(worst_distance(cmm, d.sections[0], r.sections[0].points), kRoundoff);
+  ASSERT_EQ(count(r, "trajectory_error"), 1);
+  for (const auto& e : r.events)
+    if (e.event == "trajectory_error") {
+      EXPECT_NE(e.decision.find("before the probe's over-travel"), std::string::npos) << e.decision;
+      EXPECT_LT(e.delta_l, o.tolerance);
+    }
+  // The same part scanned without the guard (a machine that hides its range) runs into the
+  // probe's over-travel: the guard is what stops it first.
+  struct NoRange : scan::VirtualCmm {
+    using VirtualCmm::VirtualCmm;
+    std::optional<double> probe_range() const override { return std::nullopt; }
+  } blind(part, {}, Eigen::Vector3d(50, -20, 40));
+  scan::ControllerOptions plain = o;
+  plain.strategy = scan::Strategy::Design;
+  const auto rb = scan::scan(blind, d, plain);
+  ASSERT_FALSE(rb.ok());
+  EXPECT_NE(rb.sections[0].reason.find("over-travel"), std::string::npos) << rb.summary();
+}
+
 }  // namespace
 }  // namespace trueaxis

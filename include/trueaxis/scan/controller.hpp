@@ -2,7 +2,10 @@
 // scanning when the part is too far from its design (after Mitutoyo's method, JP 6484108 B2).
 //
 // For each section: scan along the path computed from the design data (fast). While the
-// trajectory error ΔL stays within the tolerance, that is all. On a trajectory error:
+// trajectory error ΔL stays within the tolerance, that is all. A trajectory error is |ΔL| beyond
+// the tolerance, or (on a machine that reports its probe's range) a deflection near the range,
+// where a surface rising faster than the servo follows would push the probe to over-travel; in
+// passive scanning also a probe lifting off. On a trajectory error:
 //  1. the 2-D test: a section given as a space curve (with surface normals) that does not lie
 //     in one plane (a spiral over a sphere) ends in an error exit with the reason; one that
 //     does is treated as that (possibly oblique) plane section from here on;

@@ -35,6 +35,7 @@ struct Sample {
   // Trajectory error: how far the ball centre runs from where it would on the design, along the
   // path normal (mm): (ball centre − path point)·normal − Ep, 0 on a perfect part.
   double delta_l = 0;
+  double deflection = 0;  // the probe's deflection as read (mm, its magnitude; 0 off the surface)
   bool contact = false, overtravel = false;
 };
 
@@ -86,6 +87,10 @@ class Machine {
   virtual void orient(const Eigen::Vector3d& axis) { axis_ = axis.normalized(); }
   const Eigen::Vector3d& stylus_axis() const { return axis_; }
   virtual double time() const = 0;  // machine seconds so far
+  // The deflection beyond which the probe stops the machine (its measuring range, mm), when the
+  // scans report the deflection (Sample::deflection) so that the controller can stop before it;
+  // empty when the CMM guards its probe itself (an I++ DME server reports error 2001).
+  virtual std::optional<double> probe_range() const { return std::nullopt; }
   virtual Eigen::Vector3d position() const = 0;
   // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s, in a straight line.
   // Throws Error if it runs the stylus into the part (a collision).
@@ -163,6 +168,7 @@ class VirtualCmm : public Machine {
   VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
              const Eigen::Vector3d& home = Eigen::Vector3d::Zero());
   double time() const override { return servo_.time(); }
+  std::optional<double> probe_range() const override { return probe_.options().range; }
   Eigen::Vector3d position() const override { return servo_.position(); }
   void orient(const Eigen::Vector3d& axis) override;
   void move(const Eigen::Vector3d& to, double speed) override;
