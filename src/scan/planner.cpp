@@ -151,20 +151,7 @@ std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eige
 
 std::vector<char> Planner::faces_crossing(const design::Plane& plane) const {
   if (!part_) return {};
-  std::vector<char> out(static_cast<std::size_t>(part_->face_count()), 0);
-  const Eigen::Vector3d n = plane.normal.normalized();
-  for (int f = 0; f < part_->face_count(); ++f) {
-    const Eigen::AlignedBox3d& b = part_->face_box(f);
-    double lo = INFINITY, hi = -INFINITY;
-    for (int k = 0; k < 8; ++k) {
-      const double h =
-          (b.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - plane.origin).dot(n);
-      lo = std::min(lo, h);
-      hi = std::max(hi, h);
-    }
-    out[static_cast<std::size_t>(f)] = lo <= 1e-6 && hi >= -1e-6;
-  }
-  return out;
+  return part_->faces_crossing(plane.origin, plane.normal);
 }
 
 bool Planner::from_above(const Eigen::Vector3d& c, const Eigen::Vector3d& axis) const {
@@ -178,7 +165,7 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
                                                    const Eigen::Vector3d& axis, double step) const {
   std::vector<Blocked> out;
   if (!part_ || path.space()) return out;
-  const std::vector<char> skip = faces_crossing(path.plane);
+  const std::vector<char> skip = faces_crossing(path.plane), none;
   const Eigen::Vector3d u = axis.normalized();
   // The stylus and body keep a tenth of a millimetre from everything (a Ø1 stem beside a wall it
   // scans has 0.2 mm); the ball, from what it does not measure.
@@ -206,7 +193,7 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
     const design::PathPoint q = path.at(s);
     const Eigen::Vector3d c = q.p;
     for (int k = 0; k < 3; ++k)
-      if (element(k, c, u, k == 0 ? skip : std::vector<char>{}) < kReach) return k;
+      if (element(k, c, u, k == 0 ? skip : none) < kReach) return k;
     const Eigen::Vector3d a = q.normal, b = pn.cross(q.normal).normalized();
     for (int j = -1; j < 8; ++j) {
       const double t = std::numbers::pi / 4 * j;
@@ -227,7 +214,7 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
         if (to_contact < 0) break;
         double room = to_contact;
         for (int k = 0; k < 3; ++k) {
-          const double e = element(k, x, u, k == 0 ? skip : std::vector<char>{});
+          const double e = element(k, x, u, k == 0 ? skip : none);
           if (e < kReach) return 3 + k;
           room = std::min(room, e - kReach);
         }

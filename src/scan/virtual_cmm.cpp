@@ -129,20 +129,8 @@ void VirtualCmm::orient(const Eigen::Vector3d& axis) {
 void VirtualCmm::touch_faces(const design::Plane* plane) {
   guard_clear_ = {-1, -1, -1};
   if (!solid_) return;
-  touchable_.assign(static_cast<std::size_t>(solid_->face_count()), 0);
-  if (!plane) return;
-  const Eigen::Vector3d n = plane->normal.normalized();
-  for (int f = 0; f < solid_->face_count(); ++f) {
-    const Eigen::AlignedBox3d& b = solid_->face_box(f);
-    double lo = INFINITY, hi = -INFINITY;
-    for (int k = 0; k < 8; ++k) {
-      const double h =
-          (b.corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - plane->origin).dot(n);
-      lo = std::min(lo, h);
-      hi = std::max(hi, h);
-    }
-    touchable_[static_cast<std::size_t>(f)] = lo <= 1e-6 && hi >= -1e-6;
-  }
+  touchable_ = plane ? solid_->faces_crossing(plane->origin, plane->normal)
+                     : std::vector<char>(static_cast<std::size_t>(solid_->face_count()), 0);
 }
 
 void VirtualCmm::check_solid() {

@@ -250,6 +250,22 @@ bool Mesh::inside(const V& p) const {
   return false;
 }
 
+std::vector<char> Mesh::faces_crossing(const V& origin, const V& normal) const {
+  std::vector<char> out(face_box_.size(), 0);
+  const V n = normal.normalized();
+  for (std::size_t f = 0; f < face_box_.size(); ++f) {
+    double lo = INFINITY, hi = -INFINITY;
+    for (int k = 0; k < 8; ++k) {
+      const double h =
+          (face_box_[f].corner(static_cast<Eigen::AlignedBox3d::CornerType>(k)) - origin).dot(n);
+      lo = std::min(lo, h);
+      hi = std::max(hi, h);
+    }
+    out[f] = lo <= 1e-6 && hi >= -1e-6;
+  }
+  return out;
+}
+
 // Best-first descent of the hierarchy for the least squared distance from something (a point,
 // a segment) to the faces not skipped: box_d2(box) bounds it from below for a node, tri_d2(t)
 // is it for triangle t. `limit` when nothing is nearer.

@@ -40,6 +40,16 @@ TEST(SolidMesh, PointAndSegmentClearanceOfACube) {
   std::vector<char> skip(6, 0);
   skip[1] = 1;
   EXPECT_NEAR(m.distance(Eigen::Vector3d(5, 5, 11), INFINITY, skip), std::sqrt(25.0 + 1), kExact);
+  // Only the top face: its distance from a point beside the cube, for point and segment.
+  std::vector<char> top(6, 1);
+  top[1] = 0;
+  EXPECT_NEAR(m.distance(Eigen::Vector3d(13, 5, 5), INFINITY, top), std::sqrt(9.0 + 25), kExact);
+  EXPECT_NEAR(m.distance(Eigen::Vector3d(13, 5, 5), Eigen::Vector3d(13, 5, -5), INFINITY, top),
+              std::sqrt(9.0 + 25), kExact);
+  EXPECT_EQ(m.distance(Eigen::Vector3d(5, 5, 5), 1.0, std::vector<char>(6, 1)), 1.0);
+  // The faces a plane crosses: z = 5 meets the four sides.
+  EXPECT_EQ(m.faces_crossing(Eigen::Vector3d(0, 0, 5), Eigen::Vector3d::UnitZ()),
+            std::vector<char>({0, 0, 1, 1, 1, 1}));
   // Moved and scaled.
   Eigen::Affine3d t = Eigen::Affine3d::Identity();
   t.linear() *= 2;
@@ -98,20 +108,37 @@ TEST(SolidMesh, RealPartAgreesWithEveryTriangleAndItsShape) {
   const auto& t = m->indices();
   Eigen::Matrix3Xi one_triangle(3, 1);
   one_triangle << 0, 1, 2;
+  // Also with the faces a mid-height plane crosses left out (a ball scanning there), and with
+  // only those faces.
+  const auto crossing = m->faces_crossing(Eigen::Vector3d(0, 0, 37.5), Eigen::Vector3d::UnitZ());
+  std::vector<char> others(crossing.size());
+  for (std::size_t f = 0; f < crossing.size(); ++f) others[f] = !crossing[f];
+  const auto& without = crossing;
+  const auto& only = others;
+  const auto& face = m->triangle_faces();
   for (int k = 0; k < 200; ++k) {
     const Eigen::Vector3d p(u(rng), u(rng), 0.5 * u(rng));
     const Eigen::Vector3d q = p + Eigen::Vector3d(u(rng), u(rng), u(rng)) * 0.2;
     double best = INFINITY, best_seg = INFINITY;
+    double best_without = INFINITY, best_only = INFINITY, seg_without = INFINITY;
     for (Eigen::Index i = 0; i < t.cols(); ++i) {
       Eigen::Matrix3Xd corners(3, 3);
       corners << v.col(t(0, i)), v.col(t(1, i)), v.col(t(2, i));
       const solid::Mesh one(corners, one_triangle);
-      best = std::min(best, one.distance(p));
-      best_seg = std::min(best_seg, one.distance(p, q));
+      const double d = one.distance(p), ds = one.distance(p, q);
+      best = std::min(best, d);
+      best_seg = std::min(best_seg, ds);
+      const bool crosses = crossing[static_cast<std::size_t>(face[static_cast<std::size_t>(i)])];
+      (crosses ? best_only : best_without) = std::min(crosses ? best_only : best_without, d);
+      if (!crosses) seg_without = std::min(seg_without, ds);
     }
     EXPECT_NEAR(m->distance(p), best, 1e-12);
     EXPECT_NEAR(m->distance(p, q), best_seg, 1e-12);
+    EXPECT_NEAR(m->distance(p, INFINITY, without), best_without, 1e-12);
+    EXPECT_NEAR(m->distance(p, q, INFINITY, without), seg_without, 1e-12);
+    EXPECT_NEAR(m->distance(p, INFINITY, only), best_only, 1e-12);
   }
+  EXPECT_GT(std::count(crossing.begin(), crossing.end(), 1), 0);
 }
 
 }  // namespace

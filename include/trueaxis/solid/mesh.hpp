@@ -37,8 +37,16 @@ class Mesh {
   const Eigen::Matrix3Xi& indices() const { return tri_; }
   const Eigen::AlignedBox3d& box() const { return box_; }
   int face_count() const { return static_cast<int>(face_box_.size()); }
+  // The CAD face of each triangle.
+  const std::vector<int>& triangle_faces() const { return face_; }
   // The bounding box of one CAD face's triangles.
   const Eigen::AlignedBox3d& face_box(int face) const { return face_box_[face]; }
+
+  // The faces whose bounding boxes the plane through `origin` with normal `normal` meets (within
+  // 1e-6 mm): one entry per face, true for those (the faces a ball scanning in the plane may
+  // touch).
+  std::vector<char> faces_crossing(const Eigen::Vector3d& origin,
+                                   const Eigen::Vector3d& normal) const;
 
   // Distance from p to the surface (mm); `limit` when nothing is nearer than limit. Faces for
   // which skip[face] is true are left out (skip may be empty).
