@@ -167,7 +167,7 @@ int run_verify(const VerifyArgs& a) {
                          bool after) {
       const auto c = ballgauge::check_mpe(rows, *mpe, after);
       if (!a.quiet)
-        fmt::print("E0 {} against MPE {} um: {} ({} of {} beyond, worst {:.0f} % of MPE)\n", name,
+        fmt::print("E0 {} against MPE {} µm: {} ({} of {} beyond, worst {:.0f} % of MPE)\n", name,
                    mpe->text, c.pass() ? "PASS" : "FAIL", c.failed, c.lengths, 100 * c.worst_ratio);
     };
     say("before correction", results.front().rows, false);
@@ -343,7 +343,7 @@ int run_simulate(const SimArgs& a) {
   if (!a.quiet)
     fmt::print(
         "simulated {} placements of {} ({} points per ball, noise {} "
-        "um): wrote {}, {} and {}\n",
+        "µm): wrote {}, {} and {}\n",
         c.placements.size(), what, o.points_per_ball, a.noise_um, a.gauge, a.measurements, a.truth);
   return 0;
 }
@@ -361,11 +361,11 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       "measurements.json --output map.json");
   c->add_option("--gauge", ca->gauge, "gauge JSON (ball_diameter, ball centres in the gauge frame)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--measurements", ca->measurements,
                 "measurements JSON (placements: alignment, tip_radius, probed points per ball)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--output,-o", ca->output, "map JSON to write")->required();
   c->add_option("--match-tolerance", ca->o.match_tolerance,
                 "mm: a ball is shared with the map when its centre is this close to a mapped one")
@@ -409,10 +409,10 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       "corrected.csv");
   c->add_option("--map", cr->map, "map JSON with a grid ('trueaxis ballgauge' or 'space')")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--input,-i", cr->input, "points CSV (x,y,z in mm)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--output,-o", cr->output, "corrected CSV ('-': standard output)")->required();
   c->add_flag("--clamp", cr->clamp,
               "hold the edge value for points outside the grid (default: refuse them)");
@@ -428,19 +428,19 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       "(mm).\nExample: trueaxis verify-lengths --map map.json --input lengths.csv --output "
       "verify.json --report verify.html");
   c->add_option("--map", va->map, "map JSON with a grid ('trueaxis ballgauge')")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--model", va->model,
                 "parametric model JSON ('trueaxis ballgauge --parametric'); with --map, both "
                 "are compared")
-      ->check(CLI::ExistingFile);
-  c->add_option("--input,-i", va->input, "lengths CSV")->required()->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
+  c->add_option("--input,-i", va->input, "lengths CSV")->required()->check(cli::existing_file());
   c->add_option("--output,-o", va->output, "verification JSON to write")->required();
   c->add_option("--report", va->report,
                 "HTML report to write (length errors against nominal length)");
   add_meta_option(c);
   c->add_option("--mpe", va->mpe,
-                "E0 check against a maximum permissible error A+L/K (um, L in mm; e.g. "
-                "\"1.5+L/300\", or \"1.5+L/300,4\" capped at 4 um): PASS/FAIL and the envelope in "
+                "E0 check against a maximum permissible error A+L/K (µm, L in mm; e.g. "
+                "\"1.5+L/300\", or \"1.5+L/300,4\" capped at 4 µm): PASS/FAIL and the envelope in "
                 "the report")
       ->check([](const std::string& t) {
         try {
@@ -489,14 +489,14 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--origin", sa->origin, "true position of ball 0 in the first placement x,y,z (mm)")
       ->delimiter(',')
       ->capture_default_str();
-  c->add_option("--misalignment", sa->misalignment_urad, "gauge rotation against the axes, urad")
+  c->add_option("--misalignment", sa->misalignment_urad, "gauge rotation against the axes, µrad")
       ->capture_default_str();
   c->add_option("--points", sa->o.points_per_ball, "probed points per ball")->capture_default_str();
   c->add_option("--tip-radius", sa->o.tip_radius, "stylus tip radius, mm")->capture_default_str();
-  c->add_option("--noise", sa->noise_um, "probing noise per coordinate, um")->capture_default_str();
+  c->add_option("--noise", sa->noise_um, "probing noise per coordinate, µm")->capture_default_str();
   c->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
   c->add_option("--gauge", sa->gauge, "gauge JSON to write")->capture_default_str();
-  c->add_option("--measurements", sa->measurements, "measurements JSON to write")
+  c->add_option("--output,-o,--measurements", sa->measurements, "measurements JSON to write")
       ->capture_default_str();
   c->add_option("--truth", sa->truth, "truth CSV to write (true centres, machine error)")
       ->capture_default_str();
@@ -505,7 +505,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--repeats", sa->repeats, "repeats of every gauge-block length")
       ->capture_default_str();
   c->add_option("--length-noise", sa->length_noise_um,
-                "probing noise of the gauge-block measurements, um (default: --noise)");
+                "probing noise of the gauge-block measurements, µm (default: --noise)");
   c->add_option("--balls", sa->balls,
                 "also write where the gauge's balls stand over all its placements (true "
                 "centres, diameter) to this CSV, for trueaxis serve --balls");

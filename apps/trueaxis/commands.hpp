@@ -8,7 +8,9 @@
 
 namespace CLI {
 class App;
-}
+class ParseError;
+class Validator;
+}  // namespace CLI
 
 namespace trueaxis::sim {
 struct Machine;
@@ -94,6 +96,26 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
 // ipp check (ipp_cmds.cpp).
 std::vector<Command> add_ipp_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);
+
+// The grammar every command shares (grammar.cpp). apply_grammar: once every command is added,
+// the help lists commands one per line with their purpose, and every command takes --version.
+void apply_grammar(CLI::App& app, const std::string& version);
+// What `trueaxis` alone and `trueaxis help` print: every command on one line with its purpose.
+std::string command_list(const CLI::App& app);
+// Commands the lists have no purpose line for (none, once every command has one).
+std::vector<std::string> commands_without_purpose(const CLI::App& app);
+// After a failed parse: "did you mean --sigma?" for a word the command line had that nothing
+// took, near a flag or command of the command being run ("" when none is near).
+std::string suggestion(const CLI::App& app, const CLI::ParseError& e);
+// Input files and directories: checked as the command line is read, reported after it (so a
+// missing input is an error like every other, exit 1, not a usage mistake): missing_input() is
+// the first problem met ("design.json: no such file"), or "".
+CLI::Validator existing_file();
+CLI::Validator existing_directory();
+// --axis everywhere: a machine axis, x, y or z (X, Y, Z taken as the same); the controller's own
+// name for an axis is --axis-name.
+CLI::Validator machine_axis();
+std::string missing_input();
 
 // Runs every demo scenario and writes the HTML report. Returns the process exit code.
 int run_demo(const DemoOptions& options);

@@ -91,7 +91,7 @@ int run_demo(const DemoOptions& o) {
   const auto camp = sim::simulate_straightness(so);
   say(
       fmt::format("straightness: simulated a pitching carriage, {} stations x {} mm, 4 probes + "
-                  "level, noise {} um",
+                  "level, noise {} µm",
                   so.stations, so.step, so.noise * 1e3));
   io::write_probes((dir / "probes.csv").string(), camp.data);
 
@@ -137,7 +137,7 @@ int run_demo(const DemoOptions& o) {
                                ? fmt::format("{:.3f}", r.workpiece.uncertainty.maxCoeff() * 1e3)
                                : "-"});
     sections.push_back(report::separation_section(run.label, r, &t));
-    say(fmt::format("straightness: {:<20} max error workpiece {:.3f} um, guide {:.3f} um -> {}",
+    say(fmt::format("straightness: {:<20} max error workpiece {:.3f} µm, guide {:.3f} µm -> {}",
                     run.label, ew, eg, file));
   }
   sections.insert(sections.begin(), intro);
@@ -155,8 +155,8 @@ int run_demo(const DemoOptions& o) {
   io::write_surface((dir / "surface-moody.json").string(), classic);
   io::write_surface((dir / "surface-moody-lsq.json").string(), moody_lsq);
   say(fmt::format(
-      "surface: Moody's plate, classic worksheet: flatness {:.3f} um (min zone); least squares: "
-      "closure RMS {:.3f} um, max {:.3f} um -> surface-moody*.json",
+      "surface: Moody's plate, classic worksheet: flatness {:.3f} µm (min zone); least squares: "
+      "closure RMS {:.3f} µm, max {:.3f} µm -> surface-moody*.json",
       classic.flatness_min_zone * 1e3, moody_lsq.closure_rms * 1e3, moody_lsq.closure_max * 1e3));
   sections.push_back(report::surface_section(
       "Error surface: Moody's surface plate (1955)", classic,
@@ -194,8 +194,8 @@ int run_demo(const DemoOptions& o) {
                       0.5 * (axes[2][0] + axes[2][axes[2].size() - 1])},
                      1);
   say(fmt::format(
-      "space: {} straightness + {} laser runs; map vs truth RMS {:.3f} um; compensation at 1000 "
-      "points: RMS {:.2f} -> {:.2f} um (expected {:.2f}), x{:.1f} -> space.json, x.comp",
+      "space: {} straightness + {} laser runs; map vs truth RMS {:.3f} µm; compensation at 1000 "
+      "points: RMS {:.2f} -> {:.2f} µm (expected {:.2f}), x{:.1f} -> space.json, x.comp",
       space.straightness_runs, space.laser_runs, space.truth_rms * 1e3, check.before_rms * 1e3,
       check.after_rms * 1e3, check.predicted_rms * 1e3, check.improvement()));
   sections.push_back(
@@ -293,8 +293,8 @@ int run_demo(const DemoOptions& o) {
     // evaluation's readings, corrected to 20 °C.
     io::write_rtl((dir / "runs.rtl").string(), pr.readings, {{"Axis", "X"}});
     say(
-        fmt::format("positioning: X, 17 targets x 5 cycles, ISO 230-2: A {:.2f} um, E {:.2f} um "
-                    "(noise-free truth {:.2f}), B mean {:.2f} um (backlash 3) -> runs.csv, "
+        fmt::format("positioning: X, 17 targets x 5 cycles, ISO 230-2: A {:.2f} µm, E {:.2f} µm "
+                    "(noise-free truth {:.2f}), B mean {:.2f} µm (backlash 3) -> runs.csv, "
                     "runs.rtl",
                     pr.iso.A * 1e3, pr.iso.E * 1e3, (hi - lo) * 1e3, pr.iso.B_mean * 1e3));
     // Compensation tables for the controllers, and the axis rerun with the HEIDENHAIN one (both
@@ -312,8 +312,8 @@ int run_demo(const DemoOptions& o) {
     pc.compensation = [&com](double p, positioning::Direction d) { return com.correction(p, d); };
     const auto after = positioning::evaluate(sim::simulate_positioning(machine, pc).readings);
     say(fmt::format(
-        "positioning: compensated with X.COM (HEIDENHAIN), a new run: A {:.2f} -> {:.2f} um, E "
-        "{:.2f} -> {:.2f} um, B mean {:.2f} -> {:.2f} um (tables: x-positioning.comp, X.COM, "
+        "positioning: compensated with X.COM (HEIDENHAIN), a new run: A {:.2f} -> {:.2f} µm, E "
+        "{:.2f} -> {:.2f} µm, B mean {:.2f} -> {:.2f} µm (tables: x-positioning.comp, X.COM, "
         "x-pitch.txt, x_lec.mpf)",
         pr.iso.A * 1e3, after.iso.A * 1e3, pr.iso.E * 1e3, after.iso.E * 1e3, pr.iso.B_mean * 1e3,
         after.iso.B_mean * 1e3));
@@ -342,7 +342,7 @@ int run_demo(const DemoOptions& o) {
 
   // Scenario 5: the CMM's error-vector map from a ball gauge (Oya, Hokari, Tamura 1988), checked
   // with gauge blocks.
-  say("ballgauge: probing a 5 x 4 x 2 ball frame in 3 stacked placements (0.5 um noise)...");
+  say("ballgauge: probing a 5 x 4 x 2 ball frame in 3 stacked placements (0.5 µm noise)...");
   const auto bgauge = sim::frame_gauge();
   auto poses = sim::stacked_poses(
       bgauge, 3, {150, 120, 60},
@@ -373,9 +373,9 @@ int run_demo(const DemoOptions& o) {
   const auto mpe = ballgauge::Mpe::parse("1.5+L/300");
   io::write_length_verification((dir / "verify.json").string(), checks, &mpe);
   say(fmt::format(
-      "ballgauge: {} mapped points; {} gauge-block lengths: before {:+.1f} ... {:+.1f} um, "
-      "after the grid {:+.1f} ... {:+.1f} um (RMS {:.2f}, expected {:.2f}), after the parametric "
-      "model {:+.1f} ... {:+.1f} um (RMS {:.2f}, expected {:.2f}) -> map.json, model.json, "
+      "ballgauge: {} mapped points; {} gauge-block lengths: before {:+.1f} ... {:+.1f} µm, "
+      "after the grid {:+.1f} ... {:+.1f} µm (RMS {:.2f}, expected {:.2f}), after the parametric "
+      "model {:+.1f} ... {:+.1f} µm (RMS {:.2f}, expected {:.2f}) -> map.json, model.json, "
       "lengths.csv, verify.json",
       bmap.points.size(), gblocks.lengths.size(), checks[0].before.min * 1e3,
       checks[0].before.max * 1e3, checks[0].after.min * 1e3, checks[0].after.max * 1e3,
@@ -517,8 +517,8 @@ int run_demo(const DemoOptions& o) {
     for (const auto& sec : r.sections) errors += sec.trajectory_errors;
     say(fmt::format(
         "scan: part {} of the batch: {}; {} trajectory errors; machine time {:.1f} s "
-        "(autonomous scanning alone: {:.1f} s); points within {:.1f} um of the true part, "
-        "RMS {:.2f} um after datum alignment, {:.2f} um corrected with the error map -> "
+        "(autonomous scanning alone: {:.1f} s); points within {:.1f} µm of the true part, "
+        "RMS {:.2f} µm after datum alignment, {:.2f} µm corrected with the error map -> "
         "scan{}.json",
         k, r.ok() ? "all sections scanned" : "FAILED", errors, r.time.total, autonomous_s.back(),
         worst, form[0], form[1], k));

@@ -271,7 +271,7 @@ Command simulate_part(CLI::App& simulate) {
       "mid.1,150,0.5,20 --seed 1 -o part.json");
   c->add_option("--design", a->design, "design.json of the part")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--scale", a->scale, "uniform scale factor (about --scale-about)")
       ->capture_default_str();
   c->add_option("--scale-about", a->scale_about,
@@ -313,9 +313,9 @@ std::vector<Command> add_design_commands(CLI::App& app, CLI::App& simulate) {
       "  trueaxis design --step part.stp --section \"origin=0,0,25;normal=0,0,1\" -o design.json\n"
       "  trueaxis design --design design.json --tip-radius 1.5 --path path.csv");
   auto* step = c->add_option("--step", a->step, "STEP file (AP203/AP214) of the part (mm)")
-                   ->check(CLI::ExistingFile);
+                   ->check(cli::existing_file());
   auto* des = c->add_option("--design", a->design, "design.json to check and convert instead")
-                  ->check(CLI::ExistingFile);
+                  ->check(cli::existing_file());
   step->excludes(des);
   c->add_option("--section", a->sections,
                 "a cutting plane \"origin=X,Y,Z;normal=I,J,K[;name=N][;probe=A<deg>B<deg>]\" (mm; "

@@ -67,7 +67,7 @@ std::vector<Command> add_fit_commands(CLI::App& app) {
                                   fmt::format("Fit {}", what[static_cast<int>(e)]));
     c->add_option("--input,-i", a->input, "points: .ds or CSV with x,y,z (mm)")
         ->required()
-        ->check(CLI::ExistingFile);
+        ->check(cli::existing_file());
     c->add_option("--output,-o", a->output, "fit JSON to write")->required();
     if (e == geometry::Element::Line || e == geometry::Element::Plane ||
         e == geometry::Element::Circle)
@@ -75,7 +75,7 @@ std::vector<Command> add_fit_commands(CLI::App& app) {
                   "minimum-zone (Chebyshev) fit instead of least squares: the middle of the "
                   "thinnest zone holding all points; fit.json gets its width as \"zone\"");
     c->add_option("--point-u", a->point_u_um,
-                  "um: the points' standard uncertainty along the surface normal (e.g. the CMM's "
+                  "µm: the points' standard uncertainty along the surface normal (e.g. the CMM's "
                   "probing uncertainty); gives the form figure its expanded uncertainty")
         ->check(positive_number());
     c->add_flag("--quiet,-q", a->quiet, "print nothing on success");

@@ -107,20 +107,20 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
       "spots.csv --truth spots-truth.csv");
   sc->add_option("--layout", sa->layout, "layout JSON (detectors on the carriage)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   sa->machine.add_options(sc);
   sc->add_option("--axis", sa->axis, "the machine axis the carriage rides")
-      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->transform(cli::machine_axis())
       ->capture_default_str();
   sc->add_option("--stations,--positions", sa->o.positions,
                  "stops over the axis range (--stations, as for the other simulations)")
       ->capture_default_str();
-  sc->add_option("--noise", sa->noise_um, "spot reading noise, um")->capture_default_str();
-  sc->add_option("--pointing-noise", sa->pointing_um, "beam pointing jitter, um")
+  sc->add_option("--noise", sa->noise_um, "spot reading noise, µm")->capture_default_str();
+  sc->add_option("--pointing-noise", sa->pointing_um, "beam pointing jitter, µm")
       ->capture_default_str();
-  sc->add_option("--angle-noise", sa->angle_urad, "angle detector noise, urad")
+  sc->add_option("--angle-noise", sa->angle_urad, "angle detector noise, µrad")
       ->capture_default_str();
-  sc->add_option("--quantisation", sa->quant_um, "reading resolution, um (0: none)")
+  sc->add_option("--quantisation", sa->quant_um, "reading resolution, µm (0: none)")
       ->capture_default_str();
   sc->add_flag("--exact", sa->o.exact,
                "exact spot geometry (rotated detector planes) instead of the small-angle model");
@@ -144,19 +144,19 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
       "from laser spots on quadrant detectors carried by the carriage.\nlayout.json: the "
       "detectors' positions on the carriage (mm; z along the travel, x horizontal, y vertical) "
       "and kinds (position, or angle behind a lens).\nspots.csv: column s (mm), then "
-      "<name>_dx,<name>_dy (um) or <name>_i1..<name>_i4 (quadrant currents) per detector.\n"
+      "<name>_dx,<name>_dy (µm) or <name>_i1..<name>_i4 (quadrant currents) per detector.\n"
       "Errors the layout cannot see (e.g. pitch and yaw when all detectors share one z) are "
       "reported as not observable, never as numbers.\nExample: trueaxis guideway --layout "
       "layout.json --input spots.csv --output result.json");
   c->add_option("--layout", a->layout, "layout JSON (detectors, optional qpd calibration)")
       ->required()
-      ->check(CLI::ExistingFile);
-  c->add_option("--input,-i", a->input, "spots CSV (s in mm; dx, dy in um or quadrant currents)")
+      ->check(cli::existing_file());
+  c->add_option("--input,-i", a->input, "spots CSV (s in mm; dx, dy in µm or quadrant currents)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--output,-o", a->output, "result JSON to write")->required();
   c->add_option("--sigma", a->sigma,
-                "standard deviation of one spot reading (um) for the uncertainties (default: "
+                "standard deviation of one spot reading (µm) for the uncertainties (default: "
                 "estimated from the residuals when the layout is redundant)");
   c->add_option("--report", a->report, "also write an HTML report (one plot per error)");
   add_meta_option(c);

@@ -240,13 +240,13 @@ std::vector<Command> add_serve_command(CLI::App& app) {
   c->add_option("--machine", a->machine,
                 "machine.json: the CMM's 21 geometric errors and travel (trueaxis simulate "
                 "machine); the measured points carry them")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--part", a->part, "part.json: the simulated part (trueaxis simulate part)")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--balls", a->balls,
                 "balls.csv: balls standing in the machine (x,y,z,diameter in mm, machine "
                 "coordinates), e.g. a ball gauge (trueaxis simulate ballgauge --balls)")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: the part's design origin in machine coordinates (mm; default: the "
                 "machine origin, or centred in the travel with --machine)")
@@ -284,7 +284,7 @@ std::vector<Command> add_ipp_commands(CLI::App& app) {
       "Example: trueaxis ipp check session.prg session.res");
   c->add_option("files", a->files, "files of lines, one command or response per line (CR LF)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_flag("--quiet,-q", a->quiet, "print only the bad lines");
   auto r = std::make_shared<RunArgs>();
   auto* run = ipp->add_subcommand(
@@ -296,13 +296,13 @@ std::vector<Command> add_ipp_commands(CLI::App& app) {
       "Example: trueaxis ipp run PtMeas.prg --port 1294 --expect PtMeas.res");
   run->add_option("program", r->program, "the program: command lines (CR LF or LF)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   run->add_option("--host", r->host, "the server's address")->capture_default_str();
   run->add_option("--port", r->port, "the server's TCP port")
       ->capture_default_str()
       ->check(CLI::Range(1, 65535));
   run->add_option("--expect", r->expect, "a recording (.res) to compare the structure with")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   run->add_option("--log", r->log, "session log: every line sent and received, with the time");
   run->add_option("--timeout", r->timeout, "seconds to wait for any one response")
       ->capture_default_str()

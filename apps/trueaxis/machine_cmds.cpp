@@ -63,7 +63,7 @@ std::string truth_beside(const std::string& output) {
 
 void MachineSource::add_options(CLI::App* c) {
   c->add_option("--machine", path, "machine JSON (default: a random machine from --machine-seed)")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--machine-seed", seed, "seed of the random machine")->capture_default_str();
 }
 
@@ -197,15 +197,15 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--offset", sm->offset, "stylus/tool offset from the Z carriage, x,y,z (mm)")
       ->delimiter(',')
       ->capture_default_str();
-  c->add_option("--straightness", sm->straightness_um, "straightness scale, um over 500 mm")
+  c->add_option("--straightness", sm->straightness_um, "straightness scale, µm over 500 mm")
       ->capture_default_str();
-  c->add_option("--angular", sm->angular_urad, "roll/pitch/yaw scale, urad")->capture_default_str();
-  c->add_option("--positioning", sm->positioning_um_per_m, "positioning scale error, um/m")
+  c->add_option("--angular", sm->angular_urad, "roll/pitch/yaw scale, µrad")->capture_default_str();
+  c->add_option("--positioning", sm->positioning_um_per_m, "positioning scale error, µm/m")
       ->capture_default_str();
-  c->add_option("--squareness", sm->squareness_urad, "squareness standard deviation, urad")
+  c->add_option("--squareness", sm->squareness_urad, "squareness standard deviation, µrad")
       ->capture_default_str();
   c->add_option("--lead-screw", sm->lead_um,
-                "amplitude of a periodic lead-screw term in positioning, um (0: none)")
+                "amplitude of a periodic lead-screw term in positioning, µm (0: none)")
       ->capture_default_str();
   c->add_option("--lead", sm->o.lead, "lead-screw period, mm")->capture_default_str();
   c->add_option("--output,-o", sm->output, "machine JSON to write")->capture_default_str();
@@ -222,7 +222,7 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate) {
       "0,20,40");
   c->add_option("--machine", sl->machine, "machine JSON ('trueaxis simulate machine')")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--start", sl->start, "command of the first stop x,y,z (mm; default: range start)")
       ->delimiter(',');
   c->add_option("--direction", sl->direction, "direction of motion x,y,z")
@@ -236,13 +236,13 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--offsets", sl->o.offsets, "probe offsets along the motion, mm (whole steps)")
       ->delimiter(',')
       ->capture_default_str();
-  c->add_option("--noise", sl->noise_um, "probe noise, um")->capture_default_str();
-  c->add_option("--profile", sl->profile_um, "straightedge form error scale, um")
+  c->add_option("--noise", sl->noise_um, "probe noise, µm")->capture_default_str();
+  c->add_option("--profile", sl->profile_um, "straightedge form error scale, µm")
       ->capture_default_str();
   c->add_flag(
       "--angle", sl->o.angle,
-      "add an angle channel (autocollimator/level on the carriage), column 'angle' in urad");
-  c->add_option("--angle-noise", sl->angle_noise_urad, "angle channel noise, urad")
+      "add an angle channel (autocollimator/level on the carriage), column 'angle' in µrad");
+  c->add_option("--angle-noise", sl->angle_noise_urad, "angle channel noise, µrad")
       ->capture_default_str();
   c->add_option("--seed", sl->o.seed, "random seed")->capture_default_str();
   c->add_option("--output,-o", sl->output, "probes CSV to write")->capture_default_str();
@@ -259,14 +259,14 @@ std::vector<Command> add_machine_commands(CLI::App& app, CLI::App& simulate) {
       "error",
       "The machine's true error vector (actual - nominal tool point) at given commanded "
       "positions.\npoints.csv: header row with columns x,y,z (mm). Output columns x,y,z (mm) and "
-      "ex,ey,ez (um).\nExample: trueaxis machine error --machine machine.json --input points.csv "
+      "ex,ey,ez (µm).\nExample: trueaxis machine error --machine machine.json --input points.csv "
       "-o errors.csv\n(or, shorter: trueaxis machine error machine.json points.csv)");
   c->add_option("machine,--machine", me->machine, "machine JSON")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("points,--input,-i", me->points, "CSV with columns x,y,z (mm)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--output,-o", me->output, "CSV to write (default: standard output)");
   out.push_back({c, [me] { return run_machine_error(*me); }});
   return out;

@@ -119,8 +119,7 @@ int cmd_surface(const SurfaceArgs& a) {
   } else {
     if (a.method == "classic") throw Error("--method classic needs --moody DIR");
     surface::Options o;
-    o.method =
-        a.method == "boundary" || a.method == "seed" ? surface::Method::Seed : surface::Method::Lsq;
+    o.method = a.method == "boundary" ? surface::Method::Seed : surface::Method::Lsq;
     r = surface::build(io::read_lines(a.lines), o);
   }
   io::write_surface(a.output, r);
@@ -218,10 +217,11 @@ int cmd_examples(const std::string& dir, bool force, bool quiet) {
 int main(int argc, char** argv) {
   CLI::App app{
       "trueaxis: measure, separate, map and compensate the geometric errors of machine tools and "
-      "CMMs.\n\nUnits in files: positions in mm, deviations in um, angles in urad.\n"
+      "CMMs.\n\nUnits in files: positions in mm, deviations in µm, angles in µrad.\n"
       "Start with 'trueaxis demo' to see every capability on a virtual machine."};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "trueaxis 0.1.0");
+  const std::string version = "trueaxis 0.1.0";
+  app.set_version_flag("--version", version);
 
   // separate --------------------------------------------------------------------------------
   SeparateArgs sa;
@@ -230,12 +230,12 @@ int main(int argc, char** argv) {
       "Separate a workpiece profile from the guide's straightness (and pitch) using displacement "
       "probes on a moving carriage.\n\nprobes.csv: header row; column 'x' (mm, equal steps), then "
       "one "
-      "column per probe (um) in the order of --offsets.\nExample: trueaxis separate --input "
+      "column per probe (µm) in the order of --offsets.\nExample: trueaxis separate --input "
       "probes.csv "
       "--method three-point --output result.json");
-  sep->add_option("--input,-i", sa.input, "probes CSV (x in mm, one column of um per probe)")
+  sep->add_option("--input,-i", sa.input, "probes CSV (x in mm, one column of µm per probe)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   sep->add_option("--method,-m", sa.method,
                   "two-point: probes at 0,h (no pitch); three-point: with pitch, probes at 0,h,2h "
                   "(Mitsubishi JPH0464003B2); "
@@ -250,22 +250,22 @@ int main(int argc, char** argv) {
                   "after x except the angle column)")
       ->delimiter(',');
   sep->add_option("--angle", sa.angle,
-                  "name of a pitch column (urad) from an autocollimator or level (lsq)");
+                  "name of a pitch column (µrad) from an autocollimator or level (lsq)");
   sep->add_option(
       "--zero-difference", sa.zero_difference,
-      "known zero difference of a three-probe layout, um (o_A - 2 o_B + o_C for equal spacing); "
+      "known zero difference of a three-probe layout, µm (o_A - 2 o_B + o_C for equal spacing); "
       "removes the parabola ambiguity");
   sep->add_flag("--invert", sa.invert, "negate probe readings (probes that read the gap)");
   sep->add_option("--reference", sa.reference,
                   "ls: residuals from least-squares lines; patent: the numbers of JPH0464003B2 "
                   "(three-point); "
                   "min-zone: relative to minimum-zone lines")
-      ->check(CLI::IsMember({"ls", "patent", "seed", "min-zone"}))
+      ->check(CLI::IsMember({"ls", "patent", "min-zone"}))
       ->capture_default_str();
   sep->add_option("--sigma", sa.sigma,
-                  "probe noise, um (standard deviation) for the uncertainties; "
+                  "probe noise, µm (standard deviation) for the uncertainties; "
                   "default: estimated from the residuals when the data are redundant");
-  sep->add_option("--angle-sigma", sa.angle_sigma, "angle channel noise, urad")
+  sep->add_option("--angle-sigma", sa.angle_sigma, "angle channel noise, µrad")
       ->capture_default_str();
   sep->add_option("--filter-cutoff", sa.filter_cutoff,
                   "apply an ISO 16610-21 Gaussian filter with this cut-off, mm");
@@ -286,18 +286,18 @@ int main(int argc, char** argv) {
       "1955)");
   auto* sf_in = surf->add_option("--lines", sf.lines,
                                  "lines.json: lines with start, direction, spacing and heights "
-                                 "(um), slopes (urad) or 'from' a separate result")
-                    ->check(CLI::ExistingFile);
+                                 "(µm), slopes (µrad) or 'from' a separate result")
+                    ->check(cli::existing_file());
   surf->add_option("--moody", sf.moody,
                    "directory with Moody's eight line files (arc-seconds) and Config.txt")
-      ->check(CLI::ExistingDirectory)
+      ->check(cli::existing_directory())
       ->excludes(sf_in);
   surf->add_option(
           "--method", sf.method,
           "with --lines: lsq (default; all lines jointly, closure at every crossing) or "
           "boundary (x lines hung on two boundary y lines); with --moody: classic (default, "
           "Moody's worksheet) or lsq")
-      ->check(CLI::IsMember({"lsq", "boundary", "seed", "classic"}));
+      ->check(CLI::IsMember({"lsq", "boundary", "classic"}));
   surf->add_option("--output,-o", sf.output, "surface JSON to write")->required();
   cli::add_meta_option(surf);
   surf->add_option("--report", sf.report,
@@ -318,16 +318,16 @@ int main(int argc, char** argv) {
   simst->add_option("--offsets", ma.o.offsets, "probe offsets from the first probe, mm")
       ->delimiter(',')
       ->capture_default_str();
-  simst->add_option("--noise", ma.noise_um, "probe noise, um (standard deviation)")
+  simst->add_option("--noise", ma.noise_um, "probe noise, µm (standard deviation)")
       ->capture_default_str();
-  simst->add_option("--pitch", ma.pitch_urad, "pitch error amplitude, urad (0: no pitch)")
+  simst->add_option("--pitch", ma.pitch_urad, "pitch error amplitude, µrad (0: no pitch)")
       ->capture_default_str();
-  simst->add_option("--workpiece", ma.workpiece_um, "workpiece form error amplitude, um")
+  simst->add_option("--workpiece", ma.workpiece_um, "workpiece form error amplitude, µm")
       ->capture_default_str();
-  simst->add_option("--guide", ma.guide_um, "guide straightness amplitude, um")
+  simst->add_option("--guide", ma.guide_um, "guide straightness amplitude, µm")
       ->capture_default_str();
-  simst->add_flag("--angle", ma.o.angle, "add a pitch (angle) channel, column 'angle' in urad");
-  simst->add_option("--angle-noise", ma.angle_noise_urad, "angle channel noise, urad")
+  simst->add_flag("--angle", ma.o.angle, "add a pitch (angle) channel, column 'angle' in µrad");
+  simst->add_option("--angle-noise", ma.angle_noise_urad, "angle channel noise, µrad")
       ->capture_default_str();
   simst->add_option("--seed", ma.o.seed, "random seed (same seed, same data)")
       ->capture_default_str();
@@ -358,7 +358,7 @@ int main(int argc, char** argv) {
          "any result JSON trueaxis writes (separate, surface, space, guideway, positioning, "
          "ballgauge, verify-lengths, fit)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   rep->add_option("--output,-o", rout, "HTML file to write")->capture_default_str();
   rep->add_flag("--quiet,-q", rquiet, "print nothing on success");
   cli::add_meta_option(rep);
@@ -398,12 +398,31 @@ int main(int argc, char** argv) {
                                   "(trueaxis help separate, trueaxis help simulate line)");
   help->add_option("command", help_topic, "the command (and sub-command) to explain");
 
+  cli::apply_grammar(app, version);
+  if (argc == 1) {
+    std::fputs(cli::command_list(app).c_str(), stdout);
+    return 0;
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // --help and --version exit 0; every command-line mistake exits 2, whatever CLI11's own code.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    const std::string hint = cli::suggestion(app, e);
+    if (!hint.empty()) {
+      std::fprintf(stderr, "trueaxis: %s\nRun with --help for more information.\n", hint.c_str());
+      return 2;
+    }
     const int rc = app.exit(e);
     return rc == 0 ? 0 : 2;
+  }
+  if (const std::string m = cli::missing_input(); !m.empty()) {
+    std::fprintf(stderr, "trueaxis: error: %s\n", m.c_str());
+    return 1;
+  }
+  if (help->parsed() && help_topic.empty()) {
+    std::fputs(cli::command_list(app).c_str(), stdout);
+    return 0;
   }
   if (help->parsed()) {
     const CLI::App* topic = &app;

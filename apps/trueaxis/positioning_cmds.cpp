@@ -39,8 +39,8 @@ double parse_number(std::string_view s, const std::string& what) {
 std::vector<double> parse_targets(const std::string& s);
 
 struct PositioningArgs {
-  std::string input, log, log_targets, output = "positioning.json", standard = "iso230-2", report,
-                                       run_directions = "order";
+  std::string input, log_targets, output = "positioning.json", standard = "iso230-2", report,
+                                  run_directions = "order";
   positioning::LogOptions lo;
   double dwell_tolerance_um = 2;
   std::vector<std::string> tolerances;
@@ -54,7 +54,7 @@ int run_positioning(const PositioningArgs& a) {
   for (const auto& t : a.tolerances) {
     const auto eq = t.find('=');
     if (eq == std::string::npos)
-      throw CLI::ValidationError("--tolerance", fmt::format("'{}': use NAME=um, e.g. A=10", t));
+      throw CLI::ValidationError("--tolerance", fmt::format("'{}': use NAME=µm, e.g. A=10", t));
     const std::string name = t.substr(0, eq);
     const auto& names = positioning::parameter_names();
     if (std::find(names.begin(), names.end(), name) == names.end()) {
@@ -64,36 +64,41 @@ int run_positioning(const PositioningArgs& a) {
                                  fmt::format("unknown parameter '{}' (known: {})", name, known));
     }
     const double v = parse_number(std::string_view(t).substr(eq + 1), "--tolerance");
-    if (!(v > 0)) throw CLI::ValidationError("--tolerance", fmt::format("{}: must be > 0 um", t));
+    if (!(v > 0)) throw CLI::ValidationError("--tolerance", fmt::format("{}: must be > 0 µm", t));
     tol.emplace_back(name, v * 1e-3);
   }
-  if (a.input.empty() == a.log.empty())
-    throw CLI::ValidationError("give --input runs.csv or --log log.csv (one of them)");
-  if (!a.log.empty() && a.log_targets.empty())
-    throw CLI::ValidationError("--log needs --targets (the positions the axis stopped at)");
+  const bool is_log = io::is_log_file(a.input);
+  if (is_log && a.log_targets.empty())
+    throw CLI::ValidationError(fmt::format(
+        "{} is an interferometer log (time_s, reading_mm): it needs --targets (the positions "
+        "the axis stopped at)",
+        a.input));
+  if (!is_log && !a.log_targets.empty())
+    throw CLI::ValidationError(
+        fmt::format("--targets belongs to an interferometer log; {} holds runs", a.input));
   io::PositioningRuns runs;
   std::vector<std::string> source_warnings;
   std::string source = a.input;
-  if (!a.log.empty()) {
-    source = a.log;
+  if (is_log) {
+    const std::string& log_file = a.input;
     positioning::LogOptions lo = a.lo;
     lo.dwell_tolerance = a.dwell_tolerance_um * 1e-3;
-    const positioning::Log log = io::read_log(a.log);
+    const positioning::Log log = io::read_log(log_file);
     const std::vector<double> targets = parse_targets(a.log_targets);
     positioning::LogReadings found;
     try {
       found = positioning::readings_from_log(log, targets, lo);
     } catch (const Error& e) {
-      throw Error(fmt::format("{}: {}", a.log, e.what()));
+      throw Error(fmt::format("{}: {}", log_file, e.what()));
     }
     if (!a.quiet) {
-      fmt::print("{}: {} stops, {} at targets", a.log, found.stops, found.readings.size());
+      fmt::print("{}: {} stops, {} at targets", log_file, found.stops, found.readings.size());
       fmt::print("{}\n",
                  found.ignored.empty() ? "" : fmt::format(", {} not used:", found.ignored.size()));
       for (const auto& why : found.ignored) fmt::print("  {}\n", why);
     }
     if (found.readings.empty())
-      throw Error(fmt::format("{}: no stop of {:g} s within {:g} um lies at a target", a.log,
+      throw Error(fmt::format("{}: no stop of {:g} s within {:g} µm lies at a target", log_file,
                               lo.dwell_time, a.dwell_tolerance_um));
     runs.readings = std::move(found.readings);
   } else if (io::is_rtl_file(a.input)) {
@@ -146,9 +151,9 @@ int run_positioning(const PositioningArgs& a) {
       failed = "not judged: " + v.not_judged;
       break;
     }
-    failed += fmt::format("{}{} {} (tolerance {:g} um)", failed.empty() ? "" : "; ", v.name,
+    failed += fmt::format("{}{} {} (tolerance {:g} µm)", failed.empty() ? "" : "; ", v.name,
                           std::isnan(v.value) ? std::string("is not defined by these runs")
-                                              : fmt::format("= {:.2f} um", v.value * 1e3),
+                                              : fmt::format("= {:.2f} µm", v.value * 1e3),
                           v.limit * 1e3);
   }
   if (!a.quiet) {
@@ -297,11 +302,11 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       "cycle of ISO 230-2 (targets up, then down, every cycle), with backlash, drift, thermal "
       "growth and noise. Writes the runs CSV that 'trueaxis positioning' reads and the truth "
       "(target_mm, geometric_um: the machine's error from the first target; up_um, down_um: the "
-      "noise-free mean deviation of each direction at 20 C).\nExample: trueaxis simulate "
+      "noise-free mean deviation of each direction at 20 °C).\nExample: trueaxis simulate "
       "positioning --axis x --targets 0:50:800 --cycles 5 --backlash 3 --noise 0.5 -o runs.csv");
   sa->machine.add_options(sc);
   sc->add_option("--axis", sa->axis, "the axis under test")
-      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->transform(cli::machine_axis())
       ->capture_default_str();
   sc->add_option("--targets", sa->targets,
                  "target positions, mm: START:STEP:END or a list 0,55,103 (default: 17 over the "
@@ -309,14 +314,14 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
   sc->add_option("--cycles", sa->o.cycles, "cycles (ISO 230-2: 5)")->capture_default_str();
   sc->add_option("--at", sa->at, "the other axes' coordinates x,y,z, mm (default: mid-range)")
       ->delimiter(',');
-  sc->add_option("--backlash", sa->backlash_um, "lost motion on reversal, um")
+  sc->add_option("--backlash", sa->backlash_um, "lost motion on reversal, µm")
       ->capture_default_str();
-  sc->add_option("--noise", sa->noise_um, "reading noise, um (standard deviation)")
+  sc->add_option("--noise", sa->noise_um, "reading noise, µm (standard deviation)")
       ->capture_default_str();
-  sc->add_option("--drift", sa->drift_um, "zero drift over the whole test, um")
+  sc->add_option("--drift", sa->drift_um, "zero drift over the whole test, µm")
       ->capture_default_str();
   sc->add_option("--growth", sa->growth_um_per_m,
-                 "thermal growth of the axis reached at the end of the test, um per metre "
+                 "thermal growth of the axis reached at the end of the test, µm per metre "
                  "(not in the readings' temperatures)")
       ->capture_default_str();
   sc->add_option("--temperature", sa->temperature,
@@ -327,7 +332,7 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
   sc->add_option("--compensation", sa->compensation,
                  "run the axis compensated by this table (LinuxCNC: forward or reverse trim by "
                  "the direction of approach; interpolated linearly)")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   sc->add_option("--comp-format", sa->comp_format,
                  "the table's format: linuxcnc (COMP_FILE), sinumerik (LEC part program), "
                  "heidenhain (*.COM table) or fanuc (pitch error data)")
@@ -362,7 +367,7 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       "by ISO 230-2:2014 (A, E, M, R, B and their one-direction forms) or VDI/DGQ 3441 (P, Pa, "
       "Ps, U).\nruns.csv: target_mm,cycle,direction,deviation_um (direction '+' for an approach "
       "moving in +, '-' for one moving in -; deviation = actual - target), optional "
-      "material_temp_c (then deviations are corrected to 20 C for the axis' expansion) and "
+      "material_temp_c (then deviations are corrected to 20 °C for the axis' expansion) and "
       "air_temp_c (recorded). Rows in any order. Renishaw's .rtl files are read too (each "
       "run's direction from the order it lists its targets, or --run-directions).\nParameters the "
       "runs cannot define (one "
@@ -371,28 +376,28 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       "Example: trueaxis positioning --input runs.csv --tolerance A=12,R=4 --output "
       "positioning.json");
   c->add_option("--input,-i", a->input,
-                "runs CSV, or a Renishaw .rtl file (laser software's export: targets in mm, "
-                "deviations in um)")
-      ->check(CLI::ExistingFile);
+                "runs CSV, a Renishaw .rtl file (laser software's export: targets in mm, "
+                "deviations in µm), or an interferometer log (time_s, reading_mm: the readings "
+                "are the stops at --targets, found by dwell)")
+      ->required()
+      ->check(cli::existing_file());
   c->add_option("--run-directions", a->run_directions,
                 "with an .rtl file: how its runs went. order: from the order each run lists its "
                 "targets (default); +-: odd runs '+', even '-'; -+; + or -: all one way")
       ->check(CLI::IsMember({"order", "+-", "-+", "+", "-"}))
       ->capture_default_str();
-  c->add_option("--log", a->log,
-                "or an interferometer log (time_s, reading_mm): the readings are the stops at "
-                "--targets, found by dwell")
-      ->check(CLI::ExistingFile);
-  c->add_option("--targets", a->log_targets, "with --log: START:STEP:END or a list, mm");
-  c->add_option("--dwell", a->lo.dwell_time, "with --log: the shortest stop, s")
+  c->add_option("--targets", a->log_targets,
+                "with an interferometer log: where the axis stopped, START:STEP:END or a list, "
+                "mm");
+  c->add_option("--dwell", a->lo.dwell_time, "with a log: the shortest stop, s")
       ->capture_default_str();
   c->add_option("--dwell-tolerance", a->dwell_tolerance_um,
-                "with --log: the reading's range during a stop, um")
+                "with a log: the reading's range during a stop, µm")
       ->capture_default_str();
   c->add_option("--capture", a->lo.capture,
-                "with --log: a stop this close to a target is at it, mm (default: a quarter of "
+                "with a log: a stop this close to a target is at it, mm (default: a quarter of "
                 "the target spacing, at most 0.5)");
-  c->add_option("--output,-o", a->output, "result JSON (um)")->capture_default_str();
+  c->add_option("--output,-o", a->output, "result JSON (µm)")->capture_default_str();
   c->add_option("--report", a->report,
                 "HTML report: the standard's plot (mean deviations with +-2s), every reading, "
                 "the parameters and tolerances");
@@ -401,11 +406,11 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
       ->check(CLI::IsMember({"iso230-2", "vdi3441"}))
       ->capture_default_str();
   c->add_option("--tolerance", a->tolerances,
-                "NAME=um, e.g. A=12,R=4,B=3: check parameters (A, A_up, A_down, E, E_up, E_down, "
+                "NAME=µm, e.g. A=12,R=4,B=3: check parameters (A, A_up, A_down, E, E_up, E_down, "
                 "M, R, R_up, R_down, B, B_mean, P, Pa, Ps, U)")
       ->delimiter(',');
   c->add_option("--expansion", a->expansion_ppm,
-                "expansion coefficient of the axis for the correction to 20 C, ppm/K (steel "
+                "expansion coefficient of the axis for the correction to 20 °C, ppm/K (steel "
                 "11.5, cast iron 10.5, aluminium 23)")
       ->capture_default_str();
   c->add_option("--datum", a->o.datum,

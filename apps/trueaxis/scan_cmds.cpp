@@ -175,15 +175,15 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
       "points.csv --log events.csv --corrected-design design2.json");
   c->add_option("--design", a->design, "design.json of the part")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--part", a->part,
                 "part.json: the simulated real part (trueaxis simulate part); with --cmm only "
                 "the truth that --truth and the report compare with")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--machine", a->machine,
                 "machine.json: the CMM's 21 geometric errors (trueaxis simulate machine); the "
                 "measured points carry them, as on a real CMM")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: where the part's design origin sits in machine coordinates (mm; with "
                 "--machine, default: the part centred in the travel; with --cmm, set as the "

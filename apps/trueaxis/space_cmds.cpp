@@ -58,17 +58,17 @@ int run_space(const SpaceArgs& a) {
     if (v) {
       fmt::print(
           "  compensation check at {} random points (rigid-body part removed):\n"
-          "    before: RMS {:.3f} um, max {:.3f} um\n    after:  RMS {:.3f} um, max {:.3f} um "
+          "    before: RMS {:.3f} µm, max {:.3f} µm\n    after:  RMS {:.3f} µm, max {:.3f} µm "
           "(improvement x{:.1f})\n",
           v->points, v->before_rms * 1e3, v->before_max * 1e3, v->after_rms * 1e3,
           v->after_max * 1e3, v->improvement());
       if (v->uncertainty_known)
         fmt::print(
-            "    expected after: RMS {:.3f} um = interpolation {:.3f} (+) map uncertainty {:.3f}\n",
+            "    expected after: RMS {:.3f} µm = interpolation {:.3f} (+) map uncertainty {:.3f}\n",
             v->predicted_rms * 1e3, v->interpolation_rms * 1e3, v->uncertainty_rms * 1e3);
       else
         fmt::print(
-            "    expected after: at least RMS {:.3f} um (interpolation; the map's uncertainty was "
+            "    expected after: at least RMS {:.3f} µm (interpolation; the map's uncertainty was "
             "not computed)\n",
             v->interpolation_rms * 1e3);
     }
@@ -165,14 +165,28 @@ int run_export_linuxcnc(const ExportArgs& a) {
   return 0;
 }
 
+// --axis of every export: which machine axis the table is for.
+constexpr const char* kTableAxis =
+    "the machine axis the table is for: with --space, the grid line along it through --at; with "
+    "--positioning, the axis the result is of (it names the axis on the control by default)";
+
+// The control's name of a machine axis when --axis-name is not given: X, Y, Z (and X1, Y1, Z1
+// for a Sinumerik).
+std::string control_name(const std::string& given, const std::string& axis,
+                         const std::string& suffix = "") {
+  if (!given.empty()) return given;
+  return std::string(1, static_cast<char>(axis[0] - 'x' + 'X')) + suffix;
+}
+
 struct SinumerikArgs {
-  std::string positioning, space, output, line_axis = "x";
+  std::string positioning, space, output, line_axis = "x", axis_name;
   std::vector<double> at;
   io::SinumerikOptions o;
   bool quiet = false;
 };
 
-int run_export_sinumerik(const SinumerikArgs& a) {
+int run_export_sinumerik(SinumerikArgs a) {
+  a.o.axis = control_name(a.axis_name, a.line_axis, "1");
   if (a.space.empty() == a.positioning.empty())
     throw CLI::ValidationError("give --space FILE or --positioning FILE (one of them)");
   compensation::AxisTable t;
@@ -229,13 +243,14 @@ compensation::AxisTable table_from(const std::string& positioning, const std::st
 }
 
 struct HeidenhainArgs {
-  std::string positioning, space, output, line_axis = "x";
+  std::string positioning, space, output, line_axis = "x", axis_name;
   std::vector<double> at;
   io::HeidenhainOptions o;
   bool unidirectional = false, quiet = false;
 };
 
-int run_export_heidenhain(const HeidenhainArgs& a) {
+int run_export_heidenhain(HeidenhainArgs a) {
+  a.o.axis = control_name(a.axis_name, a.line_axis);
   if (a.unidirectional && a.positioning.empty())
     throw CLI::ValidationError("--unidirectional belongs to --positioning");
   io::PositioningFile f;
@@ -254,13 +269,14 @@ int run_export_heidenhain(const HeidenhainArgs& a) {
 }
 
 struct FanucArgs {
-  std::string positioning, space, output, line_axis = "x";
+  std::string positioning, space, output, line_axis = "x", axis_name;
   std::vector<double> at;
   io::FanucOptions o;
   bool quiet = false;
 };
 
-int run_export_fanuc(const FanucArgs& a) {
+int run_export_fanuc(FanucArgs a) {
+  a.o.axis_name = control_name(a.axis_name, a.line_axis);
   io::PositioningFile f;
   const compensation::AxisTable t =
       table_from(a.positioning, a.space, a.line_axis, a.at, false, &f);
@@ -301,12 +317,12 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "machine.json --plan plan.json -o space.json");
   c->add_option("--machine", sa->machine, "machine JSON ('trueaxis simulate machine')")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--plan", sa->plan,
                 "plan JSON: spacing (mm), probes, probe_noise_um, laser_noise_um, profile_um, "
                 "diagonals, monte_carlo, seed (default: 50 mm grid over the whole range, "
                 "noise-free)")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--output,-o", sa->output, "space JSON to write")->required();
   c->add_option("--csv", sa->csv, "also write the grid as a CSV table");
   add_meta_option(c);
@@ -328,10 +344,10 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "commands.csv --output corrected.csv");
   c->add_option("--space", ca->space, "space JSON ('trueaxis space')")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--input,-i", ca->input, "commands CSV (x,y,z in mm)")
       ->required()
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_option("--output,-o", ca->output, "corrected CSV to write ('-': standard output)")
       ->required();
   c->add_option("--interpolation", ca->interpolation, "linear (trilinear) or cubic")
@@ -358,14 +374,14 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "directions).\n"
       "Examples: trueaxis export linuxcnc --space space.json --axis x --output x.comp\n"
       "          trueaxis export linuxcnc --positioning positioning.json --output x.comp");
-  c->add_option("--space", ea->space, "space JSON")->check(CLI::ExistingFile);
+  c->add_option("--space", ea->space, "space JSON")->check(cli::existing_file());
   c->add_option("--positioning", ea->positioning, "positioning JSON ('trueaxis positioning')")
-      ->check(CLI::ExistingFile);
+      ->check(cli::existing_file());
   c->add_flag("--unidirectional", ea->unidirectional,
               "with --positioning: the bidirectional mean in both columns (leaves the reversal "
               "to the controller's backlash setting)");
-  c->add_option("--axis", ea->axis, "the joint's axis")
-      ->check(CLI::IsMember({"x", "y", "z"}))
+  c->add_option("--axis", ea->axis, kTableAxis)
+      ->transform(cli::machine_axis())
       ->capture_default_str();
   c->add_option("--at", ea->at,
                 "the line's other coordinates x,y,z in mm (default: the grid's centre)")
@@ -387,17 +403,20 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "_IS_MODULO = 0, from a positioning result or an error space. One curve for both "
       "directions (the bidirectional mean); the mean reversal is printed for MD32450 "
       "BACKLASH.\n"
-      "Example: trueaxis export sinumerik --positioning positioning.json --axis X1 -o x_lec.mpf");
+      "Example: trueaxis export sinumerik --positioning positioning.json --axis x -o x_lec.mpf");
   c->add_option("--positioning", sn->positioning, "positioning JSON ('trueaxis positioning')")
-      ->check(CLI::ExistingFile);
-  c->add_option("--space", sn->space, "or a space JSON: the error along --line through --at")
-      ->check(CLI::ExistingFile);
-  c->add_option("--line", sn->line_axis, "with --space: the axis of the grid line")
-      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->check(cli::existing_file());
+  c->add_option("--space", sn->space,
+                "or a space JSON: the error along the grid line of --axis through --at")
+      ->check(cli::existing_file());
+  c->add_option("--axis", sn->line_axis, kTableAxis)
+      ->transform(cli::machine_axis())
       ->capture_default_str();
   c->add_option("--at", sn->at, "with --space: the line's other coordinates x,y,z, mm")
       ->delimiter(',');
-  c->add_option("--axis", sn->o.axis, "machine axis name")->capture_default_str();
+  c->add_option("--axis-name", sn->axis_name,
+                "the axis' name on the control ($AA_ENC_COMP[e,N,name]; default: --axis as X1, Y1 "
+                "or Z1)");
   c->add_option("--encoder", sn->o.encoder, "measuring system (0: first, 1: second)")
       ->check(CLI::IsMember({0, 1}))
       ->capture_default_str();
@@ -419,21 +438,22 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "traverse in +, mm, and BACKLASH = forward - reverse, positive for lost motion), at most "
       "256 points, from a positioning result (both directions; --unidirectional for the mean) or "
       "an error space.\n"
-      "Example: trueaxis export heidenhain --positioning positioning.json --axis X -o X.COM");
+      "Example: trueaxis export heidenhain --positioning positioning.json --axis x -o X.COM");
   c->add_option("--positioning", hh->positioning, "positioning JSON ('trueaxis positioning')")
-      ->check(CLI::ExistingFile);
-  c->add_option("--space", hh->space, "or a space JSON: the error along --line through --at")
-      ->check(CLI::ExistingFile);
-  c->add_option("--line", hh->line_axis, "with --space: the axis of the grid line")
-      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->check(cli::existing_file());
+  c->add_option("--space", hh->space,
+                "or a space JSON: the error along the grid line of --axis through --at")
+      ->check(cli::existing_file());
+  c->add_option("--axis", hh->line_axis, kTableAxis)
+      ->transform(cli::machine_axis())
       ->capture_default_str();
   c->add_option("--at", hh->at, "with --space: the line's other coordinates x,y,z, mm")
       ->delimiter(',');
   c->add_flag("--unidirectional", hh->unidirectional,
               "with --positioning: the bidirectional mean, BACKLASH 0 (the reversal left to the "
               "axis' backlash setting)");
-  c->add_option("--axis", hh->o.axis, "the axis' column name (as in CfgAxes/axisList)")
-      ->capture_default_str();
+  c->add_option("--axis-name", hh->axis_name,
+                "the axis' column name (as in CfgAxes/axisList; default: --axis as X, Y or Z)");
   c->add_option("--name", hh->o.name, "table name in the BEGIN line (default: the file's name)");
   c->add_option("--output,-o", hh->output, "table to write (*.COM)")->required();
   c->add_flag("--quiet,-q", hh->quiet, "print nothing on success");
@@ -450,19 +470,21 @@ std::vector<Command> add_space_commands(CLI::App& app) {
       "Example: trueaxis export fanuc --positioning positioning.json --axis-number 1 "
       "--reference 800 -o x-pitch.txt");
   c->add_option("--positioning", fa->positioning, "positioning JSON ('trueaxis positioning')")
-      ->check(CLI::ExistingFile);
-  c->add_option("--space", fa->space, "or a space JSON: the error along --line through --at")
-      ->check(CLI::ExistingFile);
-  c->add_option("--line", fa->line_axis, "with --space: the axis of the grid line")
-      ->check(CLI::IsMember({"x", "y", "z"}))
+      ->check(cli::existing_file());
+  c->add_option("--space", fa->space,
+                "or a space JSON: the error along the grid line of --axis through --at")
+      ->check(cli::existing_file());
+  c->add_option("--axis", fa->line_axis, kTableAxis)
+      ->transform(cli::machine_axis())
       ->capture_default_str();
   c->add_option("--at", fa->at, "with --space: the line's other coordinates x,y,z, mm")
       ->delimiter(',');
   c->add_option("--axis-number", fa->o.axis_number, "the axis' number in the parameters (A1...)")
       ->check(CLI::Range(1, 32))
       ->capture_default_str();
-  c->add_option("--axis", fa->o.axis_name, "the axis' name (for the file's comment)")
-      ->capture_default_str();
+  c->add_option("--axis-name", fa->axis_name,
+                "the axis' name on the control, for the file's comment (default: --axis as X, Y "
+                "or Z)");
   c->add_option("--reference", fa->o.reference,
                 "where the reference position lies, mm in the table's coordinates (default: the "
                 "lowest point)");
@@ -489,8 +511,8 @@ std::vector<Command> add_space_commands(CLI::App& app) {
 
   auto csv_space = std::make_shared<std::string>(), csv_out = std::make_shared<std::string>();
   c = ex->add_subcommand("csv",
-                         "Generic error-map table: x,y,z (mm), ex,ey,ez and uncertainties (um)");
-  c->add_option("--space", *csv_space, "space JSON")->required()->check(CLI::ExistingFile);
+                         "Generic error-map table: x,y,z (mm), ex,ey,ez and uncertainties (µm)");
+  c->add_option("--space", *csv_space, "space JSON")->required()->check(cli::existing_file());
   c->add_option("--output,-o", *csv_out, "CSV to write")->required();
   out.push_back({c, [csv_space, csv_out] {
                    io::write_map_csv(*csv_out, io::read_error_map(*csv_space));

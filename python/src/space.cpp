@@ -512,7 +512,7 @@ at the nearest face with clamp=True; never extrapolated.)doc")
         surface::Options o;
         if (method == "lsq")
           o.method = surface::Method::Lsq;
-        else if (method == "boundary" || method == "seed")
+        else if (method == "boundary")
           o.method = surface::Method::Seed;
         else
           throw Error(fmt::format("method must be 'lsq' or 'boundary', not '{}'", method));

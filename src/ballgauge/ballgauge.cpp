@@ -55,7 +55,7 @@ Centre fit_ball(const Eigen::Matrix3Xd& points, double tol, bool drop) {
     const double off = std::abs((p.col(worst) - best->point).norm() - best->diameter / 2);
     const std::string what = fmt::format(
         "point {} is {:.4g} mm off the sphere through the other {} points (they fit within "
-        "{:.2g} um): a wrong touch",
+        "{:.2g} µm): a wrong touch",
         original[static_cast<std::size_t>(worst)] + 1, off, p.cols() - 1,
         max_residual(*best) * 1e3);
     if (!drop) throw Error(what + "; remove it, or drop such points with --drop-outliers");
@@ -583,14 +583,14 @@ std::string Result::summary() const {
     where = fmt::format(" in {} separate frames (each aligned placement starts its own)", frames);
   }
   std::string s = fmt::format(
-      "ball gauge: {} placements, {} mapped points{}; largest |error| {:.3f} um, {}\n",
+      "ball gauge: {} placements, {} mapped points{}; largest |error| {:.3f} µm, {}\n",
       placements.size(), points.size(), where, emax * 1e3,
-      stated ? fmt::format("largest uncertainty {:.3f} um", umax * 1e3)
+      stated ? fmt::format("largest uncertainty {:.3f} µm", umax * 1e3)
              : std::string("uncertainty not stated (centres given without their uncertainty)"));
   for (const auto& r : placements) {
     std::string fitted;
     if (r.given_centres < r.balls)
-      fitted = fmt::format(", sphere diameter error max {:.3f} um", r.diameter_error_max * 1e3);
+      fitted = fmt::format(", sphere diameter error max {:.3f} µm", r.diameter_error_max * 1e3);
     if (r.given_centres > 0) fitted += fmt::format(", {} centres given", r.given_centres);
     s += fmt::format("  {:<14} {:<6} {} balls{}{}\n", r.name,
                      r.alignment == Alignment::ThreeTwoOne    ? "321"
@@ -598,7 +598,7 @@ std::string Result::summary() const {
                                                               : "stitch",
                      r.balls,
                      r.alignment == Alignment::Stitch
-                         ? fmt::format(" ({} shared, registration RMS {:.3f} um)", r.shared,
+                         ? fmt::format(" ({} shared, registration RMS {:.3f} µm)", r.shared,
                                        r.registration_rms * 1e3)
                          : "",
                      fitted);

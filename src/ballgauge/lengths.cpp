@@ -191,19 +191,19 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
 std::string LengthVerification::summary() const {
   std::string s = fmt::format(
       "length verification, {} correction: {} lengths in {} positions\n"
-      "  before: {:+.2f} ... {:+.2f} um (range {:.2f}), mean {:+.2f}, RMS {:.2f} um\n"
-      "  after:  {:+.2f} ... {:+.2f} um (range {:.2f}), mean {:+.2f}, RMS {:.2f} um\n",
+      "  before: {:+.2f} ... {:+.2f} µm (range {:.2f}), mean {:+.2f}, RMS {:.2f} µm\n"
+      "  after:  {:+.2f} ... {:+.2f} µm (range {:.2f}), mean {:+.2f}, RMS {:.2f} µm\n",
       correction, rows.size(), positions, before.min * 1e3, before.max * 1e3, before.range() * 1e3,
       before.mean * 1e3, before.rms * 1e3, after.min * 1e3, after.max * 1e3, after.range() * 1e3,
       after.mean * 1e3, after.rms * 1e3);
   if (std::isnan(repeatability))
     s += fmt::format(
-        "  no repeated positions: the repeatability is unknown; the correction's u is {:.2f} um "
+        "  no repeated positions: the repeatability is unknown; the correction's u is {:.2f} µm "
         "RMS\n",
         correction_u_rms * 1e3);
   else
     s += fmt::format(
-        "  expected after: {:.2f} um RMS (repeatability {:.2f} um, correction u {:.2f} um)\n",
+        "  expected after: {:.2f} µm RMS (repeatability {:.2f} µm, correction u {:.2f} µm)\n",
         predicted_after * 1e3, repeatability * 1e3, correction_u_rms * 1e3);
   return s;
 }
@@ -225,7 +225,7 @@ Mpe Mpe::parse(const std::string& text) {
     if (r.ec != std::errc() || r.ptr != s.data() + s.size() || !(v > 0) || !std::isfinite(v))
       throw Error(
           fmt::format("MPE '{}': {} '{}' must be a positive number (write A+L/K or "
-                      "A+L/K,B in um with L in mm, e.g. 1.5+L/300)",
+                      "A+L/K,B in µm with L in mm, e.g. 1.5+L/300)",
                       text, what, s));
     return v;
   };

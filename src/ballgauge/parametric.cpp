@@ -436,7 +436,7 @@ std::string ParametricResult::summary() const {
       "parametric model ({} chain, polynomials of degree {}): {} balls in {} placements\n"
       "  {} unknowns ({} error coefficients + 6 per placement), rank {}: {} directions are not "
       "determined by the data (the map's rigid-body motion{})\n"
-      "  residual RMS {:.3f} um per centre component (sigma {:.3f} um), {} Gauss-Newton "
+      "  residual RMS {:.3f} µm per centre component (sigma {:.3f} µm), {} Gauss-Newton "
       "iterations\n",
       model.chain, degree, balls, placements, unknowns, unknowns - 6 * placements, rank,
       unknowns - rank,
@@ -480,11 +480,11 @@ std::string ParametricResult::summary() const {
       const std::string name = sim::error_name(k, static_cast<sim::Component>(across[j]));
       if (U >= v && std::find(unobservable.begin(), unobservable.end(), name) == unobservable.end())
         unresolved +=
-            fmt::format("{}{} (U {:.2f} um)", unresolved.empty() ? "" : ", ", name, U * 1e3);
+            fmt::format("{}{} (U {:.2f} µm)", unresolved.empty() ? "" : ", ", name, U * 1e3);
     }
   }
   s += fmt::format(
-      "  U (k = 2): straightness {} um; squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad\n",
+      "  U (k = 2): straightness {} µm; squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} µrad\n",
       st, 2e6 * iso.u_c0y, 2e6 * iso.u_b0z, 2e6 * iso.u_a0z);
   if (!unresolved.empty())
     s += fmt::format("  not resolved (U reaches the value): {}\n", unresolved);

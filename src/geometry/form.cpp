@@ -41,13 +41,13 @@ Form form_of(const Fit& f, double point_u) {
 
 std::string Form::summary() const {
   if (!U)
-    return fmt::format("{} ({}): {:.4g} um; no uncertainty: {}", name, reference, value * 1e3,
+    return fmt::format("{} ({}): {:.4g} µm; no uncertainty: {}", name, reference, value * 1e3,
                        no_uncertainty);
   if (*resolved())
-    return fmt::format("{} ({}): {} um, U = {} um (95 %)", name, reference,
+    return fmt::format("{} ({}): {} µm, U = {} µm (95 %)", name, reference,
                        detail::rounded_to(value * 1e3, *U * 1e3), detail::two_digits(*U * 1e3));
   return fmt::format(
-      "{} ({}): not resolved (U = {} um, 95 %, reaches the value): the points' noise hides the "
+      "{} ({}): not resolved (U = {} µm, 95 %, reaches the value): the points' noise hides the "
       "form",
       name, reference, detail::two_digits(*U * 1e3));
 }

@@ -100,7 +100,7 @@ void Qpd::validate() const {
       (!(table_signal.cwiseAbs().maxCoeff() < 1) || !table_displacement.allFinite()))
     throw Error("qpd: calibration signals must lie within (-1, 1) and displacements be finite");
   if (table_signal.size() == 0 && (!(gain > 0) || !std::isfinite(gain)))
-    throw Error("qpd: give a positive gain (um per unit signal) or a calibration table");
+    throw Error("qpd: give a positive gain (µm per unit signal) or a calibration table");
   if (!(min_sum >= 0) || !(max_signal > 0 && max_signal <= 1))
     throw Error("qpd: min_sum must be >= 0 and max_signal in (0, 1]");
 }
@@ -388,7 +388,7 @@ std::string Result::summary() const {
   }
   if (sigma > 0)
     out +=
-        fmt::format("  reading noise sigma {} um ({})\n", trueaxis::detail::two_digits(sigma * 1e3),
+        fmt::format("  reading noise sigma {} µm ({})\n", trueaxis::detail::two_digits(sigma * 1e3),
                     sigma_estimated ? "estimated from the residuals" : "given");
   else if (!no_uncertainty.empty())
     out += "  no uncertainty: " + no_uncertainty + "\n";

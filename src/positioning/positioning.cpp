@@ -343,7 +343,7 @@ Result evaluate(const std::vector<Reading>& readings, const Options& o) {
   }
   if (res.implausible.empty() && m >= 2 && hi - lo < kSmallestDeviationRange)
     res.implausible = fmt::format(
-        "the deviations vary by only {:.2g} um along {:g} mm of axis, below the resolution of "
+        "the deviations vary by only {:.2g} µm along {:g} mm of axis, below the resolution of "
         "any laser interferometer: they look like millimetres in a micrometre column. Name the "
         "column 'deviation [mm]' (or write micrometres)",
         (hi - lo) * 1e3, travel);
@@ -399,26 +399,26 @@ std::string Result::summary(bool vdi) const {
                    vdi ? "VDI/DGQ 3441" : "ISO 230-2:2014", targets.size(), lo, hi, cycles,
                    cycles == 1 ? "" : "s", dirs);
   if (vdi) {
-    s += fmt::format("  positional uncertainty P  {} um\n", um(this->vdi.P));
-    s += fmt::format("  positional deviation Pa   {} um\n", um(this->vdi.Pa));
-    s += fmt::format("  positional scatter Ps     {} um (mean {})\n", um(this->vdi.Ps),
+    s += fmt::format("  positional uncertainty P  {} µm\n", um(this->vdi.P));
+    s += fmt::format("  positional deviation Pa   {} µm\n", um(this->vdi.Pa));
+    s += fmt::format("  positional scatter Ps     {} µm (mean {})\n", um(this->vdi.Ps),
                      um(this->vdi.Ps_mean));
-    s += fmt::format("  reversal span U           {} um (mean {})\n", um(this->vdi.U),
+    s += fmt::format("  reversal span U           {} µm (mean {})\n", um(this->vdi.U),
                      um(this->vdi.U_mean));
   } else {
-    s += fmt::format("  accuracy A                {} um (A+ {}, A- {})\n", um(iso.A), um(iso.A_up),
+    s += fmt::format("  accuracy A                {} µm (A+ {}, A- {})\n", um(iso.A), um(iso.A_up),
                      um(iso.A_down));
-    s += fmt::format("  systematic deviation E    {} um (E+ {}, E- {})\n", um(iso.E), um(iso.E_up),
+    s += fmt::format("  systematic deviation E    {} µm (E+ {}, E- {})\n", um(iso.E), um(iso.E_up),
                      um(iso.E_down));
-    s += fmt::format("  mean bidirectional M      {} um\n", um(iso.M));
-    s += fmt::format("  repeatability R           {} um (R+ {}, R- {})\n", um(iso.R), um(iso.R_up),
+    s += fmt::format("  mean bidirectional M      {} µm\n", um(iso.M));
+    s += fmt::format("  repeatability R           {} µm (R+ {}, R- {})\n", um(iso.R), um(iso.R_up),
                      um(iso.R_down));
-    s += fmt::format("  reversal B                {} um (mean {})\n", um(iso.B), um(iso.B_mean));
+    s += fmt::format("  reversal B                {} µm (mean {})\n", um(iso.B), um(iso.B_mean));
   }
   if (temperature_corrected)
     s += fmt::format(
         "  corrected to {:g} C for a material temperature of {:.2f} .. {:.2f} C, expansion "
-        "coefficient {:g}/K, datum {:g} mm (at most {:.2f} um)\n",
+        "coefficient {:g}/K, datum {:g} mm (at most {:.2f} µm)\n",
         reference_temperature, material_min, material_max, expansion_coefficient, datum,
         max_correction * 1e3);
   for (const auto& w : warnings) s += "  warning: " + w + "\n";

@@ -406,8 +406,8 @@ std::vector<std::string> Result::warnings() const {
     std::string advice = "use more probes, an angle channel (--angle) or a known zero difference";
     if (method != Method::Lsq) advice += ", or --method lsq with redundant probes";
     w.push_back(fmt::format(
-        "the {} straightness is not resolved: its expanded uncertainty (95 %) is {} um, as large "
-        "as the {} um the profile spans, so this probe layout cannot tell it from noise. To "
+        "the {} straightness is not resolved: its expanded uncertainty (95 %) is {} µm, as large "
+        "as the {} µm the profile spans, so this probe layout cannot tell it from noise. To "
         "resolve it, {}",
         what, trueaxis::detail::two_digits(*st.U * 1e3),
         trueaxis::detail::two_digits(st.min_zone * 1e3), advice));
@@ -420,7 +420,7 @@ std::vector<std::string> Result::warnings() const {
       const double st = std::min(workpiece_straightness.ls, guide_straightness.ls);
       s += fmt::format(
           ". This layout multiplies probe noise by up to {} along the profiles, so probe noise "
-          "above {} um (standard deviation) would hide a straightness of {} um",
+          "above {} µm (standard deviation) would hide a straightness of {} µm",
           trueaxis::detail::two_digits(*noise_gain),
           trueaxis::detail::two_digits(st / (2 * *noise_gain) * 1e3),
           trueaxis::detail::two_digits(st * 1e3));
@@ -454,24 +454,24 @@ std::string Result::summary() const {
   const auto line = [&](const char* what, const Straightness& st, long n, const char* points) {
     const std::string label = fmt::format("  {} straightness:", what);
     if (st.U && !*st.resolved())
-      return fmt::format("{:<26}not resolved (U = {} um, 95 %), {} {}\n", label,
+      return fmt::format("{:<26}not resolved (U = {} µm, 95 %), {} {}\n", label,
                          trueaxis::detail::two_digits(*st.U * 1e3), n, points);
     if (st.U)
-      return fmt::format("{:<26}{} um (LS), {} um (min-zone), U = {} um (95 %), {} {}\n", label,
+      return fmt::format("{:<26}{} µm (LS), {} µm (min-zone), U = {} µm (95 %), {} {}\n", label,
                          trueaxis::detail::rounded_to(st.ls * 1e3, *st.U * 1e3),
                          trueaxis::detail::rounded_to(st.min_zone * 1e3, *st.U * 1e3),
                          trueaxis::detail::two_digits(*st.U * 1e3), n, points);
-    return fmt::format("{:<26}{:.4g} um (LS), {:.4g} um (min-zone), no uncertainty stated, {} {}\n",
+    return fmt::format("{:<26}{:.4g} µm (LS), {:.4g} µm (min-zone), no uncertainty stated, {} {}\n",
                        label, st.ls * 1e3, st.min_zone * 1e3, n, points);
   };
   s += line("workpiece", workpiece_straightness, static_cast<long>(workpiece.x.size()), "points");
   s += line("guide", guide_straightness, static_cast<long>(guide.x.size()), "stations");
   if (pitch && pitch->value.size())
-    s += fmt::format("  pitch range:            {:.4g} urad\n",
+    s += fmt::format("  pitch range:            {:.4g} µrad\n",
                      (pitch->value.maxCoeff() - pitch->value.minCoeff()) * 1e6);
   if (workpiece.uncertainty.size())
     s += fmt::format(
-        "  max standard uncertainty: workpiece {} um, guide {} um (probe noise sigma {} um{})\n",
+        "  max standard uncertainty: workpiece {} µm, guide {} µm (probe noise sigma {} um{})\n",
         trueaxis::detail::two_digits(workpiece.uncertainty.maxCoeff() * 1e3),
         trueaxis::detail::two_digits(guide.uncertainty.maxCoeff() * 1e3),
         sigma ? trueaxis::detail::two_digits(*sigma * 1e3) : std::string("not known"),

@@ -246,7 +246,7 @@ std::string Machine::summary(const std::vector<std::string>& not_determined) con
         if (n == name) return fmt::format("{:>{}}", "n/d", width);
       return fmt::format("{:{}.{}f}", span[c], width, digits);
     };
-    s += fmt::format("  {} axis                    {} um    {} {} um        {} {} {} urad\n",
+    s += fmt::format("  {} axis                    {} µm    {} {} µm        {} {} {} µrad\n",
                      kAxes[k], cell(k, 6, 2), cell(std::min(a, b), 5, 2),
                      cell(std::max(a, b), 5, 2), cell(3, 5, 1), cell(4, 5, 1), cell(5, 5, 1));
   }
@@ -254,7 +254,7 @@ std::string Machine::summary(const std::vector<std::string>& not_determined) con
     s += "  n/d: not determined by the data (no effect on these measurements)\n";
   s += "  straightness: range about the axis' reference line (ISO 230-1), at the tool point\n";
   s += fmt::format(
-      "  squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} urad (angles between the reference "
+      "  squareness EC0Y {:.1f}, EB0Z {:.1f}, EA0Z {:.1f} µrad (angles between the reference "
       "lines, less 90 deg)\n",
       lines.c0y * 1e6, lines.b0z * 1e6, lines.a0z * 1e6);
   return s;

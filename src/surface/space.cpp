@@ -405,16 +405,16 @@ std::string SpaceResult::summary() const {
       map.size(0), map.size(1), map.size(2), straightness_runs, laser_runs, surfaces.size());
   double worst_closure = 0;
   for (const auto& l : surfaces) worst_closure = std::max(worst_closure, l.closure_rms);
-  s += fmt::format("  worst surface closure RMS: {:.4f} um\n", worst_closure * 1e3);
+  s += fmt::format("  worst surface closure RMS: {:.4f} µm\n", worst_closure * 1e3);
   const Eigen::VectorXd norms = map.error.colwise().norm();
-  s += fmt::format("  error vectors: max {:.3f} um, RMS {:.3f} um\n", norms.maxCoeff() * 1e3,
+  s += fmt::format("  error vectors: max {:.3f} µm, RMS {:.3f} µm\n", norms.maxCoeff() * 1e3,
                    std::sqrt(norms.squaredNorm() / static_cast<double>(norms.size())) * 1e3);
   if (map.uncertainty.size() != 0)
-    s += fmt::format("  standard uncertainty: max {:.3f} um per component\n",
+    s += fmt::format("  standard uncertainty: max {:.3f} µm per component\n",
                      map.uncertainty.maxCoeff() * 1e3);
   else
     s += "  standard uncertainty: not computed (set monte_carlo in the plan)\n";
-  s += fmt::format("  against the virtual machine's truth: RMS {:.4f} um, max {:.4f} um\n",
+  s += fmt::format("  against the virtual machine's truth: RMS {:.4f} µm, max {:.4f} µm\n",
                    truth_rms * 1e3, truth_max * 1e3);
   std::string u;
   for (const auto& x : unobservable) u += (u.empty() ? "" : ", ") + x;
@@ -426,7 +426,7 @@ std::vector<std::string> space_warnings(const SpaceResult& space, const Verifica
   std::vector<std::string> w;
   if (v && v->after_rms > v->before_rms)
     w.push_back(fmt::format(
-        "compensating with this map makes the machine worse (RMS {:.3f} um before, {:.3f} um "
+        "compensating with this map makes the machine worse (RMS {:.3f} µm before, {:.3f} µm "
         "after): do not use it",
         v->before_rms * 1e3, v->after_rms * 1e3));
   if (space.map.uncertainty.size() == 0) {
@@ -442,7 +442,7 @@ std::vector<std::string> space_warnings(const SpaceResult& space, const Verifica
   if (v && v->uncertainty_rms > kTooFine * v->interpolation_rms)
     w.push_back(fmt::format(
         "the grid is finer than this campaign supports: the map's own uncertainty (RMS {:.3f} "
-        "um) is {:.1f} times what interpolation on this grid costs ({:.3f} um); a larger "
+        "µm) is {:.1f} times what interpolation on this grid costs ({:.3f} µm); a larger "
         "spacing would give a better map",
         v->uncertainty_rms * 1e3, v->uncertainty_rms / v->interpolation_rms,
         v->interpolation_rms * 1e3));

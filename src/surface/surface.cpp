@@ -408,7 +408,7 @@ void state_uncertainty(Result& r, const std::function<Result(std::mt19937_64&)>&
   }
   if (detail::is_round_off(r.closure_rms, size)) {
     r.no_uncertainty_reason =
-        fmt::format("the lines agree at every crossing to round-off ({:.1e} um RMS): {}",
+        fmt::format("the lines agree at every crossing to round-off ({:.1e} µm RMS): {}",
                     r.closure_rms * 1e3, detail::noise_free_reason("the readings'"));
     return;
   }
@@ -628,7 +628,7 @@ std::string Result::uncertainty_basis() const {
   if (!U) return "";
   return fmt::format(
       "reading noise {} {} (one standard deviation, the same for every reading) from the closure "
-      "at {} crossings ({} degrees of freedom), propagated to every point (largest u {} um)",
+      "at {} crossings ({} degrees of freedom), propagated to every point (largest u {} µm)",
       detail::two_digits(sigma), sigma_unit, crossings.size(), redundancy,
       detail::two_digits(u_max * 1e3));
 }
@@ -637,19 +637,19 @@ std::string Result::summary() const {
   std::string s = fmt::format("surface ({}): {} lines, {} points, {} crossings\n", method,
                               lines.size(), points.size(), crossings.size());
   if (!U)
-    s += fmt::format("  flatness: {:.4g} um (LS plane), {:.4g} um (min-zone); {}\n",
+    s += fmt::format("  flatness: {:.4g} µm (LS plane), {:.4g} µm (min-zone); {}\n",
                      flatness_ls * 1e3, flatness_min_zone * 1e3, no_uncertainty());
   else if (*resolved())
-    s += fmt::format("  flatness: {} um (LS plane), {} um (min-zone), U = {} um (95 %)\n  U: {}\n",
+    s += fmt::format("  flatness: {} µm (LS plane), {} µm (min-zone), U = {} µm (95 %)\n  U: {}\n",
                      detail::rounded_to(flatness_ls * 1e3, *U * 1e3),
                      detail::rounded_to(flatness_min_zone * 1e3, *U * 1e3),
                      detail::two_digits(*U * 1e3), uncertainty_basis());
   else
     s += fmt::format(
-        "  flatness: not resolved (U = {} um, 95 %, reaches the value): the readings' noise hides "
+        "  flatness: not resolved (U = {} µm, 95 %, reaches the value): the readings' noise hides "
         "the form\n  U: {}\n",
         detail::two_digits(*U * 1e3), uncertainty_basis());
-  s += fmt::format("  closure at crossings: RMS {:.4f} um, max {:.4f} um\n", closure_rms * 1e3,
+  s += fmt::format("  closure at crossings: RMS {:.4f} µm, max {:.4f} µm\n", closure_rms * 1e3,
                    closure_max * 1e3);
   s += fmt::format("  unobservable: {}\n  gauge: {}\n", fmt::join(unobservable, ", "), gauge);
   return s;

@@ -125,7 +125,7 @@ TEST(BallGauge, ProbingNoisePropagatesToTheStatedUncertainty) {
   EXPECT_LT(rms, 1.4);
   EXPECT_GT(inside / static_cast<double>(z.size()), 0.85);
   EXPECT_GT(u_last, u_first);  // two stitches away from the 3-2-1 placement
-  std::printf("ball gauge noise: RMS z %.2f, within 2u %.3f, u first %.3f um, last %.3f um\n", rms,
+  std::printf("ball gauge noise: RMS z %.2f, within 2u %.3f, u first %.3f µm, last %.3f µm\n", rms,
               inside / static_cast<double>(z.size()), u_first / 6 * 1e3, u_last / 6 * 1e3);
 }
 
@@ -149,7 +149,7 @@ TEST(BallGauge, LeastSquaresAlignmentHasNoRigidErrorAndSmallerUncertainty) {
     u_321 = std::max(u_321, t321.points[i].uncertainty.maxCoeff());
   }
   EXPECT_LT(u_ls, 0.5 * u_321);
-  std::printf("largest uncertainty: LS alignment %.3f um, 3-2-1 %.3f um\n", u_ls * 1e3,
+  std::printf("largest uncertainty: LS alignment %.3f µm, 3-2-1 %.3f µm\n", u_ls * 1e3,
               u_321 * 1e3);
   // Noise-free, the LS-aligned map is the truth up to one rigid motion, as for 3-2-1.
   o.noise = 0;

@@ -90,7 +90,7 @@ TEST(Parametric, NoiseFreeDataOfAPolynomialMachineAreReproducedExactly) {
   EXPECT_LT(r.rank, r.unknowns);  // the map's rigid motion is not determined
   // ... and the summary says so in words instead of printing the model's zero for them.
   const std::string summary = r.summary();
-  EXPECT_NE(summary.find("n/d urad"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("n/d µrad"), std::string::npos) << summary;
   EXPECT_NE(summary.find("n/d: not determined by the data"), std::string::npos);
   // Held-out gauge blocks, noise-free: the parametric correction makes them exact (the model
   // family holds the truth, so Gauss–Newton on the exact model converges to it). Tip radius 0:

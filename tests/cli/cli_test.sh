@@ -32,8 +32,7 @@ cut -d, -f1-3 p3.csv > p2.csv
 expect_ok "$T" separate --input p2.csv --method two-point --output r-two.json
 expect_ok "$T" separate --input p3.csv --method three-point --reference patent --output r-seed.json
 grep -q '"reference": "patent"' r-seed.json && ok || bad "patent reference recorded"
-expect_ok "$T" separate --input p3.csv --method three-point --reference seed --output r-seed2.json
-cmp -s r-seed.json r-seed2.json && ok || bad "'seed' is still read as 'patent'"
+expect_err "seed not in {ls,patent,min-zone}" "$T" separate --input p3.csv --method three-point --reference seed --output r-seed2.json
 expect_ok "$T" separate --input p3.csv --method lsq --reference min-zone --sigma 0.05 --output r-mz.json
 grep -q '"uncertainty"' r-mz.json && ok || bad "uncertainty written with --sigma"
 expect_ok "$T" report r-lsq.json -o rep.html
@@ -57,7 +56,7 @@ grep -q '"twist"' net.json && ok || bad "axis-parallel network reports the twist
 sed 's/"heights": \[0, 1, 2\]}$/"heights": [0, "q", 2]}/' lines.json > badlines.json
 expect_err "badlines.json:5:" "$T" surface --lines badlines.json -o o.json
 sed 's/"direction": \[0, 1\], "spacing": 50/"direction": [1, 1], "spacing": 50/' lines.json > diag.json
-expect_err "neither along x nor along y" "$T" surface --lines diag.json --method seed -o o.json
+expect_err "neither along x nor along y" "$T" surface --lines diag.json --method boundary -o o.json
 sed 's/"from": "r-two.json"}/"from": "r-two.json", "spacing": 7}/' lines.json > spacing.json
 expect_err "spacing.json:2:88: spacing 7 mm does not match the result's station step 10 mm" "$T" surface --lines spacing.json -o o.json
 expect_err "classic needs --moody" "$T" surface --lines lines.json --method classic -o o.json
@@ -95,7 +94,7 @@ expect_err "outside.csv:3:1: point 2 (10.000, 20.000, 999.000) mm is outside the
 expect_ok "$T" compensate --space space.json -i outside.csv -o o.csv --clamp
 expect_ok "$T" export linuxcnc --space space.json --axis y --type 0 -o y.comp
 [ "$(wc -l <y.comp)" -eq 5 ] && awk 'NF != 3 { exit 1 } NR > 1 && $1 <= prev { exit 1 } { prev = $1 }' y.comp && ok || bad "y.comp: triplets, increasing"
-expect_ok "$T" export sinumerik --space space.json --line y --axis Y1 -o y_lec.mpf
+expect_ok "$T" export sinumerik --space space.json --axis y --axis-name Y1 -o y_lec.mpf
 [ "$(grep -c '^\$AA_ENC_COMP\[0,[0-9]*,Y1\]=' y_lec.mpf)" -eq 5 ] && ok || bad "export sinumerik --space: one value per grid node"
 expect_ok "$T" export csv --space space.json -o table.csv
 echo '{"spacing": 50, "noise": 1}' > badplan.json
@@ -175,18 +174,18 @@ grep -q "incomplete cycles" pos-gap.json && ok || bad "--allow-incomplete warns"
 # The same runs as an interferometer log: the stops at the targets give the same evaluation.
 expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 -o pos2.csv --log pos-log.csv
 head -1 pos-log.csv | grep -qx "time_s,reading_mm" && ok || bad "simulate positioning --log header"
-expect_ok "$T" positioning --log pos-log.csv --targets 0:40:600 --output pos-log.json
+expect_ok "$T" positioning --input pos-log.csv --targets 0:40:600 --output pos-log.json
 grep -q "161 stops, 160 at targets, 1 not used" out.txt && ok || bad "stops found in the log: $(head -1 out.txt)"
 [ "$(grep -o '"E": [0-9.]*' pos-log.json | cut -c1-12)" = "$(grep -o '"E": [0-9.]*' pos.json | cut -c1-12)" ] && ok || bad "the log gives the runs' E"
-expect_err "give --input runs.csv or --log log.csv" "$T" positioning --output o.json
-expect_err "--log needs --targets" "$T" positioning --log pos-log.csv
+expect_err "--input is required" "$T" positioning --output o.json
+expect_err "pos-log.csv is an interferometer log (time_s, reading_mm): it needs --targets" "$T" positioning --input pos-log.csv
 # A LinuxCNC table from the positioning result, read back by the simulator: the reversal goes.
 expect_ok "$T" export linuxcnc --positioning pos.json -o pos.comp
 [ "$(wc -l <pos.comp)" -eq 16 ] && grep -q "BACKLASH = 0" out.txt && ok || bad "export linuxcnc --positioning"
 expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --cycles 5 --backlash 2 --noise 0.3 --seed 2 --compensation pos.comp -o pos-after.csv
 expect_ok "$T" positioning --input pos-after.csv --output pos-after.json --tolerance B=1.5
 expect_err "give --space FILE or --positioning FILE" "$T" export linuxcnc -o x.comp
-expect_ok "$T" export sinumerik --positioning pos.json --axis Y1 --step 20 -o pos_lec.mpf
+expect_ok "$T" export sinumerik --positioning pos.json --axis y --step 20 -o pos_lec.mpf
 head -2 pos_lec.mpf | tail -1 | grep -qx "CHANDATA(1)" && grep -q '^\$AA_ENC_COMP\[0,30,Y1\]=' pos_lec.mpf && grep -q "MD32450" out.txt && ok || bad "export sinumerik"
 expect_ok "$T" simulate positioning --axis y --targets 0:40:600 --backlash 2 --noise 0.3 --seed 2 --compensation pos_lec.mpf --comp-format sinumerik -o pos-lec.csv
 expect_err "exceed MD38000" "$T" export sinumerik --positioning pos.json --step 0.1 --max-points 200 -o o.mpf
@@ -207,7 +206,7 @@ for f in warm.csv warm.rtl; do
   expect_ok "$T" simulate positioning --axis x --targets 0:50:800 --backlash 2 --noise 0.3 --temperature 21:22.5 -o $f
   expect_ok "$T" positioning --input $f --output $f.json
 done
-[ "$(grep -o '"E": [0-9.]*' warm.rtl.json | cut -c1-10)" = "$(grep -o '"E": [0-9.]*' warm.csv.json | cut -c1-10)" ] && ok || bad "the .rtl of a warming axis is corrected to 20 C"
+[ "$(grep -o '"E": [0-9.]*' warm.rtl.json | cut -c1-10)" = "$(grep -o '"E": [0-9.]*' warm.csv.json | cut -c1-10)" ] && ok || bad "the .rtl of a warming axis is corrected to 20 °C"
 sed 's/^Target-count : 16/Target-count : 17/' pos.rtl > pos-bad.rtl
 expect_err "pos-bad.rtl:8:1: Target-count is 17 (line 7) but the Targets list has 16" "$T" positioning --input pos-bad.rtl
 expect_err "belongs to a Renishaw .rtl input" "$T" positioning --input pos.csv --run-directions +-
@@ -249,7 +248,7 @@ expect_err "" "$T" fit sphere --zone -i ball.csv -o o.json
 expect_ok "$T" fit plane --zone -i "$DATA/nist-l2/Plane/pla1.ds" -o pla.json
 grep -q '"name": "flatness"' pla.json && grep -q '"U": null' pla.json && grep -q "flatness (minimum zone): .* no uncertainty: the points' own uncertainty is not stated" out.txt && ok || bad "fit: form without --point-u"
 expect_ok "$T" fit plane --zone --point-u 0.01 -i "$DATA/nist-l2/Plane/pla1.ds" -o pla-u.json
-grep -q "flatness (minimum zone): .* um, U = .* um (95 %)" out.txt && grep -q '"resolved": true' pla-u.json && ok || bad "fit --point-u states the form's U"
+grep -q "flatness (minimum zone): .* µm, U = .* µm (95 %)" out.txt && grep -q '"resolved": true' pla-u.json && ok || bad "fit --point-u states the form's U"
 expect_err "point-u: must be a positive number, not '-1'" "$T" fit plane --point-u -1 -i "$DATA/nist-l2/Plane/pla1.ds" -o o.json
 printf '3\n0 0 0\n1 1 1\n2 2 2\n' > line.ds
 expect_err "plane fit: the points are collinear" "$T" fit plane -i line.ds -o o.json
@@ -329,11 +328,35 @@ expect_code 2 "$T" bogus
 expect_code 2 "$T" separate
 expect_code 2 "$T" separate --input p3.csv --output o.json --method nine-point
 expect_code 2 "$T" separate --input p3.csv --output o.json --no-such-flag
-expect_code 2 "$T" separate --input does-not-exist.csv --output o.json
+# A missing input is an error like every other: exit 1, "trueaxis: error: FILE: no such file".
+expect_code 1 "$T" separate --input does-not-exist.csv --output o.json
+grep -qx "trueaxis: error: does-not-exist.csv: no such file" err.txt && ok || bad "a missing input: $(cat err.txt)"
+expect_err "plate-missing: no such directory" "$T" surface --moody plate-missing -o s.json
 expect_code 2 "$T" fit sphere --input p3.csv --output o.json --stations x
 expect_code 2 "$T" simulate
 expect_code 0 "$T" help
-grep -q "separate" out.txt && ok || bad "trueaxis help lists the commands"
+# 'trueaxis help' and 'trueaxis' alone: every command on a line of its own with its purpose.
+for c in separate surface simulate machine space compensate export guideway positioning fit \
+         ballgauge correct verify-lengths design scan serve ipp report demo examples help; do
+  grep -Eq "^  $c +[a-zA-Z]" out.txt || bad "trueaxis help lists '$c' with its purpose"
+done
+[ "$(awk 'length > 100' out.txt | wc -l)" -eq 0 ] && ok || bad "the command list has lines of at most 100 characters"
+cp out.txt help-list.txt
+expect_code 0 "$T"
+cmp -s out.txt help-list.txt && ok || bad "trueaxis alone prints the command list"
+expect_code 0 "$T" fit sphere --version
+grep -q "^trueaxis [0-9]" out.txt && ok || bad "--version works on every command"
+# A slip of the keyboard gets a suggestion, with exit 2.
+expect_code 2 "$T" separate --input p3.csv --output o.json --sigm 1
+grep -q "did you mean --sigma?" err.txt && ok || bad "a mistyped flag: $(cat err.txt)"
+expect_code 2 "$T" separat --input p3.csv
+grep -q "did you mean separate?" err.txt && ok || bad "a mistyped command: $(cat err.txt)"
+expect_code 2 "$T" simulate machin
+grep -q "did you mean machine?" err.txt && ok || bad "a mistyped sub-command: $(cat err.txt)"
+# --axis is a machine axis everywhere (X taken as x); the control's own name is --axis-name.
+expect_err "'w' is not a machine axis: give x, y or z" "$T" simulate positioning --axis w -o w.csv
+expect_err "such as X1, goes in --axis-name" "$T" export sinumerik --positioning p.json --axis X1 -o x.mpf
+expect_ok "$T" simulate positioning --axis X --targets 0:100:400 --cycles 2 -o upper.csv
 expect_code 0 "$T" help simulate line
 grep -q -- "--start" out.txt && ok || bad "trueaxis help simulate line"
 expect_code 2 "$T" help nosuchcommand
@@ -440,9 +463,9 @@ grep -qi "spec 0\|the seed\|the paper's" help.txt && bad "help speaks of specs, 
 
 # E0 against a user-given MPE: verdict, envelope, JSON; a malformed MPE is a usage error.
 expect_ok "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o bg-e0.json --report bg-e0.html --mpe "1.5+L/300"
-grep -q "E0 after the grid correction against MPE 1.5+L/300 um: PASS" out.txt && grep -q '"e0"' bg-e0.json && grep -q "E0 envelope" bg-e0.html && ok || bad "verify-lengths --mpe: $(cat out.txt)"
+grep -q "E0 after the grid correction against MPE 1.5+L/300 µm: PASS" out.txt && grep -q '"e0"' bg-e0.json && grep -q "E0 envelope" bg-e0.html && ok || bad "verify-lengths --mpe: $(cat out.txt)"
 expect_ok "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o bg-e0t.json --mpe "0.1"
-grep -q "E0 after the grid correction against MPE 0.1 um: FAIL" out.txt && ok || bad "a tight MPE fails"
+grep -q "E0 after the grid correction against MPE 0.1 µm: FAIL" out.txt && ok || bad "a tight MPE fails"
 expect_code 2 "$T" verify-lengths --map bg-ls-map.json -i bg-lengths.csv -o o.json --mpe "1.5+L/x"
 
 # New inputs refuse bad values: --meta without '=', a result file with a broken reference, and

@@ -119,7 +119,7 @@ TEST(BallGaugeOverIpp, ExactCampaignGivesTheInProcessMap) {
         << there.placements[i].name;
   // Each of the 360 probings is a PtMeas and a GoTo back out, plus the moves round the balls.
   EXPECT_GT(commands, 2 * 360);
-  std::printf("ball gauge over I++ DME: map differs by %.4f um at most; %ld commands\n",
+  std::printf("ball gauge over I++ DME: map differs by %.4f µm at most; %ld commands\n",
               d.worst * 1e3, commands);
 }
 
@@ -132,7 +132,7 @@ TEST(BallGaugeOverIpp, NoisyCampaignAgreesWithinTheStatedUncertainty) {
   const auto d = compare(here, there);
   EXPECT_LT(d.worst_z, kWithinUncertainty);
   EXPECT_GT(d.worst, 0);  // different noise on the two sides
-  std::printf("noisy ball gauge over I++ DME: worst difference %.3f um, %.2f u\n", d.worst * 1e3,
+  std::printf("noisy ball gauge over I++ DME: worst difference %.3f µm, %.2f u\n", d.worst * 1e3,
               d.worst_z);
 }
 

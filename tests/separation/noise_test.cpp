@@ -129,8 +129,8 @@ TEST(SeparationNoise, StepSmallerThanSpacingIsRedundant) {
   EXPECT_LT(fine.mean_u, three.mean_u);
   EXPECT_LT(fine.rms_err, three.rms_err);
   std::printf(
-      "3 probes at 0,10,20: RMS error %.3g um, mean u %.3g um; 4 probes at 0,20,30,50: "
-      "%.3g um, %.3g um\n",
+      "3 probes at 0,10,20: RMS error %.3g µm, mean u %.3g µm; 4 probes at 0,20,30,50: "
+      "%.3g µm, %.3g µm\n",
       three.rms_err * 1e3, three.mean_u * 1e3, fine.rms_err * 1e3, fine.mean_u * 1e3);
 }
 
@@ -166,7 +166,7 @@ TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
               1e-6);
   EXPECT_GT(*r.workpiece_straightness.U, r.workpiece_straightness.ls);
   EXPECT_EQ(r.workpiece_straightness.resolved(), false);
-  // The summary gives no number for it: "not resolved (U = … um, k = 2)".
+  // The summary gives no number for it: "not resolved (U = … µm, k = 2)".
   const std::string sum = r.summary();
   EXPECT_NE(sum.find("workpiece straightness: not resolved (U = "), std::string::npos) << sum;
   EXPECT_NE(sum.find(", 95 %)"), std::string::npos) << sum;
@@ -199,13 +199,13 @@ TEST(Noise, UnresolvedStraightnessIsSaidInWords) {
             *rg.workpiece_straightness.U);
   EXPECT_NE(
       rg.summary().find(fmt::format(
-          "U = {} um (95 %)", trueaxis::detail::two_digits(*rg.workpiece_straightness.U * 1e3))),
+          "U = {} µm (95 %)", trueaxis::detail::two_digits(*rg.workpiece_straightness.U * 1e3))),
       std::string::npos)
       << rg.summary();
 }
 
 // Readings that agree to round-off carry no noise: the uncertainty is absent with that reason,
-// never a zero (and no "sigma 0.0000 um, estimated from residuals").
+// never a zero (and no "sigma 0.0000 µm, estimated from residuals").
 TEST(Noise, NoiseFreeReadingsStateNoUncertaintyAndSayWhy) {
   sim::StraightnessOptions so;
   so.stations = 200;

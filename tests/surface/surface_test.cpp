@@ -159,7 +159,7 @@ TEST(MoodySurface, LeastSquaresReportsClosureAndAgreesWithTheWorksheet) {
   EXPECT_GT(lsq.sigma, 0.05);  // arc-second: an autocollimator's, not round-off
   EXPECT_LT(lsq.sigma, 0.5);
   EXPECT_TRUE(*lsq.resolved());
-  EXPECT_NE(lsq.summary().find("U = 1.3 um (95 %)"), std::string::npos) << lsq.summary();
+  EXPECT_NE(lsq.summary().find("U = 1.3 µm (95 %)"), std::string::npos) << lsq.summary();
   EXPECT_NE(lsq.summary().find("from the closure at 22 crossings (9 degrees of freedom)"),
             std::string::npos)
       << lsq.summary();
@@ -170,7 +170,7 @@ TEST(MoodySurface, LeastSquaresReportsClosureAndAgreesWithTheWorksheet) {
   EXPECT_NE(json.find("\"resolved\": true"), std::string::npos);
   EXPECT_NE(json.find("\"degrees_of_freedom\": 9"), std::string::npos);
   EXPECT_EQ(json.find("no_uncertainty"), std::string::npos);
-  std::printf("Moody closure: worksheet max %.4f um; least squares RMS %.4f um, max %.4f um\n",
+  std::printf("Moody closure: worksheet max %.4f µm; least squares RMS %.4f µm, max %.4f µm\n",
               classic.closure_max * 1e3, lsq.closure_rms * 1e3, lsq.closure_max * 1e3);
 }
 

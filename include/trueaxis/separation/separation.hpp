@@ -37,7 +37,7 @@ enum class Reference {
 const char* to_string(Method m);
 const char* to_string(Reference r);
 Method method_from_string(const std::string& s);        // "two-point" | "three-point" | "lsq"
-Reference reference_from_string(const std::string& s);  // "ls" | "seed" | "min-zone"
+Reference reference_from_string(const std::string& s);  // "ls" | "patent" | "min-zone"
 
 // Probe readings. Units: mm and rad.
 struct ProbeData {

@@ -174,7 +174,7 @@ std::vector<ballgauge::Placement> read_measurements(const std::string& path,
             } else if (bk == "u_um") {
               const Eigen::Vector3d u = triple(f, bp / bk);
               if (!(u.minCoeff() > 0))
-                f.fail(bp / bk, "u_um (the centre's standard uncertainty, um) must be > 0");
+                f.fail(bp / bk, "u_um (the centre's standard uncertainty, µm) must be > 0");
               B.centre_u = u * 1e-3;
             } else {
               f.fail(bp / bk, fmt::format("unknown key '{}' (index, points or centre, u_um)", bk));
@@ -253,7 +253,7 @@ void write_ballgauge_map(const std::string& path, const ballgauge::Result& r) {
   ojson j;
   j["kind"] = "ballgauge map";
   j["frame"] =
-      "machine coordinates (mm); error = measured - true ball centre (um); correct with X = x - "
+      "machine coordinates (mm); error = measured - true ball centre (µm); correct with X = x - "
       "error(x)";
   j["frames"] = r.frames;
   if (!stated)
@@ -363,7 +363,7 @@ void write_length_verification(const std::string& path,
                    {"lengths", rows}});
   }
   ojson j{{"kind", "length verification"},
-          {"units", "nominal in mm; length errors (measured - nominal) in um"},
+          {"units", "nominal in mm; length errors (measured - nominal) in µm"},
           {"results", out}};
   if (mpe && !results.empty()) {
     auto check = [&](const std::vector<ballgauge::LengthRow>& rows, bool after) {

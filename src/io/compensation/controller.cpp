@@ -520,7 +520,7 @@ FanucTable write_fanuc(const std::string& path, const compensation::AxisTable& t
       for (std::size_t i = 1; i < cum.size(); ++i)
         worst = std::max(worst, std::abs(cum[i] - cum[i - 1]));
       throw Error(fmt::format(
-          "the compensation changes by up to {:g} um between points {:g} mm apart: more than {} "
+          "the compensation changes by up to {:g} µm between points {:g} mm apart: more than {} "
           "detection units even at magnification 100; use a smaller interval",
           worst * o.detection_unit * 1e3, d, o.max_value));
     }

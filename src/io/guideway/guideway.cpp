@@ -139,7 +139,7 @@ Spots read_spots(const std::string& path, const GuidewayLayout& g, bool skip_bad
                               t.where(-1, static_cast<int>(c)), h));
     if (suffix != "dx" && suffix != "dy" && suffix != "i1" && suffix != "i2" && suffix != "i3" &&
         suffix != "i4")
-      throw Error(fmt::format("{}column '{}': expected <name>_dx, _dy (um) or _i1.._i4 (currents)",
+      throw Error(fmt::format("{}column '{}': expected <name>_dx, _dy (µm) or _i1.._i4 (currents)",
                               t.where(-1, static_cast<int>(c)), h));
   }
   const long n = static_cast<long>(t.rows());
@@ -173,7 +173,7 @@ Spots read_spots(const std::string& path, const GuidewayLayout& g, bool skip_bad
     }
     if (!all_current)
       throw Error(
-          fmt::format("{}detector '{}' has no columns: give {}_dx,{}_dy (um) or "
+          fmt::format("{}detector '{}' has no columns: give {}_dx,{}_dy (µm) or "
                       "{}_i1..{}_i4 (currents)",
                       t.where(-1, 0), name, name, name, name, name));
     if (!g.qpd)

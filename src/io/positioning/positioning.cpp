@@ -7,6 +7,7 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <tuple>
@@ -220,6 +221,27 @@ positioning::Log read_log(const std::string& path) {
     log.reading.push_back(rv[i]);
   }
   return log;
+}
+
+bool is_log_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line)) return false;
+  if (line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);  // a UTF-8 byte-order mark
+  std::vector<std::string> names;
+  std::string name;
+  for (char c : line + ",") {
+    if (c == ',' || c == ';' || c == '\t') {
+      names.push_back(name);
+      name.clear();
+    } else if (!std::isspace(static_cast<unsigned char>(c)) && c != '"') {
+      name += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    }
+  }
+  if (names.size() != 2) return false;
+  auto is = [&](const std::string& n, const char* word) { return n.rfind(word, 0) == 0; };
+  return (is(names[0], "time") && is(names[1], "reading")) ||
+         (is(names[0], "reading") && is(names[1], "time"));
 }
 
 void write_log(const std::string& path, const positioning::Log& log) {

@@ -192,7 +192,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
           if (kind.find("linear") == std::string::npos)
             f.warnings.push_back(fmt::format(
                 "{}:{}: Filetype '{}' does not say linear: read as a linear positioning test "
-                "(targets in mm, deviations in um)",
+                "(targets in mm, deviations in µm)",
                 path, line, detail::quote_cut(value)));
         }
         f.fields.emplace_back(std::string(trim(l.substr(b, colon - b))), std::string(value));
@@ -225,7 +225,7 @@ RtlFile parse_rtl(std::string text, const std::string& path, const RtlOptions& o
         const int run = index(0, run_count > 0 ? run_count : kMaxCount, "run");
         const int target = index(1, target_count > 0 ? target_count : kMaxCount, "target");
         if (std::abs(v[2].first) > kMaxDeviation)
-          fail(v[2].second, fmt::format("deviation {:g} um is out of range", v[2].first));
+          fail(v[2].second, fmt::format("deviation {:g} µm is out of range", v[2].first));
         entries.push_back({run, target, v[2].first, line});
         return;
       }

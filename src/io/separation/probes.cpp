@@ -106,7 +106,7 @@ separation::ProbeData read_probes(const std::string& path, const ProbeReadOption
       if (looks_angle)
         throw Error(fmt::format(
             "{}column '{}' looks like an angle channel, not a probe: give --angle {} to use it "
-            "(urad), or --probes to list the probe columns",
+            "(µrad), or --probes to list the probe columns",
             t.where(-1, c), name, split.quantity));
       if (header_offsets.back()) {
         stem_units.push_back(split.unit);  // converted below: the name is not the stem

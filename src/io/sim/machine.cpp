@@ -129,7 +129,7 @@ sim::Machine read_machine(const JsonFile& f) {
         const double v = f.number(p);
         // The rotations are exact, but a squareness of a tenth of a radian is no machine.
         if (std::abs(v) > 1e5)
-          f.fail(p, fmt::format("squareness {} = {:g} urad: must be below 100000 urad (0.1 rad)",
+          f.fail(p, fmt::format("squareness {} = {:g} µrad: must be below 100000 µrad (0.1 rad)",
                                 key, v));
         (key == "EC0Y"   ? m.squareness_c0y
          : key == "EB0Z" ? m.squareness_b0z
@@ -169,7 +169,7 @@ nlohmann::ordered_json machine_json(const sim::Machine& m) {
   j["name"] = m.name;
   j["chain"] = m.chain;
   j["units"] =
-      "mm for positions, um for linear errors, urad for angular errors; polynomial "
+      "mm for positions, µm for linear errors, µrad for angular errors; polynomial "
       "coefficient k multiplies (u / 1000 mm)^k";
   auto& r = j["ranges"];
   const char* names[3] = {"x", "y", "z"};

@@ -75,7 +75,7 @@ surface::SpacePlan read_plan(const std::string& path) {
     } else if (key == "probe_noise_um" || key == "laser_noise_um" || key == "profile_um") {
       const double v = f.number(k);
       if (!(v >= 0 && v <= 1000))
-        f.fail(k, fmt::format("{} {:g} um: must be between 0 and 1000 um", key, v));
+        f.fail(k, fmt::format("{} {:g} µm: must be between 0 and 1000 µm", key, v));
       (key == "probe_noise_um"   ? p.probe_noise
        : key == "laser_noise_um" ? p.laser_noise
                                  : p.profile_amplitude) = v * 1e-3;
@@ -119,7 +119,7 @@ void write_space(const std::string& path, const surface::SpaceResult& s,
   ojson j;
   j["kind"] = "space";
   j["frame"] =
-      "machine coordinates (mm); error = actual - nominal tool point (um), at the nodes of the "
+      "machine coordinates (mm); error = actual - nominal tool point (µm), at the nodes of the "
       "grid";
   j["reference"] = "least-squares rigid-body motion removed";
   j["unobservable"] = s.unobservable;

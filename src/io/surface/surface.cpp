@@ -180,7 +180,7 @@ std::vector<surface::Line> read_lines(const std::string& path) {
       if (!l.heights.allFinite() || l.heights.cwiseAbs().maxCoeff() > 1e6)  // mm: a kilometre
         doc.fail(at / (doc.has(at / "heights") ? "heights" : "slopes"),
                  fmt::format("line '{}': the heights run beyond a kilometre: check the units "
-                             "(heights in um, slopes in urad)",
+                             "(heights in µm, slopes in µrad)",
                              l.name));
     }
     out.push_back(std::move(l));

@@ -174,7 +174,7 @@ TEST(BallGaugeIo, PlatesFramesAndGivenCentres) {
             std::string::npos);
   EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0, 0],
                                                 "u_um": [0.3, 0, 0.3]}]}]})")
-                .find("u_um (the centre's standard uncertainty, um) must be > 0"),
+                .find("u_um (the centre's standard uncertainty, µm) must be > 0"),
             std::string::npos);
   EXPECT_NE(merr(R"({"placements": [{"balls": [{"index": 0, "points": [[1, 2, 3]],
                                                 "u_um": [0.3, 0.3, 0.3]}]}]})")

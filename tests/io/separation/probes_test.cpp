@@ -193,7 +193,7 @@ TEST(Probes, AngleColumnIsNeverASilentProbe) {
   const char* with_angle = "x,a,b,c,angle\n0,1,2,3,10\n10,1,2,3,11\n20,1,2,3,12\n30,1,2,3,13\n";
   EXPECT_EQ(read_error(with_angle),
             "p.csv:1:9: column 'angle' looks like an angle channel, not a probe: give --angle "
-            "angle to use it (urad), or --probes to list the probe columns");
+            "angle to use it (µrad), or --probes to list the probe columns");
   io::ProbeReadOptions o;
   o.offsets = {0, 10, 20};
   EXPECT_EQ(read_error(std::string(kGood), o),
@@ -233,7 +233,7 @@ TEST(Probes, UnitsInTheHeaderReadAsThePlainFile) {
   EXPECT_LT((units.angle - plain.angle).cwiseAbs().maxCoeff(), 1e-18);
   EXPECT_EQ(read_error("x,a,b,c,tilt [arcsec]\n0,1,2,3,1\n10,1,2,3,1\n20,1,2,3,1\n"),
             "p.csv:1:9: column 'tilt [arcsec]' looks like an angle channel, not a probe: give "
-            "--angle tilt to use it (urad), or --probes to list the probe columns");
+            "--angle tilt to use it (µrad), or --probes to list the probe columns");
   // x written in metres against offsets in mm: named, with the unit it looks like.
   io::ProbeReadOptions mm;
   mm.offsets = {0, 10, 20};

@@ -126,5 +126,5 @@ TEST(MachineIo, AnAbsurdSquarenessIsRefusedAtItsKey) {
       "{\"chain\": \"FYXZ\", \"ranges\": {\"x\": [0, 800], \"y\": [0, 600], \"z\": [0, "
       "500]},\n \"errors\": {\"EB0Z\": 2e5}}");
   EXPECT_EQ(trueaxis::test::error_of([&] { trueaxis::io::read_machine(p); }),
-            p + ":2:21: squareness EB0Z = 200000 urad: must be below 100000 urad (0.1 rad)");
+            p + ":2:21: squareness EB0Z = 200000 µrad: must be below 100000 µrad (0.1 rad)");
 }

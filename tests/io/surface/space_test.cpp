@@ -56,7 +56,7 @@ TEST(SpaceIo, PlansAreReadInTheirUnitsAndBadOnesNameTheSpot) {
            {"{\"monte_carlo\": 1e9}", "p.json:1:17: monte_carlo 1e+09: at most 1000"},
            {"{\"spacing\": 1e-320}", "p.json:1:13: 'spacing' = 9.99989e-321 is too small"},
            {"{\"spacing\": 1e300}", "p.json:1:13: 'spacing' = 1e+300 is out of range"},
-           {"{\"probe_noise_um\": -1}", "p.json:1:20: probe_noise_um -1 um: must be between 0"},
+           {"{\"probe_noise_um\": -1}", "p.json:1:20: probe_noise_um -1 µm: must be between 0"},
            {std::string(100, '[') + std::string(100, ']'), "p.json:1:65: nested more than 64"},
            {"{\"diagonals\": 1}", "p.json:1:15: 'diagonals' must be true or false"},
        }) {

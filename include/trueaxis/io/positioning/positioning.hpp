@@ -46,6 +46,9 @@ PositioningRuns read_runs(const std::string& path);
 // laser's reading, mm); errors name file:line:col.
 positioning::Log read_log(const std::string& path);
 void write_log(const std::string& path, const positioning::Log& log);
+// True when the file's header row names the two columns of such a log (time and reading, in
+// either order, with any unit suffix), so that one --input takes runs and logs alike.
+bool is_log_file(const std::string& path);
 
 // Writes readings in the runs.csv form above (temperature columns when any reading has one).
 void write_runs(const std::string& path, const std::vector<positioning::Reading>& readings);
