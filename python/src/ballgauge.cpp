@@ -65,6 +65,7 @@ void bind_ballgauge(py::module_& m) {
           for (const auto& x : pl.dropped) dropped.push_back(pl.name + ": " + x);
         d["dropped"] = dropped;
         d["summary"] = r.summary();
+        savable(d, [r](const std::string& path) { io::write_ballgauge_map(path, r); });
         return d;
       },
       py::arg("gauge"), py::arg("measurements"), py::kw_only(), py::arg("match_tolerance") = 1.0,
@@ -134,6 +135,7 @@ X = x − Δ(x)), else None; 'dropped'; 'summary'}.)doc");
         d["squareness_urad"] = sq;
         d["squareness_U_urad"] = sq_u;
         d["summary"] = r.summary();
+        savable(d, [r](const std::string& path) { io::write_parametric(path, r); });
         return d;
       },
       py::arg("gauge"), py::arg("measurements"), py::kw_only(), py::arg("stylus_offset"),
@@ -223,6 +225,9 @@ output='model.json' the model and its covariance are written for verify_lengths(
           d["repeatability"] = v.repeatability * 1e3;
           d["expected_after"] = v.predicted_after * 1e3;
           d["summary"] = v.summary();
+          savable(d, [v, mpe](const std::string& path) {
+            io::write_length_verification(path, {v}, mpe ? &*mpe : nullptr);
+          });
           if (mpe) {
             auto e0 = [&](bool after) {
               const auto c = ballgauge::check_mpe(v.rows, *mpe, after);

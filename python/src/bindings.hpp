@@ -2,9 +2,24 @@
 // deviations in µm, angles in µrad. Every trueaxis::Error becomes trueaxis.Error (module.cpp).
 #pragma once
 
+#include <pybind11/functional.h>
 #include <pybind11/pybind11.h>
 
+#include <string>
+
 namespace trueaxis::python {
+
+// A result dict that trueaxis.save() can write as the file the command line writes for it:
+// `write(path)` is kept under "__save__", which the Python package takes out of the dict it hands
+// to the user (trueaxis.Result). `write` holds copies of what it writes.
+template <class Write>
+void savable(pybind11::dict& d, Write write) {
+  d["__save__"] = pybind11::cpp_function([write](const std::string& path) { write(path); });
+}
+
+// trueaxis._load(path): any result file the command line writes, checked by the reader of its
+// kind (file:line:col on a bad one); returns its kind.
+void bind_results(pybind11::module_& m);
 
 // The virtual machine, error surfaces, error spaces and error maps (space.cpp).
 void bind_space(pybind11::module_& m);

@@ -11,6 +11,7 @@
 
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/geometry/points.hpp"
 
 namespace py = pybind11;
 
@@ -57,6 +58,7 @@ void bind_fit(py::module_& m) {
                                                           : py::object(py::none()),
                              py::arg("no_uncertainty") = form.no_uncertainty,
                              py::arg("summary") = form.summary());
+        savable(d, [f, form](const std::string& path) { io::write_fit(path, f, form); });
         // Moved into the array (no copy of n doubles).
         d["residuals"] = py::cast(std::move(f.residuals), py::return_value_policy::move);
         if (f.has_uncertainty) {

@@ -113,6 +113,7 @@ void bind_guideway(py::module_& m) {
         d["sigma_estimated"] = r.sigma_estimated;
         d["message"] = r.layout.message;
         d["report"] = r.summary();
+        savable(d, [r](const std::string& path) { io::write_guideway_result(path, r); });
         return d;
       },
       py::arg("layout"), py::arg("s"), py::arg("readings"), py::kw_only(),

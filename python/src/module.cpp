@@ -7,11 +7,13 @@
 #include "bindings.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/geometry/straightness.hpp"
+#include "trueaxis/io/separation/probes.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/straightness.hpp"
 
 namespace py = pybind11;
 using namespace trueaxis;
+using trueaxis::python::savable;
 
 namespace {
 
@@ -89,6 +91,7 @@ py::dict separate(const Eigen::VectorXd& x, const Eigen::MatrixXd& readings,
   out["offsets_assumed"] = r.offsets_assumed;
   out["warnings"] = r.warnings();
   out["summary"] = r.summary();
+  savable(out, [r](const std::string& path) { io::write_result(path, r); });
   return out;
 }
 
@@ -193,4 +196,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
   trueaxis::python::bind_ballgauge(m);
   trueaxis::python::bind_scan(m);
   trueaxis::python::bind_positioning(m);
+  trueaxis::python::bind_results(m);
 }

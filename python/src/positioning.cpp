@@ -160,6 +160,10 @@ py::dict evaluate(const py::object& runs, const std::string& standard,
   d["max_correction"] = r.max_correction * 1e3;
   d["warnings"] = r.warnings;
   d["summary"] = r.summary(vdi);
+  savable(d, [r, vdi, verdicts](const std::string& path) {
+    io::write_positioning_result(
+        path, r, vdi ? positioning::Standard::Vdi3441 : positioning::Standard::Iso230_2, verdicts);
+  });
   return d;
 }
 

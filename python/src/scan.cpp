@@ -1,5 +1,7 @@
 // Python bindings for design data and error-tolerant scanning on the virtual CMM (after JP 6484108
 // B2).
+#include "trueaxis/io/scan/scan.hpp"
+
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
@@ -49,10 +51,12 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
   const auto smp = design::sample(d.sections.front(), 1.0);
   scan::Result r;
   std::vector<std::vector<double>> truth;
+  std::optional<Eigen::Vector3d> origin;  // with geometric errors: where the part stood
   {
     py::gil_scoped_release release;
     scan::VirtualCmm cmm(p, vo, smp.points.col(0) + (tip_radius + 20) * smp.normals.col(0));
     r = scan::scan(cmm, d, o);
+    if (vo.geometry) origin = cmm.part_origin();
     for (std::size_t i = 0; i < r.sections.size(); ++i) {
       std::vector<double> t;
       for (const auto& x : r.sections[i].points)
@@ -131,6 +135,13 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
   out["machine_time_s"] = times(r.time);
   out["sections"] = sections;
   out["events"] = events;
+  io::ScanCmm cmm_record;
+  cmm_record.tip_radius = tip_radius;
+  cmm_record.probe_noise_um = probe_noise_um;
+  if (vo.geometry) cmm_record.machine = vo.geometry->name.empty() ? machine : vo.geometry->name;
+  cmm_record.part_origin = origin;
+  savable(out,
+          [r, o, cmm_record](const std::string& path) { io::write_scan(path, r, o, cmm_record); });
   return out;
 }
 

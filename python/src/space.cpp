@@ -397,7 +397,12 @@ screw term of period `lead` mm.)doc")
           py::arg("name"), py::arg("u"),
           "One of the 21 errors by its ISO 230-1 name ('EXX', 'EYX', ..., 'EC0Y') at axis "
           "coordinates u (mm): µm for translations, µrad for rotations and squareness.")
-      .def("summary", &sim::Machine::summary)
+      .def("summary", &sim::Machine::summary,
+           py::arg("not_determined") = std::vector<std::string>{},
+           "A short table of the 21 errors: per axis the span of its positioning and angular "
+           "errors over its range (µm, µrad), its straightness errors, and the squareness "
+           "errors (ISO 230-1). not_determined: ISO names of errors the data could not determine "
+           "(e.g. ['ECX']), which read 'n/d' instead of a number.")
       .def("__repr__", [](const sim::Machine& mc) {
         return fmt::format("<trueaxis.Machine '{}' chain {}>", mc.name, mc.chain);
       });
@@ -521,7 +526,9 @@ at the nearest face with clamp=True; never extrapolated.)doc")
           py::gil_scoped_release release;
           r = surface::build(std::move(ls), o);
         }
-        return surface_out(r);
+        py::dict d = surface_out(r);
+        savable(d, [r](const std::string& path) { io::write_surface(path, r); });
+        return d;
       },
       py::arg("lines"), py::kw_only(), py::arg("method") = "lsq",
       R"doc(Error surface from a network of straightness lines (Moody 1955; least squares over any crossing lines).
@@ -538,7 +545,10 @@ Returns {'points': {'line', 'station', 'x', 'y', 'height' (µm)}, 'grid' ({'x', 
       [](const std::string& dir, const std::string& method) {
         if (method != "classic" && method != "lsq")
           throw Error(fmt::format("method must be 'classic' or 'lsq', not '{}'", method));
-        return surface_out(surface::moody(io::read_moody(dir), method == "lsq"));
+        const surface::Result r = surface::moody(io::read_moody(dir), method == "lsq");
+        py::dict d = surface_out(r);
+        savable(d, [r](const std::string& path) { io::write_surface(path, r); });
+        return d;
       },
       py::arg("directory"), py::kw_only(), py::arg("method") = "classic",
       "Moody's Union Jack from a directory of his eight files and Config.txt; 'classic' "
@@ -594,6 +604,7 @@ Returns {'points': {'line', 'station', 'x', 'y', 'height' (µm)}, 'grid' ({'x', 
             py::dict(py::arg("rms") = s.truth_rms * 1e3, py::arg("max") = s.truth_max * 1e3);
         d["verification"] = v ? py::object(verification_out(*v)) : py::object(py::none());
         d["summary"] = s.summary();
+        savable(d, [s, p, v](const std::string& path) { io::write_space(path, s, p, v); });
         d["map"] = std::move(s.map);
         return d;
       },

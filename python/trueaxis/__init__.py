@@ -71,6 +71,77 @@ def _plain(value, parameter):
     return value
 
 
+class Result(dict):
+    """A trueaxis result: a dict (numpy arrays for series, µm and µrad as in the files), which
+    trueaxis.save() writes as the file the command line writes for it."""
+
+    __slots__ = ("_save",)
+
+
+def _result(value):
+    """A dict the compiled module marked as savable becomes a Result (lists of them too)."""
+    if isinstance(value, dict) and "__save__" in value:
+        saver = value.pop("__save__")
+        out = Result(value)
+        out._save = saver
+        return out
+    if isinstance(value, list):
+        return [_result(v) for v in value]
+    return value
+
+
+def save(result, path):
+    """Writes `result` (what a trueaxis function returned, or load() read) as the file the command
+    line writes for it: separate → result.json, positioning → positioning.json, ballgauge → a map,
+    identify → a parametric model, fit → fit.json, ... Every trueaxis command reads it back
+    (`trueaxis report PATH` draws it). Raises TypeError for anything else."""
+    saver = getattr(result, "_save", None)
+    if saver is None:
+        raise TypeError(
+            f"trueaxis.save() writes a result a trueaxis function returned, not a {type(result).__name__}"
+            " (a dict built by hand has no file form; json.dumps() it after turning arrays into lists)")
+    saver(_os.fspath(path))
+
+
+def _arrays(value):
+    """JSON lists of numbers as numpy arrays (nested lists of equal length as 2-D arrays)."""
+    import numpy as _np
+
+    if isinstance(value, dict):
+        return {k: _arrays(v) for k, v in value.items()}
+    if isinstance(value, list):
+        if value and all(isinstance(v, (int, float)) and not isinstance(v, bool) or v is None for v in value) \
+                and any(v is not None for v in value):
+            return _np.array([_np.nan if v is None else v for v in value], dtype=float)
+        if value and all(isinstance(v, list) and v and all(isinstance(x, (int, float)) and not isinstance(x, bool)
+                                                             for x in v) for v in value) \
+                and len({len(v) for v in value}) == 1:
+            return _np.array(value, dtype=float)
+        return [_arrays(v) for v in value]
+    return value
+
+
+def load(path):
+    """Reads any result file trueaxis writes (its "kind" says which) after checking it with the
+    reader of its kind (a bad file raises trueaxis.Error naming file:line:col). Returns a Result:
+    the file's keys, with lists of numbers as numpy arrays (null as NaN); save() writes the same
+    file back."""
+    import json as _json
+
+    path = _os.fspath(path)
+    _trueaxis._load(path)
+    with open(path, encoding="utf-8") as f:
+        text = f.read()
+    out = Result(_arrays(_json.loads(text)))
+
+    def write(target):
+        with open(target, "w", encoding="utf-8") as f:
+            f.write(text)
+
+    out._save = write
+    return out
+
+
 def _friendly(fn, method=False):
     """`fn` taking pathlib paths and pandas tables, and naming a misspelt keyword in one line."""
     overloads = _signatures(fn)
@@ -88,7 +159,7 @@ def _friendly(fn, method=False):
         args = [a if i < first else _plain(a, names[i - first] if i - first < len(names) else None)
                 for i, a in enumerate(args)]
         kwargs = {k: _plain(v, k) for k, v in kwargs.items()}
-        return fn(*args, **kwargs)
+        return _result(fn(*args, **kwargs))
 
     return call
 
@@ -111,6 +182,9 @@ for _name in dir(_trueaxis):
 __all__ = [
     "Error",
     "ErrorMap",
+    "Result",
+    "load",
+    "save",
     "Machine",
     "analyze_layout",
     "ballgauge",

@@ -215,16 +215,48 @@ std::size_t second_key_position(const std::string& text) {
 
 // nlohmann's message with the input it quotes ("last read: '...'") cut to a few dozen
 // characters: a malformed file must not be echoed whole.
+// The JSON parser's message in words: what was found where, and what was expected there
+// (nlohmann's "[json.exception.parse_error.101] parse error at line 1, column 7: syntax error
+// while parsing value - invalid literal; last read: 'I'" becomes "'I' is not a JSON value").
 std::string short_message(const std::string& what) {
-  const std::string key = "last read: '";
-  const std::size_t at = what.find(key);
-  if (at == std::string::npos) return detail::quote_cut(what, 200);
-  const std::size_t from = at + key.size();
-  const std::size_t to = what.rfind('\'');
-  const std::string quoted =
-      to != std::string::npos && to > from ? what.substr(from, to - from) : what.substr(from);
-  return what.substr(0, from) + detail::quote_cut(quoted) + "'" +
-         (to != std::string::npos && to > from ? what.substr(to + 1) : "");
+  std::string m = what;
+  if (const std::size_t colon = m.find(": ");
+      m.rfind("[json.exception.", 0) == 0 && colon != std::string::npos)
+    m = m.substr(colon + 2);
+  if (const std::size_t dash = m.find(" - ");
+      m.rfind("syntax error while parsing", 0) == 0 && dash != std::string::npos)
+    m = m.substr(dash + 3);
+  std::string read;
+  const std::string key = "; last read: '";
+  if (const std::size_t at = m.find(key); at != std::string::npos) {
+    const std::size_t from = at + key.size();
+    std::size_t to = m.find("'; ", from);
+    if (to == std::string::npos) to = m.rfind('\'');
+    if (to == std::string::npos || to < from) to = m.size();
+    read = m.substr(from, to - from);
+    m = m.substr(0, at) + (to + 1 < m.size() ? m.substr(to + 1) : "");
+  }
+  const auto replace = [&m](const std::string& from, const std::string& to) {
+    if (const std::size_t at = m.find(from); at != std::string::npos)
+      m.replace(at, from.size(), to);
+  };
+  replace("invalid literal",
+          "not a JSON value (a number, \"text\", true, false, null, {...} or [...])");
+  replace("unexpected end of input", "the text ends before the JSON does (a '}' or ']' missing?)");
+  replace("unexpected string literal",
+          "unexpected text in double quotes (a ',' missing before it?)");
+  replace("; expected string literal", "; expected a key in double quotes");
+  replace("expected '[', '{', or a literal", "expected a value");
+  replace("invalid string: control character",
+          "a line break or control character inside a string:");
+  // The last token read: what stood where a value was expected ("tru" of '"a": tru}').
+  if (const std::size_t cut = read.find_last_of("{[,: ");
+      cut != std::string::npos && cut + 1 < read.size())
+    read = read.substr(cut + 1);
+  while (read.size() > 1 && (read.back() == '}' || read.back() == ']')) read.pop_back();
+  if (!read.empty() && m.rfind("the text ends", 0) != 0)
+    return fmt::format("'{}': {}", detail::quote_cut(read), m);
+  return detail::quote_cut(m, 200);
 }
 
 }  // namespace

@@ -46,6 +46,22 @@ TEST(JsonFile, TypedAccessErrorsNameThePathAndPosition) {
             }).rfind("s.json:2:9: invalid JSON", 0),
             0u);
   EXPECT_THROW(JsonFile::read("/nonexistent.json"), Error);
+  // The parser's own wording is put into words: what was found, what was expected.
+  const std::pair<const char*, const char*> cases[] = {
+      {"ISO-10303-21;", "b.json:1:1: invalid JSON: 'I': not a JSON value"},
+      {"{\"a\": tru}", "b.json:1:10: invalid JSON: 'tru': not a JSON value"},
+      {"{\"a\": 1", "b.json:1:8: invalid JSON: the text ends before the JSON does"},
+      {"{\"a\": 1 \"b\": 2}",
+       "b.json:1:11: invalid JSON: unexpected text in double quotes (a ',' "
+       "missing before it?)"},
+      {"{\"a\": 1,}", "b.json:1:9: invalid JSON: unexpected '}'; expected a key in double quotes"},
+  };
+  for (const auto& [text, expect] : cases) {
+    const std::string m = err([&] { JsonFile::parse(text, "b.json"); });
+    EXPECT_EQ(m.rfind(expect, 0), 0u) << m;
+    EXPECT_EQ(m.find("json.exception"), std::string::npos) << m;
+    EXPECT_EQ(m.find("last read"), std::string::npos) << m;
+  }
 }
 
 // A repeated key is refused where it repeats (nlohmann kept the last copy silently, and a
