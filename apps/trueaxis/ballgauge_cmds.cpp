@@ -80,9 +80,12 @@ int run_calibrate(const CalArgs& a) {
   if (!a.report.empty()) {
     report::write(
         a.report,
-        report::render("trueaxis ball-gauge map",
-                       {report::ballgauge_section("Error-vector map", r, pr ? &*pr : nullptr)},
-                       4000, cli::report_meta()));
+        report::render(
+            "trueaxis ball-gauge map",
+            {from_file(report::ballgauge_section("CMM error map from ball-gauge placements", r,
+                                                 pr ? &*pr : nullptr),
+                       a.measurements)},
+            4000, cli::report_meta()));
     if (!a.quiet) fmt::print("wrote {}\n", a.report);
   }
   if (!r.grid && r.frames > 1)
@@ -176,9 +179,12 @@ int run_verify(const VerifyArgs& a) {
   if (!a.report.empty()) {
     report::write(
         a.report,
-        report::render("trueaxis length verification",
-                       {report::lengths_section("Gauge blocks", results, mpe ? &*mpe : nullptr)},
-                       4000, cli::report_meta()));
+        report::render(
+            "trueaxis length verification",
+            {from_file(report::lengths_section("Gauge-block verification (ISO 10360-2 positions)",
+                                               results, mpe ? &*mpe : nullptr),
+                       a.input)},
+            4000, cli::report_meta()));
     if (!a.quiet) fmt::print("wrote {}\n", a.report);
   }
   return 0;

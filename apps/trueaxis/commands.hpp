@@ -18,9 +18,10 @@ struct Machine;
 namespace trueaxis::map {
 struct ErrorMap;
 }
-
 #include <Eigen/Core>
 #include <utility>
+
+#include "trueaxis/report/html.hpp"
 
 namespace trueaxis::cli {
 
@@ -52,6 +53,9 @@ struct Command {
 void add_meta_option(CLI::App* command);
 // The pairs given, in order.
 std::vector<std::pair<std::string, std::string>> report_meta();
+
+// The section of a report made from `path`: `section` with the file's name as its source.
+report::Section from_file(report::Section section, const std::string& path);
 
 // Refuses the first point outside the map at its place in the input CSV (file:line:col, the
 // point counted from 1), naming --clamp. Used before correcting or compensating.

@@ -244,6 +244,13 @@ CLI::Validator existing_directory() {
       "DIR");
 }
 
+report::Section from_file(report::Section section, const std::string& path) {
+  std::string p = path;
+  while (p.size() > 1 && p.back() == '/') p.pop_back();  // a directory: its own name ("plate")
+  section.source = std::filesystem::path(p).filename().string();
+  return section;
+}
+
 std::string missing_input() {
   return missing_inputs().empty() ? std::string() : missing_inputs().front();
 }

@@ -33,9 +33,12 @@ int run_guideway(const GuidewayArgs& a) {
   const guideway::Result r = guideway::solve(g.layout, sp.s, sp.spots, o);
   io::write_guideway_result(a.output, r);
   if (!a.report.empty())
-    report::write(a.report,
-                  report::render("trueaxis guideway report", {report::guideway_section(a.input, r)},
-                                 4000, cli::report_meta()));
+    report::write(
+        a.report,
+        report::render(
+            "trueaxis guideway report",
+            {from_file(report::guideway_section("Five motion errors of a guideway", r), a.input)},
+            4000, cli::report_meta()));
   if (!r.layout.message.empty())
     std::fprintf(stderr, "trueaxis guideway: %s\n", r.layout.message.c_str());
   if (!a.quiet)

@@ -61,11 +61,12 @@ int cmd_separate(const SeparateArgs& a) {
   io::write_result(a.output, r);
   if (!a.csv.empty()) io::write_result_csv(a.csv, r);
   if (!a.report.empty())
-    report::write(a.report,
-                  report::render("trueaxis straightness report",
-                                 {report::separation_section(
-                                     std::filesystem::path(a.input).filename().string(), r)},
-                                 4000, cli::report_meta()));
+    report::write(a.report, report::render(
+                                "trueaxis straightness report",
+                                {cli::from_file(report::separation_section(
+                                                    "Straightness of a workpiece and its guide", r),
+                                                a.input)},
+                                4000, cli::report_meta()));
   if (!a.quiet)
     fmt::print("{}wrote {}{}{}\n", r.summary(), a.output, a.csv.empty() ? "" : ", " + a.csv,
                a.report.empty() ? "" : ", " + a.report);
@@ -103,12 +104,6 @@ struct SurfaceArgs {
   bool quiet = false;
 };
 
-// The name a report gives an input: its file name, or a directory's own name ("plate/").
-std::string display_name(std::string path) {
-  while (path.size() > 1 && path.back() == '/') path.pop_back();
-  return std::filesystem::path(path).filename().string();
-}
-
 int cmd_surface(const SurfaceArgs& a) {
   surface::Result r;
   if (!a.moody.empty()) {
@@ -124,11 +119,11 @@ int cmd_surface(const SurfaceArgs& a) {
   }
   io::write_surface(a.output, r);
   if (!a.report.empty())
-    report::write(a.report,
-                  report::render("trueaxis surface report",
-                                 {report::surface_section(
-                                     display_name(a.moody.empty() ? a.lines : a.moody), r)},
-                                 4000, cli::report_meta()));
+    report::write(a.report, report::render(
+                                "trueaxis surface report",
+                                {cli::from_file(report::surface_section("Flatness of a surface", r),
+                                                a.moody.empty() ? a.lines : a.moody)},
+                                4000, cli::report_meta()));
   if (!a.quiet)
     fmt::print("{}wrote {}{}\n", r.summary(), a.output,
                a.report.empty() ? "" : fmt::format(" and {}", a.report));
@@ -143,35 +138,41 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
   report::Section section;
   if (kind == "separation") {
     title = "trueaxis straightness report";
-    section = report::separation_section(name, io::read_result(input));
+    section = report::separation_section("Straightness of a workpiece and its guide",
+                                         io::read_result(input));
   } else if (kind == "surface") {
     title = "trueaxis surface report";
-    section = report::surface_section(name, io::read_surface(input));
+    section = report::surface_section("Flatness of a surface", io::read_surface(input));
   } else if (kind == "space") {
     title = "trueaxis error space report";
     std::optional<surface::Verification> v;
     const surface::SpaceResult s = io::read_space(input, &v);
-    section = report::space_section(name, s, v ? &*v : nullptr);
+    section = report::space_section("Error space of a machine", s, v ? &*v : nullptr);
   } else if (kind == "guideway") {
     title = "trueaxis guideway report";
-    section = report::guideway_section(name, io::read_guideway_result(input));
+    section = report::guideway_section("Five motion errors of a guideway",
+                                       io::read_guideway_result(input));
   } else if (kind == "positioning") {
     title = "trueaxis positioning report";
     const io::PositioningFile f = io::read_positioning_result(input);
-    section = report::positioning_section(name, f.result, f.standard, f.verdicts);
+    section = report::positioning_section("Positioning accuracy of a linear axis", f.result,
+                                          f.standard, f.verdicts);
   } else if (kind == "ballgauge map") {
     title = "trueaxis ball-gauge map";
-    section = report::ballgauge_section(name, io::read_ballgauge_map(input));
+    section = report::ballgauge_section("CMM error map from ball-gauge placements",
+                                        io::read_ballgauge_map(input));
   } else if (kind == "length verification") {
     title = "trueaxis length verification";
-    section = report::lengths_section(name, io::read_length_verification(input));
+    section = report::lengths_section("Gauge-block verification (ISO 10360-2 positions)",
+                                      io::read_length_verification(input));
   } else if (kind == "fit") {
     title = "trueaxis fit report";
-    section = report::fit_section(name, io::read_fit(input));
+    section = report::fit_section("Fit of a geometric element", io::read_fit(input));
   } else if (kind == "scan") {
     title = "trueaxis scanning report";
     const auto f = io::read_scan(input);
-    section = report::scan_section(name, f.result, f.result.planned, f.tolerance);
+    section =
+        report::scan_section("Error-tolerant scanning", f.result, f.result.planned, f.tolerance);
   } else {
     throw Error(fmt::format("{}: a '{}' file has no report of its own{}", input, kind,
                             kind == "parametric model"
@@ -179,7 +180,8 @@ int cmd_report(const std::string& input, const std::string& output, bool quiet) 
                                   "model.json --report map.html')"
                                 : ""));
   }
-  report::write(output, report::render(title, {section}, 4000, cli::report_meta()));
+  report::write(output,
+                report::render(title, {cli::from_file(section, input)}, 4000, cli::report_meta()));
   if (!quiet) fmt::print("wrote {} ({})\n", output, kind);
   return 0;
 }

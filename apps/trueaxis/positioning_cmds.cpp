@@ -138,9 +138,10 @@ int run_positioning(const PositioningArgs& a) {
   io::write_positioning_result(a.output, r, standard, verdicts);
   if (!a.report.empty())
     report::write(a.report, report::render("trueaxis positioning report",
-                                           {report::positioning_section(
-                                               std::filesystem::path(source).filename().string(), r,
-                                               standard, verdicts)},
+                                           {from_file(report::positioning_section(
+                                                          "Positioning accuracy of a linear axis",
+                                                          r, standard, verdicts),
+                                                      source)},
                                            4000, cli::report_meta()));
   bool pass = true;
   std::string failed;

@@ -111,11 +111,13 @@ int run_scan(ScanArgs& a) {
           true_part.back() = ps.space_curve() ? sim::true_space_curve(*part, ps).points()
                                               : sim::true_contour(*part, ps).points();
     }
-    report::write(a.report,
-                  report::render("trueaxis scanning report",
-                                 {report::scan_section(a.design, r, r.planned, a.o.tolerance,
-                                                       truth_um, true_part)},
-                                 4000, report_meta()));
+    report::write(
+        a.report,
+        report::render("trueaxis scanning report",
+                       {from_file(report::scan_section("Error-tolerant scanning", r, r.planned,
+                                                       a.o.tolerance, truth_um, true_part),
+                                  a.design)},
+                       4000, report_meta()));
   }
   if (!a.quiet) {
     if (remote)

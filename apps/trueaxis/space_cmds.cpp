@@ -50,9 +50,11 @@ int run_space(const SpaceArgs& a) {
   io::write_space(a.output, s, plan, v);
   if (!a.csv.empty()) io::write_map_csv(a.csv, s.map);
   if (!a.report.empty())
-    report::write(a.report, report::render("trueaxis error space report",
-                                           {report::space_section(a.output, s, v ? &*v : nullptr)},
-                                           4000, cli::report_meta()));
+    report::write(
+        a.report,
+        report::render("trueaxis error space report",
+                       {report::space_section("Error space of a machine", s, v ? &*v : nullptr)},
+                       4000, cli::report_meta()));
   if (!a.quiet) {
     fmt::print("{}", s.summary());
     if (v) {

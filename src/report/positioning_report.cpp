@@ -127,15 +127,18 @@ Section positioning_section(const std::string& title, const positioning::Result&
   if (vdi) {
     p.title = fmt::format("mean position x̄ with ±(U + Ps)/2 — P = {}, Pa = {}, Ps = {}, U = {}",
                           um_text(r.vdi.P), um_text(r.vdi.Pa), um_text(r.vdi.Ps), um_text(r.vdi.U));
-    p.series.push_back({"x̄ ± (U + Ps)/2", mean, bm, "#444444", false});
+    p.series.push_back({"x̄ ± (U + Ps)/2", mean, bm, "#444444", false, false,
+                        "x̄ ± (U + Ps)/2 (VDI/DGQ 3441's spread about the mean position)"});
     if (r.has_up) p.series.push_back({"x̄↑", up, {}, "#1f77b4", true});
     if (r.has_down) p.series.push_back({"x̄↓", down, {}, "#d62728", true});
   } else {
     p.title = fmt::format("mean deviations with ±2s — A = {}, E = {}, M = {}, R = {}, B = {}",
                           um_text(r.iso.A), um_text(r.iso.E), um_text(r.iso.M), um_text(r.iso.R),
                           um_text(r.iso.B));
-    if (r.has_up) p.series.push_back({"x̄↑ ± 2s↑", up, bu, "#1f77b4", false});
-    if (r.has_down) p.series.push_back({"x̄↓ ± 2s↓", down, bd, "#d62728", false});
+    const char* two_s =
+        "x̄ ± 2s (ISO 230-2: twice the standard deviation of the readings at a target)";
+    if (r.has_up) p.series.push_back({"x̄↑ ± 2s↑", up, bu, "#1f77b4", false, false, two_s});
+    if (r.has_down) p.series.push_back({"x̄↓ ± 2s↓", down, bd, "#d62728", false, false, two_s});
     if (r.has_up && r.has_down)
       p.series.push_back({"x̄ (bidirectional mean)", mean, {}, "#444444", true});
   }

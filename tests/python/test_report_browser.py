@@ -100,7 +100,10 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     assert re.search(r"<th>date</th><td>\d{4}-\d\d-\d\d", dom)
     assert "k = 2" in dom
     links = re.findall(r'<a class="csv" download="([^"]+)" href="data:text/csv', dom)
-    assert "gauge-blocks-table.csv" in links and len(links) == 2, links
+    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 2, links
+    # The section is titled by what it shows, and names the data it was made from.
+    assert "<h2>Gauge-block verification (ISO 10360-2 positions)</h2>" in dom
+    assert '<p class="source">Data: l.csv</p>' in dom
     assert "<h2>References</h2>" in dom and "ISO 10360-2:2009" in dom
 
 
@@ -148,3 +151,18 @@ def test_positioning_report_renders(tmp_path):
         assert "mean deviations with ±2s" in dom and "every reading" in dom
         assert ">FAIL<" in dom and ">pass<" in dom  # B and A against their tolerances
         assert "ISO 230-2:2014" in dom and "corrected to 20 °C" in dom
+        # The page says what its shaded bands are (ISO 230-2's ±2s here, not uncertainties), and
+        # the bands' edges are not legend entries of their own.
+        assert "Shaded bands: x̄ ± 2s (ISO 230-2" in dom and "standard uncertainties" not in dom
+        edges = re.findall(r'<tr class="u-series"[^>]*>(?:(?!</tr>).)*?edge', dom, re.S)
+        assert edges and all('display: none' in e for e in edges), edges
+        assert "<h2>Positioning accuracy of a linear axis</h2>" in dom
+    # Printable: the print stylesheet hides what only a screen uses; Chromium prints it to PDF.
+    text = open(h, encoding="utf-8").read()
+    assert "@media print{" in text and ".screen," in text
+    pdf = tmp_path / "p.pdf"
+    subprocess.run([chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                    f"--user-data-dir={tmp_path / 'profile-pdf'}", "--virtual-time-budget=5000",
+                    f"--print-to-pdf={pdf}", f"file://{h}"], capture_output=True, timeout=120)
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b", data)) >= 1

@@ -20,10 +20,12 @@ namespace trueaxis::report {
 struct Series {
   std::string label;
   Eigen::VectorXd y;
-  Eigen::VectorXd band;  // optional: half-width of a shaded band around y (same unit)
+  Eigen::VectorXd band;  // optional: the band is y ± 2·band (same unit), shaded
   std::string color;     // CSS colour; empty: automatic
   bool dashed = false;
   bool points = false;  // markers only, no line (a scatter plot; x need not be distinct)
+  // What the shaded band is, for the page's note (said once per kind of band).
+  std::string band_meaning = "±2 standard uncertainties (about 95 %)";
 };
 
 struct Plot {
@@ -92,8 +94,9 @@ struct PlaneView {
 };
 
 struct Section {
-  std::string title;
-  std::string intro_html;                       // trusted HTML (escape user text!)
+  std::string title;       // what the section shows ("Positioning accuracy of a linear axis")
+  std::string source;      // the data it was made from (a file's name), shown under the title
+  std::string intro_html;  // trusted HTML (escape user text!)
   std::vector<std::string> warnings;            // plain text, shown prominently before the intro
   std::vector<std::string> references;          // sources the section's methods follow (text)
   std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
