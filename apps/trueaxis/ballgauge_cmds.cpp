@@ -343,7 +343,7 @@ int run_simulate(const SimArgs& a) {
     const auto gb = sim::simulate_gauge_blocks(m, go);
     io::write_lengths(a.lengths, gb.lengths);
     if (!a.quiet)
-      fmt::print("simulated {} gauge-block measurements in 7 positions: wrote {}\n",
+      fmt::print("simulated {} gauge-block measurements in ISO 10360-2's 7 positions: wrote {}\n",
                  gb.lengths.size(), a.lengths);
   }
   if (!a.quiet)

@@ -190,7 +190,7 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
 
 std::string LengthVerification::summary() const {
   std::string s = fmt::format(
-      "length verification, {} correction: {} lengths in {} positions\n"
+      "length verification, {} correction: {} lengths in {} set-ups (a gauge at one place)\n"
       "  before: {:+.2f} ... {:+.2f} µm (range {:.2f}), mean {:+.2f}, RMS {:.2f} µm\n"
       "  after:  {:+.2f} ... {:+.2f} µm (range {:.2f}), mean {:+.2f}, RMS {:.2f} µm\n",
       correction, rows.size(), positions, before.min * 1e3, before.max * 1e3, before.range() * 1e3,

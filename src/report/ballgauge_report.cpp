@@ -116,18 +116,23 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
                        std::to_string(p.shared), um_2f(p.registration_rms),
                        p.given_centres < p.balls ? um_2f(p.diameter_error_max) : "centres given"});
   if (pr) {
-    s.table.push_back({"parametric model (residual RMS, σ)", fmt::format("degree {}", pr->degree),
-                       std::to_string(pr->balls), fmt::format("rank {}/{}", pr->rank, pr->unknowns),
-                       um_2f(pr->residual_rms), "σ " + um_2f(pr->sigma)});
+    // The parametric model and the squareness it gives have their own tables and headers.
+    s.more_tables.push_back(
+        {"Parametric model: the 21 rigid-body error functions fitted to every placement",
+         {{"degree", "balls", "rank / unknowns", "residual RMS (µm)", "σ of a centre (µm)"},
+          {std::to_string(pr->degree), std::to_string(pr->balls),
+           fmt::format("{} / {}", pr->rank, pr->unknowns), um_2f(pr->residual_rms),
+           um_2f(pr->sigma)}}});
     // Squareness as ISO 230-1 defines it (the angles between the axes' reference lines at the
     // tool point), with U = 2u from the parameter covariance.
     const char* names[3] = {"EC0Y", "EB0Z", "EA0Z"};
     const double values[3] = {pr->iso.lines.c0y, pr->iso.lines.b0z, pr->iso.lines.a0z};
     const double u[3] = {pr->iso.u_c0y, pr->iso.u_b0z, pr->iso.u_a0z};
+    std::vector<std::vector<std::string>> sq = {{"error", "value (µrad)", "U (µrad, k = 2)"}};
     for (int i = 0; i < 3; ++i)
-      s.table.push_back({fmt::format("squareness {} (ISO 230-1)", names[i]),
-                         fmt::format("{:.2f} µrad", values[i] * 1e6),
-                         fmt::format("U = {:.2f} µrad (k = 2)", 2e6 * u[i]), "", "", ""});
+      sq.push_back(
+          {names[i], fmt::format("{:.2f}", values[i] * 1e6), fmt::format("{:.2f}", 2e6 * u[i])});
+    s.more_tables.push_back({"Squareness of the axes (ISO 230-1)", std::move(sq)});
   }
   if (pr) parametric_curves(*pr, s);
   if (r.grid) {
@@ -154,7 +159,8 @@ Section lengths_section(const std::string& title,
   if (results.empty()) return s;
   const auto& first = results.front();
   s.intro_html = fmt::format(
-      "<p>{} calibrated lengths in {} positions (repeats: same nominal, same end points). "
+      "<p>{} calibrated lengths in {} set-ups (a gauge length at one place; repeats have the "
+      "same nominal and end points). "
       "Length error = measured − nominal, before and after correction, against the nominal "
       "length (as in Oya et al. 1988, figure 10). Expected after correction: the repeatability of "
       "the "
@@ -175,17 +181,19 @@ Section lengths_section(const std::string& title,
             : fmt::format("{} (repeatability {} ⊕ u {})", um_2f(v.predicted_after),
                           um_2f(v.repeatability), um_2f(v.correction_u_rms)));
   if (mpe) {
-    s.table.push_back({"", "", "", "", "", "", ""});
+    // The E0 verdicts: a table of their own, under headers that fit them.
+    std::vector<std::vector<std::string>> e0 = {
+        {"E0", "verdict", "lengths beyond the MPE", "worst (% of the MPE)"}};
     auto verdict = [&](const std::string& name, const std::vector<ballgauge::LengthRow>& rows,
                        bool after) {
       const auto c = ballgauge::check_mpe(rows, *mpe, after);
-      s.table.push_back({fmt::format("E0 {} against MPE {} µm", name, mpe->text),
-                         c.pass() ? "PASS" : "FAIL",
-                         fmt::format("{} of {} beyond", c.failed, c.lengths),
-                         fmt::format("worst {:.0f} % of MPE", 100 * c.worst_ratio), "", "", ""});
+      e0.push_back({name, c.pass() ? "PASS" : "FAIL", fmt::format("{} of {}", c.failed, c.lengths),
+                    fmt::format("{:.0f}", 100 * c.worst_ratio)});
     };
     verdict("before correction", first.rows, false);
     for (const auto& v : results) verdict("after, " + v.correction, v.rows, true);
+    s.more_tables.push_back(
+        {fmt::format("E0 against the MPE {} µm (ISO 10360-2, L in mm)", mpe->text), std::move(e0)});
   }
   // Scatter: rows sorted by nominal length (uPlot wants x ascending; equal x are fine).
   std::vector<std::size_t> order(first.rows.size());

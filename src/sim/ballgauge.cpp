@@ -87,7 +87,7 @@ std::vector<GaugePose> stacked_poses(const ballgauge::Gauge& gauge, int sections
   std::vector<GaugePose> p;
   for (int k = 0; k < sections; ++k) {
     GaugePose q;
-    q.name = fmt::format("section {}", k + 1);
+    q.name = fmt::format("placement {}", k + 1);
     q.alignment = k == 0 ? ballgauge::Alignment::ThreeTwoOne : ballgauge::Alignment::Stitch;
     q.rotation = rotation;
     q.translation = origin + rotation * Eigen::Vector3d(0, 0, height * k);

@@ -198,7 +198,7 @@ TEST(Parametric, RefusalsNameTheProblem) {
   few[1].balls.resize(2);
   EXPECT_NE(error_of([&] {
               ballgauge::identify(g, few, options(m));
-            }).find("section 2: 2 balls; a placement needs at least 3"),
+            }).find("placement 2: 2 balls; a placement needs at least 3"),
             std::string::npos);
   few = pl;
   few[0].balls[4].points.conservativeResize(3, 4);

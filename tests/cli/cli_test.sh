@@ -266,7 +266,7 @@ expect_err "bg-out.csv:3:1: point 2 (900.000, 250.000, 150.000) mm is outside" "
 expect_ok "$T" simulate ballgauge --alignment ls --noise 0.3 --gauge bg-gauge.json --measurements bg-ls.json --truth bg-truth.csv
 grep -q '"alignment": "ls"' bg-ls.json && ok || bad "simulate ballgauge --alignment ls"
 expect_ok "$T" ballgauge --gauge bg-gauge.json --measurements bg-ls.json --output bg-ls-map.json
-grep -q "section 1      ls " out.txt && ok || bad "ballgauge with the least-squares alignment"
+grep -q "placement 1    ls " out.txt && ok || bad "ballgauge with the least-squares alignment"
 sed 's/"index": 7,/"index": 70,/' bg-meas.json > bg-bad.json
 expect_err "bg-bad.json:[0-9]*:[0-9]*: ball index 70 is not in the gauge" "$T" ballgauge --gauge bg-gauge.json --measurements bg-bad.json --output o.json
 
@@ -313,7 +313,7 @@ printf 'x,y,z\n300,250,300\n' > bg-cmd.csv
 expect_ok "$T" machine error bg-model.json bg-cmd.csv -o bg-model-err.csv
 [ "$(wc -l <bg-model-err.csv)" -eq 2 ] && ok || bad "the parametric model is a machine.json"
 expect_ok "$T" verify-lengths --map bg-ls-map.json --model bg-model.json -i bg-lengths.csv -o bg-verify.json --report bg-verify.html
-grep -q "length verification, grid correction: 105 lengths in 35 positions" out.txt && grep -q "parametric correction" out.txt && grep -q '"expected_after_rms"' bg-verify.json && grep -q "figure 10" bg-verify.html && ok || bad "verify-lengths"
+grep -q "length verification, grid correction: 105 lengths in 35 set-ups (a gauge at one place)" out.txt && grep -q "parametric correction" out.txt && grep -q '"expected_after_rms"' bg-verify.json && grep -q "figure 10" bg-verify.html && ok || bad "verify-lengths"
 expect_err "needs --map" "$T" verify-lengths -i bg-lengths.csv -o o.json
 printf 'x1,y1,z1,x2,y2,z2,nominal\n200,200,200,300,200,200,100\n200,200,200,300,200,200,0\n' > bg-badlen.csv
 expect_err "bg-badlen.csv:3:[0-9]*: nominal length 0 mm: must be > 0" "$T" verify-lengths --map bg-ls-map.json -i bg-badlen.csv -o o.json
@@ -429,8 +429,8 @@ ls race.json.partial-* >/dev/null 2>&1 && bad "temporary files left behind" || o
 python3 -c "
 import json; d = json.load(open('bg-meas.json')); d['placements'][1]['balls'][7]['points'][3][0] += 11000
 json.dump(d, open('bg-wrong.json', 'w'))"
-expect_err "section 2: ball [0-9]*: point 4 is .* mm off the sphere" "$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json
-"$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json --drop-outliers >out.txt 2>err.txt && grep -q "warning: bg-wrong.json: section 2: ball [0-9]*: point 4 is" err.txt && ok || bad "--drop-outliers: $(cat err.txt)"
+expect_err "placement 2: ball [0-9]*: point 4 is .* mm off the sphere" "$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json
+"$T" ballgauge --gauge bg-gauge.json --measurements bg-wrong.json --output o.json --drop-outliers >out.txt 2>err.txt && grep -q "warning: bg-wrong.json: placement 2: ball [0-9]*: point 4 is" err.txt && ok || bad "--drop-outliers: $(cat err.txt)"
 
 # One grammar: flags like every other command, --report wherever a result is written.
 expect_ok "$T" machine error --machine machine.json --input bg-cmd.csv -o me-flags.csv

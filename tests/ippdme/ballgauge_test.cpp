@@ -151,7 +151,7 @@ TEST(BallGaugeOverIpp, AGaugeNotWhereItsPoseSaysIsNamed) {
     sim::measure_ballgauge(c.gauge, c.poses, c.options,
                            ball_probe(cmm, sim::gauge_balls(c.gauge, c.poses)));
   });
-  EXPECT_NE(err.find("section 1 ball 0: no surface within 3 mm"), std::string::npos) << err;
+  EXPECT_NE(err.find("placement 1 ball 0: no surface within 3 mm"), std::string::npos) << err;
 }
 
 TEST(BallGaugeOverIpp, BadProbingOptionsAreRefused) {

@@ -100,7 +100,17 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     assert re.search(r"<th>date</th><td>\d{4}-\d\d-\d\d", dom)
     assert "k = 2" in dom
     links = re.findall(r'<a class="csv" download="([^"]+)" href="data:text/csv', dom)
-    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 2, links
+    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 3, links
+    # Every cell stands under a header that fits it: the E0 verdicts have a table of their own.
+    e0 = re.search(r"<h3>E0 against the MPE 1.5\+L/300 µm[^<]*</h3><table>(.*?)</table>", dom, re.S)
+    assert e0, "no E0 table"
+    rows = [re.findall(r"<t[hd]>([^<]*)</t[hd]>", r) for r in re.findall(r"<tr>(.*?)</tr>", e0.group(1))]
+    assert rows[0] == ["E0", "verdict", "lengths beyond the MPE", "worst (% of the MPE)"], rows
+    assert rows[1][0] == "before correction" and rows[1][1] in ("PASS", "FAIL"), rows
+    assert re.fullmatch(r"\d+ of 105", rows[1][2]) and re.fullmatch(r"\d+", rows[1][3]), rows
+    stats = re.search(r"<h2>Gauge-block verification[^<]*</h2>.*?<table>(.*?)</table>", dom, re.S)
+    assert "PASS" not in stats.group(1) and "FAIL" not in stats.group(1)
+    assert "105 calibrated lengths in 35 set-ups" in dom
     # The section is titled by what it shows, and names the data it was made from.
     assert "<h2>Gauge-block verification (ISO 10360-2 positions)</h2>" in dom
     assert '<p class="source">Data: l.csv</p>' in dom
@@ -166,3 +176,26 @@ def test_positioning_report_renders(tmp_path):
                     f"--print-to-pdf={pdf}", f"file://{h}"], capture_output=True, timeout=120)
     data = pdf.read_bytes()
     assert data.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b", data)) >= 1
+
+
+def test_ballgauge_map_tables_hold_only_what_their_headers_say(tmp_path):
+    g, m, t, mp, mo, h = (str(tmp_path / n) for n in ("g.json", "m.json", "t.csv", "map.json",
+                                                      "model.json", "map.html"))
+    subprocess.run([TRUEAXIS, "simulate", "ballgauge", "--noise", "0.3", "--alignment", "ls",
+                    "--gauge", g, "-o", m, "--truth", t, "-q"], check=True)
+    subprocess.run([TRUEAXIS, "ballgauge", "--gauge", g, "--measurements", m, "-o", mp,
+                    "--parametric", mo, "--stylus-offset", "0,0,-100", "--report", h, "-q"],
+                   check=True)
+    dom = dump_dom(h, tmp_path)
+    assert 'data-script-errors="' not in dom
+    tables = re.findall(r"(?:<h3>([^<]*)</h3>)?<table>(.*?)</table>", dom, re.S)
+    cells = {cap: [re.findall(r"<t[hd]>([^<]*)</t[hd]>", r) for r in re.findall(r"<tr>(.*?)</tr>", body)]
+             for cap, body in tables}
+    placements = next(rows for rows in cells.values() if rows and rows[0][0] == "placement")
+    assert [r[0] for r in placements[1:]] == ["placement 1", "placement 2", "placement 3"], placements
+    square = cells["Squareness of the axes (ISO 230-1)"]
+    assert square[0] == ["error", "value (µrad)", "U (µrad, k = 2)"]
+    assert [r[0] for r in square[1:]] == ["EC0Y", "EB0Z", "EA0Z"]
+    assert all(re.fullmatch(r"-?\d+\.\d\d", c) for r in square[1:] for c in r[1:]), square
+    model = next(rows for cap, rows in cells.items() if cap.startswith("Parametric model"))
+    assert model[0][0] == "degree" and re.fullmatch(r"\d+ / \d+", model[1][2]), model

@@ -75,7 +75,10 @@ struct LengthVerification {
   std::string correction;  // Correction::name
   std::vector<LengthRow> rows;
   LengthStats before, after;
-  int positions = 0;            // repeat groups
+  // Set-ups: a gauge length at one place (its end points within the repeat tolerance), measured
+  // once or repeatedly. ISO 10360-2's positions are the lines set-ups lie along: 7 positions × 5
+  // lengths make 35 set-ups.
+  int positions = 0;
   double repeatability = 0;     // mm: pooled standard deviation of repeats (NaN: no repeats)
   double correction_u_rms = 0;  // mm: RMS over rows of the correction's length uncertainty
   double predicted_after = 0;   // mm: sqrt(repeatability² + correction_u_rms²) (NaN: no repeats)
