@@ -4,6 +4,25 @@
 #include "trueaxis/report/guideway.hpp"
 
 namespace trueaxis::report {
+namespace {
+
+// A figure of error j (µm or µrad) to the resolution its PV's uncertainty supports.
+std::string figure(const guideway::Result& r, std::size_t j, double v) {
+  const double sc = j >= 2 ? 1e6 : 1e3;
+  const char* unit = j >= 2 ? "µrad" : "µm";
+  const std::optional<double> U = r.pv_U(j);
+  return U ? fmt::format("{} {}", trueaxis::detail::rounded_to(v * sc, *U * sc), unit)
+           : fmt::format("{:.4g} {}", v * sc, unit);
+}
+
+// The PV of error j as the table and the plot's title state it: "not resolved" when its
+// uncertainty reaches it.
+std::string pv_text(const guideway::Result& r, std::size_t j) {
+  const std::optional<double> U = r.pv_U(j);
+  return U && !*r.resolved(j) ? std::string("not resolved") : figure(r, j, r.pv[j]);
+}
+
+}  // namespace
 
 Section guideway_section(const std::string& title, const guideway::Result& r,
                          const std::array<Eigen::VectorXd, guideway::kErrors>* truth) {
@@ -19,7 +38,7 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
           : "no uncertainty is stated: " + escape(r.no_uncertainty),
       r.layout.message.empty() ? "" : " " + escape(r.layout.message) + ".");
   std::vector<std::string> head{"error", "observable", "PV", "RMS", "U of PV (95 %)", "u (1σ)"};
-  if (truth) head.push_back("max |recovered − true|");
+  if (truth) head.push_back("max |measured − true|");
   s.table.push_back(head);
   for (std::size_t j = 0; j < guideway::kErrors; ++j) {
     const bool angle = j >= 2;
@@ -31,12 +50,8 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
       // A PV the data cannot resolve is not shown as a number; figures to the resolution their
       // uncertainty supports.
       const std::optional<double> U = r.pv_U(j);
-      const auto fig = [&](double v) {
-        return U ? fmt::format("{} {}", trueaxis::detail::rounded_to(v * sc, *U * sc), unit)
-                 : fmt::format("{:.4g} {}", v * sc, unit);
-      };
-      row.push_back(U && !*r.resolved(j) ? std::string("not resolved") : fig(r.pv[j]));
-      row.push_back(fig(r.rms[j]));
+      row.push_back(pv_text(r, j));
+      row.push_back(figure(r, j, r.rms[j]));
       row.push_back(U ? fmt::format("{} {}", trueaxis::detail::two_digits(*U * sc), unit)
                       : std::string("not stated"));
       row.push_back(
@@ -67,7 +82,17 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
     p.x = r.s;
     Eigen::VectorXd band;
     if (r.sigma > 0) band = Eigen::VectorXd::Constant(r.s.size(), r.uncertainty[j] * sc);
-    p.series.push_back({"recovered", r.value[j] * sc, band, "", false});
+    p.series.push_back({"measured", r.value[j] * sc, band, "", false});
+    // Straightness is about the least-squares line (ISO 230-1): its PV and RMS are the profile's
+    // distances from that line, which is drawn with it.
+    const Eigen::VectorXd* straight = j == 0   ? &r.horizontal_straightness
+                                      : j == 1 ? &r.vertical_straightness
+                                               : nullptr;
+    if (straight && straight->size() == r.value[j].size()) {
+      p.series.push_back(
+          {"least-squares line", (r.value[j] - *straight) * sc, {}, "#444444", true});
+      p.title += " — PV about the least-squares line " + pv_text(r, j);
+    }
     if (truth && (*truth)[j].size() == r.value[j].size())
       p.series.push_back({"true", (*truth)[j] * sc, {}, "#d62728", true});
     s.plots.push_back(std::move(p));

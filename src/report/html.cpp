@@ -424,10 +424,10 @@ Section separation_section(const std::string& title, const separation::Result& r
       return a.size() == b.size() ? fmt::format("{:.3g}", (a - b).cwiseAbs().maxCoeff() * 1e3)
                                   : std::string("-");
     };
-    s.table.push_back({"max |recovered − true| workpiece (µm)",
+    s.table.push_back({"max |separated − true| workpiece (µm)",
                        err(r.workpiece.value, truth->workpiece.value), "", "", ""});
     s.table.push_back(
-        {"max |recovered − true| guide (µm)", err(r.guide.value, truth->guide.value), "", "", ""});
+        {"max |separated − true| guide (µm)", err(r.guide.value, truth->guide.value), "", "", ""});
   }
   auto plot = [&](const char* name, const separation::Profile& p, const separation::Profile* t,
                   double scale, const char* unit) {
@@ -436,7 +436,7 @@ Section separation_section(const std::string& title, const separation::Result& r
     pl.x_label = "x (mm)";
     pl.y_label = fmt::format("{} ({})", name, unit);
     pl.x = p.x;
-    Series a{"recovered", p.value * scale,
+    Series a{"separated", p.value * scale,
              p.uncertainty.size() ? Eigen::VectorXd(p.uncertainty * scale) : Eigen::VectorXd(), "",
              false};
     pl.series.push_back(a);

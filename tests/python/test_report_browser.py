@@ -199,3 +199,20 @@ def test_ballgauge_map_tables_hold_only_what_their_headers_say(tmp_path):
     assert all(re.fullmatch(r"-?\d+\.\d\d", c) for r in square[1:] for c in r[1:]), square
     model = next(rows for cap, rows in cells.items() if cap.startswith("Parametric model"))
     assert model[0][0] == "degree" and re.fullmatch(r"\d+ / \d+", model[1][2]), model
+
+
+def test_guideway_straightness_is_drawn_with_the_line_its_pv_is_about(tmp_path):
+    subprocess.run([TRUEAXIS, "examples", "-o", str(tmp_path), "-q"], check=True)
+    spots, out, h = (str(tmp_path / n) for n in ("spots.csv", "g.json", "g.html"))
+    subprocess.run([TRUEAXIS, "simulate", "guideway5d", "--layout", str(tmp_path / "layout.json"),
+                    "--axis", "x", "--noise", "0.2", "-o", spots, "-q"], check=True)
+    subprocess.run([TRUEAXIS, "guideway", "--layout", str(tmp_path / "layout.json"), "--input", spots,
+                    "-o", out, "--report", h, "-q"], check=True)
+    dom = dump_dom(h, tmp_path)
+    assert 'data-script-errors="' not in dom
+    for name in ("horizontal", "vertical"):
+        pv = re.search(rf"<td>{name}</td><td>yes</td><td>([^<]*)</td>", dom).group(1)
+        title = re.search(rf"<h3>{name} straightness[^<]*PV about the least-squares line ([^<]*)</h3>",
+                          dom)
+        assert title and title.group(1) == pv, (name, pv, title and title.group(0))
+    assert dom.count("least-squares line") >= 4  # two titles, two legend entries
