@@ -308,12 +308,13 @@ TEST(Parametric, TheReportDrawsEachAxisErrorsWithBandsAndNamesTheUnseen) {
   EXPECT_EQ(series, 18 - static_cast<int>(r.unobservable.size()));
   EXPECT_NE(s.plots[5].title.find("not determined by the data: ECZ"), std::string::npos)
       << s.plots[5].title;
-  // Squareness in the table, each with U = 2u.
-  int squareness = 0;
-  for (const auto& row : s.table)
-    if (row[0].rfind("squareness", 0) == 0) {
-      ++squareness;
-      EXPECT_NE(row[2].find("U = "), std::string::npos);
-    }
-  EXPECT_EQ(squareness, 3);
+  // Squareness in a table of its own, each with U = 2u under the header that says so; the
+  // placement table holds placements only.
+  for (const auto& row : s.table) EXPECT_EQ(row[0].rfind("squareness", 0), std::string::npos);
+  const auto sq = std::find_if(s.more_tables.begin(), s.more_tables.end(),
+                               [](const auto& t) { return t.first.rfind("Squareness", 0) == 0; });
+  ASSERT_NE(sq, s.more_tables.end());
+  ASSERT_EQ(sq->second.size(), 4u);
+  EXPECT_EQ(sq->second[0][2], "U (µrad, k = 2)");
+  for (std::size_t i = 1; i < 4; ++i) EXPECT_GT(std::stod(sq->second[i][2]), 0) << i;
 }
