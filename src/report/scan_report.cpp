@@ -8,6 +8,42 @@
 #include "trueaxis/sim/cmm.hpp"
 
 namespace trueaxis::report {
+namespace {
+
+// The log's identifiers in words, for a reader of the report (the files keep the identifiers).
+std::string event_words(const std::string& id) {
+  static const std::pair<const char*, const char*> words[] = {
+      {"trajectory_error", "trajectory error"},
+      {"touch", "touch point"},
+      {"correction_applied", "correction applied"},
+      {"correction_rejected", "correction rejected"},
+      {"correction_carried", "correction carried over from another section"},
+      {"autonomous_scan", "autonomous scan"},
+      {"design_overwritten", "design data replaced by the measured contour"},
+      {"rescan", "rescan"},
+      {"section_done", "section done"},
+      {"error_exit", "error exit"},
+      {"loop_limit", "too many autonomous scans"},
+      {"two_dimensional", "the curve lies in a plane"},
+      {"not_reachable", "not reachable"},
+      {"restart", "started again elsewhere"},
+  };
+  for (const auto& [k, w] : words)
+    if (id == k) return w;
+  std::string out = id;
+  for (char& c : out)
+    if (c == '_') c = ' ';
+  return out;
+}
+
+std::string mode_words(const std::string& mode) {
+  if (mode == "design") return "design-value scanning";
+  if (mode == "autonomous") return "autonomous scanning";
+  if (mode == "touch") return "touch";
+  return mode;
+}
+
+}  // namespace
 
 Section scan_section(const std::string& title, const scan::Result& r, const design::Design& design,
                      double tolerance, const std::vector<Eigen::VectorXd>& truth_um,
@@ -34,9 +70,7 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     std::string applied;
     for (const auto& c : sec.corrections)
       if (c.accepted) {
-        applied += (applied.empty() ? "" : "; ") + c.type;
-        for (const auto& [k, v] : c.parameters)
-          if (k.rfind("centre", 0) != 0) applied += fmt::format(" {}={:.5g}", k, v);
+        applied += (applied.empty() ? "" : "; ") + c.type + " " + c.parameters_text();
         if (!c.found_on.empty()) applied += fmt::format(" (found on {})", c.found_on);
       }
     if (applied.empty()) applied = "none";
@@ -208,7 +242,8 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
       {"t (s)", "section", "arc (mm)", "ΔL (mm)", "mode", "event", "decision"}};
   for (const auto& e : r.events)
     ev.push_back({fmt::format("{:.3f}", e.t), e.section, fmt::format("{:.1f}", e.arc),
-                  fmt::format("{:+.3f}", e.delta_l), e.mode, e.event, e.decision});
+                  fmt::format("{:+.3f}", e.delta_l), mode_words(e.mode), event_words(e.event),
+                  e.decision});
   s.more_tables.push_back({"every decision of the flow", std::move(ev)});
   return s;
 }

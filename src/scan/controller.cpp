@@ -15,13 +15,6 @@
 namespace trueaxis::scan {
 namespace {
 
-// A correction's parameter for the log, to what touch points on a CMM resolve: translations to
-// 1 µm, rotations to 1e-4° (0.4"), scale to 1 ppm, directions to 1e-4 (not "dy_mm=-1.09999").
-std::string parameter_text(const std::string& name, double v) {
-  const int decimals = name.find("_mm") != std::string::npos ? 3 : name == "scale" ? 6 : 4;
-  return fmt::format("{}={:.{}f}", name, v, decimals);
-}
-
 // Free moves between touch points keep this much beyond the band the surface is searched in
 // (mm): room for a part that is off its design by more than that band somewhere between them.
 constexpr double kRouteMargin = 2.0;
@@ -632,9 +625,7 @@ struct SectionRun {
     for (const auto& c : part_move) {
       step = c.transform * step;
       r.corrections.push_back(c);
-      std::string params;
-      for (const auto& [k, v] : c.parameters)
-        if (k.rfind("centre", 0) != 0) params += fmt::format(" {}", parameter_text(k, v));
+      const std::string params = " " + c.parameters_text();
       what += fmt::format("{}{} ({}:{})", what.empty() ? "" : ", ", c.found_on, c.type, params);
     }
     correct_by(step);
@@ -710,9 +701,7 @@ struct SectionRun {
                               c.residual_before));
               continue;
             }
-            std::string params;
-            for (const auto& [k, v] : c.parameters)
-              if (k.rfind("centre", 0) != 0) params += fmt::format(" {}", parameter_text(k, v));
+            const std::string params = " " + c.parameters_text();
             if (!c.diverged.empty())
               log(stop.arc, stop.delta_l, "correction", "correction_rejected",
                   fmt::format("{}: the fit diverged ({}); where it stopped:{}", c.type, c.diverged,

@@ -320,4 +320,31 @@ std::vector<Correction> fit_corrections(const design::Section& section,
   return out;
 }
 
+std::string Correction::parameters_text() const {
+  // Each parameter in words, to what touch points on a CMM resolve: translations to 1 µm,
+  // rotations to 1e-4° (0.4"), scale to 1 ppm, directions to 1e-4 ("dy -1.100 mm", not
+  // "dy_mm=-1.09999").
+  std::string out;
+  for (const auto& [name, v] : parameters) {
+    if (name.rfind("centre", 0) == 0) continue;
+    const auto ends = [&name](const std::string& tail) {
+      return name.size() > tail.size() &&
+             name.compare(name.size() - tail.size(), tail.size(), tail) == 0;
+    };
+    std::string word = name;
+    for (const std::string tail : {"_mm", "_deg"})
+      if (ends(tail)) word = name.substr(0, name.size() - tail.size());
+    for (char& c : word)
+      if (c == '_') c = ' ';
+    out += out.empty() ? "" : " ";
+    if (ends("_mm"))
+      out += fmt::format("{} {:.3f} mm", word, v);
+    else if (ends("_deg"))
+      out += fmt::format("{} {:.4f}°", word, v);
+    else
+      out += fmt::format("{} {:.{}f}", word, v, name == "scale" ? 6 : 4);
+  }
+  return out;
+}
+
 }  // namespace trueaxis::scan

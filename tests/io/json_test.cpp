@@ -56,7 +56,9 @@ TEST(JsonFile, TypedAccessErrorsNameThePathAndPosition) {
        "missing before it?)"},
       {"{\"a\": 1,}", "b.json:1:9: invalid JSON: unexpected '}'; expected a key in double quotes"},
   };
-  for (const auto& [text, expect] : cases) {
+  for (const auto& c : cases) {
+    const char* text = c.first;  // a lambda cannot capture a structured binding (clang 14)
+    const char* expect = c.second;
     const std::string m = err([&] { JsonFile::parse(text, "b.json"); });
     EXPECT_EQ(m.rfind(expect, 0), 0u) << m;
     EXPECT_EQ(m.find("json.exception"), std::string::npos) << m;

@@ -140,7 +140,10 @@ def test_scan_report_renders(tmp_path):
     for curve in ("corrected design", "simulated true part", "measured points"):
         assert curve in dom, curve
     assert "trajectory error: scan stopped" in dom  # the stops marked on the ΔL plots
-    assert "every decision of the flow" in dom and "design_overwritten" in dom
+    # Events in words ("design data replaced by the measured contour"), not the log's
+    # identifiers ("design_overwritten"); corrections' parameters with their units.
+    assert "every decision of the flow" in dom and "design data replaced by the measured contour" in dom
+    assert "design_overwritten" not in dom and "trajectory_error" not in dom and "_mm=" not in dom
     assert "virtual CMM" in dom and "JP 6484108 B2" in dom
 
 

@@ -108,6 +108,10 @@ struct Correction {
   // The section whose touch points found it, when it was carried over from there ("" when this
   // section's own touch points found it); the residuals are then those of that section.
   std::string found_on;
+  // Its parameters in words, to what touch points on a CMM resolve (translations to 1 µm,
+  // rotations to 1e-4°, scale to 1 ppm, directions to 1e-4), the centre of rotation and scale
+  // left out: "dx 1.800 mm dy -1.100 mm dz 0.000 mm".
+  std::string parameters_text() const;
 };
 
 // Machine time by activity (s). `moves` are the free moves between operations (safe-height
