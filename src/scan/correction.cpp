@@ -325,7 +325,9 @@ std::string Correction::parameters_text() const {
   // rotations to 1e-4° (0.4"), scale to 1 ppm, directions to 1e-4 ("dy -1.100 mm", not
   // "dy_mm=-1.09999").
   std::string out;
-  for (const auto& [name, v] : parameters) {
+  for (const auto& parameter : parameters) {
+    const std::string& name = parameter.first;  // not a structured binding: the lambda uses it
+    const double v = parameter.second;
     if (name.rfind("centre", 0) == 0) continue;
     const auto ends = [&name](const std::string& tail) {
       return name.size() > tail.size() &&
