@@ -106,8 +106,6 @@ std::vector<Command> add_serve_command(CLI::App& app);
 void apply_grammar(CLI::App& app, const std::string& version);
 // What `trueaxis` alone and `trueaxis help` print: every command on one line with its purpose.
 std::string command_list(const CLI::App& app);
-// Commands the lists have no purpose line for (none, once every command has one).
-std::vector<std::string> commands_without_purpose(const CLI::App& app);
 // After a failed parse: "did you mean --sigma?" for a word the command line had that nothing
 // took, near a flag or command of the command being run ("" when none is near).
 std::string suggestion(const CLI::App& app, const CLI::ParseError& e);

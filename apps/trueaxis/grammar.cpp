@@ -160,15 +160,6 @@ void apply_grammar(CLI::App& app, const std::string& version) {
   }
 }
 
-std::vector<std::string> commands_without_purpose(const CLI::App& app) {
-  std::vector<std::string> out;
-  for (const CLI::App* sub : subcommands_of(app)) {
-    if (!purposes().count(path_of(*sub))) out.push_back(path_of(*sub));
-    for (const std::string& s : commands_without_purpose(*sub)) out.push_back(s);
-  }
-  return out;
-}
-
 std::string command_list(const CLI::App& app) {
   std::string out = app.get_description() + "\n\nCommands:\n";
   for (const CLI::App* sub : subcommands_of(app)) out += Formatter().make_subcommand(sub);
