@@ -483,7 +483,7 @@ Result calibrate(const Gauge& gauge, const std::vector<Placement>& placements, c
         for (std::size_t j = 0; j < ks.size(); ++j)
           S.col(static_cast<Eigen::Index>(j)) = U[static_cast<std::size_t>(idx[ks[j]])];
         const Eigen::Matrix3Xd c = S.colwise() - S.rowwise().mean();
-        const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::Matrix3Xd>(c).singularValues();
+        const Eigen::Vector3d sv = Eigen::JacobiSVD<Eigen::MatrixXd>(c).singularValues();
         spread = sv[1] > 1e-6 * sv[0];
       }
       if (!spread)

@@ -323,7 +323,7 @@ ParametricResult identify(const Gauge& gauge, const std::vector<Placement>& plac
                               (R[p] * u[static_cast<std::size_t>(i)] + t[p]) + e.col(i);
     }
   };
-  Eigen::BDCSVD<Eigen::MatrixXd> svd;
+  Eigen::JacobiSVD<Eigen::MatrixXd> svd;
   residuals();
   for (r.iterations = 1; r.iterations <= o.max_iterations; ++r.iterations) {
     A.setZero();

@@ -1,8 +1,6 @@
 #include "eigen_instances.hpp"
 
 template class Eigen::JacobiSVD<Eigen::MatrixXd>;
-template class Eigen::JacobiSVD<Eigen::Matrix3Xd>;
-template class Eigen::BDCSVD<Eigen::MatrixXd>;
 template class Eigen::HouseholderQR<Eigen::MatrixXd>;
 template class Eigen::ColPivHouseholderQR<Eigen::MatrixXd>;
 template class Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>;

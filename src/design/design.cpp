@@ -159,7 +159,7 @@ std::optional<Section> as_plane_section(const Section& s, std::string* why) {
   const Eigen::Matrix3Xd& p = s.polyline;
   const Eigen::Vector3d c = p.rowwise().mean();
   const Eigen::Matrix3Xd q = p.colwise() - c;
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(q, Eigen::ComputeFullU);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(q, Eigen::ComputeFullU);
   const Eigen::Vector3d n = svd.matrixU().col(2);  // the direction of least spread
   const double off = (n.transpose() * q).cwiseAbs().maxCoeff();
   double tilt = 0;

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "../common/eigen_instances.hpp"
 #include "trueaxis/error.hpp"
 
 namespace trueaxis::geometry::detail {
@@ -40,7 +41,7 @@ Pca pca(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid, bool exact_a
   }
   const Eigen::Matrix3Xd c = p.colwise() - r.centroid;
   r.extent = std::sqrt(c.colwise().squaredNorm().maxCoeff());
-  const Eigen::JacobiSVD<Eigen::Matrix3Xd> svd(c, Eigen::ComputeFullU);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(c, Eigen::ComputeFullU);
   r.axes = svd.matrixU();
   r.spread = svd.singularValues();
   return r;

@@ -138,7 +138,7 @@ LayoutAnalysis analyze_layout_uncached(const std::vector<long>& steps, bool angl
   for (std::size_t r = 0; r < rows.size(); ++r)
     for (const auto& [id, v] : rows[r])
       A(static_cast<Eigen::Index>(r), col[static_cast<std::size_t>(id)]) += v;
-  const Eigen::BDCSVD<Eigen::MatrixXd> svd(A);  // singular values only
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A);  // singular values only
   const Eigen::VectorXd sv = svd.singularValues();
   const double tol = 1e-9 * std::max(1.0, sv.size() ? sv[0] : 1.0);
   long rank = 0;
