@@ -175,10 +175,10 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
         sec.name);
     h.x_label = "in-plane u (mm)";
     h.y_label = "in-plane v (mm)";
-    h.value_label = "deviation (µm)";
+    h.value_label = "deviation (mm)";  // as the plot above: a part may sit millimetres off
     h.px = px;
     h.py = py;
-    h.pvalue = dev * 1e3;
+    h.pvalue = dev;
     std::vector<Eigen::Index> line(static_cast<std::size_t>(m));
     for (Eigen::Index k = 0; k < m; ++k) line[static_cast<std::size_t>(k)] = k;
     h.lines.push_back(std::move(line));

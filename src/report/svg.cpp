@@ -5,6 +5,10 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
+#include <set>
+#include <utility>
+#include <vector>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/report/html.hpp"
@@ -122,6 +126,16 @@ std::string axes(const Frame& f, const std::string& xl, const std::string& yl) {
   return s;
 }
 
+// A scale's end value in three significant digits, without an exponent a reader must decode
+// ("2210", "-0.0123"); exponents only beyond 10⁶ or below 10⁻⁴.
+std::string tick_text(double v) {
+  const double a = std::abs(v);
+  if (a == 0) return "0";
+  if (a >= 1e6 || a < 1e-4) return fmt::format("{:.3g}", v);
+  const int decimals = std::max(0, 2 - static_cast<int>(std::floor(std::log10(a))));
+  return fmt::format("{:.{}f}", v, decimals);
+}
+
 // A vertical colour bar right of the plot area: 40 bands, end labels, zero if inside.
 std::string colour_bar(const Frame& f, const Scale& sc, const std::string& label) {
   const double x = f.left + f.pw + 16, w = 12, n = 40;
@@ -133,7 +147,7 @@ std::string colour_bar(const Frame& f, const Scale& sc, const std::string& label
   }
   auto tick = [&](double v) {
     const double y = f.top + (sc.hi - v) / (sc.hi - sc.lo) * f.ph;
-    return fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\">{:.3g}</text>", x + w + 3, y + 4, v);
+    return fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\">{}</text>", x + w + 3, y + 4, tick_text(v));
   };
   s += tick(sc.hi) + tick(sc.lo);
   if (sc.lo < 0 && sc.hi > 0) s += tick(0.0);
@@ -144,6 +158,60 @@ std::string colour_bar(const Frame& f, const Scale& sc, const std::string& label
 }
 
 // Cell bounds of node i: half-way to the neighbours, the outer nodes' own coordinates at the edge.
+// The vertices of a polyline (screen pixels) that a drawing at that resolution needs: those that
+// move it by `tolerance` px or more (Douglas & Peucker 1973, "Algorithms for the reduction of the
+// number of points required to represent a digitized line or its caricature", The Canadian
+// Cartographer 10(2)), the ends always.
+std::vector<Eigen::Index> screen_vertices(const Eigen::Matrix2Xd& px, double tolerance) {
+  const Eigen::Index n = px.cols();
+  std::vector<char> keep(static_cast<std::size_t>(n), 0);
+  keep.front() = keep.back() = 1;
+  std::vector<std::pair<Eigen::Index, Eigen::Index>> todo{{0, n - 1}};
+  while (!todo.empty()) {
+    const auto [a, b] = todo.back();
+    todo.pop_back();
+    if (b - a < 2) continue;
+    const Eigen::Vector2d d = px.col(b) - px.col(a);
+    const double len = d.norm();
+    double worst = -1;
+    Eigen::Index at = a;
+    for (Eigen::Index k = a + 1; k < b; ++k) {
+      const Eigen::Vector2d e = px.col(k) - px.col(a);
+      const double dist = len > 0 ? std::abs(d.x() * e.y() - d.y() * e.x()) / len : e.norm();
+      if (dist > worst) {
+        worst = dist;
+        at = k;
+      }
+    }
+    if (worst < tolerance) continue;
+    keep[static_cast<std::size_t>(at)] = 1;
+    todo.emplace_back(a, at);
+    todo.emplace_back(at, b);
+  }
+  std::vector<Eigen::Index> out;
+  for (Eigen::Index k = 0; k < n; ++k)
+    if (keep[static_cast<std::size_t>(k)]) out.push_back(k);
+  return out;
+}
+
+// The points of a heat map that a drawing at screen resolution shows: per cell of `cell_px`
+// pixels, the one whose value lies farthest from `mid` (the colour scale's centre), so that a
+// dense run of dots keeps its extremes; in their original order.
+std::vector<Eigen::Index> screen_points(const Eigen::VectorXd& X, const Eigen::VectorXd& Y,
+                                        const Eigen::VectorXd& value, double mid, double cell_px) {
+  std::map<std::pair<long, long>, Eigen::Index> best;
+  for (Eigen::Index k = 0; k < X.size(); ++k) {
+    const std::pair<long, long> key{std::lround(X[k] / cell_px), std::lround(Y[k] / cell_px)};
+    const auto [it, fresh] = best.emplace(key, k);
+    if (!fresh && std::abs(value[k] - mid) > std::abs(value[it->second] - mid)) it->second = k;
+  }
+  std::vector<Eigen::Index> out;
+  out.reserve(best.size());
+  for (const auto& kv : best) out.push_back(kv.second);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::pair<double, double> cell(const Eigen::VectorXd& x, Eigen::Index i) {
   const Eigen::Index n = x.size();
   return {i > 0 ? 0.5 * (x[i - 1] + x[i]) : x[0], i + 1 < n ? 0.5 * (x[i] + x[i + 1]) : x[n - 1]};
@@ -201,18 +269,33 @@ std::string svg(const HeatMap& h) {
             f.X(xa), f.Y(yb), f.X(xb) - f.X(xa) + 0.3, f.Y(ya) - f.Y(yb) + 0.3,
             std::isfinite(v) ? sc(v) : "#ddd", h.grid_x[i], h.grid_y[j], v);
       }
+  // At screen resolution: each line through the vertices that bend it by 0.2 px or more, one
+  // dot (9 px wide) per 3 px cell.
   for (const auto& line : h.lines) {
-    std::string pts;
+    std::vector<Eigen::Index> valid;
     for (Eigen::Index k : line)
-      if (k >= 0 && k < h.px.size())
-        pts += fmt::format("{:.2f},{:.2f} ", f.X(h.px[k]), f.Y(h.py[k]));
+      if (k >= 0 && k < h.px.size()) valid.push_back(k);
+    if (valid.empty()) continue;
+    Eigen::Matrix2Xd px(2, static_cast<Eigen::Index>(valid.size()));
+    for (std::size_t i = 0; i < valid.size(); ++i)
+      px.col(static_cast<Eigen::Index>(i)) << f.X(h.px[valid[i]]), f.Y(h.py[valid[i]]);
+    std::string pts;
+    for (const Eigen::Index i : screen_vertices(px, 0.2))
+      pts += fmt::format("{:.1f},{:.1f} ", px(0, i), px(1, i));
     s += "<polyline fill=\"none\" stroke=\"#888\" stroke-width=\"1\" points=\"" + pts + "\"/>";
   }
-  for (Eigen::Index k = 0; k < h.px.size(); ++k)
+  Eigen::VectorXd sx(h.px.size()), sy(h.px.size());
+  for (Eigen::Index k = 0; k < h.px.size(); ++k) {
+    sx[k] = f.X(h.px[k]);
+    sy[k] = f.Y(h.py[k]);
+  }
+  s += "<g stroke=\"#333\" stroke-width=\"0.6\">";
+  for (const Eigen::Index k : screen_points(sx, sy, h.pvalue, 0.5 * (sc.lo + sc.hi), 3.0))
     s += fmt::format(
-        "<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"4.5\" fill=\"{}\" stroke=\"#333\" "
-        "stroke-width=\"0.6\"><title>{:g}, {:g}: {:.4g}</title></circle>",
-        f.X(h.px[k]), f.Y(h.py[k]), sc(h.pvalue[k]), h.px[k], h.py[k], h.pvalue[k]);
+        "<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"4.5\" fill=\"{}\"><title>{:g}, {:g}: {:.4g}"
+        "</title></circle>",
+        sx[k], sy[k], sc(h.pvalue[k]), h.px[k], h.py[k], h.pvalue[k]);
+  s += "</g>";
   s += axes(f, h.x_label, h.y_label) + colour_bar(f, sc, h.value_label) + "</svg>";
   return s;
 }
@@ -327,17 +410,18 @@ std::string svg(const DistortedGrid& g) {
     for (Eigen::Index j = 0; j < nv; ++j) pts += at(j, i);
     s += "<polyline fill=\"none\" stroke=\"#1f77b4\" stroke-width=\"1.3\" points=\"" + pts + "\"/>";
   }
+  s += "<g stroke=\"#333\" stroke-width=\"0.5\">";
   for (Eigen::Index j = 0; j < nv; ++j)
     for (Eigen::Index i = 0; i < nu; ++i) {
       const std::string p = at(j, i);
       const auto comma = p.find(',');
       s += fmt::format(
-          "<circle cx=\"{}\" cy=\"{}\" r=\"3.5\" fill=\"{}\" stroke=\"#333\" "
-          "stroke-width=\"0.5\"><title>{:g}, {:g} mm: in-plane {:.3f}, {:.3f} µm; {} "
-          "{:.3f}</title></circle>",
+          "<circle cx=\"{}\" cy=\"{}\" r=\"3.5\" fill=\"{}\"><title>{:g}, {:g} mm: in-plane "
+          "{:.3f}, {:.3f} µm; {} {:.3f}</title></circle>",
           p.substr(0, comma), p.substr(comma + 1, p.size() - comma - 2), sc(g.normal(j, i)), g.u[i],
           g.v[j], g.du(j, i), g.dv(j, i), escape(g.normal_label), g.normal(j, i));
     }
+  s += "</g>";
   s += axes(f, g.u_label, g.v_label) + colour_bar(f, sc, g.normal_label);
   s += fmt::format(
       "<text x=\"{:.1f}\" y=\"{:.1f}\" text-anchor=\"end\" fill=\"#1f77b4\">in-plane errors "
@@ -409,16 +493,25 @@ std::string svg(const PlaneView& v) {
   for (std::size_t i = 0; i < v.curves.size(); ++i) {
     const auto& c = v.curves[i];
     const std::string dash = c.dashed ? " stroke-dasharray=\"6 4\"" : "";
+    // At screen resolution: a point is drawn once per pixel it lands on (a dot of 3.2 px, one
+    // round-capped stroke of no length each), a curve through the vertices that bend it by
+    // 0.2 px or more.
+    Eigen::Matrix2Xd px(2, c.xy.cols());
+    for (Eigen::Index k = 0; k < c.xy.cols(); ++k) px.col(k) << f.X(c.xy(0, k)), f.Y(c.xy(1, k));
     if (c.points) {
-      s += "<g fill=\"" + c.color + "\"><title>" + escape(c.label) + "</title>";
-      for (Eigen::Index k = 0; k < c.xy.cols(); ++k)
-        s += fmt::format("<circle cx=\"{:.2f}\" cy=\"{:.2f}\" r=\"1.6\"/>", f.X(c.xy(0, k)),
-                         f.Y(c.xy(1, k)));
-      s += "</g>";
+      std::string d;
+      std::set<std::pair<long, long>> drawn;
+      for (Eigen::Index k = 0; k < px.cols(); ++k)
+        if (drawn.emplace(std::lround(px(0, k)), std::lround(px(1, k))).second)
+          d += fmt::format("M{:.1f} {:.1f}h0", px(0, k), px(1, k));
+      s += fmt::format(
+          "<path stroke=\"{}\" stroke-width=\"3.2\" stroke-linecap=\"round\" d=\"{}\"><title>{}"
+          "</title></path>",
+          c.color, d, escape(c.label));
     } else if (c.xy.cols() > 1) {
       std::string pts;
-      for (Eigen::Index k = 0; k < c.xy.cols(); ++k)
-        pts += fmt::format("{:.2f},{:.2f} ", f.X(c.xy(0, k)), f.Y(c.xy(1, k)));
+      for (const Eigen::Index k : screen_vertices(px, 0.2))
+        pts += fmt::format("{:.1f},{:.1f} ", px(0, k), px(1, k));
       s += fmt::format(
           "<{} fill=\"none\" stroke=\"{}\" stroke-width=\"1.4\"{} points=\"{}\"><title>{}</title>"
           "</{}>",

@@ -2,8 +2,11 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "../test_util.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
@@ -239,4 +242,71 @@ TEST(Report, LengthScatterHidesNoPoint) {
         EXPECT_NE(drawn[i], drawn[j]) << i << " " << j;
       }
   EXPECT_NE(p.title.find("drawn"), std::string::npos);
+}
+
+// A scanned contour of 20 000 points is drawn at screen resolution: a polygon whose chords stay
+// within 0.2 px of the curve (plus the 0.05 px of rounding), and one dot per pixel the points
+// land on, so a page of such figures stays small without losing what the eye can see.
+TEST(Svg, PlaneViewDrawsLongCurvesAtScreenResolution) {
+  constexpr int kPoints = 20000;
+  constexpr double kChordPx = 0.2 + 0.1;  // the drawing's tolerance and the coordinates' rounding
+  report::PlaneView v;
+  v.title = "contour";
+  v.x_label = "x (mm)";
+  v.y_label = "y (mm)";
+  Eigen::Matrix2Xd xy(2, kPoints);
+  for (int k = 0; k < kPoints; ++k) {
+    const double t = 2 * M_PI * k / kPoints;
+    xy.col(k) << 40 * std::cos(t), 40 * std::sin(t);
+  }
+  v.curves.push_back({"design", xy, "#333", false, false, true});
+  v.curves.push_back({"measured", xy, "#1f77b4", false, true, false});
+  const std::string s = report::svg(v);
+  EXPECT_LT(s.size(), 60000u);  // 20 000 circles took about a megabyte
+  // The polygon's vertices in pixels.
+  const auto at = s.find("<polygon");
+  ASSERT_NE(at, std::string::npos);
+  const auto p0 = s.find("points=\"", at) + 8;
+  std::vector<Eigen::Vector2d> px;
+  {
+    std::istringstream in(s.substr(p0, s.find('"', p0) - p0));
+    double x, y;
+    char comma;
+    while (in >> x >> comma >> y) px.emplace_back(x, y);
+  }
+  ASSERT_GE(px.size(), 30u);
+  EXPECT_LT(px.size(), 1000u);
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& p : px) c += p;
+  c /= static_cast<double>(px.size());
+  double r = 0;
+  for (const auto& p : px) r += (p - c).norm();
+  r /= static_cast<double>(px.size());
+  // Each chord's sagitta: how far the circle strays from the straight line drawn.
+  for (std::size_t i = 0; i < px.size(); ++i) {
+    const Eigen::Vector2d a = px[i] - c, b = px[(i + 1) % px.size()] - c;
+    const double half = 0.5 * std::acos(std::clamp(a.dot(b) / (a.norm() * b.norm()), -1.0, 1.0));
+    EXPECT_LE(r * (1 - std::cos(half)), kChordPx) << "chord " << i;
+  }
+  // One dot per pixel: about as many as the circle is long in pixels, never one per point.
+  const double length_px = 2 * M_PI * r;
+  const auto dots = static_cast<double>(count(s, "h0"));
+  EXPECT_GT(dots, 0.7 * length_px);
+  EXPECT_LT(dots, 2.1 * length_px);
+}
+
+// Colour-bar ends read as numbers, not exponents: ±2210 µm is "2210", not "2.21e+03".
+TEST(Svg, ColourBarEndsHaveNoExponent) {
+  report::HeatMap h;
+  h.title = "t";
+  h.px = Eigen::VectorXd{{0.0, 1.0, 2.0}};
+  h.py = Eigen::VectorXd{{0.0, 1.0, 0.0}};
+  h.pvalue = Eigen::VectorXd{{-2210.0, 5.0, 2210.0}};
+  std::string s = report::svg(h);
+  EXPECT_NE(s.find(">2210</text>"), std::string::npos);
+  EXPECT_NE(s.find(">-2210</text>"), std::string::npos);
+  EXPECT_EQ(s.find("e+"), std::string::npos);
+  h.pvalue = Eigen::VectorXd{{-0.0123, 0.0, 0.0123}};
+  s = report::svg(h);
+  EXPECT_NE(s.find(">0.0123</text>"), std::string::npos);
 }
