@@ -15,7 +15,11 @@ namespace trueaxis::surface {
 namespace {
 
 constexpr const char* kAxis = "xyz";
-constexpr double kTooFine = 2;  // uncertainty / interpolation ratio that calls a grid too fine
+// How the map's own uncertainty grows as the grid gets finer (U ∝ h^−kNoiseGrowth, see
+// space_warnings), and the gain over this grid's predicted RMS a better spacing must promise
+// before the grid is called too fine.
+constexpr double kNoiseGrowth = 1.5;
+constexpr double kClearGain = 0.8;
 
 // Seeds for the individual runs of one campaign: reproducible and independent.
 std::uint64_t run_seed(std::uint64_t seed, std::uint64_t counter) {
@@ -437,15 +441,30 @@ std::vector<std::string> space_warnings(const SpaceResult& space, const Verifica
     return w;
   }
   // Finer grids interpolate better but make longer three-point runs, whose noise grows with
-  // their length; past the balance the map gets worse. Near the best spacing the interpolation
-  // error and the uncertainty are comparable, so an uncertainty well above it means "too fine".
-  if (v && v->uncertainty_rms > kTooFine * v->interpolation_rms)
-    w.push_back(fmt::format(
-        "the grid is finer than this campaign supports: the map's own uncertainty (RMS {:.3f} "
-        "µm) is {:.1f} times what interpolation on this grid costs ({:.3f} µm); a larger "
-        "spacing would give a better map",
-        v->uncertainty_rms * 1e3, v->uncertainty_rms / v->interpolation_rms,
-        v->interpolation_rms * 1e3));
+  // their length; past the balance the map gets worse. Model of the predicted RMS at k times this
+  // spacing h: interpolation I·k² (linear interpolation of a smooth error: O(h²)), the map's own
+  // uncertainty U·k^(−3/2) (each separated profile value is a double sum of reading noise over up
+  // to L/h stations, so its standard deviation grows as (L/h)^(3/2)). Its minimum is at
+  // k⁴⁺²ᵃ = a·U²/(2·I²), a = 3/2. Warn when that spacing is larger and predicts a clearly
+  // better map; near the balance the prediction is flat and the grid is a fair choice.
+  if (v && v->interpolation_rms > 0 && v->uncertainty_rms > 0) {
+    const double I = v->interpolation_rms, U = v->uncertainty_rms, a = kNoiseGrowth;
+    const double k = std::pow(a * U * U / (2 * I * I), 1 / (4 + 2 * a));
+    const double best = std::sqrt(I * I * std::pow(k, 4) + U * U * std::pow(k, -2 * a));
+    const double now = std::hypot(I, U);
+    if (k > 1 && best < kClearGain * now) {
+      const Eigen::VectorXd& x = space.map.axes[0];
+      const double h =
+          x.size() > 1 ? (x[x.size() - 1] - x[0]) / static_cast<double>(x.size() - 1) : 0.0;
+      w.push_back(fmt::format(
+          "the grid is finer than this campaign supports: the map's own uncertainty (RMS {:.3f} "
+          "µm) outweighs what interpolation on this grid costs ({:.3f} µm); a spacing about "
+          "{:.1f} times larger{} would predict a compensated RMS of about {:.2f} µm instead of "
+          "{:.2f} µm",
+          U * 1e3, I * 1e3, k, h > 0 ? fmt::format(" (about {:.0f} mm)", k * h) : std::string(),
+          best * 1e3, now * 1e3));
+    }
+  }
   return w;
 }
 

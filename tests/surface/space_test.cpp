@@ -82,6 +82,17 @@ TEST(Space, WarningsSayWhatTheDataCannotSupport) {
   w = space_warnings(r, &v);
   ASSERT_FALSE(w.empty());
   EXPECT_NE(w.back().find("finer than this campaign supports"), std::string::npos) << w.back();
+  // The spacing it suggests is measurably better: the same campaign on that grid compensates the
+  // machine to a smaller RMS, as the warning predicts.
+  const auto at = w.back().find("(about ");
+  ASSERT_NE(at, std::string::npos) << w.back();
+  const double suggested = std::stod(w.back().substr(at + 7));
+  EXPECT_GT(suggested, 20);
+  p.spacing = suggested;
+  const SpaceResult r2 = measure_space(m, p);
+  const Verification v2 = verify_compensation(m, r2.map, 200);
+  EXPECT_LT(v2.after_rms, v.after_rms) << suggested << " mm";
+  EXPECT_LT(v2.predicted_rms, v.predicted_rms);
 }
 
 TEST(Space, AGridTooFineToMeasureIsRefusedBeforeAnyWork) {
