@@ -55,7 +55,7 @@ void js_array(std::string& out, const Eigen::VectorXd& v, const std::vector<Eige
     double val = v[idx[k]];
     if (band) val += add_band_sign * (*band)[idx[k]];
     if (std::isfinite(val))
-      out += fmt::format("{:.9g}", val);
+      out += fmt::format("{:.7g}", val);  // 1 µm in a metre, in mm: finer than a plot shows
     else
       out += "null";
   }
@@ -167,6 +167,7 @@ th{background:#f4f4f4} td:first-child,th:first-child{text-align:left}
 .figs{display:flex;flex-wrap:wrap;gap:16px;align-items:flex-start;margin:12px 0}
 .figs figure{margin:0} .figs figcaption{font-weight:600;font-size:.95em;margin:4px 0}
 svg.ta-fig{max-width:100%;height:auto}
+.toc ol{padding-left:1.6em} .toc li{margin:2px 0} .toc .flag{color:#a65c00}
 @media print{
  body{margin:0;max-width:none;font-size:10pt;padding:0}
  .screen,a.csv,.u-select,.u-cursor-x,.u-cursor-y{display:none!important}
@@ -210,10 +211,25 @@ svg.ta-fig{max-width:100%;height:auto}
     h += "<tr><th>coverage factor</th><td>k = 2 for expanded uncertainties (U = 2u) and "
          "bands, about 95 %</td></tr></table>\n";
   }
+  // A report of several sections opens with its contents: each section's title as a link and
+  // its headline figure.
+  if (sections.size() >= 3) {
+    h += "<nav class=\"toc\"><h2>Contents</h2><ol>";
+    for (std::size_t i = 0; i < sections.size(); ++i) {
+      const auto& s = sections[i];
+      h += fmt::format("<li><a href=\"#s{}\">{}</a>", i + 1, escape(s.title));
+      if (!s.summary.empty()) h += ": " + escape(s.summary);
+      if (!s.warnings.empty())
+        h += fmt::format(" <span class=\"flag\">({} warning{})</span>", s.warnings.size(),
+                         s.warnings.size() > 1 ? "s" : "");
+      h += "</li>";
+    }
+    h += "</ol></nav>\n";
+  }
   std::string script = "var TA_PLOTS=[];\n";
-  int pid = 0, figures = 0;
+  int pid = 0, figures = 0, sid = 0;
   for (const auto& s : sections) {
-    h += "<h2>" + escape(s.title) + "</h2>\n";
+    h += fmt::format("<h2 id=\"s{}\">{}</h2>\n", ++sid, escape(s.title));
     if (!s.source.empty()) h += "<p class=\"source\">Data: " + escape(s.source) + "</p>\n";
     for (const auto& w : s.warnings)
       h += "<p class=\"warn\"><b>Warning:</b> " + escape(w) + "</p>\n";
@@ -248,44 +264,23 @@ svg.ta-fig{max-width:100%;height:auto}
       const std::string id = fmt::format("plot{}", pid++);
       h += "<div class=\"plot\"><h3>" + escape(p.title) + "</h3><div id=\"" + id + "\"></div>";
       const auto idx = decimate(p, max_points);
-      if (idx.size() < static_cast<std::size_t>(p.x.size()))
+      const bool all = idx.size() == static_cast<std::size_t>(p.x.size());
+      if (!all)
         h += fmt::format("<p class=\"note\">{} of {} points shown (min/max per bucket).</p>",
                          idx.size(), p.x.size());
-      {
-        // Every point of the curve (not only those drawn), with its ±2u band where it has one.
-        std::string csv = csv_cell(p.x_label);
-        for (const auto& s2 : p.series) {
-          csv.push_back(',');
-          csv.append(csv_cell(s2.label));
-          if (s2.band.size() == s2.y.size()) {
-            std::string label = s2.label;
-            label.append(" u");
-            csv.push_back(',');
-            csv.append(csv_cell(label));
-          }
-        }
-        csv += "\n";
-        // Up to kCsvRows points in full; a longer curve as drawn (its result file has it all).
-        constexpr Eigen::Index kCsvRows = 20000;
-        const bool full = p.x.size() <= kCsvRows;
-        const auto rows = full ? static_cast<std::size_t>(p.x.size()) : idx.size();
-        for (std::size_t r = 0; r < rows; ++r) {
-          const auto i = full ? static_cast<Eigen::Index>(r) : static_cast<Eigen::Index>(idx[r]);
-          csv += fmt::format("{}", p.x[i]);
-          for (const auto& s2 : p.series) {
-            csv += i < s2.y.size() && std::isfinite(s2.y[i]) ? fmt::format(",{}", s2.y[i]) : ",";
-            if (s2.band.size() == s2.y.size()) csv += fmt::format(",{}", s2.band[i]);
-          }
-          csv += "\n";
-        }
-        h += "<p class=\"dl\">" + csv_link(slug(p.title) + ".csv", csv) +
-             (full ? "" : " (the points drawn; every point is in the result file)") + "</p>";
-      }
+      // The figure's numbers as CSV, made by the page from the plot's own data when asked for
+      // (x, each series and its standard uncertainty u): the report carries them once.
+      h += fmt::format(
+          "<p class=\"dl\"><a class=\"csv\" href=\"#\" download=\"{}.csv\" "
+          "data-plot=\"{}\">CSV</a>{}"
+          "</p>",
+          escape(slug(p.title)), pid - 1,
+          all ? "" : " (the points drawn; every point is in the result file)");
       h += "</div>\n";
       std::string data = "[";
       js_array(data, p.x, idx);
       std::string series = "[{label:" + js_string(p.x_label) + "}";
-      std::string bands = "[";
+      std::string u = "{";
       int col = 0, si = 1;
       // Scatter plots pad the x range, so that markers at the ends (several at one x, as
       // repeated readings at the last target) are drawn whole.
@@ -303,30 +298,21 @@ svg.ta-fig{max-width:100%;height:auto}
         else
           series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label), color,
                                 s2.dashed ? ",dash:[6,4]" : "");
-        ++si;
+        // The ±2u band: u here, its edges made by the page (below).
         if (s2.band.size() == s2.y.size()) {
-          data += ',';
-          js_array(data, s2.y, idx, +2.0, &s2.band);
-          data += ',';
-          js_array(data, s2.y, idx, -2.0, &s2.band);
-          // The band's edges: drawn faintly, left out of the legend (the series' own label
-          // names the band).
-          series += fmt::format(
-              ",{{label:{},stroke:'{}44',width:0.5,edge:true}},"
-              "{{label:{},stroke:'{}44',width:0.5,edge:true}}",
-              js_string(s2.label + " upper edge"), color, js_string(s2.label + " lower edge"),
-              color);
-          bands += fmt::format("{{series:[{},{}],fill:'{}22'}},", si, si + 1, color);
-          si += 2;
+          u += fmt::format("{}:", si);
+          js_array(u, s2.band, idx);
+          u += ',';
         }
+        ++si;
       }
       data += "]";
       series += "]";
-      bands += "]";
+      u += "}";
       script += fmt::format(
-          "TA_PLOTS.push({{el:'{}',data:{},series:{},bands:{},xl:{},yl:{},log:{},pts:{}}});\n", id,
-          data, series, bands, js_string(p.x_label), js_string(p.y_label),
-          p.log_y ? "true" : "false", scatter ? "true" : "false");
+          "TA_PLOTS.push({{el:'{}',data:{},u:{},series:{},xl:{},yl:{},log:{},pts:{}}});\n", id,
+          data, u, series, js_string(p.x_label), js_string(p.y_label), p.log_y ? "true" : "false",
+          scatter ? "true" : "false");
     }
     if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty() || !s.planes.empty()) {
       h += "<div class=\"figs\">";
@@ -358,15 +344,42 @@ svg.ta-fig{max-width:100%;height:auto}
   TA_PLOTS.forEach(function(p){
     var el=document.getElementById(p.el);
     var w=Math.max(400,Math.min(1060,(document.body.clientWidth||900)-20));
-    var opts={width:w,height:300,series:p.series,bands:p.bands,
+    // Each series with a u gets its band y ± 2u: two faint edges (out of the legend: the
+    // series' own label names the band) and the fill between them.
+    var data=p.data.slice(),series=p.series.slice(),bands=[];
+    Object.keys(p.u).forEach(function(k){
+      var i=+k,y=p.data[i],u=p.u[k],c=p.series[i].stroke;
+      var up=y.map(function(v,j){return v===null||u[j]===null?null:v+2*u[j];});
+      var lo=y.map(function(v,j){return v===null||u[j]===null?null:v-2*u[j];});
+      data.push(up,lo);
+      series.push({label:p.series[i].label+' upper edge',stroke:c+'44',width:0.5,edge:true},
+                  {label:p.series[i].label+' lower edge',stroke:c+'44',width:0.5,edge:true});
+      bands.push({series:[data.length-2,data.length-1],fill:c+'22'});
+    });
+    var opts={width:w,height:300,series:series,bands:bands,
       scales:{x:p.pts?{time:false,range:function(u,mn,mx){var d=(mx-mn)*0.03||1;return [mn-d,mx+d];}}:{time:false},
               y:p.log?{distr:3}:{}},
       axes:[{label:p.xl},{label:p.yl,size:70}],
       cursor:{drag:{x:true,y:false}}};
-    var u=new uPlot(opts,p.data,el);
+    var u=new uPlot(opts,data,el);
     var rows=el.querySelectorAll('.u-legend .u-series');
-    p.series.forEach(function(s,i){if(s.edge&&rows[i])rows[i].style.display='none';});
+    series.forEach(function(s,i){if(s.edge&&rows[i])rows[i].style.display='none';});
     if(el.querySelector('canvas')) made++;
+  });
+  // A plot's CSV link: its numbers (x, each series, u where it has one), made when clicked.
+  function cell(t){t=String(t);return /[",\n]/.test(t)?'"'+t.replace(/"/g,'""')+'"':t;}
+  document.querySelectorAll('a[data-plot]').forEach(function(a){
+    a.addEventListener('click',function(){
+      var p=TA_PLOTS[+a.getAttribute('data-plot')],cols=[0],head=[cell(p.series[0].label)];
+      for(var i=1;i<p.series.length;i++){
+        cols.push(i);head.push(cell(p.series[i].label));
+        if(p.u[i]){cols.push(-i);head.push(cell(p.series[i].label+' u'));}
+      }
+      var lines=[head.join(',')];
+      for(var j=0;j<p.data[0].length;j++)
+        lines.push(cols.map(function(c){var v=c<0?p.u[-c][j]:p.data[c][j];return v===null?'':v;}).join(','));
+      a.href=URL.createObjectURL(new Blob([lines.join('\n')+'\n'],{type:'text/csv'}));
+    });
   });
   document.documentElement.setAttribute('data-plots-total',TA_PLOTS.length);
   document.documentElement.setAttribute('data-plots-rendered',made);
