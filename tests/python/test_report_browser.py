@@ -1,5 +1,8 @@
 """The HTML report renders its plots in headless Chromium without script errors."""
 import os
+import csv as csv_lib
+import html as html_lib
+import io
 import re
 import shutil
 import subprocess
@@ -30,10 +33,44 @@ def dump_dom(html, tmp_path):
     return out.stdout
 
 
+def plot_csvs(html, tmp_path):
+    """The CSV each plot's link makes when clicked, as lists of rows (the page builds it)."""
+    page = tmp_path / "csv-probe.html"
+    probe = """<script>
+document.querySelectorAll('a[data-plot]').forEach(function(a, i){
+  a.addEventListener('click', function(e){ e.preventDefault(); });
+  a.click();
+  fetch(a.href).then(function(r){ return r.text(); }).then(function(t){
+    var pre = document.createElement('pre'); pre.id = 'csv-' + i; pre.textContent = t;
+    document.body.appendChild(pre);
+  });
+});
+</script></body>"""
+    page.write_text(open(html, encoding="utf-8").read().replace("</body>", probe), encoding="utf-8")
+    dom = dump_dom(page, tmp_path)
+    out = {}
+    for i, text in re.findall(r'<pre id="csv-(\d+)">(.*?)</pre>', dom, re.S):
+        out[int(i)] = list(csv_lib.reader(io.StringIO(html_lib.unescape(text))))
+    return out
+
+
 def test_demo_report_renders_every_plot(tmp_path):
     report = tmp_path / "demo" / "index.html"
-    subprocess.run([TRUEAXIS, "demo", "-o", str(report), "--stations", "200", "--spacing", "100",
-                    "--repetitions", "3", "-q"], check=True)
+    subprocess.run([TRUEAXIS, "demo", "-o", str(report), "-q"], check=True)  # as the README runs it
+    # A page to hand over: at most 1.5 MB, opening with its contents, each scenario in one line
+    # with its headline figure and a link to it.
+    assert report.stat().st_size <= 1.5e6, report.stat().st_size
+    page = report.read_text(encoding="utf-8")
+    toc = re.search(r'<nav class="toc"><h2>Contents</h2><ol>(.*?)</ol></nav>', page, re.S)
+    assert toc, "no contents"
+    entries = re.findall(r'<li><a href="#(s\d+)">([^<]+)</a>: ([^<]+)', toc.group(1))
+    titles = re.findall(r'<h2 id="(s\d+)">([^<]+)</h2>', page)
+    assert [(i, t) for i, t, _ in entries] == titles and len(titles) >= 10, (entries, titles)
+    assert all(re.search(r"\d", headline) for _, _, headline in entries), entries
+    # The showcase says in words how it ends: the CMM that fails E0 passes once corrected, and
+    # the error space carries no warning against its own grid.
+    assert re.search(r"before correction FAIL; after: grid PASS, parametric PASS", page)
+    assert "finer than this campaign supports" not in page
     dom = dump_dom(report, tmp_path)
     total = re.search(r'data-plots-total="(\d+)"', dom)
     rendered = re.search(r'data-plots-rendered="(\d+)"', dom)
@@ -99,8 +136,16 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     assert "<th>operator</th><td>K. Tanaka</td>" in dom
     assert re.search(r"<th>date</th><td>\d{4}-\d\d-\d\d", dom)
     assert "k = 2" in dom
+    # Each table's CSV is in the page; each plot's is made by the page from the plot's data.
     links = re.findall(r'<a class="csv" download="([^"]+)" href="data:text/csv', dom)
-    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 3, links
+    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 2, links
+    csvs = plot_csvs(h, tmp_path)
+    assert len(csvs) == 1, csvs.keys()
+    rows = csvs[0]
+    assert rows[0][0] == "nominal length (mm)", rows[0]
+    assert rows[0][1:] == ["before correction", "after, grid", "+MPE", "−MPE"], rows[0]
+    assert len(rows) > 105 and all(len(r) == len(rows[0]) for r in rows), rows[:3]
+    assert all(c == "" or float(c) == float(c) for r in rows[1:] for c in r), rows[:3]
     # Every cell stands under a header that fits it: the E0 verdicts have a table of their own.
     e0 = re.search(r"<h3>E0 against the MPE 1.5\+L/300 µm[^<]*</h3><table>(.*?)</table>", dom, re.S)
     assert e0, "no E0 table"
@@ -108,11 +153,11 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     assert rows[0] == ["E0", "verdict", "lengths beyond the MPE", "worst (% of the MPE)"], rows
     assert rows[1][0] == "before correction" and rows[1][1] in ("PASS", "FAIL"), rows
     assert re.fullmatch(r"\d+ of 105", rows[1][2]) and re.fullmatch(r"\d+", rows[1][3]), rows
-    stats = re.search(r"<h2>Gauge-block verification[^<]*</h2>.*?<table>(.*?)</table>", dom, re.S)
+    stats = re.search(r'<h2 id="s\d+">Gauge-block verification[^<]*</h2>.*?<table>(.*?)</table>', dom, re.S)
     assert "PASS" not in stats.group(1) and "FAIL" not in stats.group(1)
     assert "105 calibrated lengths in 35 set-ups" in dom
     # The section is titled by what it shows, and names the data it was made from.
-    assert "<h2>Gauge-block verification (ISO 10360-2 positions)</h2>" in dom
+    assert '<h2 id="s1">Gauge-block verification (ISO 10360-2 positions)</h2>' in dom
     assert '<p class="source">Data: l.csv</p>' in dom
     assert "<h2>References</h2>" in dom and "ISO 10360-2:2009" in dom
 
@@ -169,7 +214,7 @@ def test_positioning_report_renders(tmp_path):
         assert "Shaded bands: x̄ ± 2s (ISO 230-2" in dom and "standard uncertainties" not in dom
         edges = re.findall(r'<tr class="u-series"[^>]*>(?:(?!</tr>).)*?edge', dom, re.S)
         assert edges and all('display: none' in e for e in edges), edges
-        assert "<h2>Positioning accuracy of a linear axis</h2>" in dom
+        assert '<h2 id="s1">Positioning accuracy of a linear axis</h2>' in dom
     # Printable: the print stylesheet hides what only a screen uses; Chromium prints it to PDF.
     text = open(h, encoding="utf-8").read()
     assert "@media print{" in text and ".screen," in text
