@@ -339,6 +339,21 @@ svg.ta-fig{max-width:100%;height:auto}
   }
   script += fmt::format("var TA_FIGURES={};\n", figures);
   h += "<script>\n" + script + R"JS(
+// Tick labels with as many decimals as the step needs ("0.0002", not "0", "-0"), no "-0".
+function taTicks(u,splits,ax,space,incr){
+  var d=Math.max(0,Math.ceil(-Math.log10(incr)-1e-9));
+  while(d<12&&Math.abs(incr*Math.pow(10,d)-Math.round(incr*Math.pow(10,d)))>1e-6*incr*Math.pow(10,d))d++;
+  return splits.map(function(v){
+    if(v==null)return '';
+    var t=v.toFixed(d);
+    return /^-0(\.0*)?$/.test(t)?t.slice(1):t;
+  });
+}
+// A y axis as wide as its longest tick label, and room for its title.
+function taAxisSize(u,values){
+  var n=0;(values||[]).forEach(function(v){n=Math.max(n,String(v).length);});
+  return Math.max(50,7*n+34);
+}
 (function(){
   var made=0;
   TA_PLOTS.forEach(function(p){
@@ -359,7 +374,8 @@ svg.ta-fig{max-width:100%;height:auto}
     var opts={width:w,height:300,series:series,bands:bands,
       scales:{x:p.pts?{time:false,range:function(u,mn,mx){var d=(mx-mn)*0.03||1;return [mn-d,mx+d];}}:{time:false},
               y:p.log?{distr:3}:{}},
-      axes:[{label:p.xl},{label:p.yl,size:70}],
+      axes:[{label:p.xl,values:taTicks},
+            p.log?{label:p.yl,size:70}:{label:p.yl,values:taTicks,size:taAxisSize}],
       cursor:{drag:{x:true,y:false}}};
     var u=new uPlot(opts,data,el);
     var rows=el.querySelectorAll('.u-legend .u-series');

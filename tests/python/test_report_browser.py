@@ -3,6 +3,7 @@ import os
 import csv as csv_lib
 import html as html_lib
 import io
+import json
 import re
 import shutil
 import subprocess
@@ -106,6 +107,17 @@ def test_demo_report_renders_every_plot(tmp_path):
     assert after and float(after.group(2)) < float(after.group(1)) / 2
 
 
+def evaluate_in(html, tmp_path, expression):
+    """The JSON value of a JavaScript expression evaluated in the report's page."""
+    page = tmp_path / "probe.html"
+    probe = ("<script>var pre=document.createElement('pre');pre.id='probe';"
+             f"pre.textContent=JSON.stringify({expression});document.body.appendChild(pre);</script></body>")
+    page.write_text(open(html, encoding="utf-8").read().replace("</body>", probe), encoding="utf-8")
+    found = re.search(r'<pre id="probe">(.*?)</pre>', dump_dom(page, tmp_path), re.S)
+    assert found, "the probe did not run"
+    return json.loads(html_lib.unescape(found.group(1)))
+
+
 def test_report_command_renders(tmp_path):
     p, t, r, h = (tmp_path / n for n in ("p.csv", "t.csv", "r.json", "r.html"))
     subprocess.run([TRUEAXIS, "simulate", "straightness", "-o", str(p), "--truth", str(t), "-q"], check=True)
@@ -113,6 +125,11 @@ def test_report_command_renders(tmp_path):
     subprocess.run([TRUEAXIS, "report", str(r), "-o", str(h), "-q"], check=True)
     dom = dump_dom(h, tmp_path)
     assert 'data-plots-rendered="3"' in dom and 'data-script-errors="' not in dom
+    # Axis ticks: sub-micron steps keep their decimals, no "-0", large values no exponent.
+    assert evaluate_in(h, tmp_path, "taTicks(null,[-0.0004,-0.0002,-0.0000000001,0.0002],0,0,0.0002)") == \
+        ["-0.0004", "-0.0002", "0.0000", "0.0002"]
+    assert evaluate_in(h, tmp_path, "taTicks(null,[0,2.5,5],0,0,2.5)") == ["0.0", "2.5", "5.0"]
+    assert evaluate_in(h, tmp_path, "taTicks(null,[1000,2000],0,0,1000)") == ["1000", "2000"]
 
 
 def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
