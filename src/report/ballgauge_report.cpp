@@ -144,8 +144,13 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
                                   m.axes[static_cast<std::size_t>(a)][i]);
     const double inplane = m.error.topRows(2).colwise().norm().maxCoeff() * 1e3;
     const double mag = nice_magnification(std::max(inplane, 1e-6), step);
-    for (Eigen::Index k = m.size(2) - 1; k >= 0; --k)
+    // Every level on one colour scale, so that a colour means the same ez on each.
+    const double ez = m.error.row(2).cwiseAbs().maxCoeff() * 1e3;
+    for (Eigen::Index k = m.size(2) - 1; k >= 0; --k) {
       s.grids.push_back(distorted_plane(m, 0, 1, k, "error vectors", mag));
+      s.grids.back().vmin = -ez;
+      s.grids.back().vmax = ez;
+    }
   }
   return s;
 }

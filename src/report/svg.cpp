@@ -386,7 +386,8 @@ std::string svg(const DistortedGrid& g) {
   const double mag = g.magnification > 0 ? g.magnification : nice_magnification(inplane, step);
   const double pad = 0.5 * step;
   const Frame f(g.u[0] - pad, g.u[nu - 1] + pad, g.v[0] - pad, g.v[nv - 1] + pad, g.width, 110);
-  const Scale sc(g.normal.minCoeff(), g.normal.maxCoeff(), true);
+  const Scale sc(std::isfinite(g.vmin) ? g.vmin : g.normal.minCoeff(),
+                 std::isfinite(g.vmax) ? g.vmax : g.normal.maxCoeff(), true);
   std::string s = open_svg(f, g.title);
   for (Eigen::Index i = 0; i < nu; ++i)
     s += fmt::format(

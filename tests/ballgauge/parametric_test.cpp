@@ -317,4 +317,16 @@ TEST(Parametric, TheReportDrawsEachAxisErrorsWithBandsAndNamesTheUnseen) {
   ASSERT_EQ(sq->second.size(), 4u);
   EXPECT_EQ(sq->second[0][2], "U (µrad, k = 2)");
   for (std::size_t i = 1; i < 4; ++i) EXPECT_GT(std::stod(sq->second[i][2]), 0) << i;
+  // The map's levels share one colour scale, the largest |ez| of the whole map: a colour means
+  // the same error on every level.
+  ASSERT_GE(s.grids.size(), 2u);
+  const double ez = map.grid->error.row(2).cwiseAbs().maxCoeff() * 1e3;
+  int below = 0;  // levels whose own scale would have differed
+  for (const auto& grid : s.grids) {
+    EXPECT_EQ(grid.vmin, -ez);
+    EXPECT_EQ(grid.vmax, ez);
+    EXPECT_LE(grid.normal.cwiseAbs().maxCoeff(), ez);
+    below += grid.normal.cwiseAbs().maxCoeff() < ez;
+  }
+  EXPECT_GE(below, 1);
 }

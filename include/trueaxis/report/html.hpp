@@ -63,6 +63,9 @@ struct DistortedGrid {
   Eigen::MatrixXd du, dv, normal;              // µm, rows = v, columns = u
   double magnification = 0;                    // 0: automatic (largest error → 40 % of a step)
   int width = 520;                             // px
+  // Colour scale limits of the out-of-plane error (NaN: from this grid), e.g. to give the levels
+  // of one map one scale.
+  double vmin = NAN, vmax = NAN;
 };
 
 // An isometric 3-D view of a surface, as a surface-plate report shows it: the lines along which
