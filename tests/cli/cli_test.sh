@@ -179,6 +179,8 @@ grep -q "161 stops, 160 at targets, 1 not used" out.txt && ok || bad "stops foun
 [ "$(grep -o '"E": [0-9.]*' pos-log.json | cut -c1-12)" = "$(grep -o '"E": [0-9.]*' pos.json | cut -c1-12)" ] && ok || bad "the log gives the runs' E"
 expect_err "--input is required" "$T" positioning --output o.json
 expect_err "pos-log.csv is an interferometer log (time_s, reading_mm): it needs --targets" "$T" positioning --input pos-log.csv
+expect_err "--targets belongs to an interferometer log; pos.csv holds runs" "$T" positioning --input pos.csv --targets 0:40:600
+expect_code 2 "$T" positioning --input pos.csv --targets 0:40:600
 # A LinuxCNC table from the positioning result, read back by the simulator: the reversal goes.
 expect_ok "$T" export linuxcnc --positioning pos.json -o pos.comp
 [ "$(wc -l <pos.comp)" -eq 16 ] && grep -q "BACKLASH = 0" out.txt && ok || bad "export linuxcnc --positioning"
