@@ -19,6 +19,7 @@
 #include "trueaxis/io/separation/probes.hpp"
 #include "trueaxis/io/surface/surface.hpp"
 #include "trueaxis/report/ballgauge.hpp"
+#include "trueaxis/report/files.hpp"
 #include "trueaxis/report/fit.hpp"
 #include "trueaxis/report/guideway.hpp"
 #include "trueaxis/report/html.hpp"
@@ -132,57 +133,9 @@ int cmd_surface(const SurfaceArgs& a) {
 
 // Any result file trueaxis writes, by its "kind".
 int cmd_report(const std::string& input, const std::string& output, bool quiet) {
-  const std::string kind = io::read_kind(input);
-  const std::string name = std::filesystem::path(input).filename().string();
-  std::string title;
-  report::Section section;
-  if (kind == "separation") {
-    title = "trueaxis straightness report";
-    section = report::separation_section("Straightness of a workpiece and its guide",
-                                         io::read_result(input));
-  } else if (kind == "surface") {
-    title = "trueaxis surface report";
-    section = report::surface_section("Flatness of a surface", io::read_surface(input));
-  } else if (kind == "space") {
-    title = "trueaxis error space report";
-    std::optional<surface::Verification> v;
-    const surface::SpaceResult s = io::read_space(input, &v);
-    section = report::space_section("Error space of a machine", s, v ? &*v : nullptr);
-  } else if (kind == "guideway") {
-    title = "trueaxis guideway report";
-    section = report::guideway_section("Five motion errors of a guideway",
-                                       io::read_guideway_result(input));
-  } else if (kind == "positioning") {
-    title = "trueaxis positioning report";
-    const io::PositioningFile f = io::read_positioning_result(input);
-    section = report::positioning_section("Positioning accuracy of a linear axis", f.result,
-                                          f.standard, f.verdicts);
-  } else if (kind == "ballgauge map") {
-    title = "trueaxis ball-gauge map";
-    section = report::ballgauge_section("CMM error map from ball-gauge placements",
-                                        io::read_ballgauge_map(input));
-  } else if (kind == "length verification") {
-    title = "trueaxis length verification";
-    section = report::lengths_section("Gauge-block verification (ISO 10360-2 positions)",
-                                      io::read_length_verification(input));
-  } else if (kind == "fit") {
-    title = "trueaxis fit report";
-    section = report::fit_section("Fit of a geometric element", io::read_fit(input));
-  } else if (kind == "scan") {
-    title = "trueaxis scanning report";
-    const auto f = io::read_scan(input);
-    section =
-        report::scan_section("Error-tolerant scanning", f.result, f.result.planned, f.tolerance);
-  } else {
-    throw Error(fmt::format("{}: a '{}' file has no report of its own{}", input, kind,
-                            kind == "parametric model"
-                                ? " (it is drawn with its map: 'trueaxis ballgauge --parametric "
-                                  "model.json --report map.html')"
-                                : ""));
-  }
-  report::write(output,
-                report::render(title, {cli::from_file(section, input)}, 4000, cli::report_meta()));
-  if (!quiet) fmt::print("wrote {} ({})\n", output, kind);
+  const report::FileReport r = report::file_report(input);
+  report::write(output, report::render(r.title, {r.section}, 4000, cli::report_meta()));
+  if (!quiet) fmt::print("wrote {} ({})\n", output, r.kind);
   return 0;
 }
 

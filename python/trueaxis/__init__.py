@@ -142,6 +142,23 @@ def load(path):
     return out
 
 
+def report(result, path, *, meta=None, title=None):
+    """Writes the HTML report of `result` to `path`, the page `trueaxis report` draws: a result a
+    trueaxis function returned (or load() read), or the path of a result file. `meta` adds header
+    rows as the command line's --meta does ({"machine": "...", "operator": "..."}, in order);
+    `title` replaces the page's title. Returns the result's kind."""
+    import tempfile as _tempfile
+
+    meta = [(str(k), str(v)) for k, v in (meta or {}).items()]
+    if isinstance(result, (str, _os.PathLike)):
+        return _trueaxis._report(_os.fspath(result), _os.fspath(path), meta, None, title)
+    with _tempfile.TemporaryDirectory() as tmp:
+        saved = _os.path.join(tmp, "result.json")
+        save(result, saved)
+        # No file behind it: the page names no data file.
+        return _trueaxis._report(saved, _os.fspath(path), meta, "", title)
+
+
 def _friendly(fn, method=False):
     """`fn` taking pathlib paths and pandas tables, and naming a misspelt keyword in one line."""
     overloads = _signatures(fn)
@@ -184,6 +201,7 @@ __all__ = [
     "ErrorMap",
     "Result",
     "load",
+    "report",
     "save",
     "Machine",
     "analyze_layout",

@@ -451,7 +451,7 @@ for pair in r-lsq.json:separation moody.json:surface space.json:space gw-sim.jso
   if "$T" report "$f" -o "rep-$f.html" >out.txt 2>err.txt && grep -q "($kind)" out.txt && grep -q "<table>" "rep-$f.html"; then ok; else bad "report $f: $(cat err.txt)"; fi
 done
 grep -q "Drag across a plot" rep-sph-fit.json.html && bad "a report without plots promises zoom" || ok
-expect_err "model.json: a 'parametric model' file has no report of its own" "$T" report bg-model.json -o o.html
+expect_err "model.json: a parametric model is drawn with its map" "$T" report bg-model.json -o o.html
 echo '{"hello": 1}' > notours.json
 expect_err "notours.json:1:1: not a trueaxis result file" "$T" report notours.json -o o.html
 

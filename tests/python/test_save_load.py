@@ -4,6 +4,7 @@ import filecmp
 import json
 import os
 import pathlib
+import re
 import subprocess
 
 import numpy as np
@@ -87,6 +88,36 @@ def test_every_result_saves_as_the_cli_file_and_loads_back(gauge, tmp_path):
                                    "ballgauge map", "parametric model", "length verification", "scan"}
 
 
+def without_date_and_source(page):
+    page = re.sub(r"<th>date</th><td>[^<]*</td>", "", page)
+    return re.sub(r'<p class="source">Data: [^<]*</p>\n?', "", page)
+
+
+def test_python_writes_the_report_the_command_line_writes(gauge, tmp_path):
+    for name, r in results(gauge, tmp_path):
+        html = tmp_path / f"{name}-py.html"
+        if name == "identify":  # a parametric model is drawn with its map
+            with pytest.raises(trueaxis.Error, match="drawn with its map"):
+                trueaxis.report(r, html)
+            continue
+        kind = trueaxis.report(r, html, meta={"machine": "M <1>", "operator": "K. Tanaka"})
+        trueaxis.save(r, tmp_path / f"{name}.json")
+        out = cli("report", tmp_path / f"{name}.json", "-o", tmp_path / f"{name}-cli.html",
+                  "--meta", "machine=M <1>", "--meta", "operator=K. Tanaka", "-q")
+        assert out.returncode == 0, out.stderr
+        py, cl = html.read_text(encoding="utf-8"), (tmp_path / f"{name}-cli.html").read_text(encoding="utf-8")
+        assert without_date_and_source(py) == without_date_and_source(cl), (name, kind)
+        assert '<p class="source">' not in py  # no file behind it: no data file named
+        # From a file, the page names it as the command line does.
+        trueaxis.report(tmp_path / f"{name}.json", html, title="Acceptance of M1")
+        page = html.read_text(encoding="utf-8")
+        assert f'<p class="source">Data: {name}.json</p>' in page and "<h1>Acceptance of M1</h1>" in page
+    with pytest.raises(trueaxis.Error, match=r"ipp_simple.stp:1:1: invalid JSON"):
+        trueaxis.report(DATA / "ippdme" / "ipp_simple.stp", tmp_path / "x.html")
+    with pytest.raises(TypeError, match="not a dict"):
+        trueaxis.report({"kind": "fit"}, tmp_path / "x.html")
+
+
 def test_load_gives_arrays_and_refuses_what_is_not_a_result(tmp_path):
     sim = trueaxis.simulate_straightness(stations=100, offsets=[0, 10, 20])
     r = trueaxis.separate(sim["x"], sim["readings"], offsets=sim["offsets"], method="three-point")
@@ -102,4 +133,10 @@ def test_load_gives_arrays_and_refuses_what_is_not_a_result(tmp_path):
     bad = tmp_path / "bad.json"
     bad.write_text('{"kind": "fit", "element": "sphere"}')
     with pytest.raises(trueaxis.Error, match="bad.json"):
+        trueaxis.load(bad)
+    bad.write_text('{"x": [1, 2]}')
+    with pytest.raises(trueaxis.Error, match=r"bad.json:1:1: not a trueaxis result file \(no 'kind'\)"):
+        trueaxis.load(bad)
+    bad.write_text('{"kind": "spline"}')
+    with pytest.raises(trueaxis.Error, match=r"bad.json: a 'spline' file is not a result"):
         trueaxis.load(bad)
