@@ -100,7 +100,7 @@ std::vector<positioning::Reading> readings_in(const py::object& runs,
 }
 
 py::dict evaluate(const py::object& runs, const std::string& standard,
-                  const std::map<std::string, double>& tolerances, double expansion,
+                  const std::map<std::string, double>& tolerance, double expansion,
                   std::optional<double> datum, bool temperature_correction, bool allow_incomplete,
                   const std::string& output, const std::string& run_directions) {
   if (standard != "iso230-2" && standard != "vdi3441")
@@ -119,7 +119,7 @@ py::dict evaluate(const py::object& runs, const std::string& standard,
   }
   r.warnings.insert(r.warnings.begin(), source_warnings.begin(), source_warnings.end());
   std::vector<std::pair<std::string, double>> tol;
-  for (const auto& [k, v] : tolerances) tol.emplace_back(k, v * 1e-3);
+  for (const auto& [k, v] : tolerance) tol.emplace_back(k, v * 1e-3);
   const auto verdicts = positioning::check(r, tol);
   const bool vdi = standard == "vdi3441";
   if (!output.empty())
@@ -171,7 +171,7 @@ py::dict evaluate(const py::object& runs, const std::string& standard,
 
 void bind_positioning(py::module_& m) {
   m.def("positioning", &evaluate, py::arg("runs"), py::kw_only(), py::arg("standard") = "iso230-2",
-        py::arg("tolerances") = std::map<std::string, double>{}, py::arg("expansion") = 11.5,
+        py::arg("tolerance") = std::map<std::string, double>{}, py::arg("expansion") = 11.5,
         py::arg("datum") = py::none(), py::arg("temperature_correction") = true,
         py::arg("allow_incomplete") = false, py::arg("output") = "",
         py::arg("run_directions") = "order",
@@ -182,7 +182,8 @@ runs: a runs.csv path, a Renishaw .rtl file (each run's direction from the order
 targets, or run_directions '+-' for odd runs '+', '-+', '+' or '-'), or a dict of sequences target_mm, cycle, direction ('+'/'-'),
 deviation_um (actual - target), optionally material_temp_c (then deviations are corrected to
 20 C with `expansion` in ppm/K about `datum` mm, default the lowest target) and air_temp_c.
-tolerances: {'A': 12, 'R': 4, ...} in µm. output: also write positioning.json.
+tolerance: {'A': 12, 'R': 4, ...} in µm (the command line's --tolerance A=12,R=4). output: also
+write positioning.json.
 
 Returns a dict: 'A', 'A_up', 'A_down', 'E', 'E_up', 'E_down', 'M', 'R', 'R_up', 'R_down', 'B',
 'B_mean', 'P', 'Pa', 'Ps', 'U', 'Ps_mean', 'U_mean' (µm; None where the runs do not define

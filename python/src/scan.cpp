@@ -30,7 +30,7 @@ py::dict times(const scan::MachineTime& t) {
 
 py::dict run_scan(const std::string& design, const std::string& part, const std::string& strategy,
                   double tolerance, int max_autonomous, double tip_radius, double pushing,
-                  bool passive, double probe_noise_um, std::uint64_t seed,
+                  bool passive, double probe_noise, std::uint64_t seed,
                   const std::string& corrected_design, const std::string& machine) {
   scan::ControllerOptions o;
   o.strategy = scan::strategy_from_string(strategy);
@@ -44,7 +44,7 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
   const sim::Part p = io::read_part(part);
   scan::VirtualCmmOptions vo;
   vo.probe.tip_radius = tip_radius;
-  vo.probe.noise = probe_noise_um * 1e-3;
+  vo.probe.noise = probe_noise * 1e-3;
   vo.probe.seed = seed;
   vo.probe.range = std::max(1.0, 3 * pushing);
   if (!machine.empty()) vo.geometry = io::read_machine(machine);
@@ -137,7 +137,7 @@ py::dict run_scan(const std::string& design, const std::string& part, const std:
   out["events"] = events;
   io::ScanCmm cmm_record;
   cmm_record.tip_radius = tip_radius;
-  cmm_record.probe_noise_um = probe_noise_um;
+  cmm_record.probe_noise_um = probe_noise;
   if (vo.geometry) cmm_record.machine = vo.geometry->name.empty() ? machine : vo.geometry->name;
   cmm_record.part_origin = origin;
   savable(out,
@@ -151,7 +151,7 @@ void bind_scan(py::module_& m) {
   m.def("scan", &run_scan, py::arg("design"), py::arg("part"), py::kw_only(),
         py::arg("strategy") = "error-tolerant", py::arg("tolerance") = 1.5,
         py::arg("max_autonomous") = 3, py::arg("tip_radius") = 1.0, py::arg("pushing") = 0.3,
-        py::arg("passive") = false, py::arg("probe_noise_um") = 0.0, py::arg("seed") = 1,
+        py::arg("passive") = false, py::arg("probe_noise") = 0.0, py::arg("seed") = 1,
         py::arg("corrected_design") = "", py::arg("machine") = "",
         "Scan a simulated part (part.json) along its design data (design.json) on the virtual "
         "CMM, as 'trueaxis scan' does. Returns a dict: ok, summary, machine_time_s, sections "
@@ -159,7 +159,8 @@ void bind_scan(py::module_& m) {
         "distance from the simulated part, corrections, counts) and events (arrays: t, section, "
         "arc_mm, delta_l_mm, mode, event, decision). corrected_design: a design.json to write "
         "for the next part of the batch. machine: a machine.json whose 21 geometric errors the "
-        "CMM has (the part centred in its travel).");
+        "CMM has (the part centred in its travel). probe_noise: the probe's noise, standard "
+        "deviation in µm (the command line's --probe-noise).");
 }
 
 }  // namespace trueaxis::python

@@ -49,7 +49,12 @@ def test_a_misspelt_keyword_is_named_in_one_line():
     with pytest.raises(TypeError) as e:
         trueaxis.simulate_straightness(stationz=100)
     assert str(e.value) == "simulate_straightness(): no keyword 'stationz' (did you mean 'stations'?)"
-    with pytest.raises(TypeError, match="no keyword 'toleranse'.*'tolerances'"):
+    with pytest.raises(TypeError, match="no keyword 'toleranse'.*'tolerance'"):
         trueaxis.positioning({}, toleranse={"A": 1})
+    # One keyword per idea, named as the command line names it (--tolerance, --probe-noise).
+    with pytest.raises(TypeError, match=r"no keyword 'tolerances' \(did you mean 'tolerance'\?\)"):
+        trueaxis.positioning({}, tolerances={"A": 1})
+    with pytest.raises(TypeError, match=r"no keyword 'probe_noise_um' \(did you mean 'probe_noise'\?\)"):
+        trueaxis.scan("design.json", "part.json", probe_noise_um=0.5)
     # The wrapped functions keep their documentation.
     assert "runs" in trueaxis.positioning.__doc__

@@ -46,7 +46,7 @@ def results(gauge, tmp):
     yield "guideway", trueaxis.guideway(LAYOUT, g["s"], g["readings"])
     runs, _ = trueaxis.simulate_positioning(m, axis="x", targets=list(np.arange(0, 801, 100.0)),
                                             cycles=3, backlash=3.0, noise=0.3)
-    yield "positioning", trueaxis.positioning(runs, tolerances={"A": 30})
+    yield "positioning", trueaxis.positioning(runs, tolerance={"A": 30})
     pts = np.random.default_rng(1).normal(size=(60, 3))
     pts = 10 * pts / np.linalg.norm(pts, axis=1)[:, None]
     yield "fit", trueaxis.fit("sphere", pts, point_u=0.5)
