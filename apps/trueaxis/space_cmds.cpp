@@ -116,12 +116,7 @@ Eigen::Vector3d line_at(const map::ErrorMap& m, const std::vector<double>& given
     if (given.size() != 3) throw Error("--at needs x,y,z (the axis' own coordinate is ignored)");
     return {given[0], given[1], given[2]};
   }
-  Eigen::Vector3d at;
-  for (int k = 0; k < 3; ++k) {
-    const auto& x = m.axes[static_cast<std::size_t>(k)];
-    at[k] = 0.5 * (x[0] + x[x.size() - 1]);
-  }
-  return at;
+  return compensation::grid_centre(m);
 }
 
 struct ExportArgs {

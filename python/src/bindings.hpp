@@ -20,6 +20,8 @@ void savable(pybind11::dict& d, Write write) {
 // trueaxis._load(path): any result file the command line writes, checked by the reader of its
 // kind (file:line:col on a bad one); returns its kind.
 void bind_results(pybind11::module_& m);
+// trueaxis.export: controller compensation tables (export.cpp).
+void bind_export(pybind11::module_& m);
 
 // The virtual machine, error surfaces, error spaces and error maps (space.cpp).
 void bind_space(pybind11::module_& m);

@@ -159,6 +159,30 @@ def report(result, path, *, meta=None, title=None):
         return _trueaxis._report(saved, _os.fspath(path), meta, "", title)
 
 
+def export(result, path, format, *, axis="x", at=None, unidirectional=False, **options):
+    """Writes the compensation table of `result` for a machine-tool controller: the file
+    `trueaxis export FORMAT` writes. format: "linuxcnc", "sinumerik", "heidenhain" or "fanuc".
+    result: what positioning() or measure_space() returned, or such a result file's path.
+    axis: the machine axis ('x', 'y', 'z'; for a space, the grid line along it); at: a point
+    (x, y, z in mm) that line passes through (default the grid's centre); unidirectional: a
+    positioning table of one curve where the format could hold both directions (LinuxCNC,
+    HEIDENHAIN). Options, named as the command line's flags: linuxcnc: type (1: trims,
+    0: actual positions); sinumerik: axis_name ('X1'), encoder, step (mm), max_points;
+    heidenhain: axis_name ('X'), name; fanuc: axis_number, axis_name, reference, interval,
+    first_number, max_number, magnification, detection_unit, max_feedrate. Returns what was
+    written, in words."""
+    import tempfile as _tempfile
+
+    at = None if at is None else [float(v) for v in at]
+    if isinstance(result, (str, _os.PathLike)):
+        return _trueaxis._export(_os.fspath(result), _os.fspath(path), format, axis, at,
+                                 unidirectional, options)
+    with _tempfile.TemporaryDirectory() as tmp:
+        saved = _os.path.join(tmp, "result.json")
+        save(result, saved)
+        return _trueaxis._export(saved, _os.fspath(path), format, axis, at, unidirectional, options)
+
+
 def _friendly(fn, method=False):
     """`fn` taking pathlib paths and pandas tables, and naming a misspelt keyword in one line."""
     overloads = _signatures(fn)
@@ -200,6 +224,7 @@ __all__ = [
     "Error",
     "ErrorMap",
     "Result",
+    "export",
     "load",
     "report",
     "save",

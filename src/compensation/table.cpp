@@ -57,6 +57,15 @@ AxisTable from_positioning(const positioning::Result& r, bool bidirectional) {
   return t;
 }
 
+Eigen::Vector3d grid_centre(const map::ErrorMap& m) {
+  Eigen::Vector3d c;
+  for (int k = 0; k < 3; ++k) {
+    const auto& x = m.axes[static_cast<std::size_t>(k)];
+    c[k] = 0.5 * (x[0] + x[x.size() - 1]);
+  }
+  return c;
+}
+
 AxisTable from_map(const map::ErrorMap& m, int axis, const Eigen::Vector3d& at) {
   if (axis < 0 || axis > 2) throw Error("the axis must be x, y or z");
   const Eigen::VectorXd& nodes = m.axes[static_cast<std::size_t>(axis)];

@@ -41,4 +41,7 @@ AxisTable from_positioning(const positioning::Result& result, bool bidirectional
 // `axis` is ignored), at the map's nodes along `axis` (0, 1, 2).
 AxisTable from_map(const map::ErrorMap& map, int axis, const Eigen::Vector3d& at);
 
+// The centre of the map's grid (mm): the default `at` of a table, the line through the middle.
+Eigen::Vector3d grid_centre(const map::ErrorMap& map);
+
 }  // namespace trueaxis::compensation
