@@ -22,6 +22,8 @@ void savable(pybind11::dict& d, Write write) {
 void bind_results(pybind11::module_& m);
 // trueaxis.export: controller compensation tables (export.cpp).
 void bind_export(pybind11::module_& m);
+// trueaxis.design, trueaxis.simulate_part: scanning inputs (design.cpp).
+void bind_design(pybind11::module_& m);
 
 // The virtual machine, error surfaces, error spaces and error maps (space.cpp).
 void bind_space(pybind11::module_& m);
