@@ -6,9 +6,9 @@
 // compiled in eigen_instances.cpp; include it in the library's source files that use them. Small
 // inline members are still inlined where they are used. (Tests and programs that use only a few
 // members gain nothing measurable from it and do not include it.) One SVD serves the library,
-// JacobiSVD over MatrixXd (3 × n point sets included): BDCSVD and a fixed-row JacobiSVD each added
-// 20–40 s of compilation per compiler for no measurable gain at the sizes used (at most a few
-// hundred columns, a one-sided Jacobi after a QR).
+// JacobiSVD over MatrixXd (3 × n point sets included), at most ~100 columns, where a one-sided
+// Jacobi after a QR costs little more than BDCSVD; ranks come from a column-pivoted QR. BDCSVD
+// and a fixed-row JacobiSVD each added 20–40 s of compilation per compiler.
 #pragma once
 
 #include <Eigen/Dense>  // Cholesky, QR, SVD, Eigenvalues

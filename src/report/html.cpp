@@ -47,13 +47,11 @@ std::vector<Eigen::Index> decimate(const Plot& p, std::size_t max_points) {
   return idx;
 }
 
-void js_array(std::string& out, const Eigen::VectorXd& v, const std::vector<Eigen::Index>& idx,
-              double add_band_sign = 0, const Eigen::VectorXd* band = nullptr) {
+void js_array(std::string& out, const Eigen::VectorXd& v, const std::vector<Eigen::Index>& idx) {
   out += '[';
   for (std::size_t k = 0; k < idx.size(); ++k) {
     if (k) out += ',';
-    double val = v[idx[k]];
-    if (band) val += add_band_sign * (*band)[idx[k]];
+    const double val = v[idx[k]];
     if (std::isfinite(val))
       out += fmt::format("{:.7g}", val);  // 1 µm in a metre, in mm: finer than a plot shows
     else
