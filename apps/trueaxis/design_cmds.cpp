@@ -123,14 +123,7 @@ int run_design(const DesignArgs& a) {
     }
     design::StepCut cut = design::cut_step(a.step, req);
     // Each contour of a plane is scanned with the plane's probe orientation.
-    for (auto& s : cut.design.sections) {
-      const auto dot = s.name.rfind('.');
-      const auto it = probes.find(s.name);
-      if (it != probes.end())
-        s.probe = it->second;
-      else if (dot != std::string::npos && probes.count(s.name.substr(0, dot)))
-        s.probe = probes[s.name.substr(0, dot)];
-    }
+    design::assign_probes(cut.design, probes);
     if (!a.quiet) {
       fmt::print("{}: {} solid{}; cut edges joined across gaps up to {:.4g} mm ({})\n", a.step,
                  cut.solids, cut.solids == 1 ? "" : "s", cut.join_tolerance,

@@ -58,13 +58,7 @@ py::dict design_from_step(const std::string& step, const py::list& sections,
   }
   design::StepCut cut = design::cut_step(step, req);
   // Each contour of a plane is scanned with the plane's probe orientation.
-  for (auto& s : cut.design.sections) {
-    const auto dot = s.name.rfind('.');
-    if (const auto it = probes.find(s.name); it != probes.end())
-      s.probe = it->second;
-    else if (dot != std::string::npos && probes.count(s.name.substr(0, dot)))
-      s.probe = probes[s.name.substr(0, dot)];
-  }
+  design::assign_probes(cut.design, probes);
   py::list made, failed;
   for (const auto& s : cut.design.sections) {
     py::dict d;

@@ -359,6 +359,15 @@ Design moved_sections(const std::string& step, const Eigen::Affine3d& t, const P
   return out;
 }
 
+void assign_probes(Design& design, const std::map<std::string, ProbeOrientation>& by_plane) {
+  for (auto& s : design.sections) {
+    auto it = by_plane.find(s.name);
+    if (const auto dot = s.name.rfind('.'); it == by_plane.end() && dot != std::string::npos)
+      it = by_plane.find(s.name.substr(0, dot));
+    if (it != by_plane.end()) s.probe = it->second;
+  }
+}
+
 Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes) {
   StepCut cut = cut_step(path, planes);
   if (!cut.failures.empty())

@@ -1,6 +1,7 @@
 """trueaxis.design and trueaxis.simulate_part make the scanning inputs `trueaxis design` and
 `trueaxis simulate part` make (the same files), and refuse what cannot be one."""
 import filecmp
+import json
 import os
 import pathlib
 import subprocess
@@ -33,6 +34,9 @@ def test_design_and_part_are_the_files_the_command_line_makes(tmp_path):
             sh / "design.json", "-q")
     assert r.returncode == 0, r.stderr
     assert filecmp.cmp(py / "design.json", sh / "design.json", shallow=False)
+    # A plane's probe orientation goes to its own sections only.
+    probes = {s["name"]: s.get("probe") for s in json.loads((py / "design.json").read_text())["sections"]}
+    assert probes == {"mid.1": None, "mid.2": None, "x": {"a_deg": 90.0, "b_deg": -90.0}}, probes
     p = trueaxis.simulate_part(py / "design.json", py / "part.json", translate=(1.8, -1.1, 0),
                                rotate=(0, 0, 0.3), bumps=[("mid.1", 150, 2, 30)], noise=2, seed=3)
     assert p["sections"] == 3 and p["bumps"] == 1 and p["centroid_shift_mm"] > 1.8

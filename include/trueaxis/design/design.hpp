@@ -19,6 +19,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -195,6 +196,9 @@ StepCut cut_step(const std::string& path, const std::vector<StepSectionRequest>&
                  const StepCutOptions& options = {});
 // The same, throwing Error ("<file>: section '<name>': <reason>") at the first failed plane.
 Design from_step(const std::string& path, const std::vector<StepSectionRequest>& planes);
+// Gives each section the probe orientation of its plane in `by_plane` (keyed by the requested
+// name: a plane's contours "NAME.1", "NAME.2" take NAME's); the others keep theirs.
+void assign_probes(Design& design, const std::map<std::string, ProbeOrientation>& by_plane);
 
 // ---------------------------------------------------------------------------------------------
 // Scanning path: parametric cubic curve segments.
@@ -220,7 +224,7 @@ struct PccSegment {
   // on the arc round a convex corner, that of the widest arc through the same tangents that cuts
   // the corner by at most a third of the pushing amount and fits on the spans beside it.
   double speed = 0;
-  double curvature = 0;               // largest curvature of the offset curve on it (1/mm)
+  double curvature = 0;  // largest curvature of the offset curve on it (1/mm)
   // The speed allowed where the segment starts, at a sharp corner of the path (the ball passing
   // from one wall to the other in a concave corner): the speed of the arc that cuts the corner
   // by a third of the pushing amount, at the normal-acceleration limit (mm/s; +inf: no corner).
