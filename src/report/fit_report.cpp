@@ -48,6 +48,20 @@ Section fit_section(const std::string& title, const geometry::Fit& f) {
   if (zone) s.table.push_back({"zone width", fmt::format("{:.4f} µm", f.zone * 1e3), "", ""});
   s.table.push_back(
       {"residual RMS / max", fmt::format("{:.4f} / {:.4f} µm", f.rms * 1e3, f.max * 1e3), "", ""});
+  // The residuals in the order of the points: a pattern (a lobe, a step, a drift) shows what
+  // the element does not describe; random scatter is what a good fit leaves.
+  if (f.residuals.size() > 0) {
+    const auto n = f.residuals.size();
+    Plot p;
+    p.title = fmt::format("residuals: orthogonal distance of each point to the fitted {}",
+                          geometry::to_string(f.element));
+    p.x_label = "point (in the order of the input)";
+    p.whole_x = true;
+    p.y_label = "residual (µm)";
+    p.x = Eigen::VectorXd::LinSpaced(n, 1, static_cast<double>(n));
+    p.series.push_back({"residual", f.residuals * 1e3, {}, "#1f77b4", false, true});
+    s.plots.push_back(std::move(p));
+  }
   return s;
 }
 

@@ -8,11 +8,13 @@
 #include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string_view>
 
 #include "../common/figures.hpp"
 #include "../io/fast_text.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/geometry/straightness.hpp"
 
 namespace trueaxis::report {
 namespace detail {
@@ -44,6 +46,9 @@ std::vector<Eigen::Index> decimate(const Plot& p, std::size_t max_points) {
     idx.push_back(std::min(imin, imax));
     if (imin != imax) idx.push_back(std::max(imin, imax));
   }
+  // The ends always: where a series given only at its ends (a reference line) is drawn.
+  if (idx.front() != 0) idx.insert(idx.begin(), 0);
+  if (idx.back() != n - 1) idx.push_back(n - 1);
   return idx;
 }
 
@@ -53,9 +58,11 @@ void js_array(std::string& out, const Eigen::VectorXd& v, const std::vector<Eige
     if (k) out += ',';
     const double val = v[idx[k]];
     if (std::isfinite(val))
-      out += fmt::format("{:.7g}", val);  // 1 µm in a metre, in mm: finer than a plot shows
-    else
-      out += "null";
+      out += fmt::format("{:.6g}", val);  // 1 µm at 999 mm, 1 nm in 1 mm: finer than a plot shows
+    else if (k + 1 == idx.size())
+      out += "null";  // a hole at the end would not count: [1,] has one element
+    // A missing value is a hole ([1,,3]), which the page reads as null: series drawn over part
+    // of a shared x are mostly holes.
   }
   out += ']';
 }
@@ -294,8 +301,10 @@ svg.ta-fig{max-width:100%;height:auto}
               "points:{{show:true,size:7,width:1,stroke:'{}',fill:'{}88'}}}}",
               js_string(s2.label), color, color, color, color);
         else
-          series += fmt::format(",{{label:{},stroke:'{}',width:1.5{}}}", js_string(s2.label), color,
-                                s2.dashed ? ",dash:[6,4]" : "");
+          series +=
+              fmt::format(",{{label:{},stroke:'{}',width:1.5{}{}{}}}", js_string(s2.label), color,
+                          s2.dashed ? ",dash:[6,4]" : "", p.span_gaps ? ",spanGaps:true" : "",
+                          s2.in_legend ? "" : ",edge:true");
         // The ±2u band: u here, its edges made by the page (below).
         if (s2.band.size() == s2.y.size()) {
           u += fmt::format("{}:", si);
@@ -308,9 +317,9 @@ svg.ta-fig{max-width:100%;height:auto}
       series += "]";
       u += "}";
       script += fmt::format(
-          "TA_PLOTS.push({{el:'{}',data:{},u:{},series:{},xl:{},yl:{},log:{},pts:{}}});\n", id,
+          "TA_PLOTS.push({{el:'{}',data:{},u:{},series:{},xl:{},yl:{},log:{},pts:{}{}}});\n", id,
           data, u, series, js_string(p.x_label), js_string(p.y_label), p.log_y ? "true" : "false",
-          scatter ? "true" : "false");
+          scatter ? "true" : "false", p.whole_x ? ",wx:true" : "");
     }
     if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty() || !s.planes.empty()) {
       h += "<div class=\"figs\">";
@@ -354,6 +363,12 @@ function taAxisSize(u,values){
 }
 (function(){
   var made=0;
+  // Holes in the data ([1,,3]) are missing values: null, as the plots and the CSV want them.
+  function filled(a){return Array.from(a,function(v){return v===undefined?null:v;});}
+  TA_PLOTS.forEach(function(p){
+    p.data=p.data.map(filled);
+    Object.keys(p.u).forEach(function(k){p.u[k]=filled(p.u[k]);});
+  });
   TA_PLOTS.forEach(function(p){
     var el=document.getElementById(p.el);
     var w=Math.max(400,Math.min(1060,(document.body.clientWidth||900)-20));
@@ -365,14 +380,15 @@ function taAxisSize(u,values){
       var up=y.map(function(v,j){return v===null||u[j]===null?null:v+2*u[j];});
       var lo=y.map(function(v,j){return v===null||u[j]===null?null:v-2*u[j];});
       data.push(up,lo);
-      series.push({label:p.series[i].label+' upper edge',stroke:c+'44',width:0.5,edge:true},
-                  {label:p.series[i].label+' lower edge',stroke:c+'44',width:0.5,edge:true});
+      var g=!!p.series[i].spanGaps;
+      series.push({label:p.series[i].label+' upper edge',stroke:c+'44',width:0.5,edge:true,spanGaps:g},
+                  {label:p.series[i].label+' lower edge',stroke:c+'44',width:0.5,edge:true,spanGaps:g});
       bands.push({series:[data.length-2,data.length-1],fill:c+'22'});
     });
     var opts={width:w,height:300,series:series,bands:bands,
       scales:{x:p.pts?{time:false,range:function(u,mn,mx){var d=(mx-mn)*0.03||1;return [mn-d,mx+d];}}:{time:false},
               y:p.log?{distr:3}:{}},
-      axes:[{label:p.xl,values:taTicks},
+      axes:[p.wx?{label:p.xl,values:taTicks,incrs:[1,2,5,10,20,50,100,200,500,1000]}:{label:p.xl,values:taTicks},
             p.log?{label:p.yl,size:70}:{label:p.yl,values:taTicks,size:taAxisSize}],
       cursor:{drag:{x:true,y:false}}};
     var u=new uPlot(opts,data,el);
@@ -409,6 +425,34 @@ void write(const std::string& path, const std::string& html) {
   io::detail::OutFile out(path);
   out.write(html);
   out.close();
+}
+
+void add_reference_lines(Plot& p, const Eigen::VectorXd& x, const Eigen::VectorXd& y,
+                         double scale) {
+  const geometry::Line ls = geometry::fit_line(x, y);
+  const geometry::MinZone mz = geometry::min_zone(x, y);
+  // The zone's width is perpendicular to its lines; along y its half-height is larger by
+  // √(1 + slope²).
+  const double half = mz.width / 2 * std::sqrt(1 + mz.middle.slope * mz.middle.slope);
+  // Straight lines: their two ends carry them (the page spans the gaps between), so a long
+  // profile does not carry three more series of its length.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  Eigen::VectorXd line = Eigen::VectorXd::Constant(x.size(), nan), lower = line, upper = line;
+  Eigen::Index first = 0, last = 0;
+  x.minCoeff(&first);
+  x.maxCoeff(&last);
+  for (const Eigen::Index i : {first, last}) {
+    line[i] = ls(x[i]) * scale;
+    // A negative scale (a value shown with the opposite sign) swaps the two lines.
+    lower[i] = (mz.middle(x[i]) - (scale < 0 ? -half : half)) * scale;
+    upper[i] = (mz.middle(x[i]) + (scale < 0 ? -half : half)) * scale;
+  }
+  p.span_gaps = true;
+  p.series.push_back({"least-squares line", line, {}, "#444444", true});
+  p.series.push_back({"minimum zone", lower, {}, "#2ca02c", true});
+  Series up{"minimum zone, upper line", upper, {}, "#2ca02c", true};
+  up.in_legend = false;
+  p.series.push_back(std::move(up));
 }
 
 Section separation_section(const std::string& title, const separation::Result& r,
@@ -457,7 +501,7 @@ Section separation_section(const std::string& title, const separation::Result& r
         {"max |separated − true| guide (µm)", err(r.guide.value, truth->guide.value), "", "", ""});
   }
   auto plot = [&](const char* name, const separation::Profile& p, const separation::Profile* t,
-                  double scale, const char* unit) {
+                  double scale, const char* unit, bool straightness) {
     Plot pl;
     pl.title = name;
     pl.x_label = "x (mm)";
@@ -467,14 +511,16 @@ Section separation_section(const std::string& title, const separation::Result& r
              p.uncertainty.size() ? Eigen::VectorXd(p.uncertainty * scale) : Eigen::VectorXd(), "",
              false};
     pl.series.push_back(a);
+    // Straightness figures are about these lines (ISO 12780-1): drawn with the profile.
+    if (straightness && p.x.size() >= 2) add_reference_lines(pl, p.x, p.value, scale);
     if (t && t->value.size() == p.value.size())
       pl.series.push_back({"true", t->value * scale, {}, "#d62728", true});
     s.plots.push_back(std::move(pl));
   };
-  plot("workpiece", r.workpiece, truth ? &truth->workpiece : nullptr, 1e3, "µm");
-  plot("guide straightness", r.guide, truth ? &truth->guide : nullptr, 1e3, "µm");
+  plot("workpiece", r.workpiece, truth ? &truth->workpiece : nullptr, 1e3, "µm", true);
+  plot("guide straightness", r.guide, truth ? &truth->guide : nullptr, 1e3, "µm", true);
   if (r.pitch)
-    plot("pitch", *r.pitch, truth && truth->pitch ? &*truth->pitch : nullptr, 1e6, "µrad");
+    plot("pitch", *r.pitch, truth && truth->pitch ? &*truth->pitch : nullptr, 1e6, "µrad", false);
   return s;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "../common/figures.hpp"
+#include "trueaxis/geometry/triangulation.hpp"
 #include "trueaxis/report/surface.hpp"
 
 namespace trueaxis::report {
@@ -29,6 +30,69 @@ HeatMap xy_map(std::string title, std::string value_label, int width) {
   h.value_label = std::move(value_label);
   h.width = width;
   return h;
+}
+
+// The height field as a contour map: the stations (a station on several lines once, at the mean
+// of its heights) triangulated, the heights linear over each triangle, drawn as cells (when the
+// method gives no lattice of its own) and as contour lines at a round step.
+void add_contours(HeatMap& h, const surface::Result& r) {
+  std::vector<Eigen::Vector2d> xy;
+  std::vector<double> sum;
+  std::vector<int> count;
+  for (const auto& p : r.points) {
+    std::size_t k = 0;
+    while (k < xy.size() && (xy[k] - p.xy).norm() > 1e-6) ++k;
+    if (k == xy.size()) {
+      xy.push_back(p.xy);
+      sum.push_back(0);
+      count.push_back(0);
+    }
+    sum[k] += p.height * 1e3;
+    ++count[k];
+  }
+  const auto n = static_cast<Eigen::Index>(xy.size());
+  Eigen::Matrix2Xd pts(2, n);
+  Eigen::VectorXd z(n);
+  for (Eigen::Index k = 0; k < n; ++k) {
+    pts.col(k) = xy[static_cast<std::size_t>(k)];
+    z[k] = sum[static_cast<std::size_t>(k)] / count[static_cast<std::size_t>(k)];
+  }
+  const auto tris = geometry::delaunay(pts);
+  if (tris.empty() || !(z.maxCoeff() > z.minCoeff())) return;
+  if (!r.grid) {
+    // Cells about 1/45 of the longer side, square.
+    const Eigen::Vector2d lo = pts.rowwise().minCoeff(), hi = pts.rowwise().maxCoeff();
+    const double step = (hi - lo).maxCoeff() / 45;
+    const auto nx = std::max<Eigen::Index>(2, std::lround((hi.x() - lo.x()) / step) + 1);
+    const auto ny = std::max<Eigen::Index>(2, std::lround((hi.y() - lo.y()) / step) + 1);
+    h.grid_x = Eigen::VectorXd::LinSpaced(nx, lo.x(), hi.x());
+    h.grid_y = Eigen::VectorXd::LinSpaced(ny, lo.y(), hi.y());
+    Eigen::Matrix2Xd q(2, nx * ny);
+    for (Eigen::Index j = 0; j < ny; ++j)
+      for (Eigen::Index i = 0; i < nx; ++i) q.col(j * nx + i) << h.grid_x[i], h.grid_y[j];
+    const Eigen::VectorXd v = geometry::interpolate_linear(pts, z, tris, q);
+    h.grid_value.resize(ny, nx);
+    for (Eigen::Index j = 0; j < ny; ++j)
+      for (Eigen::Index i = 0; i < nx; ++i) h.grid_value(j, i) = v[j * nx + i];
+  }
+  // About ten contours at 1, 2 or 5 × 10^k µm.
+  const double span = z.maxCoeff() - z.minCoeff();
+  const double raw = span / 10, p10 = std::pow(10.0, std::floor(std::log10(raw)));
+  const double step = (raw / p10 > 5 ? 10 : raw / p10 > 2 ? 5 : raw / p10 > 1 ? 2 : 1) * p10;
+  for (double level = std::ceil(z.minCoeff() / step) * step; level < z.maxCoeff(); level += step) {
+    for (const auto& [a, b] : geometry::contour_segments(pts, z, tris, level)) {
+      Eigen::Matrix2Xd seg(2, 2);
+      seg << a.x(), b.x(), a.y(), b.y();
+      h.contours.push_back(std::move(seg));
+    }
+  }
+  if (!r.grid) h.band_step = step;
+  h.title =
+      r.grid ? fmt::format("heights (cells: the lattice of stations), contours every {:g} µm", step)
+             : fmt::format(
+                   "heights: measured at the stations (dots; lines in grey), linear "
+                   "between them; contours every {:g} µm",
+                   step);
 }
 
 }  // namespace
@@ -124,6 +188,7 @@ Section surface_section(const std::string& title, const surface::Result& r,
     h.grid_y = r.grid->y;
     h.grid_value = r.grid->height * 1e3;
   }
+  add_contours(h, r);
   s.heat_maps.push_back(std::move(h));
   if (!r.crossings.empty() && r.closure_max > 0) {
     HeatMap c = xy_map("closure at every crossing (height on one line − on the other)",
@@ -156,6 +221,8 @@ Section surface_section(const std::string& title, const surface::Result& r,
       c.pvalue[k] = x.residual * 1e3;
     }
     if (spread) c.title += "; crossings at one point are drawn on a small ring around it";
+    // Few crossings, each number matters (a closure of 0 would otherwise be a white dot).
+    c.label_points = m <= 40;
     s.heat_maps.push_back(std::move(c));
   }
   return s;
@@ -236,7 +303,7 @@ Section space_section(const std::string& title, const surface::SpaceResult& sp,
           y[i] = m.error(c, node) * 1e3;
           if (band.size()) band[i] = m.uncertainty(c, node) * 1e3;
         }
-        p.series.push_back({fmt::format("e{}", names[c]), y, band, "", false});
+        p.series.push_back({fmt::format("e{}", names[c]), y, band, component_colour(c), false});
       }
       s.plots.push_back(std::move(p));
     }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <set>
 #include <utility>
@@ -257,7 +258,33 @@ std::string svg(const HeatMap& h) {
   const Scale sc(std::isfinite(h.vmin) ? h.vmin : vmin, std::isfinite(h.vmax) ? h.vmax : vmax,
                  h.symmetric);
   std::string s = open_svg(f, h.title);
-  if (grid)
+  if (grid && h.band_step > 0) {
+    // Filled bands: each row's runs of cells in one band drawn as one rectangle, the rectangles
+    // of one band as one path.
+    std::map<long, std::string> paths;
+    const auto band = [&](double v) {
+      return std::isfinite(v) ? static_cast<long>(std::floor(v / h.band_step))
+                              : std::numeric_limits<long>::min();
+    };
+    for (Eigen::Index j = 0; j < h.grid_y.size(); ++j) {
+      const auto [ya, yb] = cell(h.grid_y, j);
+      for (Eigen::Index i = 0; i < h.grid_x.size();) {
+        const long b = band(h.grid_value(j, i));
+        Eigen::Index e = i + 1;
+        while (e < h.grid_x.size() && band(h.grid_value(j, e)) == b) ++e;
+        const double xa = cell(h.grid_x, i).first, xb = cell(h.grid_x, e - 1).second;
+        if (b != std::numeric_limits<long>::min())
+          paths[b] += fmt::format("M{:.1f} {:.1f}h{:.1f}v{:.1f}h{:.1f}z", f.X(xa), f.Y(yb),
+                                  f.X(xb) - f.X(xa) + 0.3, f.Y(ya) - f.Y(yb) + 0.3,
+                                  -(f.X(xb) - f.X(xa) + 0.3));
+        i = e;
+      }
+    }
+    for (const auto& [b, d] : paths)
+      s += fmt::format("<path fill=\"{}\" d=\"{}\"/>",
+                       sc(std::clamp((static_cast<double>(b) + 0.5) * h.band_step, sc.lo, sc.hi)),
+                       d);
+  } else if (grid)
     for (Eigen::Index j = 0; j < h.grid_y.size(); ++j)
       for (Eigen::Index i = 0; i < h.grid_x.size(); ++i) {
         const auto [xa, xb] = cell(h.grid_x, i);
@@ -269,6 +296,14 @@ std::string svg(const HeatMap& h) {
             f.X(xa), f.Y(yb), f.X(xb) - f.X(xa) + 0.3, f.Y(ya) - f.Y(yb) + 0.3,
             std::isfinite(v) ? sc(v) : "#ddd", h.grid_x[i], h.grid_y[j], v);
       }
+  if (!h.contours.empty()) {
+    std::string d;
+    for (const auto& c : h.contours)
+      for (Eigen::Index k = 0; k < c.cols(); ++k)
+        d += fmt::format("{}{:.1f},{:.1f}", k ? "L" : "M", f.X(c(0, k)), f.Y(c(1, k)));
+    s += "<path fill=\"none\" stroke=\"#222\" stroke-opacity=\"0.55\" stroke-width=\"0.8\" d=\"" +
+         d + "\"/>";
+  }
   // At screen resolution: each line through the vertices that bend it by 0.2 px or more, one
   // dot (9 px wide) per 3 px cell.
   for (const auto& line : h.lines) {
@@ -296,6 +331,13 @@ std::string svg(const HeatMap& h) {
         "</title></circle>",
         sx[k], sy[k], sc(h.pvalue[k]), h.px[k], h.py[k], h.pvalue[k]);
   s += "</g>";
+  if (h.label_points) {
+    s += "<g font-size=\"10\" fill=\"#222\">";
+    for (Eigen::Index k = 0; k < h.px.size(); ++k)
+      s += fmt::format("<text x=\"{:.1f}\" y=\"{:.1f}\">{:.3g}</text>", sx[k] + 6, sy[k] - 5,
+                       std::abs(h.pvalue[k]) < 5e-4 ? 0.0 : h.pvalue[k]);
+    s += "</g>";
+  }
   s += axes(f, h.x_label, h.y_label) + colour_bar(f, sc, h.value_label) + "</svg>";
   return s;
 }

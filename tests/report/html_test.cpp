@@ -2,6 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
+#include "trueaxis/geometry/fit.hpp"
+#include "trueaxis/geometry/straightness.hpp"
+#include "trueaxis/report/fit.hpp"
+
 using namespace trueaxis;
 
 TEST(Report, EmbedsPlottingLibraryAndData) {
@@ -68,4 +74,80 @@ TEST(Report, HeaderCsvLinksAndReferences) {
   const auto first = h.find("ISO 10360-2:2009");
   ASSERT_NE(first, std::string::npos);
   EXPECT_EQ(h.find("ISO 10360-2:2009", first + 1), std::string::npos);
+}
+
+// A straightness profile is drawn with the lines its figures are about (ISO 12780-1): the
+// least-squares line, and the minimum zone's two lines that enclose every point, touch it, and
+// are as far apart as the minimum-zone straightness the table states.
+TEST(Report, StraightnessProfilesCarryTheirLeastSquaresLineAndMinimumZone) {
+  constexpr double kTol = 1e-9;  // µm: round-off of lines evaluated at 200 points
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(200, 0, 995);
+  Eigen::VectorXd y(x.size());
+  for (Eigen::Index i = 0; i < x.size(); ++i)
+    y[i] = 2e-3 * std::sin(x[i] / 90) + 1e-6 * x[i] + 0.4e-3 * std::cos(x[i] / 7);
+  separation::Result r;
+  r.workpiece = {x, y, {}};
+  r.guide = {x, -y, {}};
+  r.workpiece_straightness.min_zone = geometry::min_zone(x, y).width;
+  const report::Section s = report::separation_section("s", r);
+  ASSERT_GE(s.plots.size(), 2u);
+  const report::Plot& p = s.plots.front();
+  ASSERT_EQ(p.series.size(), 4u);  // profile, LS line, the zone's two lines
+  EXPECT_EQ(p.series[1].label, "least-squares line");
+  EXPECT_EQ(p.series[2].label, "minimum zone");
+  EXPECT_TRUE(p.series[2].in_legend);
+  EXPECT_FALSE(p.series[3].in_legend);  // one legend entry for the pair
+  // Each line is given at the profile's ends (the plot spans the gaps between).
+  EXPECT_TRUE(p.span_gaps);
+  for (std::size_t k = 1; k <= 3; ++k) {
+    EXPECT_TRUE(std::isfinite(p.series[k].y[0]) && std::isfinite(p.series[k].y[199]));
+    EXPECT_TRUE(std::isnan(p.series[k].y[100]));
+  }
+  const auto at = [&](std::size_t k, Eigen::Index i) {  // series k's line at x[i]
+    const double t = (x[i] - x[0]) / (x[199] - x[0]);
+    return (1 - t) * p.series[k].y[0] + t * p.series[k].y[199];
+  };
+  const geometry::Line ls = geometry::fit_line(x, y);
+  const Eigen::VectorXd prof = y * 1e3;
+  double touch_lower = INFINITY, touch_upper = INFINITY;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    EXPECT_NEAR(at(1, i), ls(x[i]) * 1e3, kTol);
+    EXPECT_GE(prof[i], at(2, i) - kTol);
+    EXPECT_LE(prof[i], at(3, i) + kTol);
+    touch_lower = std::min(touch_lower, prof[i] - at(2, i));
+    touch_upper = std::min(touch_upper, at(3, i) - prof[i]);
+  }
+  EXPECT_NEAR(touch_lower, 0, kTol);  // each line touches the profile
+  EXPECT_NEAR(touch_upper, 0, kTol);
+  // Vertical gap × cos(slope) = the zone's width, as tabulated.
+  const double slope = (p.series[2].y[199] - p.series[2].y[0]) / (x[199] - x[0]);
+  EXPECT_NEAR((p.series[3].y[0] - p.series[2].y[0]) / std::sqrt(1 + slope * slope * 1e-6),
+              r.workpiece_straightness.min_zone * 1e3, kTol);
+  const std::string h = report::render("t", {s});
+  EXPECT_NE(h.find("label:\"minimum zone, upper line\",stroke:'#2ca02c',width:1.5,dash:[6,4],"
+                   "spanGaps:true,edge:true}"),
+            std::string::npos);
+}
+
+// A fit's report shows its residuals point by point, so a pattern the element does not describe
+// (here a three-lobed form on a circle) can be seen, not only its RMS.
+TEST(Report, FitSectionPlotsEveryResidual) {
+  constexpr double kTol = 1e-9;  // µm
+  Eigen::Matrix3Xd pts(3, 90);
+  for (int i = 0; i < 90; ++i) {
+    const double t = 2 * M_PI * i / 90, r = 10 + 2e-3 * std::cos(3 * t);
+    pts.col(i) = Eigen::Vector3d(r * std::cos(t), r * std::sin(t), 0);
+  }
+  const geometry::Fit f = geometry::fit(geometry::Element::Circle, pts);
+  const report::Section s = report::fit_section("circle", f);
+  ASSERT_EQ(s.plots.size(), 1u);
+  const report::Plot& p = s.plots.front();
+  EXPECT_EQ(p.title, "residuals: orthogonal distance of each point to the fitted circle");
+  ASSERT_EQ(p.x.size(), 90);
+  EXPECT_EQ(p.x[0], 1);
+  EXPECT_EQ(p.x[89], 90);
+  ASSERT_EQ(p.series.size(), 1u);
+  EXPECT_TRUE(p.series[0].points);
+  EXPECT_NEAR((p.series[0].y - f.residuals * 1e3).cwiseAbs().maxCoeff(), 0, kTol);
+  EXPECT_NEAR(p.series[0].y.maxCoeff(), 2, 1e-3);  // the lobes' 2 µm
 }

@@ -17,6 +17,13 @@
 
 namespace trueaxis::report {
 
+// One colour per error component in every plot: X and A (about X) blue, Y and B red, Z and C
+// green. `component` 0..5 = X, Y, Z, A, B, C.
+inline const char* component_colour(int component) {
+  static const char* kColours[3] = {"#1f77b4", "#d62728", "#2ca02c"};
+  return kColours[((component % 3) + 3) % 3];
+}
+
 struct Series {
   std::string label;
   Eigen::VectorXd y;
@@ -26,6 +33,8 @@ struct Series {
   bool points = false;  // markers only, no line (a scatter plot; x need not be distinct)
   // What the shaded band is, for the page's note (said once per kind of band).
   std::string band_meaning = "±2 standard uncertainties (about 95 %)";
+  // false: no legend entry (the second line of a pair that another series' entry names).
+  bool in_legend = true;
 };
 
 struct Plot {
@@ -35,6 +44,11 @@ struct Plot {
   Eigen::VectorXd x;    // shared by all series
   std::vector<Series> series;
   bool log_y = false;  // logarithmic y axis (values must be positive)
+  // Lines pass over a series' missing values (NaN) instead of breaking there: for series sampled
+  // at some of the shared x only.
+  bool span_gaps = false;
+  // The x axis counts things (positions, points): ticks at whole numbers only.
+  bool whole_x = false;
 };
 
 // A colour map of values over the plane, drawn as static SVG at true aspect ratio (hover shows
@@ -51,6 +65,15 @@ struct HeatMap {
   bool symmetric = true;          // diverging colours symmetric about 0; false: sequential min..max
   double vmin = NAN, vmax = NAN;  // colour scale limits (NaN: from the data), e.g. to share one
   int width = 520;                // px
+  // Contour lines over the field (thin, dark), each a polyline (2 × k, plot coordinates).
+  std::vector<Eigen::Matrix2Xd> contours;
+  // > 0: the grid cells are filled contour bands of this step (value unit), each band one colour
+  // (its middle's) and without per-cell tooltips: for a field interpolated between measured
+  // points, whose cells carry no measured value of their own.
+  double band_step = 0;
+  // Write each point's value beside its dot (for a few points whose numbers matter, such as a
+  // surface's closures: a value at the scale's centre is otherwise a white dot).
+  bool label_points = false;
 };
 
 // A distorted grid: the nodes (u[i], v[j]) of a plane of the machine, moved by their magnified
@@ -116,6 +139,15 @@ struct Section {
 };
 
 std::string escape(const std::string& text);
+
+// Adds the reference lines of ISO 12780 to a plot of the profile y(x) (x and y in mm, the plot's
+// y in mm × `scale`): the least-squares line (dashed) and the minimum zone, the two parallel
+// lines closest together that enclose the profile (one legend entry for both). The figures
+// themselves belong in the section's table, with their uncertainty. Each line carries values at
+// the profile's two ends only (NaN between) and the plot spans gaps (Plot::span_gaps): a
+// straight line needs no more. Precondition: x.size() == y.size() >= 2, x not all equal.
+void add_reference_lines(Plot& plot, const Eigen::VectorXd& x, const Eigen::VectorXd& y,
+                         double scale);
 
 // Sources cited by the sections (listed once under "References" at the end of a report).
 namespace refs {
