@@ -146,10 +146,12 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
       py[k] = (pt - d.plane.origin).dot(e2);
     }
     Plot p;
-    p.title =
-        fmt::format("section '{}': measured surface minus the design, along the design", sec.name);
+    p.title = fmt::format(
+        "section '{}': measured surface minus the design, along the design's outward "
+        "normal",
+        sec.name);
     p.x_label = "arc along the design (mm)";
-    p.y_label = "deviation along the outward normal (mm)";
+    p.y_label = "deviation (mm)";
     // Sorted by arc, so that the curve reads left to right.
     std::vector<Eigen::Index> order(static_cast<std::size_t>(m));
     for (Eigen::Index k = 0; k < m; ++k) order[static_cast<std::size_t>(k)] = k;
@@ -190,9 +192,10 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     struct Curve {
       std::string label;
       std::vector<sim::Contour::Nearest> feet;
+      Eigen::Matrix3Xd points;  // the curve's own points, whose feet those are
     };
     auto feet_of = [&](std::string label, const Eigen::Matrix3Xd& q) {
-      Curve cv{std::move(label), {}};
+      Curve cv{std::move(label), {}, q};
       cv.feet.reserve(static_cast<std::size_t>(q.cols()));
       for (Eigen::Index k = 0; k < q.cols(); ++k) cv.feet.push_back(c.nearest(q.col(k)));
       return cv;
@@ -203,7 +206,12 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
           feet_of("corrected design", design::sample(r.design.sections[i], 0.5).points));
     if (i < true_part.size() && true_part[i].cols() > 1)
       curves.push_back(feet_of("simulated true part", true_part[i]));
-    curves.push_back({"measured points", std::move(measured_feet)});
+    {
+      Eigen::Matrix3Xd q(3, m);
+      for (Eigen::Index k = 0; k < m; ++k)
+        q.col(k) = sec.points[static_cast<std::size_t>(k)].surface;
+      curves.push_back({"measured points", std::move(measured_feet), std::move(q)});
+    }
     double worst = 0;
     for (const auto& cv : curves)
       for (const auto& f : cv.feet) worst = std::max(worst, std::abs(f.distance));
@@ -223,9 +231,15 @@ Section scan_section(const std::string& title, const scan::Result& r, const desi
     v.curves.push_back({"design", design_xy, "#757575", false, false, false});
     for (const auto& cv : curves) {
       Eigen::Matrix2Xd xy(2, static_cast<Eigen::Index>(cv.feet.size()));
+      // Each point at its foot plus its own deviation vector × M (in the plane). Along a
+      // segment that is the deviation along the normal; at a corner, where the foot is the
+      // vertex, it keeps the point's direction from it, so a rounded or offset corner is drawn
+      // as a magnified round corner, not as a spike along one side's normal.
       for (std::size_t k = 0; k < cv.feet.size(); ++k) {
         const auto& f = cv.feet[k];
-        xy.col(static_cast<Eigen::Index>(k)) = in_plane(f.point + mag * f.distance * f.normal);
+        const Eigen::Vector2d foot = in_plane(f.point);
+        xy.col(static_cast<Eigen::Index>(k)) =
+            foot + mag * (in_plane(cv.points.col(static_cast<Eigen::Index>(k))) - foot);
       }
       const bool corrected = cv.label == "corrected design";
       const bool points = cv.label == "measured points";
