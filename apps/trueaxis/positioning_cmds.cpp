@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "trueaxis/compensation/table.hpp"
@@ -40,7 +41,7 @@ std::vector<double> parse_targets(const std::string& s);
 
 struct PositioningArgs {
   std::string input, log_targets, output = "positioning.json", standard = "iso230-2", report,
-                                  run_directions = "order";
+                                  run_directions = "order", before;
   positioning::LogOptions lo;
   double dwell_tolerance_um = 2;
   std::vector<std::string> tolerances;
@@ -136,13 +137,30 @@ int run_positioning(const PositioningArgs& a) {
   const auto verdicts = positioning::check(r, tol);
   const auto standard = vdi ? positioning::Standard::Vdi3441 : positioning::Standard::Iso230_2;
   io::write_positioning_result(a.output, r, standard, verdicts);
-  if (!a.report.empty())
+  // The same axis before its compensation: a result this command wrote earlier.
+  std::optional<io::PositioningFile> before;
+  if (!a.before.empty()) {
+    before = io::read_positioning_result(a.before);
+    const auto& b = before->result;
+    if (b.targets.empty() || r.targets.empty() ||
+        b.targets.back().position < r.targets.front().position ||
+        r.targets.back().position < b.targets.front().position)
+      throw Error(fmt::format(
+          "{}: its targets ({:g} … {:g} mm) do not overlap this run's ({:g} … {:g} mm): not the "
+          "same axis before compensation",
+          a.before, b.targets.empty() ? NAN : b.targets.front().position,
+          b.targets.empty() ? NAN : b.targets.back().position,
+          r.targets.empty() ? NAN : r.targets.front().position,
+          r.targets.empty() ? NAN : r.targets.back().position));
+  }
+  if (!a.report.empty()) {
+    auto section =
+        report::positioning_section("Positioning accuracy of a linear axis", r, standard, verdicts);
+    if (before) report::add_before_after(section, before->result, r);
     report::write(a.report, report::render("trueaxis positioning report",
-                                           {from_file(report::positioning_section(
-                                                          "Positioning accuracy of a linear axis",
-                                                          r, standard, verdicts),
-                                                      source)},
-                                           4000, cli::report_meta()));
+                                           {from_file(std::move(section), source)}, 4000,
+                                           cli::report_meta()));
+  }
   bool pass = true;
   std::string failed;
   for (const auto& v : verdicts) {
@@ -159,6 +177,12 @@ int run_positioning(const PositioningArgs& a) {
   }
   if (!a.quiet) {
     fmt::print("{}", r.summary(vdi));
+    if (before)
+      fmt::print(
+          "  before compensation ({}): A {:.2f} -> {:.2f} µm, E {:.2f} -> {:.2f} µm, B "
+          "mean {:.2f} -> {:.2f} µm\n",
+          a.before, before->result.iso.A * 1e3, r.iso.A * 1e3, before->result.iso.E * 1e3,
+          r.iso.E * 1e3, before->result.iso.B_mean * 1e3, r.iso.B_mean * 1e3);
     if (!verdicts.empty())
       fmt::print("  tolerances: {}\n", pass                     ? "all met"
                                        : !r.implausible.empty() ? "NOT JUDGED (see below)"
@@ -403,6 +427,10 @@ std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate)
                 "HTML report: the standard's plot (mean deviations with +-2s), every reading, "
                 "the parameters and tolerances");
   add_meta_option(c);
+  c->add_option("--before", a->before,
+                "the result JSON of the same axis before its compensation (this command's "
+                "--output then): printed and drawn with this run on one plot")
+      ->check(cli::existing_file());
   c->add_option("--standard", a->standard, "iso230-2 (ISO 230-2:2014) or vdi3441 (VDI/DGQ 3441)")
       ->check(CLI::IsMember({"iso230-2", "vdi3441"}))
       ->capture_default_str();

@@ -17,4 +17,11 @@ Section positioning_section(const std::string& title, const positioning::Result&
                             positioning::Standard standard,
                             const std::vector<positioning::Verdict>& verdicts = {});
 
+// ISO 230-2's plot of an axis before and after its compensation, on one pair of axes: each run's
+// mean deviation per direction (before dashed, after solid) with its ±2s band, and the range
+// its A spans. The runs need not share targets (a compensated axis is often measured at other
+// positions). Appended to `section` with a sentence on what the compensation removed.
+void add_before_after(Section& section, const positioning::Result& before,
+                      const positioning::Result& after);
+
 }  // namespace trueaxis::report
