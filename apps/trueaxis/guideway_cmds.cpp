@@ -19,7 +19,7 @@ namespace trueaxis::cli {
 namespace {
 
 struct GuidewayArgs {
-  std::string layout, input, output, report;
+  std::string layout, input, output, report, axis;
   double sigma = 0;
   bool skip_bad = false, quiet = false;
 };
@@ -30,7 +30,8 @@ int run_guideway(const GuidewayArgs& a) {
   for (const auto& why : sp.skipped) std::fprintf(stderr, "skipped: %s\n", why.c_str());
   guideway::Options o;
   o.sigma = a.sigma * 1e-3;
-  const guideway::Result r = guideway::solve(g.layout, sp.s, sp.spots, o);
+  guideway::Result r = guideway::solve(g.layout, sp.s, sp.spots, o);
+  if (!a.axis.empty()) r.axis = a.axis[0] - 'x';
   io::write_guideway_result(a.output, r);
   if (!a.report.empty())
     report::write(
@@ -150,7 +151,7 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
       "<name>_dx,<name>_dy (µm) or <name>_i1..<name>_i4 (quadrant currents) per detector.\n"
       "Errors the layout cannot see (e.g. pitch and yaw when all detectors share one z) are "
       "reported as not observable, never as numbers.\nExample: trueaxis guideway --layout "
-      "layout.json --input spots.csv --output result.json");
+      "layout.json --input spots.csv --axis x --output result.json");
   c->add_option("--layout", a->layout, "layout JSON (detectors, optional qpd calibration)")
       ->required()
       ->check(cli::existing_file());
@@ -158,6 +159,12 @@ std::vector<Command> add_guideway_commands(CLI::App& app, CLI::App& simulate) {
       ->required()
       ->check(cli::existing_file());
   c->add_option("--output,-o", a->output, "result JSON to write")->required();
+  c->add_option("--axis", a->axis,
+                "the machine axis the carriage rides (x, y or z): its errors are then named as "
+                "ISO 230-1 names them (for X: EYX, EZX horizontal and vertical straightness, EBX "
+                "pitch, ECX yaw, EAX roll), with the carriage frame on X as (Y, Z, X), on Y as "
+                "(-X, Z, Y), on Z as (X, Y, Z); without it, a stand-alone carriage's own names")
+      ->transform(cli::machine_axis());
   c->add_option("--sigma", a->sigma,
                 "standard deviation of one spot reading (µm) for the uncertainties (default: "
                 "estimated from the residuals when the layout is redundant)");

@@ -360,29 +360,74 @@ std::optional<bool> Result::resolved(std::size_t j) const {
   return *U < pv[j];
 }
 
+Eigen::Matrix3d carriage_axes(int axis) {
+  if (axis < 0 || axis > 2) throw Error("guideway: the machine axis must be 0, 1 or 2 (X, Y, Z)");
+  Eigen::Matrix3d m;
+  switch (axis) {
+    case 0:  // travel X: horizontal Y, vertical Z
+      m << 0, 0, 1, 1, 0, 0, 0, 1, 0;
+      break;
+    case 1:  // travel Y: horizontal −X, vertical Z
+      m << -1, 0, 0, 0, 0, 1, 0, 1, 0;
+      break;
+    default:  // travel Z: x = X, y = Y
+      m.setIdentity();
+  }
+  return m;
+}
+
+std::array<IsoName, kErrors> iso_names(int axis) {
+  const Eigen::Matrix3d m = carriage_axes(axis);
+  const char* travel = "XYZ";
+  const char* translation = "XYZ";
+  const char* rotation = "ABC";
+  // Error j moves along (translations) or about (rotations) carriage axis c: δx, δy along x, y;
+  // εx, εy, εz about x, y, z. That axis is ± one machine axis.
+  const int along[kErrors] = {0, 1, 0, 1, 2};
+  std::array<IsoName, kErrors> out;
+  for (int j = 0; j < kErrors; ++j) {
+    Eigen::Index k = 0;
+    m.col(along[j]).cwiseAbs().maxCoeff(&k);
+    out[static_cast<std::size_t>(j)] = {
+        fmt::format("E{}{}", j < 2 ? translation[k] : rotation[k], travel[axis]),
+        m(k, along[j]) > 0 ? 1.0 : -1.0};
+  }
+  return out;
+}
+
+std::string Result::name(std::size_t j) const {
+  if (axis < 0) return kErrorNames[j];
+  return fmt::format("{} ({})", iso_names(axis)[j].name, kErrorNames[j]);
+}
+
+double Result::sign(std::size_t j) const {
+  return axis < 0 ? 1.0 : iso_names(axis)[j].sign;
+}
+
 std::string Result::summary() const {
   std::string out =
       fmt::format("guideway: {} positions, condition number {:.3g} (observable part)\n", s.size(),
                   layout.observable_condition_number);
+  const int width = axis < 0 ? 10 : 18;
   for (std::size_t j = 0; j < kErrors; ++j) {
     const bool angle = j >= 2;
     if (value[j].size() == 0) {
-      out += fmt::format("  {:<10} not observable\n", kErrorNames[j]);
+      out += fmt::format("  {:<{}} not observable\n", name(j), width);
       continue;
     }
     const double sc = angle ? 1e6 : 1e3;
     const char* unit = angle ? "urad" : "um";
     if (const std::optional<double> U = pv_U(j)) {
       if (!*resolved(j))
-        out += fmt::format("  {:<10} PV not resolved (U = {} {}, 95 %)\n", kErrorNames[j],
+        out += fmt::format("  {:<{}} PV not resolved (U = {} {}, 95 %)\n", name(j), width,
                            trueaxis::detail::two_digits(*U * sc), unit);
       else
-        out += fmt::format("  {:<10} PV {} {}, RMS {} {}, U = {} {} (95 %)\n", kErrorNames[j],
+        out += fmt::format("  {:<{}} PV {} {}, RMS {} {}, U = {} {} (95 %)\n", name(j), width,
                            trueaxis::detail::rounded_to(pv[j] * sc, *U * sc), unit,
                            trueaxis::detail::rounded_to(rms[j] * sc, *U * sc), unit,
                            trueaxis::detail::two_digits(*U * sc), unit);
     } else {
-      out += fmt::format("  {:<10} PV {:.4g} {}, RMS {:.4g} {}\n", kErrorNames[j], pv[j] * sc, unit,
+      out += fmt::format("  {:<{}} PV {:.4g} {}, RMS {:.4g} {}\n", name(j), width, pv[j] * sc, unit,
                          rms[j] * sc, unit);
     }
   }

@@ -37,6 +37,14 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
                         r.sigma_estimated ? "estimated from the residuals" : "given")
           : "no uncertainty is stated: " + escape(r.no_uncertainty),
       r.layout.message.empty() ? "" : " " + escape(r.layout.message) + ".");
+  if (r.axis >= 0) {
+    const auto n = guideway::iso_names(r.axis);
+    s.intro_html += fmt::format(
+        "<p>The carriage rides the machine's {} axis; its errors are named as ISO 230-1 names "
+        "them, in the machine frame: {} and {} (horizontal and vertical straightness), {} "
+        "(pitch), {} (yaw), {} (roll).</p>",
+        "XYZ"[r.axis], n[0].name, n[1].name, n[2].name, n[3].name, n[4].name);
+  }
   std::vector<std::string> head{"error", "observable", "PV", "RMS", "U of PV (95 %)", "u (1σ)"};
   if (truth) head.push_back("max |measured − true|");
   s.table.push_back(head);
@@ -45,7 +53,7 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
     const double sc = angle ? 1e6 : 1e3;
     const char* unit = angle ? "µrad" : "µm";
     const bool have = r.value[j].size() > 0;
-    std::vector<std::string> row{guideway::kErrorNames[j], have ? "yes" : "no"};
+    std::vector<std::string> row{r.name(j), have ? "yes" : "no"};
     if (have) {
       // A PV the data cannot resolve is not shown as a number; figures to the resolution their
       // uncertainty supports.
@@ -71,30 +79,39 @@ Section guideway_section(const std::string& title, const guideway::Result& r,
     const bool angle = j >= 2;
     const double sc = angle ? 1e6 : 1e3;
     Plot p;
-    p.title = fmt::format("{}{}", guideway::kErrorNames[j],
-                          j == 0   ? " straightness (δx)"
-                          : j == 1 ? " straightness (δy)"
-                          : j == 2 ? " (εx)"
-                          : j == 3 ? " (εy)"
-                                   : " (εz)");
-    p.x_label = "s (mm)";
-    p.y_label = fmt::format("{} ({})", guideway::kErrorNames[j], angle ? "µrad" : "µm");
+    // On a machine axis: ISO 230-1's name, and the value in the machine frame it means.
+    const double sg = r.sign(j);
+    const char* carriage = j == 0 ? "δx" : j == 1 ? "δy" : j == 2 ? "εx" : j == 3 ? "εy" : "εz";
+    p.title = r.axis < 0 ? fmt::format("{}{} ({})", guideway::kErrorNames[j],
+                                       j < 2 ? " straightness" : "", carriage)
+                         : fmt::format("{} {}{}", guideway::iso_names(r.axis)[j].name,
+                                       guideway::kErrorNames[j], j < 2 ? " straightness" : "");
+    p.x_label = r.axis < 0 ? "s (mm)" : fmt::format("{} (mm)", "XYZ"[r.axis]);
+    p.y_label = fmt::format(
+        "{} ({})",
+        r.axis < 0 ? std::string(guideway::kErrorNames[j]) : guideway::iso_names(r.axis)[j].name,
+        angle ? "µrad" : "µm");
     p.x = r.s;
     Eigen::VectorXd band;
     if (r.sigma > 0) band = Eigen::VectorXd::Constant(r.s.size(), r.uncertainty[j] * sc);
-    p.series.push_back({"measured", r.value[j] * sc, band, "", false});
+    // On a machine axis, the machine component's colour (component_colour), as in every plot.
+    std::string colour;
+    if (r.axis >= 0) {
+      const std::string iso = guideway::iso_names(r.axis)[j].name;
+      colour = component_colour(static_cast<int>(std::string("XYZABC").find(iso[1])));
+    }
+    p.series.push_back({"measured", r.value[j] * (sg * sc), band, colour, false});
     // Straightness is about the least-squares line (ISO 230-1): its PV and RMS are the profile's
     // distances from that line, which is drawn with it.
     const Eigen::VectorXd* straight = j == 0   ? &r.horizontal_straightness
                                       : j == 1 ? &r.vertical_straightness
                                                : nullptr;
-    if (straight && straight->size() == r.value[j].size()) {
-      p.series.push_back(
-          {"least-squares line", (r.value[j] - *straight) * sc, {}, "#444444", true});
+    if (straight && straight->size() == r.value[j].size() && r.s.size() >= 2) {
+      add_reference_lines(p, r.s, r.value[j], sg * sc);
       p.title += " — PV about the least-squares line " + pv_text(r, j);
     }
     if (truth && (*truth)[j].size() == r.value[j].size())
-      p.series.push_back({"true", (*truth)[j] * sc, {}, "#d62728", true});
+      p.series.push_back({"true", (*truth)[j] * (sg * sc), {}, "#9467bd", true});
     s.plots.push_back(std::move(p));
   }
   return s;

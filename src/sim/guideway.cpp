@@ -20,18 +20,7 @@ void GuidewayOptions::validate() const {
 }
 
 Eigen::Matrix3d carriage_axes(int axis) {
-  Eigen::Matrix3d m;
-  switch (axis) {
-    case 0:  // travel X: horizontal Y, vertical Z
-      m << 0, 0, 1, 1, 0, 0, 0, 1, 0;
-      break;
-    case 1:  // travel Y: horizontal −X, vertical Z
-      m << -1, 0, 0, 0, 0, 1, 0, 1, 0;
-      break;
-    default:  // travel Z: x = X, y = Y
-      m.setIdentity();
-  }
-  return m;
+  return guideway::carriage_axes(axis);
 }
 
 GuidewayCampaign simulate_guideway(const Machine& machine, const guideway::Layout& layout,

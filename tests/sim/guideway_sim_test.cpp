@@ -166,3 +166,38 @@ TEST(GuidewaySim, QuadrantCurrentsOfAGaussianSpotConvertBack) {
             }).find("axis must be"),
             std::string::npos);
 }
+
+// On a machine axis the five errors carry ISO 230-1's names: each named error, with its sign,
+// is the machine's own error function of that name (for every axis, so every sign of the
+// carriage frames is checked against the machine frame).
+TEST(GuidewaySim, Iso230NamesAndSignsGiveTheMachinesOwnErrorFunctions) {
+  constexpr double kTol = 1e-15;  // mm or rad: the same numbers, rotated by a signed permutation
+  const sim::Machine m = machine();
+  const std::array<std::array<const char*, 5>, 3> expected{{
+      {"EYX", "EZX", "EBX", "ECX", "EAX"},
+      {"EXY", "EZY", "EAY", "ECY", "EBY"},
+      {"EXZ", "EYZ", "EAZ", "EBZ", "ECZ"},
+  }};
+  const std::string components = "XYZABC";
+  for (int axis = 0; axis < 3; ++axis) {
+    sim::GuidewayOptions o;
+    o.axis = axis;
+    o.positions = 11;
+    const auto c = sim::simulate_guideway(m, layout3d(), o);
+    const auto names = guideway::iso_names(axis);
+    for (std::size_t j = 0; j < guideway::kErrors; ++j) {
+      EXPECT_EQ(names[j].name, expected[static_cast<std::size_t>(axis)][j]);
+      const auto comp = components.find(names[j].name[1]);
+      const auto& fn = m.errors[static_cast<std::size_t>(axis)][comp];
+      for (Eigen::Index k = 0; k < c.s.size(); ++k)
+        EXPECT_NEAR(names[j].sign * c.truth[j][k], fn.empty() ? 0.0 : fn(c.s[k]), kTol)
+            << names[j].name;
+    }
+  }
+  EXPECT_EQ(guideway::iso_names(1)[0].sign, -1.0);  // carriage x is −X on Y
+  guideway::Result r;
+  r.axis = 0;
+  EXPECT_EQ(r.name(4), "EAX (roll)");
+  r.axis = -1;
+  EXPECT_EQ(r.name(4), "roll");
+}

@@ -35,6 +35,20 @@ inline constexpr int kErrors = 5;
 inline constexpr const char* kErrorNames[kErrors] = {"horizontal", "vertical", "pitch", "yaw",
                                                      "roll"};
 
+// A carriage on a machine axis (X, Y or Z: 0, 1, 2) has its frame oriented so: travel X gives
+// carriage (x, y, z) = machine (Y, Z, X); travel Y, (−X, Z, Y); travel Z, (X, Y, Z). All three
+// are right-handed. The rotation whose columns are the carriage axes in machine coordinates:
+Eigen::Matrix3d carriage_axes(int axis);
+
+// ISO 230-1's name of each of the five errors of a carriage on machine axis `axis` (0..2), e.g.
+// for X: EYX, EZX, EBX, ECX, EAX, and the sign (±1) that turns the carriage-frame value into the
+// machine-frame one the name means (travel Y: EXY = −horizontal).
+struct IsoName {
+  std::string name;
+  double sign = 1;
+};
+std::array<IsoName, kErrors> iso_names(int axis);
+
 enum class Kind { Position, Angle };
 
 struct Detector {
@@ -128,6 +142,14 @@ struct Result {
   // µm, µrad; a PV the data do not resolve reads "not resolved (U = …)", figures are rounded to
   // what their uncertainty supports.
   std::string summary() const;
+  // The machine axis the carriage rides (0..2), when known: the errors are then named as ISO
+  // 230-1 names them (iso_names). -1: a stand-alone carriage, its errors named in its own frame.
+  // `value` stays in the carriage frame either way.
+  int axis = -1;
+  // The name error j is shown by: "EYX (horizontal)" on a machine axis, "horizontal" otherwise;
+  // and the sign that turns value[j] into what that name means.
+  std::string name(std::size_t j) const;
+  double sign(std::size_t j) const;
 };
 
 // Solves every position: `spots` is positions × 2m (columns dx_1, dy_1, dx_2, dy_2, ... in the

@@ -250,6 +250,17 @@ void write_guideway_result(const std::string& path, const guideway::Result& r) {
   j["uncertainty"] = unc;
   j["summary"] = sum;
   j["message"] = r.layout.message;
+  // On a machine axis: ISO 230-1's name of each error and the sign from the carriage frame (the
+  // values above) to the machine frame that name means.
+  if (r.axis >= 0) {
+    j["axis"] = std::string(1, "XYZ"[r.axis]);
+    ojson iso = ojson::object();
+    const auto names = guideway::iso_names(r.axis);
+    for (int e = 0; e < guideway::kErrors; ++e)
+      iso[guideway::kErrorNames[e]] = {{"name", names[static_cast<std::size_t>(e)].name},
+                                       {"sign", names[static_cast<std::size_t>(e)].sign}};
+    j["iso_230_1"] = iso;
+  }
   write_json(path, j);
 }
 
