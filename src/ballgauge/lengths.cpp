@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -58,6 +59,8 @@ Correction grid_correction(const map::ErrorMap& map, const map::EvalOptions& opt
 void LengthOptions::validate() const {
   if (!(repeat_tolerance >= 0) || !std::isfinite(repeat_tolerance))
     throw Error("length verification: the repeat tolerance must be a finite number >= 0 mm");
+  if (!(line_tolerance >= 0) || !std::isfinite(line_tolerance))
+    throw Error("length verification: the line tolerance must be a finite number >= 0 mm");
 }
 
 namespace {
@@ -154,6 +157,35 @@ LengthVerification verify_lengths(const std::vector<LengthMeasurement>& lengths,
     v.rows.push_back(r);
   }
   v.positions = static_cast<int>(first.size());
+  // The set-ups' lines (ISO 10360-2's positions): a set-up joins the first line whose direction
+  // agrees within 2° and whose axis passes within the tolerance of its middle. Few set-ups and
+  // fewer lines: a scan of the lines is enough.
+  {
+    const double parallel = std::sin(2 * M_PI / 180);
+    std::vector<Eigen::Vector3d> through;  // a point of each line (its first set-up's middle)
+    std::vector<int> line_of(first.size());
+    for (std::size_t g = 0; g < first.size(); ++g) {
+      Eigen::Vector3d d = (first[g]->b - first[g]->a).normalized();
+      Eigen::Index big = 0;
+      d.cwiseAbs().maxCoeff(&big);
+      if (d[big] < 0) d = -d;
+      const Eigen::Vector3d mid = (first[g]->a + first[g]->b) / 2;
+      int found = -1;
+      for (std::size_t l = 0; l < through.size() && found < 0; ++l) {
+        const Eigen::Vector3d& e = v.line_directions[l];
+        const Eigen::Vector3d off = mid - through[l];
+        if (d.cross(e).norm() <= parallel && (off - off.dot(e) * e).norm() <= o.line_tolerance)
+          found = static_cast<int>(l);
+      }
+      if (found < 0) {
+        found = static_cast<int>(through.size());
+        through.push_back(mid);
+        v.line_directions.push_back(d);
+      }
+      line_of[g] = found;
+    }
+    for (auto& r : v.rows) r.line = line_of[static_cast<std::size_t>(r.position)];
+  }
   if (corr.length_uncertainties) {
     Eigen::Matrix3Xd a(3, static_cast<Eigen::Index>(lengths.size())), b = a;
     for (std::size_t i = 0; i < lengths.size(); ++i) {
@@ -206,6 +238,28 @@ std::string LengthVerification::summary() const {
         "  expected after: {:.2f} µm RMS (repeatability {:.2f} µm, correction u {:.2f} µm)\n",
         predicted_after * 1e3, repeatability * 1e3, correction_u_rms * 1e3);
   return s;
+}
+
+std::string direction_name(const Eigen::Vector3d& d) {
+  // A component below sin 2° is taken as none: a set-up placed by hand is not exact.
+  const double none = std::sin(2 * M_PI / 180);
+  const char* axes = "XYZ";
+  std::string signs;
+  int along = 0, which = 0;
+  for (int k = 0; k < 3; ++k)
+    if (std::abs(d[k]) > none) {
+      ++along;
+      which = k;
+      signs += fmt::format("{}{}", d[k] > 0 ? "+" : "−", axes[k]);  // minus sign: no break
+    }
+  if (along <= 1) return fmt::format("along {}", axes[which]);
+  if (along == 2) {
+    std::string plane;
+    for (int k = 0; k < 3; ++k)
+      if (std::abs(d[k]) > none) plane += axes[k];
+    return fmt::format("{} plane diagonal ({})", plane, signs);
+  }
+  return fmt::format("space diagonal ({})", signs);
 }
 
 double Mpe::at(double length_mm) const {

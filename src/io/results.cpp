@@ -195,6 +195,12 @@ guideway::Result read_guideway_result(const std::string& path) {
     r.sigma_estimated = f.root().at(P("/sigma_estimated")).get<bool>();
   if (f.has(P("/no_uncertainty"))) r.no_uncertainty = f.string(P("/no_uncertainty"));
   if (f.has(P("/message"))) r.layout.message = f.string(P("/message"));
+  if (f.has(P("/axis"))) {
+    const std::string axis = f.string(P("/axis"));
+    if (axis != "X" && axis != "Y" && axis != "Z")
+      f.fail(P("/axis"), "the machine axis the carriage rides: X, Y or Z");
+    r.axis = axis[0] - 'X';
+  }
   return r;
 }
 
@@ -261,12 +267,31 @@ std::vector<ballgauge::LengthVerification> read_length_verification(const std::s
     v.repeatability = number_or_nan(f, at / "repeatability", 1e-3);
     v.correction_u_rms = number_or_nan(f, at / "correction_uncertainty_rms", 1e-3);
     v.predicted_after = number_or_nan(f, at / "expected_after_rms", 1e-3);
+    // The set-ups' lines (ISO 10360-2 positions): absent from files written before they were
+    // found.
+    if (f.has(at / "lines")) {
+      const auto& lines = f.array(at / "lines");
+      for (std::size_t k = 0; k < lines.size(); ++k) {
+        const Eigen::Vector3d d = vec3(f, at / "lines" / k);
+        if (!(std::abs(d.norm() - 1) < 1e-6))
+          f.fail(at / "lines" / k, "a line's direction must be a unit vector");
+        v.line_directions.push_back(d);
+      }
+    }
     const auto& rows = f.array(at / "lengths");
     for (std::size_t k = 0; k < rows.size(); ++k) {
       const P r = at / "lengths" / k;
       ballgauge::LengthRow row;
       row.nominal = f.number(r / "nominal");
       row.position = static_cast<int>(f.number(r / "position"));
+      if (f.has(r / "line")) {
+        const double line = f.number(r / "line");
+        if (!(line >= 0 && line < static_cast<double>(v.line_directions.size())) ||
+            line != std::floor(line))
+          f.fail(r / "line", fmt::format("a line number 0..{} (the 'lines' given)",
+                                         static_cast<long>(v.line_directions.size()) - 1));
+        row.line = static_cast<int>(line);
+      }
       row.before = f.number(r / "before") * 1e-3;
       row.after = f.number(r / "after") * 1e-3;
       row.uncertainty = f.number(r / "uncertainty") * 1e-3;

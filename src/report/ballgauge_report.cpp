@@ -6,6 +6,7 @@
 #include <limits>
 #include <numeric>
 
+#include "trueaxis/geometry/straightness.hpp"
 #include "trueaxis/report/ballgauge.hpp"
 
 namespace trueaxis::report {
@@ -70,7 +71,7 @@ void parametric_curves(const ballgauge::ParametricResult& pr, Section& s) {
                          sc
                    : 0.0;
         }
-        p.series.push_back({name, y, band, "", false});
+        p.series.push_back({name, y, band, component_colour(j), false});
       }
       if (!missing.empty()) p.title += " (not determined by the data: " + missing + ")";
       if (!p.series.empty()) s.plots.push_back(std::move(p));
@@ -155,6 +156,106 @@ Section ballgauge_section(const std::string& title, const ballgauge::Result& r,
   return s;
 }
 
+namespace {
+
+// ISO 10360-2's view of the test: the lines the set-ups lie along (its "positions"), each with its
+// worst length error before and after each correction, and every error drawn by position (a
+// position whose errors grow with length shows the direction the machine errs along).
+void add_positions(Section& s, const std::vector<ballgauge::LengthVerification>& results) {
+  const auto& first = results.front();
+  const auto lines = static_cast<int>(first.line_directions.size());
+  if (lines == 0) return;
+  for (const auto& v : results)
+    for (const auto& r : v.rows)
+      if (r.line < 0 || r.line >= lines) return;
+  std::vector<std::vector<std::string>> t{
+      {"position", "direction", "set-ups", "lengths", "max |E| before (µm)"}};
+  for (const auto& v : results) t[0].push_back("max |E| after, " + v.correction + " (µm)");
+  for (int l = 0; l < lines; ++l) {
+    std::vector<int> setups;
+    int n = 0;
+    for (const auto& r : first.rows)
+      if (r.line == l) {
+        ++n;
+        if (std::find(setups.begin(), setups.end(), r.position) == setups.end())
+          setups.push_back(r.position);
+      }
+    auto worst = [&](const std::vector<ballgauge::LengthRow>& rows, bool after) {
+      double w = 0;
+      for (const auto& r : rows)
+        if (r.line == l) w = std::max(w, std::abs(after ? r.after : r.before));
+      return um_2f(w);
+    };
+    std::vector<std::string> row{
+        fmt::format("{}", l + 1),
+        ballgauge::direction_name(first.line_directions[static_cast<std::size_t>(l)]),
+        fmt::format("{}", setups.size()), fmt::format("{}", n), worst(first.rows, false)};
+    for (const auto& v : results) row.push_back(worst(v.rows, true));
+    t.push_back(std::move(row));
+  }
+  s.more_tables.push_back({fmt::format("Positions (ISO 10360-2): the {} lines the set-ups lie "
+                                       "along",
+                                       lines),
+                           std::move(t)});
+  // Every length error at its position: a position's lengths from left to right, shortest first,
+  // across the position's width; before and after each correction side by side.
+  const auto sets = static_cast<Eigen::Index>(results.size()) + 1;
+  double lo = INFINITY, hi = -INFINITY;
+  for (const auto& r : first.rows) {
+    lo = std::min(lo, r.nominal);
+    hi = std::max(hi, r.nominal);
+  }
+  const auto n = static_cast<Eigen::Index>(first.rows.size());
+  std::vector<std::pair<double, Eigen::Index>> at;  // (x, row) of every marker, then sorted
+  at.reserve(static_cast<std::size_t>(n * sets));
+  for (Eigen::Index k = 0; k < sets; ++k)
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const auto& r = first.rows[static_cast<std::size_t>(i)];
+      const double along = hi > lo ? (r.nominal - lo) / (hi - lo) : 0.5;  // 0..1
+      at.emplace_back(r.line + 1 - 0.3 + 0.6 * along +
+                          0.04 * (static_cast<double>(k) - 0.5 * static_cast<double>(sets - 1)),
+                      k * n + i);
+    }
+  std::stable_sort(at.begin(), at.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
+  Plot p;
+  p.title = fmt::format(
+      "Length error by ISO 10360-2 position: at each position its lengths left to right, "
+      "{:g} to {:g} mm",
+      lo, hi);
+  p.x_label = "position";
+  p.whole_x = true;
+  p.y_label = "length error (µm)";
+  p.x.resize(static_cast<Eigen::Index>(at.size()));
+  std::vector<Series> series;
+  series.push_back({"before correction",
+                    Eigen::VectorXd::Constant(p.x.size(), NAN),
+                    {},
+                    "#d62728",
+                    false,
+                    true});
+  const char* colours[] = {"#1f77b4", "#2ca02c", "#9467bd"};
+  for (std::size_t c = 0; c < results.size(); ++c)
+    series.push_back({"after, " + results[c].correction,
+                      Eigen::VectorXd::Constant(p.x.size(), NAN),
+                      {},
+                      colours[c % 3],
+                      false,
+                      true});
+  for (std::size_t j = 0; j < at.size(); ++j) {
+    const auto J = static_cast<Eigen::Index>(j);
+    const Eigen::Index k = at[j].second / n, i = at[j].second % n;
+    p.x[J] = at[j].first;
+    const auto& rows = k == 0 ? first.rows : results[static_cast<std::size_t>(k - 1)].rows;
+    const auto& r = rows[static_cast<std::size_t>(i)];
+    series[static_cast<std::size_t>(k)].y[J] = (k == 0 ? r.before : r.after) * 1e3;
+  }
+  for (auto& se : series) p.series.push_back(std::move(se));
+  s.plots.push_back(std::move(p));
+}
+
+}  // namespace
+
 Section lengths_section(const std::string& title,
                         const std::vector<ballgauge::LengthVerification>& results,
                         const ballgauge::Mpe* mpe) {
@@ -164,13 +265,16 @@ Section lengths_section(const std::string& title,
   if (results.empty()) return s;
   const auto& first = results.front();
   s.intro_html = fmt::format(
-      "<p>{} calibrated lengths in {} set-ups (a gauge length at one place; repeats have the "
-      "same nominal and end points). "
+      "<p>{} calibrated lengths in {} set-ups{} (a set-up is a gauge length at one place; "
+      "repeats have the same nominal and end points). "
       "Length error = measured − nominal, before and after correction, against the nominal "
       "length (as in Oya et al. 1988, figure 10). Expected after correction: the repeatability of "
       "the "
       "measurement and the correction's own uncertainty, added in quadrature.</p>",
-      first.rows.size(), first.positions);
+      first.rows.size(), first.positions,
+      first.line_directions.empty()
+          ? std::string()
+          : fmt::format(" along {} lines, ISO 10360-2's positions", first.line_directions.size()));
   s.table = {
       {"", "min (µm)", "max (µm)", "range (µm)", "mean (µm)", "RMS (µm)", "expected RMS (µm)"}};
   auto row = [&](const std::string& name, const ballgauge::LengthStats& st,
@@ -266,7 +370,121 @@ Section lengths_section(const std::string& title,
     p.title += fmt::format(", with the E0 envelope ±({}) µm", mpe->text);
   }
   s.plots.push_back(std::move(p));
+  add_positions(s, results);
   return s;
+}
+
+FunctionDifferences add_error_functions(Section& s, const ballgauge::ParametricResult& model,
+                                        const sim::Machine& known, const std::string& known_name) {
+  FunctionDifferences worst;
+  constexpr int kSamples = 61;
+  const char* axes = "XYZ";
+  std::vector<std::vector<std::string>> t{
+      {"error", "largest |identified − " + known_name + "|", "its span (" + known_name + ")"}};
+  // Both machines with the stylus the model was identified for: the tip is what the data see.
+  sim::Machine identified = model.model, truth = known;
+  truth.offset = identified.offset;
+  // The axis that carries the stylus: with one stylus its rotations move the tip by a constant
+  // lever, exactly as its own straightness does, so the data see only their sum.
+  const int tool_axis = identified.order()[2];
+  const bool one_stylus = model.styli.size() <= 1;
+  for (int k = 0; k < 3; ++k) {
+    const auto K = static_cast<std::size_t>(k);
+    const double lo = identified.range[K][0], hi = identified.range[K][1];
+    const Eigen::VectorXd u = Eigen::VectorXd::LinSpaced(kSamples, lo, hi);
+    const double mid = (lo + hi) / 2;
+    // The axis' line through the middle of the identified span.
+    Eigen::Matrix3Xd line(3, kSamples);
+    for (Eigen::Index i = 0; i < kSamples; ++i) {
+      line.col(i) = model.centre;
+      line(k, i) = u[i];
+    }
+    const Eigen::Matrix3Xd tip_a = identified.errors_at(line), tip_b = truth.errors_at(line);
+    for (int group = 0; group < 2; ++group) {
+      const double sc = group == 0 ? 1e3 : 1e6;
+      const char* unit = group == 0 ? "µm" : "µrad";
+      Plot p;
+      p.title = group == 0
+                    ? fmt::format(
+                          "{} axis: error of the stylus tip as {} moves (the others "
+                          "mid-span), identified (solid) and {} (dashed); across "
+                          "components less their slope",
+                          axes[k], axes[k], known_name)
+                    : fmt::format("{} axis: rotation errors, identified (solid) and {} (dashed)",
+                                  axes[k], known_name);
+      p.x_label = fmt::format("{} (mm)", axes[k]);
+      p.y_label = fmt::format("error ({})", unit);
+      p.x = u;
+      for (int c = 0; c < 3; ++c) {
+        const int comp = 3 * group + c;
+        const auto C = static_cast<std::size_t>(comp);
+        // Less the value mid-span; the components across the axis also less their slope.
+        auto relative = [&](Eigen::VectorXd v, double at_mid) {
+          v.array() -= at_mid;
+          if (group == 0 && c != k)
+            v -= geometry::fit_line(u, v).slope * (u.array() - mid).matrix();
+          return Eigen::VectorXd(v * sc);
+        };
+        auto sample = [&](const sim::ErrorFunction& f) {
+          Eigen::VectorXd v(kSamples);
+          for (Eigen::Index i = 0; i < kSamples; ++i) v[i] = f.empty() ? 0.0 : f(u[i]);
+          return relative(v, f.empty() ? 0.0 : f(mid));
+        };
+        Eigen::VectorXd a, b;
+        if (group == 0) {
+          const Eigen::VectorXd ra = tip_a.row(c).transpose(), rb = tip_b.row(c).transpose();
+          a = relative(ra, ra[kSamples / 2]);
+          b = relative(rb, rb[kSamples / 2]);
+        } else {
+          a = sample(identified.errors[K][C]);
+          b = sample(known.errors[K][C]);
+        }
+        const std::string name = sim::error_name(k, static_cast<sim::Component>(comp));
+        // A rotation the data do not see (no effect on this stylus tip), or cannot tell from a
+        // straightness, is not compared: its identified value is only the solver's choice.
+        const bool unseen = std::find(model.unobservable.begin(), model.unobservable.end(), name) !=
+                            model.unobservable.end();
+        const bool confounded = group == 1 && !unseen && k == tool_axis && one_stylus;
+        if (group == 1 && (unseen || confounded)) {
+          p.series.push_back({name + " " + known_name, b, {}, component_colour(comp), true});
+          t.push_back({name,
+                       unseen ? "not determined by these data"
+                              : "not separated from the straightness (one stylus): the tip's "
+                                "error above holds both",
+                       fmt::format("{:.3g} {}", b.maxCoeff() - b.minCoeff(), unit)});
+          continue;
+        }
+        const std::string shown = group == 0 ? name + " at the tip" : name;
+        p.series.push_back({shown, a, {}, component_colour(comp), false});
+        p.series.push_back({shown + " " + known_name, b, {}, component_colour(comp), true});
+        const double d = (a - b).cwiseAbs().maxCoeff();
+        (group == 0 ? worst.translation : worst.rotation) =
+            std::max(group == 0 ? worst.translation : worst.rotation, d / sc);
+        t.push_back({shown, fmt::format("{:.3g} {}", d, unit),
+                     fmt::format("{:.3g} {}", b.maxCoeff() - b.minCoeff(), unit)});
+      }
+      s.plots.push_back(std::move(p));
+    }
+  }
+  // The squareness errors, as ISO 230-1 defines them (angles between the reference lines over
+  // the identified span).
+  sim::Machine same_span = known;
+  same_span.range = model.model.range;
+  const auto ref = sim::reference_lines(same_span, model.centre);
+  const std::array<std::pair<const char*, std::pair<double, double>>, 3> sq{
+      {{"EC0Y", {model.iso.lines.c0y, ref.c0y}},
+       {"EB0Z", {model.iso.lines.b0z, ref.b0z}},
+       {"EA0Z", {model.iso.lines.a0z, ref.a0z}}}};
+  for (const auto& [name, v] : sq) {
+    worst.squareness = std::max(worst.squareness, std::abs(v.first - v.second));
+    t.push_back({name, fmt::format("{:.3g} µrad", std::abs(v.first - v.second) * 1e6),
+                 fmt::format("{:.3g} µrad", v.second * 1e6)});
+  }
+  t[0][2] = "its span or value (" + known_name + ")";
+  s.more_tables.push_back(
+      {fmt::format("The identified errors against the {} ones (as drawn)", known_name),
+       std::move(t)});
+  return worst;
 }
 
 }  // namespace trueaxis::report

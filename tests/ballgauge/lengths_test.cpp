@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <cmath>
+#include <map>
+#include <set>
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
@@ -228,4 +230,41 @@ TEST(Lengths, E0AgainstAnMpe) {
   c = ballgauge::check_mpe(rows, m, false);
   EXPECT_TRUE(c.pass());
   EXPECT_NEAR(c.worst_ratio, 3.4 / 3.5, 1e-12);
+}
+
+// ISO 10360-2's positions are the lines the set-ups lie along: the simulated test's seven (X, Y,
+// Z and the box's four space diagonals) are found from the measured end points alone, every
+// length of a position on one line, each line named by its direction.
+TEST(Lengths, SetUpsAreGroupedIntoTheLinesOfIso10360Positions) {
+  const Campaign noisy = campaign(0.5e-3, 11, 0.5e-3);
+  const ballgauge::Correction none{"none", [](Eigen::Ref<Eigen::Matrix3Xd>) {}, {}, {}};
+  const auto v = ballgauge::verify_lengths(noisy.blocks.lengths, none);
+  ASSERT_EQ(v.line_directions.size(), 7u);
+  std::map<std::string, int> line_of;
+  for (std::size_t i = 0; i < v.rows.size(); ++i) {
+    const auto it = line_of.emplace(noisy.blocks.position[i], v.rows[i].line).first;
+    EXPECT_EQ(it->second, v.rows[i].line) << noisy.blocks.position[i];
+  }
+  ASSERT_EQ(line_of.size(), 7u);
+  std::set<int> distinct;
+  for (const auto& [name, line] : line_of) distinct.insert(line);
+  EXPECT_EQ(distinct.size(), 7u);
+  const auto name = [&](const char* pos) {
+    return ballgauge::direction_name(v.line_directions[static_cast<std::size_t>(line_of.at(pos))]);
+  };
+  EXPECT_EQ(name("x"), "along X");
+  EXPECT_EQ(name("z"), "along Z");
+  EXPECT_EQ(name("+x+y+z"), "space diagonal (+X+Y+Z)");
+  EXPECT_EQ(name("-x+y+z").rfind("space diagonal (", 0), 0u);
+  EXPECT_EQ(ballgauge::direction_name(Eigen::Vector3d(0.8, -0.6, 0.01)),
+            "XY plane diagonal (+X−Y)");
+  // Two set-ups along X, 100 mm apart, are two positions; within the tolerance, one.
+  std::vector<ballgauge::LengthMeasurement> L{{{0, 0, 0}, {100, 0, 0}, 100},
+                                              {{0, 100, 0}, {100, 100, 0}, 100},
+                                              {{10, 5, 0}, {210, 5, 0}, 200}};
+  const auto w = ballgauge::verify_lengths(L, none);
+  EXPECT_EQ(w.line_directions.size(), 2u);
+  EXPECT_EQ(w.rows[0].line, 0);
+  EXPECT_EQ(w.rows[1].line, 1);
+  EXPECT_EQ(w.rows[2].line, 0);
 }

@@ -330,3 +330,42 @@ TEST(Parametric, TheReportDrawsEachAxisErrorsWithBandsAndNamesTheUnseen) {
   }
   EXPECT_GE(below, 1);
 }
+
+// The identified error functions drawn against the machine's own: on noise-free data of a
+// machine the model family holds, every function the data determine is the machine's once what
+// ball-gauge data never fix (constants, straightness slopes) is taken out of both alike; the
+// undetermined ones are named, not compared; squareness agrees as ISO 230-1 defines it.
+TEST(Parametric, IdentifiedFunctionsMatchTheMachinesUpToWhatTheDataCannotFix) {
+  constexpr double kLength = 1e-7, kAngle = 1e-9;  // mm, rad: round-off of the identification
+  const sim::Machine m = test::cubic_machine(3);
+  const auto g = sim::frame_gauge();
+  const auto r = ballgauge::identify(g, exact_placements(m, g), options(m));
+  report::Section s;
+  const auto d = report::add_error_functions(s, r, m);
+  EXPECT_LT(d.translation, kLength);
+  EXPECT_LT(d.rotation, kAngle);
+  EXPECT_LT(d.squareness, kAngle);
+  ASSERT_EQ(s.plots.size(), 6u);  // per axis: translations, rotations
+  ASSERT_EQ(s.more_tables.size(), 1u);
+  const auto& t = s.more_tables.front().second;
+  ASSERT_EQ(t.size(), 1u + 18u + 3u);
+  int undetermined = 0, ram_rotations = 0;
+  for (const auto& row : t) {
+    const bool unseen = row[1] == "not determined by these data";
+    const bool confounded = row[1].rfind("not separated", 0) == 0;
+    if (unseen) {
+      ++undetermined;
+      EXPECT_NE(std::find(r.unobservable.begin(), r.unobservable.end(), row[0]),
+                r.unobservable.end());
+    }
+    if (confounded) {
+      EXPECT_EQ(row[0].back(), 'Z') << row[0];  // the ram carries the one stylus
+    }
+    if ((unseen || confounded) && row[0].back() == 'Z') ++ram_rotations;
+  }
+  EXPECT_EQ(undetermined, static_cast<int>(r.unobservable.size()));
+  EXPECT_GE(undetermined, 1);   // ECZ: a vertical stylus does not see the ram's yaw
+  EXPECT_EQ(ram_rotations, 3);  // none of the ram's rotations is told from its straightness
+  // A machine that is not the one measured differs.
+  EXPECT_GT(report::add_error_functions(s, r, test::cubic_machine(4)).translation, 1e-4);
+}

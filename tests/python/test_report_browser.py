@@ -102,9 +102,10 @@ def test_demo_report_renders_every_plot(tmp_path):
     rtl = trueaxis.positioning(str(report.parent / "runs.rtl"))
     csv = trueaxis.positioning(str(report.parent / "runs.csv"))
     assert rtl["A"] == pytest.approx(csv["A"], abs=1e-3) and rtl["B_mean"] < -2
-    after = re.search(r"compensated with <code>X.COM</code> and measured again: A "
-                      r"([0-9.]+) → ([0-9.]+) µm", dom)
+    after = re.search(r"Compared with the axis before compensation [^:]*: accuracy A "
+                      r"([0-9.]+) µm → ([0-9.]+) µm", dom)
     assert after and float(after.group(2)) < float(after.group(1)) / 2
+    assert "<h3>before and after compensation — A " in dom
 
 
 def evaluate_in(html, tmp_path, expression):
@@ -147,7 +148,7 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
                     "operator=K. Tanaka", "-q"], check=True)
     dom = dump_dom(h, tmp_path)
     assert 'data-script-errors="' not in dom
-    assert re.search(r'data-plots-rendered="1"', dom)
+    assert re.search(r'data-plots-rendered="2"', dom)
     assert "E0 envelope" in dom and ">PASS<" in dom and "+MPE" in dom
     assert "<th>machine</th><td>Virtual CMM</td>" in dom
     assert "<th>operator</th><td>K. Tanaka</td>" in dom
@@ -155,9 +156,9 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     assert "k = 2" in dom
     # Each table's CSV is in the page; each plot's is made by the page from the plot's data.
     links = re.findall(r'<a class="csv" download="([^"]+)" href="data:text/csv', dom)
-    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 2, links
+    assert "gauge-block-verification-iso-10360-2-positions-table.csv" in links and len(links) == 3, links
     csvs = plot_csvs(h, tmp_path)
-    assert len(csvs) == 1, csvs.keys()
+    assert len(csvs) == 2, csvs.keys()
     rows = csvs[0]
     assert rows[0][0] == "nominal length (mm)", rows[0]
     assert rows[0][1:] == ["before correction", "after, grid", "+MPE", "−MPE"], rows[0]
@@ -172,7 +173,29 @@ def test_length_report_has_e0_envelope_header_and_csv_in_the_browser(tmp_path):
     assert re.fullmatch(r"\d+ of 105", rows[1][2]) and re.fullmatch(r"\d+", rows[1][3]), rows
     stats = re.search(r'<h2 id="s\d+">Gauge-block verification[^<]*</h2>.*?<table>(.*?)</table>', dom, re.S)
     assert "PASS" not in stats.group(1) and "FAIL" not in stats.group(1)
-    assert "105 calibrated lengths in 35 set-ups" in dom
+    assert "105 calibrated lengths in 35 set-ups along 7 lines, ISO 10360-2's positions" in dom
+    # The seven positions, each with its direction, its set-ups and its worst error, and every
+    # error drawn at its position.
+    pos = re.search(r"<h3>Positions \(ISO 10360-2\): the 7 lines the set-ups lie along</h3>"
+                    r"<table>(.*?)</table>", dom, re.S)
+    assert pos, "no positions table"
+    rows = [re.findall(r"<t[hd]>([^<]*)</t[hd]>", r) for r in re.findall(r"<tr>(.*?)</tr>", pos.group(1))]
+    assert rows[0] == ["position", "direction", "set-ups", "lengths", "max |E| before (µm)",
+                       "max |E| after, grid (µm)"], rows[0]
+    assert [r[0] for r in rows[1:]] == [str(k) for k in range(1, 8)]
+    directions = [r[1] for r in rows[1:]]
+    assert sum(d.startswith("space diagonal (") for d in directions) == 4, directions
+    assert {"along X", "along Y", "along Z"} <= set(directions), directions
+    assert all(r[2] == "5" and r[3] == "15" for r in rows[1:]), rows
+    worst_before = max(float(r[4]) for r in rows[1:])
+    table_stats = [re.findall(r"<t[hd]>([^<]*)</t[hd]>", r)
+                   for r in re.findall(r"<tr>(.*?)</tr>", stats.group(1))]
+    before_row = next(r for r in table_stats if r[0] == "before correction")
+    assert worst_before == pytest.approx(max(-float(before_row[1]), float(before_row[2])), abs=0.006)
+    by_position = csvs[1]
+    assert by_position[0] == ["position", "before correction", "after, grid"], by_position[0]
+    xs = [float(r[0]) for r in by_position[1:]]
+    assert len(xs) == 2 * 105 and 0.6 < min(xs) and max(xs) < 7.4
     # The section is titled by what it shows, and names the data it was made from.
     assert '<h2 id="s1">Gauge-block verification (ISO 10360-2 positions)</h2>' in dom
     assert '<p class="source">Data: l.csv</p>' in dom
@@ -232,6 +255,30 @@ def test_positioning_report_renders(tmp_path):
         edges = re.findall(r'<tr class="u-series"[^>]*>(?:(?!</tr>).)*?edge', dom, re.S)
         assert edges and all('display: none' in e for e in edges), edges
         assert '<h2 id="s1">Positioning accuracy of a linear axis</h2>' in dom
+    # The axis measured again after its compensation, compared with this run on one plot.
+    comp, runs2, out2, h3 = (str(tmp_path / n) for n in ("x.comp", "r2.csv", "p2.json", "p3.html"))
+    subprocess.run([TRUEAXIS, "export", "linuxcnc", "--positioning", out, "-o", comp, "-q"],
+                   check=True)
+    subprocess.run([TRUEAXIS, "simulate", "positioning", "--targets", "0:40:800", "--backlash", "3",
+                    "--noise", "0.4", "--compensation", comp, "--seed", "2", "-o", runs2, "-q"],
+                   check=True)
+    shown = subprocess.run([TRUEAXIS, "positioning", "-i", runs2, "-o", out2, "--report", h3,
+                            "--before", out],
+                           capture_output=True, text=True, check=True).stdout
+    a_before, a_after = map(float, re.search(r"before compensation \([^)]*\): A ([0-9.]+) -> "
+                                             r"([0-9.]+) µm", shown).groups())
+    assert a_after < a_before / 2, shown
+    dom = dump_dom(h3, tmp_path)
+    assert 'data-plots-total="3"' in dom and 'data-plots-rendered="3"' in dom
+    assert f"<h3>before and after compensation — A {a_before:.2f} µm → {a_after:.2f} µm" in dom
+    for label in ("x̄↑ ± 2s↑ before", "x̄↓ ± 2s↓ before", "x̄↑ ± 2s↑ after", "x̄↓ ± 2s↓ after"):
+        assert f">{label}<" in dom, label
+    # Targets of one run missing from the other (0:40 against 0:50) are spanned, not gaps.
+    spans = evaluate_in(h3, tmp_path, "TA_PLOTS[2].series.slice(1).map(function(s){return !!s.spanGaps;})")
+    assert spans == [True] * 4
+    bad = subprocess.run([TRUEAXIS, "positioning", "-i", runs2, "-o", str(tmp_path / "x.json"),
+                          "--before", str(tmp_path / "p.html")], capture_output=True, text=True)
+    assert bad.returncode != 0 and "p.html" in bad.stderr
     # Printable: the print stylesheet hides what only a screen uses; Chromium prints it to PDF.
     text = open(h, encoding="utf-8").read()
     assert "@media print{" in text and ".screen," in text
@@ -281,3 +328,23 @@ def test_guideway_straightness_is_drawn_with_the_line_its_pv_is_about(tmp_path):
                           dom)
         assert title and title.group(1) == pv, (name, pv, title and title.group(0))
     assert dom.count("least-squares line") >= 4  # two titles, two legend entries
+    # The zone's two lines under one legend entry; a stand-alone carriage's own error names.
+    assert dom.count(">minimum zone<") == 2
+    upper = re.findall(r'<tr class="u-series"[^>]*>(?:(?!</tr>).)*?minimum zone, upper line', dom, re.S)
+    assert len(upper) == 2 and all('display: none' in e for e in upper), upper
+    assert "EYX" not in dom
+    # On the machine's X axis the errors carry ISO 230-1's names, in the machine frame.
+    out2, h2 = str(tmp_path / "gx.json"), str(tmp_path / "gx.html")
+    shown = subprocess.run([TRUEAXIS, "guideway", "--layout", str(tmp_path / "layout.json"),
+                            "--input", spots, "--axis", "X", "-o", out2, "--report", h2],
+                           capture_output=True, text=True, check=True).stdout
+    for name in ("EYX (horizontal)", "EZX (vertical)", "EBX (pitch)", "ECX (yaw)", "EAX (roll)"):
+        assert name in shown, shown
+    dom = dump_dom(h2, tmp_path)
+    assert 'data-script-errors="' not in dom
+    names = re.findall(r"<tr><td>(E[XYZABC]X \([a-z]+\))</td>", dom)
+    assert names == ["EYX (horizontal)", "EZX (vertical)", "EBX (pitch)", "ECX (yaw)", "EAX (roll)"], names
+    assert re.search(r"<h3>EYX horizontal straightness — PV about the least-squares line", dom)
+    assert json.load(open(out2))["axis"] == "X"
+    subprocess.run([TRUEAXIS, "report", out2, "-o", str(tmp_path / "gx2.html"), "-q"], check=True)
+    assert "<td>EAX (roll)</td>" in open(tmp_path / "gx2.html", encoding="utf-8").read()

@@ -55,6 +55,9 @@ struct LengthOptions {
   // Where length `index` (0-based) came from, for messages: end 1 or 2 (0: the length as a
   // whole), e.g. "lengths.csv:7:13: " for a file's line and column. Empty: the count alone.
   std::function<std::string(std::size_t index, int end)> locate;
+  // mm: set-ups lie along one line, one ISO 10360-2 position, when their directions agree within
+  // 2° and each one's middle lies this close to the line of the first.
+  double line_tolerance = 25.0;
   void validate() const;  // throws Error
 };
 
@@ -64,6 +67,9 @@ struct LengthRow {
   double after = 0;        // after correction (mm)
   double uncertainty = 0;  // the correction's standard uncertainty for this length (mm)
   int position = 0;        // repeat group (0-based, in order of first appearance)
+  // The line the set-up lies along, ISO 10360-2's "position" (0-based, in order of first
+  // appearance); -1: not known (a file written before lines were found).
+  int line = -1;
 };
 
 struct LengthStats {
@@ -83,7 +89,16 @@ struct LengthVerification {
   double correction_u_rms = 0;  // mm: RMS over rows of the correction's length uncertainty
   double predicted_after = 0;   // mm: sqrt(repeatability² + correction_u_rms²) (NaN: no repeats)
   std::string summary() const;  // µm
+  // The lines the set-ups lie along (ISO 10360-2's positions: 4 space diagonals and 3 others):
+  // each one's unit direction in the machine frame, signed so that its largest component is
+  // positive. Empty when not known.
+  std::vector<Eigen::Vector3d> line_directions;
 };
+
+// A line's direction in words, a component below sin 2° taken as none: "along X", "XY plane
+// diagonal (+X−Y)", "space diagonal (+X+Y−Z)" (a diagonal of the measuring volume, whatever its
+// proportions; the signs are + and the minus sign U+2212, which a line is not broken after).
+std::string direction_name(const Eigen::Vector3d& unit_direction);
 
 // Throws Error: no measurements, a non-positive or non-finite nominal, non-finite or coincident
 // end points, or (from the correction) points outside its domain; messages name the length by its

@@ -347,14 +347,22 @@ void write_length_verification(const std::string& path,
   ojson out = ojson::array();
   for (const auto& v : results) {
     ojson rows = ojson::array();
-    for (const auto& r : v.rows)
+    for (const auto& r : v.rows) {
       rows.push_back({{"nominal", r.nominal},
                       {"position", r.position},
                       {"before", r.before * 1e3},
                       {"after", r.after * 1e3},
                       {"uncertainty", r.uncertainty * 1e3}});
+      if (r.line >= 0) rows.back()["line"] = r.line;
+    }
     out.push_back({{"correction", v.correction},
                    {"positions", v.positions},
+                   {"lines",
+                    [&] {
+                      ojson l = ojson::array();
+                      for (const auto& d : v.line_directions) l.push_back(xyz(d));
+                      return l;
+                    }()},
                    {"before", stats(v.before)},
                    {"after", stats(v.after)},
                    {"repeatability", num(v.repeatability)},
