@@ -219,33 +219,19 @@ int run_simulate(const SimArgs& a) {
   if (!a.cmm.empty()) address = parse_ipp_address(a.cmm);  // a usage error before any work
   const sim::Machine m = a.machine.load();
   if (a.origin.size() != 3) throw Error("--origin needs x,y,z (mm)");
-  const Eigen::Matrix3d R =
-      Eigen::AngleAxisd(a.misalignment_urad * 1e-6, Eigen::Vector3d(0.2, -0.1, 1).normalized())
-          .toRotationMatrix();
-  ballgauge::Gauge g;
-  std::vector<sim::GaugePose> poses;
-  if (a.plate.empty()) {
-    g = sim::frame_gauge();
-    poses = sim::stacked_poses(g, a.sections, {a.origin[0], a.origin[1], a.origin[2]}, R);
-    if (a.alignment == "ls") poses.front().alignment = ballgauge::Alignment::LeastSquares;
-  } else {
-    // A plate campaign in the machine's reach (30 mm inside the command range). On a CMM over
-    // I++ DME the server's stylus probes every placement from above.
-    const auto [rows, columns] = plate_size(a.plate);
-    g = sim::plate_gauge(rows, columns, a.pitch);
-    poses = sim::plate_poses(g, m, 30, R, a.cmm.empty());
-    for (auto& q : poses)
-      if (a.alignment == "ls") q.alignment = ballgauge::Alignment::LeastSquares;
-  }
-  const std::string what = a.plate.empty()
-                               ? fmt::format("a {}-ball frame gauge", g.balls.size())
-                               : fmt::format(
-                                     "a {} ball plate at {:g} mm pitch (flat low and high, "
-                                     "upright along X and along Y{}, each aligned by itself)",
-                                     a.plate, a.pitch,
-                                     a.cmm.empty() ? " probed from the side with the stylus "
-                                                     "turned horizontal"
-                                                   : "");
+  sim::BallGaugeSetup setup;
+  if (!a.plate.empty()) std::tie(setup.plate_rows, setup.plate_columns) = plate_size(a.plate);
+  setup.pitch = a.pitch;
+  setup.placements = a.sections;
+  setup.origin = {a.origin[0], a.origin[1], a.origin[2]};
+  setup.misalignment = a.misalignment_urad * 1e-6;
+  setup.least_squares = a.alignment == "ls";
+  // On a CMM over I++ DME the server's stylus probes every placement from above.
+  setup.from_above = !a.cmm.empty();
+  const sim::BallGaugeLayout layout = sim::ballgauge_setup(m, setup);
+  const ballgauge::Gauge& g = layout.gauge;
+  const std::vector<sim::GaugePose>& poses = layout.poses;
+  const std::string& what = layout.description;
   sim::BallGaugeOptions o = a.o;
   o.noise = a.noise_um * 1e-3;
   if (!a.balls.empty()) {
@@ -283,29 +269,18 @@ int run_simulate(const SimArgs& a) {
   io::write_gauge(a.gauge, g);
   io::write_measurements(a.measurements, c.placements);
   // Truth: every probed ball's true centre and the machine's error there.
-  Eigen::VectorXd pl, ball, X, Y, Z, ex, ey, ez;
-  std::vector<double> cols[8];
-  for (std::size_t p = 0; p < c.placements.size(); ++p) {
-    // The machine's error at the tip of the stylus this placement was probed with.
-    sim::Machine ms = m;
-    if (c.placements[p].stylus_offset) ms.offset = *c.placements[p].stylus_offset;
-    for (std::size_t b = 0; b < c.placements[p].balls.size(); ++b) {
-      const Eigen::Vector3d t = c.true_centres[p][b];
-      const Eigen::Vector3d e = ms.error(t - ms.offset) * 1e3;
-      const double v[8] = {static_cast<double>(p),
-                           static_cast<double>(c.placements[p].balls[b].index),
-                           t.x(),
-                           t.y(),
-                           t.z(),
-                           e.x(),
-                           e.y(),
-                           e.z()};
-      for (int k = 0; k < 8; ++k) cols[k].push_back(v[k]);
-    }
+  const sim::BallGaugeTruth truth = sim::ballgauge_truth(m, c);
+  std::vector<Eigen::VectorXd> vc(8);
+  vc[0] = Eigen::Map<const Eigen::VectorXi>(truth.placement.data(),
+                                            static_cast<Eigen::Index>(truth.placement.size()))
+              .cast<double>();
+  vc[1] = Eigen::Map<const Eigen::VectorXi>(truth.ball.data(),
+                                            static_cast<Eigen::Index>(truth.ball.size()))
+              .cast<double>();
+  for (int k = 0; k < 3; ++k) {
+    vc[static_cast<std::size_t>(2 + k)] = truth.centre.row(k).transpose();
+    vc[static_cast<std::size_t>(5 + k)] = truth.error.row(k).transpose() * 1e3;
   }
-  std::vector<Eigen::VectorXd> vc;
-  for (auto& v : cols)
-    vc.push_back(Eigen::Map<Eigen::VectorXd>(v.data(), static_cast<Eigen::Index>(v.size())));
   io::write_csv(a.truth, {"placement", "ball", "x", "y", "z", "ex_um", "ey_um", "ez_um"},
                 {&vc[0], &vc[1], &vc[2], &vc[3], &vc[4], &vc[5], &vc[6], &vc[7]});
   if (!a.cmm.empty()) {
@@ -325,17 +300,7 @@ int run_simulate(const SimArgs& a) {
     // Gauge blocks in the box of the mapped ball centres (ISO 10360-2 style, held out), probed
     // with the machine's stylus within the span of axis positions the campaign covered (where
     // a model identified from it holds; placements probed with other styli cover other spans).
-    sim::GaugeBlockOptions go;
-    c.bounds(go.lo, go.hi);
-    Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
-    for (std::size_t p = 0; p < c.placements.size(); ++p)
-      for (const auto& X : c.true_centres[p]) {
-        const Eigen::Vector3d cmd = X - c.placements[p].stylus_offset.value_or(m.offset);
-        lo = lo.cwiseMin(cmd);
-        hi = hi.cwiseMax(cmd);
-      }
-    go.lo = go.lo.cwiseMax(lo + m.offset);
-    go.hi = go.hi.cwiseMin(hi + m.offset);
+    sim::GaugeBlockOptions go = sim::held_out_blocks(m, c);
     go.repeats = a.repeats;
     go.tip_radius = o.tip_radius;
     go.noise = (a.length_noise_um >= 0 ? a.length_noise_um : a.noise_um) * 1e-3;

@@ -6,6 +6,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <cstdio>
 #include <optional>
 #include <variant>
 
@@ -15,12 +16,101 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/surface/space.hpp"
+#include "trueaxis/sim/ballgauge.hpp"
 
 namespace py = pybind11;
 
 namespace trueaxis::python {
 
+namespace {
+
+// trueaxis.simulate_ballgauge: `trueaxis simulate ballgauge` in process (files as it writes them).
+py::dict simulate_ballgauge(const sim::Machine& machine, const std::string& gauge,
+                            const std::string& measurements, const std::string& plate, double pitch,
+                            int placements, const std::vector<double>& origin, double misalignment,
+                            const std::string& alignment, double noise, int points_per_ball,
+                            double tip_radius, std::uint64_t seed, const std::string& lengths,
+                            int repeats, std::optional<double> length_noise) {
+  if (origin.size() != 3) throw Error("origin needs [x, y, z] (mm)");
+  if (alignment != "321" && alignment != "ls")
+    throw Error(fmt::format("alignment '{}': use '321' or 'ls'", alignment));
+  sim::BallGaugeSetup setup;
+  if (!plate.empty()) {
+    int rows = 0, columns = 0;
+    char x = 0, rest = 0;
+    if (std::sscanf(plate.c_str(), "%d%c%d%c", &rows, &x, &columns, &rest) != 3 ||
+        (x != 'x' && x != 'X'))
+      throw Error(fmt::format("plate '{}': give ROWSxCOLUMNS, e.g. '5x5'", plate));
+    setup.plate_rows = rows;
+    setup.plate_columns = columns;
+  }
+  setup.pitch = pitch;
+  setup.placements = placements;
+  setup.origin = {origin[0], origin[1], origin[2]};
+  setup.misalignment = misalignment * 1e-6;
+  setup.least_squares = alignment == "ls";
+  sim::BallGaugeOptions o;
+  o.noise = noise * 1e-3;
+  o.points_per_ball = points_per_ball;
+  o.tip_radius = tip_radius;
+  o.seed = seed;
+  const sim::BallGaugeLayout layout = sim::ballgauge_setup(machine, setup);
+  sim::BallGaugeCampaign c;
+  {
+    py::gil_scoped_release release;
+    c = sim::simulate_ballgauge(machine, layout.gauge, layout.poses, o);
+  }
+  io::write_gauge(gauge, layout.gauge);
+  io::write_measurements(measurements, c.placements);
+  const sim::BallGaugeTruth t = sim::ballgauge_truth(machine, c);
+  py::dict truth;
+  truth["placement"] = t.placement;
+  truth["ball"] = t.ball;
+  truth["centre"] = Eigen::MatrixXd(t.centre.transpose());
+  truth["error"] = Eigen::MatrixXd(t.error.transpose() * 1e3);
+  py::dict d;
+  d["gauge"] = gauge;
+  d["measurements"] = measurements;
+  d["truth"] = truth;
+  d["description"] = layout.description;
+  d["lengths"] = py::none();
+  if (!lengths.empty()) {
+    sim::GaugeBlockOptions go = sim::held_out_blocks(machine, c);
+    go.repeats = repeats;
+    go.tip_radius = tip_radius;
+    go.noise = length_noise.value_or(noise) * 1e-3;
+    go.seed = seed + 1000;
+    const auto gb = sim::simulate_gauge_blocks(machine, go);
+    io::write_lengths(lengths, gb.lengths);
+    d["lengths"] = lengths;
+  }
+  d["summary"] = fmt::format("{} placements of {} ({} points per ball, noise {:g} µm)",
+                             c.placements.size(), layout.description, points_per_ball, noise);
+  return d;
+}
+
+}  // namespace
+
 void bind_ballgauge(py::module_& m) {
+  m.def("simulate_ballgauge", &simulate_ballgauge, py::arg("machine"), py::kw_only(),
+        py::arg("gauge") = "gauge.json", py::arg("measurements") = "measurements.json",
+        py::arg("plate") = "", py::arg("pitch") = 100.0, py::arg("placements") = 3,
+        py::arg("origin") = std::vector<double>{150, 120, 60}, py::arg("misalignment") = 4000.0,
+        py::arg("alignment") = "321", py::arg("noise") = 0.0, py::arg("points_per_ball") = 10,
+        py::arg("tip_radius") = 1.5, py::arg("seed") = 1, py::arg("lengths") = "",
+        py::arg("repeats") = 3, py::arg("length_noise") = py::none(),
+        R"doc(A ball-gauge campaign on the virtual CMM, as 'trueaxis simulate ballgauge' makes it.
+
+machine: a trueaxis.Machine. The frame gauge (5 x 4 x 2 balls at 80 mm) in `placements` placements
+stacked in z from `origin` (ball 0, mm), or plate='5x5' for a ball plate at `pitch` (mm) in its
+placements in the machine's reach; each set down misaligned by `misalignment` (µrad); aligned
+'321' or by least squares ('ls'). noise: probing noise (µm, per coordinate); tip_radius in mm.
+Writes `gauge` and `measurements` (what trueaxis.ballgauge and trueaxis.identify read) and, with
+lengths='lengths.csv', held-out gauge blocks in ISO 10360-2's seven positions (for
+verify_lengths; their noise length_noise µm, default `noise`). Returns {'gauge', 'measurements',
+'lengths' (paths; None without lengths), 'truth': {'placement', 'ball', 'centre' (mm),
+'error' (µm): the machine's error at each probed ball}, 'description', 'summary'}.)doc");
+
   m.def(
       "ballgauge",
       [](const std::string& gauge, const std::string& measurements, double match_tolerance,

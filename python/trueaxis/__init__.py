@@ -240,6 +240,7 @@ __all__ = [
     "positioning",
     "scan",
     "separate",
+    "simulate_ballgauge",
     "simulate_guideway",
     "simulate_part",
     "simulate_positioning",

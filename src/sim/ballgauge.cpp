@@ -328,4 +328,79 @@ GaugeBlockCampaign simulate_gauge_blocks(const Machine& machine, const GaugeBloc
   return c;
 }
 
+void BallGaugeSetup::validate() const {
+  const bool plate = plate_rows != 0 || plate_columns != 0;
+  if (plate && (plate_rows < 2 || plate_columns < 2 || plate_rows > 100 || plate_columns > 100))
+    throw Error("ball-gauge set-up: a plate has 2 to 100 rows and columns");
+  if (plate && !(pitch > 0 && std::isfinite(pitch)))
+    throw Error("ball-gauge set-up: the plate's pitch must be a positive number of mm");
+  if (!plate && (placements < 1 || placements > 20))
+    throw Error("ball-gauge set-up: the frame takes 1 to 20 placements");
+  if (!origin.allFinite()) throw Error("ball-gauge set-up: the origin must be finite");
+  if (!(std::abs(misalignment) < 0.1))
+    throw Error("ball-gauge set-up: the misalignment must be below 0.1 rad (a gauge set by hand)");
+}
+
+BallGaugeLayout ballgauge_setup(const Machine& machine, const BallGaugeSetup& s) {
+  s.validate();
+  const Eigen::Matrix3d R =
+      Eigen::AngleAxisd(s.misalignment, Eigen::Vector3d(0.2, -0.1, 1).normalized())
+          .toRotationMatrix();
+  BallGaugeLayout out;
+  if (s.plate_rows == 0) {
+    out.gauge = frame_gauge();
+    out.poses = stacked_poses(out.gauge, s.placements, s.origin, R);
+    if (s.least_squares) out.poses.front().alignment = ballgauge::Alignment::LeastSquares;
+    out.description = fmt::format("a {}-ball frame gauge", out.gauge.balls.size());
+  } else {
+    out.gauge = plate_gauge(s.plate_rows, s.plate_columns, s.pitch);
+    out.poses = plate_poses(out.gauge, machine, 30, R, !s.from_above);
+    if (s.least_squares)
+      for (auto& q : out.poses) q.alignment = ballgauge::Alignment::LeastSquares;
+    out.description = fmt::format(
+        "a {}x{} ball plate at {:g} mm pitch (flat low and high, upright along X and along Y{}, "
+        "each aligned by itself)",
+        s.plate_rows, s.plate_columns, s.pitch,
+        s.from_above ? "" : " probed from the side with the stylus turned horizontal");
+  }
+  return out;
+}
+
+BallGaugeTruth ballgauge_truth(const Machine& machine, const BallGaugeCampaign& c) {
+  BallGaugeTruth t;
+  std::size_t n = 0;
+  for (const auto& p : c.placements) n += p.balls.size();
+  t.centre.resize(3, static_cast<Eigen::Index>(n));
+  t.error.resize(3, static_cast<Eigen::Index>(n));
+  Eigen::Index k = 0;
+  for (std::size_t p = 0; p < c.placements.size(); ++p) {
+    // The machine's error at the tip of the stylus this placement was probed with.
+    Machine ms = machine;
+    if (c.placements[p].stylus_offset) ms.offset = *c.placements[p].stylus_offset;
+    for (std::size_t b = 0; b < c.placements[p].balls.size(); ++b, ++k) {
+      const Eigen::Vector3d X = c.true_centres[p][b];
+      t.placement.push_back(static_cast<int>(p));
+      t.ball.push_back(c.placements[p].balls[b].index);
+      t.centre.col(k) = X;
+      t.error.col(k) = ms.error(X - ms.offset);
+    }
+  }
+  return t;
+}
+
+GaugeBlockOptions held_out_blocks(const Machine& machine, const BallGaugeCampaign& c,
+                                  GaugeBlockOptions o) {
+  c.bounds(o.lo, o.hi);
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(HUGE_VAL), hi = -lo;
+  for (std::size_t p = 0; p < c.placements.size(); ++p)
+    for (const auto& X : c.true_centres[p]) {
+      const Eigen::Vector3d cmd = X - c.placements[p].stylus_offset.value_or(machine.offset);
+      lo = lo.cwiseMin(cmd);
+      hi = hi.cwiseMax(cmd);
+    }
+  o.lo = o.lo.cwiseMax(lo + machine.offset);
+  o.hi = o.hi.cwiseMin(hi + machine.offset);
+  return o;
+}
+
 }  // namespace trueaxis::sim

@@ -105,3 +105,42 @@ def test_a_wrong_touch_is_refused_or_left_out(tmp_path):
     assert len(r["dropped"]) == 1 and "point 4" in r["dropped"][0]
     clean = trueaxis.ballgauge(g, m)
     assert np.abs(r["error"] - clean["error"]).max() < 1.5  # um: one point fewer on one ball
+
+
+def test_python_simulates_the_campaign_the_command_line_does(tmp_path):
+    # The same campaign from Python and from the CLI: the same files, byte for byte.
+    machine = trueaxis.Machine.random(seed=7)
+    machine_file = str(tmp_path / "machine.json")
+    subprocess.run([TRUEAXIS, "simulate", "machine", "--seed", "7", "-o", machine_file, "-q"],
+                   check=True)
+    py_files = {n: str(tmp_path / f"py-{n}") for n in ("gauge.json", "meas.json", "lengths.csv")}
+    s = trueaxis.simulate_ballgauge(trueaxis.Machine.load(machine_file), gauge=py_files["gauge.json"],
+                                    measurements=py_files["meas.json"], alignment="ls", noise=0.3,
+                                    seed=4, lengths=py_files["lengths.csv"])
+    cli_files = {n: str(tmp_path / f"cli-{n}") for n in ("gauge.json", "meas.json", "lengths.csv")}
+    subprocess.run([TRUEAXIS, "simulate", "ballgauge", "--machine", machine_file, "--alignment", "ls",
+                    "--noise", "0.3", "--seed", "4", "--gauge", cli_files["gauge.json"],
+                    "--measurements", cli_files["meas.json"], "--lengths", cli_files["lengths.csv"],
+                    "--truth", str(tmp_path / "t.csv"), "-q"], check=True)
+    for n in py_files:
+        assert open(py_files[n]).read() == open(cli_files[n]).read(), n
+    assert s["lengths"] == py_files["lengths.csv"] and "40-ball frame gauge" in s["description"]
+    # The truth: where each probed ball stood and the machine's error there, as the CLI's CSV.
+    t = np.loadtxt(tmp_path / "t.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(s["truth"]["centre"], t[:, 2:5], atol=1e-9)
+    np.testing.assert_allclose(s["truth"]["error"], t[:, 5:8], atol=1e-9)
+    assert s["truth"]["error"].shape == (120, 3)
+    # What Python simulated, Python maps.
+    r = trueaxis.ballgauge(s["gauge"], s["measurements"])
+    assert r["map"] is not None and r["error"].shape == (80, 3)
+    assert machine.summary() == trueaxis.Machine.random(seed=7).summary()
+    # A plate; refusals.
+    p = trueaxis.simulate_ballgauge(machine, gauge=str(tmp_path / "pg.json"),
+                                    measurements=str(tmp_path / "pm.json"), plate="4x4", pitch=120)
+    assert "4x4 ball plate at 120 mm pitch" in p["summary"]
+    with pytest.raises(trueaxis.Error, match="ROWSxCOLUMNS"):
+        trueaxis.simulate_ballgauge(machine, plate="four", gauge=str(tmp_path / "x.json"))
+    with pytest.raises(trueaxis.Error, match="alignment"):
+        trueaxis.simulate_ballgauge(machine, alignment="best", gauge=str(tmp_path / "x.json"))
+    with pytest.raises(TypeError, match="did you mean 'noise'"):
+        trueaxis.simulate_ballgauge(machine, nois=1)

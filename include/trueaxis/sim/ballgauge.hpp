@@ -84,6 +84,42 @@ std::vector<GaugePose> plate_poses(const ballgauge::Gauge& plate, const Machine&
                                    const Eigen::Matrix3d& rotation = Eigen::Matrix3d::Identity(),
                                    bool from_the_side = true);
 
+// A ball-gauge campaign as a user sets one up. Either the frame gauge (frame_gauge) in
+// `placements` placements stacked in z (stacked_poses) from `origin`, or, with plate_rows and
+// plate_columns, a plate of that many balls at `pitch` in its four (or five) placements in the
+// machine's reach (plate_poses; the upright ones probed from the side unless `from_above`). Each
+// placement is misaligned by `misalignment` (rad) about a fixed oblique axis, as a gauge set
+// down by hand is; the first frame placement (every plate placement) is aligned 3-2-1, or by
+// least squares with `least_squares`.
+struct BallGaugeSetup {
+  int plate_rows = 0, plate_columns = 0;  // 0: the frame gauge
+  double pitch = 100;                     // mm, of the plate
+  int placements = 3;                     // of the frame
+  Eigen::Vector3d origin{150, 120, 60};   // mm, ball 0 of the first frame placement
+  double misalignment = 4e-3;             // rad
+  bool least_squares = false;
+  bool from_above = false;  // probe upright plates from above (a CMM's one stylus)
+  void validate() const;    // throws Error
+};
+
+struct BallGaugeLayout {
+  ballgauge::Gauge gauge;
+  std::vector<GaugePose> poses;
+  std::string description;  // "a 40-ball frame gauge", "a 5x5 ball plate at 100 mm pitch (...)"
+};
+
+// Throws Error for an invalid set-up or a plate that does not fit the machine.
+BallGaugeLayout ballgauge_setup(const Machine& machine, const BallGaugeSetup& setup);
+
+// What a campaign was measured against: each probed ball's true centre and the machine's error
+// there (actual − nominal at the command that puts the stylus it was probed with on it; mm), in
+// the order of the placements and their balls.
+struct BallGaugeTruth {
+  std::vector<int> placement, ball;  // placement index, ball index in the gauge
+  Eigen::Matrix3Xd centre, error;    // mm
+};
+BallGaugeTruth ballgauge_truth(const Machine& machine, const BallGaugeCampaign& campaign);
+
 // `gauge.balls` are used as given (gauge frame); poses map them into the machine.
 BallGaugeCampaign simulate_ballgauge(const Machine& machine, const ballgauge::Gauge& gauge,
                                      const std::vector<GaugePose>& poses,
@@ -137,5 +173,12 @@ struct GaugeBlockCampaign {
 };
 
 GaugeBlockCampaign simulate_gauge_blocks(const Machine& machine, const GaugeBlockOptions& options);
+
+// Gauge blocks held out from a campaign (simulate_gauge_blocks' lo, hi): the box of the mapped
+// ball centres, within the span of axis commands the campaign covered with the machine's own
+// stylus (where a model identified from it holds; placements probed with other styli cover
+// other spans). Other options stay as given.
+GaugeBlockOptions held_out_blocks(const Machine& machine, const BallGaugeCampaign& campaign,
+                                  GaugeBlockOptions options = {});
 
 }  // namespace trueaxis::sim
