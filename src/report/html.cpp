@@ -178,7 +178,9 @@ svg.ta-fig{max-width:100%;height:auto}
  .screen,a.csv,.u-select,.u-cursor-x,.u-cursor-y{display:none!important}
  h2{break-after:avoid} h3{break-after:avoid}
  figure,.plot,tr{break-inside:avoid}
- table{display:table;overflow:visible;font-size:8pt} td,th{padding:1px 4px;white-space:nowrap}
+ table{display:table;overflow:visible;font-size:8pt} td,th{padding:1px 4px}
+ td{white-space:nowrap} td.txt{white-space:normal;min-width:14em}
+ table.wide{font-size:6.5pt} table.wide td,table.wide th{padding:0 2px}
  .u-legend{font-size:8pt} .u-legend .u-value{display:none}
  .u-legend .u-series:first-child{display:none}
 }
@@ -245,11 +247,18 @@ svg.ta-fig{max-width:100%;height:auto}
     for (std::size_t ti = 0; ti < tables.size(); ++ti) {
       const auto& [caption, table] = tables[ti];
       if (!caption.empty()) h += "<h3>" + escape(caption) + "</h3>";
-      h += "<table>";
+      // Printed, a table fits the page's width: one of many columns (Moody's worksheet) in a
+      // smaller type, a cell of prose wrapping, a value never.
+      std::size_t columns = 0;
+      for (const auto& row : table) columns = std::max(columns, row.size());
+      h += columns > 12 ? "<table class=\"wide\">" : "<table>";
       for (std::size_t r = 0; r < table.size(); ++r) {
         h += "<tr>";
-        for (const auto& c : table[r])
-          h += (r == 0 ? "<th>" : "<td>") + escape(c) + (r == 0 ? "</th>" : "</td>");
+        for (const auto& c : table[r]) {
+          const bool prose = r > 0 && c.size() > 40 && c.find(' ') != std::string::npos;
+          h += (r == 0 ? "<th>" : prose ? "<td class=\"txt\">" : "<td>") + escape(c) +
+               (r == 0 ? "</th>" : "</td>");
+        }
         h += "</tr>";
       }
       h += "</table>\n";

@@ -151,3 +151,24 @@ TEST(Report, FitSectionPlotsEveryResidual) {
   EXPECT_NEAR((p.series[0].y - f.residuals * 1e3).cwiseAbs().maxCoeff(), 0, kTol);
   EXPECT_NEAR(p.series[0].y.maxCoeff(), 2, 1e-3);  // the lobes' 2 µm
 }
+
+// Printed, a table fits the page: many columns in a smaller type (class "wide"), a cell of prose
+// wraps (class "txt"), a value does not (the print stylesheet keeps other cells on one line).
+TEST(Report, PrintedTablesFitThePage) {
+  report::Section s;
+  s.table = {{"quantity", "value"},
+             {"flatness", "4.5"},
+             {"uncertainty", "U = 1.5 µm (95 %): reading noise 0.18 arc-second, from the closure"}};
+  std::vector<std::string> head{"line"}, row{"NW_SE"};
+  for (int k = 0; k < 21; ++k) {
+    head.push_back("station " + std::to_string(k));
+    row.push_back("1.58");
+  }
+  s.more_tables.push_back({"Union Jack", {head, row}});
+  const std::string h = report::render("t", {s});
+  EXPECT_NE(h.find("<table><tr><th>quantity</th>"), std::string::npos);
+  EXPECT_NE(h.find("<td>4.5</td>"), std::string::npos);
+  EXPECT_NE(h.find("<td class=\"txt\">U = 1.5 µm (95 %)"), std::string::npos);
+  EXPECT_NE(h.find("<table class=\"wide\"><tr><th>line</th>"), std::string::npos);
+  EXPECT_NE(h.find("td{white-space:nowrap} td.txt{white-space:normal"), std::string::npos);
+}
