@@ -21,9 +21,10 @@ if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
     chromium gawk clang-format >/dev/null
 fi
 (cd web && npm ci --no-audit --no-fund --silent)
-# The GoogleTest program is built by scripts/test.sh, under the sanitizers (build-san).
+# The GoogleTest program is built by scripts/test.sh, under the sanitizers (build-san); the
+# benchmarks are for developers (-DTRUEAXIS_BENCHMARKS=ON, see BENCHMARKS.md), not for the install.
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release -DTRUEAXIS_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr/local \
-  -DTRUEAXIS_UNIT_TESTS=OFF
+  -DTRUEAXIS_UNIT_TESTS=OFF -DTRUEAXIS_BENCHMARKS=OFF
 cmake --build build
 $SUDO cmake --install build
 trueaxis demo
