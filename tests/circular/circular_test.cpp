@@ -1,0 +1,327 @@
+// The circular test (ISO 230-4) on the virtual machine: its figures against an independent
+// computation, and every cause of the diagnosis against the machine's truth, alone and together,
+// noise-free and with noise, with its sign convention.
+#include "trueaxis/circular/circular.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/sim/circular.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+circular::Options options(const sim::CircularOptions& s) {
+  circular::Options o;
+  o.radius = s.radius;
+  o.feed = s.feed;
+  o.plane = s.plane;
+  return o;
+}
+
+const circular::Cause& cause(const circular::Result& r, const std::string& key) {
+  for (const auto& c : r.causes)
+    if (c.key == key) return c;
+  throw Error("no cause " + key);
+}
+
+// The tool's actual position at command c of machine m (mm).
+Eigen::Vector3d tool(const sim::Machine& m, const Eigen::Vector3d& c) {
+  return c + m.offset + m.error(c);
+}
+
+// The machine's squareness of X and Y at c, as the angle between the actual +X and +Y directions
+// less 90° (rad), and its scale mismatch, from the tool's actual positions: independent of the
+// circular test's model.
+double squareness_xy(const sim::Machine& m, const Eigen::Vector3d& c) {
+  const double h = 50;
+  const Eigen::Vector3d dx =
+      tool(m, c + Eigen::Vector3d(h, 0, 0)) - tool(m, c - Eigen::Vector3d(h, 0, 0));
+  const Eigen::Vector3d dy =
+      tool(m, c + Eigen::Vector3d(0, h, 0)) - tool(m, c - Eigen::Vector3d(0, h, 0));
+  const Eigen::Vector2d a = dx.head<2>(), b = dy.head<2>();
+  return std::acos(a.dot(b) / (a.norm() * b.norm())) - kPi / 2;
+}
+double scale_mismatch_xy(const sim::Machine& m, const Eigen::Vector3d& c) {
+  const double h = 50;
+  const double sx =
+      (tool(m, c + Eigen::Vector3d(h, 0, 0)) - tool(m, c - Eigen::Vector3d(h, 0, 0))).x() /
+          (2 * h) -
+      1;
+  const double sy =
+      (tool(m, c + Eigen::Vector3d(0, h, 0)) - tool(m, c - Eigen::Vector3d(0, h, 0))).y() /
+          (2 * h) -
+      1;
+  return sx - sy;
+}
+
+const Eigen::Vector3d kCentre(400, 300, 250);
+
+sim::CircularOptions test_run() {
+  sim::CircularOptions s;
+  s.centre = kCentre;
+  return s;
+}
+
+}  // namespace
+
+// Each cause alone, noise-free: its diagnosed size is the truth to what the first-order model
+// leaves (stated per case), and every other cause reads near zero.
+TEST(Circular, EachCauseAloneIsDiagnosedAsTheMachineHasIt) {
+  // The first-order model δr = e·u leaves |e|²/(2R): below 1e-4 µm here, 0.002 µm/m in a
+  // squareness or scale (over R/2).
+  constexpr double kExact = 2e-4, kExactPerM = 0.01;
+  const sim::Machine perfect;
+  {  // squareness: the actual +X and +Y make more than 90° when S > 0
+    sim::Machine m;
+    m.squareness_c0y = 25e-6;
+    const auto s = test_run();
+    const auto r = circular::evaluate(sim::simulate_circular(m, s).trace, options(s));
+    const double truth = squareness_xy(m, kCentre) * 1e6;
+    EXPECT_NEAR(std::abs(truth), 25, 1e-3);
+    EXPECT_NEAR(cause(r, "squareness").value, truth, kExactPerM);
+    EXPECT_NEAR(cause(r, "scale_mismatch").value, 0, kExactPerM);
+    EXPECT_NEAR(cause(r, "backlash.X").value, 0, kExact);
+  }
+  {  // scale mismatch: X long by 12 µm/m, Y short by 5 µm/m
+    sim::Machine m;
+    m.errors[0][0].polynomial = {0, 12e-3};  // EXX, mm per (u / 1 m)
+    m.errors[1][1].polynomial = {0, -5e-3};  // EYY
+    const auto s = test_run();
+    const auto r = circular::evaluate(sim::simulate_circular(m, s).trace, options(s));
+    EXPECT_NEAR(scale_mismatch_xy(m, kCentre) * 1e6, 17, 1e-6);
+    EXPECT_NEAR(cause(r, "scale_mismatch").value, 17, kExactPerM);
+    EXPECT_NEAR(cause(r, "squareness").value, 0, kExactPerM);
+  }
+  {  // backlash: each axis stops short by half of it each way
+    auto s = test_run();
+    s.servo[0].backlash = 4e-3;
+    s.servo[1].backlash = 6e-3;
+    const auto r = circular::evaluate(sim::simulate_circular(perfect, s).trace, options(s));
+    EXPECT_NEAR(cause(r, "backlash.X").value, 4, kExact);
+    EXPECT_NEAR(cause(r, "backlash.Y").value, 6, kExact);
+    EXPECT_NEAR(cause(r, "centre_offset.X").value, 0, kExact);
+    EXPECT_LT(r.unexplained_rms, 1e-7);
+  }
+  {  // reversal spikes: outward, decaying over 4° after each reversal; the decay is found
+    auto s = test_run();
+    s.servo[0].spike = 5e-3;
+    s.servo[0].spike_decay = 4 * kPi / 180;
+    s.servo[1].spike = 3e-3;
+    s.servo[1].spike_decay = 4 * kPi / 180;
+    const auto r = circular::evaluate(sim::simulate_circular(perfect, s).trace, options(s));
+    EXPECT_NEAR(r.spike_decay * 180 / kPi, 4, 1e-3);
+    for (const char* d : {"ccw", "cw"}) {
+      EXPECT_NEAR(cause(r, std::string("reversal_spike.X.") + d).value, 5, 1e-3) << d;
+      EXPECT_NEAR(cause(r, std::string("reversal_spike.Y.") + d).value, 3, 1e-3) << d;
+    }
+  }
+  {  // servo lag mismatch: τ = 1/K per axis; the fit's sin 2θ term is first order in ωτ, and the
+     // axes' different amplitude loss and phase, second order, read as a scale mismatch of
+     // −(3/2)·ω²·(τX² − τY²)
+    auto s = test_run();
+    s.servo[0].gain = 40;
+    s.servo[1].gain = 30;
+    const auto r = circular::evaluate(sim::simulate_circular(perfect, s).trace, options(s));
+    const double tx = 1.0 / 40, ty = 1.0 / 30, w = s.feed / 60 / s.radius;
+    EXPECT_NEAR(cause(r, "lag_mismatch").value, (tx - ty) * 1e3, 1e-3 * std::abs(tx - ty) * 1e3);
+    EXPECT_NEAR(cause(r, "scale_mismatch").value, -1.5 * w * w * (tx * tx - ty * ty) * 1e6, 0.05);
+    EXPECT_NEAR(cause(r, "squareness").value, 0, 0.05);
+  }
+  {  // the pivot set 10 µm off in +X and 20 µm in −Y: the path's centre is the opposite way
+    auto s = test_run();
+    s.pivot_offset = Eigen::Vector3d(0.010, -0.020, 0);
+    const auto r = circular::evaluate(sim::simulate_circular(perfect, s).trace, options(s));
+    EXPECT_NEAR(cause(r, "centre_offset.X").value, -10, kExact);
+    EXPECT_NEAR(cause(r, "centre_offset.Y").value, 20, kExact);
+    EXPECT_NEAR(r.ccw.centre.x() * 1e3, -10, kExact);
+  }
+}
+
+// All together, noise-free: squareness, scale, straightness, backlash, spikes, the pivot's
+// offset and the ballbar's length error are each given back.
+TEST(Circular, AllCausesTogetherAreSeparated) {
+  sim::Machine m;
+  m.squareness_c0y = -18e-6;
+  m.errors[0][0].polynomial = {0, 9e-3};
+  m.errors[0][1].polynomial = {0, 0, 40e-3};  // EYX: a bow of Y along X
+  auto s = test_run();
+  s.servo[0].backlash = 3e-3;
+  s.servo[1].backlash = 5e-3;
+  s.servo[0].spike = 4e-3;
+  s.servo[1].spike = 2e-3;
+  s.servo[0].spike_decay = s.servo[1].spike_decay = 5 * kPi / 180;
+  s.pivot_offset = Eigen::Vector3d(0.004, 0.007, 0);
+  s.length_error = 0.002;
+  const auto r = circular::evaluate(sim::simulate_circular(m, s).trace, options(s));
+  // The bow's slope at the centre is part of the squareness the test sees; its curvature over
+  // ±R is the straightness term: 40 µm·(R / 1 m)² = 0.4 µm.
+  // First order in e/R: 0.02 µm/m, 0.001 µm.
+  EXPECT_NEAR(cause(r, "squareness").value, squareness_xy(m, kCentre) * 1e6, 0.02);
+  EXPECT_NEAR(cause(r, "scale_mismatch").value, scale_mismatch_xy(m, kCentre) * 1e6, 0.02);
+  EXPECT_NEAR(cause(r, "straightness.X").value, 40e-3 * 0.01 * 1e3, 1e-3);
+  EXPECT_NEAR(cause(r, "backlash.X").value, 3, 1e-3);
+  EXPECT_NEAR(cause(r, "backlash.Y").value, 5, 1e-3);
+  EXPECT_NEAR(cause(r, "reversal_spike.X.ccw").value, 4, 1e-3);
+  EXPECT_NEAR(cause(r, "reversal_spike.Y.cw").value, 2, 1e-3);
+  EXPECT_LT(r.unexplained_rms, 1e-6);
+  for (const auto& c : r.causes) EXPECT_TRUE(c.separated) << c.name << ": " << c.confused_with;
+}
+
+// G, F and H as ISO 230-4 defines them, computed here independently: the least-squares circle by
+// Gauss–Newton on the points themselves, the band about it; H from the two paths interpolated
+// on a common grid of angles.
+TEST(Circular, FiguresAgreeWithAnIndependentComputation) {
+  constexpr double kFigure = 1e-7;  // mm
+  sim::Machine m;
+  m.squareness_c0y = 30e-6;
+  auto s = test_run();
+  s.servo[0].backlash = 5e-3;
+  s.servo[1].gain = 35;
+  s.servo[0].gain = 40;
+  s.noise = 0.3e-3;
+  s.pivot_offset = Eigen::Vector3d(0.01, 0, 0);
+  const auto run = sim::simulate_circular(m, s);
+  const auto r = circular::evaluate(run.trace, options(s));
+  const auto& t = run.trace;
+  for (const auto d : {circular::Direction::Ccw, circular::Direction::Cw}) {
+    std::vector<Eigen::Vector2d> p;
+    std::vector<double> dev;
+    for (Eigen::Index k = 0; k < t.angle.size(); ++k)
+      if (t.direction[static_cast<std::size_t>(k)] == d) {
+        const double rr = s.radius + t.deviation[k];
+        p.emplace_back(rr * std::cos(t.angle[k]), rr * std::sin(t.angle[k]));
+        dev.push_back(t.deviation[k]);
+      }
+    Eigen::Vector3d c(0, 0, s.radius);  // centre, radius
+    for (int it = 0; it < 20; ++it) {
+      Eigen::MatrixXd J(static_cast<Eigen::Index>(p.size()), 3);
+      Eigen::VectorXd f(J.rows());
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        const Eigen::Vector2d q = p[i] - c.head<2>();
+        const auto I = static_cast<Eigen::Index>(i);
+        f[I] = q.norm() - c[2];
+        J.row(I) << -q.x() / q.norm(), -q.y() / q.norm(), -1;
+      }
+      c -= J.colPivHouseholderQr().solve(f);
+    }
+    double lo = INFINITY, hi = -INFINITY;
+    for (const auto& q : p) {
+      lo = std::min(lo, (q - c.head<2>()).norm());
+      hi = std::max(hi, (q - c.head<2>()).norm());
+    }
+    const auto& fig = d == circular::Direction::Ccw ? r.ccw : r.cw;
+    EXPECT_NEAR(fig.G, hi - lo, kFigure);
+    EXPECT_NEAR(fig.F_min, *std::min_element(dev.begin(), dev.end()), 1e-15);
+    EXPECT_NEAR(fig.F_max, *std::max_element(dev.begin(), dev.end()), 1e-15);
+  }
+  // H: both paths on a fine grid of angles, the largest difference.
+  auto path = [&](circular::Direction d) {
+    std::vector<std::pair<double, double>> v;
+    for (Eigen::Index k = 0; k < t.angle.size(); ++k)
+      if (t.direction[static_cast<std::size_t>(k)] == d)
+        v.emplace_back(std::fmod(std::fmod(t.angle[k], 2 * kPi) + 2 * kPi, 2 * kPi),
+                       t.deviation[k]);
+    std::sort(v.begin(), v.end());
+    return v;
+  };
+  const auto ccw = path(circular::Direction::Ccw), cw = path(circular::Direction::Cw);
+  double h = 0;
+  for (const auto& [th, dv] : ccw) {
+    auto it = std::lower_bound(cw.begin(), cw.end(), std::make_pair(th, -HUGE_VAL));
+    const auto& hi_pt = it == cw.end() ? cw.front() : *it;
+    const auto& lo_pt = it == cw.begin() ? cw.back() : *(it - 1);
+    double a0 = lo_pt.first, a1 = hi_pt.first, x = th;
+    if (a1 <= a0) a1 += 2 * kPi;
+    if (x < a0) x += 2 * kPi;
+    const double other = lo_pt.second + (hi_pt.second - lo_pt.second) * (x - a0) / (a1 - a0);
+    h = std::max(h, std::abs(dv - other));
+  }
+  ASSERT_TRUE(r.H);
+  EXPECT_NEAR(*r.H, h, 1e-12);
+}
+
+// Noisy traces: each estimate within 2u of the truth in about 95 % of the runs.
+TEST(Circular, NoisyEstimatesAgreeWithTheirStatedUncertainty) {
+  sim::Machine m;
+  m.squareness_c0y = 20e-6;
+  int inside = 0, total = 0;
+  for (std::uint64_t seed = 1; seed <= 30; ++seed) {
+    auto s = test_run();
+    s.servo[0].backlash = 3e-3;
+    s.servo[1].backlash = 2e-3;
+    s.noise = 0.5e-3;
+    s.sample_rate = 25;  // fewer samples: a u large enough to test against
+    s.seed = seed;
+    auto o = options(s);
+    o.spike_decay = 5 * kPi / 180;
+    const auto r = circular::evaluate(sim::simulate_circular(m, s).trace, o);
+    const std::map<std::string, double> truth{{"squareness", squareness_xy(m, kCentre) * 1e6},
+                                              {"backlash.X", 3},
+                                              {"backlash.Y", 2},
+                                              {"scale_mismatch", 0},
+                                              {"lag_mismatch", 0}};
+    for (const auto& [key, value] : truth) {
+      const auto& c = cause(r, key);
+      ASSERT_TRUE(c.u) << key;
+      inside += std::abs(c.value - value) <= 2 * *c.u;
+      ++total;
+    }
+    EXPECT_NEAR(r.sigma, 0.5e-3, 0.1e-3);
+  }
+  EXPECT_GE(inside, static_cast<int>(0.88 * total)) << inside << " of " << total;
+  EXPECT_LE(inside, total);
+}
+
+// One direction only: the lag mismatch and the squareness have one signature, and are named as
+// not separated instead of being given numbers.
+TEST(Circular, WhatOneDirectionCannotSeparateIsNamed) {
+  auto s = test_run();
+  s.cw = false;
+  s.servo[0].gain = 40;
+  s.servo[1].gain = 30;
+  const auto r = circular::evaluate(sim::simulate_circular(sim::Machine{}, s).trace, options(s));
+  const auto& lag = cause(r, "lag_mismatch");
+  const auto& sq = cause(r, "squareness");
+  EXPECT_FALSE(lag.separated && sq.separated);
+  EXPECT_NE(r.summary().find("not separated from"), std::string::npos) << r.summary();
+  EXPECT_FALSE(r.H);
+  EXPECT_FALSE(r.warnings.empty());
+}
+
+TEST(Circular, WhatCannotBeATestIsRefused) {
+  auto s = test_run();
+  s.arc = 300 * kPi / 180;  // 60° missing
+  const auto run = sim::simulate_circular(sim::Machine{}, s);
+  EXPECT_NE(test::error_of([&] { circular::evaluate(run.trace, options(s)); }).find("without data"),
+            std::string::npos);
+  circular::Trace few;
+  few.direction.assign(5, circular::Direction::Ccw);
+  few.angle = Eigen::VectorXd::LinSpaced(5, 0, 6);
+  few.deviation = Eigen::VectorXd::Zero(5);
+  EXPECT_NE(test::error_of([&] { circular::evaluate(few, {}); }).find("at least 36"),
+            std::string::npos);
+  auto bad = sim::simulate_circular(sim::Machine{}, test_run()).trace;
+  bad.deviation[7] = NAN;
+  bad.where.assign(static_cast<std::size_t>(bad.angle.size()), "");
+  bad.where[7] = "trace.csv:9:3: ";
+  EXPECT_EQ(test::error_of([&] {
+              circular::evaluate(bad, options(test_run()));
+            }).rfind("trace.csv:9:3: ", 0),
+            0u);
+  EXPECT_NE(test::error_of([] { circular::Plane::parse("XZ"); }).find("XY, YZ or ZX"),
+            std::string::npos);
+  EXPECT_EQ(circular::Plane::parse("zx").name(), "ZX");
+  auto far = test_run();
+  far.radius = 450;
+  EXPECT_NE(test::error_of([&] { sim::simulate_circular(sim::Machine{}, far); }).find("range"),
+            std::string::npos);
+}
