@@ -97,6 +97,9 @@ std::vector<Command> add_scan_commands(CLI::App& app);
 // 'positioning' (ISO 230-2 / VDI 3441) and 'simulate positioning' (under `simulate`).
 std::vector<Command> add_positioning_commands(CLI::App& app, CLI::App& simulate);
 
+// 'circular' (ISO 230-4, a ballbar) and 'simulate circular' (under `simulate`).
+std::vector<Command> add_circular_commands(CLI::App& app, CLI::App& simulate);
+
 // ipp check (ipp_cmds.cpp).
 std::vector<Command> add_ipp_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);

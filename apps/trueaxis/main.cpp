@@ -296,6 +296,7 @@ int main(int argc, char** argv) {
   for (auto& c : cli::add_space_commands(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_guideway_commands(app, *simc)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_positioning_commands(app, *simc)) machine_cmds.push_back(std::move(c));
+  for (auto& c : cli::add_circular_commands(app, *simc)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_fit_commands(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_ballgauge_commands(app, *simc)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_design_commands(app, *simc)) machine_cmds.push_back(std::move(c));

@@ -125,7 +125,8 @@ double spike(double theta, double s, const std::array<double, 2>& at, double d) 
   return out;
 }
 
-std::vector<Column> columns(const Trace& t, const Options& o, double decay, bool ccw, bool cw) {
+std::vector<Column> columns(const Trace& t, const Options& o, double decay, double delay, bool ccw,
+                            bool cw) {
   const Eigen::Index n = t.angle.size();
   const double R = o.radius, v = o.feed / 60.0;
   const char* axes = "XYZ";
@@ -172,13 +173,15 @@ std::vector<Column> columns(const Trace& t, const Options& o, double decay, bool
     c[j++].v[k] = -R / 2 * std::sin(2 * th);
     c[j++].v[k] = R / 2 * std::cos(2 * th);
     c[j++].v[k] = s * v / 2 * std::sin(2 * th);
-    c[j++].v[k] = s / 2 * sign(sn) * cs;
-    c[j++].v[k] = -s / 2 * sign(cs) * sn;
+    // An axis reverses where its motor's velocity changes sign: `delay` after the commanded
+    // reversal in the direction of travel (a following lag's phase).
+    c[j++].v[k] = s / 2 * sign(std::sin(th - s * delay)) * cs;
+    c[j++].v[k] = -s / 2 * sign(std::cos(th - s * delay)) * sn;
     c[j++].v[k] = cs * cs * sn;
     c[j++].v[k] = sn * sn * cs;
     for (int axis = 0; axis < 2; ++axis) {
-      const std::array<double, 2> at =
-          axis == 0 ? std::array<double, 2>{0, kPi} : std::array<double, 2>{kPi / 2, 3 * kPi / 2};
+      const double base = axis == 0 ? 0.0 : kPi / 2;
+      const std::array<double, 2> at{base + s * delay, base + kPi + s * delay};
       for (int dir = 0; dir < 2; ++dir) {
         if ((dir == 0 && !ccw) || (dir == 1 && !cw)) continue;
         if ((dir == 0) == (s > 0))
@@ -281,6 +284,9 @@ void Options::validate() const {
     throw Error("circular test: the feed must be > 0 mm/min");
   if (!(spike_decay >= 0) || !std::isfinite(spike_decay))
     throw Error("circular test: the spike decay must be >= 0 (0: found from the data)");
+  if (!std::isfinite(reversal_delay) || reversal_delay > 0.5)
+    throw Error(
+        "circular test: the reversal delay must be below 0.5 rad (< 0: found from the data)");
   if (!(pitch_a >= 0) || !(pitch_b >= 0) || !std::isfinite(pitch_a) || !std::isfinite(pitch_b))
     throw Error("circular test: a cyclic error's pitch must be >= 0 mm (0: none)");
   if (min_samples < 8) throw Error("circular test: at least 8 samples per direction");
@@ -336,47 +342,79 @@ Result evaluate(const Trace& t, const Options& o) {
     r.H = h;
   }
 
-  // The diagnosis. The spikes' decay, when not given, is the one that fits best (golden section
-  // on log d over 0.5° … 30°, after a coarse scan for the bracket).
+  // The diagnosis. The spikes' decay and the reversals' delay, when not given, are those that
+  // fit best: a coarse grid of both, then a golden-section search of each in turn about the best
+  // (decay on a log scale over 0.5° … 30°, delay over 0 … 5°).
   const bool has_ccw = !ccw.empty(), has_cw = !cw.empty();
-  auto rss_at = [&](double d) { return solve(columns(t, o, d, has_ccw, has_cw), t.deviation).rss; };
-  double decay = o.spike_decay;
-  if (decay == 0) {
-    const double lo = std::log(0.5 * kPi / 180), hi = std::log(30 * kPi / 180);
-    constexpr int kScan = 12;
-    int best = 0;
-    double best_rss = INFINITY;
-    for (int i = 0; i <= kScan; ++i) {
-      const double v = rss_at(std::exp(lo + (hi - lo) * i / kScan));
-      if (v < best_rss) {
-        best_rss = v;
-        best = i;
-      }
-    }
-    double a = lo + (hi - lo) * std::max(0, best - 1) / kScan;
-    double b = lo + (hi - lo) * std::min(kScan, best + 1) / kScan;
+  auto rss_at = [&](double d, double delay) {
+    return solve(columns(t, o, d, delay, has_ccw, has_cw), t.deviation).rss;
+  };
+  // The least of f over [a, b]: golden section, the bracket's ends included (a step-like RSS,
+  // as a backlash step's position between samples gives, or a minimum at an end, is kept).
+  auto golden = [](auto f, double a, double b) {
     const double g = (std::sqrt(5.0) - 1) / 2;
+    double best_x = a, best_f = f(a);
+    if (const double fb = f(b); fb < best_f) {
+      best_x = b;
+      best_f = fb;
+    }
     double x1 = b - g * (b - a), x2 = a + g * (b - a);
-    double f1 = rss_at(std::exp(x1)), f2 = rss_at(std::exp(x2));
+    double f1 = f(x1), f2 = f(x2);
     for (int it = 0; it < 30; ++it) {
       if (f1 < f2) {
         b = x2;
         x2 = x1;
         f2 = f1;
         x1 = b - g * (b - a);
-        f1 = rss_at(std::exp(x1));
+        f1 = f(x1);
       } else {
         a = x1;
         x1 = x2;
         f1 = f2;
         x2 = a + g * (b - a);
-        f2 = rss_at(std::exp(x2));
+        f2 = f(x2);
       }
     }
-    decay = std::exp(f1 < f2 ? x1 : x2);
+    const double x = f1 < f2 ? x1 : x2, fx = std::min(f1, f2);
+    return fx < best_f ? x : best_x;
+  };
+  const double lo = std::log(0.5 * kPi / 180), hi = std::log(30 * kPi / 180);
+  const double max_delay = 5 * kPi / 180;
+  const bool find_decay = o.spike_decay == 0, find_delay = o.reversal_delay < 0;
+  constexpr int kScan = 12, kDelays = 10;
+  double log_decay = find_decay ? 0.5 * (lo + hi) : std::log(o.spike_decay);
+  double delay = find_delay ? 0 : o.reversal_delay;
+  if (find_decay || find_delay) {
+    double best = INFINITY;
+    int bi = 0, bj = 0;
+    for (int i = 0; i <= (find_decay ? kScan : 0); ++i)
+      for (int j = 0; j <= (find_delay ? kDelays : 0); ++j) {
+        const double ld = find_decay ? lo + (hi - lo) * i / kScan : log_decay;
+        const double dl = find_delay ? max_delay * j / kDelays : delay;
+        const double v = rss_at(std::exp(ld), dl);
+        if (v < best) {
+          best = v;
+          bi = i;
+          bj = j;
+        }
+      }
+    if (find_decay) log_decay = lo + (hi - lo) * bi / kScan;
+    if (find_delay) delay = max_delay * bj / kDelays;
+    for (int round = 0; round < 2; ++round) {
+      if (find_decay)
+        log_decay = golden([&](double x) { return rss_at(std::exp(x), delay); },
+                           std::max(lo, log_decay - (hi - lo) / kScan),
+                           std::min(hi, log_decay + (hi - lo) / kScan));
+      if (find_delay)
+        delay = golden([&](double x) { return rss_at(std::exp(log_decay), x); },
+                       std::max(0.0, delay - max_delay / kDelays),
+                       std::min(max_delay, delay + max_delay / kDelays));
+    }
   }
+  const double decay = std::exp(log_decay);
   r.spike_decay = decay;
-  const auto cols = columns(t, o, decay, has_ccw, has_cw);
+  r.reversal_delay = delay;
+  const auto cols = columns(t, o, decay, delay, has_ccw, has_cw);
   const Fit fit = solve(cols, t.deviation);
   const auto p = static_cast<Eigen::Index>(fit.kept.size());
   const double dof = static_cast<double>(n - p);

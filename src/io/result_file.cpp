@@ -34,10 +34,12 @@ ResultFile read_result_file(const std::string& path) {
     f.result = read_fit(path);
   } else if (k == "scan") {
     f.result = read_scan(path);
+  } else if (k == "circular") {
+    f.result = read_circular_result(path);
   } else {
     throw Error(fmt::format(
         "{}: {} is not a result trueaxis writes (results: separation, surface, space, guideway, "
-        "positioning, ballgauge map, parametric model, length verification, fit, scan)",
+        "positioning, ballgauge map, parametric model, length verification, fit, scan, circular)",
         path, k.empty() ? "a file with no \"kind\"" : fmt::format("a '{}' file", k)));
   }
   return f;

@@ -7,6 +7,7 @@
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/result_file.hpp"
 #include "trueaxis/report/ballgauge.hpp"
+#include "trueaxis/report/circular.hpp"
 #include "trueaxis/report/files.hpp"
 #include "trueaxis/report/fit.hpp"
 #include "trueaxis/report/guideway.hpp"
@@ -54,6 +55,13 @@ FileReport file_report(const std::string& path) {
         } else if constexpr (std::is_same_v<T, geometry::Fit>) {
           r.title = "trueaxis fit report";
           r.section = fit_section("Fit of a geometric element", v);
+        } else if constexpr (std::is_same_v<T, io::CircularFile>) {
+          if (v.trace.angle.size() == 0)
+            throw Error(fmt::format("{}: the file holds no trace to draw", path));
+          r.title = "trueaxis circular test report";
+          r.section = circular_section(
+              fmt::format("Circular test in {} (ISO 230-4)", v.result.plane.name()), v.result,
+              v.trace);
         } else {
           static_assert(std::is_same_v<T, io::ScanFile>);
           r.title = "trueaxis scanning report";

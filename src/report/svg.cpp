@@ -524,9 +524,13 @@ std::string svg(const PlaneView& v) {
   if (!std::isfinite(x0)) throw Error(fmt::format("plane view '{}': no data", v.title));
   const double pad = 0.04 * std::max(x1 - x0, y1 - y0);
   const Frame f(x0 - pad, x1 + pad, y0 - pad, y1 + pad, v.width, 0);
-  // Room for the legend under the axes: one line per curve.
+  // Room for the legend under the axes: one line per curve with a label (a curve without one
+  // belongs to the entry before it, as the second ring of a band).
   const double legend_top = f.height();
-  const double height = legend_top + 16.0 * static_cast<double>(v.curves.size()) + 4;
+  const auto entries = std::count_if(v.curves.begin(), v.curves.end(),
+                                     [](const PlaneView::Curve& c) { return !c.label.empty(); });
+  const double height = legend_top + 16.0 * static_cast<double>(entries) + 4;
+  std::size_t entry = 0;
   std::string s = fmt::format(
       "<svg class=\"ta-fig\" xmlns=\"http://www.w3.org/2000/svg\" width=\"{:.0f}\" "
       "height=\"{:.0f}\" viewBox=\"0 0 {:.0f} {:.0f}\" role=\"img\" aria-label=\"{}\" "
@@ -561,7 +565,8 @@ std::string svg(const PlaneView& v) {
           c.closed ? "polygon" : "polyline", c.color, dash, pts, escape(c.label),
           c.closed ? "polygon" : "polyline");
     }
-    const double ly = legend_top + 16.0 * static_cast<double>(i) + 8;
+    if (c.label.empty()) continue;
+    const double ly = legend_top + 16.0 * static_cast<double>(entry++) + 8;
     s += c.points ? fmt::format("<circle cx=\"{:.1f}\" cy=\"{:.1f}\" r=\"3\" fill=\"{}\"/>",
                                 f.left + 12, ly - 4, c.color)
                   : fmt::format(

@@ -158,4 +158,52 @@ CircularRun simulate_circular(const Machine& machine, const CircularOptions& o) 
   return run;
 }
 
+CircularTruth circular_truth(const Machine& machine, const CircularOptions& o) {
+  Eigen::Vector3d c = o.centre;
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(c[k]))
+      c[k] = (machine.range[static_cast<std::size_t>(k)][0] +
+              machine.range[static_cast<std::size_t>(k)][1]) /
+             2;
+  const int a = o.plane.a, b = o.plane.b;
+  // Each axis' actual direction over the test's span: least-squares slopes of the tool's
+  // in-plane position as the axis moves from −R to +R about the centre (the other axis there).
+  constexpr int kPoints = 41;
+  auto slopes = [&](int axis) {
+    Eigen::Vector2d sum_u = Eigen::Vector2d::Zero();
+    double suu = 0;
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    std::array<Eigen::Vector2d, kPoints> p;
+    std::array<double, kPoints> u{};
+    for (int i = 0; i < kPoints; ++i) {
+      u[static_cast<std::size_t>(i)] = o.radius * (2.0 * i / (kPoints - 1) - 1);
+      Eigen::Vector3d q = c;
+      q[axis] += u[static_cast<std::size_t>(i)];
+      const Eigen::Vector3d actual = q + machine.error(q);
+      p[static_cast<std::size_t>(i)] = Eigen::Vector2d(actual[a], actual[b]);
+      mean += p[static_cast<std::size_t>(i)] / kPoints;
+    }
+    for (int i = 0; i < kPoints; ++i) {
+      const auto I = static_cast<std::size_t>(i);
+      sum_u += u[I] * (p[I] - mean);
+      suu += u[I] * u[I];
+    }
+    return Eigen::Vector2d(sum_u / suu);  // d(a, b)/du
+  };
+  const Eigen::Vector2d da = slopes(a), db = slopes(b);
+  CircularTruth t;
+  t.squareness = std::acos(da.dot(db) / (da.norm() * db.norm())) - kPi / 2;
+  t.scale_mismatch = (da.x() - 1) - (db.y() - 1);
+  const auto& sa = o.servo[static_cast<std::size_t>(a)];
+  const auto& sb = o.servo[static_cast<std::size_t>(b)];
+  t.lag_mismatch = (sa.gain > 0 ? 1 / sa.gain : 0.0) - (sb.gain > 0 ? 1 / sb.gain : 0.0);
+  // The path's centre is the tool at the circle's centre: its error there, less the pivot's
+  // offset.
+  const Eigen::Vector3d e = machine.error(c);
+  t.centre_offset = Eigen::Vector2d(e[a] - o.pivot_offset[a], e[b] - o.pivot_offset[b]);
+  t.backlash = {sa.backlash, sb.backlash};
+  t.spike = {sa.spike, sb.spike};
+  return t;
+}
+
 }  // namespace trueaxis::sim

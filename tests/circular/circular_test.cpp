@@ -11,6 +11,8 @@
 
 #include "../test_util.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/circular/circular.hpp"
+#include "trueaxis/report/files.hpp"
 #include "trueaxis/sim/circular.hpp"
 
 using namespace trueaxis;
@@ -324,4 +326,66 @@ TEST(Circular, WhatCannotBeATestIsRefused) {
   far.radius = 450;
   EXPECT_NE(test::error_of([&] { sim::simulate_circular(sim::Machine{}, far); }).find("range"),
             std::string::npos);
+}
+
+// The trace and the result as files: the trace reads back to its samples, the result to its
+// figures, causes and trace (what `trueaxis report` draws); bad files are refused where they
+// are wrong.
+TEST(Circular, FilesRoundTripAndBadOnesAreRefused) {
+  constexpr double kRound = 1e-12;  // mm: numbers written in the shortest exact form, µm ↔ mm
+  sim::Machine m;
+  m.squareness_c0y = 12e-6;
+  auto s = test_run();
+  s.servo[0].backlash = 2e-3;
+  s.noise = 0.2e-3;
+  const auto run = sim::simulate_circular(m, s);
+  const std::string trace_path = test::temp_dir() + "/trace.csv";
+  io::write_trace(trace_path, run.trace);
+  const auto back = io::read_trace(trace_path);
+  ASSERT_EQ(back.angle.size(), run.trace.angle.size());
+  EXPECT_LT((back.angle - run.trace.angle).cwiseAbs().maxCoeff(), kRound);
+  EXPECT_LT((back.deviation - run.trace.deviation).cwiseAbs().maxCoeff(), kRound);
+  EXPECT_EQ(back.direction, run.trace.direction);
+  EXPECT_EQ(back.where[3].rfind(trace_path + ":5:", 0), 0u);  // line 5, the deviation's column
+  const auto r = circular::evaluate(back, options(s));
+  const std::string result_path = test::temp_dir() + "/circular.json";
+  io::write_circular_result(result_path, r, &back);
+  const auto f = io::read_circular_result(result_path);
+  EXPECT_NEAR(f.result.ccw.G, r.ccw.G, kRound);
+  EXPECT_NEAR(f.result.cw.F_max, r.cw.F_max, kRound);
+  ASSERT_TRUE(f.result.H);
+  EXPECT_NEAR(*f.result.H, *r.H, kRound);
+  ASSERT_EQ(f.result.causes.size(), r.causes.size());
+  for (const auto& c : r.causes) {
+    const auto& d = cause(f.result, c.key);
+    EXPECT_EQ(d.name, c.name);
+    EXPECT_EQ(d.unit, c.unit) << c.key;
+    EXPECT_NEAR(d.value, c.value, 1e-9) << c.key;
+  }
+  EXPECT_EQ(f.trace.angle.size(), back.angle.size());
+  EXPECT_LT((f.result.model - r.model).cwiseAbs().maxCoeff(), kRound);
+  const auto fr = report::file_report(result_path);
+  EXPECT_EQ(fr.kind, "circular");
+  EXPECT_EQ(fr.section.planes.size(), 1u);  // the polar plot
+  // Bad traces: each refused at its line and column.
+  auto refused = [](const std::string& text) {
+    return test::error_of([&] { io::parse_trace(text, "t.csv"); });
+  };
+  EXPECT_EQ(refused("direction,angle_deg,deviation_um\nccw,0,1\nleft,1,2\n")
+                .rfind("t.csv:3:1: direction 'left'", 0),
+            0u);
+  EXPECT_EQ(refused("direction,angle_deg,deviation_um\nccw,x,1\n")
+                .rfind("t.csv:2:5: 'x' is not a number", 0),
+            0u);
+  EXPECT_EQ(refused("direction,angle_deg,deviation_um\nccw,0\n").rfind("t.csv:2:", 0), 0u);
+  EXPECT_EQ(refused("direction,angle_deg,speed\n").rfind("t.csv:1:21: unknown column 'speed'", 0),
+            0u)
+      << refused("direction,angle_deg,speed\n");
+  EXPECT_EQ(refused("direction,angle [s],deviation_um\n").rfind("t.csv:1:11:", 0), 0u);
+  EXPECT_NE(refused("").find("empty"), std::string::npos);
+  // A trace in nm and a spreadsheet's dialect read to the same numbers.
+  const auto nm =
+      io::parse_trace("sep=;\ndirection;angle_deg;deviation (nm)\ncw;1,5;-250\n", "x.csv");
+  EXPECT_NEAR(nm.angle[0], 1.5 * kPi / 180, 1e-15);
+  EXPECT_NEAR(nm.deviation[0], -250e-6, 1e-15);
 }

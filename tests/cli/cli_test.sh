@@ -666,5 +666,34 @@ expect_code 2 "$T" serve --port 70000
 expect_ok "$T" serve --help
 grep -q "Without --part each probing meets" out.txt && ok || bad "serve --help"
 
+# Circular test (ISO 230-4): a ballbar on the virtual machine, the figures and the diagnosis,
+# the tolerances' exit status, bad traces refused at file:line:col.
+printf '{"X": {"backlash_um": 4}, "Y": {"backlash_um": 2, "spike_um": 3, "spike_decay_deg": 6}}\n' > servo.json
+expect_ok "$T" simulate circular --machine-seed 4 --plane XY --radius 100 --feed 1000 --servo servo.json --noise 0.1 -o circ.csv
+head -1 circ.csv | grep -qx "direction,angle_deg,deviation_um" && [ -s circ-truth.json ] && ok || bad "simulate circular files"
+expect_ok "$T" circular --input circ.csv --plane XY --radius 100 --feed 1000 -o circ.json --report circ.html
+python3 -c "
+import json, sys
+r = json.load(open('circ.json')); t = json.load(open('circ-truth.json')); d = r['diagnosis']
+ok = r['kind'] == 'circular' and set(r['G_um']) == {'ccw', 'cw'} and r['H_um'] > 0
+ok = ok and abs(d['backlash_um']['X']['value'] - 4) < 0.3 and abs(d['backlash_um']['Y']['value'] - 2) < 0.3
+ok = ok and abs(d['reversal_spike_um']['Y']['ccw']['value'] - 3) < 0.3 and d['backlash_um']['X']['u'] > 0
+sys.exit(0 if ok else 1)" && ok || bad "circular: figures and diagnosis against the truth"
+grep -q "polar plot" circ.html && ok || bad "circular report's polar plot"
+expect_ok "$T" report circ.json -o circ-again.html
+grep -q "polar plot" circ-again.html && grep -q "Diagnosis: the trace explained by its causes" circ-again.html && ok || bad "report of a saved circular result"
+expect_code 1 "$T" circular --input circ.csv -o circ2.json --tolerance G=0.5
+grep -q "tolerance not met: G = " err.txt && ok || bad "circular tolerance message"
+expect_code 2 "$T" circular --input circ.csv -o circ2.json --tolerance F=3
+printf 'direction,angle_deg,deviation_um\nccw,0,1.5\nup,1,1.2\n' > bad-dir.csv
+expect_err "bad-dir.csv:3:1: direction 'up'" "$T" circular --input bad-dir.csv -o x.json
+printf 'direction,angle_deg,deviation_um\nccw,0,abc\n' > bad-num.csv
+expect_err "bad-num.csv:2:7: 'abc' is not a number" "$T" circular --input bad-num.csv -o x.json
+printf 'direction,angle_deg\nccw,0\n' > bad-head.csv
+expect_err "bad-head.csv:1:1: the header has no 'deviation_um' column" "$T" circular --input bad-head.csv -o x.json
+head -100 circ.csv > part.csv
+expect_err "part.csv:100:22: the ccw samples leave 350.6° of the circle without data" "$T" circular --input part.csv -o x.json --plane XY
+expect_code 2 "$T" circular --input circ.csv -o x.json --plane XZ
+
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/circular/circular.hpp"
 #include "trueaxis/io/positioning/positioning.hpp"
 #include "trueaxis/io/results.hpp"
 #include "trueaxis/io/scan/scan.hpp"
@@ -21,9 +22,10 @@ struct SpaceFile {
   std::optional<surface::Verification> verification;
 };
 
-using AnyResult = std::variant<separation::Result, surface::Result, SpaceFile, guideway::Result,
-                               PositioningFile, ballgauge::Result, ballgauge::ParametricResult,
-                               std::vector<ballgauge::LengthVerification>, geometry::Fit, ScanFile>;
+using AnyResult =
+    std::variant<separation::Result, surface::Result, SpaceFile, guideway::Result, PositioningFile,
+                 ballgauge::Result, ballgauge::ParametricResult,
+                 std::vector<ballgauge::LengthVerification>, geometry::Fit, ScanFile, CircularFile>;
 
 struct ResultFile {
   std::string kind;  // as the file states it ("separation", "ballgauge map", ...)

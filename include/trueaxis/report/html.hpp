@@ -168,6 +168,9 @@ inline constexpr const char* kIso230 =
 inline constexpr const char* kIso230_2 =
     "ISO 230-2:2014, Test code for machine tools, Part 2: positioning accuracy and "
     "repeatability.";
+inline constexpr const char* kIso230_4 =
+    "ISO 230-4:2005, Test code for machine tools, Part 4: circular tests for numerically "
+    "controlled machine tools (circular deviation G, radial deviation F, circular hysteresis H).";
 inline constexpr const char* kVdi3441 =
     "VDI/DGQ 3441:1977, Statistical testing of the operational and positional accuracy of machine "
     "tools: basis (positional uncertainty P, deviation Pa, scatter Ps, reversal span U).";

@@ -62,4 +62,19 @@ struct CircularRun {
 // Throws Error for invalid options or a circle outside the machine's ranges.
 CircularRun simulate_circular(const Machine& machine, const CircularOptions& options);
 
+// What the test of `options` on `machine` should diagnose, in circular::evaluate's conventions:
+// the path's centre from the pivot (the machine's error at the centre less the pivot offset, in
+// the plane), the squareness and scale
+// mismatch of the plane's axes from the tool's actual positions (the angle between the actual
+// +a and +b directions less 90°, a's scale error less b's, each direction the least-squares
+// line of the tool as the axis moves over ±R about the centre), the lag
+// mismatch 1/K_a − 1/K_b (0 where a gain is 0), and per axis the backlash and spike.
+struct CircularTruth {
+  Eigen::Vector2d centre_offset = Eigen::Vector2d::Zero();  // mm
+  double squareness = 0, scale_mismatch = 0;                // rad, relative
+  double lag_mismatch = 0;                                  // s
+  std::array<double, 2> backlash{}, spike{};                // mm, axes a and b
+};
+CircularTruth circular_truth(const Machine& machine, const CircularOptions& options);
+
 }  // namespace trueaxis::sim
