@@ -36,7 +36,7 @@ struct MachineSource {
 struct DemoOptions {
   std::string output = "demo-report/index.html";
   unsigned long seed = 7;
-  long stations = 400;
+  long stations = 250;
   double spacing = 50;   // mm, grid of the error space
   int repetitions = 10;  // Monte Carlo repetitions for the space's uncertainty
   bool quiet = false;

@@ -13,11 +13,13 @@
 #include "trueaxis/ballgauge/ballgauge.hpp"
 #include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/ballgauge/parametric.hpp"
+#include "trueaxis/circular/circular.hpp"
 #include "trueaxis/compensation/table.hpp"
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/guideway/guideway.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/circular/circular.hpp"
 #include "trueaxis/io/compensation/controller.hpp"
 #include "trueaxis/io/design/design.hpp"
 #include "trueaxis/io/files.hpp"
@@ -31,6 +33,7 @@
 #include "trueaxis/io/surface/surface.hpp"
 #include "trueaxis/map/error_map.hpp"
 #include "trueaxis/report/ballgauge.hpp"
+#include "trueaxis/report/circular.hpp"
 #include "trueaxis/report/guideway.hpp"
 #include "trueaxis/report/html.hpp"
 #include "trueaxis/report/positioning.hpp"
@@ -39,6 +42,7 @@
 #include "trueaxis/scan/controller.hpp"
 #include "trueaxis/separation/separation.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
+#include "trueaxis/sim/circular.hpp"
 #include "trueaxis/sim/guideway.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/part.hpp"
@@ -365,6 +369,57 @@ int run_demo(const DemoOptions& o) {
     ps.summary = fmt::format("A {:.2f} µm, E {:.2f} µm; compensated with X.COM: A {:.2f} µm",
                              pr.iso.A * 1e3, pr.iso.E * 1e3, after.iso.A * 1e3);
     sections.push_back(std::move(ps));
+  }
+
+  // Scenario: a circular test of X and Y with a ballbar (ISO 230-4), its causes diagnosed.
+  {
+    say("circular: a ballbar test of X and Y, R 100 mm at 1000 mm/min, both directions...");
+    sim::CircularOptions co;
+    co.radius = 100;
+    co.feed = 1000;
+    co.servo[0].gain = 40;
+    co.servo[1].gain = 36;
+    co.servo[0].backlash = 3e-3;
+    co.servo[1].backlash = 5e-3;
+    co.servo[1].spike = 3e-3;
+    co.servo[1].spike_decay = 5 * M_PI / 180;
+    co.pivot_offset = Eigen::Vector3d(0.006, -0.004, 0);
+    co.noise = 0.1e-3;
+    co.sample_rate = 25;  // Hz: the report draws every sample, and stays small
+    co.seed = o.seed;
+    const auto run = sim::simulate_circular(machine, co);
+    io::write_trace((dir / "circular.csv").string(), run.trace);
+    circular::Options opt;
+    opt.radius = co.radius;
+    opt.feed = co.feed;
+    const auto cr = circular::evaluate(run.trace, opt);
+    io::write_circular_result((dir / "circular.json").string(), cr, &run.trace);
+    const auto truth = sim::circular_truth(machine, co);
+    auto value = [&](const std::string& key) -> double {
+      for (const auto& c : cr.causes)
+        if (c.key == key) return c.value;
+      return NAN;
+    };
+    say(
+        fmt::format("circular: G {:.2f} / {:.2f} µm (ccw / cw), H {:.2f} µm; backlash X {:.2f}, Y "
+                    "{:.2f} µm (set 3, 5); lag mismatch {:.2f} ms (set {:.2f}) -> circular.csv, "
+                    "circular.json",
+                    cr.ccw.G * 1e3, cr.cw.G * 1e3, cr.H ? *cr.H * 1e3 : NAN, value("backlash.X"),
+                    value("backlash.Y"), value("lag_mismatch"), truth.lag_mismatch * 1e3));
+    auto cs = report::circular_section("Circular test of X and Y with a ballbar (ISO 230-4)", cr,
+                                       run.trace);
+    cs.intro_html =
+        fmt::format(
+            "<p>A telescoping ballbar on the same virtual machine: X and Y contour a 100 mm circle "
+            "at 1000 mm/min under position loops of 40 and 36 /s (a lag mismatch of {:.2f} ms), "
+            "with 3 and 5 µm of backlash, a 3 µm reversal spike on Y, the machine's own "
+            "geometric errors (squareness {:.1f} µm/m, scale mismatch {:.1f} µm/m over ±R), the "
+            "pivot set 6 µm and −4 µm off and 0.1 µm of reading noise. The diagnosis below is "
+            "found from the trace alone. Try <code>trueaxis circular --input circular.csv "
+            "--report c.html</code>.</p>",
+            truth.lag_mismatch * 1e3, truth.squareness * 1e6, truth.scale_mismatch * 1e6) +
+        cs.intro_html;
+    sections.push_back(std::move(cs));
   }
 
   // Scenario 5: the CMM's error-vector map from a ball gauge (Oya, Hokari, Tamura 1988), checked

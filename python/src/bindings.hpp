@@ -37,5 +37,7 @@ void bind_ballgauge(pybind11::module_& m);
 void bind_scan(pybind11::module_& m);
 // Positioning accuracy by ISO 230-2 / VDI 3441 and virtual laser runs (positioning.cpp).
 void bind_positioning(pybind11::module_& m);
+// Circular tests with a ballbar, ISO 230-4, and the virtual test (circular.cpp).
+void bind_circular(pybind11::module_& m);
 
 }  // namespace trueaxis::python

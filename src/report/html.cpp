@@ -52,13 +52,16 @@ std::vector<Eigen::Index> decimate(const Plot& p, std::size_t max_points) {
   return idx;
 }
 
-void js_array(std::string& out, const Eigen::VectorXd& v, const std::vector<Eigen::Index>& idx) {
+// Values with `digits` significant digits: 6 for positions (1 µm at 999 mm), 5 for the plotted
+// quantities (0.1 nm in 1 µm: finer than a plot shows, or than the numbers' uncertainty).
+void js_array(std::string& out, const Eigen::VectorXd& v, const std::vector<Eigen::Index>& idx,
+              int digits = 5) {
   out += '[';
   for (std::size_t k = 0; k < idx.size(); ++k) {
     if (k) out += ',';
     const double val = v[idx[k]];
     if (std::isfinite(val))
-      out += fmt::format("{:.6g}", val);  // 1 µm at 999 mm, 1 nm in 1 mm: finer than a plot shows
+      out += fmt::format("{:.{}g}", val, digits);
     else if (k + 1 == idx.size())
       out += "null";  // a hole at the end would not count: [1,] has one element
     // A missing value is a hole ([1,,3]), which the page reads as null: series drawn over part
@@ -256,8 +259,10 @@ svg.ta-fig{max-width:100%;height:auto}
         h += "<tr>";
         for (const auto& c : table[r]) {
           const bool prose = r > 0 && c.size() > 40 && c.find(' ') != std::string::npos;
-          h += (r == 0 ? "<th>" : prose ? "<td class=\"txt\">" : "<td>") + escape(c) +
-               (r == 0 ? "</th>" : "</td>");
+          h += (r == 0  ? "<th>"
+                : prose ? "<td class=\"txt\">"
+                        : "<td>") +
+               escape(c) + (r == 0 ? "</th>" : "</td>");
         }
         h += "</tr>";
       }
@@ -292,7 +297,7 @@ svg.ta-fig{max-width:100%;height:auto}
           all ? "" : " (the points drawn; every point is in the result file)");
       h += "</div>\n";
       std::string data = "[";
-      js_array(data, p.x, idx);
+      js_array(data, p.x, idx, 6);
       std::string series = "[{label:" + js_string(p.x_label) + "}";
       std::string u = "{";
       int col = 0, si = 1;
