@@ -60,6 +60,17 @@ struct Drive {
   }
 };
 
+// The circle's centre: as given, or mid-range on every axis left NaN.
+Eigen::Vector3d centre_of(const Machine& machine, const CircularOptions& o) {
+  Eigen::Vector3d c = o.centre;
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(c[k]))
+      c[k] = (machine.range[static_cast<std::size_t>(k)][0] +
+              machine.range[static_cast<std::size_t>(k)][1]) /
+             2;
+  return c;
+}
+
 }  // namespace
 
 void CircularOptions::validate() const {
@@ -80,12 +91,7 @@ void CircularOptions::validate() const {
 CircularRun simulate_circular(const Machine& machine, const CircularOptions& o) {
   o.validate();
   machine.validate();
-  Eigen::Vector3d centre = o.centre;
-  for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(centre[k]))
-      centre[k] = (machine.range[static_cast<std::size_t>(k)][0] +
-                   machine.range[static_cast<std::size_t>(k)][1]) /
-                  2;
+  const Eigen::Vector3d centre = centre_of(machine, o);
   const int a = o.plane.a, b = o.plane.b;
   for (int k : {a, b})
     if (centre[k] - o.radius < machine.range[static_cast<std::size_t>(k)][0] - 1e-9 ||
@@ -159,12 +165,7 @@ CircularRun simulate_circular(const Machine& machine, const CircularOptions& o) 
 }
 
 CircularTruth circular_truth(const Machine& machine, const CircularOptions& o) {
-  Eigen::Vector3d c = o.centre;
-  for (int k = 0; k < 3; ++k)
-    if (!std::isfinite(c[k]))
-      c[k] = (machine.range[static_cast<std::size_t>(k)][0] +
-              machine.range[static_cast<std::size_t>(k)][1]) /
-             2;
+  const Eigen::Vector3d c = centre_of(machine, o);
   const int a = o.plane.a, b = o.plane.b;
   // Each axis' actual direction over the test's span: least-squares slopes of the tool's
   // in-plane position as the axis moves from −R to +R about the centre (the other axis there).
