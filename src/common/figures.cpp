@@ -21,7 +21,10 @@ std::string two_digits(double u) {
 }
 
 std::string rounded_to(double value, double u) {
-  return fmt::format("{:.{}f}", value, decimals_for(u));
+  std::string s = fmt::format("{:.{}f}", value, decimals_for(u));
+  // A value that rounds to zero is "0.00", not "-0.00".
+  if (s[0] == '-' && s.find_first_not_of("-0.") == std::string::npos) s.erase(0, 1);
+  return s;
 }
 
 double peak_to_valley_U(double u_max, long n) {

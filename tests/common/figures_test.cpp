@@ -20,6 +20,9 @@ TEST(Figures, TwoSignificantDigitsAndTheValueRoundedToMatch) {
   EXPECT_EQ(rounded_to(2.749206676242011, 0.21), "2.75");
   EXPECT_EQ(rounded_to(35.47, 111), "35");
   EXPECT_EQ(rounded_to(6.3125, 0.0996), "6.31");
+  EXPECT_EQ(rounded_to(-0.0004, 0.23), "0.00");  // no "-0.00" for what rounds to zero
+  EXPECT_EQ(rounded_to(-0.004, 0.023), "-0.004");
+  EXPECT_EQ(rounded_to(-3e-5, 12), "0");
 }
 
 // U of a PV covers the figure's error at least 95 % of the time, for independent points (where
