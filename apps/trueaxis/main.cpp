@@ -312,7 +312,7 @@ int main(int argc, char** argv) {
   rep->add_option(
          "result", rin,
          "any result JSON trueaxis writes (separate, surface, space, guideway, positioning, "
-         "ballgauge, verify-lengths, fit)")
+         "circular, ballgauge, verify-lengths, fit, scan)")
       ->required()
       ->check(cli::existing_file());
   rep->add_option("--output,-o", rout, "HTML file to write")->capture_default_str();
