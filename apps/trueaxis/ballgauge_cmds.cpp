@@ -204,23 +204,13 @@ struct SimArgs {
   bool quiet = false;
 };
 
-// "5x5" → rows 5, columns 5; {0, 0} when the text is not ROWSxCOLUMNS with 2..100 of each.
-std::pair<int, int> plate_size(const std::string& text) {
-  int rows = 0, columns = 0;
-  char x = 0, rest = 0;
-  if (std::sscanf(text.c_str(), "%d%c%d%c", &rows, &x, &columns, &rest) != 3 ||
-      (x != 'x' && x != 'X') || rows < 2 || columns < 2 || rows > 100 || columns > 100)
-    return {0, 0};
-  return {rows, columns};
-}
-
 int run_simulate(const SimArgs& a) {
   std::pair<std::string, unsigned short> address;
   if (!a.cmm.empty()) address = parse_ipp_address(a.cmm);  // a usage error before any work
   const sim::Machine m = a.machine.load();
   if (a.origin.size() != 3) throw Error("--origin needs x,y,z (mm)");
   sim::BallGaugeSetup setup;
-  if (!a.plate.empty()) std::tie(setup.plate_rows, setup.plate_columns) = plate_size(a.plate);
+  if (!a.plate.empty()) sim::parse_plate(a.plate, setup);  // checked by --plate's validator
   setup.pitch = a.pitch;
   setup.placements = a.sections;
   setup.origin = {a.origin[0], a.origin[1], a.origin[2]};
@@ -443,7 +433,8 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
       "campaign that identifies the 21 errors: flat near the bottom and near the top of the "
       "volume, upright along X and along Y, each placement aligned by itself");
   plate->check([](const std::string& t) {
-    return plate_size(t).first > 0
+    sim::BallGaugeSetup probe;
+    return sim::parse_plate(t, probe)
                ? std::string()
                : fmt::format("--plate {}: give ROWSxCOLUMNS, e.g. 5x5 (2 to 100 each)", t);
   });

@@ -6,7 +6,6 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
-#include <cstdio>
 #include <optional>
 #include <variant>
 
@@ -35,15 +34,8 @@ py::dict simulate_ballgauge(const sim::Machine& machine, const std::string& gaug
   if (alignment != "321" && alignment != "ls")
     throw Error(fmt::format("alignment '{}': use '321' or 'ls'", alignment));
   sim::BallGaugeSetup setup;
-  if (!plate.empty()) {
-    int rows = 0, columns = 0;
-    char x = 0, rest = 0;
-    if (std::sscanf(plate.c_str(), "%d%c%d%c", &rows, &x, &columns, &rest) != 3 ||
-        (x != 'x' && x != 'X'))
-      throw Error(fmt::format("plate '{}': give ROWSxCOLUMNS, e.g. '5x5'", plate));
-    setup.plate_rows = rows;
-    setup.plate_columns = columns;
-  }
+  if (!plate.empty() && !sim::parse_plate(plate, setup))
+    throw Error(fmt::format("plate '{}': give ROWSxCOLUMNS, e.g. '5x5' (2 to 100 each)", plate));
   setup.pitch = pitch;
   setup.placements = placements;
   setup.origin = {origin[0], origin[1], origin[2]};

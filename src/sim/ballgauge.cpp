@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 
@@ -339,6 +340,17 @@ void BallGaugeSetup::validate() const {
   if (!origin.allFinite()) throw Error("ball-gauge set-up: the origin must be finite");
   if (!(std::abs(misalignment) < 0.1))
     throw Error("ball-gauge set-up: the misalignment must be below 0.1 rad (a gauge set by hand)");
+}
+
+bool parse_plate(const std::string& text, BallGaugeSetup& setup) {
+  int rows = 0, columns = 0;
+  char x = 0, rest = 0;
+  if (std::sscanf(text.c_str(), "%d%c%d%c", &rows, &x, &columns, &rest) != 3 ||
+      (x != 'x' && x != 'X') || rows < 2 || columns < 2 || rows > 100 || columns > 100)
+    return false;
+  setup.plate_rows = rows;
+  setup.plate_columns = columns;
+  return true;
 }
 
 BallGaugeLayout ballgauge_setup(const Machine& machine, const BallGaugeSetup& s) {

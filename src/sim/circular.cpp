@@ -21,12 +21,8 @@ struct Drive {
   double motor = 0, last_cmd = 0, direction = 0;  // direction of the motor's last motion
   double last_velocity = 0;
   double reversed_at = -1e300;  // travelled angle at the last reversal (rad)
-  bool started = false;
 
-  void start(double cmd) {
-    motor = last_cmd = cmd;
-    started = true;
-  }
+  void start(double cmd) { motor = last_cmd = cmd; }
   // The motor after dt with the command moving linearly from last_cmd to cmd (exact for a
   // first-order loop). The motor's direction is its velocity's sign at the tick's end: the
   // loop's K·(cmd − motor), or without a loop the command's own velocity `cmd_velocity`; a

@@ -389,3 +389,41 @@ TEST(Circular, FilesRoundTripAndBadOnesAreRefused) {
   EXPECT_NEAR(nm.angle[0], 1.5 * kPi / 180, 1e-15);
   EXPECT_NEAR(nm.deviation[0], -250e-6, 1e-15);
 }
+
+// servo.json and a saved result that are not what they claim are refused where they are wrong.
+TEST(Circular, BadServoAndResultFilesAreRefusedWhereTheyAreWrong) {
+  const auto servo = io::read_servo(test::temp_file(
+      "servo.json", "{\"X\": {\"gain_per_s\": 30, \"backlash_um\": 3}, \"Y\": {\"spike_um\": 2}}"));
+  EXPECT_EQ(servo[0].gain, 30);
+  EXPECT_NEAR(servo[0].backlash, 3e-3, 1e-18);
+  EXPECT_NEAR(servo[1].spike, 2e-3, 1e-18);
+  auto refused = [](const std::string& name, const std::string& text, auto reader) -> std::string {
+    const std::string path = test::temp_file(name, text);
+    return test::error_of([&] { reader(path); });
+  };
+  const auto servo_reader = [](const std::string& p) { io::read_servo(p); };
+  EXPECT_NE(
+      refused("s1.json", "{\"W\": {}}", servo_reader).find("s1.json:1:7: an axis is X, Y or Z"),
+      std::string::npos);
+  EXPECT_NE(refused("s2.json", "{\"X\":\n {\"backlash_um\": -1}}", servo_reader)
+                .find("s2.json:2:18: must be >= 0"),
+            std::string::npos)
+      << refused("s2.json", "{\"X\":\n {\"backlash_um\": -1}}", servo_reader);
+  EXPECT_NE(refused("s3.json", "{\"X\": {\"pitch_mm\": 0}}", servo_reader).find("s3.json:1:"),
+            std::string::npos);
+  const auto result_reader = [](const std::string& p) { io::read_circular_result(p); };
+  const std::string head =
+      "{\"kind\": \"circular\", \"radius_mm\": 100, \"feed_mm_per_min\": 1000,\n";
+  EXPECT_NE(refused("r1.json", head + "\"plane\": \"XZ\"}", result_reader)
+                .find("r1.json:2:10: plane 'XZ'"),
+            std::string::npos)
+      << refused("r1.json", head + "\"plane\": \"XZ\"}", result_reader);
+  const std::string trace =
+      head +
+      "\"plane\": \"XY\", \"diagnosis\": {\"unexplained_rms_um\": 0.1},\n\"trace\": "
+      "{\"direction\": \"+-\", \"angle_deg\": [0, 1], \"deviation_um\": [0, 1], "
+      "\"model_um\": [0]}}";
+  EXPECT_NE(refused("r2.json", trace, result_reader).find("r2.json:3:10: direction, angle_deg"),
+            std::string::npos)
+      << refused("r2.json", trace, result_reader);
+}

@@ -111,6 +111,10 @@ struct BallGaugeLayout {
 // Throws Error for an invalid set-up or a plate that does not fit the machine.
 BallGaugeLayout ballgauge_setup(const Machine& machine, const BallGaugeSetup& setup);
 
+// A plate's size as written, "5x5" (ROWSxCOLUMNS, 2 … 100 each), into setup's plate_rows and
+// plate_columns; false (setup unchanged) for anything else.
+bool parse_plate(const std::string& text, BallGaugeSetup& setup);
+
 // What a campaign was measured against: each probed ball's true centre and the machine's error
 // there (actual − nominal at the command that puts the stylus it was probed with on it; mm), in
 // the order of the placements and their balls.

@@ -5,6 +5,7 @@
 
 #include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/results.hpp"
 #include "trueaxis/sim/ballgauge.hpp"
 
 using namespace trueaxis;
@@ -196,4 +197,37 @@ TEST(BallGaugeIo, PlatesFramesAndGivenCentres) {
                 .find("'placements[0].balls[0].centre' needs [x, y, z]"),
             std::string::npos)
       << merr(R"({"placements": [{"balls": [{"index": 0, "centre": [0, 0]}]}]})");
+}
+
+// The lines of ISO 10360-2's positions read back with the lengths; a direction that is not a
+// unit vector, or a line number no line has, is refused where it stands.
+TEST(LengthVerificationFile, PositionLinesReadBackAndBadOnesAreRefused) {
+  const ballgauge::Correction none{"none", [](Eigen::Ref<Eigen::Matrix3Xd>) {}, {}, {}};
+  const std::vector<ballgauge::LengthMeasurement> L{{{0, 0, 0}, {100, 0, 0}, 100},
+                                                    {{0, 0, 0}, {0, 0, 150}, 150}};
+  const std::string path = test::temp_dir() + "/v.json";
+  io::write_length_verification(path, {ballgauge::verify_lengths(L, none)});
+  const auto back = io::read_length_verification(path);
+  ASSERT_EQ(back.front().line_directions.size(), 2u);
+  EXPECT_EQ(back.front().rows[1].line, 1);
+  const std::string head =
+      "{\"results\": [{\"correction\": \"none\", \"positions\": 1, \"before\": {\"min\": 0, "
+      "\"max\": 0, \"mean\": 0, \"rms\": 0}, \"after\": {\"min\": 0, \"max\": 0, \"mean\": 0, "
+      "\"rms\": 0}, \"repeatability\": null, \"correction_uncertainty_rms\": 0, "
+      "\"expected_after_rms\": null,\n";
+  const std::string row =
+      "\"lengths\": [{\"nominal\": 100, \"position\": 0, \"before\": 0, \"after\": 0, "
+      "\"uncertainty\": 0, \"line\": ";
+  const std::string not_unit =
+      test::temp_file("not-unit.json", head + "\"lines\": [[1, 1, 0]],\n" + row + "0}]}]}");
+  EXPECT_NE(test::error_of([&] {
+              io::read_length_verification(not_unit);
+            }).find("not-unit.json:2:11: a line's direction must be a unit vector"),
+            std::string::npos)
+      << test::error_of([&] { io::read_length_verification(not_unit); });
+  const std::string no_line =
+      test::temp_file("no-line.json", head + "\"lines\": [[1, 0, 0]],\n" + row + "3}]}]}");
+  EXPECT_NE(test::error_of([&] { io::read_length_verification(no_line); }).find("no-line.json:3:"),
+            std::string::npos)
+      << test::error_of([&] { io::read_length_verification(no_line); });
 }

@@ -8,6 +8,7 @@
 
 #include "../../test_util.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/results.hpp"
 
 using namespace trueaxis;
 
@@ -164,4 +165,25 @@ TEST(Qpd, CalibrationTableBeatsTheLinearGainFarFromCentre) {
               worst_lin, worst_tab);
   EXPECT_NE(test::error_of([&] { tab.displacement(0.99); }).find("outside the calibration table"),
             std::string::npos);
+}
+
+// A result on a machine axis reads back with its ISO 230-1 names; an axis that is not one is
+// refused where it stands.
+TEST(GuidewayResultFile, MachineAxisReadsBackAndABadOneIsRefused) {
+  guideway::Result r;
+  r.s = Eigen::VectorXd::LinSpaced(3, 0, 100);
+  r.value[0] = Eigen::VectorXd::Zero(3);
+  r.axis = 1;
+  const std::string path = test::temp_dir() + "/g.json";
+  io::write_guideway_result(path, r);
+  EXPECT_EQ(io::read_guideway_result(path).axis, 1);
+  EXPECT_EQ(io::read_guideway_result(path).name(0), "EXY (horizontal)");
+  const std::string bad = test::temp_file(
+      "bad-axis.json",
+      "{\"kind\": \"guideway\", \"s\": [0, 1], \"observable\": {},\n \"axis\": \"W\"}");
+  EXPECT_EQ(test::error_of([&] {
+              io::read_guideway_result(bad);
+            }).rfind(bad + ":2:10: the machine axis the carriage rides: X, Y or Z", 0),
+            0u)
+      << test::error_of([&] { io::read_guideway_result(bad); });
 }
