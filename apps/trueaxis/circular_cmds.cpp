@@ -3,12 +3,16 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <filesystem>
 #include <memory>
+#include <optional>
 
 #include "commands.hpp"
 #include "trueaxis/circular/circular.hpp"
+#include "trueaxis/circular/compensation.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/circular/circular.hpp"
+#include "trueaxis/io/circular/compensation.hpp"
 #include "trueaxis/report/circular.hpp"
 #include "trueaxis/sim/circular.hpp"
 #include "trueaxis/sim/machine.hpp"
@@ -24,6 +28,9 @@ struct CircularArgs {
   double spike_decay_deg = 0;
   std::vector<double> pitch;
   std::vector<std::string> tolerances;
+  std::string compensation, before;
+  std::vector<double> active_backlash_um, travel;
+  double active_squareness_um_per_m = 0;
   bool quiet = false;
 };
 
@@ -62,15 +69,53 @@ int run_circular(const CircularArgs& a) {
     throw Error(what.rfind(a.input + ":", 0) == 0 ? what : a.input + ": " + what);
   }
   io::write_circular_result(a.output, r, &trace);
-  if (!a.report.empty())
+  io::CircularFile before;
+  if (!a.before.empty()) {
+    before = io::read_circular_result(a.before);
+    if (before.result.plane.name() != r.plane.name() ||
+        std::abs(before.result.radius - r.radius) > 1e-9 * r.radius)
+      throw Error(fmt::format("{}: a test in {} of radius {:g} mm; this one is in {} of {:g} mm",
+                              a.before, before.result.plane.name(), before.result.radius,
+                              r.plane.name(), r.radius));
+    if (before.trace.angle.size() == 0)
+      throw Error(a.before + ": holds no trace to draw (write it with this version)");
+  }
+  std::optional<circular::Compensation> comp;
+  io::CompensationFiles files;
+  if (!a.compensation.empty()) {
+    circular::CompensationOptions co;
+    if (!a.active_backlash_um.empty()) {
+      if (a.active_backlash_um.size() != 2)
+        throw CLI::ValidationError("--active-backlash", "give A,B (µm) for the plane's two axes");
+      co.active_backlash = {a.active_backlash_um[0] * 1e-3, a.active_backlash_um[1] * 1e-3};
+    }
+    co.active_squareness = a.active_squareness_um_per_m * 1e-6;
+    io::CompensationFilesOptions fo;
+    if (!a.travel.empty()) {
+      if (a.travel.size() != 2 || !(a.travel[1] > a.travel[0]))
+        throw CLI::ValidationError("--travel", "give LOW,HIGH (mm) of the plane's second axis");
+      fo.travel = std::array<double, 2>{a.travel[0], a.travel[1]};
+    }
+    comp = circular::compensation_from(r, co);
+    files = io::write_compensation_files(a.compensation, *comp, fo);
+  }
+  if (!a.report.empty()) {
+    report::Section section = report::circular_section(
+        fmt::format("Circular test in {} (ISO 230-4)", o.plane.name()), r, trace,
+        a.before.empty() ? report::CircularBefore{}
+                         : report::CircularBefore{&before.result, &before.trace});
+    if (comp) {
+      std::vector<std::vector<std::string>> rows{{"file", "controller", "what"}};
+      for (const auto& w : files.written)
+        rows.push_back({std::filesystem::path(w.path).filename().string(), w.controller, w.what});
+      for (const auto& n : files.not_written)
+        rows.push_back({"not written", n.controller, n.what + ": " + n.reason});
+      report::add_compensation(section, *comp, rows);
+    }
     report::write(a.report,
-                  report::render(
-                      "trueaxis circular test report",
-                      {from_file(report::circular_section(
-                                     fmt::format("Circular test in {} (ISO 230-4)", o.plane.name()),
-                                     r, trace),
-                                 a.input)},
-                      4000, report_meta()));
+                  report::render("trueaxis circular test report",
+                                 {from_file(std::move(section), a.input)}, 4000, report_meta()));
+  }
   std::string failed;
   for (const auto& [name, limit] : tol) {
     const double value = name == "G" ? std::max(r.ccw.G, r.cw.G) : (r.H ? *r.H : std::nan(""));
@@ -82,7 +127,20 @@ int run_circular(const CircularArgs& a) {
   }
   if (!a.quiet) {
     fmt::print("{}", r.summary());
+    if (!a.before.empty())
+      fmt::print("  before ({}): G {:.2f} µm, H {}\n", a.before,
+                 std::max(before.result.ccw.G, before.result.cw.G) * 1e3,
+                 before.result.H ? fmt::format("{:.2f} µm", *before.result.H * 1e3)
+                                 : std::string("not defined"));
     if (!tol.empty()) fmt::print("  tolerances: {}\n", failed.empty() ? "all met" : "NOT MET");
+    if (comp) {
+      fmt::print("{}", comp->summary());
+      for (const auto& w : files.written)
+        fmt::print("  wrote {} ({}: {}; read back and checked)\n", w.path, w.controller, w.what);
+      for (const auto& n : files.not_written)
+        fmt::print("  not written for {}: {} ({})\n", n.controller, n.what, n.reason);
+      fmt::print("  wrote {}\n", files.json_path);
+    }
     fmt::print("wrote {}{}\n", a.output, a.report.empty() ? "" : " and " + a.report);
   }
   if (!failed.empty()) {
@@ -94,7 +152,7 @@ int run_circular(const CircularArgs& a) {
 
 struct CircularSimArgs {
   MachineSource machine;
-  std::string plane = "XY", output = "trace.csv", truth, servo, directions = "both";
+  std::string plane = "XY", output = "trace.csv", truth, servo, directions = "both", compensation;
   std::vector<double> centre, pivot_offset_um;
   double arc_deg = 360, overshoot_deg = 180, noise_um = 0, length_error_um = 0, drift_um = 0;
   sim::CircularOptions o;
@@ -123,6 +181,9 @@ int run_simulate_circular(const CircularSimArgs& a) {
   o.ccw = a.directions != "cw";
   o.cw = a.directions != "ccw";
   if (!a.servo.empty()) o.servo = io::read_servo(a.servo);
+  if (!a.compensation.empty()) {
+    io::read_compensation_json(a.compensation).apply(o);
+  }
   const auto run = sim::simulate_circular(m, o);
   io::write_trace(a.output, run.trace);
   const std::string truth = a.truth.empty() ? truth_beside(a.output) : a.truth;
@@ -180,6 +241,10 @@ std::vector<Command> add_circular_commands(CLI::App& app, CLI::App& simulate) {
       ->capture_default_str();
   sc->add_option("--drift", sa->drift_um, "the ballbar's length drift over each run, µm")
       ->capture_default_str();
+  sc->add_option("--compensation", sa->compensation,
+                 "compensation.json from 'trueaxis circular --compensation': run the test with "
+                 "that backlash and squareness compensation loaded in the controller")
+      ->check(existing_file());
   sc->add_option("--noise", sa->noise_um, "reading noise, µm (standard deviation)")
       ->capture_default_str();
   sc->add_option("--sample-rate", sa->o.sample_rate, "Hz")->capture_default_str();
@@ -214,6 +279,25 @@ std::vector<Command> add_circular_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--pitch", a->pitch, "ball screw pitches A,B (mm) to fit cyclic errors of")
       ->delimiter(',');
   c->add_option("--tolerance", a->tolerances, "G=µm and/or H=µm: check them")->delimiter(',');
+  c->add_option("--compensation", a->compensation,
+                "folder to write the backlash and squareness compensation to, for LinuxCNC, "
+                "HEIDENHAIN, FANUC and Siemens (each file read back and checked), with "
+                "compensation.json");
+  c->add_option("--active-backlash", a->active_backlash_um,
+                "A,B: the backlash compensation (µm) active during the test; the new values add "
+                "what the test found")
+      ->delimiter(',');
+  c->add_option("--active-squareness", a->active_squareness_um_per_m,
+                "the squareness compensation (µm/m) active during the test")
+      ->capture_default_str();
+  c->add_option("--travel", a->travel,
+                "LOW,HIGH: the plane's second axis' travel (mm), the span of the squareness "
+                "tables (without it no table is written)")
+      ->delimiter(',');
+  c->add_option("--before", a->before,
+                "circular.json of the same test before a compensation: drawn on the same polar "
+                "plot, its G and H beside the new ones")
+      ->check(existing_file());
   c->add_option("--output,-o", a->output, "result JSON")->capture_default_str();
   c->add_option("--report", a->report,
                 "HTML report: the polar plot, the figures, the diagnosis, the trace and its fit");

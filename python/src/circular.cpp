@@ -10,8 +10,10 @@
 #include <variant>
 
 #include "bindings.hpp"
+#include "trueaxis/circular/compensation.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/circular/circular.hpp"
+#include "trueaxis/io/circular/compensation.hpp"
 #include "trueaxis/sim/circular.hpp"
 
 namespace py = pybind11;
@@ -89,7 +91,9 @@ void bind_circular(py::module_& m) {
   m.def(
       "circular",
       [](const std::variant<std::string, py::dict>& trace, const std::string& plane, double radius,
-         double feed, double spike_decay, std::optional<std::pair<double, double>> pitch) {
+         double feed, double spike_decay, std::optional<std::pair<double, double>> pitch,
+         const std::optional<std::string>& compensation, std::pair<double, double> active_backlash,
+         double active_squareness, std::optional<std::pair<double, double>> travel) {
         const circular::Trace t = trace_of(trace);
         circular::Options o;
         o.plane = circular::Plane::parse(plane);
@@ -105,10 +109,35 @@ void bind_circular(py::module_& m) {
           py::gil_scoped_release release;
           r = circular::evaluate(t, o);
         }
-        return result_dict(r, t);
+        py::dict d = result_dict(r, t);
+        if (compensation) {
+          circular::CompensationOptions co;
+          co.active_backlash = {active_backlash.first * 1e-3, active_backlash.second * 1e-3};
+          co.active_squareness = active_squareness * 1e-6;
+          io::CompensationFilesOptions fo;
+          if (travel) fo.travel = std::array<double, 2>{travel->first, travel->second};
+          const auto c = circular::compensation_from(r, co);
+          const auto files = io::write_compensation_files(*compensation, c, fo);
+          py::dict cd, backlash;
+          const char* axes = "XYZ";
+          backlash[py::str(std::string(1, axes[o.plane.a]))] = c.backlash[0].value * 1e3;
+          backlash[py::str(std::string(1, axes[o.plane.b]))] = c.backlash[1].value * 1e3;
+          cd["backlash_um"] = backlash;
+          cd["squareness_um_per_m"] = c.squareness.value * 1e6;
+          std::vector<std::string> written;
+          for (const auto& w : files.written) written.push_back(w.path);
+          cd["files"] = written;
+          cd["json"] = files.json_path;
+          cd["summary"] = c.summary();
+          d["compensation"] = cd;
+        }
+        return d;
       },
       py::arg("trace"), py::kw_only(), py::arg("plane") = "XY", py::arg("radius") = 100.0,
       py::arg("feed") = 1000.0, py::arg("spike_decay") = 0.0, py::arg("pitch") = py::none(),
+      py::arg("compensation") = py::none(),
+      py::arg("active_backlash") = std::pair<double, double>{0, 0},
+      py::arg("active_squareness") = 0.0, py::arg("travel") = py::none(),
       R"doc(A circular test with a telescoping ballbar (ISO 230-4), as 'trueaxis circular'.
 
 trace: trace.csv's path, or a dict {'direction': ['ccw' | 'cw', ...], 'angle_deg': [...],
@@ -119,7 +148,11 @@ pitch: (first, second) ball screw pitches (mm) to fit cyclic errors of. Returns 
 'value', 'u', 'share', 'separated'}} (value and u None where the data cannot tell the cause
 from another, named in 'not_separated_from'), 'unexplained_rms_um', 'spike_decay_deg',
 'model_um', 'residual_um' (per sample), 'warnings', 'summary'}. trueaxis.save() writes
-circular.json.)doc");
+circular.json. compensation: a folder to write the backlash and squareness compensation to for
+LinuxCNC, HEIDENHAIN, FANUC and Siemens, as 'trueaxis circular --compensation' (with
+active_backlash (µm, first and second axis) and active_squareness (µm/m) in force during the test,
+travel (low, high) of the second axis in mm for the squareness tables); the result then has
+'compensation': {'backlash_um', 'squareness_um_per_m', 'files', 'json', 'summary'}.)doc");
 
   m.def(
       "simulate_circular",
@@ -127,7 +160,7 @@ circular.json.)doc");
          std::optional<std::vector<double>> centre, double arc, double overshoot,
          const std::string& directions, const std::optional<std::string>& servo,
          std::vector<double> pivot_offset, double length_error, double drift, double noise,
-         double sample_rate, std::uint64_t seed) {
+         double sample_rate, std::uint64_t seed, const std::optional<std::string>& compensation) {
         sim::CircularOptions o;
         o.plane = circular::Plane::parse(plane);
         o.radius = radius;
@@ -143,6 +176,9 @@ circular.json.)doc");
         o.ccw = directions != "cw";
         o.cw = directions != "ccw";
         if (servo) o.servo = io::read_servo(*servo);
+        if (compensation) {
+          io::read_compensation_json(*compensation).apply(o);
+        }
         if (pivot_offset.size() != 3) throw Error("pivot_offset needs [x, y, z] (µm)");
         o.pivot_offset = Eigen::Vector3d(pivot_offset[0], pivot_offset[1], pivot_offset[2]) * 1e-3;
         o.length_error = length_error * 1e-3;
@@ -185,13 +221,14 @@ circular.json.)doc");
       py::arg("overshoot") = 180.0, py::arg("directions") = "both", py::arg("servo") = py::none(),
       py::arg("pivot_offset") = std::vector<double>{0, 0, 0}, py::arg("length_error") = 0.0,
       py::arg("drift") = 0.0, py::arg("noise") = 0.0, py::arg("sample_rate") = 100.0,
-      py::arg("seed") = 1,
+      py::arg("seed") = 1, py::arg("compensation") = py::none(),
       R"doc(A circular test with a ballbar on a trueaxis.Machine, as 'trueaxis simulate circular'.
 
 plane, radius (mm), feed (mm/min), centre [x, y, z] (mm; default mid-range), arc and overshoot
 (degrees), directions 'both' | 'ccw' | 'cw', servo: a servo.json path (per axis gain, backlash,
 spikes, cyclic error), pivot_offset [x, y, z], length_error, drift, noise (µm), sample_rate (Hz),
-seed. Returns (trace, truth): trace is the dict trueaxis.circular() reads (with t_s), truth what
+seed, compensation: a compensation.json (from circular(..., compensation=...)) loaded in the
+controller. Returns (trace, truth): trace is the dict trueaxis.circular() reads (with t_s), truth what
 its diagnosis should find.)doc");
 }
 

@@ -10,7 +10,7 @@
 namespace trueaxis::report {
 
 Section circular_section(const std::string& title, const circular::Result& r,
-                         const circular::Trace& t) {
+                         const circular::Trace& t, const CircularBefore& before) {
   constexpr double kDeg = 3.14159265358979323846 / 180;
   Section s;
   s.title = title;
@@ -38,6 +38,17 @@ Section circular_section(const std::string& title, const circular::Result& r,
                          fmt::format("{:+.2f}", d->F_min * 1e3),
                          fmt::format("{:+.2f}", d->F_max * 1e3), fmt::format("{}", d->samples)});
   if (r.H) s.table.push_back({"H, both directions", fmt::format("{:.2f}", *r.H * 1e3), "", "", ""});
+  const bool has_before = before.result && before.trace;
+  if (has_before) {
+    const circular::Result& b = *before.result;
+    s.table[0].push_back("before: G or H (µm)");
+    for (std::size_t row = 1; row < s.table.size(); ++row) {
+      const std::string& name = s.table[row][0];
+      const circular::DirectionFigures* d = name == "ccw" ? &b.ccw : name == "cw" ? &b.cw : nullptr;
+      s.table[row].push_back(d ? (d->present ? fmt::format("{:.2f}", d->G * 1e3) : "not run")
+                               : (b.H ? fmt::format("{:.2f}", *b.H * 1e3) : "not defined"));
+    }
+  }
   std::vector<std::vector<std::string>> diag{{"cause", "value", "u (1σ)", "share of G"}};
   for (const auto& c : r.causes) {
     if (!c.separated) {
@@ -64,7 +75,9 @@ Section circular_section(const std::string& title, const circular::Result& r,
 
   // The polar plot: each path at R + M·δr about the pivot, the nominal circle, and rings at a
   // round deviation either side.
-  const double worst = t.deviation.size() ? t.deviation.cwiseAbs().maxCoeff() * 1e3 : 0;  // µm
+  double worst = t.deviation.size() ? t.deviation.cwiseAbs().maxCoeff() * 1e3 : 0;  // µm
+  if (has_before && before.trace->deviation.size())
+    worst = std::max(worst, before.trace->deviation.cwiseAbs().maxCoeff() * 1e3);
   const double mag = nice_magnification(std::max(worst, 1e-3), r.radius, 0.25);
   const double ring = [&] {  // µm: 1, 2 or 5 × 10^k about the largest deviation
     const double p = std::pow(10.0, std::floor(std::log10(std::max(worst, 1e-3))));
@@ -86,23 +99,31 @@ Section circular_section(const std::string& title, const circular::Result& r,
   v.curves.push_back({fmt::format("±{:g} µm", ring), circle(r.radius + mag * ring * 1e-3),
                       "#bdbdbd", true, false, true});
   v.curves.push_back({"", circle(r.radius - mag * ring * 1e-3), "#bdbdbd", true, false, true});
-  for (const auto dir : {circular::Direction::Ccw, circular::Direction::Cw}) {
-    std::vector<Eigen::Index> idx;
-    for (Eigen::Index k = 0; k < t.angle.size(); ++k)
-      if (t.direction[static_cast<std::size_t>(k)] == dir) idx.push_back(k);
-    if (idx.empty()) continue;
-    std::stable_sort(idx.begin(), idx.end(), [&](Eigen::Index p, Eigen::Index q) {
-      return std::remainder(t.angle[p], 2 * 180 * kDeg) <
-             std::remainder(t.angle[q], 2 * 180 * kDeg);
-    });
-    Eigen::Matrix2Xd xy(2, static_cast<Eigen::Index>(idx.size()));
-    for (std::size_t k = 0; k < idx.size(); ++k) {
-      const double th = t.angle[idx[k]], rho = r.radius + mag * t.deviation[idx[k]];
-      xy.col(static_cast<Eigen::Index>(k)) = rho * Eigen::Vector2d(std::cos(th), std::sin(th));
+  // Each direction's path, sorted by angle; `old` paths (before a compensation) dashed and paler.
+  auto paths = [&](const circular::Trace& tr, bool old) {
+    for (const auto dir : {circular::Direction::Ccw, circular::Direction::Cw}) {
+      std::vector<Eigen::Index> idx;
+      for (Eigen::Index k = 0; k < tr.angle.size(); ++k)
+        if (tr.direction[static_cast<std::size_t>(k)] == dir) idx.push_back(k);
+      if (idx.empty()) continue;
+      std::stable_sort(idx.begin(), idx.end(), [&](Eigen::Index p, Eigen::Index q) {
+        return std::remainder(tr.angle[p], 2 * 180 * kDeg) <
+               std::remainder(tr.angle[q], 2 * 180 * kDeg);
+      });
+      Eigen::Matrix2Xd xy(2, static_cast<Eigen::Index>(idx.size()));
+      for (std::size_t k = 0; k < idx.size(); ++k) {
+        const double th = tr.angle[idx[k]], rho = r.radius + mag * tr.deviation[idx[k]];
+        xy.col(static_cast<Eigen::Index>(k)) = rho * Eigen::Vector2d(std::cos(th), std::sin(th));
+      }
+      const bool ccw = dir == circular::Direction::Ccw;
+      const std::string label = std::string(ccw ? "ccw" : "cw") + (old ? ", before" : "");
+      const char* colour = old ? (ccw ? "#9ecae1" : "#fcae91") : (ccw ? "#1f77b4" : "#d62728");
+      v.curves.push_back(
+          {has_before && !old ? label + ", after" : label, xy, colour, old, false, true});
     }
-    const bool ccw = dir == circular::Direction::Ccw;
-    v.curves.push_back({ccw ? "ccw" : "cw", xy, ccw ? "#1f77b4" : "#d62728", false, false, true});
-  }
+  };
+  if (has_before) paths(*before.trace, true);
+  paths(t, false);
   s.planes.push_back(std::move(v));
 
   // Per direction: the trace against the angle with the fitted model, and the residual.
@@ -140,6 +161,32 @@ Section circular_section(const std::string& title, const circular::Result& r,
     s.plots.push_back(std::move(p));
   }
   return s;
+}
+
+void add_compensation(Section& s, const circular::Compensation& c,
+                      const std::vector<std::vector<std::string>>& files) {
+  const char* axes = "XYZ";
+  std::vector<std::vector<std::string>> t{
+      {"compensation", "to enter", "active in the test", "the test found (±u)", "note"}};
+  auto row = [&](const std::string& name, const circular::CompensationValue& v, double scale,
+                 const char* unit) {
+    t.push_back({name, fmt::format("{:+.2f} {}", v.value * scale, unit),
+                 fmt::format("{:+.2f} {}", v.active * scale, unit),
+                 std::isfinite(v.diagnosed) && v.u
+                     ? fmt::format("{} ± {} {}",
+                                   trueaxis::detail::rounded_to(v.diagnosed * scale, *v.u * scale),
+                                   trueaxis::detail::two_digits(*v.u * scale), unit)
+                     : std::string("not resolved"),
+                 v.changed ? "changed" : "unchanged: " + v.reason});
+  };
+  for (int i = 0; i < 2; ++i)
+    row(fmt::format("backlash of {}", axes[i == 0 ? c.plane.a : c.plane.b]),
+        c.backlash[static_cast<std::size_t>(i)], 1e3, "µm");
+  row(fmt::format("squareness: {} corrected by slope × {}", axes[c.plane.a], axes[c.plane.b]),
+      c.squareness, 1e6, "µm/m");
+  s.more_tables.push_back({"What to give the controller", std::move(t)});
+  if (files.size() > 1)
+    s.more_tables.push_back({"Compensation files (each read back and checked)", files});
 }
 
 }  // namespace trueaxis::report

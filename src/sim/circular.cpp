@@ -80,6 +80,13 @@ void CircularOptions::validate() const {
     if (!(s.gain >= 0) || !(s.spike_decay > 0) || !(s.pitch > 0) || !std::isfinite(s.backlash) ||
         !std::isfinite(s.spike) || !std::isfinite(s.cyclic))
       throw Error("circular test: servo gain >= 0, spike decay > 0 and pitch > 0 per axis");
+  for (double b : compensation.backlash)
+    if (!std::isfinite(b)) throw Error("circular test: a compensated backlash must be finite");
+  if ((compensation.cross_input < 0) != (compensation.cross_output < 0) ||
+      compensation.cross_input > 2 || compensation.cross_output > 2 ||
+      (compensation.cross_input >= 0 && compensation.cross_input == compensation.cross_output) ||
+      !std::isfinite(compensation.cross_slope))
+    throw Error("circular test: a cross-axis compensation needs two different axes and a slope");
   if (!(noise >= 0) || !(sample_rate > 0) || !(servo_rate >= sample_rate))
     throw Error("circular test: noise >= 0, sample rate > 0, servo rate >= sample rate");
 }
@@ -111,13 +118,32 @@ CircularRun simulate_circular(const Machine& machine, const CircularOptions& o) 
     // θ(travelled): ccw from −overshoot/2 up, cw from arc + overshoot/2 down.
     const double total = o.arc + o.overshoot;
     const double start = s > 0 ? -o.overshoot / 2 : o.arc + o.overshoot / 2;
+    // The controller's command: the circle, plus what a loaded compensation adds (the backlash
+    // half each way of the commanded travel, whose direction `way` holds per axis).
+    const ControllerCompensation& comp = o.compensation;
+    Eigen::Vector3d way = Eigen::Vector3d::Zero();
     auto command = [&](double travelled) {
       const double th = start + s * travelled;
       Eigen::Vector3d c = centre;
       c[a] += o.radius * std::cos(th);
       c[b] += o.radius * std::sin(th);
+      const Eigen::Vector3d nominal = c;
+      for (int k = 0; k < 3; ++k) c[k] += comp.backlash[static_cast<std::size_t>(k)] / 2 * way[k];
+      if (comp.cross_input >= 0)
+        c[comp.cross_output] += comp.cross_slope * nominal[comp.cross_input];
       return c;
     };
+    auto velocity = [&](double th) {  // the circle's velocity, mm/s
+      Eigen::Vector3d v = Eigen::Vector3d::Zero();
+      v[a] = -s * omega * o.radius * std::sin(th);
+      v[b] = s * omega * o.radius * std::cos(th);
+      return v;
+    };
+    auto update_way = [&](const Eigen::Vector3d& v) {
+      for (int k = 0; k < 3; ++k)
+        if (v[k] != 0) way[k] = v[k] > 0 ? 1.0 : -1.0;
+    };
+    update_way(velocity(start));
     std::array<Drive, 3> drive;
     const Eigen::Vector3d c0 = command(0);
     for (int k = 0; k < 3; ++k) {
@@ -129,11 +155,10 @@ CircularRun simulate_circular(const Machine& machine, const CircularOptions& o) 
     for (long i = 1; i <= ticks; ++i) {
       const double t = static_cast<double>(i) * dt;
       const double travelled = std::min(omega * t, total);
-      const Eigen::Vector3d c = command(travelled);
       const double th = start + s * travelled;
-      Eigen::Vector3d v = Eigen::Vector3d::Zero();  // the command's velocity, mm/s
-      v[a] = -s * omega * o.radius * std::sin(th);
-      v[b] = s * omega * o.radius * std::cos(th);
+      const Eigen::Vector3d v = velocity(th);
+      update_way(v);
+      const Eigen::Vector3d c = command(travelled);
       for (int k = 0; k < 3; ++k)
         drive[static_cast<std::size_t>(k)].step(c[k], v[k], dt, before, travelled);
       before = travelled;
@@ -198,7 +223,13 @@ CircularTruth circular_truth(const Machine& machine, const CircularOptions& o) {
   // offset.
   const Eigen::Vector3d e = machine.error(c);
   t.centre_offset = Eigen::Vector2d(e[a] - o.pivot_offset[a], e[b] - o.pivot_offset[b]);
-  t.backlash = {sa.backlash, sb.backlash};
+  t.backlash = {sa.backlash - o.compensation.backlash[static_cast<std::size_t>(a)],
+                sb.backlash - o.compensation.backlash[static_cast<std::size_t>(b)]};
+  // A cross table adding slope·b to a's command leaves e_a = −(S − slope)·b.
+  if (o.compensation.cross_output == a && o.compensation.cross_input == b)
+    t.squareness -= o.compensation.cross_slope;
+  else if (o.compensation.cross_output == b && o.compensation.cross_input == a)
+    t.squareness -= o.compensation.cross_slope;
   t.spike = {sa.spike, sb.spike};
   return t;
 }

@@ -694,6 +694,24 @@ expect_err "bad-head.csv:1:1: the header has no 'deviation_um' column" "$T" circ
 head -100 circ.csv > part.csv
 expect_err "part.csv:100:22: the ccw samples leave 350.6° of the circle without data" "$T" circular --input part.csv -o x.json --plane XY
 expect_code 2 "$T" circular --input circ.csv -o x.json --plane XZ
+# The compensation: written for four controllers and read back; the test rerun with it loaded.
+expect_ok "$T" circular --input circ.csv -o circ.json --compensation comp --travel 0,600
+for f in linuxcnc-backlash.ini heidenhain-backlash.mp fanuc-backlash.txt siemens-backlash.ini siemens-squareness.ini heidenhain-squareness.com compensation.json; do
+  [ -s "comp/$f" ] || bad "compensation file $f"
+done
+grep -q "read back and checked" out.txt && grep -q "not written for LinuxCNC: squareness" out.txt && ok || bad "compensation summary"
+expect_ok "$T" simulate circular --machine-seed 4 --plane XY --radius 100 --feed 1000 --servo servo.json --noise 0.1 --compensation comp/compensation.json -o circ-after.csv
+expect_ok "$T" circular --input circ-after.csv -o circ-after.json --before circ.json --report circ-after.html
+python3 -c "
+import json, sys
+b = json.load(open('circ.json')); a = json.load(open('circ-after.json'))
+g = lambda r: max(r['G_um'].values())
+ok = g(a) < 0.7 * g(b) and all(abs(a['diagnosis']['backlash_um'][k]['value']) < 0.1 for k in 'XY')
+sys.exit(0 if ok else 1)" && ok || bad "circular: G after the compensation"
+grep -q "cw, before" circ-after.html && ok || bad "before and after on one polar plot"
+expect_err "comp/compensation.json: a compensation for XY; this test runs in YZ" "$T" simulate circular --machine-seed 4 --plane YZ --compensation comp/compensation.json -o x.csv
+expect_err "a test in XY of radius 100 mm; this one is in XY of 50 mm" "$T" circular --input circ-after.csv --radius 50 -o x.json --before circ.json
+expect_code 2 "$T" circular --input circ.csv -o x.json --compensation comp --travel 600,0
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -60,3 +60,23 @@ def test_circular_refuses_what_is_not_a_test(tmp_path):
         trueaxis.simulate_circular(trueaxis.Machine.random(seed=1), directions="up")
     with pytest.raises(TypeError, match="did you mean 'radius'"):
         trueaxis.circular({}, radiuss=100)
+
+
+def test_compensation_from_python_closes_the_loop(tmp_path):
+    servo = tmp_path / "servo.json"
+    servo.write_text(json.dumps({"X": {"backlash_um": 5}, "Y": {"backlash_um": 3}}))
+    m = trueaxis.Machine.random(seed=7)
+    trace, truth = trueaxis.simulate_circular(m, servo=str(servo), noise=0.05, sample_rate=25)
+    r = trueaxis.circular(trace, compensation=str(tmp_path / "comp"), travel=(0, 600))
+    c = r["compensation"]
+    assert c["backlash_um"]["X"] == pytest.approx(r["diagnosis"]["backlash.X"]["value"])
+    assert c["squareness_um_per_m"] == pytest.approx(r["diagnosis"]["squareness"]["value"])
+    assert len(c["files"]) == 6 and os.path.exists(c["json"])
+    after, left = trueaxis.simulate_circular(m, servo=str(servo), noise=0.05, sample_rate=25,
+                                             compensation=c["json"])
+    assert left["backlash_um"]["X"] == pytest.approx(5 - c["backlash_um"]["X"])
+    assert left["backlash_um"]["Y"] == pytest.approx(3 - c["backlash_um"]["Y"])
+    ra = trueaxis.circular(after)
+    assert max(ra["G_um"].values()) < max(r["G_um"].values())
+    with pytest.raises(trueaxis.Error, match="this test runs in YZ"):
+        trueaxis.simulate_circular(m, plane="YZ", compensation=c["json"])

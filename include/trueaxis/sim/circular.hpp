@@ -34,6 +34,15 @@ struct ServoAxis {
   double pitch = 10;          // mm, its period, > 0
 };
 
+// What the controller adds to its commands (a compensation loaded in it): per machine axis a
+// backlash, half of it each way of commanded travel (so B at each reversal); and a cross-axis
+// table, a linear one: `cross_slope` times the input axis' command added to the output axis'.
+struct ControllerCompensation {
+  std::array<double, 3> backlash{0, 0, 0};  // mm
+  int cross_input = -1, cross_output = -1;  // machine axes 0..2; -1: none
+  double cross_slope = 0;                   // mm/mm
+};
+
 struct CircularOptions {
   circular::Plane plane;
   // The circle's centre (commands, mm); NaN: the middle of the machine's ranges.
@@ -51,6 +60,7 @@ struct CircularOptions {
   double sample_rate = 100;                                // Hz
   double servo_rate = 1000;                                // Hz
   std::uint64_t seed = 1;
+  ControllerCompensation compensation;
   void validate() const;  // throws Error
 };
 
@@ -68,7 +78,8 @@ CircularRun simulate_circular(const Machine& machine, const CircularOptions& opt
 // mismatch of the plane's axes from the tool's actual positions (the angle between the actual
 // +a and +b directions less 90°, a's scale error less b's, each direction the least-squares
 // line of the tool as the axis moves over ±R about the centre), the lag
-// mismatch 1/K_a − 1/K_b (0 where a gain is 0), and per axis the backlash and spike.
+// mismatch 1/K_a − 1/K_b (0 where a gain is 0), and per axis the backlash and spike. With a
+// compensation, the squareness and backlash are what it leaves.
 struct CircularTruth {
   Eigen::Vector2d centre_offset = Eigen::Vector2d::Zero();  // mm
   double squareness = 0, scale_mismatch = 0;                // rad, relative
