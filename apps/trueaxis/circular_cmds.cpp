@@ -31,6 +31,9 @@ struct CircularArgs {
   std::string compensation, before;
   std::vector<double> active_backlash_um, travel;
   double active_squareness_um_per_m = 0;
+  double start_angle_deg = 0;
+  std::string order = "ccw,cw";
+  CLI::Option *feed_given = nullptr, *radius_given = nullptr;
   bool quiet = false;
 };
 
@@ -60,7 +63,13 @@ int run_circular(const CircularArgs& a) {
     o.pitch_a = a.pitch[0];
     o.pitch_b = a.pitch[1];
   }
-  const circular::Trace trace = io::read_trace(a.input);
+  // A time series is turned into angles with the feed and radius the user states (not defaults).
+  io::TimeSeriesOptions series;
+  series.feed = a.feed_given->count() ? o.feed : NAN;
+  series.radius = a.radius_given->count() ? o.radius : NAN;
+  series.start_angle = a.start_angle_deg * kCircularDegree;
+  series.order = io::TimeSeriesOptions::order_of(a.order);
+  const circular::Trace trace = io::read_trace(a.input, &series);
   circular::Result r;
   try {
     r = circular::evaluate(trace, o);
@@ -263,16 +272,26 @@ std::vector<Command> add_circular_commands(CLI::App& app, CLI::App& simulate) {
       "by its causes (centre offset, squareness, scale and servo lag mismatch, backlash, reversal "
       "spikes, straightness, cyclic error), each with its uncertainty and share of G.\ntrace.csv: "
       "direction (ccw or cw), angle_deg (from the plane's first axis towards its second), "
-      "deviation_um (the reading less the calibrated length).\nExit status 1 when G or H exceeds "
+      "deviation_um (the reading less the calibrated length); or a raw time series t_s, "
+      "deviation_um with --feed, --radius, --start-angle and --order.\nExit status 1 when G or H "
+      "exceeds "
       "its --tolerance (the result is still written).\nExample: trueaxis circular --input "
       "trace.csv --plane XY --radius 100 --feed 1000 -o circular.json --report circular.html");
   c->add_option("--input,-i", a->input, "trace CSV")->required()->check(existing_file());
   c->add_option("--plane", a->plane, "XY, YZ or ZX")
       ->check(CLI::IsMember({"XY", "YZ", "ZX"}, CLI::ignore_case))
       ->capture_default_str();
-  c->add_option("--radius", a->o.radius, "mm (the ballbar's calibrated length)")
+  a->radius_given = c->add_option("--radius", a->o.radius, "mm (the ballbar's calibrated length)")
+                        ->capture_default_str();
+  a->feed_given =
+      c->add_option("--feed", a->o.feed, "mm/min (for the lag mismatch)")->capture_default_str();
+  c->add_option("--start-angle", a->start_angle_deg,
+                "a time series: the angle (degrees) of each run's first sample")
       ->capture_default_str();
-  c->add_option("--feed", a->o.feed, "mm/min (for the lag mismatch)")->capture_default_str();
+  c->add_option("--order", a->order,
+                "a time series: the runs' directions in time order (ccw,cw; cw,ccw; ccw; cw)")
+      ->check(CLI::IsMember({"ccw,cw", "cw,ccw", "ccw", "cw"}))
+      ->capture_default_str();
   c->add_option("--spike-decay", a->spike_decay_deg,
                 "reversal spikes' decay, degrees of the circle (0: found from the data)")
       ->capture_default_str();

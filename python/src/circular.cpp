@@ -25,8 +25,9 @@ constexpr double kDegree = 3.14159265358979323846 / 180;
 
 // A trace from a path, or from a dict of its columns (direction: 'ccw'/'cw' per sample, angle_deg,
 // deviation_um).
-circular::Trace trace_of(const std::variant<std::string, py::dict>& input) {
-  if (const auto* path = std::get_if<std::string>(&input)) return io::read_trace(*path);
+circular::Trace trace_of(const std::variant<std::string, py::dict>& input,
+                         const io::TimeSeriesOptions* series = nullptr) {
+  if (const auto* path = std::get_if<std::string>(&input)) return io::read_trace(*path, series);
   const auto& d = std::get<py::dict>(input);
   for (const char* k : {"direction", "angle_deg", "deviation_um"})
     if (!d.contains(k))
@@ -93,8 +94,14 @@ void bind_circular(py::module_& m) {
       [](const std::variant<std::string, py::dict>& trace, const std::string& plane, double radius,
          double feed, double spike_decay, std::optional<std::pair<double, double>> pitch,
          const std::optional<std::string>& compensation, std::pair<double, double> active_backlash,
-         double active_squareness, std::optional<std::pair<double, double>> travel) {
-        const circular::Trace t = trace_of(trace);
+         double active_squareness, std::optional<std::pair<double, double>> travel,
+         double start_angle, const std::string& order) {
+        io::TimeSeriesOptions series;
+        series.feed = feed;
+        series.radius = radius;
+        series.start_angle = start_angle * kDegree;
+        series.order = io::TimeSeriesOptions::order_of(order);
+        const circular::Trace t = trace_of(trace, &series);
         circular::Options o;
         o.plane = circular::Plane::parse(plane);
         o.radius = radius;
@@ -138,9 +145,11 @@ void bind_circular(py::module_& m) {
       py::arg("compensation") = py::none(),
       py::arg("active_backlash") = std::pair<double, double>{0, 0},
       py::arg("active_squareness") = 0.0, py::arg("travel") = py::none(),
+      py::arg("start_angle") = 0.0, py::arg("order") = "ccw,cw",
       R"doc(A circular test with a telescoping ballbar (ISO 230-4), as 'trueaxis circular'.
 
-trace: trace.csv's path, or a dict {'direction': ['ccw' | 'cw', ...], 'angle_deg': [...],
+trace: trace.csv's path (or a raw time series t_s, deviation_um: its runs in `order`, each
+starting at `start_angle` degrees, turned into angles with feed and radius), or a dict {'direction': ['ccw' | 'cw', ...], 'angle_deg': [...],
 'deviation_um': [...]} (what simulate_circular returns). plane 'XY', 'YZ' or 'ZX'; radius (mm,
 the ballbar's calibrated length); feed (mm/min); spike_decay (degrees; 0: found from the data);
 pitch: (first, second) ball screw pitches (mm) to fit cyclic errors of. Returns {'G_um': {'ccw',

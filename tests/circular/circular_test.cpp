@@ -3,6 +3,7 @@
 // noise-free and with noise, with its sign convention.
 #include "trueaxis/circular/circular.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -426,4 +427,55 @@ TEST(Circular, BadServoAndResultFilesAreRefusedWhereTheyAreWrong) {
   EXPECT_NE(refused("r2.json", trace, result_reader).find("r2.json:3:10: direction, angle_deg"),
             std::string::npos)
       << refused("r2.json", trace, result_reader);
+}
+
+// A raw time series (t_s, deviation_um) becomes the trace: runs told apart where the time goes
+// back, angles from the feed and radius; what cannot be this test's is refused where it is.
+TEST(Circular, TimeSeriesBecomesTheTraceAndBadOnesAreRefused) {
+  sim::Machine m;
+  m.squareness_c0y = 15e-6;
+  auto s = test_run();
+  s.servo[0].backlash = 3e-3;
+  s.sample_rate = 50;
+  const auto run = sim::simulate_circular(m, s);
+  std::string text = "t_s,deviation_um\n";
+  for (Eigen::Index k = 0; k < run.time.size(); ++k)
+    text += fmt::format("{:.17g},{:.17g}\n", run.time[k], run.trace.deviation[k] * 1e3);
+  io::TimeSeriesOptions ts;
+  ts.feed = s.feed;
+  ts.radius = s.radius;
+  // Each run's first sample is at its first data angle: 0° ccw, 360° cw, within a sample's step.
+  const double step = s.feed / 60 / s.radius / s.sample_rate;  // rad per sample
+  const circular::Trace t = io::parse_trace(text, "ts.csv", &ts);
+  ASSERT_EQ(t.angle.size(), run.trace.angle.size());
+  EXPECT_EQ(t.direction, run.trace.direction);
+  const auto n_ccw = std::count(t.direction.begin(), t.direction.end(), circular::Direction::Ccw);
+  double worst = 0;
+  for (Eigen::Index k = 0; k < t.angle.size(); ++k)
+    worst = std::max(worst, std::abs(std::remainder(t.angle[k] - run.trace.angle[k], 2 * kPi)));
+  EXPECT_LT(worst, step);
+  EXPECT_GT(n_ccw, 0);
+  const auto a = circular::evaluate(t, options(s)), b = circular::evaluate(run.trace, options(s));
+  EXPECT_NEAR(cause(a, "backlash.X").value, cause(b, "backlash.X").value, 0.05);
+  EXPECT_NEAR(cause(a, "squareness").value, cause(b, "squareness").value, 0.2);
+  // Refusals, each at the line and the time column.
+  EXPECT_EQ(test::error_of([&] {
+              io::parse_trace(text, "ts.csv");
+            }).rfind("ts.csv:1:1: a time series", 0),
+            0u);
+  io::TimeSeriesOptions one = ts;
+  one.order = io::TimeSeriesOptions::order_of("ccw");
+  const std::string e1 = test::error_of([&] { io::parse_trace(text, "ts.csv", &one); });
+  EXPECT_EQ(e1.rfind(fmt::format("ts.csv:{}:1: run 2 starts here", n_ccw + 2), 0), 0u) << e1;
+  io::TimeSeriesOptions slow = ts;
+  slow.radius = 10;  // ten times the angle: more than two turns
+  EXPECT_NE(
+      test::error_of([&] { io::parse_trace(text, "ts.csv", &slow); }).find("more than two turns"),
+      std::string::npos);
+  io::TimeSeriesOptions three = ts;
+  three.order = io::TimeSeriesOptions::order_of("cw,ccw");
+  EXPECT_EQ(io::parse_trace(text, "ts.csv", &three).direction.front(), circular::Direction::Cw);
+  EXPECT_THROW(io::TimeSeriesOptions::order_of("up,down"), Error);
+  EXPECT_EQ(test::error_of([&] { io::parse_trace("t_s,deviation_um\n0,1\n0,2\n", "f", &ts); }),
+            "f: a time series needs times that increase");
 }

@@ -694,6 +694,22 @@ expect_err "bad-head.csv:1:1: the header has no 'deviation_um' column" "$T" circ
 head -100 circ.csv > part.csv
 expect_err "part.csv:100:22: the ccw samples leave 350.6° of the circle without data" "$T" circular --input part.csv -o x.json --plane XY
 expect_code 2 "$T" circular --input circ.csv -o x.json --plane XZ
+# A raw time series: the same test, its times turned into angles with the stated feed and radius.
+python3 -c "
+import csv, math
+w = 1000 / 60 / 100
+with open('circ-ts.csv', 'w') as f:
+    f.write('t_s,deviation_um\\n')
+    for d, a, v in list(csv.reader(open('circ.csv')))[1:]:
+        a = math.radians(float(a))
+        f.write('%.6f,%s\\n' % (a / w if d == 'ccw' else 1000 + (2 * math.pi - a) / w, v))"
+expect_err "circ-ts.csv:1:1: a time series needs the feed" "$T" circular --input circ-ts.csv -o x.json
+expect_ok "$T" circular --input circ-ts.csv --feed 1000 --radius 100 -o circ-ts.json
+python3 -c "
+import json, sys
+a = json.load(open('circ.json')); b = json.load(open('circ-ts.json'))
+sys.exit(0 if abs(a['G_um']['ccw'] - b['G_um']['ccw']) < 0.05 else 1)" && ok || bad "circular from a time series"
+expect_err "circ-ts.csv:" "$T" circular --input circ-ts.csv --feed 1000 --radius 100 --order ccw -o x.json
 # The compensation: written for four controllers and read back; the test rerun with it loaded.
 expect_ok "$T" circular --input circ.csv -o circ.json --compensation comp --travel 0,600
 for f in linuxcnc-backlash.ini heidenhain-backlash.mp fanuc-backlash.txt siemens-backlash.ini siemens-squareness.ini heidenhain-squareness.com compensation.json; do

@@ -2,10 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstring>
 #include <functional>
-#include <cmath>
 #include <map>
 
 #include "../fast_text.hpp"
@@ -36,17 +37,89 @@ std::vector<std::pair<std::size_t, std::size_t>> trace_fields(std::string_view l
   return f;
 }
 
+// A time series' samples as runs and angles: a new run starts where the time goes back or jumps
+// by more than kGap median sample intervals; run i is order[i], starting at the start angle at its
+// first sample and moving at ω = feed / R in its direction.
+void series_to_angles(const std::vector<double>& time, const std::vector<std::size_t>& lines,
+                      const std::string& path, const TimeSeriesOptions& o, std::size_t time_col,
+                      circular::Trace& t, std::vector<double>& angle) {
+  o.validate();
+  constexpr double kGap = 5;
+  const std::size_t n = time.size();
+  std::vector<double> dt;
+  for (std::size_t k = 1; k < n; ++k)
+    if (time[k] > time[k - 1]) dt.push_back(time[k] - time[k - 1]);
+  if (dt.empty()) throw Error(fmt::format("{}: a time series needs times that increase", path));
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2), dt.end());
+  const double step = dt[dt.size() / 2];
+  const double omega = o.feed / 60 / o.radius;  // rad/s
+  std::size_t run = 0, first = 0;
+  auto where = [&](std::size_t k) {
+    return fmt::format("{}:{}:{}: ", path, lines[k], time_col + 1);
+  };
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k > 0 && (time[k] <= time[k - 1] || time[k] - time[k - 1] > kGap * step)) {
+      ++run;
+      first = k;
+      if (run >= o.order.size())
+        throw Error(fmt::format(
+            "{}run {} starts here (the time {} {:g} s after {:g} s), but the direction order "
+            "names {} run{}",
+            where(k), run + 1, time[k] <= time[k - 1] ? "goes back to" : "jumps to", time[k],
+            time[k - 1], o.order.size(), o.order.size() == 1 ? "" : "s"));
+    }
+    const circular::Direction d = o.order[run];
+    const double s = d == circular::Direction::Ccw ? 1.0 : -1.0;
+    const double a = o.start_angle + s * omega * (time[k] - time[first]);
+    if (std::abs(a - o.start_angle) > 4 * 3.14159265358979323846 + 1e-9)
+      throw Error(fmt::format(
+          "{}run {} has gone {:.0f}° round the circle at {:g} mm/min on a radius of {:g} mm: "
+          "more than two turns, so the feed, the radius or the run boundaries are not this "
+          "test's",
+          where(k), run + 1, std::abs(a - o.start_angle) / kDegree, o.feed, o.radius));
+    t.direction.push_back(d);
+    angle.push_back(a);
+  }
+  if (run + 1 != o.order.size())
+    throw Error(fmt::format(
+        "{}: {} run{} found (runs are told apart where the time goes back or jumps), but the "
+        "direction order names {}",
+        path, run + 1, run == 0 ? "" : "s", o.order.size()));
+}
+
 }  // namespace
 
-circular::Trace parse_trace(std::string text, const std::string& path) {
+void TimeSeriesOptions::validate() const {
+  if (!(feed > 0) || !std::isfinite(feed))
+    throw Error("a time series needs the feed (mm/min, > 0) to turn times into angles");
+  if (!(radius > 0) || !std::isfinite(radius))
+    throw Error("a time series needs the radius (mm, > 0) to turn times into angles");
+  if (!std::isfinite(start_angle)) throw Error("the start angle must be finite");
+  if (order.empty() || order.size() > 2)
+    throw Error("the direction order names one or two runs (ccw,cw; cw,ccw; ccw; cw)");
+}
+
+std::vector<circular::Direction> TimeSeriesOptions::order_of(const std::string& text) {
+  const std::string t = detail::lower(text);
+  using circular::Direction;
+  if (t == "ccw,cw") return {Direction::Ccw, Direction::Cw};
+  if (t == "cw,ccw") return {Direction::Cw, Direction::Ccw};
+  if (t == "ccw") return {Direction::Ccw};
+  if (t == "cw") return {Direction::Cw};
+  throw Error(fmt::format("direction order '{}': use ccw,cw; cw,ccw; ccw or cw", text));
+}
+
+circular::Trace parse_trace(std::string text, const std::string& path,
+                            const TimeSeriesOptions* series) {
   detail::normalize_text(text);
   if (std::optional<std::string> plain = detail::plain_csv(text, path)) text = std::move(*plain);
   circular::Trace t;
-  std::vector<double> angle, deviation;
-  int col[3] = {-1, -1, -1};  // direction, angle, deviation
-  double scale[3] = {1, 1, 1};
+  std::vector<double> angle, deviation, time;
+  std::vector<std::size_t> lines;
+  int col[4] = {-1, -1, -1, -1};  // direction, angle, deviation, time
+  double scale[4] = {1, 1, 1, 1};
   std::size_t ncol = 0;
-  bool header = false;
+  bool header = false, is_series = false;
   detail::for_each_line(text, [&](std::size_t line, std::string_view l) {
     std::size_t first = 0;
     while (first < l.size() && detail::is_blank(l[first])) ++first;
@@ -58,12 +131,12 @@ circular::Trace parse_trace(std::string text, const std::string& path) {
     if (!header) {
       header = true;
       ncol = f.size();
-      const char* quantity[3] = {"direction", "angle", "deviation"};
-      const Unit unit[3] = {Unit::Count, Unit::Degree, Unit::Micrometre};
+      const char* quantity[4] = {"direction", "angle", "deviation", "t"};
+      const Unit unit[4] = {Unit::Count, Unit::Degree, Unit::Micrometre, Unit::Second};
       for (std::size_t c = 0; c < f.size(); ++c) {
         const std::string_view name = l.substr(f[c].first, f[c].second - f[c].first);
         int which = -1;
-        for (int k = 0; k < 3 && which < 0; ++k) {
+        for (int k = 0; k < 4 && which < 0; ++k) {
           ColumnMatch m;
           try {
             m = column_matches(name, quantity[k]);
@@ -81,18 +154,36 @@ circular::Trace parse_trace(std::string text, const std::string& path) {
           }
         }
         if (which < 0)
-          fail(f[c].first, fmt::format("unknown column '{}' (direction, angle_deg, deviation_um)",
-                                       detail::quote_cut(name)));
+          fail(f[c].first,
+               fmt::format("unknown column '{}' (direction, angle_deg, deviation_um; or t_s, "
+                           "deviation_um for a time series)",
+                           detail::quote_cut(name)));
         if (col[which] >= 0)
           fail(f[c].first, fmt::format("column '{}' holds the {} again", detail::quote_cut(name),
                                        quantity[which]));
         col[which] = static_cast<int>(c);
       }
+      // A time series: times and deviations only, turned into angles below.
+      is_series = col[0] < 0 && col[1] < 0 && col[3] >= 0 && col[2] >= 0;
+      if (is_series && !series)
+        fail(f[static_cast<std::size_t>(col[3])].first,
+             "a time series (t_s, deviation_um): give the feed and the radius to turn the times "
+             "into angles");
+      if (is_series) {
+        try {
+          series->validate();
+        } catch (const Error& e) {
+          fail(f[static_cast<std::size_t>(col[3])].first, e.what());
+        }
+        return;
+      }
       for (int k = 0; k < 3; ++k)
         if (col[k] < 0)
           fail(0, fmt::format("the header has no '{}' column (direction, angle_deg and "
-                              "deviation_um are needed)",
-                              k == 0 ? "direction" : k == 1 ? "angle_deg" : "deviation_um"));
+                              "deviation_um are needed, or t_s and deviation_um)",
+                              k == 0   ? "direction"
+                              : k == 1 ? "angle_deg"
+                                       : "deviation_um"));
       return;
     }
     if (f.size() != ncol)
@@ -109,32 +200,40 @@ circular::Trace parse_trace(std::string text, const std::string& path) {
         fail(b, fmt::format("'{}' is not a number", detail::quote_cut(l.substr(b, e - b))));
       return v * scale[k];
     };
-    const auto [b, e] = f[static_cast<std::size_t>(col[0])];
-    const std::string d = detail::lower(l.substr(b, e - b));
-    if (d == "ccw")
-      t.direction.push_back(circular::Direction::Ccw);
-    else if (d == "cw")
-      t.direction.push_back(circular::Direction::Cw);
-    else
-      fail(b, fmt::format("direction '{}': use ccw (angle increasing) or cw",
-                          detail::quote_cut(l.substr(b, e - b))));
-    angle.push_back(number(1) * kDegree);
+    if (is_series) {
+      time.push_back(number(3));
+      lines.push_back(line);
+    } else {
+      const auto [b, e] = f[static_cast<std::size_t>(col[0])];
+      const std::string d = detail::lower(l.substr(b, e - b));
+      if (d == "ccw")
+        t.direction.push_back(circular::Direction::Ccw);
+      else if (d == "cw")
+        t.direction.push_back(circular::Direction::Cw);
+      else
+        fail(b, fmt::format("direction '{}': use ccw (angle increasing) or cw",
+                            detail::quote_cut(l.substr(b, e - b))));
+      angle.push_back(number(1) * kDegree);
+    }
     const double dev = number(2);
     if (std::abs(dev) > detail::kMaxDeviation)
       fail(f[static_cast<std::size_t>(col[2])].first,
            fmt::format("{:g} µm is not a ballbar's deviation", dev));
     deviation.push_back(dev * 1e-3);
-    t.where.push_back(fmt::format("{}:{}:{}: ", path, line, f[static_cast<std::size_t>(col[2])].first + 1));
+    t.where.push_back(
+        fmt::format("{}:{}:{}: ", path, line, f[static_cast<std::size_t>(col[2])].first + 1));
   });
   if (!header) throw Error(fmt::format("{}: empty: no header and no samples", path));
+  if (is_series)
+    series_to_angles(time, lines, path, *series, static_cast<std::size_t>(col[3]), t, angle);
   t.angle = Eigen::Map<Eigen::VectorXd>(angle.data(), static_cast<Eigen::Index>(angle.size()));
   t.deviation =
       Eigen::Map<Eigen::VectorXd>(deviation.data(), static_cast<Eigen::Index>(deviation.size()));
   return t;
 }
 
-circular::Trace read_trace(const std::string& path) {
-  return parse_trace(detail::read_text(path), path);
+circular::Trace read_trace(const std::string& path, const TimeSeriesOptions* series) {
+  return parse_trace(detail::read_text(path), path, series);
 }
 
 void write_trace(const std::string& path, const circular::Trace& t) {
@@ -160,8 +259,7 @@ void write_circular_result(const std::string& path, const circular::Result& r,
   j["plane"] = r.plane.name();
   j["radius_mm"] = r.radius;
   j["feed_mm_per_min"] = r.feed;
-  ojson g = ojson::object(), f = ojson::object(), lsc = ojson::object(),
-        samples = ojson::object();
+  ojson g = ojson::object(), f = ojson::object(), lsc = ojson::object(), samples = ojson::object();
   for (const auto* d : {&r.ccw, &r.cw}) {
     if (!d->present) continue;
     const char* name = d == &r.ccw ? "ccw" : "cw";
@@ -216,8 +314,7 @@ void write_circular_result(const std::string& path, const circular::Result& r,
     for (const auto d : trace->direction) dir += d == circular::Direction::Ccw ? '+' : '-';
     std::vector<double> a(trace->angle.data(), trace->angle.data() + trace->angle.size());
     for (double& x : a) x /= kDegree;
-    std::vector<double> dv(static_cast<std::size_t>(trace->angle.size())),
-        md(dv.size());
+    std::vector<double> dv(static_cast<std::size_t>(trace->angle.size())), md(dv.size());
     for (std::size_t k = 0; k < dv.size(); ++k) {
       dv[k] = trace->deviation[static_cast<Eigen::Index>(k)] * 1e3;
       md[k] = r.model[static_cast<Eigen::Index>(k)] * 1e3;
@@ -234,8 +331,7 @@ std::array<sim::ServoAxis, 3> read_servo(const std::string& path) {
   f.object(P());
   for (const auto& [key, value] : f.root().items()) {
     (void)value;
-    if (key != "X" && key != "Y" && key != "Z")
-      f.fail(P("/" + key), "an axis is X, Y or Z");
+    if (key != "X" && key != "Y" && key != "Z") f.fail(P("/" + key), "an axis is X, Y or Z");
   }
   const char* names[3] = {"X", "Y", "Z"};
   for (int k = 0; k < 3; ++k) {
@@ -246,7 +342,8 @@ std::array<sim::ServoAxis, 3> read_servo(const std::string& path) {
     auto get = [&](const char* name, double scale, double& into, bool positive) {
       if (!f.has(at / name)) return;
       const double v = f.number(at / name);
-      if (positive ? !(v > 0) : !(v >= 0)) f.fail(at / name, positive ? "must be > 0" : "must be >= 0");
+      if (positive ? !(v > 0) : !(v >= 0))
+        f.fail(at / name, positive ? "must be > 0" : "must be >= 0");
       into = v * scale;
     };
     get("gain_per_s", 1, s.gain, false);
@@ -316,7 +413,8 @@ CircularFile read_circular_result(const std::string& path) {
           if (node.at("value").is_null()) {
             c.value = NAN;
             c.separated = false;
-            if (f.has(at / "not_separated_from")) c.confused_with = f.string(at / "not_separated_from");
+            if (f.has(at / "not_separated_from"))
+              c.confused_with = f.string(at / "not_separated_from");
           } else {
             c.value = f.number(at / "value");
           }
@@ -333,9 +431,8 @@ CircularFile read_circular_result(const std::string& path) {
   for (const auto& [k, v] : f.root().at(diag).items()) {
     if (!v.is_object()) continue;
     std::string base = k, unit = "µm";
-    for (const auto& [suffix, u] : {std::pair<const char*, const char*>{"_um_per_m", "µm/m"},
-                                    {"_um", "µm"},
-                                    {"_ms", "ms"}})
+    for (const auto& [suffix, u] :
+         {std::pair<const char*, const char*>{"_um_per_m", "µm/m"}, {"_um", "µm"}, {"_ms", "ms"}})
       if (base.size() > std::strlen(suffix) &&
           base.compare(base.size() - std::strlen(suffix), std::string::npos, suffix) == 0) {
         base.resize(base.size() - std::strlen(suffix));

@@ -14,17 +14,35 @@
 // model.
 #pragma once
 
-#include <string>
-
 #include <array>
+#include <limits>
+#include <string>
+#include <vector>
 
 #include "trueaxis/circular/circular.hpp"
 #include "trueaxis/sim/circular.hpp"
 
 namespace trueaxis::io {
 
-circular::Trace read_trace(const std::string& path);
-circular::Trace parse_trace(std::string text, const std::string& path);
+// A raw time series instead: a header `t_s`, `deviation_um` (a unit in a name as above), one
+// sample per line in time order, the runs one after another. A new run starts where the time goes
+// back or jumps by more than five median sample intervals; run i runs in order[i], its first
+// sample at `start_angle`, its angle then moving at ω = feed / radius. Refused with file:line:col:
+// more runs than the order names, a run going more than two turns (a wrong feed or radius).
+struct TimeSeriesOptions {
+  double feed = std::numeric_limits<double>::quiet_NaN();    // mm/min
+  double radius = std::numeric_limits<double>::quiet_NaN();  // mm
+  double start_angle = 0;                                    // rad
+  std::vector<circular::Direction> order{circular::Direction::Ccw, circular::Direction::Cw};
+  void validate() const;  // throws Error
+  // "ccw,cw", "cw,ccw", "ccw" or "cw" (any case); throws Error for anything else.
+  static std::vector<circular::Direction> order_of(const std::string& text);
+};
+
+// `series`: how to read a time series (without it one is refused, saying what to give).
+circular::Trace read_trace(const std::string& path, const TimeSeriesOptions* series = nullptr);
+circular::Trace parse_trace(std::string text, const std::string& path,
+                            const TimeSeriesOptions* series = nullptr);
 void write_trace(const std::string& path, const circular::Trace& trace);
 
 // servo.json: per machine axis ("X", "Y", "Z"; any may be left out) {"gain_per_s",
