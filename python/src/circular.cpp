@@ -78,6 +78,7 @@ py::dict result_dict(const circular::Result& r, const circular::Trace& t) {
   d["diagnosis"] = causes;
   d["unexplained_rms_um"] = r.unexplained_rms * 1e3;
   d["spike_decay_deg"] = r.spike_decay / kDegree;
+  d["reversal_delay_deg"] = r.reversal_delay / kDegree;
   d["model_um"] = Eigen::VectorXd(r.model * 1e3);
   d["residual_um"] = Eigen::VectorXd(r.residual * 1e3);
   d["warnings"] = r.warnings;

@@ -10,6 +10,7 @@
 #include <cctype>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include "../common/figures.hpp"
 #include "trueaxis/error.hpp"
@@ -29,14 +30,22 @@ double sign(double v) {
   return v > 0 ? 1.0 : v < 0 ? -1.0 : 0.0;
 }
 
-// One direction's samples, by index into the trace, sorted by wrapped angle.
-std::vector<Eigen::Index> of_direction(const Trace& t, Direction d) {
+// One direction's samples, by index into the trace, sorted by wrapped angle (`w`: every
+// sample's angle wrapped).
+std::vector<Eigen::Index> of_direction(const Trace& t, const std::vector<double>& w, Direction d) {
   std::vector<Eigen::Index> idx;
   for (std::size_t k = 0; k < t.direction.size(); ++k)
     if (t.direction[k] == d) idx.push_back(static_cast<Eigen::Index>(k));
-  std::stable_sort(idx.begin(), idx.end(), [&](Eigen::Index p, Eigen::Index q) {
-    return wrap(t.angle[p]) < wrap(t.angle[q]);
-  });
+  auto less = [&](Eigen::Index p, Eigen::Index q) {
+    return w[static_cast<std::size_t>(p)] < w[static_cast<std::size_t>(q)];
+  };
+  // A trace in time order is already sorted but for where it passes 0° (and reversed for cw):
+  // then a rotation does; anything else is sorted.
+  if (d == Direction::Cw) std::reverse(idx.begin(), idx.end());
+  const auto cut = std::is_sorted_until(idx.begin(), idx.end(), less);
+  if (cut != idx.end() && std::is_sorted(cut, idx.end(), less))
+    std::rotate(idx.begin(), cut, idx.end());
+  if (!std::is_sorted(idx.begin(), idx.end(), less)) std::stable_sort(idx.begin(), idx.end(), less);
   return idx;
 }
 
@@ -64,7 +73,7 @@ DirectionFigures figures(const Trace& t, const std::vector<Eigen::Index>& idx, d
     y[i] = t.deviation[k];
     p.col(i) = (R + y[i]) * Eigen::Vector2d(std::cos(th), std::sin(th));
   }
-  const Eigen::Vector3d lin = A.colPivHouseholderQr().solve(y);
+  const Eigen::Vector3d lin = (A.transpose() * A).ldlt().solve(A.transpose() * y);
   Eigen::Vector3d c(lin[1], lin[2], R + lin[0]);  // centre a, b; radius
   for (int it = 0; it < 8; ++it) {
     Eigen::MatrixXd J(n, 3);
@@ -75,7 +84,7 @@ DirectionFigures figures(const Trace& t, const std::vector<Eigen::Index>& idx, d
       r[i] = d - c[2];
       J.row(i) << -q.x() / d, -q.y() / d, -1;
     }
-    const Eigen::Vector3d step = J.colPivHouseholderQr().solve(r);
+    const Eigen::Vector3d step = (J.transpose() * J).ldlt().solve(J.transpose() * r);
     c -= step;
     if (step.norm() < 1e-13 * R) break;
   }
@@ -93,12 +102,14 @@ DirectionFigures figures(const Trace& t, const std::vector<Eigen::Index>& idx, d
 }
 
 // The deviation of one direction at angle θ, linear between its samples (periodic).
-double interpolate(const Trace& t, const std::vector<Eigen::Index>& idx, double theta) {
+double interpolate(const Trace& t, const std::vector<double>& wrapped,
+                   const std::vector<Eigen::Index>& idx, double theta) {
   const double w = wrap(theta);
   const auto n = idx.size();
-  auto angle = [&](std::size_t k) { return wrap(t.angle[idx[k]]); };
-  auto upper = std::lower_bound(idx.begin(), idx.end(), w,
-                                [&](Eigen::Index p, double v) { return wrap(t.angle[p]) < v; });
+  auto angle = [&](std::size_t k) { return wrapped[static_cast<std::size_t>(idx[k])]; };
+  auto upper = std::lower_bound(idx.begin(), idx.end(), w, [&](Eigen::Index p, double v) {
+    return wrapped[static_cast<std::size_t>(p)] < v;
+  });
   const std::size_t j = static_cast<std::size_t>(upper - idx.begin()) % n;
   const std::size_t i = (j + n - 1) % n;
   double a0 = angle(i), a1 = angle(j), x = w;
@@ -108,34 +119,47 @@ double interpolate(const Trace& t, const std::vector<Eigen::Index>& idx, double 
   return (1 - s) * t.deviation[idx[i]] + s * t.deviation[idx[j]];
 }
 
+// A column of the design: what it is; its values are the design matrix' column of the same index.
 struct Column {
   std::string key, name, unit;
   double to_unit;  // library value × to_unit = value in `unit`
-  Eigen::VectorXd v;
 };
 
-// Spike signature: exp(−Δθ/d) after each reversal at `at` (two angles), Δθ measured in the
-// direction of travel.
-double spike(double theta, double s, const std::array<double, 2>& at, double d) {
-  double out = 0;
-  for (double r : at) {
-    const double dt = wrap(s > 0 ? theta - r : r - theta);
-    if (dt < 12 * d) out += std::exp(-dt / d);
+// The samples a design is built over: angle, its cosine and sine, and the direction's sign
+// (+1 ccw, −1 cw), computed once.
+struct Samples {
+  Eigen::VectorXd th, w, cs, sn, s;  // w: θ wrapped into [0, 2π)
+  Eigen::Index size() const { return th.size(); }
+  static Samples of(const Trace& t, const std::vector<Eigen::Index>& idx) {
+    Samples x;
+    const auto n = static_cast<Eigen::Index>(idx.size());
+    x.th.resize(n);
+    x.w.resize(n);
+    x.cs.resize(n);
+    x.sn.resize(n);
+    x.s.resize(n);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const Eigen::Index k = idx[static_cast<std::size_t>(i)];
+      x.th[i] = t.angle[k];
+      x.w[i] = wrap(x.th[i]);
+      x.cs[i] = std::cos(x.th[i]);
+      x.sn[i] = std::sin(x.th[i]);
+      x.s[i] = t.direction[static_cast<std::size_t>(k)] == Direction::Ccw ? 1.0 : -1.0;
+    }
+    return x;
   }
-  return out;
-}
+};
 
-std::vector<Column> columns(const Trace& t, const Options& o, double decay, double delay, bool ccw,
-                            bool cw) {
-  const Eigen::Index n = t.angle.size();
+// The columns that do not depend on the spikes' decay or the reversals' delay, their values
+// written into F (n × columns).
+std::vector<Column> fixed_columns(const Samples& x, const Options& o, Eigen::MatrixXd& F) {
+  const Eigen::Index n = x.size();
   const double R = o.radius, v = o.feed / 60.0;
   const char* axes = "XYZ";
   const char A = axes[o.plane.a], B = axes[o.plane.b];
   std::vector<Column> c;
   auto add = [&](std::string key, std::string name, std::string unit, double to_unit) {
-    c.push_back(
-        {std::move(key), std::move(name), std::move(unit), to_unit, Eigen::VectorXd::Zero(n)});
-    return &c.back().v;
+    c.push_back({std::move(key), std::move(name), std::move(unit), to_unit});
   };
   add(fmt::format("centre_offset.{}", A), fmt::format("centre offset along {}", A), "µm", 1e3);
   add(fmt::format("centre_offset.{}", B), fmt::format("centre offset along {}", B), "µm", 1e3);
@@ -143,19 +167,10 @@ std::vector<Column> columns(const Trace& t, const Options& o, double decay, doub
   add("squareness", fmt::format("squareness of {} and {}", A, B), "µm/m", 1e6);
   add("scale_mismatch", fmt::format("scale mismatch ({} − {})", A, B), "µm/m", 1e6);
   add("lag_mismatch", fmt::format("servo lag mismatch ({} − {})", A, B), "ms", 1e3);
-  add(fmt::format("backlash.{}", A), fmt::format("backlash of {}", A), "µm", 1e3);
-  add(fmt::format("backlash.{}", B), fmt::format("backlash of {}", B), "µm", 1e3);
   add(fmt::format("straightness.{}", A), fmt::format("straightness of {} (bow along {})", A, B),
       "µm", 1e3);
   add(fmt::format("straightness.{}", B), fmt::format("straightness of {} (bow along {})", B, A),
       "µm", 1e3);
-  for (int axis = 0; axis < 2; ++axis)
-    for (int dir = 0; dir < 2; ++dir) {
-      if ((dir == 0 && !ccw) || (dir == 1 && !cw)) continue;
-      const char X = axis == 0 ? A : B;
-      add(fmt::format("reversal_spike.{}.{}", X, dir == 0 ? "ccw" : "cw"),
-          fmt::format("reversal spike of {}, {}", X, dir == 0 ? "ccw" : "cw"), "µm", 1e3);
-    }
   const double pitch[2] = {o.pitch_a, o.pitch_b};
   for (int axis = 0; axis < 2; ++axis)
     if (pitch[axis] > 0) {
@@ -163,40 +178,83 @@ std::vector<Column> columns(const Trace& t, const Options& o, double decay, doub
       add(fmt::format("cyclic_sin.{}", X), "", "µm", 1e3);
       add(fmt::format("cyclic_cos.{}", X), "", "µm", 1e3);
     }
+  F.resize(n, static_cast<Eigen::Index>(c.size()));
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double th = t.angle[k], cs = std::cos(th), sn = std::sin(th);
-    const double s = t.direction[static_cast<std::size_t>(k)] == Direction::Ccw ? 1.0 : -1.0;
-    std::size_t j = 0;
-    c[j++].v[k] = cs;
-    c[j++].v[k] = sn;
-    c[j++].v[k] = 1;
-    c[j++].v[k] = -R / 2 * std::sin(2 * th);
-    c[j++].v[k] = R / 2 * std::cos(2 * th);
-    c[j++].v[k] = s * v / 2 * std::sin(2 * th);
-    // An axis reverses where its motor's velocity changes sign: `delay` after the commanded
-    // reversal in the direction of travel (a following lag's phase).
-    c[j++].v[k] = s / 2 * sign(std::sin(th - s * delay)) * cs;
-    c[j++].v[k] = -s / 2 * sign(std::cos(th - s * delay)) * sn;
-    c[j++].v[k] = cs * cs * sn;
-    c[j++].v[k] = sn * sn * cs;
-    for (int axis = 0; axis < 2; ++axis) {
-      const double base = axis == 0 ? 0.0 : kPi / 2;
-      const std::array<double, 2> at{base + s * delay, base + kPi + s * delay};
-      for (int dir = 0; dir < 2; ++dir) {
-        if ((dir == 0 && !ccw) || (dir == 1 && !cw)) continue;
-        if ((dir == 0) == (s > 0))
-          c[j].v[k] = spike(th, s, at, decay) * std::abs(axis == 0 ? cs : sn);
-        ++j;
-      }
-    }
+    const double cs = x.cs[k], sn = x.sn[k], s2 = 2 * sn * cs, c2 = cs * cs - sn * sn;
+    Eigen::Index j = 0;
+    F(k, j++) = cs;
+    F(k, j++) = sn;
+    F(k, j++) = 1;
+    F(k, j++) = -R / 2 * s2;
+    F(k, j++) = R / 2 * c2;
+    F(k, j++) = x.s[k] * v / 2 * s2;
+    F(k, j++) = cs * cs * sn;
+    F(k, j++) = sn * sn * cs;
     for (int axis = 0; axis < 2; ++axis)
       if (pitch[axis] > 0) {
-        const double x = R * (axis == 0 ? cs : sn), w = kTwoPi * x / pitch[axis];
-        const double proj = axis == 0 ? cs : sn;
-        c[j++].v[k] = std::sin(w) * proj;
-        c[j++].v[k] = std::cos(w) * proj;
+        const double proj = axis == 0 ? cs : sn, w = kTwoPi * R * proj / pitch[axis];
+        F(k, j++) = std::sin(w) * proj;
+        F(k, j++) = std::cos(w) * proj;
       }
   }
+  return c;
+}
+
+// The columns that do: backlash per axis, then the reversal spikes per axis and direction run
+// (the ones run: `ccw`, `cw`), written into V (n × columns). The spike after a reversal at r,
+// Δθ = the angle travelled since r, is exp(−Δθ/d) (left out beyond 12·d, below 6·10⁻⁶).
+int varying_count(bool ccw, bool cw) {
+  return 2 + 2 * ((ccw ? 1 : 0) + (cw ? 1 : 0));
+}
+void varying_matrix(const Samples& x, double decay, double delay, bool ccw, bool cw,
+                    Eigen::Ref<Eigen::MatrixXd> V) {  // sized n × varying_count(ccw, cw)
+  const Eigen::Index n = x.size();
+  V.setZero();
+  int spike_col[2][2] = {{-1, -1}, {-1, -1}};  // [axis][direction]
+  int next = 2;
+  for (int axis = 0; axis < 2; ++axis)
+    for (int dir = 0; dir < 2; ++dir)
+      if ((dir == 0 && ccw) || (dir == 1 && cw)) spike_col[axis][dir] = next++;
+  const double cd = std::cos(delay), sd = std::sin(delay), reach = 12 * decay;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double cs = x.cs[k], sn = x.sn[k], s = x.s[k];
+    // An axis reverses where its motor's velocity changes sign: `delay` after the commanded
+    // reversal in the direction of travel (a following lag's phase). sin and cos of θ − s·δ:
+    const double sin_d = sn * cd - s * cs * sd, cos_d = cs * cd + s * sn * sd;
+    V(k, 0) = s / 2 * sign(sin_d) * cs;
+    V(k, 1) = -s / 2 * sign(cos_d) * sn;
+    const int dir = s > 0 ? 0 : 1;
+    for (int axis = 0; axis < 2; ++axis) {
+      const int j = spike_col[axis][dir];
+      if (j < 0) continue;
+      const double first = (axis == 0 ? 0.0 : kPi / 2) + s * delay;
+      double sum = 0;
+      for (const double r : {first, first + kPi}) {
+        double d = s > 0 ? x.w[k] - r : r - x.w[k];  // in (−2π − δ, 2π + δ): two steps at most
+        if (d < 0) d += kTwoPi;
+        if (d < 0) d += kTwoPi;
+        if (d >= kTwoPi) d -= kTwoPi;
+        if (d < reach) sum += std::exp(-d / decay);
+      }
+      V(k, j) = sum * std::abs(axis == 0 ? cs : sn);
+    }
+  }
+}
+// What varying_matrix's columns are.
+std::vector<Column> varying_columns(const Options& o, bool ccw, bool cw) {
+  const char* axes = "XYZ";
+  const char AB[2] = {axes[o.plane.a], axes[o.plane.b]};
+  std::vector<Column> c;
+  for (int axis = 0; axis < 2; ++axis)
+    c.push_back(
+        {fmt::format("backlash.{}", AB[axis]), fmt::format("backlash of {}", AB[axis]), "µm", 1e3});
+  for (int axis = 0; axis < 2; ++axis)
+    for (int dir = 0; dir < 2; ++dir) {
+      if ((dir == 0 && !ccw) || (dir == 1 && !cw)) continue;
+      const char* d = dir == 0 ? "ccw" : "cw";
+      c.push_back({fmt::format("reversal_spike.{}.{}", AB[axis], d),
+                   fmt::format("reversal spike of {}, {}", AB[axis], d), "µm", 1e3});
+    }
   return c;
 }
 
@@ -205,38 +263,36 @@ struct Fit {
   Eigen::MatrixXd cov_unit;                // (JᵀJ)⁻¹ over the kept columns, library units
   std::vector<int> kept;                   // column indices solved for
   std::vector<std::vector<int>> confused;  // groups the data cannot tell apart
-  double rss = 0;
+  double rss = 0;                          // yᵀy − βᵀJᵀy (the normal equations' own)
 };
 
-// Least squares over the columns, with the columns the data cannot tell apart found from the
-// scaled normal matrix's near-null directions and all but the first of each group left out.
-Fit solve(const std::vector<Column>& cols, const Eigen::VectorXd& y) {
-  const Eigen::Index n = y.size();
+// Least squares from the normal equations N = JᵀJ, c = Jᵀy, yy = yᵀy over the columns, scaled to
+// unit norm: the columns the data cannot tell apart are found from N's near-null directions and
+// all but the first of each group left out; the rest solved by Cholesky. Columns with no effect
+// (zero diagonal) are left out. With the columns scaled, N's condition is that of the
+// signatures' correlations (|corr| < 0.995 kept apart: a condition below ~10⁴).
+Fit solve_normal(const Eigen::MatrixXd& N0, const Eigen::VectorXd& c0, double yy) {
+  const auto p = N0.rows();
   Fit f;
   std::vector<int> use;
-  for (std::size_t j = 0; j < cols.size(); ++j)
-    if (cols[j].v.cwiseAbs().maxCoeff() > 0) use.push_back(static_cast<int>(j));
-  auto matrix = [&](const std::vector<int>& which, Eigen::VectorXd& scale) {
-    Eigen::MatrixXd J(n, static_cast<Eigen::Index>(which.size()));
-    scale.resize(J.cols());
-    for (Eigen::Index j = 0; j < J.cols(); ++j) {
-      J.col(j) = cols[static_cast<std::size_t>(which[static_cast<std::size_t>(j)])].v;
-      scale[j] = J.col(j).norm();
-      J.col(j) /= scale[j];
-    }
-    return J;
-  };
-  Eigen::VectorXd scale;
-  Eigen::MatrixXd J = matrix(use, scale);
-  // Groups the data cannot tell apart: the near-null eigenvectors of the scaled normal matrix.
-  const Eigen::MatrixXd N = J.transpose() * J;
+  for (Eigen::Index j = 0; j < p; ++j)
+    if (N0(j, j) > 0) use.push_back(static_cast<int>(j));
+  const auto m = static_cast<Eigen::Index>(use.size());
+  Eigen::VectorXd scale(m);
+  for (Eigen::Index i = 0; i < m; ++i)
+    scale[i] = std::sqrt(N0(use[static_cast<std::size_t>(i)], use[static_cast<std::size_t>(i)]));
+  Eigen::MatrixXd N(m, m);
+  for (Eigen::Index i = 0; i < m; ++i)
+    for (Eigen::Index k = 0; k < m; ++k)
+      N(i, k) = N0(use[static_cast<std::size_t>(i)], use[static_cast<std::size_t>(k)]) /
+                (scale[i] * scale[k]);
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(N);
   std::vector<bool> drop(use.size(), false);
   const double top = es.eigenvalues().maxCoeff();
-  for (Eigen::Index e = 0; e < es.eigenvalues().size(); ++e) {
+  for (Eigen::Index e = 0; e < m; ++e) {
     if (es.eigenvalues()[e] > 1e-10 * top) continue;
     std::vector<int> group;
-    for (Eigen::Index j = 0; j < es.eigenvectors().rows(); ++j)
+    for (Eigen::Index j = 0; j < m; ++j)
       if (std::abs(es.eigenvectors()(j, e)) > 0.2) group.push_back(static_cast<int>(j));
     if (group.size() < 2) continue;
     std::vector<int> named;
@@ -244,22 +300,88 @@ Fit solve(const std::vector<Column>& cols, const Eigen::VectorXd& y) {
     f.confused.push_back(named);
     for (std::size_t g = 1; g < group.size(); ++g) drop[static_cast<std::size_t>(group[g])] = true;
   }
+  std::vector<Eigen::Index> at;  // positions in `use` kept
   for (std::size_t j = 0; j < use.size(); ++j)
-    if (!drop[j]) f.kept.push_back(use[j]);
-  J = matrix(f.kept, scale);
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(J);
-  const Eigen::VectorXd b = qr.solve(y);
-  f.rss = (J * b - y).squaredNorm();
-  f.beta = Eigen::VectorXd::Constant(static_cast<Eigen::Index>(cols.size()), NAN);
-  const Eigen::MatrixXd inv = (J.transpose() * J).inverse();
-  f.cov_unit.resize(J.cols(), J.cols());
-  for (Eigen::Index i = 0; i < J.cols(); ++i) {
-    f.beta[f.kept[static_cast<std::size_t>(i)]] = b[i] / scale[i];
-    for (Eigen::Index k = 0; k < J.cols(); ++k)
-      f.cov_unit(i, k) = inv(i, k) / (scale[i] * scale[k]);
+    if (!drop[j]) {
+      f.kept.push_back(use[j]);
+      at.push_back(static_cast<Eigen::Index>(j));
+    }
+  const auto q = static_cast<Eigen::Index>(at.size());
+  Eigen::MatrixXd K(q, q);
+  Eigen::VectorXd c(q);
+  for (Eigen::Index i = 0; i < q; ++i) {
+    c[i] = c0[use[static_cast<std::size_t>(at[static_cast<std::size_t>(i)])]] /
+           scale[at[static_cast<std::size_t>(i)]];
+    for (Eigen::Index k = 0; k < q; ++k)
+      K(i, k) = N(at[static_cast<std::size_t>(i)], at[static_cast<std::size_t>(k)]);
+  }
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(K);
+  const Eigen::VectorXd b = ldlt.solve(c);
+  f.rss = std::max(yy - b.dot(c), 0.0);
+  const Eigen::MatrixXd inv = ldlt.solve(Eigen::MatrixXd::Identity(q, q));
+  f.beta = Eigen::VectorXd::Constant(p, NAN);
+  f.cov_unit.resize(q, q);
+  for (Eigen::Index i = 0; i < q; ++i) {
+    const double si = scale[at[static_cast<std::size_t>(i)]];
+    f.beta[f.kept[static_cast<std::size_t>(i)]] = b[i] / si;
+    for (Eigen::Index k = 0; k < q; ++k)
+      f.cov_unit(i, k) = inv(i, k) / (si * scale[at[static_cast<std::size_t>(k)]]);
   }
   return f;
 }
+
+// The residual sum of squares at (decay, delay), for the search: the normal equations of
+// Z = [fixed columns | varying columns | y], the fixed part's products computed once and the
+// varying columns' products (one matrix product) per call, over at most `cap` samples evenly
+// taken from the trace (every k-th in its order). The decay and delay are found from them; the
+// sizes are then fitted over every sample.
+class Search {
+ public:
+  Search(const Trace& t, const Options& o, bool ccw, bool cw, std::size_t cap)
+      : ccw_(ccw), cw_(cw) {
+    const auto n = static_cast<std::size_t>(t.angle.size());
+    const std::size_t step = (n + cap - 1) / cap;
+    std::vector<Eigen::Index> idx;
+    for (std::size_t k = 0; k < n; k += step) idx.push_back(static_cast<Eigen::Index>(k));
+    x_ = Samples::of(t, idx);
+    Eigen::MatrixXd F;
+    fixed_columns(x_, o, F);
+    pf_ = F.cols();
+    pv_ = varying_count(ccw, cw);
+    Z_.resize(x_.size(), pf_ + pv_ + 1);
+    Z_.leftCols(pf_) = F;
+    for (Eigen::Index i = 0; i < x_.size(); ++i)
+      Z_(i, pf_ + pv_) = t.deviation[idx[static_cast<std::size_t>(i)]];
+    const Eigen::MatrixXd Fz = F.transpose() * Z_.rightCols(1);
+    FF_ = F.transpose() * F;
+    Fy_ = Fz.col(0);
+    yy_ = Z_.rightCols(1).squaredNorm();
+    spacing_ = 4 * kPi / static_cast<double>(std::max<Eigen::Index>(x_.size(), 1));
+  }
+  double rss(double decay, double delay) {
+    varying_matrix(x_, decay, delay, ccw_, cw_, Z_.middleCols(pf_, pv_));
+    const Eigen::MatrixXd P = Z_.transpose() * Z_.middleCols(pf_, pv_);  // (p + 1) × pv
+    const Eigen::Index p = pf_ + pv_;
+    Eigen::MatrixXd N(p, p);
+    N.topLeftCorner(pf_, pf_) = FF_;
+    N.rightCols(pv_) = P.topRows(p);
+    N.bottomLeftCorner(pv_, pf_) = P.topRows(pf_).transpose();
+    Eigen::VectorXd c(p);
+    c.head(pf_) = Fy_;
+    c.tail(pv_) = P.row(p).transpose();
+    return solve_normal(N, c, yy_).rss;
+  }
+  // The mean angle between the samples searched over (rad): finer delays cannot be told apart.
+  double spacing() const { return spacing_; }
+
+ private:
+  bool ccw_, cw_;
+  Samples x_;
+  Eigen::Index pf_ = 0, pv_ = 0;
+  Eigen::MatrixXd Z_, FF_;
+  Eigen::VectorXd Fy_;
+  double yy_ = 0, spacing_ = 0;
+};
 
 }  // namespace
 
@@ -301,7 +423,10 @@ Result evaluate(const Trace& t, const Options& o) {
   for (Eigen::Index k = 0; k < n; ++k)
     if (!std::isfinite(t.angle[k]) || !std::isfinite(t.deviation[k]))
       throw Error(where(t, k) + "the angle and the deviation must be finite numbers");
-  const auto ccw = of_direction(t, Direction::Ccw), cw = of_direction(t, Direction::Cw);
+  std::vector<double> wrapped(static_cast<std::size_t>(n));
+  for (Eigen::Index k = 0; k < n; ++k) wrapped[static_cast<std::size_t>(k)] = wrap(t.angle[k]);
+  const auto ccw = of_direction(t, wrapped, Direction::Ccw),
+             cw = of_direction(t, wrapped, Direction::Cw);
   if (ccw.empty() && cw.empty()) throw Error("circular test: no samples");
   for (const auto* idx : {&ccw, &cw}) {
     if (idx->empty()) continue;
@@ -338,20 +463,28 @@ Result evaluate(const Trace& t, const Options& o) {
   if (!ccw.empty() && !cw.empty()) {
     double h = 0;
     for (Eigen::Index k : ccw)
-      h = std::max(h, std::abs(t.deviation[k] - interpolate(t, cw, t.angle[k])));
+      h = std::max(h, std::abs(t.deviation[k] - interpolate(t, wrapped, cw, t.angle[k])));
     r.H = h;
   }
 
   // The diagnosis. The spikes' decay and the reversals' delay, when not given, are those that
-  // fit best: a coarse grid of both, then a golden-section search of each in turn about the best
-  // (decay on a log scale over 0.5° … 30°, delay over 0 … 5°).
+  // fit best: a coarse grid of both (over at most kGridSamples samples), then a golden-section
+  // search of each in turn about the best (over at most kSearchSamples; decay on a log scale
+  // over 0.5° … 30°, delay over 0 … 5°).
+  constexpr std::size_t kGridSamples = 1024, kSearchSamples = 4096;
   const bool has_ccw = !ccw.empty(), has_cw = !cw.empty();
+  std::optional<Search> coarse, fine;
+  auto coarse_rss = [&](double d, double delay) {
+    if (!coarse) coarse.emplace(t, o, has_ccw, has_cw, kGridSamples);
+    return coarse->rss(d, delay);
+  };
   auto rss_at = [&](double d, double delay) {
-    return solve(columns(t, o, d, delay, has_ccw, has_cw), t.deviation).rss;
+    if (!fine) fine.emplace(t, o, has_ccw, has_cw, kSearchSamples);
+    return fine->rss(d, delay);
   };
   // The least of f over [a, b]: golden section, the bracket's ends included (a step-like RSS,
   // as a backlash step's position between samples gives, or a minimum at an end, is kept).
-  auto golden = [](auto f, double a, double b) {
+  auto golden = [](auto f, double a, double b, double tol) {
     const double g = (std::sqrt(5.0) - 1) / 2;
     double best_x = a, best_f = f(a);
     if (const double fb = f(b); fb < best_f) {
@@ -360,7 +493,7 @@ Result evaluate(const Trace& t, const Options& o) {
     }
     double x1 = b - g * (b - a), x2 = a + g * (b - a);
     double f1 = f(x1), f2 = f(x2);
-    for (int it = 0; it < 30; ++it) {
+    for (int it = 0; it < 60 && b - a > tol; ++it) {
       if (f1 < f2) {
         b = x2;
         x2 = x1;
@@ -391,7 +524,7 @@ Result evaluate(const Trace& t, const Options& o) {
       for (int j = 0; j <= (find_delay ? kDelays : 0); ++j) {
         const double ld = find_decay ? lo + (hi - lo) * i / kScan : log_decay;
         const double dl = find_delay ? max_delay * j / kDelays : delay;
-        const double v = rss_at(std::exp(ld), dl);
+        const double v = coarse_rss(std::exp(ld), dl);
         if (v < best) {
           best = v;
           bi = i;
@@ -400,28 +533,45 @@ Result evaluate(const Trace& t, const Options& o) {
       }
     if (find_decay) log_decay = lo + (hi - lo) * bi / kScan;
     if (find_delay) delay = max_delay * bj / kDelays;
+    // Two rounds: the first over the grid's samples, the second over the finer set.
     for (int round = 0; round < 2; ++round) {
+      auto f = [&](double d, double dl) { return round == 0 ? coarse_rss(d, dl) : rss_at(d, dl); };
       if (find_decay)
-        log_decay = golden([&](double x) { return rss_at(std::exp(x), delay); },
+        log_decay = golden([&](double x) { return f(std::exp(x), delay); },
                            std::max(lo, log_decay - (hi - lo) / kScan),
-                           std::min(hi, log_decay + (hi - lo) / kScan));
-      if (find_delay)
-        delay = golden([&](double x) { return rss_at(std::exp(log_decay), x); },
+                           std::min(hi, log_decay + (hi - lo) / kScan), 1e-5);
+      if (find_delay) {
+        f(std::exp(log_decay), delay);  // the searched samples' spacing sets the tolerance
+        const double spacing = (round == 0 ? coarse : fine)->spacing();
+        delay = golden([&](double x) { return f(std::exp(log_decay), x); },
                        std::max(0.0, delay - max_delay / kDelays),
-                       std::min(max_delay, delay + max_delay / kDelays));
+                       std::min(max_delay, delay + max_delay / kDelays), spacing / 8);
+      }
     }
   }
   const double decay = std::exp(log_decay);
   r.spike_decay = decay;
   r.reversal_delay = delay;
-  const auto cols = columns(t, o, decay, delay, has_ccw, has_cw);
-  const Fit fit = solve(cols, t.deviation);
+  std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
+  std::iota(all.begin(), all.end(), Eigen::Index{0});
+  const Samples x = Samples::of(t, all);
+  Eigen::MatrixXd F;
+  auto cols = fixed_columns(x, o, F);
+  for (auto& c : varying_columns(o, has_ccw, has_cw)) cols.push_back(std::move(c));
+  const Eigen::Index pv = varying_count(has_ccw, has_cw);
+  Eigen::MatrixXd design(n, F.cols() + pv);
+  design.leftCols(F.cols()) = F;
+  F.resize(0, 0);
+  varying_matrix(x, decay, delay, has_ccw, has_cw, design.rightCols(pv));
+  Fit fit = solve_normal(design.transpose() * design, design.transpose() * t.deviation,
+                         t.deviation.squaredNorm());
   const auto p = static_cast<Eigen::Index>(fit.kept.size());
   const double dof = static_cast<double>(n - p);
-  r.sigma = dof > 0 ? std::sqrt(fit.rss / dof) : 0.0;
   r.model = Eigen::VectorXd::Zero(n);
-  for (int j : fit.kept) r.model += cols[static_cast<std::size_t>(j)].v * fit.beta[j];
+  for (int j : fit.kept) r.model += design.col(j) * fit.beta[j];
   r.residual = t.deviation - r.model;
+  fit.rss = r.residual.squaredNorm();  // from the residual itself: no cancellation
+  r.sigma = dof > 0 ? std::sqrt(fit.rss / dof) : 0.0;
   r.unexplained_rms = std::sqrt(r.residual.squaredNorm() / static_cast<double>(n));
   const double G = std::max(r.ccw.G, r.cw.G);
   auto position = [&](int j) {
@@ -434,7 +584,8 @@ Result evaluate(const Trace& t, const Options& o) {
   for (std::size_t j = 0; j < cols.size(); ++j) {
     const Column& c = cols[j];
     if (c.key.rfind("cyclic_cos.", 0) == 0) continue;  // with its sine, below
-    if (c.v.cwiseAbs().maxCoeff() == 0) continue;      // no effect on these samples
+    const auto v = design.col(static_cast<Eigen::Index>(j));
+    if (v.cwiseAbs().maxCoeff() == 0) continue;  // no effect on these samples
     Cause cause;
     cause.key = c.key;
     cause.name = c.name;
@@ -456,7 +607,7 @@ Result evaluate(const Trace& t, const Options& o) {
                            (amp * amp);
         cause.u = r.sigma * std::sqrt(std::max(var, 0.0)) * c.to_unit;
       }
-      cause.share = share(c.v * s + cols[static_cast<std::size_t>(Jc)].v * co);
+      cause.share = share(v * s + design.col(Jc) * co);
       r.causes.push_back(cause);
       continue;
     }
@@ -472,7 +623,7 @@ Result evaluate(const Trace& t, const Options& o) {
     if (i < p) {
       cause.value = fit.beta[J] * c.to_unit;
       if (r.sigma > 0) cause.u = r.sigma * std::sqrt(fit.cov_unit(i, i)) * c.to_unit;
-      cause.share = share(c.v * fit.beta[J]);
+      cause.share = G > 0 ? std::abs(fit.beta[J]) * (v.maxCoeff() - v.minCoeff()) / G : 0.0;
       // Estimates the data barely tell apart (|correlation| ≥ 0.995) are named as such too.
       for (Eigen::Index k = 0; k < p; ++k) {
         if (k == i) continue;
