@@ -33,16 +33,24 @@ circular::Trace trace_of(const std::variant<std::string, py::dict>& input,
     if (!d.contains(k))
       throw Error(
           fmt::format("trace: no '{}' (the trace has direction, angle_deg, deviation_um)", k));
-  const auto dir = d["direction"].cast<std::vector<std::string>>();
+  const auto dir = d["direction"].cast<py::sequence>();
   const auto angle = d["angle_deg"].cast<Eigen::VectorXd>();
   const auto dev = d["deviation_um"].cast<Eigen::VectorXd>();
   if (static_cast<Eigen::Index>(dir.size()) != angle.size() || angle.size() != dev.size())
     throw Error("trace: direction, angle_deg and deviation_um differ in length");
   circular::Trace t;
+  t.direction.reserve(dir.size());
   for (std::size_t k = 0; k < dir.size(); ++k) {
-    if (dir[k] != "ccw" && dir[k] != "cw")
-      throw Error(fmt::format("trace: direction[{}] = '{}': use 'ccw' or 'cw'", k, dir[k]));
-    t.direction.push_back(dir[k] == "ccw" ? circular::Direction::Ccw : circular::Direction::Cw);
+    // Compared in place: no string made per sample (10⁵ of them in a long trace).
+    const py::object item = dir[k];
+    if (PyUnicode_Check(item.ptr()) && PyUnicode_CompareWithASCIIString(item.ptr(), "ccw") == 0)
+      t.direction.push_back(circular::Direction::Ccw);
+    else if (PyUnicode_Check(item.ptr()) &&
+             PyUnicode_CompareWithASCIIString(item.ptr(), "cw") == 0)
+      t.direction.push_back(circular::Direction::Cw);
+    else
+      throw Error(fmt::format("trace: direction[{}] = {}: use 'ccw' or 'cw'", k,
+                              py::repr(item).cast<std::string>()));
   }
   t.angle = angle * kDegree;
   t.deviation = dev * 1e-3;

@@ -32,13 +32,11 @@ double sign(double v) {
 
 // One direction's samples, by index into the trace, sorted by wrapped angle (`w`: every
 // sample's angle wrapped).
-std::vector<Eigen::Index> of_direction(const Trace& t, const std::vector<double>& w, Direction d) {
+std::vector<Eigen::Index> of_direction(const Trace& t, const Eigen::VectorXd& w, Direction d) {
   std::vector<Eigen::Index> idx;
   for (std::size_t k = 0; k < t.direction.size(); ++k)
     if (t.direction[k] == d) idx.push_back(static_cast<Eigen::Index>(k));
-  auto less = [&](Eigen::Index p, Eigen::Index q) {
-    return w[static_cast<std::size_t>(p)] < w[static_cast<std::size_t>(q)];
-  };
+  auto less = [&](Eigen::Index p, Eigen::Index q) { return w[p] < w[q]; };
   // A trace in time order is already sorted but for where it passes 0° (and reversed for cw):
   // then a rotation does; anything else is sorted.
   if (d == Direction::Cw) std::reverse(idx.begin(), idx.end());
@@ -54,7 +52,9 @@ std::string where(const Trace& t, Eigen::Index k) {
   return K < t.where.size() ? t.where[K] : fmt::format("sample {}: ", k + 1);
 }
 
-DirectionFigures figures(const Trace& t, const std::vector<Eigen::Index>& idx, double R) {
+// `cs`, `sn`: every sample's cos θ and sin θ.
+DirectionFigures figures(const Trace& t, const Eigen::VectorXd& cs, const Eigen::VectorXd& sn,
+                         const std::vector<Eigen::Index>& idx, double R) {
   DirectionFigures f;
   if (idx.empty()) return f;
   f.present = true;
@@ -62,29 +62,39 @@ DirectionFigures figures(const Trace& t, const std::vector<Eigen::Index>& idx, d
   const auto n = static_cast<Eigen::Index>(idx.size());
   // The least-squares circle of the path's points: linear in its centre and radius to first
   // order in δr/R for a start, then Gauss–Newton on the orthogonal distances (two or three
-  // steps reach round-off).
-  Eigen::MatrixXd A(n, 3);
+  // steps reach round-off); each step's 3 × 3 normal equations summed over the points.
   Eigen::VectorXd y(n);
   Eigen::Matrix2Xd p(2, n);
+  Eigen::Matrix3d AA = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d Ay = Eigen::Vector3d::Zero();
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Index k = idx[static_cast<std::size_t>(i)];
-    const double th = t.angle[k];
-    A.row(i) << 1, std::cos(th), std::sin(th);
+    const Eigen::Vector3d a(1, cs[k], sn[k]);
     y[i] = t.deviation[k];
-    p.col(i) = (R + y[i]) * Eigen::Vector2d(std::cos(th), std::sin(th));
+    AA += a * a.transpose();
+    Ay += a * y[i];
+    p.col(i) = (R + y[i]) * Eigen::Vector2d(cs[k], sn[k]);
   }
-  const Eigen::Vector3d lin = (A.transpose() * A).ldlt().solve(A.transpose() * y);
+  const Eigen::Vector3d lin = AA.ldlt().solve(Ay);
   Eigen::Vector3d c(lin[1], lin[2], R + lin[0]);  // centre a, b; radius
   for (int it = 0; it < 8; ++it) {
-    Eigen::MatrixXd J(n, 3);
-    Eigen::VectorXd r(n);
+    // j = (−qx/d, −qy/d, −1): the six sums of the symmetric JᵀJ and the three of Jᵀr.
+    double xx = 0, xy = 0, yy = 0, x1 = 0, y1 = 0, rx = 0, ry = 0, r1 = 0;
     for (Eigen::Index i = 0; i < n; ++i) {
-      const Eigen::Vector2d q = p.col(i) - c.head<2>();
-      const double d = q.norm();
-      r[i] = d - c[2];
-      J.row(i) << -q.x() / d, -q.y() / d, -1;
+      const double qx = p(0, i) - c[0], qy = p(1, i) - c[1];
+      const double d = std::sqrt(qx * qx + qy * qy), ux = qx / d, uy = qy / d, r = d - c[2];
+      xx += ux * ux;
+      xy += ux * uy;
+      yy += uy * uy;
+      x1 += ux;
+      y1 += uy;
+      rx += ux * r;
+      ry += uy * r;
+      r1 += r;
     }
-    const Eigen::Vector3d step = (J.transpose() * J).ldlt().solve(J.transpose() * r);
+    Eigen::Matrix3d JJ;
+    JJ << xx, xy, x1, xy, yy, y1, x1, y1, static_cast<double>(n);
+    const Eigen::Vector3d step = JJ.ldlt().solve(-Eigen::Vector3d(rx, ry, r1));
     c -= step;
     if (step.norm() < 1e-13 * R) break;
   }
@@ -101,18 +111,13 @@ DirectionFigures figures(const Trace& t, const std::vector<Eigen::Index>& idx, d
   return f;
 }
 
-// The deviation of one direction at angle θ, linear between its samples (periodic).
-double interpolate(const Trace& t, const std::vector<double>& wrapped,
-                   const std::vector<Eigen::Index>& idx, double theta) {
-  const double w = wrap(theta);
+// The deviation of one direction at the wrapped angle w, linear between its samples (periodic):
+// `upper` is the position in `idx` of the first sample at w or after it (idx.size(): none).
+double interpolate(const Trace& t, const Eigen::VectorXd& wrapped,
+                   const std::vector<Eigen::Index>& idx, double w, std::size_t upper) {
   const auto n = idx.size();
-  auto angle = [&](std::size_t k) { return wrapped[static_cast<std::size_t>(idx[k])]; };
-  auto upper = std::lower_bound(idx.begin(), idx.end(), w, [&](Eigen::Index p, double v) {
-    return wrapped[static_cast<std::size_t>(p)] < v;
-  });
-  const std::size_t j = static_cast<std::size_t>(upper - idx.begin()) % n;
-  const std::size_t i = (j + n - 1) % n;
-  double a0 = angle(i), a1 = angle(j), x = w;
+  const std::size_t j = upper % n, i = (j + n - 1) % n;
+  double a0 = wrapped[idx[i]], a1 = wrapped[idx[j]], x = w;
   if (a1 <= a0) a1 += kTwoPi;
   if (x < a0) x += kTwoPi;
   const double s = a1 > a0 ? (x - a0) / (a1 - a0) : 0.0;
@@ -151,8 +156,12 @@ struct Samples {
 };
 
 // The columns that do not depend on the spikes' decay or the reversals' delay, their values
-// written into F (n × columns).
-std::vector<Column> fixed_columns(const Samples& x, const Options& o, Eigen::MatrixXd& F) {
+// written into F (n × fixed_count(o)).
+Eigen::Index fixed_count(const Options& o) {
+  return 8 + (o.pitch_a > 0 ? 2 : 0) + (o.pitch_b > 0 ? 2 : 0);
+}
+std::vector<Column> fixed_columns(const Samples& x, const Options& o,
+                                  Eigen::Ref<Eigen::MatrixXd> F) {
   const Eigen::Index n = x.size();
   const double R = o.radius, v = o.feed / 60.0;
   const char* axes = "XYZ";
@@ -178,7 +187,6 @@ std::vector<Column> fixed_columns(const Samples& x, const Options& o, Eigen::Mat
       add(fmt::format("cyclic_sin.{}", X), "", "µm", 1e3);
       add(fmt::format("cyclic_cos.{}", X), "", "µm", 1e3);
     }
-  F.resize(n, static_cast<Eigen::Index>(c.size()));
   for (Eigen::Index k = 0; k < n; ++k) {
     const double cs = x.cs[k], sn = x.sn[k], s2 = 2 * sn * cs, c2 = cs * cs - sn * sn;
     Eigen::Index j = 0;
@@ -344,12 +352,11 @@ class Search {
     std::vector<Eigen::Index> idx;
     for (std::size_t k = 0; k < n; k += step) idx.push_back(static_cast<Eigen::Index>(k));
     x_ = Samples::of(t, idx);
-    Eigen::MatrixXd F;
-    fixed_columns(x_, o, F);
-    pf_ = F.cols();
+    pf_ = fixed_count(o);
     pv_ = varying_count(ccw, cw);
     Z_.resize(x_.size(), pf_ + pv_ + 1);
-    Z_.leftCols(pf_) = F;
+    fixed_columns(x_, o, Z_.leftCols(pf_));
+    const auto F = Z_.leftCols(pf_);
     for (Eigen::Index i = 0; i < x_.size(); ++i)
       Z_(i, pf_ + pv_) = t.deviation[idx[static_cast<std::size_t>(i)]];
     const Eigen::MatrixXd Fz = F.transpose() * Z_.rightCols(1);
@@ -423,8 +430,10 @@ Result evaluate(const Trace& t, const Options& o) {
   for (Eigen::Index k = 0; k < n; ++k)
     if (!std::isfinite(t.angle[k]) || !std::isfinite(t.deviation[k]))
       throw Error(where(t, k) + "the angle and the deviation must be finite numbers");
-  std::vector<double> wrapped(static_cast<std::size_t>(n));
-  for (Eigen::Index k = 0; k < n; ++k) wrapped[static_cast<std::size_t>(k)] = wrap(t.angle[k]);
+  std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
+  std::iota(all.begin(), all.end(), Eigen::Index{0});
+  const Samples x = Samples::of(t, all);  // every sample's wrapped angle, cos and sin, once
+  const Eigen::VectorXd& wrapped = x.w;
   const auto ccw = of_direction(t, wrapped, Direction::Ccw),
              cw = of_direction(t, wrapped, Direction::Cw);
   if (ccw.empty() && cw.empty()) throw Error("circular test: no samples");
@@ -439,9 +448,8 @@ Result evaluate(const Trace& t, const Options& o) {
     double gap = 0;
     Eigen::Index after = (*idx)[0];
     for (std::size_t k = 0; k < idx->size(); ++k) {
-      const double a0 = wrap(t.angle[(*idx)[k]]);
-      const double a1 =
-          k + 1 < idx->size() ? wrap(t.angle[(*idx)[k + 1]]) : wrap(t.angle[(*idx)[0]]) + kTwoPi;
+      const double a0 = wrapped[(*idx)[k]];
+      const double a1 = k + 1 < idx->size() ? wrapped[(*idx)[k + 1]] : wrapped[(*idx)[0]] + kTwoPi;
       if (a1 - a0 > gap) {
         gap = a1 - a0;
         after = (*idx)[k];
@@ -458,12 +466,16 @@ Result evaluate(const Trace& t, const Options& o) {
   r.plane = o.plane;
   r.radius = o.radius;
   r.feed = o.feed;
-  r.ccw = figures(t, ccw, o.radius);
-  r.cw = figures(t, cw, o.radius);
+  r.ccw = figures(t, x.cs, x.sn, ccw, o.radius);
+  r.cw = figures(t, x.cs, x.sn, cw, o.radius);
   if (!ccw.empty() && !cw.empty()) {
+    // Both directions sorted by angle: the cw sample after each ccw one moves forward only.
     double h = 0;
-    for (Eigen::Index k : ccw)
-      h = std::max(h, std::abs(t.deviation[k] - interpolate(t, wrapped, cw, t.angle[k])));
+    std::size_t upper = 0;
+    for (Eigen::Index k : ccw) {
+      while (upper < cw.size() && wrapped[cw[upper]] < wrapped[k]) ++upper;
+      h = std::max(h, std::abs(t.deviation[k] - interpolate(t, wrapped, cw, wrapped[k], upper)));
+    }
     r.H = h;
   }
 
@@ -514,7 +526,7 @@ Result evaluate(const Trace& t, const Options& o) {
   const double lo = std::log(0.5 * kPi / 180), hi = std::log(30 * kPi / 180);
   const double max_delay = 5 * kPi / 180;
   const bool find_decay = o.spike_decay == 0, find_delay = o.reversal_delay < 0;
-  constexpr int kScan = 12, kDelays = 10;
+  constexpr int kScan = 12, kDelays = 5;
   double log_decay = find_decay ? 0.5 * (lo + hi) : std::log(o.spike_decay);
   double delay = find_delay ? 0 : o.reversal_delay;
   if (find_decay || find_delay) {
@@ -552,23 +564,19 @@ Result evaluate(const Trace& t, const Options& o) {
   const double decay = std::exp(log_decay);
   r.spike_decay = decay;
   r.reversal_delay = delay;
-  std::vector<Eigen::Index> all(static_cast<std::size_t>(n));
-  std::iota(all.begin(), all.end(), Eigen::Index{0});
-  const Samples x = Samples::of(t, all);
-  Eigen::MatrixXd F;
-  auto cols = fixed_columns(x, o, F);
+  const Eigen::Index pf = fixed_count(o), pv = varying_count(has_ccw, has_cw);
+  Eigen::MatrixXd design(n, pf + pv);
+  auto cols = fixed_columns(x, o, design.leftCols(pf));
   for (auto& c : varying_columns(o, has_ccw, has_cw)) cols.push_back(std::move(c));
-  const Eigen::Index pv = varying_count(has_ccw, has_cw);
-  Eigen::MatrixXd design(n, F.cols() + pv);
-  design.leftCols(F.cols()) = F;
-  F.resize(0, 0);
   varying_matrix(x, decay, delay, has_ccw, has_cw, design.rightCols(pv));
-  Fit fit = solve_normal(design.transpose() * design, design.transpose() * t.deviation,
-                         t.deviation.squaredNorm());
+  // JᵀJ by a symmetric rank update (half the work of the full product).
+  Eigen::MatrixXd normal = Eigen::MatrixXd::Zero(pf + pv, pf + pv);
+  normal.selfadjointView<Eigen::Lower>().rankUpdate(design.transpose());
+  normal = normal.selfadjointView<Eigen::Lower>();
+  Fit fit = solve_normal(normal, design.transpose() * t.deviation, t.deviation.squaredNorm());
   const auto p = static_cast<Eigen::Index>(fit.kept.size());
   const double dof = static_cast<double>(n - p);
-  r.model = Eigen::VectorXd::Zero(n);
-  for (int j : fit.kept) r.model += design.col(j) * fit.beta[j];
+  r.model = design * fit.beta.unaryExpr([](double b) { return std::isnan(b) ? 0.0 : b; });
   r.residual = t.deviation - r.model;
   fit.rss = r.residual.squaredNorm();  // from the residual itself: no cancellation
   r.sigma = dof > 0 ? std::sqrt(fit.rss / dof) : 0.0;
