@@ -37,23 +37,24 @@ def best(f, budget=2.0, most=30):
     return min(t), out
 
 
-def design(trace, radius, feed, decay_deg, delay_deg):
+def design(trace, radius, feed, decay_deg, delays_deg):
     """The diagnosis' columns as the header of include/trueaxis/circular/circular.hpp states them."""
     th = np.radians(np.asarray(trace["angle_deg"]))
     s = np.where(np.asarray(trace["direction"]) == "ccw", 1.0, -1.0)
     c, sn, v = np.cos(th), np.sin(th), feed / 60.0
-    d, dl = math.radians(decay_deg), math.radians(delay_deg)
+    d = math.radians(decay_deg)
+    da, db = (math.radians(x) for x in delays_deg)
     cols = [c, sn, np.ones_like(th), -radius / 2 * np.sin(2 * th), radius / 2 * np.cos(2 * th),
             s * v / 2 * np.sin(2 * th), c * c * sn, sn * sn * c,
-            s / 2 * np.sign(np.sin(th - s * dl)) * c, -s / 2 * np.sign(np.cos(th - s * dl)) * sn]
+            s / 2 * np.sign(np.sin(th - s * da)) * c, -s / 2 * np.sign(np.cos(th - s * db)) * sn]
     w = np.mod(th, 2 * np.pi)
     for axis in (0, 1):
         for direction in (1.0, -1.0):
             total = np.zeros_like(th)
-            for r in ((0.0 if axis == 0 else np.pi / 2) + direction * dl,) * 1:
-                for at in (r, r + np.pi):
-                    dt = np.mod(w - at if direction > 0 else at - w, 2 * np.pi)
-                    total += np.where(dt < 12 * d, np.exp(-dt / d), 0.0)
+            first = (0.0 if axis == 0 else np.pi / 2) + direction * (da if axis == 0 else db)
+            for at in (first, first + np.pi):
+                dt = np.mod(w - at if direction > 0 else at - w, 2 * np.pi)
+                total += np.where(dt < 12 * d, np.exp(-dt / d), 0.0)
             total *= np.abs(c if axis == 0 else sn)
             cols.append(np.where(s == direction, total, 0.0))
     return np.stack(cols, axis=1)
@@ -70,7 +71,8 @@ def main():
         trace, truth = ta.simulate_circular(m, feed=750, servo=servo, noise=0.1, sample_rate=rate)
     n = len(trace["angle_deg"])
     t_ta, r = best(lambda: ta.circular(trace, feed=750))
-    J = design(trace, 100.0, 750.0, r["spike_decay_deg"], r["reversal_delay_deg"])
+    J = design(trace, 100.0, 750.0, r["spike_decay_deg"],
+               (r["reversal_delay_deg"]["X"], r["reversal_delay_deg"]["Y"]))
     y = np.asarray(trace["deviation_um"]) * 1e-3
     t_np, sol = best(lambda: np.linalg.lstsq(J, y, rcond=None))
     beta = sol[0]

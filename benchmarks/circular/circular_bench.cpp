@@ -40,14 +40,14 @@ void BM_CircularAnalysis(benchmark::State& st) {
   st.counters["samples"] = static_cast<double>(t.angle.size());
 }
 
-// The same with the decay and delay given: the figures and one fit, without the search.
+// The same with the decay and one delay given: the figures and one fit, without the search.
 void BM_CircularAnalysisWithoutSearch(benchmark::State& st) {
   const auto& t = run().trace;
   circular::Options o;
   o.feed = 750;
   const auto found = circular::evaluate(t, o);
   o.spike_decay = found.spike_decay;
-  o.reversal_delay = found.reversal_delay;
+  o.reversal_delay = found.reversal_delay[0];
   for (auto _ : st) benchmark::DoNotOptimize(circular::evaluate(t, o));
 }
 

@@ -45,8 +45,7 @@ circular::Trace trace_of(const std::variant<std::string, py::dict>& input,
     const py::object item = dir[k];
     if (PyUnicode_Check(item.ptr()) && PyUnicode_CompareWithASCIIString(item.ptr(), "ccw") == 0)
       t.direction.push_back(circular::Direction::Ccw);
-    else if (PyUnicode_Check(item.ptr()) &&
-             PyUnicode_CompareWithASCIIString(item.ptr(), "cw") == 0)
+    else if (PyUnicode_Check(item.ptr()) && PyUnicode_CompareWithASCIIString(item.ptr(), "cw") == 0)
       t.direction.push_back(circular::Direction::Cw);
     else
       throw Error(fmt::format("trace: direction[{}] = {}: use 'ccw' or 'cw'", k,
@@ -86,7 +85,10 @@ py::dict result_dict(const circular::Result& r, const circular::Trace& t) {
   d["diagnosis"] = causes;
   d["unexplained_rms_um"] = r.unexplained_rms * 1e3;
   d["spike_decay_deg"] = r.spike_decay / kDegree;
-  d["reversal_delay_deg"] = r.reversal_delay / kDegree;
+  py::dict delay;
+  delay[py::str(std::string(1, "XYZ"[r.plane.a]))] = r.reversal_delay[0] / kDegree;
+  delay[py::str(std::string(1, "XYZ"[r.plane.b]))] = r.reversal_delay[1] / kDegree;
+  d["reversal_delay_deg"] = delay;
   d["model_um"] = Eigen::VectorXd(r.model * 1e3);
   d["residual_um"] = Eigen::VectorXd(r.residual * 1e3);
   d["warnings"] = r.warnings;

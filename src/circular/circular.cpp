@@ -214,7 +214,8 @@ std::vector<Column> fixed_columns(const Samples& x, const Options& o,
 int varying_count(bool ccw, bool cw) {
   return 2 + 2 * ((ccw ? 1 : 0) + (cw ? 1 : 0));
 }
-void varying_matrix(const Samples& x, double decay, double delay, bool ccw, bool cw,
+void varying_matrix(const Samples& x, double decay, const std::array<double, 2>& delay, bool ccw,
+                    bool cw,
                     Eigen::Ref<Eigen::MatrixXd> V) {  // sized n × varying_count(ccw, cw)
   const Eigen::Index n = x.size();
   V.setZero();
@@ -223,19 +224,21 @@ void varying_matrix(const Samples& x, double decay, double delay, bool ccw, bool
   for (int axis = 0; axis < 2; ++axis)
     for (int dir = 0; dir < 2; ++dir)
       if ((dir == 0 && ccw) || (dir == 1 && cw)) spike_col[axis][dir] = next++;
-  const double cd = std::cos(delay), sd = std::sin(delay), reach = 12 * decay;
+  const double ca = std::cos(delay[0]), sa = std::sin(delay[0]), cb = std::cos(delay[1]),
+               sb = std::sin(delay[1]), reach = 12 * decay;
   for (Eigen::Index k = 0; k < n; ++k) {
     const double cs = x.cs[k], sn = x.sn[k], s = x.s[k];
-    // An axis reverses where its motor's velocity changes sign: `delay` after the commanded
-    // reversal in the direction of travel (a following lag's phase). sin and cos of θ − s·δ:
-    const double sin_d = sn * cd - s * cs * sd, cos_d = cs * cd + s * sn * sd;
-    V(k, 0) = s / 2 * sign(sin_d) * cs;
-    V(k, 1) = -s / 2 * sign(cos_d) * sn;
+    // An axis reverses where its motor's velocity changes sign: its own delay after the
+    // commanded reversal in the direction of travel (its following lag's phase). sin(θ − s·δa)
+    // for the first axis, cos(θ − s·δb) for the second:
+    const double sin_a = sn * ca - s * cs * sa, cos_b = cs * cb + s * sn * sb;
+    V(k, 0) = s / 2 * sign(sin_a) * cs;
+    V(k, 1) = -s / 2 * sign(cos_b) * sn;
     const int dir = s > 0 ? 0 : 1;
     for (int axis = 0; axis < 2; ++axis) {
       const int j = spike_col[axis][dir];
       if (j < 0) continue;
-      const double first = (axis == 0 ? 0.0 : kPi / 2) + s * delay;
+      const double first = (axis == 0 ? 0.0 : kPi / 2) + s * delay[static_cast<std::size_t>(axis)];
       double sum = 0;
       for (const double r : {first, first + kPi}) {
         double d = s > 0 ? x.w[k] - r : r - x.w[k];  // in (−2π − δ, 2π + δ): two steps at most
@@ -365,7 +368,7 @@ class Search {
     yy_ = Z_.rightCols(1).squaredNorm();
     spacing_ = 4 * kPi / static_cast<double>(std::max<Eigen::Index>(x_.size(), 1));
   }
-  double rss(double decay, double delay) {
+  double rss(double decay, const std::array<double, 2>& delay) {
     varying_matrix(x_, decay, delay, ccw_, cw_, Z_.middleCols(pf_, pv_));
     const Eigen::MatrixXd P = Z_.transpose() * Z_.middleCols(pf_, pv_);  // (p + 1) × pv
     const Eigen::Index p = pf_ + pv_;
@@ -486,11 +489,12 @@ Result evaluate(const Trace& t, const Options& o) {
   constexpr std::size_t kGridSamples = 1024, kSearchSamples = 4096;
   const bool has_ccw = !ccw.empty(), has_cw = !cw.empty();
   std::optional<Search> coarse, fine;
-  auto coarse_rss = [&](double d, double delay) {
+  using Delays = std::array<double, 2>;
+  auto coarse_rss = [&](double d, const Delays& delay) {
     if (!coarse) coarse.emplace(t, o, has_ccw, has_cw, kGridSamples);
     return coarse->rss(d, delay);
   };
-  auto rss_at = [&](double d, double delay) {
+  auto rss_at = [&](double d, const Delays& delay) {
     if (!fine) fine.emplace(t, o, has_ccw, has_cw, kSearchSamples);
     return fine->rss(d, delay);
   };
@@ -528,15 +532,16 @@ Result evaluate(const Trace& t, const Options& o) {
   const bool find_decay = o.spike_decay == 0, find_delay = o.reversal_delay < 0;
   constexpr int kScan = 12, kDelays = 5;
   double log_decay = find_decay ? 0.5 * (lo + hi) : std::log(o.spike_decay);
-  double delay = find_delay ? 0 : o.reversal_delay;
+  Delays delay{find_delay ? 0 : o.reversal_delay, find_delay ? 0 : o.reversal_delay};
   if (find_decay || find_delay) {
+    // The grid with one delay for both axes; then each axis' own.
     double best = INFINITY;
     int bi = 0, bj = 0;
     for (int i = 0; i <= (find_decay ? kScan : 0); ++i)
       for (int j = 0; j <= (find_delay ? kDelays : 0); ++j) {
         const double ld = find_decay ? lo + (hi - lo) * i / kScan : log_decay;
-        const double dl = find_delay ? max_delay * j / kDelays : delay;
-        const double v = coarse_rss(std::exp(ld), dl);
+        const double dl = find_delay ? max_delay * j / kDelays : delay[0];
+        const double v = coarse_rss(std::exp(ld), {dl, dl});
         if (v < best) {
           best = v;
           bi = i;
@@ -544,10 +549,12 @@ Result evaluate(const Trace& t, const Options& o) {
         }
       }
     if (find_decay) log_decay = lo + (hi - lo) * bi / kScan;
-    if (find_delay) delay = max_delay * bj / kDelays;
+    if (find_delay) delay[0] = delay[1] = max_delay * bj / kDelays;
     // Two rounds: the first over the grid's samples, the second over the finer set.
     for (int round = 0; round < 2; ++round) {
-      auto f = [&](double d, double dl) { return round == 0 ? coarse_rss(d, dl) : rss_at(d, dl); };
+      auto f = [&](double d, const Delays& dl) {
+        return round == 0 ? coarse_rss(d, dl) : rss_at(d, dl);
+      };
       if (find_decay)
         log_decay = golden([&](double x) { return f(std::exp(x), delay); },
                            std::max(lo, log_decay - (hi - lo) / kScan),
@@ -555,9 +562,15 @@ Result evaluate(const Trace& t, const Options& o) {
       if (find_delay) {
         f(std::exp(log_decay), delay);  // the searched samples' spacing sets the tolerance
         const double spacing = (round == 0 ? coarse : fine)->spacing();
-        delay = golden([&](double x) { return f(std::exp(log_decay), x); },
-                       std::max(0.0, delay - max_delay / kDelays),
-                       std::min(max_delay, delay + max_delay / kDelays), spacing / 8);
+        for (std::size_t axis = 0; axis < 2; ++axis)
+          delay[axis] = golden(
+              [&](double x) {
+                Delays d = delay;
+                d[axis] = x;
+                return f(std::exp(log_decay), d);
+              },
+              std::max(0.0, delay[axis] - max_delay / kDelays),
+              std::min(max_delay, delay[axis] + max_delay / kDelays), spacing / 8);
       }
     }
   }

@@ -29,10 +29,10 @@
 //   order terms, which read as a scale mismatch of −(3/2)·ω²·(τa² − τb²) (ω = v/R): 20 µm/m for
 //   25 and 33 ms at 1000 mm/min on R 100 mm. The data do not give τa + τb, so it is not removed.
 // - backlash B per axis (> 0 when the axis stops short of the command, by B/2 each way):
-//   a: (s/2)·sign(sin θ')·cos θ·B_a,   b: −(s/2)·sign(cos θ')·sin θ·B_b, with θ' = θ − s·δ: an
-//   axis reverses a delay δ after the commanded reversal (its following lag's phase)
+//   a: (s/2)·sign(sin θ'a)·cos θ·B_a,   b: −(s/2)·sign(cos θ'b)·sin θ·B_b, with θ'x = θ − s·δx:
+//   each axis reverses its own delay δx after the commanded reversal (its following lag's phase)
 // - reversal spike per axis and direction (> 0 outward: the table left behind), decaying over
-//   an angle d after each reversal of the axis (a at θ = 0°, 180°; b at 90°, 270°; each δ
+//   an angle d after each reversal of the axis (a at θ = 0°, 180°; b at 90°, 270°; each δx
 //   later):
 //   a: A·exp(−Δθ/d)·|cos θ|,   b: A·exp(−Δθ/d)·|sin θ|
 // - straightness per axis, a bow of the other coordinate over ±R: e_b = k_a·(a/R)², e_a =
@@ -46,6 +46,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -78,8 +79,8 @@ struct Options {
   // 0.5° … 30°).
   double spike_decay = 0;
   // The reversals' delay (rad): an axis reverses this far after the commanded reversal, in the
-  // direction of travel (its following lag's phase, about ω·τ); < 0: found from the data (the
-  // one that fits best over 0 … 5°).
+  // direction of travel (its following lag's phase, about ω·τ); the same given for both axes;
+  // < 0: each axis' own found from the data (the ones that fit best over 0 … 5°).
   double reversal_delay = -1;
   // Cyclic errors' pitch per axis (mm); 0: not fitted.
   double pitch_a = 0, pitch_b = 0;
@@ -115,12 +116,12 @@ struct Result {
   Plane plane;
   double radius = 0, feed = 0;
   DirectionFigures ccw, cw;
-  std::optional<double> H;     // mm, with both directions
-  std::vector<Cause> causes;   // in the order of the list in the header, then ranked by share
-  double spike_decay = 0;      // rad, as used
-  double reversal_delay = 0;   // rad, as used
-  double unexplained_rms = 0;  // mm
-  double sigma = 0;            // mm, the residuals' standard deviation used for the u
+  std::optional<double> H;    // mm, with both directions
+  std::vector<Cause> causes;  // in the order of the list in the header, then ranked by share
+  double spike_decay = 0;     // rad, as used
+  std::array<double, 2> reversal_delay{};  // rad per axis a, b, as used
+  double unexplained_rms = 0;              // mm
+  double sigma = 0;                        // mm, the residuals' standard deviation used for the u
   // The fitted model and its residual per sample (mm), in the trace's order.
   Eigen::VectorXd model, residual;
   std::vector<std::string> warnings;

@@ -298,7 +298,8 @@ void write_circular_result(const std::string& path, const circular::Result& r,
     *at = v;
   }
   diag["spike_decay_deg"] = r.spike_decay / kDegree;
-  diag["reversal_delay_deg"] = r.reversal_delay / kDegree;
+  diag["reversal_delay_deg"] = {{std::string(1, "XYZ"[r.plane.a]), r.reversal_delay[0] / kDegree},
+                                {std::string(1, "XYZ"[r.plane.b]), r.reversal_delay[1] / kDegree}};
   diag["unexplained_rms_um"] = r.unexplained_rms * 1e3;
   diag["sigma_um"] = r.sigma > 0 ? ojson(r.sigma * 1e3) : ojson(nullptr);
   j["diagnosis"] = diag;
@@ -442,8 +443,15 @@ CircularFile read_circular_result(const std::string& path) {
     walk(diag / k, base, unit);
   }
   if (f.has(diag / "spike_decay_deg")) r.spike_decay = f.number(diag / "spike_decay_deg") * kDegree;
-  if (f.has(diag / "reversal_delay_deg"))
-    r.reversal_delay = f.number(diag / "reversal_delay_deg") * kDegree;
+  if (f.has(diag / "reversal_delay_deg")) {  // per axis; one number (files of 2026-11) for both
+    const auto at = diag / "reversal_delay_deg";
+    if (f.root().at(at).is_number()) {
+      r.reversal_delay[0] = r.reversal_delay[1] = f.number(at) * kDegree;
+    } else {
+      r.reversal_delay[0] = f.number(at / std::string(1, "XYZ"[r.plane.a])) * kDegree;
+      r.reversal_delay[1] = f.number(at / std::string(1, "XYZ"[r.plane.b])) * kDegree;
+    }
+  }
   r.unexplained_rms = f.number(diag / "unexplained_rms_um") * 1e-3;
   if (f.has(diag / "sigma_um") && !f.root().at(diag / "sigma_um").is_null())
     r.sigma = f.number(diag / "sigma_um") * 1e-3;
