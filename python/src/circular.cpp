@@ -6,6 +6,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <memory>
 #include <optional>
 #include <variant>
 
@@ -56,7 +57,11 @@ circular::Trace trace_of(const std::variant<std::string, py::dict>& input,
   return t;
 }
 
-py::dict result_dict(const circular::Result& r, const circular::Trace& t) {
+// The result and its trace are shared with the save function, not copied (a 10⁵-sample trace
+// and its model are megabytes).
+py::dict result_dict(std::shared_ptr<const circular::Result> rp,
+                     std::shared_ptr<const circular::Trace> tp) {
+  const circular::Result& r = *rp;
   py::dict d, g, f;
   for (const auto* x : {&r.ccw, &r.cw}) {
     if (!x->present) continue;
@@ -93,7 +98,7 @@ py::dict result_dict(const circular::Result& r, const circular::Trace& t) {
   d["residual_um"] = Eigen::VectorXd(r.residual * 1e3);
   d["warnings"] = r.warnings;
   d["summary"] = r.summary();
-  savable(d, [r, t](const std::string& path) { io::write_circular_result(path, r, &t); });
+  savable(d, [rp, tp](const std::string& path) { io::write_circular_result(path, *rp, tp.get()); });
   return d;
 }
 
@@ -112,7 +117,8 @@ void bind_circular(py::module_& m) {
         series.radius = radius;
         series.start_angle = start_angle * kDegree;
         series.order = io::TimeSeriesOptions::order_of(order);
-        const circular::Trace t = trace_of(trace, &series);
+        auto tp = std::make_shared<const circular::Trace>(trace_of(trace, &series));
+        const circular::Trace& t = *tp;
         circular::Options o;
         o.plane = circular::Plane::parse(plane);
         o.radius = radius;
@@ -122,12 +128,13 @@ void bind_circular(py::module_& m) {
           o.pitch_a = pitch->first;
           o.pitch_b = pitch->second;
         }
-        circular::Result r;
+        std::shared_ptr<const circular::Result> rp;
         {
           py::gil_scoped_release release;
-          r = circular::evaluate(t, o);
+          rp = std::make_shared<const circular::Result>(circular::evaluate(t, o));
         }
-        py::dict d = result_dict(r, t);
+        const circular::Result& r = *rp;
+        py::dict d = result_dict(rp, tp);
         if (compensation) {
           circular::CompensationOptions co;
           co.active_backlash = {active_backlash.first * 1e-3, active_backlash.second * 1e-3};
