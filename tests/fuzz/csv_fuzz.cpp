@@ -1,11 +1,14 @@
-// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs), Renishaw
-// .rtl files and the LinuxCNC, Sinumerik, HEIDENHAIN and FANUC compensation tables on arbitrary
-// bytes.
+// libFuzzer target: the CSV readers (probes, points, spots, lengths, positioning runs, ballbar
+// traces and time series), Renishaw .rtl files, the LinuxCNC, Sinumerik, HEIDENHAIN and FANUC
+// compensation tables and backlash parameters, and Siemens cross-axis tables on arbitrary bytes.
 #include <cstdint>
 
 #include "fuzz_util.hpp"
+#include "trueaxis/circular/circular.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/circular/circular.hpp"
 #include "trueaxis/io/compensation/controller.hpp"
+#include "trueaxis/io/compensation/parameters.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/guideway/guideway.hpp"
 #include "trueaxis/io/positioning/positioning.hpp"
@@ -37,6 +40,22 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::expect_only_trueaxis_errors([&] { io::read_sinumerik(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_heidenhain(p); });
   fuzz::expect_only_trueaxis_errors([&] { io::read_fanuc(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_linuxcnc_backlash(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_heidenhain_backlash(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_fanuc_backlash(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_sinumerik_backlash(p); });
+  fuzz::expect_only_trueaxis_errors([&] { io::read_sinumerik_cec(p).at(1.5); });
+  fuzz::expect_only_trueaxis_errors([&] {
+    io::TimeSeriesOptions ts;
+    ts.feed = 1000;
+    ts.radius = 10;
+    const auto trace = io::read_trace(p, &ts);
+    circular::Options o;
+    o.radius = 10;
+    o.min_samples = 8;
+    o.max_gap = 3.2;
+    if (trace.angle.size() <= 2000) circular::evaluate(trace, o);
+  });
   fuzz::expect_only_trueaxis_errors([&] {
     positioning::Options o;
     o.allow_incomplete = true;

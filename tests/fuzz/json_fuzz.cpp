@@ -4,6 +4,8 @@
 
 #include "fuzz_util.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
+#include "trueaxis/io/circular/circular.hpp"
+#include "trueaxis/io/circular/compensation.hpp"
 #include "trueaxis/io/design/design.hpp"
 #include "trueaxis/io/guideway/guideway.hpp"
 #include "trueaxis/io/json.hpp"
@@ -21,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 12) {
+    switch (data[0] % 15) {
       case 0:
         io::read_machine(p);
         break;
@@ -56,6 +58,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         break;
       case 10:
         io::read_part(p);
+        break;
+      case 12:
+        io::read_circular_result(p);
+        break;
+      case 13:
+        io::read_servo(p);
+        break;
+      case 14:
+        io::read_compensation_json(p);
         break;
       default:
         io::read_positioning_result(p);

@@ -34,6 +34,13 @@ printf '%%_N_AX_EEC_INI\nCHANDATA(1)\n$AA_ENC_COMP[0,0,X1]=0.003 ; 3 um\n$AA_ENC
 printf 'BEGIN X.COM MM\nNR    AXISPOS         X               BACKLASH\n0     +0.0000         +0.0010         +0.0021\n1     +40.0000        +0.0011         -0.0019\n[END]\n' > "$corpus/csv/X.COM"
 printf '%%\n(PITCH ERROR)\nN3620A1P1\nN3621A1P0\nN3622A1P2\nN3623A1P1\nN3624A1P10.0\nN10000P1\nN10001P-2\nN10002P3\n%%\n' > "$corpus/csv/pitch.txt"
 printf 'HEADER::\r\nFile type : RTL\r\nTARGET DATA::\r\nFiletype : Linear\r\nTarget-count : 3\r\nTargets :\r\n 0.0 50.0 100.0\r\nRUNS::\r\nRun-count : 2\r\nDEVIATIONS::\r\nRun Target Data:\r\n1  1  0.5\r\n1  2  1.0\r\n1  3  1.5\r\n2  3  -0.5\r\n2  2  -1.0\r\n2  1  -1.5\r\n' > "$corpus/csv/runs.rtl"
+printf 'direction,angle_deg,deviation_um\nccw,0,1\nccw,60,2\nccw,120,-1\nccw,180,0.5\nccw,240,1\nccw,300,-2\nccw,359,0\nccw,30,1\ncw,0,1\ncw,300,2\ncw,240,0\ncw,180,1\ncw,120,-1\ncw,60,0.5\ncw,10,1\ncw,90,0\n' > "$corpus/csv/trace.csv"
+printf 't_s,deviation_um\n0,1\n0.1,2\n0.2,1\n0.3,0\n0.4,1\n0.5,2\n0.6,1\n0.7,0\n0,1\n0.1,2\n' > "$corpus/csv/series.csv"
+printf '[JOINT_0]\nBACKLASH = 0.003\n[JOINT_1]\nBACKLASH = 0.005\n' > "$corpus/csv/backlash.ini"
+printf 'MP710.0: +0.0030 ; X\nMP710.1: +0.0050\n' > "$corpus/csv/backlash.mp"
+printf '%%\n(BACKLASH)\nN1851A1P3\nN1851A2P5\n%%\n' > "$corpus/csv/backlash_fanuc.txt"
+printf '%%_N_BACKLASH_INI\n$MA_BACKLASH[0,AX1]=0.003\nM17\n' > "$corpus/csv/backlash_siemens.ini"
+printf '%%_N_NC_CEC_INI\nCHANDATA(1)\n$AN_CEC[0,0]=0\n$AN_CEC[0,1]=0.001\n$AN_CEC_INPUT_AXIS[0]=(AX2)\n$AN_CEC_OUTPUT_AXIS[0]=(AX1)\n$AN_CEC_STEP[0]=100\n$AN_CEC_MIN[0]=0\n$AN_CEC_MAX[0]=100\n$AN_CEC_DIRECTION[0]=0\nM17\n' > "$corpus/csv/cec.ini"
 printf 'time_s,reading_mm\n0,-5\n0.5,-5\n1,-5\n1.5,-2\n2,0.001\n2.5,0.001\n3,0.001\n3.5,0.0012\n4,5\n' > "$corpus/csv/log.csv"
 # JSON: the first byte picks the reader (see json_fuzz.cpp).
 for f in examples/*.json; do
@@ -43,6 +50,9 @@ printf '\x00{"chain": "FYXZ", "ranges": {"x": [0, 800], "y": [0, 600], "z": [0, 
 printf '\x09{"sections": [{"name": "s", "plane": {"origin": [0, 0, 0], "normal": [0, 0, 1]}, "closed": false, "curve": {"nurbs": {"degree": 2, "knots": [0, 0, 0, 1, 1, 1], "weights": [1, 0.7, 1], "control_points": [[0, 0, 0], [1, 1, 0], [2, 0, 0]]}}, "material": "left"}]}' > "$corpus/json/design"
 printf '\x0a{"design": {"sections": [{"name": "s", "plane": {"origin": [0, 0, 0], "normal": [0, 0, 1]}, "closed": false, "curve": {"polyline": [[0, 0, 0], [10, 0, 0], [10, 5, 0]]}, "material": "left"}]}, "deviation": {"scale": 1.01, "rotation_deg": [0, 0, 1], "translation": [1, 0, 0], "bumps": [{"section": "s", "arc_mm": 5, "height_mm": 0.2, "width_mm": 4}], "noise_um": 1, "seed": 3}}' > "$corpus/json/part"
 printf '\x0b{"kind": "positioning", "standard": "ISO 230-2:2014", "A": 3, "B": null, "cycles": 2, "targets": [{"position": 0, "n_up": 2, "mean_up": 1, "s_up": 0.5}, {"position": 50, "n_up": 2, "mean_up": 2, "s_up": 0.1}], "temperature": {"material": [20, 21], "air": null, "corrected": true, "reference": 20, "expansion_coefficient": 1.15e-05, "datum_mm": 0, "max_correction_um": 0.5}, "tolerances": {"A": {"limit": 5, "value": 3, "pass": true}}, "warnings": ["w"], "readings": {"target_mm": [0, 50, 0, 50], "cycle": [1, 1, 2, 2], "direction": "++++", "deviation_um": [1, 2, 1, 2]}}' > "$corpus/json/positioning"
+printf '\x0c{"kind": "circular", "plane": "XY", "radius_mm": 100, "feed_mm_per_min": 1000, "G_um": {"ccw": 3}, "F_um": {"ccw": {"min": -1, "max": 2}}, "H_um": null, "diagnosis": {"reversal_delay_deg": {"X": 0.2, "Y": 0.3}}, "trace": {"direction": ["ccw", "ccw"], "angle_deg": [0, 180], "deviation_um": [1, 2], "model_um": [1, 2]}}' > "$corpus/json/circular"
+printf '\x0d{"X": {"gain_per_s": 30, "backlash_um": 3, "spike_um": 4, "spike_decay_deg": 5, "cyclic_um": 0.5, "pitch_mm": 10}}' > "$corpus/json/servo"
+printf '\x0e{"kind": "circular compensation", "plane": "XY", "backlash_um": {"X": {"value": 3}, "Y": {"value": 5}}, "squareness_um_per_m": {"value": 12}}' > "$corpus/json/compensation"
 printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
 find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
 # Inputs the fuzzers once found a problem with (kept in tests/data/fuzz), so each run starts there.

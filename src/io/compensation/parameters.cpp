@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 
@@ -122,7 +123,7 @@ AxisValues parse_linuxcnc_backlash(std::string text, const std::string& path) {
       const std::string_view name = s.substr(1, s.size() - 2);
       joint = -1;
       if (name.substr(0, 6) == "JOINT_")
-        joint = static_cast<int>(integer(name.substr(6), b + 7, fail));
+        joint = static_cast<int>(std::clamp(integer(name.substr(6), b + 7, fail), -1L, 1000L));
       return;
     }
     const std::size_t eq = s.find('=');
@@ -170,7 +171,7 @@ AxisValues parse_heidenhain_backlash(std::string text, const std::string& path) 
     const std::size_t col = b + static_cast<std::size_t>(value.data() - s.data());
     const double x = number(value, col, fail);
     if (std::abs(x) > 1) fail(col, "MP710 takes −1 … +1 mm");
-    set_once(v, static_cast<int>(axis), x, path, line, b);
+    set_once(v, static_cast<int>(std::clamp(axis, -1L, 3L)), x, path, line, b);
   });
   return nonempty(v, path, "MP710.x");
 }
@@ -232,7 +233,8 @@ AxisValues parse_fanuc_backlash(std::string text, const std::string& path, doubl
     const long axis = integer(t.substr(a + 1, p - a - 1), b + a + 1, fail);
     const long value = integer(t.substr(p + 1), b + p + 1, fail);
     if (value < -9999 || value > 9999) fail(b + p + 1, "No. 1851 takes −9999 … 9999");
-    set_once(v, static_cast<int>(axis) - 1, static_cast<double>(value) * unit, path, line, b);
+    set_once(v, static_cast<int>(std::clamp(axis, 0L, 4L)) - 1, static_cast<double>(value) * unit,
+             path, line, b);
   });
   if (percents != 2)
     throw Error(fmt::format("{}: a FANUC tape starts and ends with a '%' line", path));
@@ -377,6 +379,7 @@ CrossTable parse_sinumerik_cec(std::string text, const std::string& path) {
     }
     const Assignment a = assignment(s, b, fail);
     const long table = integer(a.index[0], b + a.name.size() + 1, fail);
+    if (table < 0 || table > 1000) fail(b, fmt::format("table {}: 0 … 1000", table));
     if (t.table < 0) t.table = static_cast<int>(table);
     if (table != t.table) fail(b, fmt::format("table {}: one table per file is read here", table));
     if (a.name == "$AN_CEC") {
