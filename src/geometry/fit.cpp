@@ -330,7 +330,9 @@ bool quadric_axis(const Eigen::Matrix3Xd& p, const Eigen::Vector3d& centroid, Ei
   const Eigen::VectorXd c = svd.matrixV().col(9);
   Eigen::Matrix3d A;
   A << c[0], c[3], c[4], c[3], c[1], c[5], c[4], c[5], c[2];
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(A);
+  // The library's one instance of the solver (eigen_instances.hpp): a 3 × 3 instance of its own
+  // cost ~6 s of compilation per compiler.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd{A});
   const Eigen::Vector3d e = es.eigenvalues();  // ascending
   w = es.eigenvectors().col(e[1] - e[0] < e[2] - e[1] ? 2 : 0);
   return w.allFinite() && w.norm() > 0.5;
@@ -634,7 +636,9 @@ Fit fit(Element element, const Eigen::Matrix3Xd& p) {
       // settles the last digits. A cap too shallow for that, or a start that does not
       // converge, goes through Levenberg–Marquardt on the QR of J as before.
       auto well_conditioned = [&](const Mat4& A) {
-        const Eigen::SelfAdjointEigenSolver<Mat4> es(A, Eigen::EigenvaluesOnly);
+        // The library's one instance of the solver (eigen_instances.hpp), as above.
+        const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es(Eigen::MatrixXd{A},
+                                                                Eigen::EigenvaluesOnly);
         const Vec4& ev = es.eigenvalues();
         return ev[0] > 0 && ev[3] < kNormalConditionLimit * ev[0];
       };
