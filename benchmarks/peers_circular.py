@@ -19,22 +19,11 @@ import math
 import os
 import sys
 import tempfile
-import time
 
 import numpy as np
 
 import trueaxis as ta
-
-
-def best(f, budget=2.0, most=30):
-    t, out, spent = [], None, 0.0
-    while len(t) < most and (len(t) < 3 or spent < budget):
-        t0 = time.perf_counter()
-        out = f()
-        dt = time.perf_counter() - t0
-        t.append(dt)
-        spent += dt
-    return min(t), out
+from peers_timing import best
 
 
 def design(trace, radius, feed, decay_deg, delays_deg):
@@ -70,11 +59,11 @@ def main():
         m = ta.Machine.random(seed=1)
         trace, truth = ta.simulate_circular(m, feed=750, servo=servo, noise=0.1, sample_rate=rate)
     n = len(trace["angle_deg"])
-    t_ta, r = best(lambda: ta.circular(trace, feed=750))
+    t_ta, r = best(lambda: ta.circular(trace, feed=750), most=30)
     J = design(trace, 100.0, 750.0, r["spike_decay_deg"],
                (r["reversal_delay_deg"]["X"], r["reversal_delay_deg"]["Y"]))
     y = np.asarray(trace["deviation_um"]) * 1e-3
-    t_np, sol = best(lambda: np.linalg.lstsq(J, y, rcond=None))
+    t_np, sol = best(lambda: np.linalg.lstsq(J, y, rcond=None), most=30)
     beta = sol[0]
     diff = max(abs(beta[8] * 1e3 - r["diagnosis"]["backlash.X"]["value"]),
                abs(beta[9] * 1e3 - r["diagnosis"]["backlash.Y"]["value"]))

@@ -17,23 +17,12 @@ and how far the diameters are apart. The cylinder's ratio to the sphere fit of a
 the other figure of interest (target: at most 10).
 """
 import sys
-import time
 
 import numpy as np
 from scipy.optimize import least_squares
 
 import trueaxis as ta
-
-
-def best(f, budget=2.0, most=50):
-    t, out, spent = [], None, 0.0
-    while len(t) < most and (len(t) < 2 or spent < budget):
-        t0 = time.perf_counter()
-        out = f()
-        dt = time.perf_counter() - t0
-        t.append(dt)
-        spent += dt
-    return min(t), out
+from peers_timing import best
 
 
 def sphere_points(n, rng):
@@ -118,13 +107,13 @@ def main():
     for n in sizes:
         sp = sphere_points(n, rng)
         cp = cylinder_points(n, rng)
-        t_s, fs = best(lambda: ta.fit("sphere", sp))
+        t_s, fs = best(lambda: ta.fit("sphere", sp), least=2)
         rows = [("sphere", t_s, fs["diameter"], lambda m: scipy_sphere(sp, m))]
-        t_c, fc = best(lambda: ta.fit("cylinder", cp))
+        t_c, fc = best(lambda: ta.fit("cylinder", cp), least=2)
         rows.append(("cylinder", t_c, fc["diameter"], lambda m: scipy_cylinder(cp, m)))
         for name, t, d, peer in rows:
-            t_lm, d_lm = best(lambda: peer("lm"), budget=1.0, most=10)
-            t_trf, _ = best(lambda: peer("trf"), budget=1.0, most=10)
+            t_lm, d_lm = best(lambda: peer("lm"), budget=1.0, most=10, least=2)
+            t_trf, _ = best(lambda: peer("trf"), budget=1.0, most=10, least=2)
             print(f"{name:9s} {n:8d} {t * 1e3:9.3f}ms {t_lm * 1e3:9.3f}ms {t_lm / t:6.1f} "
                   f"{t_trf * 1e3:9.3f}ms {t_trf / t:6.1f}  {abs(d - d_lm):.1e}")
         print(f"{'':9s} {n:8d} cylinder / sphere fit of as many points: {t_c / t_s:.1f}")

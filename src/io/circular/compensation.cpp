@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 
 #include "trueaxis/compensation/table.hpp"
@@ -66,37 +67,41 @@ CompensationFiles write_compensation_files(const std::string& folder,
   backlash[static_cast<std::size_t>(a)] = c.backlash[0].value;
   backlash[static_cast<std::size_t>(b)] = c.backlash[1].value;
 
-  // Backlash, four controllers.
-  if (c.backlash[0].value < 0 || c.backlash[1].value < 0) {
-    out.not_written.push_back({"LinuxCNC", "backlash",
-                               "a negative backlash (the axis overshoots) has no LinuxCNC value"});
-  } else {
-    const std::string p = in("linuxcnc-backlash.ini");
-    write_linuxcnc_backlash(p, backlash, note);
-    const double d = difference(backlash, read_linuxcnc_backlash(p), p);
-    check(d, 1e-6, p);
-    out.written.push_back({"LinuxCNC", "backlash ([JOINT_n] BACKLASH)", p, d});
-  }
-  {
-    const std::string p = in("heidenhain-backlash.mp");
-    write_heidenhain_backlash(p, backlash, note);
-    const double d = difference(backlash, read_heidenhain_backlash(p), p);
-    check(d, 0.5e-4, p);
-    out.written.push_back({"HEIDENHAIN", "backlash (MP710.x / backLash)", p, d});
-  }
-  {
-    const std::string p = in("fanuc-backlash.txt");
-    write_fanuc_backlash(p, backlash, o.fanuc_detection_unit, note);
-    const double d = difference(backlash, read_fanuc_backlash(p, o.fanuc_detection_unit), p);
-    check(d, o.fanuc_detection_unit / 2 * (1 + 1e-9), p);
-    out.written.push_back({"FANUC", "backlash (No. 1851, rounded to the detection unit)", p, d});
-  }
-  {
-    const std::string p = in("siemens-backlash.ini");
-    write_sinumerik_backlash(p, backlash, note);
-    const double d = difference(backlash, read_sinumerik_backlash(p), p);
-    check(d, 1e-6, p);
-    out.written.push_back({"Siemens", "backlash (MD32450 BACKLASH)", p, d});
+  // Backlash, four controllers: each file written, read back and compared within the format's
+  // resolution (mm).
+  struct Format {
+    const char *controller, *what, *file;
+    std::function<void(const std::string&)> write;
+    std::function<AxisValues(const std::string&)> read;
+    double resolution;
+  };
+  const double unit = o.fanuc_detection_unit;
+  const std::vector<Format> formats{
+      {"LinuxCNC", "backlash ([JOINT_n] BACKLASH)", "linuxcnc-backlash.ini",
+       [&](const std::string& p) { write_linuxcnc_backlash(p, backlash, note); },
+       [](const std::string& p) { return read_linuxcnc_backlash(p); }, 1e-6},
+      {"HEIDENHAIN", "backlash (MP710.x / backLash)", "heidenhain-backlash.mp",
+       [&](const std::string& p) { write_heidenhain_backlash(p, backlash, note); },
+       [](const std::string& p) { return read_heidenhain_backlash(p); }, 0.5e-4},
+      {"FANUC", "backlash (No. 1851, rounded to the detection unit)", "fanuc-backlash.txt",
+       [&](const std::string& p) { write_fanuc_backlash(p, backlash, unit, note); },
+       [&](const std::string& p) { return read_fanuc_backlash(p, unit); }, unit / 2 * (1 + 1e-9)},
+      {"Siemens", "backlash (MD32450 BACKLASH)", "siemens-backlash.ini",
+       [&](const std::string& p) { write_sinumerik_backlash(p, backlash, note); },
+       [](const std::string& p) { return read_sinumerik_backlash(p); }, 1e-6}};
+  for (const Format& f : formats) {
+    if (std::string(f.controller) == "LinuxCNC" &&
+        (c.backlash[0].value < 0 || c.backlash[1].value < 0)) {
+      out.not_written.push_back(
+          {f.controller, "backlash",
+           "a negative backlash (the axis overshoots) has no LinuxCNC value"});
+      continue;
+    }
+    const std::string p = in(f.file);
+    f.write(p);
+    const double d = difference(backlash, f.read(p), p);
+    check(d, f.resolution, p);
+    out.written.push_back({f.controller, f.what, p, d});
   }
 
   // Squareness: a cross-axis table, a's correction over b's position.
