@@ -367,7 +367,6 @@ class Search {
     FF_ = F.transpose() * F;
     Fy_ = Fz.col(0);
     yy_ = Z_.rightCols(1).squaredNorm();
-    spacing_ = 4 * kPi / static_cast<double>(std::max<Eigen::Index>(x_.size(), 1));
   }
   double rss(double decay, const std::array<double, 2>& delay) {
     varying_matrix(x_, decay, delay, ccw_, cw_, Z_.middleCols(pf_, pv_));
@@ -383,7 +382,9 @@ class Search {
     return solve_normal(N, c, yy_, false).rss;
   }
   // The mean angle between the samples searched over (rad): finer delays cannot be told apart.
-  double spacing() const { return spacing_; }
+  double spacing() const {
+    return 4 * kPi / static_cast<double>(std::max<Eigen::Index>(x_.size(), 1));
+  }
 
  private:
   bool ccw_, cw_;
@@ -391,7 +392,7 @@ class Search {
   Eigen::Index pf_ = 0, pv_ = 0;
   Eigen::MatrixXd Z_, FF_;
   Eigen::VectorXd Fy_;
-  double yy_ = 0, spacing_ = 0;
+  double yy_ = 0;
 };
 
 }  // namespace

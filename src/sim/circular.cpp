@@ -226,10 +226,11 @@ CircularTruth circular_truth(const Machine& machine, const CircularOptions& o) {
   t.backlash = {sa.backlash - o.compensation.backlash[static_cast<std::size_t>(a)],
                 sb.backlash - o.compensation.backlash[static_cast<std::size_t>(b)]};
   // A cross table adding slope·b to a's command leaves e_a = −(S − slope)·b.
-  if (o.compensation.cross_output == a && o.compensation.cross_input == b)
-    t.squareness -= o.compensation.cross_slope;
-  else if (o.compensation.cross_output == b && o.compensation.cross_input == a)
-    t.squareness -= o.compensation.cross_slope;
+  // Either way round (b corrected over a turns +a towards +b) it takes the slope off S.
+  const auto& cc = o.compensation;
+  if ((cc.cross_output == a && cc.cross_input == b) ||
+      (cc.cross_output == b && cc.cross_input == a))
+    t.squareness -= cc.cross_slope;
   t.spike = {sa.spike, sb.spike};
   return t;
 }

@@ -510,6 +510,27 @@ TEST(Circular, EachAxisReversesAfterItsOwnDelay) {
   const auto back = io::read_circular_result(path).result;
   EXPECT_NEAR(back.reversal_delay[0], r.reversal_delay[0], 1e-12);
   EXPECT_NEAR(back.reversal_delay[1], r.reversal_delay[1], 1e-12);
+  // A delay that is not a number is refused where it stands; one number (older files) is both.
+  std::string text = test::read_file(path);
+  const std::string key = "\"reversal_delay_deg\": {";
+  const auto at = text.find(key);
+  ASSERT_NE(at, std::string::npos);
+  const auto close = text.find('}', at);
+  const std::string bad =
+      text.substr(0, at) + key + "\"X\": \"fast\", \"Y\": 0.1" + text.substr(close);
+  EXPECT_NE(test::error_of([&] {
+              io::read_circular_result(test::temp_file("bad.json", bad));
+            }).find("bad.json:"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([&] {
+              io::read_circular_result(test::temp_file("bad.json", bad));
+            }).find("reversal_delay_deg.X"),
+            std::string::npos);
+  const std::string old_form =
+      text.substr(0, at) + "\"reversal_delay_deg\": 0.5" + text.substr(close + 1);
+  const auto older = io::read_circular_result(test::temp_file("old.json", old_form)).result;
+  EXPECT_NEAR(older.reversal_delay[0], 0.5 * kPi / 180, 1e-15);
+  EXPECT_NEAR(older.reversal_delay[1], 0.5 * kPi / 180, 1e-15);
   // At this speed the first-order lag model leaves ~0.06 µm, and a slowly decaying "spike" can
   // take part of a backlash step: the two together are the step.
   for (const char* axis : {"X", "Y"}) {

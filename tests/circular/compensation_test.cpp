@@ -225,3 +225,27 @@ TEST(ControllerParameters, BadFilesAreRefusedWhereTheyAreWrong) {
   EXPECT_THROW(io::write_fanuc_backlash(dir + "/f.txt", big, 1e-4), Error);  // 20000 units
   EXPECT_THROW(io::write_sinumerik_backlash(dir + "/s.ini", io::AxisValues{}), Error);
 }
+
+// compensation.json read back: what is not one is refused where it is wrong.
+TEST(CircularCompensation, BadCompensationFilesAreRefusedWhereTheyAreWrong) {
+  auto file = [&](const std::string& name, const std::string& text) {
+    return test::temp_file(name, text);
+  };
+  const std::string kind =
+      file("kind.json", "{\n \"kind\": \"circular\",\n \"plane\": \"XY\"\n}\n");
+  refused_at([&] { io::read_compensation_json(kind); },
+             kind + ":2:10:", "not a circular test's compensation");
+  const std::string plane =
+      file("plane.json", "{\"kind\": \"circular compensation\", \"plane\": \"XZ\"}\n");
+  refused_at([&] { io::read_compensation_json(plane); }, plane + ":1:44:", "XY, YZ or ZX");
+  const std::string value = file(
+      "value.json",
+      "{\"kind\": \"circular compensation\", \"plane\": \"XY\",\n \"backlash_um\": {\"X\": "
+      "{\"value\": \"3\"}, \"Y\": {\"value\": 5}}, \"squareness_um_per_m\": {\"value\": 1}}\n");
+  refused_at([&] { io::read_compensation_json(value); }, value + ":2:33:", "backlash_um.X.value");
+  const std::string missing =
+      file("missing.json",
+           "{\"kind\": \"circular compensation\", \"plane\": \"XY\",\n \"backlash_um\": {\"X\": "
+           "{\"value\": 3}, \"Y\": {\"value\": 5}}}\n");
+  refused_at([&] { io::read_compensation_json(missing); }, missing + ":", "squareness_um_per_m");
+}

@@ -74,27 +74,28 @@ CompensationFiles write_compensation_files(const std::string& folder,
     std::function<void(const std::string&)> write;
     std::function<AxisValues(const std::string&)> read;
     double resolution;
+    bool takes_negative;  // a backlash < 0 (the axis overshoots) has a value in this format
   };
   const double unit = o.fanuc_detection_unit;
   const std::vector<Format> formats{
       {"LinuxCNC", "backlash ([JOINT_n] BACKLASH)", "linuxcnc-backlash.ini",
        [&](const std::string& p) { write_linuxcnc_backlash(p, backlash, note); },
-       [](const std::string& p) { return read_linuxcnc_backlash(p); }, 1e-6},
+       [](const std::string& p) { return read_linuxcnc_backlash(p); }, 1e-6, false},
       {"HEIDENHAIN", "backlash (MP710.x / backLash)", "heidenhain-backlash.mp",
        [&](const std::string& p) { write_heidenhain_backlash(p, backlash, note); },
-       [](const std::string& p) { return read_heidenhain_backlash(p); }, 0.5e-4},
+       [](const std::string& p) { return read_heidenhain_backlash(p); }, 0.5e-4, true},
       {"FANUC", "backlash (No. 1851, rounded to the detection unit)", "fanuc-backlash.txt",
        [&](const std::string& p) { write_fanuc_backlash(p, backlash, unit, note); },
-       [&](const std::string& p) { return read_fanuc_backlash(p, unit); }, unit / 2 * (1 + 1e-9)},
+       [&](const std::string& p) { return read_fanuc_backlash(p, unit); }, unit / 2 * (1 + 1e-9),
+       true},
       {"Siemens", "backlash (MD32450 BACKLASH)", "siemens-backlash.ini",
        [&](const std::string& p) { write_sinumerik_backlash(p, backlash, note); },
-       [](const std::string& p) { return read_sinumerik_backlash(p); }, 1e-6}};
+       [](const std::string& p) { return read_sinumerik_backlash(p); }, 1e-6, true}};
   for (const Format& f : formats) {
-    if (std::string(f.controller) == "LinuxCNC" &&
-        (c.backlash[0].value < 0 || c.backlash[1].value < 0)) {
+    if (!f.takes_negative && (c.backlash[0].value < 0 || c.backlash[1].value < 0)) {
       out.not_written.push_back(
           {f.controller, "backlash",
-           "a negative backlash (the axis overshoots) has no LinuxCNC value"});
+           fmt::format("a negative backlash (the axis overshoots) has no {} value", f.controller)});
       continue;
     }
     const std::string p = in(f.file);
