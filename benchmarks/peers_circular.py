@@ -41,9 +41,9 @@ def design(trace, radius, feed, decay_deg, delays_deg):
         for direction in (1.0, -1.0):
             total = np.zeros_like(th)
             first = (0.0 if axis == 0 else np.pi / 2) + direction * (da if axis == 0 else db)
-            for at in (first, first + np.pi):
+            for at in (first, first + np.pi):  # the axis' last two reversals
                 dt = np.mod(w - at if direction > 0 else at - w, 2 * np.pi)
-                total += np.where(dt < 12 * d, np.exp(-dt / d), 0.0)
+                total += np.exp(-dt / d)
             total *= np.abs(c if axis == 0 else sn)
             cols.append(np.where(s == direction, total, 0.0))
     return np.stack(cols, axis=1)

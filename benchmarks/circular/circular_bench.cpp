@@ -65,6 +65,6 @@ void BM_LeastSquaresOfTheSameSize(benchmark::State& st) {
 
 }  // namespace
 
-BENCHMARK(BM_CircularAnalysis)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_CircularAnalysisWithoutSearch)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CircularAnalysis)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CircularAnalysisWithoutSearch)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_LeastSquaresOfTheSameSize)->Unit(benchmark::kMillisecond);

@@ -6,6 +6,7 @@
 #include <pybind11/eigen.h>
 #include <pybind11/stl.h>
 
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <variant>
@@ -41,16 +42,25 @@ circular::Trace trace_of(const std::variant<std::string, py::dict>& input,
     throw Error("trace: direction, angle_deg and deviation_um differ in length");
   circular::Trace t;
   t.direction.reserve(dir.size());
+  // Compared in place, through the list's own item array when it is one: no string and no new
+  // reference made per sample (10⁵ of them in a long trace).
+  const py::object items = py::reinterpret_steal<py::object>(
+      PySequence_Fast(dir.ptr(), "trace: direction must be a sequence"));
+  if (!items) throw py::error_already_set();
+  PyObject** item = PySequence_Fast_ITEMS(items.ptr());
+  auto is = [](PyObject* o, const char* text, std::size_t size) {
+    return PyUnicode_Check(o) && PyUnicode_KIND(o) == PyUnicode_1BYTE_KIND &&
+           static_cast<std::size_t>(PyUnicode_GET_LENGTH(o)) == size &&
+           std::memcmp(PyUnicode_1BYTE_DATA(o), text, size) == 0;
+  };
   for (std::size_t k = 0; k < dir.size(); ++k) {
-    // Compared in place: no string made per sample (10⁵ of them in a long trace).
-    const py::object item = dir[k];
-    if (PyUnicode_Check(item.ptr()) && PyUnicode_CompareWithASCIIString(item.ptr(), "ccw") == 0)
+    if (is(item[k], "ccw", 3))
       t.direction.push_back(circular::Direction::Ccw);
-    else if (PyUnicode_Check(item.ptr()) && PyUnicode_CompareWithASCIIString(item.ptr(), "cw") == 0)
+    else if (is(item[k], "cw", 2))
       t.direction.push_back(circular::Direction::Cw);
     else
       throw Error(fmt::format("trace: direction[{}] = {}: use 'ccw' or 'cw'", k,
-                              py::repr(item).cast<std::string>()));
+                              py::repr(py::handle(item[k])).cast<std::string>()));
   }
   t.angle = angle * kDegree;
   t.deviation = dev * 1e-3;
@@ -90,6 +100,10 @@ py::dict result_dict(std::shared_ptr<const circular::Result> rp,
   d["diagnosis"] = causes;
   d["unexplained_rms_um"] = r.unexplained_rms * 1e3;
   d["spike_decay_deg"] = r.spike_decay / kDegree;
+  d["spike_decay_u_deg"] =
+      r.spike_decay_u ? py::object(py::float_(*r.spike_decay_u / kDegree)) : py::object(py::none());
+  if (!r.spike_decay_u) d["spike_decay_note"] = r.spike_decay_note;
+  d["reversal_delay_resolution_deg"] = r.reversal_delay_resolution / kDegree;
   py::dict delay;
   delay[py::str(std::string(1, "XYZ"[r.plane.a]))] = r.reversal_delay[0] / kDegree;
   delay[py::str(std::string(1, "XYZ"[r.plane.b]))] = r.reversal_delay[1] / kDegree;
@@ -173,7 +187,9 @@ the ballbar's calibrated length); feed (mm/min); spike_decay (degrees; 0: found 
 pitch: (first, second) ball screw pitches (mm) to fit cyclic errors of. Returns {'G_um': {'ccw',
 'cw'}, 'F_um': {'ccw': {'min', 'max'}, ...}, 'H_um', 'diagnosis': {key: {'name', 'unit',
 'value', 'u', 'share', 'separated'}} (value and u None where the data cannot tell the cause
-from another, named in 'not_separated_from'), 'unexplained_rms_um', 'spike_decay_deg',
+from another, named in 'not_separated_from'), 'unexplained_rms_um', 'spike_decay_deg' and
+'spike_decay_u_deg' (None, with 'spike_decay_note', when given or not resolved),
+'reversal_delay_deg' per axis and 'reversal_delay_resolution_deg' (the samples' spacing),
 'model_um', 'residual_um' (per sample), 'warnings', 'summary'}. trueaxis.save() writes
 circular.json. compensation: a folder to write the backlash and squareness compensation to for
 LinuxCNC, HEIDENHAIN, FANUC and Siemens, as 'trueaxis circular --compensation' (with

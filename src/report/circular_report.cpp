@@ -28,11 +28,15 @@ Section circular_section(const std::string& title, const circular::Result& r,
       "when the actual +{} and +{} make more than 90° (the 45° diagonal comes out short); the "
       "scale mismatch is {}'s scale error less {}'s; the lag mismatch {}'s following lag less "
       "{}'s; backlash is positive when an axis stops short; reversal spikes are positive "
-      "outward, decaying over {:.1f}° of the circle; {} reverses {:.2f}° and {} {:.2f}° after the "
-      "command (their following lags' phase).</p>",
+      "outward, decaying over {:.1f}° of the circle{}; {} reverses {:.2f}° and {} {:.2f}° after "
+      "the "
+      "command (their following lags' phase; the samples, {:.2f}° apart, resolve no finer).</p>",
       plane, r.radius, r.feed, plane[0], plane[1], plane[0], plane[1], plane[0], plane[1], plane[0],
-      plane[1], r.spike_decay / kDeg, plane[0], r.reversal_delay[0] / kDeg, plane[1],
-      r.reversal_delay[1] / kDeg);
+      plane[1], r.spike_decay / kDeg,
+      r.spike_decay_u ? fmt::format(" (u {:.2f}°)", *r.spike_decay_u / kDeg)
+                      : fmt::format(" ({})", report::escape(r.spike_decay_note)),
+      plane[0], r.reversal_delay[0] / kDeg, plane[1], r.reversal_delay[1] / kDeg,
+      r.reversal_delay_resolution / kDeg);
   s.table.push_back({"direction", "G (µm)", "F min (µm)", "F max (µm)", "samples"});
   for (const auto* d : {&r.ccw, &r.cw})
     if (d->present)

@@ -29,6 +29,13 @@ def test_circular_from_python_and_from_the_command_line(tmp_path):
     assert d["lag_mismatch"]["value"] == pytest.approx(truth["lag_mismatch_ms"], rel=0.02)
     assert d["lag_mismatch"]["unit"] == "ms" and d["lag_mismatch"]["u"] > 0
     assert r["G_um"]["ccw"] > 0 and r["H_um"] > 0 and len(r["residual_um"]) == len(trace["angle_deg"])
+    assert r["spike_decay_u_deg"] > 0 and "spike_decay_note" not in r  # Y's 3 µm spike over 6°
+    assert r["spike_decay_deg"] == pytest.approx(6, abs=1.5)
+    assert 0 < r["reversal_delay_resolution_deg"] < 0.2
+    # The directions as a tuple or a numpy array of str: the same diagnosis.
+    for directions in (tuple(trace["direction"]), np.array(trace["direction"])):
+        again = trueaxis.circular(dict(trace, direction=directions), plane="XY", radius=100, feed=1000)
+        assert again["diagnosis"]["backlash.X"]["value"] == d["backlash.X"]["value"]
     # The same trace as a file through the command line: the same figures.
     csv = tmp_path / "trace.csv"
     with open(csv, "w") as f:
@@ -54,6 +61,11 @@ def test_circular_refuses_what_is_not_a_test(tmp_path):
         trueaxis.circular({"direction": ["ccw"], "angle_deg": [0], "deviation_um": [0]}, plane="XZ")
     with pytest.raises(trueaxis.Error, match="use 'ccw' or 'cw'"):
         trueaxis.circular({"direction": ["up"], "angle_deg": [0], "deviation_um": [0]})
+    for bad in (b"ccw", "ccw ", "cẃ", 1):  # bytes, a trailing space, not ASCII, not text
+        with pytest.raises(trueaxis.Error, match=r"direction\[1\] = .*use 'ccw' or 'cw'"):
+            trueaxis.circular({"direction": ["cw", bad], "angle_deg": [0, 1], "deviation_um": [0, 0]})
+    with pytest.raises(TypeError, match="sequence"):
+        trueaxis.circular({"direction": 5, "angle_deg": [0], "deviation_um": [0]})
     with pytest.raises(trueaxis.Error, match="at least 36"):
         trueaxis.circular({"direction": ["ccw"] * 5, "angle_deg": list(range(5)), "deviation_um": [0] * 5})
     with pytest.raises(trueaxis.Error, match="directions"):

@@ -119,9 +119,19 @@ struct Result {
   std::optional<double> H;    // mm, with both directions
   std::vector<Cause> causes;  // in the order of the list in the header, then ranked by share
   double spike_decay = 0;     // rad, as used
+  // The decay's standard uncertainty (rad) when it was found from the data: that of the search
+  // that found it (over a weighted subset of the samples when there are many), from how the
+  // residuals change with it, the sizes refitted at each decay (the delays held).
+  // Absent, with the reason in spike_decay_note, when the decay was given or the data do not
+  // resolve it (no spike stands out of the noise, or the best fit is at the end of the range).
+  std::optional<double> spike_decay_u;
+  std::string spike_decay_note;
   std::array<double, 2> reversal_delay{};  // rad per axis a, b, as used
-  double unexplained_rms = 0;              // mm
-  double sigma = 0;                        // mm, the residuals' standard deviation used for the u
+  // What the samples resolve of a delay (rad): the median angle between successive samples of
+  // one direction. A delay found from the data is known to about this, no better.
+  double reversal_delay_resolution = 0;
+  double unexplained_rms = 0;  // mm
+  double sigma = 0;            // mm, the residuals' standard deviation used for the u
   // The fitted model and its residual per sample (mm), in the trace's order.
   Eigen::VectorXd model, residual;
   std::vector<std::string> warnings;

@@ -298,6 +298,9 @@ void write_circular_result(const std::string& path, const circular::Result& r,
     *at = v;
   }
   diag["spike_decay_deg"] = r.spike_decay / kDegree;
+  diag["spike_decay_u_deg"] = r.spike_decay_u ? ojson(*r.spike_decay_u / kDegree) : ojson(nullptr);
+  if (!r.spike_decay_u) diag["spike_decay_note"] = r.spike_decay_note;
+  diag["reversal_delay_resolution_deg"] = r.reversal_delay_resolution / kDegree;
   diag["reversal_delay_deg"] = {{std::string(1, "XYZ"[r.plane.a]), r.reversal_delay[0] / kDegree},
                                 {std::string(1, "XYZ"[r.plane.b]), r.reversal_delay[1] / kDegree}};
   diag["unexplained_rms_um"] = r.unexplained_rms * 1e3;
@@ -443,6 +446,11 @@ CircularFile read_circular_result(const std::string& path) {
     walk(diag / k, base, unit);
   }
   if (f.has(diag / "spike_decay_deg")) r.spike_decay = f.number(diag / "spike_decay_deg") * kDegree;
+  if (f.has(diag / "spike_decay_u_deg") && !f.root().at(diag / "spike_decay_u_deg").is_null())
+    r.spike_decay_u = f.number(diag / "spike_decay_u_deg") * kDegree;
+  if (f.has(diag / "spike_decay_note")) r.spike_decay_note = f.string(diag / "spike_decay_note");
+  if (f.has(diag / "reversal_delay_resolution_deg"))
+    r.reversal_delay_resolution = f.number(diag / "reversal_delay_resolution_deg") * kDegree;
   if (f.has(diag / "reversal_delay_deg")) {  // per axis; one number (files of 2026-11) for both
     const auto at = diag / "reversal_delay_deg";
     if (f.root().at(at).is_number()) {
