@@ -102,6 +102,8 @@ std::vector<Command> add_circular_commands(CLI::App& app, CLI::App& simulate);
 
 // ipp check (ipp_cmds.cpp).
 std::vector<Command> add_ipp_commands(CLI::App& app);
+// 'acceptance e0', 'acceptance probing'.
+std::vector<Command> add_acceptance_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);
 
 // The grammar every command shares (grammar.cpp). apply_grammar: once every command is added,

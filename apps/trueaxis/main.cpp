@@ -10,7 +10,9 @@
 
 #include "commands.hpp"
 #include "moody_data.hpp"
+#include "trueaxis/acceptance/acceptance.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/acceptance/acceptance.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/files.hpp"
 #include "trueaxis/io/positioning/positioning.hpp"
@@ -150,8 +152,15 @@ int cmd_examples(const std::string& dir, bool force, bool quiet) {
   for (const auto& [name, text] : cli::example_files()) files.emplace_back(root / name, text);
   for (const auto& [name, text] : cli::moody_files())
     files.emplace_back(root / "plate" / std::string(name), text);
+  // The CMM acceptance set-up fits the volume of the machine 'simulate machine' makes.
+  const fs::path setup = root / "acceptance.json";
   if (!force)
-    for (const auto& [path, text] : files)
+    for (const auto& path : [&] {
+           std::vector<fs::path> all;
+           for (const auto& f : files) all.push_back(f.first);
+           all.push_back(setup);
+           return all;
+         }())
       if (fs::exists(path))
         throw Error(fmt::format("{}: exists; nothing was written (use --force to overwrite)",
                                 path.string()));
@@ -159,10 +168,17 @@ int cmd_examples(const std::string& dir, bool force, bool quiet) {
   for (const auto& [path, text] : files) {
     io::write_text(path.string(), text);
   }
+  sim::Machine volume;
+  const sim::MachineOptions defaults;
+  volume.range = defaults.range;
+  volume.offset = defaults.offset;
+  io::write_acceptance_setup(setup.string(),
+                             acceptance::example_setup(acceptance::Volume::of(volume)));
   if (!quiet)
     fmt::print(
         "wrote the example inputs in {}: lines.json, plan.json, points.csv, commands.csv, "
-        "layout.json, cylinder.csv, ipp_simple.stp and plate/ (Moody's 1955 surface plate)\n",
+        "layout.json, cylinder.csv, ipp_simple.stp, acceptance.json (CMM acceptance artefacts) "
+        "and plate/ (Moody's 1955 surface plate)\n",
         dir);
   return 0;
 }
@@ -303,6 +319,7 @@ int main(int argc, char** argv) {
   for (auto& c : cli::add_scan_commands(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_serve_command(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_ipp_commands(app)) machine_cmds.push_back(std::move(c));
+  for (auto& c : cli::add_acceptance_commands(app)) machine_cmds.push_back(std::move(c));
 
   // report -----------------------------------------------------------------------------------
   std::string rin, rout = "report.html";

@@ -39,5 +39,7 @@ void bind_scan(pybind11::module_& m);
 void bind_positioning(pybind11::module_& m);
 // Circular tests with a ballbar, ISO 230-4, and the virtual test (circular.cpp).
 void bind_circular(pybind11::module_& m);
+// CMM acceptance tests, ISO 10360-2 and -5, on the virtual CMM (acceptance.cpp).
+void bind_acceptance(pybind11::module_& m);
 
 }  // namespace trueaxis::python

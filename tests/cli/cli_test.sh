@@ -339,7 +339,7 @@ expect_code 2 "$T" simulate
 expect_code 0 "$T" help
 # 'trueaxis help' and 'trueaxis' alone: every command on a line of its own with its purpose.
 for c in separate surface simulate machine space compensate export guideway positioning fit \
-         ballgauge correct verify-lengths design scan serve ipp report demo examples help; do
+         ballgauge correct verify-lengths design scan serve ipp acceptance report demo examples help; do
   grep -Eq "^  $c +[a-zA-Z]" out.txt || bad "trueaxis help lists '$c' with its purpose"
 done
 [ "$(awk 'length > 100' out.txt | wc -l)" -eq 0 ] && ok || bad "the command list has lines of at most 100 characters"
@@ -728,6 +728,31 @@ grep -q "cw, before" circ-after.html && ok || bad "before and after on one polar
 expect_err "comp/compensation.json: a compensation for XY; this test runs in YZ" "$T" simulate circular --machine-seed 4 --plane YZ --compensation comp/compensation.json -o x.csv
 expect_err "a test in XY of radius 100 mm; this one is in XY of 50 mm" "$T" circular --input circ-after.csv --radius 50 -o x.json --before circ.json
 expect_code 2 "$T" circular --input circ.csv -o x.json --compensation comp --travel 600,0
+
+# CMM acceptance (ISO 10360-2, -5) on the virtual CMM of a machine file, with the example set-up.
+mkdir -p acc && (cd acc && "$T" examples -q) && ok || bad "examples for acceptance"
+expect_ok "$T" simulate machine --seed 3 -o acc/m.json
+expect_code 1 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "1.5+L/300" -o acc/e0.json
+grep -q "E0: 105 lengths in 7 positions; .*: does not conform -> acc/e0.json" out.txt && ok || bad "acceptance e0 summary: $(cat out.txt)"
+python3 -c "
+import json, sys
+r = json.load(open('acc/e0.json'))
+ok = r['kind'] == 'acceptance-e0' and len(r['lengths']) == 105 and r['pass'] is False
+ok = ok and r['E0_max_um'] == max(abs(l['error_um']) for l in r['lengths'])
+ok = ok and all(len(l['endpoints']) == 2 and len(l['endpoints'][0]) == 3 for l in r['lengths'])
+sys.exit(0 if ok else 1)" && ok || bad "acceptance e0 json"
+expect_ok "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "40" -o acc/e0-wide.json -q
+[ ! -s out.txt ] && ok || bad "acceptance e0 -q prints nothing on a pass"
+expect_code 0 "$T" acceptance probing --machine acc/m.json --artefacts acc/acceptance.json --mpe-form 1.8 --mpe-size 1.5 --lobing 0.5 --noise 0.1 -o acc/probing.json
+grep -q "PForm .* µm, PSize .*; PForm conforms" out.txt && ok || bad "acceptance probing: $(cat out.txt)"
+expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json -o x.json
+expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "fast" -o x.json
+grep -q "MPE 'fast'" err.txt && ok || bad "acceptance: a bad MPE named: $(cat err.txt)"
+python3 -c "
+import json; d = json.load(open('acc/acceptance.json')); d['placements'][0]['centre'][0] += 400
+json.dump(d, open('acc/outside.json', 'w'), indent=1)"
+expect_code 1 "$T" acceptance e0 --machine acc/m.json --artefacts acc/outside.json --mpe 3 -o x.json
+grep -q "outside the volume" err.txt && ok || bad "acceptance: a placement outside the volume: $(cat err.txt)"
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

@@ -1,0 +1,264 @@
+// An ISO 10360-2 set-up checked against the standard and the machine's volume (acceptance.hpp).
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "trueaxis/acceptance/acceptance.hpp"
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::acceptance {
+namespace {
+
+// Directions within 2° are one line's (as ballgauge::LengthOptions takes them).
+constexpr double kParallel = 0.99939;  // cos 2°
+
+// The closest distance between the segments p0–p1 and q0–q1 (mm).
+double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
+                        const Eigen::Vector3d& q0, const Eigen::Vector3d& q1) {
+  const Eigen::Vector3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
+  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
+  const double c = d1.dot(r), b = d1.dot(d2), den = a * e - b * b;
+  double s = den > 1e-12 * a * e ? std::clamp((b * f - c * e) / den, 0.0, 1.0) : 0.0;
+  double t = (b * s + f) / e;
+  if (t < 0) {
+    t = 0;
+    s = std::clamp(-c / a, 0.0, 1.0);
+  } else if (t > 1) {
+    t = 1;
+    s = std::clamp((b - c) / a, 0.0, 1.0);
+  }
+  return (p0 + s * d1 - (q0 + t * d2)).norm();
+}
+
+// The length of the line through p along unit d inside the volume (mm).
+double chord(const Volume& v, const Eigen::Vector3d& p, const Eigen::Vector3d& d) {
+  double lo = -INFINITY, hi = INFINITY;
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(d[a]) < 1e-12) continue;
+    double t0 = (v.low[a] - p[a]) / d[a], t1 = (v.high[a] - p[a]) / d[a];
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::max(lo, t0);
+    hi = std::min(hi, t1);
+  }
+  return hi > lo ? hi - lo : 0.0;
+}
+
+std::string xyz(const Eigen::Vector3d& v) {
+  return fmt::format("({:.1f}, {:.1f}, {:.1f})", v.x(), v.y(), v.z());
+}
+
+}  // namespace
+
+void Setup::validate() const {
+  if (placements.empty() && !sphere)
+    throw Error("acceptance set-up: no placements of calibrated lengths and no reference sphere");
+  if (!placements.empty() && blocks.empty())
+    throw Error("acceptance set-up: placements but no calibrated lengths (blocks)");
+  for (std::size_t i = 0; i < blocks.size(); ++i) {
+    const auto& b = blocks[i];
+    if (b.id.empty()) throw Error(fmt::format("block {}: no id", i + 1));
+    if (!(b.length > 0) || !std::isfinite(b.length))
+      throw Error(fmt::format("block '{}': the length must be > 0 mm", b.id));
+    if (!(b.u >= 0) || !std::isfinite(b.u) || !(b.u_alpha >= 0) || !std::isfinite(b.alpha))
+      throw Error(fmt::format("block '{}': uncertainties must be ≥ 0 and finite", b.id));
+    for (std::size_t j = 0; j < i; ++j)
+      if (blocks[j].id == b.id) throw Error(fmt::format("block '{}' is listed twice", b.id));
+  }
+  for (std::size_t i = 0; i < placements.size(); ++i) {
+    const auto& p = placements[i];
+    block(p.block);
+    if (!p.centre.allFinite() || !p.direction.allFinite() ||
+        std::abs(p.direction.norm() - 1) > 1e-9)
+      throw Error(
+          fmt::format("placement {} (block '{}'): the centre must be finite and the "
+                      "direction a unit vector",
+                      i + 1, p.block));
+  }
+  if (sphere && (!(sphere->diameter > 0) || !(sphere->u_diameter >= 0) || !(sphere->form >= 0) ||
+                 !sphere->centre.allFinite() || std::abs(sphere->pole.norm() - 1) > 1e-9))
+    throw Error("reference sphere: diameter > 0, u and form ≥ 0, a finite centre and a unit pole");
+  if (!(u_temperature >= 0) || !(u_alignment >= 0) || !std::isfinite(temperature))
+    throw Error("acceptance set-up: the temperature and its u, and the alignment's u, must be ≥ 0");
+  if (!(block_width > 0) || !(approach > 0))
+    throw Error("acceptance set-up: the block width and the approach must be > 0 mm");
+  if (repetitions < 1 || repetitions > 100)
+    throw Error("acceptance set-up: repetitions must be 1 … 100 (ISO 10360-2: 3)");
+}
+
+const GaugeBlock& Setup::block(const std::string& id) const {
+  for (const auto& b : blocks)
+    if (b.id == id) return b;
+  throw Error(fmt::format("no calibrated length '{}' in the set-up's blocks", id));
+}
+
+Volume Volume::of(const sim::Machine& m) {
+  Volume v;
+  for (int a = 0; a < 3; ++a) {
+    v.low[a] = m.range[static_cast<std::size_t>(a)][0] + m.offset[a];
+    v.high[a] = m.range[static_cast<std::size_t>(a)][1] + m.offset[a];
+  }
+  return v;
+}
+
+std::vector<Position> positions(const Setup& setup, const Volume& volume) {
+  setup.validate();
+  std::vector<std::string> why;
+  // Every face, approached from `approach` mm out, inside the volume.
+  for (std::size_t i = 0; i < setup.placements.size(); ++i) {
+    const auto& p = setup.placements[i];
+    const double half = setup.block(p.block).length / 2 + setup.approach;
+    for (const double s : {-1.0, 1.0}) {
+      const Eigen::Vector3d at = p.centre + s * half * p.direction;
+      if ((at.array() < volume.low.array() - 1e-9).any() ||
+          (at.array() > volume.high.array() + 1e-9).any())
+        why.push_back(fmt::format(
+            "placement {} (block '{}'): face {} approached from {} mm out is at {}, outside the "
+            "volume {} … {}",
+            i + 1, p.block, s < 0 ? "A" : "B", setup.approach, xyz(at), xyz(volume.low),
+            xyz(volume.high)));
+    }
+  }
+  // No two blocks of one position in one place (the positions are set up one after another):
+  // their axes closer than a block's width.
+  for (std::size_t i = 0; i < setup.placements.size(); ++i)
+    for (std::size_t j = 0; j < i; ++j) {
+      const auto& p = setup.placements[i];
+      const auto& q = setup.placements[j];
+      const bool together =
+          p.position.empty()
+              ? q.position.empty() && std::abs(p.direction.dot(q.direction)) >= kParallel
+              : p.position == q.position;
+      if (!together) continue;
+      const double hp = setup.block(p.block).length / 2, hq = setup.block(q.block).length / 2;
+      const double d = segment_distance(p.centre - hp * p.direction, p.centre + hp * p.direction,
+                                        q.centre - hq * q.direction, q.centre + hq * q.direction);
+      if (d < setup.block_width)
+        why.push_back(fmt::format(
+            "placements {} and {} (blocks '{}' and '{}') overlap: their axes come {:.1f} mm "
+            "apart, closer than a block's width ({:g} mm)",
+            j + 1, i + 1, q.block, p.block, d, setup.block_width));
+    }
+  // The lines.
+  std::vector<Position> out;
+  for (std::size_t i = 0; i < setup.placements.size(); ++i) {
+    const auto& p = setup.placements[i];
+    Position* home = nullptr;
+    for (auto& pos : out) {
+      const bool same = p.position.empty()
+                            ? std::abs(pos.direction.dot(p.direction)) >= kParallel &&
+                                  setup.placements[pos.placements.front()].position.empty()
+                            : pos.name == p.position;
+      if (same) home = &pos;
+    }
+    if (!home) {
+      Position pos;
+      pos.name = p.position.empty() ? ballgauge::direction_name(p.direction) : p.position;
+      pos.direction = p.direction;
+      out.push_back(pos);
+      home = &out.back();
+    }
+    if (std::abs(home->direction.dot(p.direction)) < kParallel)
+      why.push_back(fmt::format("placement {} (block '{}') is in position '{}' but not along it",
+                                i + 1, p.block, home->name));
+    home->placements.push_back(i);
+  }
+  // ISO 10360-2:2009, 6.3: 7 positions, the 4 space diagonals among them, 5 lengths in each,
+  // the longest at least 66 % of the space diagonal.
+  bool diagonal[4] = {false, false, false, false};
+  const double third = std::sin(20 * 3.14159265358979323846 / 180);
+  for (auto& pos : out) {
+    Eigen::Vector3d d = pos.direction;
+    if ((d.array().abs() > third).all()) {
+      if (d.z() < 0) d = -d;
+      pos.space_diagonal = true;
+      diagonal[(d.x() > 0 ? 0 : 1) + (d.y() > 0 ? 0 : 2)] = true;
+    }
+    std::vector<double> lengths;
+    for (const auto i : pos.placements) {
+      const double l = setup.block(setup.placements[i].block).length;
+      if (std::find(lengths.begin(), lengths.end(), l) == lengths.end()) lengths.push_back(l);
+    }
+    if (lengths.size() < 5)
+      why.push_back(fmt::format("position '{}' has {} different lengths; ISO 10360-2 needs 5",
+                                pos.name, lengths.size()));
+  }
+  if (out.size() < 7)
+    why.push_back(fmt::format(
+        "{} positions; ISO 10360-2 needs 7 (the 4 space diagonals and 3 more)", out.size()));
+  const int diagonals =
+      static_cast<int>(std::count(std::begin(diagonal), std::end(diagonal), true));
+  if (diagonals < 4)
+    why.push_back(fmt::format("{} of the 4 space diagonals of the volume are among the positions",
+                              diagonals));
+  // The longest length of a position at least 66 % of the travel along its line (on a space
+  // diagonal: of the volume's space diagonal).
+  for (const auto& pos : out) {
+    double longest = 0;
+    for (const auto i : pos.placements)
+      longest = std::max(longest, setup.block(setup.placements[i].block).length);
+    const double travel =
+        chord(volume, setup.placements[pos.placements.front()].centre, pos.direction);
+    if (longest < 0.66 * travel)
+      why.push_back(fmt::format(
+          "position '{}': the longest length, {:g} mm, is below 66 % of the travel along its line "
+          "({:.0f} mm: at least {:.0f} mm)",
+          pos.name, longest, travel, 0.66 * travel));
+  }
+  if (!why.empty()) {
+    std::string text = "not an ISO 10360-2 test as set up:";
+    for (const auto& w : why) text += "\n  - " + w;
+    throw Error(text);
+  }
+  return out;
+}
+
+Setup example_setup(const Volume& volume) {
+  Setup s;
+  const Eigen::Vector3d size = volume.high - volume.low, middle = (volume.low + volume.high) / 2;
+  struct Line {
+    const char *id, *name;
+    Eigen::Vector3d d;
+  };
+  const Line lines[7] = {
+      {"D1", "space diagonal 1 (+X+Y+Z)", Eigen::Vector3d(size.x(), size.y(), size.z())},
+      {"D2", "space diagonal 2 (−X+Y+Z)", Eigen::Vector3d(-size.x(), size.y(), size.z())},
+      {"D3", "space diagonal 3 (+X−Y+Z)", Eigen::Vector3d(size.x(), -size.y(), size.z())},
+      {"D4", "space diagonal 4 (−X−Y+Z)", Eigen::Vector3d(-size.x(), -size.y(), size.z())},
+      {"X", "along X", Eigen::Vector3d::UnitX()},
+      {"Y", "along Y", Eigen::Vector3d::UnitY()},
+      {"Z", "along Z", Eigen::Vector3d::UnitZ()}};
+  const double fraction[5] = {0.7, 0.55, 0.4, 0.25, 0.1};  // of the travel along the line
+  const int side[5] = {0, 1, -1, 2, -2};                   // lateral places, longest in the middle
+  for (const auto& line : lines) {
+    const Eigen::Vector3d d = line.d.normalized();
+    // Side by side across the line: horizontally where the line is not vertical.
+    Eigen::Vector3d across = d.cross(Eigen::Vector3d::UnitZ());
+    if (across.norm() < 1e-6) across = Eigen::Vector3d::UnitX();
+    across.normalize();
+    const double travel = chord(volume, middle, d);
+    for (int k = 0; k < 5; ++k) {
+      const double length = std::floor(fraction[k] * travel / 10) * 10;
+      GaugeBlock b;
+      b.id = fmt::format("{}-{:g}", line.id, length);
+      b.length = length;
+      b.u = (0.05 + 0.5e-3 * length) * 1e-3;  // a grade-K certificate's order: 0.05 µm + 0.5 µm/m
+      s.blocks.push_back(b);
+      Placement p;
+      p.block = b.id;
+      p.position = line.name;
+      p.direction = d;
+      p.centre = middle + side[k] * 1.5 * s.block_width * across;
+      s.placements.push_back(p);
+    }
+  }
+  ReferenceSphere sphere;
+  sphere.centre = volume.low + Eigen::Vector3d(0.25, 0.25, 0.2).cwiseProduct(size);
+  sphere.diameter = 25.0003;
+  sphere.u_diameter = 0.1e-3;
+  sphere.form = 0.05e-3;
+  s.sphere = sphere;
+  return s;
+}
+
+}  // namespace trueaxis::acceptance

@@ -1,0 +1,209 @@
+#include "trueaxis/io/acceptance/acceptance.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/json.hpp"
+
+namespace trueaxis::io {
+namespace {
+
+using ojson = nlohmann::ordered_json;
+using P = JsonFile::pointer;
+
+Eigen::Vector3d setup_vector3(const JsonFile& f, const P& at) {
+  const Eigen::VectorXd v = f.numbers(at);
+  if (v.size() != 3) f.fail(at, fmt::format("{}: three numbers [x, y, z]", dotted(at)));
+  return v;
+}
+Eigen::Vector3d setup_direction(const JsonFile& f, const P& at) {
+  const Eigen::Vector3d d = setup_vector3(f, at);
+  if (!(d.norm() > 1e-9)) f.fail(at, fmt::format("{}: not a direction (zero length)", dotted(at)));
+  return d.normalized();
+}
+double setup_optional(const JsonFile& f, const P& at, double fallback, double scale = 1) {
+  return f.has(at) ? f.number(at) * scale : fallback;
+}
+ojson setup_xyz(const Eigen::Vector3d& v) {
+  return ojson::array({v.x(), v.y(), v.z()});
+}
+
+}  // namespace
+
+acceptance::Setup read_acceptance_setup(const std::string& path) {
+  const auto f = JsonFile::read(path);
+  f.object(P(""));
+  acceptance::Setup s;
+  if (f.has(P("/kind")) && f.string(P("/kind")) != "acceptance-setup")
+    f.fail(P("/kind"), fmt::format("kind '{}': an acceptance set-up is \"acceptance-setup\"",
+                                   f.string(P("/kind"))));
+  s.temperature = setup_optional(f, P("/temperature_C"), s.temperature);
+  s.u_temperature = setup_optional(f, P("/u_temperature_K"), s.u_temperature);
+  s.u_alignment = setup_optional(f, P("/u_alignment_um"), s.u_alignment, 1e-3);
+  s.block_width = setup_optional(f, P("/block_width_mm"), s.block_width);
+  s.approach = setup_optional(f, P("/approach_mm"), s.approach);
+  if (f.has(P("/repetitions"))) {
+    const double r = f.number(P("/repetitions"));
+    if (r != std::floor(r) || r < 1 || r > 100)
+      f.fail(P("/repetitions"), "repetitions: a whole number 1 … 100");
+    s.repetitions = static_cast<int>(r);
+  }
+  if (f.has(P("/blocks"))) {
+    const auto& blocks = f.array(P("/blocks"));
+    for (std::size_t i = 0; i < blocks.size(); ++i) {
+      const P at = P("/blocks") / i;
+      f.object(at);
+      acceptance::GaugeBlock b;
+      b.id = f.string(at / "id");
+      b.length = f.number(at / "length_mm");
+      if (!(b.length > 0)) f.fail(at / "length_mm", "length_mm: a length > 0");
+      b.u = setup_optional(f, at / "u_um", 0, 1e-3);
+      b.alpha = setup_optional(f, at / "alpha_per_K", b.alpha);
+      b.u_alpha = setup_optional(f, at / "u_alpha_per_K", b.u_alpha);
+      if (b.u < 0 || b.u_alpha < 0) f.fail(at, "an uncertainty below 0");
+      for (const auto& other : s.blocks)
+        if (other.id == b.id) f.fail(at / "id", fmt::format("block '{}' is listed twice", b.id));
+      s.blocks.push_back(b);
+    }
+  }
+  if (f.has(P("/placements"))) {
+    const auto& placements = f.array(P("/placements"));
+    for (std::size_t i = 0; i < placements.size(); ++i) {
+      const P at = P("/placements") / i;
+      f.object(at);
+      acceptance::Placement p;
+      p.block = f.string(at / "block");
+      bool known = false;
+      for (const auto& b : s.blocks) known = known || b.id == p.block;
+      if (!known) f.fail(at / "block", fmt::format("block '{}' is not among \"blocks\"", p.block));
+      if (f.has(at / "position")) p.position = f.string(at / "position");
+      p.centre = setup_vector3(f, at / "centre");
+      p.direction = setup_direction(f, at / "direction");
+      s.placements.push_back(p);
+    }
+  }
+  if (f.has(P("/sphere"))) {
+    const P at("/sphere");
+    f.object(at);
+    acceptance::ReferenceSphere sp;
+    sp.centre = setup_vector3(f, at / "centre");
+    sp.diameter = f.number(at / "diameter_mm");
+    if (!(sp.diameter > 0)) f.fail(at / "diameter_mm", "diameter_mm: a diameter > 0");
+    sp.u_diameter = setup_optional(f, at / "u_um", 0, 1e-3);
+    sp.form = setup_optional(f, at / "form_um", 0, 1e-3);
+    if (sp.u_diameter < 0 || sp.form < 0) f.fail(at, "u_um and form_um must be ≥ 0");
+    if (f.has(at / "pole")) sp.pole = setup_direction(f, at / "pole");
+    s.sphere = sp;
+  }
+  if (s.placements.empty() && !s.sphere)
+    f.fail(P(""), "no \"placements\" (with \"blocks\") and no \"sphere\": nothing to test");
+  try {
+    if (!s.blocks.empty()) s.validate();
+  } catch (const Error& e) {
+    throw Error(f.where(P("")) + e.what());
+  }
+  return s;
+}
+
+void write_acceptance_setup(const std::string& path, const acceptance::Setup& s) {
+  ojson j;
+  j["kind"] = "acceptance-setup";
+  j["temperature_C"] = s.temperature;
+  j["u_temperature_K"] = s.u_temperature;
+  j["u_alignment_um"] = s.u_alignment * 1e3;
+  j["block_width_mm"] = s.block_width;
+  j["approach_mm"] = s.approach;
+  j["repetitions"] = s.repetitions;
+  j["blocks"] = ojson::array();
+  for (const auto& b : s.blocks)
+    j["blocks"].push_back({{"id", b.id},
+                           {"length_mm", b.length},
+                           {"u_um", b.u * 1e3},
+                           {"alpha_per_K", b.alpha},
+                           {"u_alpha_per_K", b.u_alpha}});
+  j["placements"] = ojson::array();
+  for (const auto& p : s.placements)
+    j["placements"].push_back({{"block", p.block},
+                               {"position", p.position},
+                               {"centre", setup_xyz(p.centre)},
+                               {"direction", setup_xyz(p.direction)}});
+  if (s.sphere)
+    j["sphere"] = {{"centre", setup_xyz(s.sphere->centre)},
+                   {"diameter_mm", s.sphere->diameter},
+                   {"u_um", s.sphere->u_diameter * 1e3},
+                   {"form_um", s.sphere->form * 1e3},
+                   {"pole", setup_xyz(s.sphere->pole)}};
+  write_json(path, j);
+}
+
+void write_e0_result(const std::string& path, const acceptance::E0Result& r) {
+  ojson j;
+  j["kind"] = "acceptance-e0";
+  j["mpe"] = r.mpe_text;
+  if (r.stylus_offset) j["stylus_offset_mm"] = *r.stylus_offset;
+  j["E0_max_um"] = r.e0_max * 1e3;
+  j["R0_max_um"] = r.r0_max * 1e3;
+  if (!r.r0_text.empty()) {
+    j["r0_mpe"] = r.r0_text;
+    j["r0_pass"] = r.r0_pass.value_or(false);
+  }
+  j["pass"] = r.verdict == acceptance::Verdict::Conforms && r.r0_pass.value_or(true);
+  j["verdict"] = acceptance::to_string(r.verdict);
+  j["rule"] = r.rule;
+  j["complete"] = r.complete;
+  if (!r.complete) j["stopped"] = r.stopped;
+  j["positions"] = ojson::array();
+  for (const auto& p : r.positions)
+    j["positions"].push_back({{"name", p.name},
+                              {"direction", setup_xyz(p.direction)},
+                              {"space_diagonal", p.space_diagonal}});
+  j["r0"] = ojson::array();
+  for (const auto& x : r.r0)
+    j["r0"].push_back({{"position", x.position},
+                       {"block", x.block},
+                       {"nominal_mm", x.nominal},
+                       {"range_um", x.range * 1e3}});
+  j["lengths"] = ojson::array();
+  for (const auto& l : r.lengths)
+    j["lengths"].push_back({{"position", l.position},
+                            {"block", l.block},
+                            {"repetition", l.repetition},
+                            {"nominal_mm", l.nominal},
+                            {"measured_mm", l.measured},
+                            {"error_um", l.error * 1e3},
+                            {"mpe_um", l.mpe * 1e3},
+                            {"U_um", l.U * 1e3},
+                            {"endpoints", ojson::array({setup_xyz(l.a), setup_xyz(l.b)})}});
+  write_json(path, j);
+}
+
+void write_probing_result(const std::string& path, const acceptance::ProbingResult& r) {
+  ojson j;
+  j["kind"] = "acceptance-probing";
+  j["PForm_um"] = r.form * 1e3;
+  j["PSize_um"] = r.size * 1e3;
+  j["diameter_mm"] = r.diameter;
+  j["centre"] = setup_xyz(r.centre);
+  j["U_form_um"] = r.U_form * 1e3;
+  j["U_size_um"] = r.U_size * 1e3;
+  auto verdict = [](const std::optional<acceptance::Verdict>& v) {
+    return v ? ojson(acceptance::to_string(*v)) : ojson(nullptr);
+  };
+  j["mpe_form_um"] = r.mpe_form ? ojson(*r.mpe_form * 1e3) : ojson(nullptr);
+  j["mpe_size_um"] = r.mpe_size ? ojson(*r.mpe_size * 1e3) : ojson(nullptr);
+  j["form_verdict"] = verdict(r.form_verdict);
+  j["size_verdict"] = verdict(r.size_verdict);
+  j["pass"] =
+      r.form_verdict.value_or(acceptance::Verdict::Conforms) == acceptance::Verdict::Conforms &&
+      r.size_verdict.value_or(acceptance::Verdict::Conforms) == acceptance::Verdict::Conforms &&
+      (r.form_verdict || r.size_verdict);
+  j["rule"] = r.rule;
+  j["points"] = ojson::array();
+  for (Eigen::Index i = 0; i < r.points.cols(); ++i)
+    j["points"].push_back({{"xyz", setup_xyz(r.points.col(i))}, {"radial_um", r.radial[i] * 1e3}});
+  write_json(path, j);
+}
+
+}  // namespace trueaxis::io

@@ -1,0 +1,272 @@
+// CMM acceptance tests (ISO 10360-2 E0/R0, ISO 10360-5 PForm/PSize) on the virtual CMM, against
+// the machine's own error field computed here.
+#include "trueaxis/acceptance/acceptance.hpp"
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+#include "../test_util.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/acceptance/acceptance.hpp"
+#include "trueaxis/sim/machine.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+sim::Machine default_volume_machine(std::uint64_t seed) {
+  sim::MachineOptions o;
+  o.seed = seed;
+  return sim::random_machine(o);
+}
+
+// The tip position the CMM reads when its tip really is at P (mm): P less the error at the
+// command that puts it there, from the machine's functions directly.
+Eigen::Vector3d read_at(const sim::Machine& m, const Eigen::Vector3d& P) {
+  Eigen::Vector3d c = P - m.offset;
+  for (int it = 0; it < 10; ++it) c = P - m.offset - m.error(c);
+  return c + m.offset;
+}
+
+}  // namespace
+
+// The example set-up is an ISO 10360-2 test of the volume: 7 positions, 4 of them the space
+// diagonals, 5 lengths each, 105 lengths measured.
+TEST(Acceptance, TheExampleSetUpIsAStandardTest) {
+  const auto m = default_volume_machine(1);
+  const auto volume = acceptance::Volume::of(m);
+  const auto setup = acceptance::example_setup(volume);
+  const auto pos = acceptance::positions(setup, volume);
+  ASSERT_EQ(pos.size(), 7u);
+  EXPECT_EQ(std::count_if(pos.begin(), pos.end(), [](const auto& p) { return p.space_diagonal; }),
+            4);
+  acceptance::E0Options o;
+  o.mpe = ballgauge::Mpe::parse("1.5+L/300");
+  const auto r = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m), o);
+  EXPECT_EQ(r.lengths.size(), 105u);
+  EXPECT_EQ(r.r0.size(), 35u);
+  EXPECT_TRUE(r.complete);
+}
+
+// Noise-free, each length error is the machine's error field at the two ends projected on the
+// length's direction (the probe's qualified radius cancels), as computed here from the machine.
+TEST(Acceptance, EachLengthErrorIsTheErrorFieldAlongIt) {
+  const auto m = default_volume_machine(3);
+  const auto volume = acceptance::Volume::of(m);
+  const auto setup = acceptance::example_setup(volume);
+  acceptance::E0Options o;
+  o.mpe = ballgauge::Mpe::parse("1.5+L/300");
+  const auto r = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m), o);
+  ASSERT_EQ(r.lengths.size(), 105u);
+  double largest = 0;
+  for (const auto& row : r.lengths) {
+    const auto& p = *std::find_if(setup.placements.begin(), setup.placements.end(),
+                                  [&](const auto& q) { return q.block == row.block; });
+    const double L = setup.block(row.block).length;
+    const Eigen::Vector3d fa = p.centre - L / 2 * p.direction, fb = p.centre + L / 2 * p.direction;
+    // The tip's centre 1 mm (any radius) off each face, on the side it comes from.
+    const Eigen::Vector3d ra = read_at(m, fa - p.direction) + p.direction,
+                          rb = read_at(m, fb + p.direction) - p.direction;
+    const double expected = (rb - ra).dot(p.direction) - L;
+    EXPECT_NEAR(row.error, expected, 1e-9) << row.position << " " << row.block;
+    largest = std::max(largest, std::abs(expected));
+  }
+  EXPECT_NEAR(r.e0_max, largest, 1e-12);
+  EXPECT_GT(r.e0_max, 5e-3);  // a random machine uncorrected: micrometres, not nothing
+  EXPECT_EQ(r.verdict, acceptance::Verdict::DoesNotConform);
+  EXPECT_EQ(r.r0_max, 0);  // no noise: repetitions agree
+}
+
+// ISO 14253-1 at the MPE: conformance proven below MPE − U, non-conformance above MPE + U,
+// neither between; R0 is the range of the repetitions.
+TEST(Acceptance, TheVerdictFollowsTheDecisionRuleWithTheTestUncertainty) {
+  sim::Machine m = default_volume_machine(1);
+  for (auto& axis : m.errors)
+    for (auto& f : axis) f = {};
+  m.squareness_c0y = m.squareness_b0z = m.squareness_a0z = 0;
+  m.errors[0][0].polynomial = {0, 4e-3};  // X 4 µm/m long
+  const auto volume = acceptance::Volume::of(m);
+  auto setup = acceptance::example_setup(volume);
+  setup.u_temperature = 0.05;  // K: a temperature-controlled room (0.2 K: U 3.3 µm at 700 mm)
+  acceptance::VirtualProbeOptions probe;
+  probe.noise = 0.2e-3;
+  probe.seed = 5;
+  acceptance::E0Options o;
+  o.mpe = ballgauge::Mpe::parse("1.5+L/300");
+  auto r = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m, probe), o);
+  EXPECT_EQ(r.verdict, acceptance::Verdict::Conforms) << r.summary();
+  // R0 per position and length from the rows, here.
+  std::map<std::pair<std::string, std::string>, std::pair<double, double>> span;
+  for (const auto& row : r.lengths) {
+    auto [it, fresh] = span.try_emplace({row.position, row.block}, row.measured, row.measured);
+    it->second = {std::min(it->second.first, row.measured),
+                  std::max(it->second.second, row.measured)};
+  }
+  double r0 = 0;
+  for (const auto& [key, mm] : span) r0 = std::max(r0, mm.second - mm.first);
+  EXPECT_NEAR(r.r0_max, r0, 1e-15);
+  EXPECT_GT(r.r0_max, 0);
+  // A tighter MPE: between MPE − U and MPE + U for the worst length, neither is proven.
+  const auto worst = *std::max_element(r.lengths.begin(), r.lengths.end(), [](auto& a, auto& b) {
+    return std::abs(a.error) - a.U < std::abs(b.error) - b.U;
+  });
+  ASSERT_GT(worst.U, 0);
+  o.mpe = ballgauge::Mpe::parse(fmt::format("{}", (std::abs(worst.error) + worst.U / 2) * 1e3));
+  acceptance::judge_e0(setup, o, r);
+  EXPECT_EQ(r.verdict, acceptance::Verdict::NotProven) << r.summary();
+  o.mpe = ballgauge::Mpe::parse(fmt::format("{}", (std::abs(worst.error) - 1.5 * worst.U) * 1e3));
+  acceptance::judge_e0(setup, o, r);
+  EXPECT_EQ(r.verdict, acceptance::Verdict::DoesNotConform) << r.summary();
+  EXPECT_NE(r.rule.find("ISO 14253-1"), std::string::npos);
+}
+
+// A CMM that stops answering: what was measured is kept and judged as far as it goes.
+TEST(Acceptance, AStoppedRunKeepsWhatWasMeasured) {
+  const auto m = default_volume_machine(2);
+  const auto volume = acceptance::Volume::of(m);
+  const auto setup = acceptance::example_setup(volume);
+  const auto inner = acceptance::virtual_touch(m);
+  int calls = 0;
+  const acceptance::Touch failing = [&](const Eigen::Vector3d& at, const Eigen::Vector3d& d) {
+    if (++calls > 20) throw Error("error 1006: surface not found");
+    return inner(at, d);
+  };
+  acceptance::E0Options o;
+  o.mpe = ballgauge::Mpe::parse("100");
+  const auto r = acceptance::run_e0(setup, volume, failing, o);
+  EXPECT_FALSE(r.complete);
+  EXPECT_EQ(r.lengths.size(), 10u);
+  EXPECT_NE(r.stopped.find("1006"), std::string::npos);
+  EXPECT_EQ(r.verdict, acceptance::Verdict::NotProven);  // all within, but not all measured
+  const std::string path = test::temp_dir() + "/stopped-e0.json";
+  io::write_e0_result(path, r);
+  const std::string text = test::read_file(path);
+  EXPECT_NE(text.find("\"complete\": false"), std::string::npos);
+  EXPECT_NE(text.find("\"endpoints\""), std::string::npos);
+}
+
+// ISO 10360-5: the pattern's 25 directions, and the form error that the probe's lobing alone
+// gives, computed here by linear least squares of the radial shifts (centre and radius).
+TEST(Acceptance, ProbingFormIsTheLobingsEffectOnThe25Points) {
+  const auto dirs = acceptance::probing_pattern(Eigen::Vector3d::UnitZ());
+  ASSERT_EQ(dirs.size(), 25u);
+  int equator = 0;
+  for (const auto& d : dirs) {
+    EXPECT_NEAR(d.norm(), 1, 1e-15);
+    EXPECT_GE(d.z(), -1e-12);  // a hemisphere: all reachable from above
+    equator += std::abs(d.z()) < 1e-12;
+  }
+  EXPECT_EQ(equator, 8);
+  sim::Machine perfect;
+  perfect.range = {{{0, 800}, {0, 600}, {0, 500}}};
+  acceptance::Setup setup;
+  acceptance::ReferenceSphere sphere;
+  sphere.centre = {200, 200, 100};
+  sphere.diameter = 25;
+  sphere.u_diameter = 0.1e-3;
+  sphere.form = 0.05e-3;
+  setup.sphere = sphere;
+  acceptance::VirtualProbeOptions probe;
+  probe.lobing = 1e-3;
+  acceptance::ProbingOptions o;
+  o.mpe_form = 1.8e-3;
+  o.mpe_size = 1.5e-3;
+  const auto r = acceptance::run_probing(setup, acceptance::virtual_touch(perfect, probe), o);
+  // Each point moves along its probing direction (−n) by the pre-travel: radially by −δ.
+  Eigen::MatrixXd A(25, 4);
+  Eigen::VectorXd shift(25);
+  for (int i = 0; i < 25; ++i) {
+    const Eigen::Vector3d n = dirs[static_cast<std::size_t>(i)], d = -n;
+    const double delta = 1e-3 * std::cos(3 * std::atan2(d.y(), d.x())) * (1 - d.z() * d.z());
+    shift[i] = -delta;
+    A.row(i) << 1, n.x(), n.y(), n.z();
+  }
+  const Eigen::VectorXd coef = A.colPivHouseholderQr().solve(shift);
+  const Eigen::VectorXd radial = shift - A * coef;
+  EXPECT_NEAR(r.form, radial.maxCoeff() - radial.minCoeff(), 1e-7);
+  EXPECT_NEAR(r.size, 2 * coef[0], 1e-7);
+  EXPECT_GT(r.form, 0.5e-3);
+  ASSERT_TRUE(r.form_verdict && r.size_verdict);
+  EXPECT_EQ(*r.form_verdict, acceptance::Verdict::Conforms);
+  // With the machine's geometric errors too: over the sphere they are nearly an affine
+  // distortion (an ellipsoid, a few tenths of a µm of form), and the residuals add, so the form
+  // lies within the machine's own of the lobing's: the probe's part is not the machine's, and
+  // no map of the machine removes it.
+  const auto m = default_volume_machine(4);
+  const auto with_errors = acceptance::run_probing(setup, acceptance::virtual_touch(m, probe), o);
+  const auto machine_only = acceptance::run_probing(setup, acceptance::virtual_touch(m), o);
+  EXPECT_LE(std::abs(with_errors.form - r.form), machine_only.form + 1e-8);
+  EXPECT_LT(machine_only.form, r.form);
+}
+
+// Set-ups that cannot be an ISO 10360-2 test are refused with every reason.
+TEST(Acceptance, BadSetUpsAreRefusedWithTheirReasons) {
+  const auto m = default_volume_machine(1);
+  const auto volume = acceptance::Volume::of(m);
+  const auto good = acceptance::example_setup(volume);
+  auto refused = [&](const acceptance::Setup& s) {
+    return test::error_of([&] { acceptance::positions(s, volume); });
+  };
+  auto outside = good;
+  outside.placements[0].centre.x() += 300;
+  EXPECT_NE(refused(outside).find("outside the volume"), std::string::npos) << refused(outside);
+  auto overlap = good;
+  overlap.placements[1].centre = overlap.placements[0].centre;
+  EXPECT_NE(refused(overlap).find("overlap"), std::string::npos);
+  auto six = good;
+  six.placements.erase(six.placements.begin(), six.placements.begin() + 5);  // diagonal 1
+  const std::string e6 = refused(six);
+  EXPECT_NE(e6.find("6 positions"), std::string::npos) << e6;
+  EXPECT_NE(e6.find("3 of the 4 space diagonals"), std::string::npos) << e6;
+  auto four = good;
+  four.placements.erase(four.placements.begin() + 4);  // diagonal 1's shortest
+  EXPECT_NE(refused(four).find("4 different lengths"), std::string::npos);
+  auto short_set = good;
+  short_set.blocks[0].length = 300;  // diagonal 1's longest
+  EXPECT_NE(refused(short_set).find("below 66 %"), std::string::npos) << refused(short_set);
+  auto unknown = good;
+  unknown.placements[3].block = "no such block";
+  EXPECT_NE(refused(unknown).find("no such block"), std::string::npos);
+}
+
+// The set-up file: written and read back; bad ones refused at file:line:col.
+TEST(Acceptance, SetUpFilesRoundTripAndBadOnesAreRefused) {
+  const auto volume = acceptance::Volume::of(default_volume_machine(1));
+  const auto setup = acceptance::example_setup(volume);
+  const std::string path = test::temp_dir() + "/acceptance.json";
+  io::write_acceptance_setup(path, setup);
+  const auto back = io::read_acceptance_setup(path);
+  ASSERT_EQ(back.placements.size(), setup.placements.size());
+  EXPECT_NEAR((back.placements[7].centre - setup.placements[7].centre).norm(), 0, 1e-12);
+  EXPECT_NEAR(back.blocks[2].u, setup.blocks[2].u, 1e-15);
+  ASSERT_TRUE(back.sphere);
+  EXPECT_NEAR(back.sphere->diameter, setup.sphere->diameter, 1e-12);
+  EXPECT_NO_THROW(acceptance::positions(back, volume));
+  auto refused = [](const std::string& text) {
+    return test::error_of([&] { io::read_acceptance_setup(test::temp_file("bad.json", text)); });
+  };
+  const std::string block = R"({"id": "A", "length_mm": 100})";
+  EXPECT_NE(
+      refused(R"({"blocks": [)" + block +
+              R"(], "placements": [{"block": "B", "centre": [0, 0, 0], "direction": [1, 0, 0]}]})")
+          .find("bad.json:1:"),
+      std::string::npos);
+  const std::string zero = refused(R"({"blocks": [)" + block +
+                                   R"(],
+ "placements": [{"block": "A", "centre": [0, 0, 0], "direction": [0, 0, 0]}]})");
+  EXPECT_NE(zero.find("bad.json:2:"), std::string::npos) << zero;
+  EXPECT_NE(zero.find("not a direction"), std::string::npos) << zero;
+  EXPECT_NE(refused(R"({"blocks": [{"id": "A", "length_mm": "long"}], "placements": []})")
+                .find("bad.json:1:"),
+            std::string::npos);
+  EXPECT_NE(refused(R"({"sphere": {"centre": [0, 0], "diameter_mm": 25}})").find("three numbers"),
+            std::string::npos);
+  EXPECT_NE(refused("{}").find("nothing to test"), std::string::npos);
+  EXPECT_NE(refused(R"({"kind": "circular"})").find("acceptance-setup"), std::string::npos);
+  EXPECT_NE(refused(R"({"blocks": [)" + block + "," + block + "]}").find("twice"),
+            std::string::npos);
+}
