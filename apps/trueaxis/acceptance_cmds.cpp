@@ -11,6 +11,8 @@
 #include "trueaxis/acceptance/acceptance.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/acceptance/acceptance.hpp"
+#include "trueaxis/ippdme/acceptance.hpp"
+#include "trueaxis/ippdme/remote_cmm.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::cli {
@@ -18,6 +20,9 @@ namespace {
 
 struct AcceptanceArgs {
   MachineSource machine;
+  std::string cmm, log;
+  std::vector<double> travel;
+  double clearance = 5;
   std::string artefacts, output;
   std::string mpe, r0_mpe;
   double stylus_offset = 0;
@@ -27,12 +32,48 @@ struct AcceptanceArgs {
   bool quiet = false;
 };
 
-acceptance::Touch virtual_cmm(const AcceptanceArgs& a, const sim::Machine& m) {
-  acceptance::VirtualProbeOptions p;
-  p.lobing = a.lobing_um * 1e-3;
-  p.noise = a.noise_um * 1e-3;
-  p.seed = a.seed;
-  return acceptance::virtual_touch(m, p);
+// Where the test runs: the virtual CMM in process (--machine), or a CMM over I++ DME (--cmm),
+// whose travel comes from --machine or --travel.
+struct Cmm {
+  acceptance::Volume volume;
+  std::optional<sim::Machine> machine;
+  std::unique_ptr<ippdme::RemoteCmm> remote;
+  acceptance::Touch touch;
+};
+
+std::unique_ptr<Cmm> open_cmm(const AcceptanceArgs& a, const acceptance::Setup& setup) {
+  auto c = std::make_unique<Cmm>();
+  if (a.cmm.empty() || !a.machine.path.empty()) {
+    c->machine = a.machine.load();
+    c->volume = acceptance::Volume::of(*c->machine);
+  }
+  if (a.cmm.empty()) {
+    acceptance::VirtualProbeOptions p;
+    p.lobing = a.lobing_um * 1e-3;
+    p.noise = a.noise_um * 1e-3;
+    p.seed = a.seed;
+    c->touch = acceptance::virtual_touch(*c->machine, p);
+    return c;
+  }
+  if (!c->machine) {
+    if (a.travel.size() != 6)
+      throw CLI::ValidationError("--travel",
+                                 "with --cmm give the travel: --travel X0,Y0,Z0,X1,Y1,Z1 (mm, tip "
+                                 "centre) or --machine");
+    c->volume.low = Eigen::Vector3d(a.travel[0], a.travel[1], a.travel[2]);
+    c->volume.high = Eigen::Vector3d(a.travel[3], a.travel[4], a.travel[5]);
+    if (!(c->volume.high.array() > c->volume.low.array()).all())
+      throw CLI::ValidationError("--travel", "each high end must lie above its low end");
+  }
+  ippdme::RemoteCmmOptions ro;
+  std::tie(ro.client.host, ro.client.port) = parse_ipp_address(a.cmm);
+  ro.client.log = a.log;
+  ro.tip_radius = 0;  // the server's tool
+  c->remote = std::make_unique<ippdme::RemoteCmm>(ro);
+  ippdme::AcceptanceProbingOptions po;
+  po.clearance = a.clearance;
+  c->touch = ippdme::acceptance_touch(*c->remote, setup, c->volume, po);
+  return c;
 }
 
 int run_e0(const AcceptanceArgs& a) {
@@ -41,12 +82,12 @@ int run_e0(const AcceptanceArgs& a) {
   if (!a.r0_mpe.empty()) o.r0 = ballgauge::Mpe::parse(a.r0_mpe);
   if (a.stylus_offset > 0) o.stylus_offset = a.stylus_offset;
   const auto setup = io::read_acceptance_setup(a.artefacts);
-  const sim::Machine m = a.machine.load();
+  const auto cmm = open_cmm(a, setup);
   Progress progress("measuring the lengths", a.quiet);
   o.progress = [&](std::size_t done, std::size_t total) {
     progress.update(static_cast<double>(done) / static_cast<double>(total));
   };
-  const auto r = acceptance::run_e0(setup, acceptance::Volume::of(m), virtual_cmm(a, m), o);
+  const auto r = acceptance::run_e0(setup, cmm->volume, cmm->touch, o);
   progress.done();
   io::write_e0_result(a.output, r);
   const bool pass = r.verdict == acceptance::Verdict::Conforms && r.r0_pass.value_or(true);
@@ -64,8 +105,8 @@ int run_probing(const AcceptanceArgs& a) {
   if (a.mpe_form_um > 0) o.mpe_form = a.mpe_form_um * 1e-3;
   if (a.mpe_size_um > 0) o.mpe_size = a.mpe_size_um * 1e-3;
   const auto setup = io::read_acceptance_setup(a.artefacts);
-  const sim::Machine m = a.machine.load();
-  const auto r = acceptance::run_probing(setup, virtual_cmm(a, m), o);
+  const auto cmm = open_cmm(a, setup);
+  const auto r = acceptance::run_probing(setup, cmm->touch, o);
   io::write_probing_result(a.output, r);
   const bool pass =
       r.form_verdict.value_or(acceptance::Verdict::Conforms) == acceptance::Verdict::Conforms &&
@@ -76,6 +117,16 @@ int run_probing(const AcceptanceArgs& a) {
 
 void add_common(CLI::App* c, AcceptanceArgs& a, const char* output) {
   a.machine.add_options(c);
+  c->add_option("--cmm", a.cmm,
+                "ipp://HOST:PORT: run on a CMM over I++ DME (trueaxis serve --artefacts, or a real "
+                "one) instead of the virtual CMM of --machine");
+  c->add_option("--travel", a.travel,
+                "with --cmm and no --machine: the travel X0,Y0,Z0,X1,Y1,Z1 (mm, tip centre)")
+      ->delimiter(',');
+  c->add_option("--clearance", a.clearance,
+                "with --cmm: mm kept between the ball and any artefact on a free move")
+      ->capture_default_str();
+  c->add_option("--log", a.log, "with --cmm: every I++ DME line sent and received, timed");
   c->add_option("--artefacts", a.artefacts,
                 "acceptance.json: the artefacts as set up, in the machine's coordinates "
                 "(trueaxis examples writes one)")
@@ -97,7 +148,8 @@ void add_common(CLI::App* c, AcceptanceArgs& a, const char* output) {
 std::vector<Command> add_acceptance_commands(CLI::App& app) {
   auto* group = app.add_subcommand(
       "acceptance",
-      "CMM acceptance and reverification tests on the virtual CMM of a machine file: the length "
+      "CMM acceptance and reverification tests, on a CMM over I++ DME or the virtual CMM of a "
+      "machine file: the length "
       "measuring error E0 and repeatability R0 (ISO 10360-2) and the probing errors PForm and "
       "PSize (ISO 10360-5), judged by ISO 14253-1 with the test's own uncertainty.\n"
       "Exit status 0 when conformance is proven, 1 otherwise.");

@@ -11,10 +11,16 @@
 #include <thread>
 
 #include "commands.hpp"
+#include "trueaxis/acceptance/acceptance.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/ballgauge/parametric.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/acceptance/acceptance.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/design/design.hpp"
+#include "trueaxis/io/json.hpp"
 #include "trueaxis/io/sim/machine.hpp"
+#include "trueaxis/io/surface/space.hpp"
 #include "trueaxis/ippdme/client.hpp"
 #include "trueaxis/ippdme/commands.hpp"
 #include "trueaxis/ippdme/protocol.hpp"
@@ -95,7 +101,8 @@ std::pair<std::string, unsigned short> parse_ipp_address(const std::string& addr
 namespace {
 
 struct ServeArgs {
-  std::string host = "127.0.0.1", machine, part, log, balls;
+  std::string host = "127.0.0.1", machine, part, log, balls, artefacts, correction;
+  double lobing_um = 0;
   int port = 1294;
   std::vector<double> part_origin;
   double time_scale = 1, tip_radius = 1, probe_noise_um = 0;
@@ -140,13 +147,57 @@ int run_serve(const ServeArgs& a) {
     // Home above the balls when no machine says where (with one, its top corner).
     if (!e.cmm.geometry) e.cmm.home = Eigen::Vector3d(0, 0, e.cmm.travel[2][1]);
   }
+  if (!a.artefacts.empty()) {
+    const auto setup = io::read_acceptance_setup(a.artefacts);
+    e.boxes = acceptance::artefact_boxes(setup);
+    if (setup.sphere) e.balls.push_back({setup.sphere->centre, setup.sphere->diameter / 2});
+  }
+  e.cmm.probe.lobing = a.lobing_um * 1e-3;
+  std::string corrected;
+  if (!a.correction.empty()) {
+    // A ball-gauge grid map (clamped at its edges, as a controller holds its table's last
+    // values) or an identified model (outside its span, points are left as read).
+    const auto kind = io::JsonFile::read(a.correction).root().value("kind", std::string());
+    if (kind == "parametric model") {
+      auto c = std::make_shared<ballgauge::Correction>(
+          ballgauge::parametric_correction(io::read_parametric(a.correction)));
+      e.correction = [c](const Eigen::Vector3d& x) {
+        Eigen::Matrix3Xd p = x;
+        try {
+          c->apply(p);
+        } catch (const Error&) {
+          return x;
+        }
+        return Eigen::Vector3d(p.col(0));
+      };
+    } else {
+      auto grid = std::make_shared<map::ErrorMap>(io::read_error_map(a.correction));
+      map::EvalOptions eo;
+      eo.outside = map::Outside::Clamp;
+      auto c = std::make_shared<ballgauge::Correction>(ballgauge::grid_correction(*grid, eo));
+      e.correction = [c, grid](const Eigen::Vector3d& x) {
+        Eigen::Matrix3Xd p = x;
+        c->apply(p);
+        return Eigen::Vector3d(p.col(0));
+      };
+    }
+    corrected = fmt::format(", corrected by {}", a.correction);
+  }
   ippdme::Server server(o);
   std::string world = e.part ? fmt::format("the part of {}", a.part) : std::string();
-  if (!e.balls.empty())
+  if (!e.boxes.empty())
+    world += fmt::format("{}{} gauge blocks{} of {} (a position at a time)",
+                         world.empty() ? "" : " and ", e.boxes.size(),
+                         e.balls.size() > (a.balls.empty() ? 0 : io::read_balls(a.balls).size())
+                             ? " and the reference sphere"
+                             : "",
+                         a.artefacts);
+  if (!a.balls.empty())
     world += fmt::format("{}{} balls of {}", world.empty() ? "" : " and ", e.balls.size(), a.balls);
-  fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}; Ctrl-C stops\n", a.host, server.port(),
-             world.empty() ? std::string("the nominal world") : world,
-             e.cmm.geometry ? fmt::format(" on the machine of {}", a.machine) : std::string());
+  fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}{}; Ctrl-C stops\n", a.host,
+             server.port(), world.empty() ? std::string("the nominal world") : world,
+             e.cmm.geometry ? fmt::format(" on the machine of {}", a.machine) : std::string(),
+             corrected);
   if (e.part)
     fmt::print(
         "the part's design origin is at ({:.3f}, {:.3f}, {:.3f}) mm in machine "
@@ -247,6 +298,17 @@ std::vector<Command> add_serve_command(CLI::App& app) {
                 "balls.csv: balls standing in the machine (x,y,z,diameter in mm, machine "
                 "coordinates), e.g. a ball gauge (trueaxis simulate ballgauge --balls)")
       ->check(cli::existing_file());
+  c->add_option("--artefacts", a->artefacts,
+                "acceptance.json: gauge blocks (a position at a time: the one a PtMeas aims at) "
+                "and the reference sphere, for 'trueaxis acceptance --cmm'")
+      ->check(existing_file());
+  c->add_option("--correction", a->correction,
+                "map.json (ball-gauge grid map) or model.json (parametric model): corrects every "
+                "point reported and every position commanded, as a controller's error map")
+      ->check(existing_file());
+  c->add_option("--lobing", a->lobing_um,
+                "single points: the probe's pre-travel variation (µm, three lobes)")
+      ->capture_default_str();
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: the part's design origin in machine coordinates (mm; default: the "
                 "machine origin, or centred in the travel with --machine)")

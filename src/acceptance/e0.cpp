@@ -10,6 +10,7 @@
 
 #include "trueaxis/acceptance/acceptance.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/sim/cmm.hpp"
 
 namespace trueaxis::acceptance {
 
@@ -52,8 +53,7 @@ Touch virtual_touch(const sim::Machine& machine, const VirtualProbeOptions& opti
     if (!s->m.contains(c, 1e-6))
       throw Error(fmt::format("the point ({:.1f}, {:.1f}, {:.1f}) is beyond the machine's travel",
                               at.x(), at.y(), at.z()));
-    const double phi = std::atan2(direction.y(), direction.x());
-    const double pretravel = s->o.lobing * std::cos(3 * phi) * (1 - direction.z() * direction.z());
+    const double pretravel = sim::pretravel_lobing(s->o.lobing, direction);
     const double noise = s->o.noise > 0 ? s->o.noise * s->gauss(s->rng) : 0.0;
     return c + s->m.offset + (r + pretravel + noise) * direction;
   };

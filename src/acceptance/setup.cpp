@@ -80,8 +80,8 @@ void Setup::validate() const {
     throw Error("reference sphere: diameter > 0, u and form ≥ 0, a finite centre and a unit pole");
   if (!(u_temperature >= 0) || !(u_alignment >= 0) || !std::isfinite(temperature))
     throw Error("acceptance set-up: the temperature and its u, and the alignment's u, must be ≥ 0");
-  if (!(block_width > 0) || !(approach > 0))
-    throw Error("acceptance set-up: the block width and the approach must be > 0 mm");
+  if (!(block_width > 0) || !(block_height > 0) || !(approach > 0))
+    throw Error("acceptance set-up: the block's width and height and the approach must be > 0 mm");
   if (repetitions < 1 || repetitions > 100)
     throw Error("acceptance set-up: repetitions must be 1 … 100 (ISO 10360-2: 3)");
 }
@@ -99,6 +99,63 @@ Volume Volume::of(const sim::Machine& m) {
     v.high[a] = m.range[static_cast<std::size_t>(a)][1] + m.offset[a];
   }
   return v;
+}
+
+namespace {
+
+// The placements by position: their own names, or (unnamed) their directions.
+std::vector<Position> group(const Setup& setup) {
+  std::vector<Position> out;
+  for (std::size_t i = 0; i < setup.placements.size(); ++i) {
+    const auto& p = setup.placements[i];
+    Position* home = nullptr;
+    for (auto& pos : out) {
+      const bool same = p.position.empty()
+                            ? std::abs(pos.direction.dot(p.direction)) >= kParallel &&
+                                  setup.placements[pos.placements.front()].position.empty()
+                            : pos.name == p.position;
+      if (same) home = &pos;
+    }
+    if (!home) {
+      Position pos;
+      pos.name = p.position.empty() ? ballgauge::direction_name(p.direction) : p.position;
+      pos.direction = p.direction;
+      out.push_back(pos);
+      home = &out.back();
+    }
+    home->placements.push_back(i);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<sim::Box> artefact_boxes(const Setup& setup) {
+  setup.validate();
+  std::vector<sim::Box> out;
+  const auto positions = group(setup);
+  for (std::size_t g = 0; g < positions.size(); ++g)
+    for (const auto i : positions[g].placements) {
+      const auto& p = setup.placements[i];
+      sim::Box b;
+      b.centre = p.centre;
+      b.axes = block_axes(p.direction);
+      b.half =
+          Eigen::Vector3d(setup.block(p.block).length, setup.block_width, setup.block_height) / 2;
+      b.group = static_cast<int>(g);
+      out.push_back(b);
+    }
+  return out;
+}
+
+Eigen::Matrix3d block_axes(const Eigen::Vector3d& direction) {
+  const Eigen::Vector3d d = direction.normalized();
+  Eigen::Vector3d across = d.cross(Eigen::Vector3d::UnitZ());
+  if (across.norm() < 1e-6) across = Eigen::Vector3d::UnitX().cross(d);
+  across.normalize();
+  Eigen::Matrix3d a;
+  a << d, across, d.cross(across);
+  return a;
 }
 
 std::vector<Position> positions(const Setup& setup, const Volume& volume) {
@@ -140,29 +197,12 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
             j + 1, i + 1, q.block, p.block, d, setup.block_width));
     }
   // The lines.
-  std::vector<Position> out;
-  for (std::size_t i = 0; i < setup.placements.size(); ++i) {
-    const auto& p = setup.placements[i];
-    Position* home = nullptr;
-    for (auto& pos : out) {
-      const bool same = p.position.empty()
-                            ? std::abs(pos.direction.dot(p.direction)) >= kParallel &&
-                                  setup.placements[pos.placements.front()].position.empty()
-                            : pos.name == p.position;
-      if (same) home = &pos;
-    }
-    if (!home) {
-      Position pos;
-      pos.name = p.position.empty() ? ballgauge::direction_name(p.direction) : p.position;
-      pos.direction = p.direction;
-      out.push_back(pos);
-      home = &out.back();
-    }
-    if (std::abs(home->direction.dot(p.direction)) < kParallel)
-      why.push_back(fmt::format("placement {} (block '{}') is in position '{}' but not along it",
-                                i + 1, p.block, home->name));
-    home->placements.push_back(i);
-  }
+  std::vector<Position> out = group(setup);
+  for (const auto& pos : out)
+    for (const auto i : pos.placements)
+      if (std::abs(pos.direction.dot(setup.placements[i].direction)) < kParallel)
+        why.push_back(fmt::format("placement {} (block '{}') is in position '{}' but not along it",
+                                  i + 1, setup.placements[i].block, pos.name));
   // ISO 10360-2:2009, 6.3: 7 positions, the 4 space diagonals among them, 5 lengths in each,
   // the longest at least 66 % of the space diagonal.
   bool diagonal[4] = {false, false, false, false};
@@ -215,6 +255,8 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
 
 Setup example_setup(const Volume& volume) {
   Setup s;
+  s.u_temperature = 0.05;   // K: a room at 20 ± 0.5 °C, the blocks' thermometer calibrated
+  s.u_alignment = 0.1e-3;  // mm
   const Eigen::Vector3d size = volume.high - volume.low, middle = (volume.low + volume.high) / 2;
   struct Line {
     const char *id, *name;
@@ -233,9 +275,7 @@ Setup example_setup(const Volume& volume) {
   for (const auto& line : lines) {
     const Eigen::Vector3d d = line.d.normalized();
     // Side by side across the line: horizontally where the line is not vertical.
-    Eigen::Vector3d across = d.cross(Eigen::Vector3d::UnitZ());
-    if (across.norm() < 1e-6) across = Eigen::Vector3d::UnitX();
-    across.normalize();
+    const Eigen::Vector3d across = block_axes(d).col(1);
     const double travel = chord(volume, middle, d);
     for (int k = 0; k < 5; ++k) {
       const double length = std::floor(fraction[k] * travel / 10) * 10;
@@ -252,8 +292,20 @@ Setup example_setup(const Volume& volume) {
       s.placements.push_back(p);
     }
   }
+  // The sphere low in the volume, where it is farthest from every block's place.
   ReferenceSphere sphere;
-  sphere.centre = volume.low + Eigen::Vector3d(0.25, 0.25, 0.2).cwiseProduct(size);
+  const auto boxes = artefact_boxes(s);
+  double farthest = -1;
+  for (const double fx : {0.15, 0.3, 0.5, 0.7, 0.85})
+    for (const double fy : {0.15, 0.3, 0.5, 0.7, 0.85}) {
+      const Eigen::Vector3d c = volume.low + Eigen::Vector3d(fx, fy, 0.2).cwiseProduct(size);
+      double nearest = INFINITY;
+      for (const auto& b : boxes) nearest = std::min(nearest, b.nearest(c).distance);
+      if (nearest > farthest) {
+        farthest = nearest;
+        sphere.centre = c;
+      }
+    }
   sphere.diameter = 25.0003;
   sphere.u_diameter = 0.1e-3;
   sphere.form = 0.05e-3;

@@ -22,6 +22,8 @@ SimulatedCmm::Contact Executor::probe(const Eigen::Vector3d& x, const Eigen::Vec
   {
     Unlocked u(lk_);
     s_.go(start, go_speed, go_accel);
+    // Boxes are set up a group at a time: the one whose box the nominal point is on is there.
+    if (s_.boxes) s_.boxes->active->store(s_.boxes->group_at(x));
     c = s_.cmm.touch(-n, approach + r + search, speed, surface);
     if (!c) {
       s_.go(start, go_speed, go_accel);

@@ -160,6 +160,37 @@ struct BallSurface {
   }
 };
 
+// Boxes standing in the machine (machine coordinates), a group at a time: the nearest box's
+// surface among the active group's, for boxes within reach of the tip.
+struct BoxSurface {
+  std::vector<sim::Box> boxes;
+  double reach;
+  double top = -INFINITY;  // the highest point of any box (mm, machine z)
+  std::shared_ptr<std::atomic<int>> active = std::make_shared<std::atomic<int>>(-1);  // none yet
+  std::optional<Nearest> operator()(const Eigen::Vector3d& x) const {
+    std::optional<Nearest> best;
+    const int group = active->load();
+    for (const auto& b : boxes) {
+      if (b.group != group) continue;
+      const auto n = b.nearest(x);
+      if (n.distance > reach || (best && n.distance >= best->distance)) continue;
+      best = n;
+    }
+    return best;
+  }
+  // The group of the box nearest to x.
+  int group_at(const Eigen::Vector3d& x) const {
+    int group = active->load();
+    double best = INFINITY;
+    for (const auto& b : boxes)
+      if (const double d = std::abs(b.nearest(x).distance); d < best) {
+        best = d;
+        group = b.group;
+      }
+    return group;
+  }
+};
+
 }  // namespace detail
 
 // The engine's state and its executor are used by the engine's own files only.
@@ -172,6 +203,7 @@ struct Engine::State {
   SimulatedCmm cmm;
   std::shared_ptr<PartSurface> part;   // the part world (empty: the nominal world)
   std::shared_ptr<BallSurface> balls;  // balls on the table (empty: none)
+  std::shared_ptr<BoxSurface> boxes;   // boxes (gauge blocks) in the machine (empty: none)
 
   std::mutex m;  // guards everything below (the CMM belongs to the worker)
   std::condition_variable cv;
@@ -242,6 +274,14 @@ struct Engine::State {
         if (!b.centre.allFinite() || !(b.radius > 0) || !std::isfinite(b.radius))
           throw Error("I++ DME server: a ball needs a finite centre and a positive radius");
       balls = std::make_shared<BallSurface>(BallSurface{o.balls, cmm.tip_radius() + 5});
+    }
+    if (!o.boxes.empty()) {
+      for (const auto& b : o.boxes)
+        if (!b.centre.allFinite() || !b.axes.allFinite() || !(b.half.array() > 0).all())
+          throw Error("I++ DME server: a box needs a finite centre and axes and a positive size");
+      boxes = std::make_shared<BoxSurface>(BoxSurface{o.boxes, cmm.tip_radius() + 5});
+      for (const auto& b : o.boxes)
+        boxes->top = std::max(boxes->top, b.centre.z() + (b.axes.row(2).cwiseAbs() * b.half)(0));
     }
     cmm.set_hook([this] { return on_tick(); });
   }
@@ -448,9 +488,20 @@ struct Engine::State {
 
   // ---- coordinates -----------------------------------------------------------------------
   const Csy& frame() const { return csys.at(csy); }
-  Eigen::Vector3d to_machine(const Eigen::Vector3d& p) { return frame().from(p); }
+  // Between the scales and the machine coordinates reported, the controller's correction (a
+  // point read at x is reported at correction(x); a commanded point p is reached at the x that
+  // corrects to it, by fixed-point iteration: the correction is within micrometres of x).
+  Eigen::Vector3d to_machine(const Eigen::Vector3d& p) {
+    const Eigen::Vector3d m = frame().from(p);
+    if (!o.correction) return m;
+    Eigen::Vector3d x = m;
+    for (int it = 0; it < 8; ++it) x = m - (o.correction(x) - x);
+    return x;
+  }
   Eigen::Vector3d dir_to_machine(const Eigen::Vector3d& v) { return frame().M.transpose() * v; }
-  Eigen::Vector3d to_csy(const Eigen::Vector3d& x) { return frame().to(x); }
+  Eigen::Vector3d to_csy(const Eigen::Vector3d& x) {
+    return frame().to(o.correction ? o.correction(x) : x);
+  }
   Eigen::Vector3d dir_to_csy(const Eigen::Vector3d& v) { return frame().M * v; }
 
   // X(), Y(), Z(), IJK() of a command; missing coordinates from the current position.
@@ -481,20 +532,26 @@ struct Engine::State {
 
   // ---- motion (called with the lock released) --------------------------------------------
   Surface world() const {
-    if (!part && !balls) return {};
-    auto ps = part;
-    auto bs = balls;
-    if (!bs) return [ps](const Eigen::Vector3d& x) { return (*ps)(x); };
-    if (!ps) return [bs](const Eigen::Vector3d& x) { return (*bs)(x); };
-    return [ps, bs](const Eigen::Vector3d& x) {
-      auto a = (*ps)(x), b = (*bs)(x);
-      if (a && b) return std::abs(a->distance) <= std::abs(b->distance) ? a : b;
-      return a ? a : b;
+    std::vector<Surface> all;
+    if (part) all.push_back([ps = part](const Eigen::Vector3d& x) { return (*ps)(x); });
+    if (balls) all.push_back([bs = balls](const Eigen::Vector3d& x) { return (*bs)(x); });
+    if (boxes) all.push_back([xs = boxes](const Eigen::Vector3d& x) { return (*xs)(x); });
+    if (all.empty()) return {};
+    if (all.size() == 1) return all.front();
+    return [all](const Eigen::Vector3d& x) {
+      std::optional<Nearest> best;
+      for (const auto& s : all)
+        if (auto n = s(x); n && (!best || std::abs(n->distance) < std::abs(best->distance)))
+          best = n;
+      return best;
     };
   }
   void go(const Eigen::Vector3d& x, double speed, double accel) {
     if (!cmm.within_travel(x)) throw Fail{2500};
     if (!cmm.move(x, speed, accel, world())) throw Fail{2504};
+    // With the probe above every box, the operator may change the set-up: none is there until
+    // a PtMeas aims at one.
+    if (boxes && cmm.position().z() > boxes->top + cmm.tip_radius()) boxes->active->store(-1);
   }
 };
 

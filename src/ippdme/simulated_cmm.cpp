@@ -141,7 +141,9 @@ std::optional<SimulatedCmm::Contact> SimulatedCmm::touch(const Eigen::Vector3d& 
     if (r.contact && (r.overtravel || r.deflection.norm() >= o_.point_deflection)) {
       const double m = r.deflection.norm();
       const Eigen::Vector3d n = m > 0 ? Eigen::Vector3d(r.deflection / m) : Eigen::Vector3d(-d);
-      out = Contact{servo_.position() + r.deflection, n};
+      // A touch-trigger probe latches after its pre-travel, which varies with the direction.
+      out = Contact{
+          servo_.position() + r.deflection + sim::pretravel_lobing(o_.probe.lobing, d) * d, n};
       break;
     }
   }

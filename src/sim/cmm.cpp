@@ -211,6 +211,36 @@ void ProbeOptions::validate() const {
     throw Error(fmt::format("probe range = {:g}: must be in (0, 10] mm", range));
   if (!(noise >= 0 && noise <= 0.1))
     throw Error(fmt::format("probe noise = {:g} mm: must be in [0, 0.1] mm", noise));
+  if (!(lobing >= 0 && lobing <= 0.1))
+    throw Error(fmt::format("probe lobing = {:g} mm: must be in [0, 0.1] mm", lobing));
+}
+
+double pretravel_lobing(double lobing, const Eigen::Vector3d& d) {
+  if (lobing == 0) return 0;
+  const Eigen::Vector3d u = d.normalized();
+  return lobing * std::cos(3 * std::atan2(u.y(), u.x())) * (1 - u.z() * u.z());
+}
+
+Contour::Nearest Box::nearest(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d q = axes.transpose() * (x - centre);  // in the box's frame
+  const Eigen::Vector3d excess = q.cwiseAbs() - half;
+  Contour::Nearest n;
+  if ((excess.array() > 0).any()) {  // outside: the closest point of the box
+    const Eigen::Vector3d inner = q.cwiseMax(-half).cwiseMin(half);
+    const Eigen::Vector3d v = q - inner;
+    n.distance = v.norm();
+    n.point = centre + axes * inner;
+    n.normal = axes * (v / n.distance);
+    return n;
+  }
+  int k = 0;  // inside: the nearest face
+  excess.maxCoeff(&k);
+  Eigen::Vector3d inner = q;
+  inner[k] = q[k] >= 0 ? half[k] : -half[k];
+  n.distance = excess[k];  // ≤ 0
+  n.point = centre + axes * inner;
+  n.normal = axes.col(k) * (q[k] >= 0 ? 1.0 : -1.0);
+  return n;
 }
 
 SpaceCurve::SpaceCurve(Eigen::Matrix3Xd points, Eigen::Matrix3Xd normals)

@@ -753,6 +753,22 @@ import json; d = json.load(open('acc/acceptance.json')); d['placements'][0]['cen
 json.dump(d, open('acc/outside.json', 'w'), indent=1)"
 expect_code 1 "$T" acceptance e0 --machine acc/m.json --artefacts acc/outside.json --mpe 3 -o x.json
 grep -q "outside the volume" err.txt && ok || bad "acceptance: a placement outside the volume: $(cat err.txt)"
+# The same test over I++ DME on the served virtual CMM: the same lengths as in process.
+start_server --machine acc/m.json --artefacts acc/acceptance.json --port 0 --time-scale 0 --sessions 1
+grep -q "35 gauge blocks and the reference sphere of acc/acceptance.json (a position at a time)" serve.txt && ok || bad "serve --artefacts: $(cat serve.txt)"
+expect_code 1 "$T" acceptance e0 --cmm "ipp://127.0.0.1:$PORT" --machine acc/m.json --artefacts acc/acceptance.json --mpe "1.5+L/300" -o acc/e0-ipp.json
+end_server
+python3 -c "
+import json, sys
+a = json.load(open('acc/e0.json')); b = json.load(open('acc/e0-ipp.json'))
+ok = b['complete'] and len(b['lengths']) == 105
+ok = ok and max(abs(x['error_um'] - y['error_um']) for x, y in zip(a['lengths'], b['lengths'])) < 0.05
+sys.exit(0 if ok else 1)" && ok || bad "acceptance e0 over I++ DME agrees with the virtual CMM in process"
+expect_code 2 "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --artefacts acc/acceptance.json --mpe 3 -o x.json
+grep -q "travel" err.txt && ok || bad "acceptance --cmm without a travel: $(cat err.txt)"
+expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,-100,800,600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
+echo '{"sphere": {"centre": [0, 0], "diameter_mm": 25}}' > acc/bad.json
+expect_err "acc/bad.json:1:[0-9]*: sphere.centre: three numbers" "$T" serve --artefacts acc/bad.json --port 0
 
 echo "cli: $passes passed, $fails failed"
 [ "$fails" -eq 0 ]

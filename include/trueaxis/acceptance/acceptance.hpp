@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "trueaxis/ballgauge/lengths.hpp"
+#include "trueaxis/sim/cmm.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::acceptance {
@@ -71,9 +72,11 @@ struct Setup {
   double temperature = 20;     // °C, the artefacts'
   double u_temperature = 0.2;  // K
   double u_alignment = 0;      // mm, standard uncertainty of a length from its alignment
-  // The blocks' cross-section (mm): what two placements must not share, and the clearance a
-  // face is approached with.
+  // The blocks' cross-section (mm), as a long gauge block's: block_width across the line
+  // (horizontal where the line is not vertical) and block_height across both; two placements of
+  // a position must not come closer than block_width.
   double block_width = 35;
+  double block_height = 9;
   double approach = 5;  // mm: a face is approached from this far out
   int repetitions = 3;
   // Throws Error naming the first problem (a placement of an unknown block, a direction that is
@@ -104,10 +107,18 @@ struct Position {
 // along it).
 std::vector<Position> positions(const Setup& setup, const Volume& volume);
 
+// The blocks as boxes (length × block_width × block_height) in the machine, each one's group
+// its position's index (positions are set up one after another).
+std::vector<sim::Box> artefact_boxes(const Setup& setup);
+// A block's axes: the line's direction, across it (horizontal unless the line is vertical, then
+// along Y), and the third.
+Eigen::Matrix3d block_axes(const Eigen::Vector3d& direction);
+
 // A set-up that fits `volume` and the standard: the 4 space diagonals and lines along X, Y and Z
 // through its middle, each with 5 blocks side by side (0.7, 0.55, 0.4, 0.25 and 0.1 of the
-// travel along it, to 10 mm), and a 25 mm reference sphere low in a corner. Positions are set up
-// one after another.
+// travel along it, to 10 mm), and a 25 mm reference sphere low in the volume where it is
+// farthest from the blocks; the blocks' temperature known to 0.05 K and their alignment to
+// 0.1 µm. Positions are set up one after another.
 Setup example_setup(const Volume& volume);
 
 // Measures a point: the surface whose nominal point is `at` (mm, machine coordinates), approached

@@ -42,7 +42,8 @@
 //
 // The world the probe meets: with a part (sections of a simulated part, placed at
 // `part_origin`) the probe meets its sections, and with balls (a ball gauge standing on the
-// table) their spheres; with neither, each command meets the surface it describes (the nominal
+// table) their spheres, and with boxes (gauge blocks) theirs; with none, each command meets the
+// surface it describes (the nominal
 // world: PtMeas meets the plane through its point normal to its direction, ScanOnCircle the cone of
 // its circle, ScanOnCurve its curve).
 //
@@ -75,6 +76,15 @@ struct EngineOptions {
   std::optional<sim::Part> part;  // the simulated part (none: the nominal world)
   Eigen::Vector3d part_origin = Eigen::Vector3d::Zero();  // its design origin (machine, mm)
   std::vector<sim::Ball> balls;  // spheres the probe meets, with or without a part
+  // Boxes the probe meets (gauge blocks). Those of one group are set up together, the groups
+  // one after another, as an operator sets up the position being measured: a group is there
+  // from a PtMeas whose nominal point is nearest one of its boxes until the probe is moved above
+  // every box (then none is, until the next PtMeas).
+  std::vector<sim::Box> boxes;
+  // The controller's error correction (an error map or a model): it maps a point as the scales
+  // read it to the corrected one. Every position and point reported is corrected, and every
+  // position commanded is reached through it (its inverse). Empty: none.
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> correction;
   Eigen::Vector3d table_centre = Eigen::Vector3d::Zero();  // on the rotary table's axis (mm)
   // Machine time against the wall clock: 1 runs in real time, 0 as fast as the simulation goes
   // (for tests and batch runs), 0.1 ten times faster than real time.

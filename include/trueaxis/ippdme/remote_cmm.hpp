@@ -78,6 +78,14 @@ class RemoteCmm : public scan::Machine {
                                  bool closed, double length, double speed,
                                  const scan::ScanSettings& settings) override;
 
+  // One point as measuring software takes it: PtMeas of the nominal surface point `at` with
+  // its outward normal, the tip starting `approach` mm (plus its radius) out along the normal
+  // and searching `search` mm beyond `at` at `speed` (mm/s), retracting 1 mm. The surface point
+  // and normal as reported; nothing when no surface was met (1006). Throws Error for any other
+  // error of the server.
+  std::optional<scan::Touch> measure(const Eigen::Vector3d& at, const Eigen::Vector3d& normal,
+                                     double approach, double search, double speed);
+
   // The stylus stays as the server's tool has it (taken to be vertical): any other orientation
   // is refused (scan::NoWay: the section is not scanned, the machine has not moved).
   void orient(const Eigen::Vector3d& axis) override;
@@ -102,6 +110,7 @@ class RemoteCmm : public scan::Machine {
   bool in_plane_scans_ = true;  // ScanInPlaneEndIsSphere in its 1.4.3 form
   double goto_speed_ = -1, scan_speed_ = -1;
   double touch_search_ = -1, touch_speed_ = -1;  // PtMeasPar as last set by touch()
+  double touch_approach_ = 0;                    // (measure() sets the approach too)
   mutable long commands_ = 0;
   // Every command goes through call(), which counts it.
   Transaction call(const std::string& command) const;

@@ -133,12 +133,33 @@ struct Ball {
   double radius = 0;
 };
 
+// A box standing in the machine, such as a gauge block: its centre, its axes (the columns of
+// `axes`, orthonormal) and half its size along each (mm, machine coordinates). `group`: which
+// set-up it belongs to (artefacts set up one after another).
+struct Box {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d half = Eigen::Vector3d::Ones();
+  int group = 0;
+  // The nearest point of its surface to x, the outward normal there, and the signed distance
+  // (> 0 outside; inside, to the nearest face).
+  Contour::Nearest nearest(const Eigen::Vector3d& x) const;
+};
+
+// A touch-trigger probe's pre-travel variation with the probing direction d (unit, machine
+// frame; the stylus along −Z): lobing·cos(3φ)·sin²θ, φ the azimuth of d and θ its angle from
+// the stylus axis — the three lobes of a kinematic probe's three contacts, its mean taken out by
+// the probe's qualification (mm). The point latched lies this much further along d.
+double pretravel_lobing(double lobing, const Eigen::Vector3d& d);
+
 struct ProbeOptions {
   double tip_radius = 1.0;  // ball radius (mm)
   double range = 1.0;       // measuring range of the deflection (mm)
   double noise = 0;         // standard deviation of each deflection component (mm)
+  double lobing = 0;        // single points: pre-travel variation (pretravel_lobing, mm)
   std::uint64_t seed = 1;
-  void validate() const;  // throws Error: radius in (0, 50], range in (0, 10], noise in [0, 0.1]
+  // Throws Error: radius in (0, 50], range in (0, 10], noise and lobing in [0, 0.1].
+  void validate() const;
 };
 
 struct ProbeReading {

@@ -43,6 +43,7 @@ acceptance::Setup read_acceptance_setup(const std::string& path) {
   s.u_temperature = setup_optional(f, P("/u_temperature_K"), s.u_temperature);
   s.u_alignment = setup_optional(f, P("/u_alignment_um"), s.u_alignment, 1e-3);
   s.block_width = setup_optional(f, P("/block_width_mm"), s.block_width);
+  s.block_height = setup_optional(f, P("/block_height_mm"), s.block_height);
   s.approach = setup_optional(f, P("/approach_mm"), s.approach);
   if (f.has(P("/repetitions"))) {
     const double r = f.number(P("/repetitions"));
@@ -114,6 +115,7 @@ void write_acceptance_setup(const std::string& path, const acceptance::Setup& s)
   j["u_temperature_K"] = s.u_temperature;
   j["u_alignment_um"] = s.u_alignment * 1e3;
   j["block_width_mm"] = s.block_width;
+  j["block_height_mm"] = s.block_height;
   j["approach_mm"] = s.approach;
   j["repetitions"] = s.repetitions;
   j["blocks"] = ojson::array();

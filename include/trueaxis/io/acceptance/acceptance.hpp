@@ -4,7 +4,7 @@
 // acceptance.json (`"kind": "acceptance-setup"`), as the user sets the artefacts up, in the
 // machine's coordinates (mm):
 //   {"temperature_C": 20.1, "u_temperature_K": 0.2, "u_alignment_um": 0.05,
-//    "block_width_mm": 35, "approach_mm": 5, "repetitions": 3,
+//    "block_width_mm": 35, "block_height_mm": 9, "approach_mm": 5, "repetitions": 3,
 //    "blocks": [{"id": "G0100", "length_mm": 100.00012, "u_um": 0.04,
 //                "alpha_per_K": 11.5e-6, "u_alpha_per_K": 1e-6}, ...],
 //    "placements": [{"block": "G0100", "position": "diagonal 1", "centre": [x, y, z],
