@@ -13,6 +13,7 @@
 #include "trueaxis/io/acceptance/acceptance.hpp"
 #include "trueaxis/ippdme/acceptance.hpp"
 #include "trueaxis/ippdme/remote_cmm.hpp"
+#include "trueaxis/report/acceptance.hpp"
 #include "trueaxis/sim/machine.hpp"
 
 namespace trueaxis::cli {
@@ -23,7 +24,7 @@ struct AcceptanceArgs {
   std::string cmm, log;
   std::vector<double> travel;
   double clearance = 5;
-  std::string artefacts, output;
+  std::string artefacts, output, report;
   std::string mpe, r0_mpe;
   double stylus_offset = 0;
   double mpe_form_um = 0, mpe_size_um = 0;
@@ -90,6 +91,13 @@ int run_e0(const AcceptanceArgs& a) {
   const auto r = acceptance::run_e0(setup, cmm->volume, cmm->touch, o);
   progress.done();
   io::write_e0_result(a.output, r);
+  if (!a.report.empty())
+    report::write(
+        a.report,
+        report::render(
+            "trueaxis CMM acceptance: length measuring error",
+            {from_file(report::e0_section("Length measuring error (ISO 10360-2)", r), a.artefacts)},
+            4000, report_meta()));
   const bool pass = r.verdict == acceptance::Verdict::Conforms && r.r0_pass.value_or(true);
   if (!a.quiet || !pass) fmt::print("{} -> {}\n", r.summary(), a.output);
   if (!r.complete) {
@@ -108,6 +116,15 @@ int run_probing(const AcceptanceArgs& a) {
   const auto cmm = open_cmm(a, setup);
   const auto r = acceptance::run_probing(setup, cmm->touch, o);
   io::write_probing_result(a.output, r);
+  if (!a.report.empty())
+    report::write(
+        a.report,
+        report::render("trueaxis CMM acceptance: probing errors",
+                       {from_file(report::probing_section(
+                                      "Probing errors on the reference sphere (ISO 10360-5)", r,
+                                      setup.sphere->pole),
+                                  a.artefacts)},
+                       4000, report_meta()));
   const bool pass =
       r.form_verdict.value_or(acceptance::Verdict::Conforms) == acceptance::Verdict::Conforms &&
       r.size_verdict.value_or(acceptance::Verdict::Conforms) == acceptance::Verdict::Conforms;
@@ -140,6 +157,8 @@ void add_common(CLI::App* c, AcceptanceArgs& a, const char* output) {
   c->add_option("--seed", a.seed, "seed of the probe's noise")->capture_default_str();
   a.output = output;
   c->add_option("--output,-o", a.output, "result JSON")->capture_default_str();
+  c->add_option("--report", a.report, "HTML report: the figures, the verdict and its rule, plots");
+  add_meta_option(c);
   c->add_flag("--quiet,-q", a.quiet, "print nothing when the test passes");
 }
 

@@ -102,6 +102,11 @@ std::vector<Command> add_circular_commands(CLI::App& app, CLI::App& simulate);
 
 // ipp check (ipp_cmds.cpp).
 std::vector<Command> add_ipp_commands(CLI::App& app);
+// The demo's CMM acceptance scenario (demo_acceptance.cpp): writes acceptance.json, e0-before.json,
+// e0.json and probing.json into `dir`; returns its report section.
+report::Section demo_acceptance(const sim::Machine& machine, const std::string& dir,
+                                std::uint64_t seed,
+                                const std::function<void(const std::string&)>& say);
 // 'acceptance e0', 'acceptance probing'.
 std::vector<Command> add_acceptance_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);

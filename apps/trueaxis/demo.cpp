@@ -594,6 +594,9 @@ int run_demo(const DemoOptions& o) {
   }
   sections.push_back(std::move(ls));
 
+  // Scenario: the CMM accepted by ISO 10360-2 and -5, failing, mapped and corrected.
+  sections.push_back(demo_acceptance(machine, dir.string(), o.seed, say));
+
   // Scenario 6: error-tolerant scanning of NIST's I++ test part, from its STEP file, on the same
   // CMM (its geometric errors included). Two parts of a batch that sit 1.8 mm off in the fixture
   // and carry a 2 mm bump the design does not have.

@@ -406,12 +406,12 @@ std::string svg(const SurfaceView& v) {
         f.X(U(x0, y0)), f.Y(V(x0, y0, hmin)), f.X(U(x, y)), f.Y(V(x, y, hmin)), f.X(U(x, y)) + 3,
         f.Y(V(x, y, hmin)) + 12, name);
   };
-  s += arrow(x0 + ax, y0, "x") + arrow(x0, y0 + ax, "y");
+  s += arrow(x0 + ax, y0, v.x_name.c_str()) + arrow(x0, y0 + ax, v.y_name.c_str());
   s += colour_bar(f, sc, v.value_label);
   s += fmt::format(
-      "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#444\">heights ×{:g} over the plate "
+      "<text x=\"{:.1f}\" y=\"{:.1f}\" fill=\"#444\">heights ×{:g} over {} "
       "(isometric view; grey: the lines at the lowest height)</text>",
-      f.left, f.top + f.ph + 30, mag);
+      f.left, f.top + f.ph + 30, mag, escape(v.base));
   return s + "</svg>";
 }
 

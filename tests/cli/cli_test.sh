@@ -741,10 +741,13 @@ ok = r['kind'] == 'acceptance-e0' and len(r['lengths']) == 105 and r['pass'] is 
 ok = ok and r['E0_max_um'] == max(abs(l['error_um']) for l in r['lengths'])
 ok = ok and all(len(l['endpoints']) == 2 and len(l['endpoints'][0]) == 3 for l in r['lengths'])
 sys.exit(0 if ok else 1)" && ok || bad "acceptance e0 json"
-expect_ok "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "40" -o acc/e0-wide.json -q
+expect_ok "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "40" -o acc/e0-wide.json -q --report acc/e0.html --meta "machine=Prismo 7"
+grep -q "Length error against nominal length, one colour per position" acc/e0.html && grep -q "Prismo 7" acc/e0.html && grep -q "conforms" acc/e0.html && ok || bad "acceptance e0 report"
 [ ! -s out.txt ] && ok || bad "acceptance e0 -q prints nothing on a pass"
 expect_code 0 "$T" acceptance probing --machine acc/m.json --artefacts acc/acceptance.json --mpe-form 1.8 --mpe-size 1.5 --lobing 0.5 --noise 0.1 -o acc/probing.json
 grep -q "PForm .* µm, PSize .*; PForm conforms" out.txt && ok || bad "acceptance probing: $(cat out.txt)"
+expect_ok "$T" acceptance probing --machine acc/m.json --artefacts acc/acceptance.json --lobing 0.5 -o acc/probing2.json --report acc/probing.html -q
+grep -q "Radial deviations of the 25 points" acc/probing.html && ok || bad "acceptance probing report"
 expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json -o x.json
 expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "fast" -o x.json
 grep -q "MPE 'fast'" err.txt && ok || bad "acceptance: a bad MPE named: $(cat err.txt)"

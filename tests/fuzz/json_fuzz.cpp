@@ -3,6 +3,8 @@
 #include <cstdint>
 
 #include "fuzz_util.hpp"
+#include "trueaxis/acceptance/acceptance.hpp"
+#include "trueaxis/io/acceptance/acceptance.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/circular/circular.hpp"
 #include "trueaxis/io/circular/compensation.hpp"
@@ -23,7 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 15) {
+    switch (data[0] % 16) {
       case 0:
         io::read_machine(p);
         break;
@@ -68,6 +70,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 14:
         io::read_compensation_json(p);
         break;
+      case 15: {  // a CMM acceptance set-up, checked against the standard and a volume
+        const auto setup = io::read_acceptance_setup(p);
+        acceptance::Volume v;
+        v.high = Eigen::Vector3d(800, 600, 500);
+        if (!setup.placements.empty()) {
+          acceptance::artefact_boxes(setup);
+          acceptance::positions(setup, v);
+        }
+        break;
+      }
       default:
         io::read_positioning_result(p);
         break;

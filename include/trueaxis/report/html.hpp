@@ -99,8 +99,10 @@ struct SurfaceView {
   std::string title;
   std::string value_label;  // the height with its unit, e.g. "height (µm)"
   std::vector<Eigen::Matrix3Xd> lines;
-  double magnification = 0;  // heights drawn ×this; 0: automatic (span → 15 % of size)
-  int width = 620;           // px
+  double magnification = 0;        // heights drawn ×this; 0: automatic (span → 15 % of size)
+  int width = 620;                 // px
+  std::string base = "the plate";  // what the heights stand over, for the caption
+  std::string x_name = "x", y_name = "y";  // the plane's axes, at their arrows
 };
 
 // Curves in a plane at true aspect ratio, each in its own colour with a legend: e.g. a scanned
