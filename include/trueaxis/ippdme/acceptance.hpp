@@ -24,7 +24,7 @@ struct AcceptanceProbingOptions {
   double escape = 30;       // mm out from a face before going up or across
   double search = 3;        // mm searched beyond a face's nominal place
   double speed = 5;         // probing speed (mm/s)
-  double move_speed = 100;  // moves (mm/s)
+  double move_speed = 300;  // moves (mm/s), a bridge CMM's usual positioning speed
   void validate() const;    // throws Error naming the option
 };
 
