@@ -36,10 +36,15 @@ ResultFile read_result_file(const std::string& path) {
     f.result = read_scan(path);
   } else if (k == "circular") {
     f.result = read_circular_result(path);
+  } else if (k == "acceptance-e0") {
+    f.result = read_e0_result(path);
+  } else if (k == "acceptance-probing") {
+    f.result = read_probing_result(path);
   } else {
     throw Error(fmt::format(
         "{}: {} is not a result trueaxis writes (results: separation, surface, space, guideway, "
-        "positioning, ballgauge map, parametric model, length verification, fit, scan, circular)",
+        "positioning, ballgauge map, parametric model, length verification, fit, scan, circular, "
+        "acceptance-e0, acceptance-probing)",
         path, k.empty() ? "a file with no \"kind\"" : fmt::format("a '{}' file", k)));
   }
   return f;

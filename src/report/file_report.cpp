@@ -6,6 +6,7 @@
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/result_file.hpp"
+#include "trueaxis/report/acceptance.hpp"
 #include "trueaxis/report/ballgauge.hpp"
 #include "trueaxis/report/circular.hpp"
 #include "trueaxis/report/files.hpp"
@@ -62,6 +63,12 @@ FileReport file_report(const std::string& path) {
           r.section = circular_section(
               fmt::format("Circular test in {} (ISO 230-4)", v.result.plane.name()), v.result,
               v.trace);
+        } else if constexpr (std::is_same_v<T, acceptance::E0Result>) {
+          r.title = "trueaxis CMM acceptance: length measuring error";
+          r.section = e0_section("Length measuring error (ISO 10360-2)", v);
+        } else if constexpr (std::is_same_v<T, acceptance::ProbingResult>) {
+          r.title = "trueaxis CMM acceptance: probing errors";
+          r.section = probing_section("Probing errors on the reference sphere (ISO 10360-5)", v);
         } else {
           static_assert(std::is_same_v<T, io::ScanFile>);
           r.title = "trueaxis scanning report";

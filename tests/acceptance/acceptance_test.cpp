@@ -270,3 +270,58 @@ TEST(Acceptance, SetUpFilesRoundTripAndBadOnesAreRefused) {
   EXPECT_NE(refused(R"({"blocks": [)" + block + "," + block + "]}").find("twice"),
             std::string::npos);
 }
+
+// The results written and read back, and tampered ones refused where they are wrong.
+TEST(Acceptance, ResultFilesRoundTripAndBadOnesAreRefused) {
+  const auto m = default_volume_machine(2);
+  const auto volume = acceptance::Volume::of(m);
+  const auto setup = acceptance::example_setup(volume);
+  acceptance::VirtualProbeOptions probe;
+  probe.noise = 0.2e-3;
+  probe.lobing = 0.5e-3;
+  acceptance::E0Options o;
+  o.mpe = ballgauge::Mpe::parse("2.5+L/250");
+  o.r0 = ballgauge::Mpe::parse("1.5");
+  const auto e0 = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m, probe), o);
+  const std::string path = test::temp_dir() + "/e0-back.json";
+  io::write_e0_result(path, e0);
+  const auto back = io::read_e0_result(path);
+  ASSERT_EQ(back.lengths.size(), e0.lengths.size());
+  EXPECT_EQ(back.verdict, e0.verdict);
+  EXPECT_EQ(back.positions.size(), 7u);
+  EXPECT_NEAR(back.e0_max, e0.e0_max, 1e-15);
+  EXPECT_NEAR(back.r0_max, e0.r0_max, 1e-15);
+  EXPECT_NEAR((back.lengths[40].b - e0.lengths[40].b).norm(), 0, 1e-12);
+  ASSERT_TRUE(back.r0_pass);
+  EXPECT_EQ(*back.r0_pass, *e0.r0_pass);
+  const std::string text = test::read_file(path);
+  auto tampered = [&](const std::string& from, const std::string& to) {
+    std::string t = text;
+    const auto at = t.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) t.replace(at, from.size(), to);
+    return test::error_of([&] { io::read_e0_result(test::temp_file("bad-e0.json", t)); });
+  };
+  const std::string verdict = std::string("\"verdict\": \"") + acceptance::to_string(e0.verdict);
+  EXPECT_NE(tampered(verdict, "\"verdict\": \"fine").find("bad-e0.json:"), std::string::npos);
+  EXPECT_NE(tampered("\"error_um\": ", "\"error_um\": 1000 + ").find("bad-e0.json:"),
+            std::string::npos);
+  EXPECT_NE(tampered("\"E0_max_um\": ", "\"E0_max_um\": 1").find("E0_max_um is not"),
+            std::string::npos);
+  EXPECT_NE(tampered("\"acceptance-e0\"", "\"circular\"").find("acceptance-e0"), std::string::npos);
+  // Probing.
+  auto ps = setup;
+  const auto probing = acceptance::run_probing(ps, acceptance::virtual_touch(m, probe), {});
+  const std::string pp = test::temp_dir() + "/probing-back.json";
+  io::write_probing_result(pp, probing);
+  const auto pb = io::read_probing_result(pp);
+  EXPECT_NEAR(pb.form, probing.form, 1e-15);
+  EXPECT_EQ(pb.points.cols(), 25);
+  EXPECT_FALSE(pb.form_verdict);
+  std::string pt = test::read_file(pp);
+  pt.replace(pt.find("\"PForm_um\": "), 12, "\"PForm_um\": 9");
+  EXPECT_NE(test::error_of([&] {
+              io::read_probing_result(test::temp_file("bad-p.json", pt));
+            }).find("PForm_um is not the range"),
+            std::string::npos);
+}

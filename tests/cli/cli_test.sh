@@ -748,6 +748,8 @@ expect_code 0 "$T" acceptance probing --machine acc/m.json --artefacts acc/accep
 grep -q "PForm .* µm, PSize .*; PForm conforms" out.txt && ok || bad "acceptance probing: $(cat out.txt)"
 expect_ok "$T" acceptance probing --machine acc/m.json --artefacts acc/acceptance.json --lobing 0.5 -o acc/probing2.json --report acc/probing.html -q
 grep -q "Radial deviations of the 25 points" acc/probing.html && ok || bad "acceptance probing report"
+expect_ok "$T" report acc/e0.json -o acc/e0-again.html
+grep -q "Length measuring error (ISO 10360-2)" acc/e0-again.html && grep -q "acceptance-e0" out.txt && ok || bad "report of a saved acceptance result: $(cat out.txt)"
 expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json -o x.json
 expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "fast" -o x.json
 grep -q "MPE 'fast'" err.txt && ok || bad "acceptance: a bad MPE named: $(cat err.txt)"

@@ -7,6 +7,7 @@
 #include <variant>
 #include <vector>
 
+#include "trueaxis/io/acceptance/acceptance.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/circular/circular.hpp"
 #include "trueaxis/io/positioning/positioning.hpp"
@@ -22,10 +23,10 @@ struct SpaceFile {
   std::optional<surface::Verification> verification;
 };
 
-using AnyResult =
-    std::variant<separation::Result, surface::Result, SpaceFile, guideway::Result, PositioningFile,
-                 ballgauge::Result, ballgauge::ParametricResult,
-                 std::vector<ballgauge::LengthVerification>, geometry::Fit, ScanFile, CircularFile>;
+using AnyResult = std::variant<separation::Result, surface::Result, SpaceFile, guideway::Result,
+                               PositioningFile, ballgauge::Result, ballgauge::ParametricResult,
+                               std::vector<ballgauge::LengthVerification>, geometry::Fit, ScanFile,
+                               CircularFile, acceptance::E0Result, acceptance::ProbingResult>;
 
 struct ResultFile {
   std::string kind;  // as the file states it ("separation", "ballgauge map", ...)

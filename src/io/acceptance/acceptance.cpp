@@ -208,4 +208,123 @@ void write_probing_result(const std::string& path, const acceptance::ProbingResu
   write_json(path, j);
 }
 
+namespace {
+
+acceptance::Verdict verdict_of(const JsonFile& f, const P& at) {
+  const std::string v = f.string(at);
+  for (const auto k : {acceptance::Verdict::Conforms, acceptance::Verdict::DoesNotConform,
+                       acceptance::Verdict::NotProven})
+    if (v == acceptance::to_string(k)) return k;
+  f.fail(at, fmt::format("{}: '{}' is not a verdict (conforms, does not conform, not proven)",
+                         dotted(at), v));
+}
+
+void expect_kind(const JsonFile& f, const char* kind) {
+  f.object(P(""));
+  if (!f.has(P("/kind")) || f.string(P("/kind")) != kind)
+    f.fail(P("/kind"), fmt::format("not a result of this kind: \"kind\" must be \"{}\"", kind));
+}
+
+}  // namespace
+
+acceptance::E0Result read_e0_result(const std::string& path) {
+  const auto f = JsonFile::read(path);
+  expect_kind(f, "acceptance-e0");
+  acceptance::E0Result r;
+  r.mpe_text = f.string(P("/mpe"));
+  if (f.has(P("/stylus_offset_mm"))) r.stylus_offset = f.number(P("/stylus_offset_mm"));
+  if (f.has(P("/r0_mpe"))) {
+    r.r0_text = f.string(P("/r0_mpe"));
+    if (f.has(P("/r0_pass"))) {
+      if (!f.root().at(P("/r0_pass")).is_boolean()) f.fail(P("/r0_pass"), "r0_pass: true or false");
+      r.r0_pass = f.root().at(P("/r0_pass")).get<bool>();
+    }
+  }
+  r.verdict = verdict_of(f, P("/verdict"));
+  r.rule = f.string(P("/rule"));
+  if (!f.root().at(P("/complete")).is_boolean()) f.fail(P("/complete"), "complete: true or false");
+  r.complete = f.root().at(P("/complete")).get<bool>();
+  if (f.has(P("/stopped"))) r.stopped = f.string(P("/stopped"));
+  const auto& positions = f.array(P("/positions"));
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    const P at = P("/positions") / i;
+    acceptance::Position pos;
+    pos.name = f.string(at / "name");
+    pos.direction = setup_vector3(f, at / "direction");
+    pos.space_diagonal = f.root().at(at).value("space_diagonal", false);
+    r.positions.push_back(pos);
+  }
+  const auto& lengths = f.array(P("/lengths"));
+  for (std::size_t i = 0; i < lengths.size(); ++i) {
+    const P at = P("/lengths") / i;
+    acceptance::LengthResult l;
+    l.position = f.string(at / "position");
+    l.block = f.string(at / "block");
+    const double rep = f.number(at / "repetition");
+    if (rep != std::floor(rep) || rep < 1 || rep > 100)
+      f.fail(at / "repetition", "repetition: a whole number 1 … 100");
+    l.repetition = static_cast<int>(rep);
+    l.nominal = f.number(at / "nominal_mm");
+    l.measured = f.number(at / "measured_mm");
+    l.error = f.number(at / "error_um") * 1e-3;
+    if (std::abs(l.error - (l.measured - l.nominal)) > 1e-9 * std::max(1.0, l.nominal))
+      f.fail(at / "error_um", "error_um is not measured_mm less nominal_mm");
+    l.mpe = f.number(at / "mpe_um") * 1e-3;
+    l.U = f.number(at / "U_um") * 1e-3;
+    const auto& ends = f.array(at / "endpoints");
+    if (ends.size() != 2) f.fail(at / "endpoints", "endpoints: two points [[x, y, z], [x, y, z]]");
+    l.a = setup_vector3(f, at / "endpoints" / 0);
+    l.b = setup_vector3(f, at / "endpoints" / 1);
+    r.e0_max = std::max(r.e0_max, std::abs(l.error));
+    r.lengths.push_back(l);
+  }
+  if (std::abs(f.number(P("/E0_max_um")) * 1e-3 - r.e0_max) > 1e-9)
+    f.fail(P("/E0_max_um"), "E0_max_um is not the largest |error_um| of the lengths");
+  for (std::size_t i = 0; i < f.array(P("/r0")).size(); ++i) {
+    const P at = P("/r0") / i;
+    r.r0.push_back({f.string(at / "position"), f.string(at / "block"), f.number(at / "nominal_mm"),
+                    f.number(at / "range_um") * 1e-3});
+    r.r0_max = std::max(r.r0_max, r.r0.back().range);
+  }
+  if (std::abs(f.number(P("/R0_max_um")) * 1e-3 - r.r0_max) > 1e-9)
+    f.fail(P("/R0_max_um"), "R0_max_um is not the largest range_um of r0");
+  return r;
+}
+
+acceptance::ProbingResult read_probing_result(const std::string& path) {
+  const auto f = JsonFile::read(path);
+  expect_kind(f, "acceptance-probing");
+  acceptance::ProbingResult r;
+  r.form = f.number(P("/PForm_um")) * 1e-3;
+  r.size = f.number(P("/PSize_um")) * 1e-3;
+  r.diameter = f.number(P("/diameter_mm"));
+  r.centre = setup_vector3(f, P("/centre"));
+  r.U_form = f.number(P("/U_form_um")) * 1e-3;
+  r.U_size = f.number(P("/U_size_um")) * 1e-3;
+  auto optional_mm = [&](const char* key) -> std::optional<double> {
+    const P at = P("/") / key;
+    if (!f.has(at) || f.root().at(at).is_null()) return std::nullopt;
+    return f.number(at) * 1e-3;
+  };
+  r.mpe_form = optional_mm("mpe_form_um");
+  r.mpe_size = optional_mm("mpe_size_um");
+  for (const char* key : {"form_verdict", "size_verdict"}) {
+    const P at = P("/") / key;
+    if (f.has(at) && !f.root().at(at).is_null())
+      (key[0] == 'f' ? r.form_verdict : r.size_verdict) = verdict_of(f, at);
+  }
+  if (f.has(P("/rule"))) r.rule = f.string(P("/rule"));
+  const auto& points = f.array(P("/points"));
+  r.points.resize(3, static_cast<Eigen::Index>(points.size()));
+  r.radial.resize(static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const P at = P("/points") / i;
+    r.points.col(static_cast<Eigen::Index>(i)) = setup_vector3(f, at / "xyz");
+    r.radial[static_cast<Eigen::Index>(i)] = f.number(at / "radial_um") * 1e-3;
+  }
+  if (points.size() > 0 && std::abs(r.radial.maxCoeff() - r.radial.minCoeff() - r.form) > 1e-9)
+    f.fail(P("/PForm_um"), "PForm_um is not the range of the points' radial_um");
+  return r;
+}
+
 }  // namespace trueaxis::io

@@ -33,5 +33,10 @@ acceptance::Setup read_acceptance_setup(const std::string& path);
 void write_acceptance_setup(const std::string& path, const acceptance::Setup& setup);
 void write_e0_result(const std::string& path, const acceptance::E0Result& result);
 void write_probing_result(const std::string& path, const acceptance::ProbingResult& result);
+// The results read back (for reports and records). Refused with file:line:col: a field of the
+// wrong type, a verdict that is not one, a length whose error is not its measured less its
+// nominal, an E0_max_um or PForm_um that its lengths or points do not give.
+acceptance::E0Result read_e0_result(const std::string& path);
+acceptance::ProbingResult read_probing_result(const std::string& path);
 
 }  // namespace trueaxis::io
