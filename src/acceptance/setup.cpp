@@ -6,30 +6,13 @@
 
 #include "trueaxis/acceptance/acceptance.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/geometry/distance.hpp"
 
 namespace trueaxis::acceptance {
 namespace {
 
 // Directions within 2° are one line's (as ballgauge::LengthOptions takes them).
 constexpr double kParallel = 0.99939;  // cos 2°
-
-// The closest distance between the segments p0–p1 and q0–q1 (mm).
-double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1,
-                        const Eigen::Vector3d& q0, const Eigen::Vector3d& q1) {
-  const Eigen::Vector3d d1 = p1 - p0, d2 = q1 - q0, r = p0 - q0;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  const double c = d1.dot(r), b = d1.dot(d2), den = a * e - b * b;
-  double s = den > 1e-12 * a * e ? std::clamp((b * f - c * e) / den, 0.0, 1.0) : 0.0;
-  double t = (b * s + f) / e;
-  if (t < 0) {
-    t = 0;
-    s = std::clamp(-c / a, 0.0, 1.0);
-  } else if (t > 1) {
-    t = 1;
-    s = std::clamp((b - c) / a, 0.0, 1.0);
-  }
-  return (p0 + s * d1 - (q0 + t * d2)).norm();
-}
 
 // The length of the line through p along unit d inside the volume (mm).
 double chord(const Volume& v, const Eigen::Vector3d& p, const Eigen::Vector3d& d) {
@@ -188,8 +171,9 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
               : p.position == q.position;
       if (!together) continue;
       const double hp = setup.block(p.block).length / 2, hq = setup.block(q.block).length / 2;
-      const double d = segment_distance(p.centre - hp * p.direction, p.centre + hp * p.direction,
-                                        q.centre - hq * q.direction, q.centre + hq * q.direction);
+      const double d = std::sqrt(
+          geometry::segment_distance2(p.centre - hp * p.direction, p.centre + hp * p.direction,
+                                      q.centre - hq * q.direction, q.centre + hq * q.direction));
       if (d < setup.block_width)
         why.push_back(fmt::format(
             "placements {} and {} (blocks '{}' and '{}') overlap: their axes come {:.1f} mm "
@@ -255,7 +239,7 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
 
 Setup example_setup(const Volume& volume) {
   Setup s;
-  s.u_temperature = 0.05;   // K: a room at 20 ± 0.5 °C, the blocks' thermometer calibrated
+  s.u_temperature = 0.05;  // K: a room at 20 ± 0.5 °C, the blocks' thermometer calibrated
   s.u_alignment = 0.1e-3;  // mm
   const Eigen::Vector3d size = volume.high - volume.low, middle = (volume.low + volume.high) / 2;
   struct Line {

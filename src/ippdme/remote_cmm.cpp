@@ -214,26 +214,8 @@ std::optional<scan::Touch> RemoteCmm::touch(const design::Plane&, const Eigen::V
   // PtMeas starts `Approach` plus the tip radius off its nominal point, along IJK, and searches
   // `Search` beyond it: with Approach 0 the nominal point is one tip radius ahead of the start.
   const Eigen::Vector3d d = direction.normalized();
-  const double r = o_.tip_radius, search = std::max(0.1, distance - r);
-  if (search != touch_search_ || speed != touch_speed_ || touch_approach_ != 0) {
-    must(
-        fmt::format("SetProp(Tool.PtMeasPar.Approach(0), Tool.PtMeasPar.Search({:g}), "
-                    "Tool.PtMeasPar.Speed({:g}), Tool.PtMeasPar.Retract(1))",
-                    search, speed));
-    touch_search_ = search;
-    touch_speed_ = speed;
-    touch_approach_ = 0;
-  }
-  const auto tr = run(fmt::format("PtMeas({}, {})", xyz(start + r * d), ijk(-d)));
-  const double t = time();
-  if (!tr.errors.empty()) {
-    if (number(tr.errors.front()) == kSurfaceNotFound) return std::nullopt;
-    throw Error(fmt::format("I++ DME: PtMeas failed: {}", describe(tr.errors.front())));
-  }
-  const auto v = tr.numbers();
-  if (v.size() < 6) throw Error("I++ DME: PtMeas reported no point with its normal");
-  return scan::Touch{Eigen::Vector3d(v[0], v[1], v[2]),
-                     Eigen::Vector3d(v[3], v[4], v[5]).normalized(), t};
+  const double r = o_.tip_radius;
+  return measure(start + r * d, -d, 0, std::max(0.1, distance - r), speed);
 }
 
 std::optional<scan::Touch> RemoteCmm::measure(const Eigen::Vector3d& at,

@@ -15,6 +15,7 @@
 
 #include "../design/occt_api.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/geometry/distance.hpp"
 
 namespace trueaxis::solid {
 namespace {
@@ -43,35 +44,6 @@ V closest_on_triangle(const V& p, const V& a, const V& b, const V& c) {
   return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
-// Squared distance between segments p1–q1 and p2–q2.
-double segment_segment2(const V& p1, const V& q1, const V& p2, const V& q2) {
-  const V d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  double s = 0, t = 0;
-  constexpr double eps = 1e-30;
-  if (a <= eps && e <= eps) return r.squaredNorm();
-  if (a <= eps) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= eps) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2), denom = a * e - b * b;
-      s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1) {
-        t = 1;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  return (p1 + d1 * s - (p2 + d2 * t)).squaredNorm();
-}
-
 // Does segment p–q cross triangle abc?
 bool crosses(const V& p, const V& q, const V& a, const V& b, const V& c) {
   const V d = q - p, e1 = b - a, e2 = c - a;
@@ -93,9 +65,9 @@ double segment_triangle2(const V& p, const V& q, const V& a, const V& b, const V
   if (crosses(p, q, a, b, c)) return 0;
   double best = (closest_on_triangle(p, a, b, c) - p).squaredNorm();
   best = std::min(best, (closest_on_triangle(q, a, b, c) - q).squaredNorm());
-  best = std::min(best, segment_segment2(p, q, a, b));
-  best = std::min(best, segment_segment2(p, q, b, c));
-  best = std::min(best, segment_segment2(p, q, c, a));
+  best = std::min(best, geometry::segment_distance2(p, q, a, b));
+  best = std::min(best, geometry::segment_distance2(p, q, b, c));
+  best = std::min(best, geometry::segment_distance2(p, q, c, a));
   return best;
 }
 
@@ -337,8 +309,9 @@ double Mesh::highest_near(const V& up, const V& a, const V& b, double radius) co
     if (h <= best) continue;
     const V f0 = flat(p0), f1 = flat(p1), f2 = flat(p2);
     // A wall seen from above is a line: its edges decide. Otherwise the full test.
-    double d2 = std::min({segment_segment2(fa, fb, f0, f1), segment_segment2(fa, fb, f1, f2),
-                          segment_segment2(fa, fb, f2, f0)});
+    double d2 = std::min({geometry::segment_distance2(fa, fb, f0, f1),
+                          geometry::segment_distance2(fa, fb, f1, f2),
+                          geometry::segment_distance2(fa, fb, f2, f0)});
     if (d2 > r2 && (f1 - f0).cross(f2 - f0).norm() > 1e-12)
       d2 = std::min({d2, (closest_on_triangle(fa, f0, f1, f2) - fa).squaredNorm(),
                      (closest_on_triangle(fb, f0, f1, f2) - fb).squaredNorm()});

@@ -109,8 +109,8 @@ class RemoteCmm : public scan::Machine {
   std::string version_;
   bool in_plane_scans_ = true;  // ScanInPlaneEndIsSphere in its 1.4.3 form
   double goto_speed_ = -1, scan_speed_ = -1;
-  double touch_search_ = -1, touch_speed_ = -1;  // PtMeasPar as last set by touch()
-  double touch_approach_ = 0;                    // (measure() sets the approach too)
+  // PtMeasPar as last set (by measure(), through which touch() goes too).
+  double touch_search_ = -1, touch_speed_ = -1, touch_approach_ = 0;
   mutable long commands_ = 0;
   // Every command goes through call(), which counts it.
   Transaction call(const std::string& command) const;
