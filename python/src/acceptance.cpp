@@ -61,8 +61,8 @@ trueaxis.Machine: 35 gauge blocks in the 7 positions (the 4 space diagonals, alo
         py::dict d;
         d["kind"] = "acceptance-e0";
         d["mpe"] = r->mpe_text;
-        d["E0_max_um"] = r->e0_max * 1e3;
-        d["R0_max_um"] = r->r0_max * 1e3;
+        d["E0_max_um"] = r->lengths.empty() ? py::object(py::none()) : py::float_(r->e0_max * 1e3);
+        d["R0_max_um"] = r->r0.empty() ? py::object(py::none()) : py::float_(r->r0_max * 1e3);
         d["verdict"] = acceptance::to_string(r->verdict);
         d["pass"] = r->verdict == acceptance::Verdict::Conforms && r->r0_pass.value_or(true);
         d["rule"] = r->rule;

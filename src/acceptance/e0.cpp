@@ -125,7 +125,10 @@ void judge_e0(const Setup& setup, const E0Options& options, E0Result& result) {
   }
   result.r0.clear();
   result.r0_max = 0;
+  std::map<std::pair<std::string, std::string>, int> count;
+  for (const auto& row : result.lengths) ++count[{row.position, row.block}];
   for (const auto& key : order) {
+    if (count[key] < 2) continue;  // a range needs repetitions
     const auto& [lo, hi] = span[key];
     result.r0.push_back({key.first, key.second, setup.block(key.second).length, hi - lo});
     result.r0_max = std::max(result.r0_max, hi - lo);
@@ -147,10 +150,16 @@ void judge_e0(const Setup& setup, const E0Options& options, E0Result& result) {
 }
 
 std::string E0Result::summary() const {
-  std::string s = fmt::format(
-      "E{}: {} lengths in {} positions; largest |E| {:.2f} µm (MPE {}), R0 largest {:.2f} µm: {}",
-      stylus_offset ? fmt::format("{:g}", *stylus_offset) : std::string("0"), lengths.size(),
-      positions.size(), e0_max * 1e3, mpe_text, r0_max * 1e3, to_string(verdict));
+  const std::string e = stylus_offset ? fmt::format("E{:g}", *stylus_offset) : "E0";
+  std::string s =
+      lengths.empty()
+          ? fmt::format("{}: no length measured ({} positions set up): {}", e, positions.size(),
+                        to_string(verdict))
+          : fmt::format("{}: {} lengths in {} positions; largest |E| {:.2f} µm (MPE {}), {}: {}", e,
+                        lengths.size(), positions.size(), e0_max * 1e3, mpe_text,
+                        r0.empty() ? std::string("R0 not determined (no repetitions)")
+                                   : fmt::format("R0 largest {:.2f} µm", r0_max * 1e3),
+                        to_string(verdict));
   if (r0_pass) s += fmt::format("; R0 {} (MPE {})", *r0_pass ? "within" : "beyond", r0_text);
   if (!complete) s += "; stopped: " + stopped;
   return s;

@@ -40,8 +40,9 @@ Section e0_section(const std::string& title, const acceptance::E0Result& r) {
   s.title = title;
   s.references = {refs::kIso10360_2, kIso14253_1, refs::kGum};
   const std::string e = r.stylus_offset ? fmt::format("E{:g}", *r.stylus_offset) : "E0";
-  s.summary = fmt::format("{} {:.2f} µm (MPE {} µm): {}", e, r.e0_max * 1e3, r.mpe_text,
-                          acceptance::to_string(r.verdict));
+  s.summary = r.lengths.empty() ? fmt::format("{}: no length measured", e)
+                                : fmt::format("{} {:.2f} µm (MPE {} µm): {}", e, r.e0_max * 1e3,
+                                              r.mpe_text, acceptance::to_string(r.verdict));
   if (!r.complete)
     s.warnings.push_back(
         fmt::format("The test stopped after {} lengths: {}. What was measured "
@@ -59,26 +60,33 @@ Section e0_section(const std::string& title, const acceptance::E0Result& r) {
                                         }),
       verdict_html(r.verdict), escape(r.rule));
   s.table = {{"figure", "value (µm)", "MPE (µm)", "verdict"}};
-  s.table.push_back({fmt::format("{} (largest |E|)", e), fmt::format("{:.2f}", r.e0_max * 1e3),
+  s.table.push_back({fmt::format("{} (largest |E|)", e),
+                     r.lengths.empty() ? "not measured" : fmt::format("{:.2f}", r.e0_max * 1e3),
                      r.mpe_text, acceptance::to_string(r.verdict)});
-  s.table.push_back({"R0 (largest range of repetitions)", fmt::format("{:.2f}", r.r0_max * 1e3),
+  s.table.push_back({"R0 (largest range of repetitions)",
+                     r.r0.empty() ? "not determined" : fmt::format("{:.2f}", r.r0_max * 1e3),
                      r.r0_text.empty() ? "not specified" : r.r0_text,
                      r.r0_pass ? (*r.r0_pass ? "within" : "beyond") : ""});
   // Per position and length: the errors of the repetitions, R0, the MPE and U.
   std::vector<std::vector<std::string>> t = {
       {"position", "block", "nominal (mm)", "errors (µm)", "R0 (µm)", "MPE (µm)", "U (µm)"}};
   std::map<std::pair<std::string, std::string>, std::vector<double>> errors;
-  for (const auto& l : r.lengths) errors[{l.position, l.block}].push_back(l.error * 1e3);
-  for (const auto& x : r.r0) {
-    const auto& row = *std::find_if(r.lengths.begin(), r.lengths.end(), [&](auto& l) {
-      return l.position == x.position && l.block == x.block;
-    });
+  std::vector<const acceptance::LengthResult*> firsts;  // each length's first repetition
+  for (const auto& l : r.lengths) {
+    auto& list = errors[{l.position, l.block}];
+    if (list.empty()) firsts.push_back(&l);
+    list.push_back(l.error * 1e3);
+  }
+  for (const auto* row : firsts) {
     std::string list;
-    for (const double v : errors[{x.position, x.block}])
+    for (const double v : errors[{row->position, row->block}])
       list += (list.empty() ? "" : ", ") + fmt::format("{:+.2f}", v);
-    t.push_back({x.position, x.block, fmt::format("{:g}", x.nominal), list,
-                 fmt::format("{:.2f}", x.range * 1e3), fmt::format("{:.2f}", row.mpe * 1e3),
-                 fmt::format("{:.2f}", row.U * 1e3)});
+    const auto r0 = std::find_if(r.r0.begin(), r.r0.end(), [&](const auto& x) {
+      return x.position == row->position && x.block == row->block;
+    });
+    t.push_back({row->position, row->block, fmt::format("{:g}", row->nominal), list,
+                 r0 == r.r0.end() ? "—" : fmt::format("{:.2f}", r0->range * 1e3),
+                 fmt::format("{:.2f}", row->mpe * 1e3), fmt::format("{:.2f}", row->U * 1e3)});
   }
   s.more_tables.push_back({"Each length at each position (ISO 10360-2)", std::move(t)});
   if (r.lengths.empty()) return s;

@@ -142,6 +142,19 @@ TEST(Acceptance, AStoppedRunKeepsWhatWasMeasured) {
   EXPECT_EQ(r.lengths.size(), 10u);
   EXPECT_NE(r.stopped.find("1006"), std::string::npos);
   EXPECT_EQ(r.verdict, acceptance::Verdict::NotProven);  // all within, but not all measured
+  // Nothing measured: no figure (not a zero); one repetition: no R0.
+  acceptance::E0Result none;
+  acceptance::judge_e0(setup, o, none);
+  EXPECT_NE(none.summary().find("no length measured"), std::string::npos) << none.summary();
+  const std::string empty = test::temp_dir() + "/empty-e0.json";
+  io::write_e0_result(empty, none);
+  EXPECT_NE(test::read_file(empty).find("\"E0_max_um\": null"), std::string::npos);
+  EXPECT_TRUE(io::read_e0_result(empty).lengths.empty());
+  auto once = setup;
+  once.repetitions = 1;
+  const auto single = acceptance::run_e0(once, volume, inner, o);
+  EXPECT_TRUE(single.r0.empty());
+  EXPECT_NE(single.summary().find("R0 not determined"), std::string::npos) << single.summary();
   const std::string path = test::temp_dir() + "/stopped-e0.json";
   io::write_e0_result(path, r);
   const std::string text = test::read_file(path);
