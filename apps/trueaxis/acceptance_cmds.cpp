@@ -181,19 +181,11 @@ std::vector<Command> add_acceptance_commands(CLI::App& app) {
       "trueaxis acceptance e0 --machine machine.json --artefacts acceptance.json --mpe "
       "\"1.5+L/300\" -o e0.json");
   add_common(ce, *e, "e0.json");
-  const auto mpe_text = [](const std::string& t) {
-    try {
-      ballgauge::Mpe::parse(t);
-    } catch (const Error& err) {
-      return std::string(err.what());
-    }
-    return std::string();
-  };
   ce->add_option("--mpe", e->mpe, "E0,MPE in µm, L in mm: \"A\", \"A+L/K\" or \"A+L/K,B\"")
       ->required()
-      ->check(mpe_text);
+      ->check(mpe_text());
   ce->add_option("--r0-mpe", e->r0_mpe, "R0,MPE in µm (same form), when specified")
-      ->check(mpe_text);
+      ->check(mpe_text());
   ce->add_option("--stylus-offset", e->stylus_offset,
                  "mm: an E150 test with this stylus offset, recorded in the result");
   auto p = std::make_shared<AcceptanceArgs>();

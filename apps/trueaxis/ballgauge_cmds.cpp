@@ -403,14 +403,7 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
                 "E0 check against a maximum permissible error A+L/K (µm, L in mm; e.g. "
                 "\"1.5+L/300\", or \"1.5+L/300,4\" capped at 4 µm): PASS/FAIL and the envelope in "
                 "the report")
-      ->check([](const std::string& t) {
-        try {
-          ballgauge::Mpe::parse(t);
-        } catch (const Error& e) {
-          return std::string(e.what());
-        }
-        return std::string();
-      });
+      ->check(mpe_text());
   c->add_option("--repeat-tolerance", va->o.repeat_tolerance,
                 "mm: rows with the same nominal and both ends this close are repeats")
       ->capture_default_str();

@@ -70,6 +70,10 @@ std::pair<std::string, unsigned short> parse_ipp_address(const std::string& addr
 // PositiveNumber names a range up to 1.8e308).
 CLI::Validator positive_number();
 
+// Accepts an MPE as ballgauge::Mpe::parse reads it ("A", "A+L/K", "A+L/K,B"); otherwise its
+// message (exit 2).
+CLI::Validator mpe_text();
+
 // The default truth file of a simulation: the output's name with "-truth.csv" (probes.csv ->
 // probes-truth.csv), so that simulations never overwrite each other's truth.
 std::string truth_beside(const std::string& output);

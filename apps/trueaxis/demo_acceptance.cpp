@@ -47,9 +47,7 @@ report::Section demo_acceptance(const sim::Machine& machine, const std::string& 
   const auto raw = acceptance::virtual_touch(machine, probe);
   const acceptance::Touch corrected = [raw, correction](const Eigen::Vector3d& at,
                                                         const Eigen::Vector3d& d) {
-    Eigen::Matrix3Xd p = raw(at, d);
-    correction->apply(p);
-    return Eigen::Vector3d(p.col(0));
+    return correction->corrected(raw(at, d));
   };
   const auto after = acceptance::run_e0(setup, volume, corrected, o);
   io::write_e0_result(dir + "/e0.json", after);

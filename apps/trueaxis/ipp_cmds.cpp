@@ -147,10 +147,12 @@ int run_serve(const ServeArgs& a) {
     // Home above the balls when no machine says where (with one, its top corner).
     if (!e.cmm.geometry) e.cmm.home = Eigen::Vector3d(0, 0, e.cmm.travel[2][1]);
   }
+  bool sphere = false;
   if (!a.artefacts.empty()) {
     const auto setup = io::read_acceptance_setup(a.artefacts);
     e.boxes = acceptance::artefact_boxes(setup);
     if (setup.sphere) e.balls.push_back({setup.sphere->centre, setup.sphere->diameter / 2});
+    sphere = setup.sphere.has_value();
   }
   e.cmm.probe.lobing = a.lobing_um * 1e-3;
   std::string corrected;
@@ -162,24 +164,18 @@ int run_serve(const ServeArgs& a) {
       auto c = std::make_shared<ballgauge::Correction>(
           ballgauge::parametric_correction(io::read_parametric(a.correction)));
       e.correction = [c](const Eigen::Vector3d& x) {
-        Eigen::Matrix3Xd p = x;
         try {
-          c->apply(p);
+          return c->corrected(x);
         } catch (const Error&) {
           return x;
         }
-        return Eigen::Vector3d(p.col(0));
       };
     } else {
       auto grid = std::make_shared<map::ErrorMap>(io::read_error_map(a.correction));
       map::EvalOptions eo;
       eo.outside = map::Outside::Clamp;
       auto c = std::make_shared<ballgauge::Correction>(ballgauge::grid_correction(*grid, eo));
-      e.correction = [c, grid](const Eigen::Vector3d& x) {
-        Eigen::Matrix3Xd p = x;
-        c->apply(p);
-        return Eigen::Vector3d(p.col(0));
-      };
+      e.correction = [c, grid](const Eigen::Vector3d& x) { return c->corrected(x); };
     }
     corrected = fmt::format(", corrected by {}", a.correction);
   }
@@ -188,10 +184,7 @@ int run_serve(const ServeArgs& a) {
   if (!e.boxes.empty())
     world += fmt::format("{}{} gauge blocks{} of {} (a position at a time)",
                          world.empty() ? "" : " and ", e.boxes.size(),
-                         e.balls.size() > (a.balls.empty() ? 0 : io::read_balls(a.balls).size())
-                             ? " and the reference sphere"
-                             : "",
-                         a.artefacts);
+                         sphere ? " and the reference sphere" : "", a.artefacts);
   if (!a.balls.empty())
     world += fmt::format("{}{} balls of {}", world.empty() ? "" : " and ", e.balls.size(), a.balls);
   fmt::print("trueaxis serve: I++ DME 1.4.3 on {}:{}, {}{}{}; Ctrl-C stops\n", a.host,

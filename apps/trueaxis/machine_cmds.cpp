@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "commands.hpp"
+#include "trueaxis/ballgauge/lengths.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/csv.hpp"
 #include "trueaxis/io/separation/probes.hpp"
@@ -54,6 +55,19 @@ CLI::Validator positive_number() {
         return std::string();
       },
       "POSITIVE");
+}
+
+CLI::Validator mpe_text() {
+  return CLI::Validator(
+      [](std::string& text) {
+        try {
+          ballgauge::Mpe::parse(text);
+        } catch (const Error& e) {
+          return std::string(e.what());
+        }
+        return std::string();
+      },
+      "MPE");
 }
 
 std::string truth_beside(const std::string& output) {

@@ -113,25 +113,26 @@ void judge_e0(const Setup& setup, const E0Options& options, E0Result& result) {
     if (std::abs(row.error) > row.mpe - row.U) all_within = false;
     if (std::abs(row.error) > row.mpe + row.U) some_beyond = true;
   }
-  // R0: the range of each length's repetitions at its position.
-  std::map<std::pair<std::string, std::string>, std::pair<double, double>> span;
+  // R0: the range of each length's repetitions at its position (a range needs two).
+  struct Span {
+    double lo = INFINITY, hi = -INFINITY;
+    int n = 0;
+  };
+  std::map<std::pair<std::string, std::string>, Span> span;
   std::vector<std::pair<std::string, std::string>> order;
   for (const auto& row : result.lengths) {
-    const auto key = std::make_pair(row.position, row.block);
-    auto [it, fresh] = span.try_emplace(key, row.measured, row.measured);
-    if (fresh) order.push_back(key);
-    it->second.first = std::min(it->second.first, row.measured);
-    it->second.second = std::max(it->second.second, row.measured);
+    auto& sp = span[{row.position, row.block}];
+    if (sp.n++ == 0) order.emplace_back(row.position, row.block);
+    sp.lo = std::min(sp.lo, row.measured);
+    sp.hi = std::max(sp.hi, row.measured);
   }
   result.r0.clear();
   result.r0_max = 0;
-  std::map<std::pair<std::string, std::string>, int> count;
-  for (const auto& row : result.lengths) ++count[{row.position, row.block}];
   for (const auto& key : order) {
-    if (count[key] < 2) continue;  // a range needs repetitions
-    const auto& [lo, hi] = span[key];
-    result.r0.push_back({key.first, key.second, setup.block(key.second).length, hi - lo});
-    result.r0_max = std::max(result.r0_max, hi - lo);
+    const auto& sp = span[key];
+    if (sp.n < 2) continue;
+    result.r0.push_back({key.first, key.second, setup.block(key.second).length, sp.hi - sp.lo});
+    result.r0_max = std::max(result.r0_max, sp.hi - sp.lo);
   }
   if (options.r0) {
     bool ok = true;

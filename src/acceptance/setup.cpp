@@ -159,34 +159,30 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
             xyz(volume.high)));
     }
   }
-  // No two blocks of one position in one place (the positions are set up one after another):
-  // their axes closer than a block's width.
-  for (std::size_t i = 0; i < setup.placements.size(); ++i)
-    for (std::size_t j = 0; j < i; ++j) {
-      const auto& p = setup.placements[i];
-      const auto& q = setup.placements[j];
-      const bool together =
-          p.position.empty()
-              ? q.position.empty() && std::abs(p.direction.dot(q.direction)) >= kParallel
-              : p.position == q.position;
-      if (!together) continue;
-      const double hp = setup.block(p.block).length / 2, hq = setup.block(q.block).length / 2;
-      const double d = std::sqrt(
-          geometry::segment_distance2(p.centre - hp * p.direction, p.centre + hp * p.direction,
-                                      q.centre - hq * q.direction, q.centre + hq * q.direction));
-      if (d < setup.block_width)
-        why.push_back(fmt::format(
-            "placements {} and {} (blocks '{}' and '{}') overlap: their axes come {:.1f} mm "
-            "apart, closer than a block's width ({:g} mm)",
-            j + 1, i + 1, q.block, p.block, d, setup.block_width));
-    }
-  // The lines.
+  // The lines, and no two blocks of one of them in one place (the positions are set up one
+  // after another): their axes closer than a block's width.
   std::vector<Position> out = group(setup);
   for (const auto& pos : out)
-    for (const auto i : pos.placements)
-      if (std::abs(pos.direction.dot(setup.placements[i].direction)) < kParallel)
+    for (std::size_t m = 0; m < pos.placements.size(); ++m) {
+      const std::size_t i = pos.placements[m];
+      const auto& p = setup.placements[i];
+      if (std::abs(pos.direction.dot(p.direction)) < kParallel)
         why.push_back(fmt::format("placement {} (block '{}') is in position '{}' but not along it",
-                                  i + 1, setup.placements[i].block, pos.name));
+                                  i + 1, p.block, pos.name));
+      for (std::size_t k = 0; k < m; ++k) {
+        const std::size_t j = pos.placements[k];
+        const auto& q = setup.placements[j];
+        const double hp = setup.block(p.block).length / 2, hq = setup.block(q.block).length / 2;
+        const double d = std::sqrt(
+            geometry::segment_distance2(p.centre - hp * p.direction, p.centre + hp * p.direction,
+                                        q.centre - hq * q.direction, q.centre + hq * q.direction));
+        if (d < setup.block_width)
+          why.push_back(fmt::format(
+              "placements {} and {} (blocks '{}' and '{}') overlap: their axes come {:.1f} mm "
+              "apart, closer than a block's width ({:g} mm)",
+              j + 1, i + 1, q.block, p.block, d, setup.block_width));
+      }
+    }
   // ISO 10360-2:2009, 6.3: 7 positions, the 4 space diagonals among them, 5 lengths in each,
   // the longest at least 66 % of the space diagonal.
   bool diagonal[4] = {false, false, false, false};

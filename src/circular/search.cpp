@@ -152,14 +152,8 @@ Searched search(const Trace& t, const Samples& x, const Options& o, bool ccw, bo
   // of both (over at most kGridSamples samples), then a golden-section search of each in turn
   // about the best (over at most kSearchSamples, and every sample where the axes reverse).
   constexpr std::size_t kGridSamples = 1024, kSearchSamples = 2048;
-  const bool has_ccw = ccw, has_cw = cw;
-  std::optional<Search> coarse;
   auto fine = std::make_shared<std::optional<Search>>();
   using Delays = Search::Delays;
-  auto coarse_rss = [&](double d, const Delays& delay) {
-    if (!coarse) coarse.emplace(t, x, o, has_ccw, has_cw, kGridSamples);
-    return coarse->rss(d, delay);
-  };
   // The least of f over [a, b] by golden section, starting from `from`: the bracket's ends are
   // tried too (a step-like RSS, as a backlash step's place between samples gives, or a minimum
   // at an end, is kept), and `from` is left only for an RSS lower by more than `slack` (what
@@ -199,6 +193,7 @@ Searched search(const Trace& t, const Samples& x, const Options& o, bool ccw, bo
   double log_decay = find_decay ? 0.5 * (lo + hi) : std::log(o.spike_decay);
   Delays delay{find_delay ? 0 : o.reversal_delay, find_delay ? 0 : o.reversal_delay};
   if (find_decay || find_delay) {
+    Search coarse(t, x, o, ccw, cw, kGridSamples);
     // Grids with one delay for both axes: the delay at a middle decay (a backlash step's
     // place hardly depends on the decay), the decay at that delay, the delay again at that
     // decay; then each axis' own.
@@ -208,7 +203,7 @@ Searched search(const Trace& t, const Samples& x, const Options& o, bool ccw, bo
       for (int i = 0; i <= (over_decay ? kScan : kDelays); ++i) {
         const double ld = over_decay ? lo + (hi - lo) * i / kScan : log_decay;
         const double dl = over_decay ? delay[0] : max_delay * i / kDelays;
-        if (const double v = coarse_rss(std::exp(ld), {dl, dl}); v < best) {
+        if (const double v = coarse.rss(std::exp(ld), {dl, dl}); v < best) {
           best = v;
           best_at = over_decay ? ld : dl;
         }
@@ -226,20 +221,20 @@ Searched search(const Trace& t, const Samples& x, const Options& o, bool ccw, bo
       // Each axis' delay is searched about the grid's within its step, then about the first
       // round's within twice the spacing of the samples it searched over (when wider).
       const double reach =
-          round == 0 ? max_delay / kDelays : std::max(max_delay / kDelays, 2 * coarse->spacing());
+          round == 0 ? max_delay / kDelays : std::max(max_delay / kDelays, 2 * coarse.spacing());
       if (round == 1)  // every sample where the axes reverse, over the delays' search range
-        fine->emplace(t, x, o, has_ccw, has_cw, kSearchSamples, delay, reach + kPi / 1800);
+        fine->emplace(t, x, o, ccw, cw, kSearchSamples, delay, reach + kPi / 1800);
       auto f = [&](double d, const Delays& dl) {
-        return round == 0 ? coarse_rss(d, dl) : (*fine)->rss(d, dl);
+        return round == 0 ? coarse.rss(d, dl) : (*fine)->rss(d, dl);
       };
       // Differences below 10⁻¹⁰ of the trace's sum of squares are round-off, not evidence.
-      const double slack = 1e-10 * (round == 0 ? *coarse : **fine).yy();
+      const double slack = 1e-10 * (round == 0 ? coarse : **fine).yy();
       if (find_decay)
         log_decay = golden([&](double ld) { return f(std::exp(ld), delay); }, log_decay,
                            std::max(lo, log_decay - (hi - lo) / kScan),
                            std::min(hi, log_decay + (hi - lo) / kScan), 1e-5, slack);
       if (find_delay) {
-        const double spacing = (round == 0 ? *coarse : **fine).spacing();
+        const double spacing = (round == 0 ? coarse : **fine).spacing();
         for (std::size_t axis = 0; axis < 2; ++axis)
           delay[axis] = golden(
               [&](double at) {

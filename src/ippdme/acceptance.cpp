@@ -175,8 +175,7 @@ acceptance::Touch acceptance_touch(RemoteCmm& cmm, const acceptance::Setup& setu
   if (!setup.placements.empty()) p->boxes = acceptance::artefact_boxes(setup);
   if (setup.sphere) p->sphere = sim::Ball{setup.sphere->centre, setup.sphere->diameter / 2};
   double top = p->sphere ? p->sphere->centre.z() + p->sphere->radius : -INFINITY;
-  for (const auto& b : p->boxes)
-    top = std::max(top, b.centre.z() + (b.axes.row(2).cwiseAbs() * b.half)(0));
+  for (const auto& b : p->boxes) top = std::max(top, b.top());
   // Below the top of the travel by more than a corrected CMM's reading differs from its scales.
   p->safe_z = std::min(top + cmm.tip_radius() + options.clearance, travel.high.z() - 0.5);
   if (p->safe_z < top + cmm.tip_radius())

@@ -280,8 +280,7 @@ struct Engine::State {
         if (!b.centre.allFinite() || !b.axes.allFinite() || !(b.half.array() > 0).all())
           throw Error("I++ DME server: a box needs a finite centre and axes and a positive size");
       boxes = std::make_shared<BoxSurface>(BoxSurface{o.boxes, cmm.tip_radius() + 5});
-      for (const auto& b : o.boxes)
-        boxes->top = std::max(boxes->top, b.centre.z() + (b.axes.row(2).cwiseAbs() * b.half)(0));
+      for (const auto& b : o.boxes) boxes->top = std::max(boxes->top, b.top());
     }
     cmm.set_hook([this] { return on_tick(); });
   }

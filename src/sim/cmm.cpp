@@ -221,6 +221,10 @@ double pretravel_lobing(double lobing, const Eigen::Vector3d& d) {
   return lobing * std::cos(3 * std::atan2(u.y(), u.x())) * (1 - u.z() * u.z());
 }
 
+double Box::top() const {
+  return centre.z() + axes.row(2).cwiseAbs().dot(half);
+}
+
 Contour::Nearest Box::nearest(const Eigen::Vector3d& x) const {
   const Eigen::Vector3d q = axes.transpose() * (x - centre);  // in the box's frame
   const Eigen::Vector3d excess = q.cwiseAbs() - half;

@@ -631,4 +631,13 @@ TEST(Circular, DecayAndDelaysAreFoundOnSparseNoisyTraces) {
   const auto again = io::read_circular_result(path).result;
   ASSERT_TRUE(again.spike_decay_u);
   EXPECT_NEAR(*again.spike_decay_u, *found.spike_decay_u, 1e-12);
+  // The decay's u and the delays' resolution must be numbers where they stand.
+  std::string text = test::read_file(path);
+  const auto at = text.find("\"spike_decay_u_deg\": ");
+  ASSERT_NE(at, std::string::npos);
+  text.insert(at + 21, "\"wide\", \"was\": ");
+  const std::string e =
+      test::error_of([&] { io::read_circular_result(test::temp_file("bad-decay.json", text)); });
+  EXPECT_NE(e.find("bad-decay.json:"), std::string::npos) << e;
+  EXPECT_NE(e.find("spike_decay_u_deg"), std::string::npos) << e;
 }

@@ -771,6 +771,8 @@ ok = ok and max(abs(x['error_um'] - y['error_um']) for x, y in zip(a['lengths'],
 sys.exit(0 if ok else 1)" && ok || bad "acceptance e0 over I++ DME agrees with the virtual CMM in process"
 expect_code 2 "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --artefacts acc/acceptance.json --mpe 3 -o x.json
 grep -q "travel" err.txt && ok || bad "acceptance --cmm without a travel: $(cat err.txt)"
+expect_code 2 "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,0,800,-600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
+grep -q "high end must lie above its low end" err.txt && ok || bad "acceptance --travel reversed: $(cat err.txt)"
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,-100,800,600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
 echo '{"sphere": {"centre": [0, 0], "diameter_mm": 25}}' > acc/bad.json
 expect_err "acc/bad.json:1:[0-9]*: sphere.centre: three numbers" "$T" serve --artefacts acc/bad.json --port 0

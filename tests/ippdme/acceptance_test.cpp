@@ -132,9 +132,7 @@ TEST(AcceptanceOverIpp, AFailingCmmIsMappedCorrectedAndPasses) {
       std::make_shared<ballgauge::Correction>(ballgauge::grid_correction(*mapped.grid, clamp));
   ServerOptions corrected = serving(setup, lobing);
   corrected.engine.correction = [correction](const Eigen::Vector3d& x) {
-    Eigen::Matrix3Xd p = x;
-    correction->apply(p);
-    return Eigen::Vector3d(p.col(0));
+    return correction->corrected(x);
   };
   const auto after = over_ipp(corrected, setup, eo);
   ASSERT_TRUE(after.e0.complete) << after.e0.stopped;

@@ -88,7 +88,6 @@ struct Setup {
 // Where the probe can reach: the machine's travel, as tip-centre positions (mm).
 struct Volume {
   Eigen::Vector3d low = Eigen::Vector3d::Zero(), high = Eigen::Vector3d::Zero();
-  double diagonal() const { return (high - low).norm(); }
   static Volume of(const sim::Machine& machine);
 };
 

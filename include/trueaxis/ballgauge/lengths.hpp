@@ -44,6 +44,12 @@ struct Correction {
   // builds it once for all of them.
   std::function<Eigen::VectorXd(const Eigen::Matrix3Xd&, const Eigen::Matrix3Xd&)>
       length_uncertainties;
+  // One point corrected (apply on a single column).
+  Eigen::Vector3d corrected(const Eigen::Vector3d& x) const {
+    Eigen::Matrix3Xd p = x;
+    apply(p);
+    return p.col(0);
+  }
 };
 
 // The grid map's correction (trilinear unless `options` says cubic). Points outside the grid are

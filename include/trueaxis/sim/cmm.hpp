@@ -144,6 +144,7 @@ struct Box {
   // The nearest point of its surface to x, the outward normal there, and the signed distance
   // (> 0 outside; inside, to the nearest face).
   Contour::Nearest nearest(const Eigen::Vector3d& x) const;
+  double top() const;  // its highest point's z (mm)
 };
 
 // A touch-trigger probe's pre-travel variation with the probing direction d (unit, machine
