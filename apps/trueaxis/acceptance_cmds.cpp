@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <chrono>
+#include <iostream>
 #include <memory>
 #include <optional>
 
@@ -26,12 +28,26 @@ struct AcceptanceArgs {
   double clearance = 5;
   std::string artefacts, output, report;
   std::string mpe, r0_mpe;
-  double stylus_offset = 0;
+  std::vector<double> stylus_offset;  // mm: L, or X,Y,Z
+  std::vector<std::string> positions;
   double mpe_form_um = 0, mpe_size_um = 0;
   double lobing_um = 0, noise_um = 0;
   std::uint64_t seed = 1;
-  bool quiet = false;
+  bool quiet = false, pause = false;
 };
+
+// --pause: asks the operator on stderr and waits for a line on stdin; "q" or the end of the input
+// stops the run (an Error, so what was measured is kept). Returns the seconds waited.
+double wait_for_operator(const std::string& ask, const std::string& stop) {
+  fmt::print(stderr, "{} Press Enter when ready, or q and Enter to stop: ", ask);
+  std::fflush(stderr);
+  const auto t0 = std::chrono::steady_clock::now();
+  std::string line;
+  const bool got = static_cast<bool>(std::getline(std::cin, line));
+  if (isatty(fileno(stdin)) == 0) fmt::print(stderr, "\n");  // a terminal echoes the Enter
+  if (!got || line == "q" || line == "Q") throw Error("by the operator " + stop);
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
 // Where the test runs: the virtual CMM in process (--machine), or a CMM over I++ DME (--cmm),
 // whose travel comes from --machine or --travel.
@@ -46,6 +62,9 @@ std::unique_ptr<Cmm> open_cmm(const AcceptanceArgs& a, const acceptance::Setup& 
   auto c = std::make_unique<Cmm>();
   if (a.cmm.empty() || !a.machine.path.empty()) {
     c->machine = a.machine.load();
+    // E_L: the machine probes with the offset stylus, whose tip reaches another volume.
+    if (!a.stylus_offset.empty())
+      c->machine = acceptance::with_stylus(*c->machine, stylus_offset_of(a.stylus_offset));
     c->volume = acceptance::Volume::of(*c->machine);
   }
   if (a.cmm.empty()) {
@@ -81,13 +100,27 @@ int run_e0(const AcceptanceArgs& a) {
   acceptance::E0Options o;
   o.mpe = ballgauge::Mpe::parse(a.mpe);
   if (!a.r0_mpe.empty()) o.r0 = ballgauge::Mpe::parse(a.r0_mpe);
-  if (a.stylus_offset > 0) o.stylus_offset = a.stylus_offset;
+  if (!a.stylus_offset.empty()) o.stylus_offset = stylus_offset_of(a.stylus_offset);
+  o.positions = a.positions;
+  if (!o.stylus_offset && !o.positions.empty())
+    throw CLI::ValidationError("--position",
+                               "E0 is measured in every position of the set-up; --position "
+                               "chooses them for E_L, with --stylus-offset");
   const auto setup = io::read_acceptance_setup(a.artefacts);
   const auto cmm = open_cmm(a, setup);
   Progress progress("measuring the lengths", a.quiet);
   o.progress = [&](std::size_t done, std::size_t total) {
     progress.update(static_cast<double>(done) / static_cast<double>(total));
   };
+  if (a.pause)
+    o.before_position = [&](const acceptance::Position& pos, std::size_t k, std::size_t n) {
+      std::string blocks;
+      for (const auto i : pos.placements)
+        blocks += (blocks.empty() ? "" : ", ") + setup.placements[i].block;
+      progress.exclude(wait_for_operator(
+          fmt::format("Set up position {} of {}, '{}': {}.", k + 1, n, pos.name, blocks),
+          fmt::format("before position '{}'", pos.name)));
+    };
   const auto r = acceptance::run_e0(setup, cmm->volume, cmm->touch, o);
   progress.done();
   io::write_e0_result(a.output, r);
@@ -96,7 +129,9 @@ int run_e0(const AcceptanceArgs& a) {
         a.report,
         report::render(
             "trueaxis CMM acceptance: length measuring error",
-            {from_file(report::e0_section("Length measuring error (ISO 10360-2)", r), a.artefacts)},
+            {from_file(report::e0_section(
+                           fmt::format("Length measuring error {} (ISO 10360-2)", r.name()), r),
+                       a.artefacts)},
             4000, report_meta()));
   const bool pass = r.verdict == acceptance::Verdict::Conforms && r.r0_pass.value_or(true);
   if (!a.quiet || !pass) fmt::print("{} -> {}\n", r.summary(), a.output);
@@ -114,6 +149,11 @@ int run_probing(const AcceptanceArgs& a) {
   if (a.mpe_size_um > 0) o.mpe_size = a.mpe_size_um * 1e-3;
   const auto setup = io::read_acceptance_setup(a.artefacts);
   const auto cmm = open_cmm(a, setup);
+  if (a.pause && setup.sphere)
+    wait_for_operator(
+        fmt::format("Set up the reference sphere at ({:.1f}, {:.1f}, {:.1f}) mm.",
+                    setup.sphere->centre.x(), setup.sphere->centre.y(), setup.sphere->centre.z()),
+        "before the reference sphere");
   const auto r = acceptance::run_probing(setup, cmm->touch, o);
   io::write_probing_result(a.output, r);
   if (!a.report.empty())
@@ -130,6 +170,27 @@ int run_probing(const AcceptanceArgs& a) {
       r.size_verdict.value_or(acceptance::Verdict::Conforms) == acceptance::Verdict::Conforms;
   if (!a.quiet || !pass) fmt::print("{} -> {}\n", r.summary(), a.output);
   return pass ? 0 : 1;
+}
+
+struct SetupArgs {
+  MachineSource machine;
+  std::vector<double> stylus_offset;
+  std::string output = "acceptance.json";
+};
+
+int run_setup(const SetupArgs& a) {
+  sim::Machine m = a.machine.load();
+  if (!a.stylus_offset.empty()) m = acceptance::with_stylus(m, stylus_offset_of(a.stylus_offset));
+  const auto volume = acceptance::Volume::of(m);
+  const auto setup = acceptance::example_setup(volume);
+  io::write_acceptance_setup(a.output, setup);
+  fmt::print(
+      "{} gauge blocks in {} positions and a Ø{:g} mm reference sphere, in the volume ({:.0f}, "
+      "{:.0f}, {:.0f}) … ({:.0f}, {:.0f}, {:.0f}) mm of the tip{} -> {}\n",
+      setup.placements.size(), acceptance::lines(setup).size(), setup.sphere->diameter,
+      volume.low.x(), volume.low.y(), volume.low.z(), volume.high.x(), volume.high.y(),
+      volume.high.z(), a.stylus_offset.empty() ? "" : " with the offset stylus", a.output);
+  return 0;
 }
 
 void add_common(CLI::App* c, AcceptanceArgs& a, const char* output) {
@@ -159,17 +220,38 @@ void add_common(CLI::App* c, AcceptanceArgs& a, const char* output) {
   c->add_option("--output,-o", a.output, "result JSON")->capture_default_str();
   c->add_option("--report", a.report, "HTML report: the figures, the verdict and its rule, plots");
   add_meta_option(c);
+  c->add_flag("--pause", a.pause,
+              "before each position (and the sphere) wait for the operator to set it up: Enter "
+              "goes on, q stops (what was measured is kept); for a real CMM whose artefacts are "
+              "moved by hand");
   c->add_flag("--quiet,-q", a.quiet, "print nothing when the test passes");
 }
 
 }  // namespace
+
+Eigen::Vector3d stylus_offset_of(const std::vector<double>& v) {
+  Eigen::Vector3d lateral;
+  if (v.size() == 1)
+    lateral = Eigen::Vector3d(v[0], 0, 0);
+  else if (v.size() == 3)
+    lateral = Eigen::Vector3d(v[0], v[1], v[2]);
+  else
+    throw CLI::ValidationError("--stylus-offset", "give L (mm, along +X) or X,Y,Z");
+  try {
+    acceptance::validate_stylus_offset(lateral);
+  } catch (const Error& e) {
+    throw CLI::ValidationError("--stylus-offset", e.what());
+  }
+  return lateral;
+}
 
 std::vector<Command> add_acceptance_commands(CLI::App& app) {
   auto* group = app.add_subcommand(
       "acceptance",
       "CMM acceptance and reverification tests, on a CMM over I++ DME or the virtual CMM of a "
       "machine file: the length "
-      "measuring error E0 and repeatability R0 (ISO 10360-2) and the probing errors PForm and "
+      "measuring error E0 (E150 with a stylus offset) and repeatability R0 (ISO 10360-2) and the "
+      "probing errors PForm and "
       "PSize (ISO 10360-5), judged by ISO 14253-1 with the test's own uncertainty.\n"
       "Exit status 0 when conformance is proven, 1 otherwise.");
   group->require_subcommand(1);
@@ -187,7 +269,14 @@ std::vector<Command> add_acceptance_commands(CLI::App& app) {
   ce->add_option("--r0-mpe", e->r0_mpe, "R0,MPE in µm (same form), when specified")
       ->check(mpe_text());
   ce->add_option("--stylus-offset", e->stylus_offset,
-                 "mm: an E150 test with this stylus offset, recorded in the result");
+                 "L or X,Y,Z (mm): E_L instead of E0, the stylus tip offset across the ram by L "
+                 "along +X (150: E150) or by (X, Y, 0); the virtual CMM of --machine probes with "
+                 "it, a CMM over I++ DME with the stylus it has (mount and qualify it first)")
+      ->delimiter(',')
+      ->expected(1, 3);
+  ce->add_option("--position", e->positions,
+                 "E_L: a position to measure, by its name in the set-up (repeat the flag; "
+                 "default: the first two space diagonals, ISO 10360-2 asks for two)");
   auto p = std::make_shared<AcceptanceArgs>();
   auto* cp = group->add_subcommand(
       "probing",
@@ -197,7 +286,23 @@ std::vector<Command> add_acceptance_commands(CLI::App& app) {
   add_common(cp, *p, "probing.json");
   cp->add_option("--mpe-form", p->mpe_form_um, "PForm,MPE (µm)");
   cp->add_option("--mpe-size", p->mpe_size_um, "PSize,MPE (µm)");
-  return {{ce, [e] { return run_e0(*e); }}, {cp, [p] { return run_probing(*p); }}};
+  auto s = std::make_shared<SetupArgs>();
+  auto* cs = group->add_subcommand(
+      "setup",
+      "Writes an artefact set-up that fits a machine's travel: 35 gauge blocks in the 7 positions "
+      "of ISO 10360-2 (the 4 space diagonals, along X, Y and Z) and a Ø25 mm reference sphere, "
+      "for the stylus the machine file has, or an offset one.\nExample: trueaxis acceptance setup "
+      "--machine machine.json --stylus-offset 150 -o acceptance150.json");
+  s->machine.add_options(cs);
+  cs->add_option("--stylus-offset", s->stylus_offset,
+                 "L or X,Y,Z (mm): fit the volume the tip reaches with a stylus offset across the "
+                 "ram (as for 'acceptance e0 --stylus-offset')")
+      ->delimiter(',')
+      ->expected(1, 3);
+  cs->add_option("--output,-o", s->output, "the set-up JSON")->capture_default_str();
+  return {{ce, [e] { return run_e0(*e); }},
+          {cp, [p] { return run_probing(*p); }},
+          {cs, [s] { return run_setup(*s); }}};
 }
 
 }  // namespace trueaxis::cli

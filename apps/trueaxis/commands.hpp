@@ -111,6 +111,9 @@ std::vector<Command> add_ipp_commands(CLI::App& app);
 report::Section demo_acceptance(const sim::Machine& machine, const std::string& dir,
                                 std::uint64_t seed,
                                 const std::function<void(const std::string&)>& say);
+// --stylus-offset's values (mm): L alone (along +X) or X,Y,Z, the stylus tip's offset across
+// the ram of ISO 10360-2's E_L test. Throws CLI::ValidationError naming the flag.
+Eigen::Vector3d stylus_offset_of(const std::vector<double>& values);
 // 'acceptance e0', 'acceptance probing'.
 std::vector<Command> add_acceptance_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);

@@ -80,22 +80,11 @@ int run_ipp_check(const IppCheckArgs& a) {
 }  // namespace
 
 std::pair<std::string, unsigned short> parse_ipp_address(const std::string& address) {
-  const std::string scheme = "ipp://";
-  const auto bad = [&] {
-    return CLI::ValidationError(
-        fmt::format("'{}' is not an I++ DME server address: expected ipp://HOST:PORT, e.g. "
-                    "ipp://127.0.0.1:1294",
-                    address));
-  };
-  if (address.rfind(scheme, 0) != 0) throw bad();
-  const std::string rest = address.substr(scheme.size());
-  const auto colon = rest.rfind(':');
-  if (colon == std::string::npos || colon == 0 || colon + 1 == rest.size()) throw bad();
-  const std::string port = rest.substr(colon + 1);
-  if (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos) throw bad();
-  const long p = std::stol(port);
-  if (p < 1 || p > 65535) throw bad();
-  return {rest.substr(0, colon), static_cast<unsigned short>(p)};
+  try {
+    return ippdme::parse_address(address);
+  } catch (const Error& e) {
+    throw CLI::ValidationError(e.what());
+  }
 }
 
 namespace {
@@ -103,6 +92,7 @@ namespace {
 struct ServeArgs {
   std::string host = "127.0.0.1", machine, part, log, balls, artefacts, correction;
   double lobing_um = 0;
+  std::vector<double> stylus_offset;
   int port = 1294;
   std::vector<double> part_origin;
   double time_scale = 1, tip_radius = 1, probe_noise_um = 0;
@@ -125,10 +115,16 @@ int run_serve(const ServeArgs& a) {
   e.cmm.probe.seed = a.seed;
   if (!a.machine.empty()) {
     e.cmm.geometry = io::read_machine(a.machine);
+    // An offset stylus (ISO 10360-2's E_L): the tip, and so the travel, moves with it.
+    if (!a.stylus_offset.empty())
+      e.cmm.geometry = acceptance::with_stylus(*e.cmm.geometry, stylus_offset_of(a.stylus_offset));
     const auto& g = *e.cmm.geometry;
     // Home: the back left top corner of the travel (tool point, machine coordinates).
     e.cmm.home = Eigen::Vector3d(g.range[0][0], g.range[1][1], g.range[2][1]) + g.offset;
   }
+  if (!a.stylus_offset.empty() && !e.cmm.geometry)
+    throw CLI::ValidationError("--stylus-offset",
+                               "needs --machine: the offset is added to the machine's stylus");
   if (!a.part.empty()) {
     e.part = io::read_part(a.part);
     // Home above the part: the top of the travel.
@@ -302,6 +298,12 @@ std::vector<Command> add_serve_command(CLI::App& app) {
   c->add_option("--lobing", a->lobing_um,
                 "single points: the probe's pre-travel variation (µm, three lobes)")
       ->capture_default_str();
+  c->add_option("--stylus-offset", a->stylus_offset,
+                "L or X,Y,Z (mm), with --machine: Probe1 is a stylus offset across the ram by L "
+                "along +X or by (X, Y, 0), as for ISO 10360-2's E150 (the carriages' rotations "
+                "then move the tip by their angle times the offset)")
+      ->delimiter(',')
+      ->expected(1, 3);
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: the part's design origin in machine coordinates (mm; default: the "
                 "machine origin, or centred in the travel with --machine)")

@@ -45,6 +45,12 @@ class Progress {
                100 * fraction, time_left(t, fraction), tty_ && !always_ ? "   " : "\n");
     std::fflush(stderr);
   }
+  // Leaves `seconds` out of the time spent (an operator's wait), so the time left counts only
+  // the work.
+  void exclude(double seconds) {
+    start_ += std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+        std::chrono::duration<double>(seconds));
+  }
   void done() {
     if (printed_ && tty_ && !always_) fmt::print(stderr, "\n");
   }

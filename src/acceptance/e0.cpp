@@ -59,14 +59,59 @@ Touch virtual_touch(const sim::Machine& machine, const VirtualProbeOptions& opti
   };
 }
 
+std::string el_name(const std::optional<Eigen::Vector3d>& stylus_offset) {
+  return stylus_offset ? fmt::format("E{:.0f}", stylus_offset->norm()) : std::string("E0");
+}
+
+std::string E0Result::name() const {
+  return el_name(stylus_offset);
+}
+
+void validate_stylus_offset(const Eigen::Vector3d& lateral) {
+  if (!lateral.allFinite() || !(lateral.norm() > 0) || !(lateral.norm() <= 500))
+    throw Error("stylus offset: give its length, > 0 and up to 500 mm (e.g. 150 for E150)");
+  if (std::abs(lateral.z()) > 1e-9 * lateral.norm())
+    throw Error(fmt::format(
+        "stylus offset ({:g}, {:g}, {:g}) mm: ISO 10360-2's E_L offsets the tip across the ram, "
+        "so its Z component must be 0",
+        lateral.x(), lateral.y(), lateral.z()));
+}
+
+sim::Machine with_stylus(sim::Machine machine, const Eigen::Vector3d& lateral) {
+  validate_stylus_offset(lateral);
+  machine.offset += lateral;
+  return machine;
+}
+
 E0Result run_e0(const Setup& setup, const Volume& volume, const Touch& touch,
                 const E0Options& options) {
   E0Result result;
-  result.positions = positions(setup, volume);
-  const std::size_t total = setup.placements.size() * static_cast<std::size_t>(setup.repetitions);
+  std::vector<std::string> only = options.positions;
+  if (options.stylus_offset) {
+    validate_stylus_offset(*options.stylus_offset);
+    // ISO 10360-2 measures E_L in two positions; by default the set-up's first two space
+    // diagonals, the lines along which every carriage moves and rotates.
+    if (only.empty())
+      for (const auto& line : lines(setup))
+        if (line.space_diagonal && only.size() < 2) only.push_back(line.name);
+    if (only.empty())
+      throw Error(
+          "E_L: the set-up has no space diagonal to measure with the stylus offset; name the "
+          "positions");
+  } else if (!only.empty()) {
+    throw Error(
+        "E0 is measured in every position of the set-up; choosing positions is for E_L, with a "
+        "stylus offset");
+  }
+  result.positions = positions(setup, volume, only);
+  std::size_t total = 0;
+  for (const auto& pos : result.positions)
+    total += pos.placements.size() * static_cast<std::size_t>(setup.repetitions);
   std::size_t done = 0;
   try {
-    for (const auto& pos : result.positions)
+    for (std::size_t k = 0; k < result.positions.size(); ++k) {
+      const auto& pos = result.positions[k];
+      if (options.before_position) options.before_position(pos, k, result.positions.size());
       for (const auto i : pos.placements) {
         const auto& p = setup.placements[i];
         const auto& block = setup.block(p.block);
@@ -85,6 +130,7 @@ E0Result run_e0(const Setup& setup, const Volume& volume, const Touch& touch,
           if (options.progress) options.progress(++done, total);
         }
       }
+    }
   } catch (const Error& e) {
     result.complete = false;
     result.stopped = e.what();
@@ -107,7 +153,7 @@ void judge_e0(const Setup& setup, const E0Options& options, E0Result& result) {
     const double u =
         std::sqrt(block.u * block.u + std::pow(L * block.alpha * setup.u_temperature, 2) +
                   std::pow(L * block.u_alpha * (setup.temperature - 20), 2) +
-                  setup.u_alignment * setup.u_alignment);
+                  setup.u_alignment * setup.u_alignment + setup.u_fixturing * setup.u_fixturing);
     row.U = 2 * u;
     result.e0_max = std::max(result.e0_max, std::abs(row.error));
     if (std::abs(row.error) > row.mpe - row.U) all_within = false;
@@ -143,15 +189,15 @@ void judge_e0(const Setup& setup, const E0Options& options, E0Result& result) {
                    : all_within && result.complete && !result.lengths.empty() ? Verdict::Conforms
                                                                               : Verdict::NotProven;
   result.rule = fmt::format(
-      "ISO 14253-1: conformance with E{},MPE = {} µm is proven when every |E| ≤ MPE − U, "
+      "ISO 14253-1: conformance with {},MPE = {} µm is proven when every |E| ≤ MPE − U, "
       "non-conformance when some |E| > MPE + U; U (k = 2) from the lengths' calibration, "
-      "temperature ({:g} ± {:g} °C), expansion coefficient and alignment",
-      options.stylus_offset ? fmt::format("{:g}", *options.stylus_offset) : std::string("0"),
-      options.mpe.text, setup.temperature, setup.u_temperature);
+      "temperature ({:g} ± {:g} °C), expansion coefficient, alignment and fixturing (ISO/TS "
+      "23165)",
+      el_name(options.stylus_offset), options.mpe.text, setup.temperature, setup.u_temperature);
 }
 
 std::string E0Result::summary() const {
-  const std::string e = stylus_offset ? fmt::format("E{:g}", *stylus_offset) : "E0";
+  const std::string e = name();
   std::string s =
       lengths.empty()
           ? fmt::format("{}: no length measured ({} positions set up): {}", e, positions.size(),
@@ -162,6 +208,9 @@ std::string E0Result::summary() const {
                                    : fmt::format("R0 largest {:.2f} µm", r0_max * 1e3),
                         to_string(verdict));
   if (r0_pass) s += fmt::format("; R0 {} (MPE {})", *r0_pass ? "within" : "beyond", r0_text);
+  if (stylus_offset)
+    s += fmt::format("; stylus offset ({:g}, {:g}, {:g}) mm", stylus_offset->x(),
+                     stylus_offset->y(), stylus_offset->z());
   if (!complete) s += "; stopped: " + stopped;
   return s;
 }

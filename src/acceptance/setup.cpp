@@ -61,8 +61,11 @@ void Setup::validate() const {
   if (sphere && (!(sphere->diameter > 0) || !(sphere->u_diameter >= 0) || !(sphere->form >= 0) ||
                  !sphere->centre.allFinite() || std::abs(sphere->pole.norm() - 1) > 1e-9))
     throw Error("reference sphere: diameter > 0, u and form ≥ 0, a finite centre and a unit pole");
-  if (!(u_temperature >= 0) || !(u_alignment >= 0) || !std::isfinite(temperature))
-    throw Error("acceptance set-up: the temperature and its u, and the alignment's u, must be ≥ 0");
+  if (!(u_temperature >= 0) || !(u_alignment >= 0) || !(u_fixturing >= 0) ||
+      !std::isfinite(temperature))
+    throw Error(
+        "acceptance set-up: the temperature and its u, and the alignment's and fixturing's u, "
+        "must be ≥ 0");
   if (!(block_width > 0) || !(block_height > 0) || !(approach > 0))
     throw Error("acceptance set-up: the block's width and height and the approach must be > 0 mm");
   if (repetitions < 1 || repetitions > 100)
@@ -141,11 +144,39 @@ Eigen::Matrix3d block_axes(const Eigen::Vector3d& direction) {
   return a;
 }
 
-std::vector<Position> positions(const Setup& setup, const Volume& volume) {
+std::vector<Position> lines(const Setup& setup) {
+  std::vector<Position> out = group(setup);
+  const double third = std::sin(20 * 3.14159265358979323846 / 180);
+  for (auto& pos : out) pos.space_diagonal = (pos.direction.array().abs() > third).all();
+  return out;
+}
+
+std::vector<Position> positions(const Setup& setup, const Volume& volume,
+                                const std::vector<std::string>& only) {
   setup.validate();
   std::vector<std::string> why;
-  // Every face, approached from `approach` mm out, inside the volume.
-  for (std::size_t i = 0; i < setup.placements.size(); ++i) {
+  std::vector<Position> out = lines(setup);
+  if (!only.empty()) {
+    std::vector<Position> chosen;
+    for (const auto& name : only) {
+      const auto it =
+          std::find_if(out.begin(), out.end(), [&](const Position& p) { return p.name == name; });
+      if (it != out.end()) {
+        chosen.push_back(*it);
+        continue;
+      }
+      std::string known;
+      for (const auto& p : out) known += (known.empty() ? "'" : ", '") + p.name + "'";
+      why.push_back(fmt::format("no position '{}' in the set-up (it has {})", name, known));
+    }
+    out = std::move(chosen);
+  }
+  // Every face of the positions measured, approached from `approach` mm out, inside the volume.
+  std::vector<std::size_t> measured;
+  for (const auto& pos : out)
+    measured.insert(measured.end(), pos.placements.begin(), pos.placements.end());
+  std::sort(measured.begin(), measured.end());
+  for (const std::size_t i : measured) {
     const auto& p = setup.placements[i];
     const double half = setup.block(p.block).length / 2 + setup.approach;
     for (const double s : {-1.0, 1.0}) {
@@ -159,9 +190,8 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
             xyz(volume.high)));
     }
   }
-  // The lines, and no two blocks of one of them in one place (the positions are set up one
-  // after another): their axes closer than a block's width.
-  std::vector<Position> out = group(setup);
+  // No two blocks of one line in one place (the positions are set up one after another): their
+  // axes closer than a block's width.
   for (const auto& pos : out)
     for (std::size_t m = 0; m < pos.placements.size(); ++m) {
       const std::size_t i = pos.placements[m];
@@ -186,12 +216,10 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
   // ISO 10360-2:2009, 6.3: 7 positions, the 4 space diagonals among them, 5 lengths in each,
   // the longest at least 66 % of the space diagonal.
   bool diagonal[4] = {false, false, false, false};
-  const double third = std::sin(20 * 3.14159265358979323846 / 180);
   for (auto& pos : out) {
     Eigen::Vector3d d = pos.direction;
-    if ((d.array().abs() > third).all()) {
+    if (pos.space_diagonal) {
       if (d.z() < 0) d = -d;
-      pos.space_diagonal = true;
       diagonal[(d.x() > 0 ? 0 : 1) + (d.y() > 0 ? 0 : 2)] = true;
     }
     std::vector<double> lengths;
@@ -203,12 +231,12 @@ std::vector<Position> positions(const Setup& setup, const Volume& volume) {
       why.push_back(fmt::format("position '{}' has {} different lengths; ISO 10360-2 needs 5",
                                 pos.name, lengths.size()));
   }
-  if (out.size() < 7)
-    why.push_back(fmt::format(
-        "{} positions; ISO 10360-2 needs 7 (the 4 space diagonals and 3 more)", out.size()));
   const int diagonals =
       static_cast<int>(std::count(std::begin(diagonal), std::end(diagonal), true));
-  if (diagonals < 4)
+  if (only.empty() && out.size() < 7)
+    why.push_back(fmt::format(
+        "{} positions; ISO 10360-2 needs 7 (the 4 space diagonals and 3 more)", out.size()));
+  if (only.empty() && diagonals < 4)
     why.push_back(fmt::format("{} of the 4 space diagonals of the volume are among the positions",
                               diagonals));
   // The longest length of a position at least 66 % of the travel along its line (on a space

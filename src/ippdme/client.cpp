@@ -18,6 +18,25 @@
 
 namespace trueaxis::ippdme {
 
+std::pair<std::string, unsigned short> parse_address(const std::string& address) {
+  const std::string scheme = "ipp://";
+  const auto bad = [&] {
+    return Error(
+        fmt::format("'{}' is not an I++ DME server address: expected ipp://HOST:PORT, e.g. "
+                    "ipp://127.0.0.1:1294",
+                    address));
+  };
+  if (address.rfind(scheme, 0) != 0) throw bad();
+  const std::string rest = address.substr(scheme.size());
+  const auto colon = rest.rfind(':');
+  if (colon == std::string::npos || colon == 0 || colon + 1 == rest.size()) throw bad();
+  const std::string port = rest.substr(colon + 1);
+  if (port.size() > 5 || port.find_first_not_of("0123456789") != std::string::npos) throw bad();
+  const long p = std::stol(port);
+  if (p < 1 || p > 65535) throw bad();
+  return {rest.substr(0, colon), static_cast<unsigned short>(p)};
+}
+
 using asio::ip::tcp;
 
 std::vector<double> Transaction::numbers() const {

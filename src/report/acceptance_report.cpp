@@ -17,6 +17,10 @@ constexpr const char* kIso10360_5 =
 constexpr const char* kIso14253_1 =
     "ISO 14253-1:2017, Decision rules for verifying conformity or nonconformity with "
     "specifications (conformance proven within the specification less U).";
+constexpr const char* kIsoTs23165 =
+    "ISO/TS 23165:2006, Guidelines for the evaluation of coordinate measuring machine (CMM) test "
+    "uncertainty (the test value's budget: calibration, temperature, expansion coefficient, "
+    "alignment, fixturing).";
 
 // One colour per ISO 10360-2 position.
 const char* position_colour(std::size_t i) {
@@ -38,8 +42,8 @@ std::string verdict_html(acceptance::Verdict v) {
 Section e0_section(const std::string& title, const acceptance::E0Result& r) {
   Section s;
   s.title = title;
-  s.references = {refs::kIso10360_2, kIso14253_1, refs::kGum};
-  const std::string e = r.stylus_offset ? fmt::format("E{:g}", *r.stylus_offset) : "E0";
+  s.references = {refs::kIso10360_2, kIso14253_1, kIsoTs23165, refs::kGum};
+  const std::string e = r.name();
   s.summary = r.lengths.empty() ? fmt::format("{}: no length measured", e)
                                 : fmt::format("{} {:.2f} µm (MPE {} µm): {}", e, r.e0_max * 1e3,
                                               r.mpe_text, acceptance::to_string(r.verdict));
@@ -49,9 +53,14 @@ Section e0_section(const std::string& title, const acceptance::E0Result& r) {
                     "is shown; conformance cannot be proven from it.",
                     r.lengths.size(), r.stopped));
   s.intro_html = fmt::format(
-      "<p>The length measuring error {} of ISO 10360-2: {} lengths in {} positions, each "
+      "<p>The length measuring error {} of ISO 10360-2{}: {} lengths in {} positions, each "
       "probed once on each face from outside, {} times. Verdict: {}. {}.</p>",
-      escape(e), r.lengths.size(), r.positions.size(),
+      escape(e),
+      r.stylus_offset
+          ? fmt::format(", with the stylus tip offset ({:g}, {:g}, {:g}) mm from the ram axis",
+                        r.stylus_offset->x(), r.stylus_offset->y(), r.stylus_offset->z())
+          : std::string(),
+      r.lengths.size(), r.positions.size(),
       r.lengths.empty() ? 0
                         : std::count_if(r.lengths.begin(), r.lengths.end(),
                                         [&](auto& l) {
@@ -88,7 +97,7 @@ Section e0_section(const std::string& title, const acceptance::E0Result& r) {
                  r0 == r.r0.end() ? "—" : fmt::format("{:.2f}", r0->range * 1e3),
                  fmt::format("{:.2f}", row->mpe * 1e3), fmt::format("{:.2f}", row->U * 1e3)});
   }
-  s.more_tables.push_back({"Each length at each position (ISO 10360-2)", std::move(t)});
+  s.tables_after.push_back({"Each length at each position (ISO 10360-2)", std::move(t)});
   if (r.lengths.empty()) return s;
   // Length errors against the nominal length: one series per position (markers), each drawn
   // a little beside the nominal so that positions do not hide each other.
@@ -149,7 +158,7 @@ Section e0_section(const std::string& title, const acceptance::E0Result& r) {
                    fmt::format("({:+.3f}, {:+.3f}, {:+.3f})", q.direction.x(), q.direction.y(),
                                q.direction.z()),
                    fmt::format("{}", q.placements.size()), q.space_diagonal ? "yes" : ""});
-  s.more_tables.push_back({"The positions (machine coordinates)", std::move(pos)});
+  s.tables_after.push_back({"The positions (machine coordinates)", std::move(pos)});
   return s;
 }
 

@@ -244,41 +244,45 @@ svg.ta-fig{max-width:100%;height:auto}
     for (const auto& w : s.warnings)
       h += "<p class=\"warn\"><b>Warning:</b> " + escape(w) + "</p>\n";
     h += s.intro_html + "\n";
-    std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>> tables;
+    using Tables = std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>>;
+    Tables tables;
     if (!s.table.empty()) tables.emplace_back("", s.table);
     for (const auto& t : s.more_tables) tables.push_back(t);
-    for (std::size_t ti = 0; ti < tables.size(); ++ti) {
-      const auto& [caption, table] = tables[ti];
-      if (!caption.empty()) h += "<h3>" + escape(caption) + "</h3>";
-      // Printed, a table fits the page's width: one of many columns (Moody's worksheet) in a
-      // smaller type, a cell of prose wrapping, a value never.
-      std::size_t columns = 0;
-      for (const auto& row : table) columns = std::max(columns, row.size());
-      h += columns > 12 ? "<table class=\"wide\">" : "<table>";
-      for (std::size_t r = 0; r < table.size(); ++r) {
-        h += "<tr>";
-        for (const auto& c : table[r]) {
-          const bool prose = r > 0 && c.size() > 40 && c.find(' ') != std::string::npos;
-          h += (r == 0  ? "<th>"
-                : prose ? "<td class=\"txt\">"
-                        : "<td>") +
-               escape(c) + (r == 0 ? "</th>" : "</td>");
+    auto emit_tables = [&](const Tables& list) {
+      for (std::size_t ti = 0; ti < list.size(); ++ti) {
+        const auto& [caption, table] = list[ti];
+        if (!caption.empty()) h += "<h3>" + escape(caption) + "</h3>";
+        // Printed, a table fits the page's width: one of many columns (Moody's worksheet) in a
+        // smaller type, a cell of prose wrapping, a value never.
+        std::size_t columns = 0;
+        for (const auto& row : table) columns = std::max(columns, row.size());
+        h += columns > 12 ? "<table class=\"wide\">" : "<table>";
+        for (std::size_t r = 0; r < table.size(); ++r) {
+          h += "<tr>";
+          for (const auto& c : table[r]) {
+            const bool prose = r > 0 && c.size() > 40 && c.find(' ') != std::string::npos;
+            h += (r == 0  ? "<th>"
+                  : prose ? "<td class=\"txt\">"
+                          : "<td>") +
+                 escape(c) + (r == 0 ? "</th>" : "</td>");
+          }
+          h += "</tr>";
         }
-        h += "</tr>";
-      }
-      h += "</table>\n";
-      std::string csv;
-      for (const auto& row : table) {
-        for (std::size_t c = 0; c < row.size(); ++c) {
-          if (c) csv.push_back(',');
-          csv.append(csv_cell(row[c]));
+        h += "</table>\n";
+        std::string csv;
+        for (const auto& row : table) {
+          for (std::size_t c = 0; c < row.size(); ++c) {
+            if (c) csv.push_back(',');
+            csv.append(csv_cell(row[c]));
+          }
+          csv += "\n";
         }
-        csv += "\n";
+        const std::string name =
+            slug(s.title) + (ti == 0 && caption.empty() ? "-table" : "-" + slug(caption)) + ".csv";
+        h += "<p class=\"dl\">" + csv_link(name, csv) + "</p>\n";
       }
-      const std::string name =
-          slug(s.title) + (ti == 0 && caption.empty() ? "-table" : "-" + slug(caption)) + ".csv";
-      h += "<p class=\"dl\">" + csv_link(name, csv) + "</p>\n";
-    }
+    };
+    emit_tables(tables);
     for (const auto& p : s.plots) {
       const std::string id = fmt::format("plot{}", pid++);
       h += "<div class=\"plot\"><h3>" + escape(p.title) + "</h3><div id=\"" + id + "\"></div>";
@@ -347,6 +351,7 @@ svg.ta-fig{max-width:100%;height:auto}
       for (const auto& v : s.planes) figure(v.title, svg(v));
       h += "</div>\n";
     }
+    emit_tables(s.tables_after);
   }
   // One list of the sources the sections' methods follow, each once, in order of first use.
   std::vector<std::string> refs;

@@ -81,6 +81,77 @@ TEST(Acceptance, EachLengthErrorIsTheErrorFieldAlongIt) {
   EXPECT_EQ(r.r0_max, 0);  // no noise: repetitions agree
 }
 
+// E150: the stylus tip 150 mm across the ram. Each length error is the error field of the machine
+// probing with that stylus, computed here in two parts at the commands that bring the tip to the
+// faces: the vertical stylus's error e(c) and the Abbe term (R(c) − I)·ℓ, the carriages'
+// rotations times the offset, which E0's stylus does not see.
+TEST(Acceptance, E150AddsTheCarriagesRotationsTimesTheStylusOffset) {
+  const auto m = default_volume_machine(3);
+  const Eigen::Vector3d lateral(150, 0, 0);
+  const auto m150 = acceptance::with_stylus(m, lateral);
+  EXPECT_TRUE(m150.offset.isApprox(m.offset + lateral));
+  const auto volume = acceptance::Volume::of(m150);
+  EXPECT_NEAR(volume.low.x(), acceptance::Volume::of(m).low.x() + 150, 1e-12);
+  const auto setup = acceptance::example_setup(volume);
+  acceptance::E0Options o;
+  o.mpe = ballgauge::Mpe::parse("1.5+L/300");
+  o.stylus_offset = lateral;
+  const auto r = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m150), o);
+  EXPECT_EQ(r.name(), "E150");
+  ASSERT_EQ(r.positions.size(), 2u);  // two positions, by default the first two space diagonals
+  EXPECT_TRUE(r.positions[0].space_diagonal && r.positions[1].space_diagonal);
+  ASSERT_EQ(r.lengths.size(), 30u);  // 2 positions × 5 lengths × 3 repetitions
+  // The command that puts the tip (stylus offset o + ℓ) at P, by fixed-point steps.
+  const auto command = [&](const Eigen::Vector3d& P) {
+    Eigen::Vector3d c = P - m150.offset;
+    for (int it = 0; it < 10; ++it) c = P - m150.offset - m150.error(c);
+    return c;
+  };
+  double largest_abbe = 0;
+  for (const auto& row : r.lengths) {
+    const auto& p = *std::find_if(setup.placements.begin(), setup.placements.end(),
+                                  [&](const auto& q) { return q.block == row.block; });
+    const double L = setup.block(row.block).length;
+    const Eigen::Vector3d ca = command(p.centre - (L / 2 + 1) * p.direction),
+                          cb = command(p.centre + (L / 2 + 1) * p.direction);
+    const double vertical = -(m.error(cb) - m.error(ca)).dot(p.direction);
+    const double abbe = -((m.pose(cb).linear() - m.pose(ca).linear()) * lateral).dot(p.direction);
+    EXPECT_NEAR(row.error, vertical + abbe, 1e-9) << row.position << " " << row.block;
+    largest_abbe = std::max(largest_abbe, std::abs(abbe));
+  }
+  EXPECT_GT(largest_abbe, 1e-3);  // the random machine's rotations: micrometres at 150 mm
+  EXPECT_NE(r.rule.find("E150,MPE"), std::string::npos) << r.rule;
+  // The set-up made for the vertical stylus does not fit the offset one's volume: refused.
+  const auto vertical_setup = acceptance::example_setup(acceptance::Volume::of(m));
+  const std::string e = test::error_of(
+      [&] { acceptance::run_e0(vertical_setup, volume, acceptance::virtual_touch(m150), o); });
+  EXPECT_NE(e.find("outside the volume"), std::string::npos) << e;
+  // Positions by name; an unknown one, choosing positions for E0, and an offset along the ram
+  // are refused.
+  auto named = o;
+  named.positions = {"along X", "along Y"};
+  const auto rx = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m150), named);
+  ASSERT_EQ(rx.positions.size(), 2u);
+  EXPECT_EQ(rx.positions[0].name, "along X");
+  named.positions = {"along W"};
+  EXPECT_NE(test::error_of([&] {
+              acceptance::run_e0(setup, volume, acceptance::virtual_touch(m150), named);
+            }).find("no position 'along W'"),
+            std::string::npos);
+  auto e0 = o;
+  e0.stylus_offset.reset();
+  e0.positions = {"along X"};
+  EXPECT_NE(test::error_of([&] {
+              acceptance::run_e0(setup, volume, acceptance::virtual_touch(m150), e0);
+            }).find("every position"),
+            std::string::npos);
+  EXPECT_NE(test::error_of([&] {
+              acceptance::with_stylus(m, Eigen::Vector3d(0, 0, -150));
+            }).find("across the ram"),
+            std::string::npos);
+  EXPECT_THROW(acceptance::with_stylus(m, Eigen::Vector3d(900, 0, 0)), Error);
+}
+
 // ISO 14253-1 at the MPE: conformance proven below MPE − U, non-conformance above MPE + U,
 // neither between; R0 is the range of the repetitions.
 TEST(Acceptance, TheVerdictFollowsTheDecisionRuleWithTheTestUncertainty) {
@@ -122,6 +193,18 @@ TEST(Acceptance, TheVerdictFollowsTheDecisionRuleWithTheTestUncertainty) {
   acceptance::judge_e0(setup, o, r);
   EXPECT_EQ(r.verdict, acceptance::Verdict::DoesNotConform) << r.summary();
   EXPECT_NE(r.rule.find("ISO 14253-1"), std::string::npos);
+  // U (k = 2) is ISO/TS 23165's budget for each length, computed here: calibration, the
+  // temperature's and the expansion coefficient's effects, alignment and fixturing.
+  setup.temperature = 21.5;
+  setup.u_fixturing = 0.3e-3;
+  acceptance::judge_e0(setup, o, r);
+  for (const auto& row : r.lengths) {
+    const auto& b = setup.block(row.block);
+    const double u2 = b.u * b.u + std::pow(b.length * b.alpha * setup.u_temperature, 2) +
+                      std::pow(b.length * b.u_alpha * 1.5, 2) + std::pow(setup.u_alignment, 2) +
+                      std::pow(0.3e-3, 2);
+    EXPECT_NEAR(row.U, 2 * std::sqrt(u2), 1e-15) << row.block;
+  }
 }
 
 // A CMM that stops answering: what was measured is kept and judged as far as it goes.
@@ -322,6 +405,19 @@ TEST(Acceptance, ResultFilesRoundTripAndBadOnesAreRefused) {
   EXPECT_NE(tampered("\"E0_max_um\": ", "\"E0_max_um\": 1").find("E0_max_um is not"),
             std::string::npos);
   EXPECT_NE(tampered("\"acceptance-e0\"", "\"circular\"").find("acceptance-e0"), std::string::npos);
+  // E150's stylus offset: a vector across the ram, or its length alone (along X).
+  EXPECT_NE(
+      tampered("\"mpe\"", "\"stylus_offset_mm\": [0, 0, 150], \"mpe\"").find("across the ram"),
+      std::string::npos);
+  EXPECT_NE(tampered("\"mpe\"", "\"stylus_offset_mm\": \"150\", \"mpe\"").find("bad-e0.json:"),
+            std::string::npos);
+  {
+    std::string t = text;
+    t.replace(t.find("\"mpe\""), 5, "\"stylus_offset_mm\": 150, \"mpe\"");
+    const auto e150 = io::read_e0_result(test::temp_file("e150.json", t));
+    ASSERT_TRUE(e150.stylus_offset);
+    EXPECT_EQ(e150.name(), "E150");
+  }
   // Probing.
   auto ps = setup;
   const auto probing = acceptance::run_probing(ps, acceptance::virtual_touch(m, probe), {});

@@ -774,6 +774,38 @@ grep -q "travel" err.txt && ok || bad "acceptance --cmm without a travel: $(cat 
 expect_code 2 "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,0,800,-600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
 grep -q "high end must lie above its low end" err.txt && ok || bad "acceptance --travel reversed: $(cat err.txt)"
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,-100,800,600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
+# --pause: the operator sets up each position; q stops the run, what was measured is kept.
+printf '\n\nq\n' | "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe 3 --pause -o acc/e0-paused.json >out.txt 2>err.txt; rc=$?
+[ "$rc" -eq 1 ] && grep -q "Set up position 3 of 7, 'space diagonal 3 (+X−Y+Z)': D3-" err.txt && grep -q "stopped after 30 lengths: by the operator before position 'space diagonal 3" err.txt && ok || bad "acceptance e0 --pause: $rc $(cat err.txt)"
+python3 -c "
+import json, sys
+r = json.load(open('acc/e0-paused.json'))
+sys.exit(0 if r['complete'] is False and len(r['lengths']) == 30 else 1)" && ok || bad "a stopped run keeps its 30 lengths"
+# E150: a set-up for the volume the offset stylus reaches, measured in process and over I++ DME
+# (the served CMM's Probe1 is the offset stylus): the same lengths, in two positions.
+expect_ok "$T" acceptance setup --machine acc/m.json --stylus-offset 150 -o acc/acc150.json
+grep -q "35 gauge blocks in 7 positions .* with the offset stylus -> acc/acc150.json" out.txt && ok || bad "acceptance setup: $(cat out.txt)"
+expect_code 1 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acc150.json --stylus-offset 150 --mpe "1.5+L/300" -o acc/e150.json --report acc/e150.html
+grep -q "E150: 30 lengths in 2 positions; .*stylus offset (150, 0, 0) mm" out.txt && grep -q "Length measuring error E150" acc/e150.html && ok || bad "acceptance e0 --stylus-offset: $(cat out.txt)"
+expect_code 1 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --stylus-offset 150 --mpe 3 -o x.json
+grep -q "outside the volume" err.txt && ok || bad "E150 on the vertical stylus's set-up: $(cat err.txt)"
+start_server --machine acc/m.json --stylus-offset 150 --artefacts acc/acc150.json --port 0 --time-scale 0 --sessions 1
+expect_code 1 "$T" acceptance e0 --cmm "ipp://127.0.0.1:$PORT" --machine acc/m.json --stylus-offset 150 --artefacts acc/acc150.json --position "along X" --position "along Y" --mpe "1.5+L/300" -o acc/e150-ipp.json
+end_server
+expect_code 1 "$T" acceptance e0 --machine acc/m.json --stylus-offset 150 --artefacts acc/acc150.json --position "along X" --position "along Y" --mpe "1.5+L/300" -o acc/e150-xy.json
+python3 -c "
+import json, sys
+a = json.load(open('acc/e150-xy.json')); b = json.load(open('acc/e150-ipp.json'))
+ok = a['test'] == 'E150' and b['test'] == 'E150' and b['stylus_offset_mm'] == [150, 0, 0]
+ok = ok and b['complete'] and len(b['lengths']) == 30 and {x['position'] for x in b['lengths']} == {'along X', 'along Y'}
+ok = ok and max(abs(x['error_um'] - y['error_um']) for x, y in zip(a['lengths'], b['lengths'])) < 0.05
+sys.exit(0 if ok else 1)" && ok || bad "E150 over I++ DME agrees with the virtual CMM in process"
+expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --position "along X" --mpe 3 -o x.json
+grep -q "for E_L, with --stylus-offset" err.txt && ok || bad "acceptance e0 --position without an offset: $(cat err.txt)"
+expect_code 2 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acc150.json --stylus-offset 0,0,150 --mpe 3 -o x.json
+grep -q "across the ram" err.txt && ok || bad "a stylus offset along the ram: $(cat err.txt)"
+expect_code 2 "$T" serve --stylus-offset 150 --port 0
+grep -q "needs --machine" err.txt && ok || bad "serve --stylus-offset without a machine: $(cat err.txt)"
 echo '{"sphere": {"centre": [0, 0], "diameter_mm": 25}}' > acc/bad.json
 expect_err "acc/bad.json:1:[0-9]*: sphere.centre: three numbers" "$T" serve --artefacts acc/bad.json --port 0
 

@@ -47,3 +47,36 @@ def test_acceptance_from_python_and_from_the_command_line(tmp_path):
     bad.write_text('{"sphere": {"centre": [0, 0], "diameter_mm": 25}}')
     with pytest.raises(trueaxis.Error, match=r"bad.json:1:\d+: .*three numbers"):
         trueaxis.acceptance_probing(m, str(bad))
+
+
+def test_e150_in_process_and_over_ipp_from_python(tmp_path):
+    """E150 with a 150 mm stylus offset along X, on a set-up for that stylus's volume: in process,
+    then over I++ DME on a served CMM whose stylus is offset the same way (cmm=): the same lengths."""
+    import re
+    m = trueaxis.Machine.random(seed=3)
+    setup = str(tmp_path / "acc150.json")
+    trueaxis.acceptance_setup(m, setup, stylus_offset=150)
+    kw = dict(mpe="1.5+L/300", stylus_offset=[150, 0, 0], positions=["along X", "along Z"])
+    r = trueaxis.acceptance_e0(m, setup, **kw)
+    assert r["test"] == "E150" and len(r["lengths"]) == 30 and r["complete"]
+    assert {l["position"] for l in r["lengths"]} == {"along X", "along Z"}
+    machine = tmp_path / "m.json"
+    m.save(str(machine))
+    server = subprocess.Popen(
+        [TRUEAXIS, "serve", "--port", "0", "--time-scale", "0", "--sessions", "1", "--machine",
+         str(machine), "--stylus-offset", "150", "--artefacts", setup],
+        stdout=subprocess.PIPE, text=True)
+    try:
+        port = int(re.search(r"127\.0\.0\.1:(\d+)", server.stdout.readline()).group(1))
+        remote = trueaxis.acceptance_e0(m, setup, **kw, cmm=f"ipp://127.0.0.1:{port}")
+    finally:
+        server.wait(timeout=60)
+    assert remote["complete"] and len(remote["lengths"]) == 30
+    assert max(abs(a["error_um"] - b["error_um"])
+               for a, b in zip(r["lengths"], remote["lengths"])) < 0.05
+    with pytest.raises(trueaxis.Error, match="across the ram"):
+        trueaxis.acceptance_e0(m, setup, mpe="3", stylus_offset=[0, 0, 150])
+    with pytest.raises(trueaxis.Error, match="travel"):
+        trueaxis.acceptance_e0(None, setup, mpe="3", cmm="ipp://127.0.0.1:1")
+    with pytest.raises(trueaxis.Error, match="not an I\\+\\+ DME server address"):
+        trueaxis.acceptance_e0(None, setup, mpe="3", cmm="127.0.0.1:1", travel=[0, 0, 0, 1, 1, 1])

@@ -11,11 +11,13 @@
 // error E = measured − calibrated length. The placements that lie along one line make one of
 // the standard's positions (4 space diagonals and 3 more, 5 lengths each, the longest at least
 // 66 % of the travel along the line: on a space diagonal, of the volume's space diagonal). R0 is
-// the range of a length's repetitions at a position. Test uncertainty (ISO/TS 23165:2006 in
-// outline, k = 2): the length's calibration, its temperature (L·α·u(T)) and expansion coefficient
-// (L·u(α)·|T − 20 °C|), and the alignment; the CMM's own repeatability is not in it (it is what is
-// tested). Decision rule (ISO 14253-1): conformance is proven when every |E| ≤ MPE − U,
-// non-conformance when some |E| > MPE + U; between, neither is proven.
+// the range of a length's repetitions at a position. Test uncertainty (ISO/TS 23165:2006's
+// contributors, k = 2): the length's calibration, its temperature (L·α·u(T)) and expansion
+// coefficient (L·u(α)·|T − 20 °C|), the alignment and the fixturing; the CMM's own repeatability is
+// not in it (it is what is tested). Decision rule (ISO 14253-1): conformance is proven when every
+// |E| ≤ MPE − U, non-conformance when some |E| > MPE + U; between, neither is proven. E_L (E150):
+// the same test with the stylus tip offset across the ram (150 mm), in two positions; the
+// carriages' rotations then move the tip by their angle times the offset (an Abbe error).
 //
 // ISO 10360-5: 25 points on the reference sphere in the standard's pattern (the pole, 4 points
 // at 22.5° from it, 8 at 45°, 4 at 67.5° and 8 on the equator, each ring turned 22.5° from the
@@ -72,6 +74,7 @@ struct Setup {
   double temperature = 20;     // °C, the artefacts'
   double u_temperature = 0.2;  // K
   double u_alignment = 0;      // mm, standard uncertainty of a length from its alignment
+  double u_fixturing = 0;      // mm, from how it is supported (bending, clamping)
   // The blocks' cross-section (mm), as a long gauge block's: block_width across the line
   // (horizontal where the line is not vertical) and block_height across both; two placements of
   // a position must not come closer than block_width.
@@ -103,8 +106,11 @@ struct Position {
 // every reason it cannot be an ISO 10360-2 test (a placement outside the volume or overlapping
 // another of its position (positions are set up one after another), fewer than 7 positions or a
 // space diagonal missing, a position without 5 lengths or whose longest is below 66 % of the travel
-// along it).
-std::vector<Position> positions(const Setup& setup, const Volume& volume);
+// along it). `only` (names): just these positions are measured and checked, as for E_L with a
+// stylus offset, which ISO 10360-2 measures in two positions; the 7 positions are then not asked
+// for, and a name the set-up does not have is refused.
+std::vector<Position> positions(const Setup& setup, const Volume& volume,
+                                const std::vector<std::string>& only = {});
 
 // The blocks as boxes (length × block_width × block_height) in the machine, each one's group
 // its position's index (positions are set up one after another).
@@ -112,6 +118,10 @@ std::vector<sim::Box> artefact_boxes(const Setup& setup);
 // A block's axes: the line's direction, across it (horizontal unless the line is vertical, then
 // along Y), and the third.
 Eigen::Matrix3d block_axes(const Eigen::Vector3d& direction);
+
+// The placements by position (their own names, or their directions when unnamed), each marked
+// when it is a space diagonal; nothing checked.
+std::vector<Position> lines(const Setup& setup);
 
 // A set-up that fits `volume` and the standard: the 4 space diagonals and lines along X, Y and Z
 // through its middle, each with 5 blocks side by side (0.7, 0.55, 0.4, 0.25 and 0.1 of the
@@ -157,16 +167,27 @@ enum class Verdict { Conforms, DoesNotConform, NotProven };
 const char* to_string(Verdict v);  // "conforms", "does not conform", "not proven"
 
 struct E0Options {
-  ballgauge::Mpe mpe;                   // E0,MPE (or E150,MPE)
-  std::optional<ballgauge::Mpe> r0;     // R0,MPE when given
-  std::optional<double> stylus_offset;  // mm: E150 (the offset used), for the record
+  ballgauge::Mpe mpe;                // E0,MPE (or E150,MPE)
+  std::optional<ballgauge::Mpe> r0;  // R0,MPE when given
+  // E_L (ISO 10360-2): the stylus tip's offset from the ram axis (mm, machine axes, across the
+  // ram: its Z component 0, length up to 500 mm), e.g. 150 mm along X for E150. The touch must
+  // probe with that stylus (for the virtual CMM: the machine's offset plus this, with_stylus);
+  // the volume is that stylus's too. Rotations of the carriages then move the tip by their angle
+  // times this offset (the Abbe error the test exposes), which E0's stylus hides.
+  std::optional<Eigen::Vector3d> stylus_offset;
+  // E_L only: the positions measured (names from lines()); empty: the set-up's first two space
+  // diagonals.
+  std::vector<std::string> positions;
   // Called after every length measured: done, total.
   std::function<void(std::size_t, std::size_t)> progress;
+  // Called before each position is measured (the position, its index from 0, how many), e.g.
+  // to have an operator set it up on a real CMM; an Error it throws stops the run as a touch's.
+  std::function<void(const Position&, std::size_t, std::size_t)> before_position;
 };
 
 struct E0Result {
   std::string mpe_text, r0_text;
-  std::optional<double> stylus_offset;
+  std::optional<Eigen::Vector3d> stylus_offset;  // mm, E_L's
   std::vector<Position> positions;
   std::vector<LengthResult> lengths;
   std::vector<RepeatRange> r0;
@@ -178,9 +199,19 @@ struct E0Result {
   bool complete = true;         // false: stopped before every length was measured
   std::string stopped;          // why
   std::string summary() const;  // µm
+  std::string name() const;     // "E0", or "E150" for a 150 mm stylus offset
 };
 
-// Runs the test: every placement of every position, `repetitions` times, bidirectionally. A
+// The test's name for a stylus offset: "E0" without one, else "E" and its length in mm.
+std::string el_name(const std::optional<Eigen::Vector3d>& stylus_offset);
+
+// The virtual CMM's machine probing with a stylus offset across the ram (mm): its offset plus
+// `lateral`. Throws Error when `lateral` is not across the ram or longer than 500 mm.
+sim::Machine with_stylus(sim::Machine machine, const Eigen::Vector3d& lateral);
+void validate_stylus_offset(const Eigen::Vector3d& lateral);  // throws Error
+
+// Runs the test: every placement of every position (E_L: of options.positions), `repetitions`
+// times, bidirectionally. A
 // touch that throws stops the run: what was measured is kept (complete = false, stopped = the
 // reason) and judged as far as it goes.
 E0Result run_e0(const Setup& setup, const Volume& volume, const Touch& touch,

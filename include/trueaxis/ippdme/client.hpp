@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "trueaxis/ippdme/protocol.hpp"
@@ -19,6 +20,10 @@ struct ClientOptions {
   double timeout = 60;  // s: the longest wait for a line of a transaction
   std::string log;      // every line sent and received, with the time (empty: none)
 };
+
+// An I++ DME server's address, ipp://HOST:PORT (e.g. ipp://127.0.0.1:1294): its host and port.
+// Throws Error saying what is expected.
+std::pair<std::string, unsigned short> parse_address(const std::string& address);
 
 struct Transaction {
   Tag tag;

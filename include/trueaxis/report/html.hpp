@@ -130,6 +130,8 @@ struct Section {
   std::vector<std::vector<std::string>> table;  // first row = header; cells are escaped
   // Further tables after the first, each with a caption (first row = header).
   std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>> more_tables;
+  // Tables with a caption drawn after the figures: long listings the figures summarise.
+  std::vector<std::pair<std::string, std::vector<std::vector<std::string>>>> tables_after;
   std::vector<Plot> plots;
   std::vector<SurfaceView> views;    // drawn first among the figures
   std::vector<HeatMap> heat_maps;    // drawn after the plots, side by side when they fit

@@ -42,6 +42,7 @@ acceptance::Setup read_acceptance_setup(const std::string& path) {
   s.temperature = setup_optional(f, P("/temperature_C"), s.temperature);
   s.u_temperature = setup_optional(f, P("/u_temperature_K"), s.u_temperature);
   s.u_alignment = setup_optional(f, P("/u_alignment_um"), s.u_alignment, 1e-3);
+  s.u_fixturing = setup_optional(f, P("/u_fixturing_um"), s.u_fixturing, 1e-3);
   s.block_width = setup_optional(f, P("/block_width_mm"), s.block_width);
   s.block_height = setup_optional(f, P("/block_height_mm"), s.block_height);
   s.approach = setup_optional(f, P("/approach_mm"), s.approach);
@@ -114,6 +115,7 @@ void write_acceptance_setup(const std::string& path, const acceptance::Setup& s)
   j["temperature_C"] = s.temperature;
   j["u_temperature_K"] = s.u_temperature;
   j["u_alignment_um"] = s.u_alignment * 1e3;
+  j["u_fixturing_um"] = s.u_fixturing * 1e3;
   j["block_width_mm"] = s.block_width;
   j["block_height_mm"] = s.block_height;
   j["approach_mm"] = s.approach;
@@ -144,7 +146,8 @@ void write_e0_result(const std::string& path, const acceptance::E0Result& r) {
   ojson j;
   j["kind"] = "acceptance-e0";
   j["mpe"] = r.mpe_text;
-  if (r.stylus_offset) j["stylus_offset_mm"] = *r.stylus_offset;
+  j["test"] = r.name();  // E0, or E_L (E150) with a stylus offset
+  if (r.stylus_offset) j["stylus_offset_mm"] = setup_xyz(*r.stylus_offset);
   // Nothing measured, or no repetitions: no figure, not a zero.
   j["E0_max_um"] = r.lengths.empty() ? ojson(nullptr) : ojson(r.e0_max * 1e3);
   j["R0_max_um"] = r.r0.empty() ? ojson(nullptr) : ojson(r.r0_max * 1e3);
@@ -233,7 +236,17 @@ acceptance::E0Result read_e0_result(const std::string& path) {
   expect_kind(f, "acceptance-e0");
   acceptance::E0Result r;
   r.mpe_text = f.string(P("/mpe"));
-  if (f.has(P("/stylus_offset_mm"))) r.stylus_offset = f.number(P("/stylus_offset_mm"));
+  // The stylus offset as a vector (mm), or its length alone (along X).
+  if (f.has(P("/stylus_offset_mm"))) {
+    r.stylus_offset = f.root().at(P("/stylus_offset_mm")).is_number()
+                          ? Eigen::Vector3d(f.number(P("/stylus_offset_mm")), 0, 0)
+                          : setup_vector3(f, P("/stylus_offset_mm"));
+    try {
+      acceptance::validate_stylus_offset(*r.stylus_offset);
+    } catch (const Error& e) {
+      f.fail(P("/stylus_offset_mm"), e.what());
+    }
+  }
   if (f.has(P("/r0_mpe"))) {
     r.r0_text = f.string(P("/r0_mpe"));
     if (f.has(P("/r0_pass"))) {
