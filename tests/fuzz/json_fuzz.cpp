@@ -25,7 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 16) {
+    switch (data[0] % 18) {
       case 0:
         io::read_machine(p);
         break;
@@ -80,6 +80,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
         break;
       }
+      case 16:  // CMM acceptance results, as 'trueaxis report' and trueaxis.load read them
+        io::read_e0_result(p);
+        break;
+      case 17:
+        io::read_probing_result(p);
+        break;
       default:
         io::read_positioning_result(p);
         break;

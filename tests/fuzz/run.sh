@@ -53,6 +53,9 @@ printf '\x0b{"kind": "positioning", "standard": "ISO 230-2:2014", "A": 3, "B": n
 printf '\x0c{"kind": "circular", "plane": "XY", "radius_mm": 100, "feed_mm_per_min": 1000, "G_um": {"ccw": 3}, "F_um": {"ccw": {"min": -1, "max": 2}}, "H_um": null, "diagnosis": {"reversal_delay_deg": {"X": 0.2, "Y": 0.3}}, "trace": {"direction": ["ccw", "ccw"], "angle_deg": [0, 180], "deviation_um": [1, 2], "model_um": [1, 2]}}' > "$corpus/json/circular"
 printf '\x0d{"X": {"gain_per_s": 30, "backlash_um": 3, "spike_um": 4, "spike_decay_deg": 5, "cyclic_um": 0.5, "pitch_mm": 10}}' > "$corpus/json/servo"
 printf '\x0e{"kind": "circular compensation", "plane": "XY", "backlash_um": {"X": {"value": 3}, "Y": {"value": 5}}, "squareness_um_per_m": {"value": 12}}' > "$corpus/json/compensation"
+# CMM acceptance results as trueaxis writes them (an E150 run stopped after one position).
+printf '\x10' | cat - tests/data/fuzz/acceptance-e150-stopped.json > "$corpus/json/e150"
+printf '\x11' | cat - tests/data/fuzz/acceptance-probing.json > "$corpus/json/probing"
 printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
 find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
 # Inputs the fuzzers once found a problem with (kept in tests/data/fuzz), so each run starts there.
