@@ -26,7 +26,7 @@ struct AcceptanceArgs {
   std::string cmm, log;
   std::vector<double> travel;
   double clearance = 5;
-  std::string artefacts, output, report;
+  std::string artefacts, output, report, correction;
   std::string mpe, r0_mpe;
   std::vector<double> stylus_offset;  // mm: L, or X,Y,Z
   std::vector<std::string> positions;
@@ -73,8 +73,19 @@ std::unique_ptr<Cmm> open_cmm(const AcceptanceArgs& a, const acceptance::Setup& 
     p.noise = a.noise_um * 1e-3;
     p.seed = a.seed;
     c->touch = acceptance::virtual_touch(*c->machine, p);
+    if (!a.correction.empty()) {
+      // The controller's correction applied to every point read, as on the CMM it stands for.
+      auto correct = load_correction(a.correction);
+      c->touch = [raw = c->touch, correct](const Eigen::Vector3d& at, const Eigen::Vector3d& d) {
+        return correct(raw(at, d));
+      };
+    }
     return c;
   }
+  if (!a.correction.empty())
+    throw CLI::ValidationError("--correction",
+                               "is for the virtual CMM of --machine; a CMM over I++ DME applies "
+                               "its own (trueaxis serve --correction)");
   if (!c->machine) {
     if (a.travel.size() != 6)
       throw CLI::ValidationError("--travel",
@@ -209,6 +220,10 @@ void add_common(CLI::App* c, AcceptanceArgs& a, const char* output) {
                 "acceptance.json: the artefacts as set up, in the machine's coordinates "
                 "(trueaxis examples writes one)")
       ->required()
+      ->check(existing_file());
+  c->add_option("--correction", a.correction,
+                "map.json (ball-gauge grid map) or model.json (parametric model): the virtual CMM "
+                "corrects every point it reads, as a controller with that error map would")
       ->check(existing_file());
   c->add_option("--lobing", a.lobing_um,
                 "the virtual probe's pre-travel variation (µm, three lobes about the stylus)")

@@ -111,6 +111,10 @@ std::vector<Command> add_ipp_commands(CLI::App& app);
 report::Section demo_acceptance(const sim::Machine& machine, const std::string& dir,
                                 std::uint64_t seed,
                                 const std::function<void(const std::string&)>& say);
+// --correction's file: a ball-gauge grid map (map.json, held at its edges) or an identified
+// model (model.json, points outside its span left as read), as a CMM controller applies it to
+// every point it reads (ipp_cmds.cpp).
+std::function<Eigen::Vector3d(const Eigen::Vector3d&)> load_correction(const std::string& path);
 // --stylus-offset's values (mm): L alone (along +X) or X,Y,Z, the stylus tip's offset across
 // the ram of ISO 10360-2's E_L test. Throws CLI::ValidationError naming the flag.
 Eigen::Vector3d stylus_offset_of(const std::vector<double>& values);

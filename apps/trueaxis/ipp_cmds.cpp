@@ -87,6 +87,29 @@ std::pair<std::string, unsigned short> parse_ipp_address(const std::string& addr
   }
 }
 
+// A controller's error correction from a ball-gauge grid map (held at its edges beyond them, as a
+// controller holds its table's last values) or an identified model (outside its span, points
+// are left as read).
+std::function<Eigen::Vector3d(const Eigen::Vector3d&)> load_correction(const std::string& path) {
+  const auto kind = io::JsonFile::read(path).root().value("kind", std::string());
+  if (kind == "parametric model") {
+    auto c = std::make_shared<ballgauge::Correction>(
+        ballgauge::parametric_correction(io::read_parametric(path)));
+    return [c](const Eigen::Vector3d& x) {
+      try {
+        return c->corrected(x);
+      } catch (const Error&) {
+        return x;
+      }
+    };
+  }
+  auto grid = std::make_shared<map::ErrorMap>(io::read_error_map(path));
+  map::EvalOptions eo;
+  eo.outside = map::Outside::Clamp;
+  auto c = std::make_shared<ballgauge::Correction>(ballgauge::grid_correction(*grid, eo));
+  return [c, grid](const Eigen::Vector3d& x) { return c->corrected(x); };
+}
+
 namespace {
 
 struct ServeArgs {
@@ -153,26 +176,7 @@ int run_serve(const ServeArgs& a) {
   e.cmm.probe.lobing = a.lobing_um * 1e-3;
   std::string corrected;
   if (!a.correction.empty()) {
-    // A ball-gauge grid map (clamped at its edges, as a controller holds its table's last
-    // values) or an identified model (outside its span, points are left as read).
-    const auto kind = io::JsonFile::read(a.correction).root().value("kind", std::string());
-    if (kind == "parametric model") {
-      auto c = std::make_shared<ballgauge::Correction>(
-          ballgauge::parametric_correction(io::read_parametric(a.correction)));
-      e.correction = [c](const Eigen::Vector3d& x) {
-        try {
-          return c->corrected(x);
-        } catch (const Error&) {
-          return x;
-        }
-      };
-    } else {
-      auto grid = std::make_shared<map::ErrorMap>(io::read_error_map(a.correction));
-      map::EvalOptions eo;
-      eo.outside = map::Outside::Clamp;
-      auto c = std::make_shared<ballgauge::Correction>(ballgauge::grid_correction(*grid, eo));
-      e.correction = [c, grid](const Eigen::Vector3d& x) { return c->corrected(x); };
-    }
+    e.correction = load_correction(a.correction);
     corrected = fmt::format(", corrected by {}", a.correction);
   }
   ippdme::Server server(o);

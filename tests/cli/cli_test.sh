@@ -774,6 +774,16 @@ grep -q "travel" err.txt && ok || bad "acceptance --cmm without a travel: $(cat 
 expect_code 2 "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,0,800,-600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
 grep -q "high end must lie above its low end" err.txt && ok || bad "acceptance --travel reversed: $(cat err.txt)"
 expect_err "cannot connect to an I++ DME server at 127.0.0.1:1" "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,-100,800,600,400 --artefacts acc/acceptance.json --mpe 3 -o x.json
+# --correction: the virtual CMM corrects what it reads with a ball-gauge map, as its controller
+# would; the map covers part of the volume, so E0 falls but does not vanish.
+"$T" simulate ballgauge --machine acc/m.json --gauge acc/g.json -o acc/meas.json --truth acc/bt.csv -q && "$T" ballgauge --gauge acc/g.json --measurements acc/meas.json --output acc/map.json -q && ok || bad "a ball-gauge map for acceptance --correction"
+expect_code 1 "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe "1.5+L/300" --correction acc/map.json -o acc/e0-corrected.json
+python3 -c "
+import json, sys
+a = json.load(open('acc/e0.json')); b = json.load(open('acc/e0-corrected.json'))
+sys.exit(0 if b['E0_max_um'] < 0.8 * a['E0_max_um'] else 1)" && ok || bad "acceptance e0 --correction lowers E0"
+expect_code 2 "$T" acceptance e0 --cmm "ipp://127.0.0.1:1" --travel 0,0,-100,800,600,400 --correction acc/map.json --artefacts acc/acceptance.json --mpe 3 -o x.json
+grep -q "trueaxis serve --correction" err.txt && ok || bad "acceptance --cmm --correction: $(cat err.txt)"
 # --pause: the operator sets up each position; q stops the run, what was measured is kept.
 printf '\n\nq\n' | "$T" acceptance e0 --machine acc/m.json --artefacts acc/acceptance.json --mpe 3 --pause -o acc/e0-paused.json >out.txt 2>err.txt; rc=$?
 [ "$rc" -eq 1 ] && grep -q "Set up position 3 of 7, 'space diagonal 3 (+X−Y+Z)': D3-" err.txt && grep -q "stopped after 30 lengths: by the operator before position 'space diagonal 3" err.txt && ok || bad "acceptance e0 --pause: $rc $(cat err.txt)"
