@@ -121,6 +121,8 @@ Eigen::Vector3d stylus_offset_of(const std::vector<double>& values);
 // 'acceptance e0', 'acceptance probing'.
 std::vector<Command> add_acceptance_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);
+// 'record add|machines|list|show|export' (record_cmds.cpp).
+std::vector<Command> add_record_commands(CLI::App& app);
 
 // The grammar every command shares (grammar.cpp). apply_grammar: once every command is added,
 // the help lists commands one per line with their purpose, and every command takes --version.

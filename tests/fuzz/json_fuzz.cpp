@@ -16,6 +16,7 @@
 #include "trueaxis/io/sim/machine.hpp"
 #include "trueaxis/io/surface/space.hpp"
 #include "trueaxis/io/surface/surface.hpp"
+#include "trueaxis/records/records.hpp"
 #include "trueaxis/surface/surface.hpp"
 
 using namespace trueaxis;
@@ -25,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 18) {
+    switch (data[0] % 19) {
       case 0:
         io::read_machine(p);
         break;
@@ -86,6 +87,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       case 17:
         io::read_probing_result(p);
         break;
+      case 18: {  // the records' headline figures of any JSON text, whatever its kind says
+        const std::string text(reinterpret_cast<const char*>(data + 1), size - 1);
+        for (const char* kind : {"positioning", "circular", "acceptance-e0", "acceptance-probing",
+                                 "separation", "guideway", "surface", "space",
+                                 "length verification", "ballgauge map", "fit", "scan"}) {
+          try {
+            records::headline_figures(kind, text);
+          } catch (const Error&) {  // not a result of that kind: the next
+          }
+        }
+        break;
+      }
       default:
         io::read_positioning_result(p);
         break;

@@ -1,0 +1,177 @@
+// trueaxis CLI — machine records: 'record add|machines|list|show|export' on the records database.
+#include <fmt/format.h>
+
+#include <CLI/CLI.hpp>
+#include <fstream>
+#include <memory>
+
+#include "commands.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/records/records.hpp"
+
+namespace trueaxis::cli {
+namespace {
+
+struct RecordArgs {
+  std::string db;
+  // add
+  std::vector<std::string> files;
+  records::AddOptions add;
+  bool as_found = false, as_left = false;
+  double temperature = NAN;
+  // list, export
+  records::ListFilter filter;
+  std::string output, format = "json";
+  long long id = 0;
+  bool quiet = false;
+};
+
+std::string figures_text(const records::Record& r) {
+  std::string s;
+  for (const auto& f : r.figures) {
+    s += fmt::format("{}{}{} {:.3g}{}{}", s.empty() ? "" : ", ", f.name,
+                     f.axis.empty() ? "" : "@" + f.axis, f.value,
+                     f.u ? fmt::format(" ± {:.2g}", *f.u) : std::string(), " " + f.unit);
+  }
+  return s.empty() ? "no headline figure" : s;
+}
+
+int run_add(RecordArgs& a) {
+  if (a.as_found && a.as_left)
+    throw CLI::ValidationError("--as-found", "a result is as found or as left, not both");
+  a.add.state = a.as_found  ? records::State::AsFound
+                : a.as_left ? records::State::AsLeft
+                            : records::State::None;
+  if (!std::isnan(a.temperature)) a.add.temperature = a.temperature;
+  records::Database db(records::database_path(a.db));
+  for (const auto& f : a.files) {
+    const auto r = db.add(f, a.add);
+    a.add.new_machine = false;  // registered by the first file
+    if (!a.quiet)
+      fmt::print("record {}: {} {} {}{} ({})\n", r.id, r.machine, r.date, r.kind,
+                 r.state == records::State::None ? "" : std::string(" ") + to_string(r.state),
+                 figures_text(r));
+  }
+  return 0;
+}
+
+int run_machines(const RecordArgs& a) {
+  const records::Database db(records::database_path(a.db));
+  const auto ms = db.machines();
+  if (ms.empty()) fmt::print("no machine in {}\n", records::database_path(a.db));
+  for (const auto& m : ms)
+    fmt::print("{}: {} record{}{}\n", m.id, m.records, m.records == 1 ? "" : "s",
+               m.records ? fmt::format(", {} … {}", m.first, m.last) : std::string());
+  return 0;
+}
+
+int run_list(const RecordArgs& a) {
+  const records::Database db(records::database_path(a.db));
+  for (const auto& r : db.list(a.filter))
+    fmt::print("{:>5}  {}  {}  {}{}  {}\n", r.id, r.date, r.machine, r.kind,
+               r.state == records::State::None ? "" : std::string(" ") + to_string(r.state),
+               figures_text(r));
+  return 0;
+}
+
+int run_show(const RecordArgs& a) {
+  const records::Database db(records::database_path(a.db));
+  const auto r = db.show(a.id);
+  fmt::print("record {}\n  machine: {}\n  date: {}\n  kind: {}\n  state: {}\n  file: {}\n", r.id,
+             r.machine, r.date, r.kind,
+             r.state == records::State::None ? "not stated" : to_string(r.state), r.file_name);
+  if (!r.operator_name.empty()) fmt::print("  operator: {}\n", r.operator_name);
+  if (!r.instrument.empty()) fmt::print("  instrument: {}\n", r.instrument);
+  if (r.temperature) fmt::print("  temperature: {:g} °C\n", *r.temperature);
+  if (!r.note.empty()) fmt::print("  note: {}\n", r.note);
+  fmt::print("  trueaxis: {}\n  figures: {}\n", r.trueaxis_version, figures_text(r));
+  if (!a.output.empty()) {
+    std::ofstream out(a.output, std::ios::binary);
+    out << db.content(r.id);
+    if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
+    fmt::print("  the stored file -> {}\n", a.output);
+  }
+  return 0;
+}
+
+int run_export(const RecordArgs& a) {
+  const records::Database db(records::database_path(a.db));
+  const auto rs = db.list(a.filter);
+  const std::string text = a.format == "csv" ? records::to_csv(rs) : records::to_json(rs);
+  std::ofstream out(a.output, std::ios::binary);
+  out << text;
+  if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
+  if (!a.quiet) fmt::print("{} records -> {}\n", rs.size(), a.output);
+  return 0;
+}
+
+void add_db(CLI::App* c, RecordArgs& a) {
+  c->add_option("--db", a.db,
+                "the records database (default: $TRUEAXIS_DB, else trueaxis-records.db here)");
+}
+
+void add_filter(CLI::App* c, RecordArgs& a) {
+  c->add_option("--machine", a.filter.machine, "only this machine's records");
+  c->add_option("--kind", a.filter.kind, "only results of this kind (positioning, circular, ...)");
+  c->add_option("--from", a.filter.from, "only from this date (ISO 8601)");
+  c->add_option("--to", a.filter.to, "only up to this date, inclusive (ISO 8601)");
+}
+
+}  // namespace
+
+std::vector<Command> add_record_commands(CLI::App& app) {
+  auto* group = app.add_subcommand(
+      "record",
+      "Machine records: every result stored with its machine, date, state (as found, as left), "
+      "operator and instrument, in an SQLite database (--db, $TRUEAXIS_DB or "
+      "trueaxis-records.db).");
+  group->require_subcommand(1);
+  auto a = std::make_shared<RecordArgs>();
+  auto* add = group->add_subcommand(
+      "add",
+      "Store result files (any JSON result trueaxis writes) with their headline figures.\n"
+      "Example: trueaxis record add positioning.json --machine VMC-3 --date 2026-11-29 "
+      "--as-found --axis X --new-machine");
+  add_db(add, *a);
+  add->add_option("files", a->files, "result JSON files")->required()->check(existing_file());
+  add->add_option("--machine", a->add.machine, "the machine's id")->required();
+  add->add_option("--date", a->add.date, "when it was measured, ISO 8601 (default: today)");
+  add->add_flag("--as-found", a->as_found, "measured before any adjustment");
+  add->add_flag("--as-left", a->as_left, "measured after adjustment or compensation");
+  add->add_option("--operator", a->add.operator_name, "who measured");
+  add->add_option("--instrument", a->add.instrument, "the instrument's id (laser, ball bar, ...)");
+  add->add_option("--temperature", a->temperature, "°C during the test");
+  add->add_option("--note", a->add.note, "free text");
+  add->add_option("--axis", a->add.axis,
+                  "the axis the result is of, when the file does not say (positioning)")
+      ->check(machine_axis());
+  add->add_flag("--new-machine", a->add.new_machine, "register the machine if it is not known");
+  add->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  auto* machines = group->add_subcommand("machines", "The machines and their records' dates.");
+  add_db(machines, *a);
+  auto* list = group->add_subcommand("list", "The records, one a line, with their figures.");
+  add_db(list, *a);
+  add_filter(list, *a);
+  auto* show = group->add_subcommand("show", "One record in full; -o writes the stored file back.");
+  add_db(show, *a);
+  show->add_option("id", a->id, "the record's number")->required();
+  show->add_option("--output,-o", a->output, "write the stored result file here");
+  auto* exp = group->add_subcommand(
+      "export",
+      "The records as a JSON array (or CSV, a row per figure), for a spreadsheet or a "
+      "quality system.\nExample: trueaxis record export --machine VMC-3 -o records.json");
+  add_db(exp, *a);
+  add_filter(exp, *a);
+  exp->add_option("--output,-o", a->output, "where to write")->required();
+  exp->add_option("--format", a->format, "json or csv")
+      ->check(CLI::IsMember({"json", "csv"}))
+      ->capture_default_str();
+  exp->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {{add, [a] { return run_add(*a); }},
+          {machines, [a] { return run_machines(*a); }},
+          {list, [a] { return run_list(*a); }},
+          {show, [a] { return run_show(*a); }},
+          {exp, [a] { return run_export(*a); }}};
+}
+
+}  // namespace trueaxis::cli

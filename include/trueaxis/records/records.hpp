@@ -1,0 +1,114 @@
+// trueaxis::records — a machine's calibration history: every result file trueaxis writes,
+// stored with who measured it, when, with which instrument, in which state (as found, as left),
+// and its headline figures, in an embedded SQLite database (one file, no server).
+//
+// Schema (version kSchemaVersion; a newer one is refused, an older one migrated on open):
+//   meta(key, value)                         'schema_version'
+//   machines(id, created)
+//   records(id, machine, date, kind, state, operator, instrument, temperature_C, note,
+//           trueaxis_version, file_name, digest, content)   unique (machine, digest)
+//   figures(record, name, axis, value, u, unit)
+// Every statement is parameterised: machine ids, notes and file contents are data, never SQL.
+// An add is one transaction: a process killed in the middle leaves the database as it was.
+//
+// Units: figures in the unit they state (µm for lengths, µrad for angles); temperature in °C;
+// dates ISO 8601 (YYYY-MM-DD, optionally with a time).
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace trueaxis::records {
+
+inline constexpr int kSchemaVersion = 1;
+
+// A headline figure of a result: its name as the standard gives it ("A", "E0", "G", "flatness"),
+// the axis or plane it belongs to ("" when none), its value and standard uncertainty (none when
+// the result states none), and its unit.
+struct Figure {
+  std::string name, axis;
+  double value = 0;
+  std::optional<double> u;
+  std::string unit;
+};
+
+// The headline figures of a result file's JSON text, by its kind (positioning: A, B, E, M, R;
+// circular: G per direction and H; acceptance-e0: E0 (or E150) and R0; acceptance-probing: PForm,
+// PSize; separation and guideway: straightness; surface: flatness; space: the residual after
+// compensation; ballgauge map and parametric model: the largest error; length verification:
+// the worst fraction of the MPE; fit: the form; scan: machine time). `axis` names the axis for
+// kinds whose file does not (positioning). Throws Error when the text is not a result.
+std::vector<Figure> headline_figures(const std::string& kind, const std::string& json,
+                                     const std::string& axis = "");
+
+enum class State { None, AsFound, AsLeft };
+const char* to_string(State s);  // "", "as-found", "as-left"
+
+// What `record add` stores with a file.
+struct AddOptions {
+  std::string machine;  // required, any text
+  std::string date;     // ISO 8601; empty: today (UTC)
+  State state = State::None;
+  std::string operator_name, instrument, note, axis;
+  std::optional<double> temperature;  // °C
+  bool new_machine = false;           // register an unknown machine instead of refusing it
+  void validate() const;              // throws Error
+};
+
+struct Record {
+  long long id = 0;
+  std::string machine, date, kind;
+  State state = State::None;
+  std::string operator_name, instrument, note, trueaxis_version, file_name;
+  std::optional<double> temperature;
+  std::vector<Figure> figures;
+};
+
+struct MachineSummary {
+  std::string id;
+  long long records = 0;
+  std::string first, last;  // dates
+};
+
+struct ListFilter {
+  std::string machine, kind, from, to;  // empty: any; dates inclusive
+};
+
+class Database {
+ public:
+  // Opens (creating when absent) the SQLite database at `path`. Throws Error: a file that is not
+  // a database, one written by a newer trueaxis (schema newer than kSchemaVersion), a directory
+  // that cannot be written.
+  explicit Database(const std::string& path);
+  ~Database();
+  Database(Database&&) noexcept;
+  Database& operator=(Database&&) noexcept;
+
+  // Stores the result file at `path`: refuses a file that is not a trueaxis result, a machine
+  // not yet known (unless new_machine) and a file already stored for that machine. Returns the
+  // stored record.
+  Record add(const std::string& path, const AddOptions& options);
+  std::vector<MachineSummary> machines() const;
+  std::vector<Record> list(const ListFilter& filter = {}) const;
+  Record show(long long id) const;          // throws Error when there is no such record
+  std::string content(long long id) const;  // the stored file, as it was
+  int schema_version() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The records as a JSON array ({"id", "machine", "date", "kind", "state", "operator",
+// "instrument", "temperature_C", "note", "file", "trueaxis_version", "figures": {name or
+// name@axis: {"value", "u", "unit"}}}) or CSV (one row per figure).
+std::string to_json(const std::vector<Record>& records);
+std::string to_csv(const std::vector<Record>& records);
+
+// The database path the commands use: `explicit_path`, else $TRUEAXIS_DB, else
+// trueaxis-records.db in the working directory.
+std::string database_path(const std::string& explicit_path);
+
+}  // namespace trueaxis::records

@@ -1,0 +1,253 @@
+// Machine records: results stored with their machine, date and state and read back exactly;
+// refusals; strings that cannot break a query; a newer schema refused; two processes adding at
+// once, and one killed while adding, lose nothing and leave the database consistent.
+#include "trueaxis/records/records.hpp"
+
+#include <SQLiteCpp/SQLiteCpp.h>
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "../test_util.hpp"
+#include "trueaxis/acceptance/acceptance.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/io/acceptance/acceptance.hpp"
+#include "trueaxis/sim/machine.hpp"
+
+using namespace trueaxis;
+
+namespace {
+
+// A fresh database file in the tests' temporary directory.
+std::string fresh_db(const std::string& name) {
+  const std::string path = test::temp_dir() + "/" + name;
+  std::filesystem::remove(path);
+  return path;
+}
+
+// A probing result (ISO 10360-5) of the virtual CMM, different for each seed.
+std::string probing_file(const std::string& name, std::uint64_t seed) {
+  sim::MachineOptions mo;
+  mo.seed = 1;
+  const auto m = sim::random_machine(mo);
+  const auto setup = acceptance::example_setup(acceptance::Volume::of(m));
+  acceptance::VirtualProbeOptions p;
+  p.noise = 0.2e-3;
+  p.seed = seed;
+  acceptance::ProbingOptions o;
+  o.mpe_form = 1.8e-3;
+  const auto r = acceptance::run_probing(setup, acceptance::virtual_touch(m, p), o);
+  const std::string path = test::temp_dir() + "/" + name;
+  io::write_probing_result(path, r);
+  return path;
+}
+
+}  // namespace
+
+TEST(Records, ResultsAreStoredWithTheirFiguresAndReadBackExactly) {
+  const std::string path = fresh_db("records-roundtrip.db");
+  sim::MachineOptions mo;
+  mo.seed = 2;
+  const auto m = sim::random_machine(mo);
+  const auto volume = acceptance::Volume::of(m);
+  const auto setup = acceptance::example_setup(volume);
+  acceptance::E0Options eo;
+  eo.mpe = ballgauge::Mpe::parse("2.5+L/250");
+  const auto e0 = acceptance::run_e0(setup, volume, acceptance::virtual_touch(m), eo);
+  const std::string e0_path = test::temp_dir() + "/records-e0.json";
+  io::write_e0_result(e0_path, e0);
+  const std::string probing = probing_file("records-probing.json", 1);
+
+  records::Database db(path);
+  EXPECT_EQ(db.schema_version(), records::kSchemaVersion);
+  records::AddOptions a;
+  a.machine = "CMM-7";
+  a.date = "2025-03-01";
+  a.state = records::State::AsFound;
+  a.operator_name = "J. Smith";
+  a.instrument = "gauge blocks set 12";
+  a.temperature = 20.3;
+  a.new_machine = true;
+  const auto r1 = db.add(e0_path, a);
+  EXPECT_EQ(r1.kind, "acceptance-e0");
+  ASSERT_EQ(r1.figures.size(), 2u);  // E0 and R0
+  EXPECT_EQ(r1.figures[0].name, "E0");
+  EXPECT_DOUBLE_EQ(r1.figures[0].value, e0.e0_max * 1e3);
+  a.new_machine = false;
+  a.date = "2025-03-02";
+  a.state = records::State::AsLeft;
+  const auto r2 = db.add(probing, a);
+  ASSERT_EQ(r2.figures.size(), 2u);  // PForm and PSize, with u = U/2
+  EXPECT_EQ(r2.figures[0].name, "PForm");
+  ASSERT_TRUE(r2.figures[0].u);
+
+  const auto all = db.list();
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all[0].machine, "CMM-7");
+  EXPECT_EQ(all[0].state, records::State::AsFound);
+  EXPECT_EQ(all[1].state, records::State::AsLeft);
+  ASSERT_TRUE(all[0].temperature);
+  EXPECT_DOUBLE_EQ(*all[0].temperature, 20.3);
+  EXPECT_EQ(all[0].instrument, "gauge blocks set 12");
+  EXPECT_DOUBLE_EQ(all[1].figures[0].value, r2.figures[0].value);
+  EXPECT_EQ(db.content(r1.id), test::read_file(e0_path));
+  records::ListFilter f;
+  f.kind = "acceptance-probing";
+  EXPECT_EQ(db.list(f).size(), 1u);
+  f = {};
+  f.to = "2025-03-01";
+  EXPECT_EQ(db.list(f).size(), 1u);
+  const auto ms = db.machines();
+  ASSERT_EQ(ms.size(), 1u);
+  EXPECT_EQ(ms[0].records, 2);
+  EXPECT_EQ(ms[0].first, "2025-03-01");
+  EXPECT_EQ(ms[0].last, "2025-03-02");
+  // The export: a JSON array with the figures by name.
+  const auto j = nlohmann::json::parse(records::to_json(all));
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_EQ(j[0]["state"], "as-found");
+  EXPECT_DOUBLE_EQ(j[0]["figures"]["E0"]["value"].get<double>(), e0.e0_max * 1e3);
+  EXPECT_TRUE(j[0]["figures"]["E0"]["u"].is_null());  // the file states none: null, not 0
+  const std::string csv = records::to_csv(all);
+  EXPECT_NE(csv.find("CMM-7,2025-03-02,acceptance-probing,as-left"), std::string::npos) << csv;
+  // Reopened: the same.
+  const records::Database again(path);
+  EXPECT_EQ(again.list().size(), 2u);
+}
+
+TEST(Records, UnknownMachinesDuplicatesAndNonResultsAreRefused) {
+  const std::string path = fresh_db("records-refusals.db");
+  records::Database db(path);
+  const std::string probing = probing_file("records-refuse.json", 2);
+  records::AddOptions a;
+  a.machine = "VMC-1";
+  EXPECT_NE(test::error_of([&] { db.add(probing, a); }).find("--new-machine"), std::string::npos);
+  a.new_machine = true;
+  db.add(probing, a);
+  EXPECT_NE(test::error_of([&] { db.add(probing, a); }).find("already stored"), std::string::npos);
+  a.machine = "VMC-2";  // the same file for another machine is another record
+  EXPECT_NO_THROW(db.add(probing, a));
+  const std::string not_result = test::temp_file("records-not.json", "{\"a\": 1}");
+  EXPECT_THROW(db.add(not_result, a), Error);
+  a.date = "29/11/2026";
+  EXPECT_NE(test::error_of([&] { db.add(probing, a); }).find("ISO 8601"), std::string::npos);
+  a.date = "2026-13-01";
+  EXPECT_THROW(db.add(probing, a), Error);
+  EXPECT_EQ(db.list().size(), 2u);
+  EXPECT_THROW(records::Database(test::temp_dir() + "/no/such/dir/r.db"), Error);
+  const std::string junk = test::temp_file("records-junk.db", std::string(4096, 'x'));
+  EXPECT_THROW(records::Database{junk}, Error);
+}
+
+// Machine ids, notes and file contents are data: quotes, semicolons, SQL, NUL and a 1 MB note
+// are stored and read back as they were.
+TEST(Records, NoStringCanBreakAQuery) {
+  const std::string path = fresh_db("records-strings.db");
+  records::Database db(path);
+  records::AddOptions a;
+  a.machine = "M'1\"; DROP TABLE records; --";
+  a.operator_name = std::string("O'Brien\0x", 9);
+  a.note = std::string(1 << 20, 'n') + "'; DELETE FROM figures; --";
+  a.new_machine = true;
+  const auto r = db.add(probing_file("records-strings.json", 3), a);
+  const auto back = db.show(r.id);
+  EXPECT_EQ(back.machine, a.machine);
+  EXPECT_EQ(back.operator_name, a.operator_name);
+  EXPECT_EQ(back.note, a.note);
+  EXPECT_EQ(back.figures.size(), 2u);
+  records::ListFilter f;
+  f.machine = a.machine;
+  EXPECT_EQ(db.list(f).size(), 1u);
+  f.machine = "' OR '1'='1";
+  EXPECT_EQ(db.list(f).size(), 0u);
+}
+
+TEST(Records, ADatabaseFromANewerTrueaxisIsRefused) {
+  const std::string path = fresh_db("records-newer.db");
+  { records::Database db(path); }
+  {
+    SQLite::Database raw(path, SQLite::OPEN_READWRITE);
+    raw.exec("UPDATE meta SET value = '99' WHERE key = 'schema_version'");
+  }
+  const std::string e = test::error_of([&] { records::Database db(path); });
+  EXPECT_NE(e.find("newer trueaxis"), std::string::npos) << e;
+  EXPECT_NE(e.find("schema 99"), std::string::npos) << e;
+}
+
+// Two processes adding at once: every record is there. A process killed while adding leaves
+// every record whole (its figures with it) and the database usable.
+TEST(Records, ConcurrentAddsLoseNothingAndAKilledAddLeavesItConsistent) {
+  const std::string path = fresh_db("records-concurrent.db");
+  { records::Database db(path); }
+  constexpr int kEach = 8;
+  std::vector<std::string> files[2];
+  for (int p = 0; p < 2; ++p)
+    for (int i = 0; i < kEach; ++i)
+      files[p].push_back(probing_file(fmt::format("records-c{}-{}.json", p, i), 100 + p * 50 + i));
+  pid_t kids[2];
+  for (int p = 0; p < 2; ++p) {
+    kids[p] = fork();
+    ASSERT_GE(kids[p], 0);
+    if (kids[p] == 0) {
+      int code = 0;
+      try {
+        records::Database db(path);
+        records::AddOptions a;
+        a.machine = fmt::format("M{}", p);
+        a.new_machine = true;
+        for (const auto& f : files[p]) {
+          db.add(f, a);
+          a.new_machine = false;
+        }
+      } catch (...) {
+        code = 1;
+      }
+      _exit(code);
+    }
+  }
+  for (const pid_t k : kids) {
+    int status = 0;
+    waitpid(k, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0);
+  }
+  records::Database db(path);
+  EXPECT_EQ(db.list().size(), 2u * kEach);
+  // A process adding in a loop, killed: whatever it stored is whole.
+  const pid_t k = fork();
+  ASSERT_GE(k, 0);
+  if (k == 0) {
+    try {
+      records::Database child(path);
+      records::AddOptions a;
+      a.machine = "killed";
+      a.new_machine = true;
+      for (int i = 0;; ++i) {
+        a.note = std::to_string(i);  // the same file again would be a duplicate: a new machine
+        a.machine = fmt::format("killed-{}", i);
+        child.add(files[0][0], a);
+      }
+    } catch (...) {
+    }
+    _exit(0);
+  }
+  usleep(300000);
+  kill(k, SIGKILL);
+  int status = 0;
+  waitpid(k, &status, 0);
+  const records::Database after(path);
+  const auto all = after.list();
+  EXPECT_GE(all.size(), 2u * kEach);
+  for (const auto& r : all) EXPECT_EQ(r.figures.size(), 2u) << r.machine;
+  SQLite::Database raw(path, SQLite::OPEN_READONLY);
+  EXPECT_EQ(raw.execAndGet("PRAGMA integrity_check").getString(), "ok");
+  EXPECT_EQ(raw.execAndGet("SELECT COUNT(*) FROM figures WHERE record NOT IN (SELECT id FROM "
+                           "records)")
+                .getInt(),
+            0);
+}
