@@ -260,6 +260,11 @@ Eigen::Vector3d stylus_offset_of(const std::vector<double>& v) {
   return lateral;
 }
 
+void add_stylus_offset_option(CLI::App* command, std::vector<double>& values,
+                              const std::string& help) {
+  command->add_option("--stylus-offset", values, help)->delimiter(',')->expected(1, 3);
+}
+
 std::vector<Command> add_acceptance_commands(CLI::App& app) {
   auto* group = app.add_subcommand(
       "acceptance",
@@ -283,12 +288,11 @@ std::vector<Command> add_acceptance_commands(CLI::App& app) {
       ->check(mpe_text());
   ce->add_option("--r0-mpe", e->r0_mpe, "R0,MPE in µm (same form), when specified")
       ->check(mpe_text());
-  ce->add_option("--stylus-offset", e->stylus_offset,
-                 "L or X,Y,Z (mm): E_L instead of E0, the stylus tip offset across the ram by L "
-                 "along +X (150: E150) or by (X, Y, 0); the virtual CMM of --machine probes with "
-                 "it, a CMM over I++ DME with the stylus it has (mount and qualify it first)")
-      ->delimiter(',')
-      ->expected(1, 3);
+  add_stylus_offset_option(
+      ce, e->stylus_offset,
+      "L or X,Y,Z (mm): E_L instead of E0, the stylus tip offset across the ram by L along +X "
+      "(150: E150) or by (X, Y, 0); the virtual CMM of --machine probes with it, a CMM over I++ "
+      "DME with the stylus it has (mount and qualify it first)");
   ce->add_option("--position", e->positions,
                  "E_L: a position to measure, by its name in the set-up (repeat the flag; "
                  "default: the first two space diagonals, ISO 10360-2 asks for two)");
@@ -309,11 +313,9 @@ std::vector<Command> add_acceptance_commands(CLI::App& app) {
       "for the stylus the machine file has, or an offset one.\nExample: trueaxis acceptance setup "
       "--machine machine.json --stylus-offset 150 -o acceptance150.json");
   s->machine.add_options(cs);
-  cs->add_option("--stylus-offset", s->stylus_offset,
-                 "L or X,Y,Z (mm): fit the volume the tip reaches with a stylus offset across the "
-                 "ram (as for 'acceptance e0 --stylus-offset')")
-      ->delimiter(',')
-      ->expected(1, 3);
+  add_stylus_offset_option(cs, s->stylus_offset,
+                           "L or X,Y,Z (mm): fit the volume the tip reaches with a stylus offset "
+                           "across the ram (as for 'acceptance e0 --stylus-offset')");
   cs->add_option("--output,-o", s->output, "the set-up JSON")->capture_default_str();
   return {{ce, [e] { return run_e0(*e); }},
           {cp, [p] { return run_probing(*p); }},

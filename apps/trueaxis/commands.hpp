@@ -118,6 +118,9 @@ std::function<Eigen::Vector3d(const Eigen::Vector3d&)> load_correction(const std
 // --stylus-offset's values (mm): L alone (along +X) or X,Y,Z, the stylus tip's offset across
 // the ram of ISO 10360-2's E_L test. Throws CLI::ValidationError naming the flag.
 Eigen::Vector3d stylus_offset_of(const std::vector<double>& values);
+// Adds --stylus-offset (1 or 3 numbers, comma-separated) to `command`, with `help`.
+void add_stylus_offset_option(CLI::App* command, std::vector<double>& values,
+                              const std::string& help);
 // 'acceptance e0', 'acceptance probing'.
 std::vector<Command> add_acceptance_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);

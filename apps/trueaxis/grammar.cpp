@@ -76,6 +76,7 @@ const std::map<std::string, std::string>& purposes() {
       {"record list", "the records, one a line, with their headline figures"},
       {"record show", "one record in full, and the stored file"},
       {"record export", "the records as JSON or CSV"},
+      {"record trend", "a figure's drift per year and the date it reaches its tolerance"},
       {"report", "an HTML report of any result file"},
       {"demo", "every capability on a virtual machine, with a report"},
       {"examples", "write the example inputs the README uses"},

@@ -302,12 +302,11 @@ std::vector<Command> add_serve_command(CLI::App& app) {
   c->add_option("--lobing", a->lobing_um,
                 "single points: the probe's pre-travel variation (µm, three lobes)")
       ->capture_default_str();
-  c->add_option("--stylus-offset", a->stylus_offset,
-                "L or X,Y,Z (mm), with --machine: Probe1 is a stylus offset across the ram by L "
-                "along +X or by (X, Y, 0), as for ISO 10360-2's E150 (the carriages' rotations "
-                "then move the tip by their angle times the offset)")
-      ->delimiter(',')
-      ->expected(1, 3);
+  add_stylus_offset_option(
+      c, a->stylus_offset,
+      "L or X,Y,Z (mm), with --machine: Probe1 is a stylus offset across the ram by L along +X or "
+      "by (X, Y, 0), as for ISO 10360-2's E150 (the carriages' rotations then move the tip by "
+      "their angle times the offset)");
   c->add_option("--part-origin", a->part_origin,
                 "X,Y,Z: the part's design origin in machine coordinates (mm; default: the "
                 "machine origin, or centred in the travel with --machine)")

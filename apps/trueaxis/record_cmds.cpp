@@ -2,6 +2,8 @@
 #include <fmt/format.h>
 
 #include <CLI/CLI.hpp>
+#include <cctype>
+#include <cmath>
 #include <fstream>
 #include <memory>
 
@@ -24,6 +26,9 @@ struct RecordArgs {
   std::string output, format = "json";
   long long id = 0;
   bool quiet = false;
+  // trend
+  std::string figure, axis;
+  double tolerance = NAN;
 };
 
 std::string figures_text(const records::Record& r) {
@@ -105,6 +110,29 @@ int run_export(const RecordArgs& a) {
   return 0;
 }
 
+int run_trend(const RecordArgs& a) {
+  const records::Database db(records::database_path(a.db));
+  std::string axis = a.axis;
+  for (char& c : axis) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  auto t = db.history(a.filter.machine, a.figure, axis);
+  records::TrendOptions o;
+  if (!std::isnan(a.tolerance)) o.tolerance = a.tolerance;
+  const std::string unit = t.unit;
+  t = records::fit_trend(t.points, o);
+  t.figure = a.figure;
+  t.axis = axis;
+  t.unit = unit;
+  if (!a.output.empty()) {
+    std::ofstream out(a.output, std::ios::binary);
+    out << records::to_json(t, a.filter.machine);
+    if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
+  }
+  if (!a.quiet)
+    fmt::print("{}: {}{}\n", a.filter.machine, t.summary(),
+               a.output.empty() ? std::string() : " -> " + a.output);
+  return 0;
+}
+
 void add_db(CLI::App* c, RecordArgs& a) {
   c->add_option("--db", a.db,
                 "the records database (default: $TRUEAXIS_DB, else trueaxis-records.db here)");
@@ -167,11 +195,23 @@ std::vector<Command> add_record_commands(CLI::App& app) {
       ->check(CLI::IsMember({"json", "csv"}))
       ->capture_default_str();
   exp->add_flag("--quiet,-q", a->quiet, "print nothing on success");
-  return {{add, [a] { return run_add(*a); }},
-          {machines, [a] { return run_machines(*a); }},
-          {list, [a] { return run_list(*a); }},
-          {show, [a] { return run_show(*a); }},
-          {exp, [a] { return run_export(*a); }}};
+  auto* trend = group->add_subcommand(
+      "trend",
+      "One figure's history on a machine, its drift per year with its uncertainty (the figures' "
+      "own u and their scatter) and the date it reaches --tolerance.\nExample: trueaxis record "
+      "trend --machine VMC-3 --figure A --axis X --tolerance 25 -o trend.json");
+  add_db(trend, *a);
+  trend->add_option("--machine", a->filter.machine, "the machine's id")->required();
+  trend->add_option("--figure", a->figure, "the figure's name (A, E0, G_ccw, flatness, ...)")
+      ->required();
+  trend->add_option("--axis", a->axis, "its axis or plane, when it has one (X, XY, ...)");
+  trend->add_option("--tolerance", a->tolerance,
+                    "the figure's upper limit, in its unit: when the trend reaches it");
+  trend->add_option("--output,-o", a->output, "trend.json");
+  trend->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {{add, [a] { return run_add(*a); }},           {trend, [a] { return run_trend(*a); }},
+          {machines, [a] { return run_machines(*a); }}, {list, [a] { return run_list(*a); }},
+          {show, [a] { return run_show(*a); }},         {exp, [a] { return run_export(*a); }}};
 }
 
 }  // namespace trueaxis::cli

@@ -42,6 +42,14 @@ std::string today() {
   return b;
 }
 
+// A number, or NULL when there is none (never a zero in its place).
+void bind_optional(SQLite::Statement& q, int index, const std::optional<double>& v) {
+  if (v)
+    q.bind(index, *v);
+  else
+    q.bind(index);
+}
+
 State state_of(const std::string& s) {
   if (s == "as-found") return State::AsFound;
   if (s == "as-left") return State::AsLeft;
@@ -201,10 +209,7 @@ Record Database::add(const std::string& path, const AddOptions& options) {
     ins.bind(4, to_string(r.state));
     ins.bind(5, r.operator_name);
     ins.bind(6, r.instrument);
-    if (r.temperature)
-      ins.bind(7, *r.temperature);
-    else
-      ins.bind(7);
+    bind_optional(ins, 7, r.temperature);
     ins.bind(8, r.note);
     ins.bind(9, r.trueaxis_version);
     ins.bind(10, r.file_name);
@@ -220,10 +225,7 @@ Record Database::add(const std::string& path, const AddOptions& options) {
       fig.bind(2, f.name);
       fig.bind(3, f.axis);
       fig.bind(4, f.value);
-      if (f.u)
-        fig.bind(5, *f.u);
-      else
-        fig.bind(5);
+      bind_optional(fig, 5, f.u);
       fig.bind(6, f.unit);
       fig.exec();
       fig.reset();
@@ -307,6 +309,49 @@ std::string Database::content(long long id) const {
     const auto c = q.getColumn(0);
     return std::string(static_cast<const char*>(c.getBlob()),
                        static_cast<std::size_t>(c.getBytes()));
+  });
+}
+
+Trend Database::history(const std::string& machine, const std::string& figure,
+                        const std::string& axis) const {
+  return guarded("reading a figure's history", [&] {
+    Trend t;
+    t.figure = figure;
+    t.axis = axis;
+    SQLite::Statement q(impl_->db,
+                        "SELECT r.id, r.date, r.state, f.value, f.u, f.unit FROM figures f JOIN "
+                        "records r ON r.id = f.record WHERE r.machine = ? AND f.name = ? AND "
+                        "f.axis = ? ORDER BY r.date, r.id");
+    q.bind(1, machine);
+    q.bind(2, figure);
+    q.bind(3, axis);
+    while (q.executeStep()) {
+      TrendPoint p;
+      p.record = q.getColumn(0).getInt64();
+      p.date = q.getColumn(1).getString();
+      p.state = state_of(q.getColumn(2).getString());
+      p.value = q.getColumn(3).getDouble();
+      if (!q.getColumn(4).isNull()) p.u = q.getColumn(4).getDouble();
+      t.unit = q.getColumn(5).getString();
+      t.points.push_back(p);
+    }
+    if (t.points.empty()) {
+      // Say which figures there are, so that a misspelt name or axis is seen at once.
+      SQLite::Statement names(impl_->db,
+                              "SELECT DISTINCT f.name, f.axis FROM figures f JOIN records r ON "
+                              "r.id = f.record WHERE r.machine = ? ORDER BY f.name, f.axis");
+      names.bind(1, machine);
+      std::string known;
+      while (names.executeStep()) {
+        const std::string a = names.getColumn(1).getString();
+        known += (known.empty() ? "" : ", ") + names.getColumn(0).getString() +
+                 (a.empty() ? "" : " --axis " + a);
+      }
+      throw Error(fmt::format("machine '{}' has no figure {}{} in the records{}", machine, figure,
+                              axis.empty() ? "" : " on axis " + axis,
+                              known.empty() ? " (it has none)" : " (it has: " + known + ")"));
+    }
+    return t;
   });
 }
 

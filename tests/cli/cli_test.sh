@@ -849,6 +849,17 @@ e0 = json.load(open('acc/e0.json'))
 ok = ok and abs(r[0]['figures']['E0']['value'] - e0['E0_max_um']) < 1e-9
 sys.exit(0 if ok else 1)" && ok || bad "record export: $(head -c 600 acc/records.json)"
 grep -q "^3,CMM-7,2025-03-02,acceptance-probing,as-left,.*,PForm,," acc/records.csv && ok || bad "record export csv: $(head -3 acc/records.csv)"
+# A figure's trend: two dates without stated u give a drift but no uncertainty, and say so.
+expect_ok "$T" record trend --machine CMM-7 --figure E0 --tolerance 30 -o acc/trend.json
+grep -q "CMM-7: E0: 2 points, drift .* µm/year; two points without stated uncertainties" out.txt && ok || bad "record trend: $(cat out.txt)"
+python3 -c "
+import json, sys
+t = json.load(open('acc/trend.json'))
+ok = t['kind'] == 'trend' and t['machine'] == 'CMM-7' and len(t['points']) == 2 and t['drift_per_year']['u'] is None
+ok = ok and t['due']['date'] is None and t['points'][0]['state'] == 'as-found'
+sys.exit(0 if ok else 1)" && ok || bad "record trend json: $(cat acc/trend.json)"
+expect_code 1 "$T" record trend --machine CMM-7 --figure E9
+grep -q "has no figure E9 in the records (it has: E0, PForm, PSize, R0)" err.txt && ok || bad "record trend: an unknown figure: $(cat err.txt)"
 unset TRUEAXIS_DB
 expect_err "acc/bad.json:1:[0-9]*: sphere.centre: three numbers" "$T" serve --artefacts acc/bad.json --port 0
 

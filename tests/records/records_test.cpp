@@ -10,9 +10,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "../test_util.hpp"
 #include "trueaxis/acceptance/acceptance.hpp"
@@ -250,4 +252,128 @@ TEST(Records, ConcurrentAddsLoseNothingAndAKilledAddLeavesItConsistent) {
                            "records)")
                 .getInt(),
             0);
+}
+
+TEST(Records, DaysAndDatesRoundTripOverLeapYears) {
+  EXPECT_EQ(records::day_number("1970-01-01"), 0);
+  EXPECT_EQ(records::day_number("2000-03-01") - records::day_number("2000-02-28"), 2);  // leap
+  EXPECT_EQ(records::day_number("2100-03-01") - records::day_number("2100-02-28"), 1);  // not
+  EXPECT_EQ(records::day_number("2026-11-29T10:00:00Z"), records::day_number("2026-11-29"));
+  for (long long d = -800000; d < 800000; d += 997)
+    ASSERT_EQ(records::day_number(records::date_of_day(d)), d) << records::date_of_day(d);
+  EXPECT_THROW(records::day_number("29/11/2026"), Error);
+  EXPECT_THROW(records::day_number("2026-13-01"), Error);
+}
+
+// A figure drifting linearly, tested every few months with noise of known u: the fitted drift
+// lies within its stated uncertainty of the true one as often as a normal distribution says,
+// and so does the date the line reaches the tolerance.
+TEST(Records, TrendRecoversTheDriftAndDueDateWithinTheirUncertainty) {
+  constexpr double kDrift = 1.5, kStart = 4.0, kU = 0.4, kTolerance = 12;  // µm, µm/year
+  constexpr int kRuns = 400;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> noise(0.0, kU);
+  std::uniform_int_distribution<int> jitter(-20, 20);
+  const long long day0 = records::day_number("2024-01-15");
+  int drift_in_2u = 0, due_in_2u = 0, due_given = 0;
+  for (int run = 0; run < kRuns; ++run) {
+    std::vector<records::TrendPoint> pts;
+    for (int visit = 0; visit < 9; ++visit) {  // every ~3 months over two years
+      const long long day = day0 + visit * 91 + jitter(rng);
+      records::TrendPoint p;
+      p.date = records::date_of_day(day);
+      p.value = kStart + kDrift * static_cast<double>(day - day0) / 365.2425 + noise(rng);
+      p.u = kU;
+      pts.push_back(p);
+    }
+    std::shuffle(pts.begin(), pts.end(), rng);  // any order: sorted by date
+    records::TrendOptions o;
+    o.tolerance = kTolerance;
+    const auto t = records::fit_trend(pts, o);
+    ASSERT_TRUE(t.drift_per_year && t.u_drift) << t.summary();
+    EXPECT_LT(std::abs(*t.drift_per_year - kDrift), 5 * *t.u_drift);
+    drift_in_2u += std::abs(*t.drift_per_year - kDrift) <= 2 * *t.u_drift;
+    if (t.due) {
+      ++due_given;
+      const double true_due = static_cast<double>(day0) + (kTolerance - kStart) / kDrift * 365.2425;
+      const double err = static_cast<double>(records::day_number(*t.due)) - true_due;
+      due_in_2u += std::abs(err) <= 2 * *t.u_due_days + 1;  // a day: the date's rounding
+    }
+  }
+  EXPECT_EQ(due_given, kRuns);  // a drift of 1.5 ± ~0.2 µm/year always stands out
+  // 95 % within 2u for a normal estimate; at least 91 % of 400 (3σ of the binomial below 95 %).
+  EXPECT_GE(drift_in_2u, 364) << drift_in_2u;
+  EXPECT_GE(due_in_2u, 364) << due_in_2u;
+}
+
+// Without stated u the scatter gives the uncertainty; too few points, no drift out of the noise,
+// or a falling figure: no due date, and the reason.
+TEST(Records, TrendSaysWhatTheDataCannotSupport) {
+  auto point = [](const std::string& date, double v, std::optional<double> u = std::nullopt) {
+    records::TrendPoint p;
+    p.date = date;
+    p.value = v;
+    p.u = u;
+    return p;
+  };
+  records::TrendOptions o;
+  o.tolerance = 10;
+  EXPECT_NE(records::fit_trend({point("2025-01-01", 3)}, o).not_resolved.find("at least two"),
+            std::string::npos);
+  const auto two = records::fit_trend({point("2025-01-01", 3), point("2026-01-01", 4)}, o);
+  EXPECT_FALSE(two.u_drift);
+  EXPECT_FALSE(two.due);
+  EXPECT_NE(two.not_resolved.find("cannot be estimated"), std::string::npos);
+  // Exactly on a line without u: drift exact, its u zero from zero scatter, due date exact.
+  const auto exact =
+      records::fit_trend({point("2024-01-01", 2), point("2025-01-01", 2 + 366 / 365.2425),
+                          point("2026-01-01", 2 + 731 / 365.2425)},
+                         o);
+  ASSERT_TRUE(exact.drift_per_year && exact.due);
+  EXPECT_NEAR(*exact.drift_per_year, 1, 1e-12);
+  EXPECT_EQ(*exact.due,
+            records::date_of_day(records::day_number("2024-01-01") + std::llround(8 * 365.2425)));
+  const auto flat = records::fit_trend(
+      {point("2024-01-01", 3, 0.5), point("2025-01-01", 3.1, 0.5), point("2026-01-01", 2.9, 0.5)},
+      o);
+  ASSERT_TRUE(flat.u_drift);
+  EXPECT_FALSE(flat.due);
+  EXPECT_NE(flat.not_resolved.find("does not stand out"), std::string::npos) << flat.summary();
+  const auto falling = records::fit_trend(
+      {point("2024-01-01", 9, 0.1), point("2025-01-01", 7, 0.1), point("2026-01-01", 5, 0.1)}, o);
+  EXPECT_FALSE(falling.due);
+  EXPECT_NE(falling.not_resolved.find("falling"), std::string::npos);
+  // Scatter larger than the stated u widens the drift's u (Birge ratio).
+  const auto tight =
+      records::fit_trend({point("2024-01-01", 1, 0.01), point("2025-01-01", 3, 0.01),
+                          point("2026-01-01", 3, 0.01), point("2027-01-01", 5, 0.01)});
+  EXPECT_GT(*tight.u_drift, 0.1);
+}
+
+// The database hands a figure's history to the trend; a figure it does not have is named with
+// the ones it has.
+TEST(Records, HistoryFromTheDatabase) {
+  const std::string path = fresh_db("records-history.db");
+  records::Database db(path);
+  records::AddOptions a;
+  a.machine = "CMM-H";
+  a.new_machine = true;
+  for (int k = 0; k < 3; ++k) {
+    a.date = fmt::format("202{}-06-01", 4 + k);
+    db.add(probing_file(fmt::format("records-h{}.json", k), 200 + k), a);
+    a.new_machine = false;
+  }
+  const auto h = db.history("CMM-H", "PForm", "");
+  ASSERT_EQ(h.points.size(), 3u);
+  EXPECT_EQ(h.points[0].date, "2024-06-01");
+  EXPECT_EQ(h.unit, "µm");
+  ASSERT_TRUE(h.points[2].u);
+  const std::string e = test::error_of([&] { db.history("CMM-H", "PFrom", ""); });
+  EXPECT_NE(e.find("it has: PForm, PSize"), std::string::npos) << e;
+  const auto t = records::fit_trend(h.points);
+  EXPECT_TRUE(t.drift_per_year);
+  const auto j = nlohmann::json::parse(records::to_json(t, "CMM-H"));
+  EXPECT_EQ(j["kind"], "trend");
+  EXPECT_EQ(j["points"].size(), 3u);
+  EXPECT_TRUE(j["due"]["date"].is_null());
 }

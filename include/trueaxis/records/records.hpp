@@ -66,6 +66,48 @@ struct Record {
   std::vector<Figure> figures;
 };
 
+// One figure's history and its drift (records trend).
+struct TrendPoint {
+  std::string date;  // ISO 8601 (the day counts)
+  double value = 0;
+  std::optional<double> u;
+  State state = State::None;
+  long long record = 0;
+};
+
+struct TrendOptions {
+  // The figure's upper limit, in its unit (the figures grow as a machine wears): the date the
+  // trend reaches it.
+  std::optional<double> tolerance;
+  void validate() const;  // throws Error
+};
+
+// The drift per year by weighted least squares of value against time (weights 1/u² when every
+// point states its u, else equal), its standard uncertainty from the points' u and their
+// scatter about the line (the larger: the covariance scaled by χ²/dof when that exceeds 1), and
+// the date the line reaches the tolerance with its standard uncertainty (the line's covariance
+// propagated to the crossing). Not resolved, with the reason, when there are too few points or
+// dates, or the drift does not stand out of its uncertainty (|drift| < 2u) or falls (it never
+// reaches the upper limit).
+struct Trend {
+  std::string figure, axis, unit;
+  std::vector<TrendPoint> points;
+  std::optional<double> drift_per_year, u_drift;  // unit per year
+  std::optional<double> value_now, u_value_now;   // the line at the last point's date
+  std::optional<std::string> due;                 // ISO 8601 date
+  std::optional<double> u_due_days;
+  std::string not_resolved;  // why no drift or no due date ("" when both are given)
+  std::string summary() const;
+};
+
+// Days since 1970-01-01 of an ISO 8601 date's day (proleptic Gregorian); throws Error when it is
+// not one. And back.
+long long day_number(const std::string& date);
+std::string date_of_day(long long day);
+
+Trend fit_trend(std::vector<TrendPoint> points, const TrendOptions& options = {});
+std::string to_json(const Trend& trend, const std::string& machine);
+
 struct MachineSummary {
   std::string id;
   long long records = 0;
@@ -95,6 +137,10 @@ class Database {
   Record show(long long id) const;          // throws Error when there is no such record
   std::string content(long long id) const;  // the stored file, as it was
   int schema_version() const;
+  // One figure's history on one machine, oldest first (axis "" matches a figure without one).
+  // Throws Error naming the figures the machine has when there is none of that name.
+  Trend history(const std::string& machine, const std::string& figure,
+                const std::string& axis) const;
 
  private:
   struct Impl;
