@@ -27,7 +27,7 @@ struct RecordArgs {
   long long id = 0;
   bool quiet = false;
   // trend
-  std::string figure, axis;
+  std::string figure, axis, plane;
   double tolerance = NAN;
 };
 
@@ -112,7 +112,7 @@ int run_export(const RecordArgs& a) {
 
 int run_trend(const RecordArgs& a) {
   const records::Database db(records::database_path(a.db));
-  std::string axis = a.axis;
+  std::string axis = a.plane.empty() ? a.axis : a.plane;
   for (char& c : axis) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   auto t = db.history(a.filter.machine, a.figure, axis);
   records::TrendOptions o;
@@ -204,7 +204,11 @@ std::vector<Command> add_record_commands(CLI::App& app) {
   trend->add_option("--machine", a->filter.machine, "the machine's id")->required();
   trend->add_option("--figure", a->figure, "the figure's name (A, E0, G_ccw, flatness, ...)")
       ->required();
-  trend->add_option("--axis", a->axis, "its axis or plane, when it has one (X, XY, ...)");
+  trend->add_option("--axis", a->axis, "its axis, when it has one (positioning, straightness)")
+      ->check(machine_axis());
+  trend->add_option("--plane", a->plane, "its plane, when it has one (circular): XY, YZ or ZX")
+      ->check(CLI::IsMember({"XY", "YZ", "ZX"}, CLI::ignore_case))
+      ->excludes("--axis");
   trend->add_option("--tolerance", a->tolerance,
                     "the figure's upper limit, in its unit: when the trend reaches it");
   trend->add_option("--output,-o", a->output, "trend.json");
