@@ -41,5 +41,7 @@ void bind_positioning(pybind11::module_& m);
 void bind_circular(pybind11::module_& m);
 // CMM acceptance tests, ISO 10360-2 and -5, on the virtual CMM (acceptance.cpp).
 void bind_acceptance(pybind11::module_& m);
+// trueaxis.records (records.cpp).
+void bind_records(pybind11::module_& m);
 
 }  // namespace trueaxis::python

@@ -201,4 +201,5 @@ present; zero_difference: the probes' zero difference is known. Returns {'observ
   trueaxis::python::bind_design(m);
   trueaxis::python::bind_circular(m);
   trueaxis::python::bind_acceptance(m);
+  trueaxis::python::bind_records(m);
 }

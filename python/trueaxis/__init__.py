@@ -22,6 +22,7 @@ import re as _re
 
 from . import _trueaxis
 from ._trueaxis import Error, ErrorMap, Machine
+from ._trueaxis import records
 
 # Parameters that take a table of named columns (a dict of sequences): a pandas DataFrame there
 # becomes {column: values}. Anywhere else a DataFrame or Series becomes its numpy array.
@@ -232,6 +233,7 @@ __all__ = [
     "acceptance_e0",
     "acceptance_probing",
     "acceptance_setup",
+    "records",
     "analyze_layout",
     "design",
     "ballgauge",

@@ -1,0 +1,183 @@
+// Python bindings for the machine records: trueaxis.records.open(db) and its add, machines,
+// list and trend, returning lists of dicts (pandas.DataFrame(...) takes them as they are) and
+// numpy arrays.
+#include "trueaxis/records/records.hpp"
+
+#include <fmt/format.h>
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <memory>
+#include <optional>
+#include <variant>
+
+#include "bindings.hpp"
+#include "trueaxis/error.hpp"
+
+namespace py = pybind11;
+
+namespace trueaxis::python {
+namespace {
+
+py::object opt(const std::optional<double>& v) { return v ? py::object(py::float_(*v)) : py::none(); }
+
+py::dict record_dict(const records::Record& r) {
+  py::dict d;
+  d["id"] = r.id;
+  d["machine"] = r.machine;
+  d["date"] = r.date;
+  d["kind"] = r.kind;
+  d["state"] = r.state == records::State::None ? py::object(py::none())
+                                                : py::object(py::str(to_string(r.state)));
+  d["operator"] = r.operator_name;
+  d["instrument"] = r.instrument;
+  d["temperature_C"] = opt(r.temperature);
+  d["note"] = r.note;
+  d["file"] = r.file_name;
+  d["trueaxis_version"] = r.trueaxis_version;
+  py::dict figures;
+  for (const auto& f : r.figures) {
+    py::dict one;
+    one["value"] = f.value;
+    one["u"] = opt(f.u);
+    one["unit"] = f.unit;
+    figures[py::str(f.axis.empty() ? f.name : f.name + "@" + f.axis)] = one;
+  }
+  d["figures"] = figures;
+  return d;
+}
+
+records::State state_of(const std::optional<std::string>& s) {
+  if (!s) return records::State::None;
+  if (*s == "as-found") return records::State::AsFound;
+  if (*s == "as-left") return records::State::AsLeft;
+  throw Error(fmt::format("state '{}': 'as-found', 'as-left' or None", *s));
+}
+
+}  // namespace
+
+void bind_records(py::module_& m) {
+  auto sub = m.def_submodule(
+      "records",
+      "Machine records: every result stored with its machine, date, state, operator and "
+      "instrument in an SQLite database, as 'trueaxis record'.");
+  py::class_<records::Database, std::shared_ptr<records::Database>>(sub, "Database")
+      .def(
+          "add",
+          [](records::Database& db, const std::variant<std::string, std::vector<std::string>>& files,
+             const std::string& machine, const std::optional<std::string>& date,
+             const std::optional<std::string>& state, const std::string& operator_name,
+             const std::string& instrument, std::optional<double> temperature,
+             const std::string& note, const std::string& axis, bool new_machine) {
+            records::AddOptions o;
+            o.machine = machine;
+            o.date = date.value_or("");
+            o.state = state_of(state);
+            o.operator_name = operator_name;
+            o.instrument = instrument;
+            o.temperature = temperature;
+            o.note = note;
+            o.axis = axis;
+            o.new_machine = new_machine;
+            std::vector<std::string> paths;
+            if (const auto* one = std::get_if<std::string>(&files))
+              paths.push_back(*one);
+            else
+              paths = std::get<std::vector<std::string>>(files);
+            py::list out;
+            for (const auto& p : paths) {
+              out.append(record_dict(db.add(p, o)));
+              o.new_machine = false;
+            }
+            return out;
+          },
+          py::arg("files"), py::kw_only(), py::arg("machine"), py::arg("date") = py::none(),
+          py::arg("state") = py::none(), py::arg("operator") = "", py::arg("instrument") = "",
+          py::arg("temperature") = py::none(), py::arg("note") = "", py::arg("axis") = "",
+          py::arg("new_machine") = false,
+          R"doc(Stores result files (a path or a list) for `machine`: date ISO 8601 (default today),
+state 'as-found' or 'as-left', temperature in °C, axis for a result whose file does not name it.
+Refuses a file that is not a trueaxis result, an unknown machine (unless new_machine) and a file
+already stored for the machine. Returns the stored records as dicts.)doc")
+      .def("machines",
+           [](const records::Database& db) {
+             py::list out;
+             for (const auto& mm : db.machines()) {
+               py::dict d;
+               d["machine"] = mm.id;
+               d["records"] = mm.records;
+               d["first"] = mm.first;
+               d["last"] = mm.last;
+               out.append(d);
+             }
+             return out;
+           })
+      .def(
+          "list",
+          [](const records::Database& db, const std::string& machine, const std::string& kind,
+             const std::string& since, const std::string& until) {
+            records::ListFilter f;
+            f.machine = machine;
+            f.kind = kind;
+            f.from = since;
+            f.to = until;
+            py::list out;
+            for (const auto& r : db.list(f)) out.append(record_dict(r));
+            return out;
+          },
+          py::kw_only(), py::arg("machine") = "", py::arg("kind") = "", py::arg("since") = "",
+          py::arg("until") = "",
+          "The records (dicts, oldest first), filtered by machine, kind and dates (inclusive).")
+      .def(
+          "trend",
+          [](const records::Database& db, const std::string& machine, const std::string& figure,
+             const std::string& axis, std::optional<double> tolerance) {
+            auto h = db.history(machine, figure, axis);
+            records::TrendOptions o;
+            o.tolerance = tolerance;
+            auto t = records::fit_trend(h.points, o);
+            const auto n = static_cast<py::ssize_t>(t.points.size());
+            py::array_t<double> value(n), u(n);
+            py::list dates, states;
+            for (py::ssize_t i = 0; i < n; ++i) {
+              const auto& p = t.points[static_cast<std::size_t>(i)];
+              value.mutable_at(i) = p.value;
+              u.mutable_at(i) = p.u ? *p.u : NAN;
+              dates.append(p.date);
+              states.append(p.state == records::State::None ? py::object(py::none())
+                                                            : py::object(py::str(to_string(p.state))));
+            }
+            py::dict d;
+            d["kind"] = "trend";
+            d["machine"] = machine;
+            d["figure"] = figure;
+            d["axis"] = axis;
+            d["unit"] = h.unit;
+            d["dates"] = dates;
+            d["values"] = value;
+            d["u"] = u;
+            d["states"] = states;
+            d["drift_per_year"] = opt(t.drift_per_year);
+            d["u_drift"] = opt(t.u_drift);
+            d["due"] = t.due ? py::object(py::str(*t.due)) : py::none();
+            d["u_due_days"] = opt(t.u_due_days);
+            d["not_resolved"] = t.not_resolved;
+            return d;
+          },
+          py::kw_only(), py::arg("machine"), py::arg("figure"), py::arg("axis") = "",
+          py::arg("tolerance") = py::none(),
+          R"doc(One figure's history on a machine and its drift per year: {'dates', 'values', 'u' (numpy,
+NaN where not stated), 'states', 'drift_per_year', 'u_drift', 'due' (the date the trend reaches
+`tolerance`, the figure's upper limit), 'u_due_days', 'not_resolved' (why a figure is None)}.)doc");
+  sub.def(
+      "open",
+      [](const std::optional<std::string>& path) {
+        return std::make_shared<records::Database>(records::database_path(path.value_or("")));
+      },
+      py::arg("db") = py::none(),
+      "Opens (creating it) the records database: `db`, else $TRUEAXIS_DB, else "
+      "trueaxis-records.db in the working directory.");
+}
+
+}  // namespace trueaxis::python

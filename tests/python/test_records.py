@@ -1,0 +1,48 @@
+"""Machine records from Python: trueaxis.records.open(db), add, list, machines and trend, the
+same database as 'trueaxis record'."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+import trueaxis
+
+TRUEAXIS = os.environ.get("TRUEAXIS", "trueaxis")
+
+
+def test_records_from_python_and_the_command_line(tmp_path):
+    m = trueaxis.Machine.random(seed=1)
+    setup = str(tmp_path / "acceptance.json")
+    trueaxis.acceptance_setup(m, setup)
+    files = []
+    for k in range(3):
+        r = trueaxis.acceptance_probing(m, setup, mpe_form=1.8, lobing=0.5, noise=0.1, seed=k + 1)
+        files.append(str(tmp_path / f"probing{k}.json"))
+        trueaxis.save(r, files[-1])
+    db = trueaxis.records.open(str(tmp_path / "r.db"))
+    first = db.add(files[0], machine="CMM 1", date="2024-05-01", state="as-found", new_machine=True)
+    assert first[0]["figures"]["PForm"]["value"] == pytest.approx(
+        json.load(open(files[0]))["PForm_um"])
+    db.add(files[1:], machine="CMM 1", date="2025-05-01", state="as-left", operator="J. O'Brien")
+    with pytest.raises(trueaxis.Error, match="already stored"):
+        db.add(files[0], machine="CMM 1")
+    with pytest.raises(trueaxis.Error, match="--new-machine"):
+        db.add(files[0], machine="CMM 2")
+    with pytest.raises(trueaxis.Error, match="'as-found', 'as-left'"):
+        db.add(files[0], machine="CMM 1", state="found")
+    rows = db.list(machine="CMM 1")
+    assert [r["state"] for r in rows] == ["as-found", "as-left", "as-left"]
+    assert db.machines() == [{"machine": "CMM 1", "records": 3, "first": "2024-05-01",
+                              "last": "2025-05-01"}]
+    t = db.trend(machine="CMM 1", figure="PForm", tolerance=5)
+    assert t["dates"] == ["2024-05-01", "2025-05-01", "2025-05-01"] and t["unit"] == "µm"
+    assert isinstance(t["values"], np.ndarray) and not np.isnan(t["u"]).any()
+    assert t["u_drift"] is None or t["u_drift"] > 0
+    # The command line reads the same database.
+    out = subprocess.run([TRUEAXIS, "record", "list", "--db", str(tmp_path / "r.db")],
+                         capture_output=True, text=True)
+    assert out.returncode == 0 and out.stdout.count("CMM 1") == 3, out.stderr
+    pd = pytest.importorskip("pandas")
+    frame = pd.DataFrame(rows)
+    assert list(frame["date"]) == ["2024-05-01", "2025-05-01", "2025-05-01"]
