@@ -405,6 +405,12 @@ TEST(Acceptance, ResultFilesRoundTripAndBadOnesAreRefused) {
   EXPECT_NE(tampered("\"E0_max_um\": ", "\"E0_max_um\": 1").find("E0_max_um is not"),
             std::string::npos);
   EXPECT_NE(tampered("\"acceptance-e0\"", "\"circular\"").find("acceptance-e0"), std::string::npos);
+  // Fields missing or of the wrong type are named, never a crash (a fuzzer's finding: a missing
+  // "complete" once escaped as a library exception).
+  EXPECT_NE(tampered("\"complete\"", "\"finished\"").find("'complete' is missing"),
+            std::string::npos);
+  EXPECT_NE(tampered("\"space_diagonal\": true", "\"space_diagonal\": 1").find("true or false"),
+            std::string::npos);
   // E150's stylus offset: a vector across the ram, or its length alone (along X).
   EXPECT_NE(
       tampered("\"mpe\"", "\"stylus_offset_mm\": [0, 0, 150], \"mpe\"").find("across the ram"),

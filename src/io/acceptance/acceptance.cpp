@@ -26,6 +26,20 @@ Eigen::Vector3d setup_direction(const JsonFile& f, const P& at) {
 double setup_optional(const JsonFile& f, const P& at, double fallback, double scale = 1) {
   return f.has(at) ? f.number(at) * scale : fallback;
 }
+// A true/false field; `fallback` when it is absent (none: it is required).
+bool setup_boolean(const JsonFile& f, const P& at, std::optional<bool> fallback = std::nullopt) {
+  if (!f.has(at)) {
+    if (fallback) return *fallback;
+    f.fail(at, fmt::format("'{}' is missing", dotted(at)));
+  }
+  const auto& v = f.root().at(at);
+  if (!v.is_boolean()) f.fail(at, fmt::format("{}: true or false", dotted(at)));
+  return v.get<bool>();
+}
+// A field that must be null (a figure there is none of) or present.
+bool null_or_missing(const JsonFile& f, const P& at) {
+  return !f.has(at) || f.root().at(at).is_null();
+}
 ojson setup_xyz(const Eigen::Vector3d& v) {
   return ojson::array({v.x(), v.y(), v.z()});
 }
@@ -250,14 +264,12 @@ acceptance::E0Result read_e0_result(const std::string& path) {
   if (f.has(P("/r0_mpe"))) {
     r.r0_text = f.string(P("/r0_mpe"));
     if (f.has(P("/r0_pass"))) {
-      if (!f.root().at(P("/r0_pass")).is_boolean()) f.fail(P("/r0_pass"), "r0_pass: true or false");
-      r.r0_pass = f.root().at(P("/r0_pass")).get<bool>();
+      r.r0_pass = setup_boolean(f, P("/r0_pass"));
     }
   }
   r.verdict = verdict_of(f, P("/verdict"));
   r.rule = f.string(P("/rule"));
-  if (!f.root().at(P("/complete")).is_boolean()) f.fail(P("/complete"), "complete: true or false");
-  r.complete = f.root().at(P("/complete")).get<bool>();
+  r.complete = setup_boolean(f, P("/complete"));
   if (f.has(P("/stopped"))) r.stopped = f.string(P("/stopped"));
   const auto& positions = f.array(P("/positions"));
   for (std::size_t i = 0; i < positions.size(); ++i) {
@@ -265,7 +277,7 @@ acceptance::E0Result read_e0_result(const std::string& path) {
     acceptance::Position pos;
     pos.name = f.string(at / "name");
     pos.direction = setup_vector3(f, at / "direction");
-    pos.space_diagonal = f.root().at(at).value("space_diagonal", false);
+    pos.space_diagonal = setup_boolean(f, at / "space_diagonal", false);
     r.positions.push_back(pos);
   }
   const auto& lengths = f.array(P("/lengths"));
@@ -292,7 +304,7 @@ acceptance::E0Result read_e0_result(const std::string& path) {
     r.e0_max = std::max(r.e0_max, std::abs(l.error));
     r.lengths.push_back(l);
   }
-  if (r.lengths.empty() ? !f.root().at(P("/E0_max_um")).is_null()
+  if (r.lengths.empty() ? !null_or_missing(f, P("/E0_max_um"))
                         : std::abs(f.number(P("/E0_max_um")) * 1e-3 - r.e0_max) > 1e-9)
     f.fail(P("/E0_max_um"), "E0_max_um is not the largest |error_um| of the lengths (null: none)");
   for (std::size_t i = 0; i < f.array(P("/r0")).size(); ++i) {
@@ -301,7 +313,7 @@ acceptance::E0Result read_e0_result(const std::string& path) {
                     f.number(at / "range_um") * 1e-3});
     r.r0_max = std::max(r.r0_max, r.r0.back().range);
   }
-  if (r.r0.empty() ? !f.root().at(P("/R0_max_um")).is_null()
+  if (r.r0.empty() ? !null_or_missing(f, P("/R0_max_um"))
                    : std::abs(f.number(P("/R0_max_um")) * 1e-3 - r.r0_max) > 1e-9)
     f.fail(P("/R0_max_um"), "R0_max_um is not the largest range_um of r0 (null: none)");
   return r;
