@@ -250,6 +250,10 @@ std::vector<MachineSummary> Database::machines() const {
 }
 
 std::vector<Record> Database::list(const ListFilter& f) const {
+  return query(f, 0);
+}
+
+std::vector<Record> Database::query(const ListFilter& f, long long id) const {
   return guarded("listing the records", [&] {
     std::vector<Record> out;
     SQLite::Statement q(
@@ -257,11 +261,12 @@ std::vector<Record> Database::list(const ListFilter& f) const {
         "SELECT id, machine, date, kind, state, operator, instrument, temperature_C, note, "
         "trueaxis_version, file_name FROM records WHERE (?1 = '' OR machine = ?1) AND (?2 = '' "
         "OR kind = ?2) AND (?3 = '' OR date >= ?3) AND (?4 = '' OR substr(date, 1, 10) <= ?4) "
-        "ORDER BY date, id");
+        "AND (?5 = 0 OR id = ?5) ORDER BY date, id");
     q.bind(1, f.machine);
     q.bind(2, f.kind);
     q.bind(3, f.from);
     q.bind(4, f.to);
+    q.bind(5, static_cast<std::int64_t>(id));
     SQLite::Statement figs(impl_->db,
                            "SELECT name, axis, value, u, unit FROM figures WHERE record = ? "
                            "ORDER BY rowid");
@@ -296,8 +301,8 @@ std::vector<Record> Database::list(const ListFilter& f) const {
 }
 
 Record Database::show(long long id) const {
-  for (auto& r : list())
-    if (r.id == id) return r;
+  if (id > 0)
+    if (auto one = query({}, id); !one.empty()) return one.front();
   throw Error(fmt::format("no record {} in the records database", id));
 }
 

@@ -99,6 +99,8 @@ TEST(Records, ResultsAreStoredWithTheirFiguresAndReadBackExactly) {
   EXPECT_EQ(all[0].instrument, "gauge blocks set 12");
   EXPECT_DOUBLE_EQ(all[1].figures[0].value, r2.figures[0].value);
   EXPECT_EQ(db.content(r1.id), test::read_file(e0_path));
+  EXPECT_EQ(db.show(r2.id).kind, "acceptance-probing");
+  EXPECT_NE(test::error_of([&] { db.show(999); }).find("no record 999"), std::string::npos);
   records::ListFilter f;
   f.kind = "acceptance-probing";
   EXPECT_EQ(db.list(f).size(), 1u);

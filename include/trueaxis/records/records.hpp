@@ -145,6 +145,7 @@ class Database {
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
+  std::vector<Record> query(const ListFilter& filter, long long id) const;  // id 0: any
 };
 
 // The records as a JSON array ({"id", "machine", "date", "kind", "state", "operator",
