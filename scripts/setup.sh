@@ -18,7 +18,7 @@ if [ "${TRUEAXIS_SKIP_APT:-0}" != 1 ]; then
     libocct-data-exchange-dev libocct-modeling-algorithms-dev libtbb-dev \
     libgtest-dev libgmock-dev libbenchmark-dev \
     pybind11-dev python3-dev python3-numpy python3-pytest libasio-dev \
-    libsqlite3-dev libsqlitecpp-dev \
+    libsqlite3-dev libsqlitecpp-dev libpqxx-dev \
     chromium gawk clang-format >/dev/null
 fi
 (cd web && npm ci --no-audit --no-fund --silent)

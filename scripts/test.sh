@@ -16,6 +16,12 @@ if ! /usr/bin/python3 -c "import pandas" 2>/dev/null; then
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
     python3-pandas >/dev/null
 fi
+# The records' tests run on PostgreSQL too, on a server they start themselves (initdb, pg_ctl).
+if ! ls /usr/lib/postgresql/*/bin/initdb >/dev/null 2>&1; then
+  SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO=sudo
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
+    postgresql >/dev/null
+fi
 cmake --build build
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 if ! command -v clang++ >/dev/null ||

@@ -29,6 +29,9 @@ struct RecordArgs {
   // trend
   std::string figure, axis, plane;
   double tolerance = NAN;
+  // due
+  records::DueOptions due;
+  std::vector<std::string> limits;
 };
 
 std::string figures_text(const records::Record& r) {
@@ -61,7 +64,7 @@ int run_add(RecordArgs& a) {
 }
 
 int run_machines(const RecordArgs& a) {
-  const records::Database db(records::database_path(a.db));
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   const auto ms = db.machines();
   if (ms.empty()) fmt::print("no machine in {}\n", records::database_path(a.db));
   for (const auto& m : ms)
@@ -71,7 +74,7 @@ int run_machines(const RecordArgs& a) {
 }
 
 int run_list(const RecordArgs& a) {
-  const records::Database db(records::database_path(a.db));
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   for (const auto& r : db.list(a.filter))
     fmt::print("{:>5}  {}  {}  {}{}  {}\n", r.id, r.date, r.machine, r.kind,
                r.state == records::State::None ? "" : std::string(" ") + to_string(r.state),
@@ -80,7 +83,7 @@ int run_list(const RecordArgs& a) {
 }
 
 int run_show(const RecordArgs& a) {
-  const records::Database db(records::database_path(a.db));
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   const auto r = db.show(a.id);
   fmt::print("record {}\n  machine: {}\n  date: {}\n  kind: {}\n  state: {}\n  file: {}\n", r.id,
              r.machine, r.date, r.kind,
@@ -100,7 +103,7 @@ int run_show(const RecordArgs& a) {
 }
 
 int run_export(const RecordArgs& a) {
-  const records::Database db(records::database_path(a.db));
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   const auto rs = db.list(a.filter);
   const std::string text = a.format == "csv" ? records::to_csv(rs) : records::to_json(rs);
   std::ofstream out(a.output, std::ios::binary);
@@ -111,17 +114,12 @@ int run_export(const RecordArgs& a) {
 }
 
 int run_trend(const RecordArgs& a) {
-  const records::Database db(records::database_path(a.db));
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   std::string axis = a.plane.empty() ? a.axis : a.plane;
   for (char& c : axis) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  auto t = db.history(a.filter.machine, a.figure, axis);
   records::TrendOptions o;
   if (!std::isnan(a.tolerance)) o.tolerance = a.tolerance;
-  const std::string unit = t.unit;
-  t = records::fit_trend(t.points, o);
-  t.figure = a.figure;
-  t.axis = axis;
-  t.unit = unit;
+  const auto t = db.trend(a.filter.machine, a.figure, axis, o);
   if (!a.output.empty()) {
     std::ofstream out(a.output, std::ios::binary);
     out << records::to_json(t, a.filter.machine);
@@ -133,9 +131,32 @@ int run_trend(const RecordArgs& a) {
   return 0;
 }
 
+int run_due(RecordArgs& a) {
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
+  for (const auto& l : a.limits) a.due.limits.push_back(records::Limit::parse(l));
+  a.due.machine = a.filter.machine;
+  const auto due = records::due_dates(db, a.due);
+  if (!a.output.empty()) {
+    std::ofstream out(a.output, std::ios::binary);
+    out << records::to_json(due);
+    if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
+  }
+  if (a.quiet) return 0;
+  if (due.empty()) fmt::print("no machine with records in {}\n", records::database_path(a.db));
+  for (const auto& d : due) {
+    fmt::print("{}  {}{}  {}  (last visit {}): {}\n", d.due,
+               d.u_days ? fmt::format("± {:.0f} d  ", *d.u_days) : std::string(),
+               d.overdue ? "OVERDUE" : "due", d.machine, d.last_visit, d.because);
+    for (const auto& n : d.notes) fmt::print("      {}\n", n);
+  }
+  if (!a.output.empty()) fmt::print("-> {}\n", a.output);
+  return 0;
+}
+
 void add_db(CLI::App* c, RecordArgs& a) {
   c->add_option("--db", a.db,
-                "the records database (default: $TRUEAXIS_DB, else trueaxis-records.db here)");
+                "the records: an SQLite file, or postgresql://[user@]host[:port]/dbname (default: "
+                "$TRUEAXIS_DB, else trueaxis-records.db here)");
 }
 
 void add_filter(CLI::App* c, RecordArgs& a) {
@@ -152,7 +173,7 @@ std::vector<Command> add_record_commands(CLI::App& app) {
       "record",
       "Machine records: every result stored with its machine, date, state (as found, as left), "
       "operator and instrument, in an SQLite database (--db, $TRUEAXIS_DB or "
-      "trueaxis-records.db).");
+      "trueaxis-records.db) or on a PostgreSQL server (--db postgresql://host/dbname).");
   group->require_subcommand(1);
   auto a = std::make_shared<RecordArgs>();
   auto* add = group->add_subcommand(
@@ -213,9 +234,27 @@ std::vector<Command> add_record_commands(CLI::App& app) {
                     "the figure's upper limit, in its unit: when the trend reaches it");
   trend->add_option("--output,-o", a->output, "trend.json");
   trend->add_flag("--quiet,-q", a->quiet, "print nothing on success");
-  return {{add, [a] { return run_add(*a); }},           {trend, [a] { return run_trend(*a); }},
-          {machines, [a] { return run_machines(*a); }}, {list, [a] { return run_list(*a); }},
-          {show, [a] { return run_show(*a); }},         {exp, [a] { return run_export(*a); }}};
+  auto* due = group->add_subcommand(
+      "due",
+      "When each machine is next due: its last visit plus --interval, brought forward when a "
+      "figure's trend reaches its --limit sooner (the trend's date and its u).\nExample: "
+      "trueaxis record due --interval 12 --limit A=25 --limit E0=3.5");
+  add_db(due, *a);
+  due->add_option("--machine", a->filter.machine, "only this machine");
+  due->add_option("--interval", a->due.interval_months,
+                  "the longest time between two visits, in months")
+      ->check(CLI::Range(1, 120))
+      ->capture_default_str();
+  due->add_option("--limit", a->limits,
+                  "a figure's upper limit in its unit: A=25 (every axis), A@X=20, G_ccw@XY=15 "
+                  "(repeatable)");
+  due->add_option("--today", a->due.today, "the date that decides what is overdue (ISO 8601)");
+  due->add_option("--output,-o", a->output, "due.json");
+  due->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {{add, [a] { return run_add(*a); }},     {due, [a] { return run_due(*a); }},
+          {trend, [a] { return run_trend(*a); }}, {machines, [a] { return run_machines(*a); }},
+          {list, [a] { return run_list(*a); }},   {show, [a] { return run_show(*a); }},
+          {exp, [a] { return run_export(*a); }}};
 }
 
 }  // namespace trueaxis::cli

@@ -20,7 +20,9 @@ namespace py = pybind11;
 namespace trueaxis::python {
 namespace {
 
-py::object opt(const std::optional<double>& v) { return v ? py::object(py::float_(*v)) : py::none(); }
+py::object opt(const std::optional<double>& v) {
+  return v ? py::object(py::float_(*v)) : py::none();
+}
 
 py::dict record_dict(const records::Record& r) {
   py::dict d;
@@ -29,7 +31,7 @@ py::dict record_dict(const records::Record& r) {
   d["date"] = r.date;
   d["kind"] = r.kind;
   d["state"] = r.state == records::State::None ? py::object(py::none())
-                                                : py::object(py::str(to_string(r.state)));
+                                               : py::object(py::str(to_string(r.state)));
   d["operator"] = r.operator_name;
   d["instrument"] = r.instrument;
   d["temperature_C"] = opt(r.temperature);
@@ -65,7 +67,8 @@ void bind_records(py::module_& m) {
   py::class_<records::Database, std::shared_ptr<records::Database>>(sub, "Database")
       .def(
           "add",
-          [](records::Database& db, const std::variant<std::string, std::vector<std::string>>& files,
+          [](records::Database& db,
+             const std::variant<std::string, std::vector<std::string>>& files,
              const std::string& machine, const std::optional<std::string>& date,
              const std::optional<std::string>& state, const std::string& operator_name,
              const std::string& instrument, std::optional<double> temperature,
@@ -133,10 +136,9 @@ already stored for the machine. Returns the stored records as dicts.)doc")
           "trend",
           [](const records::Database& db, const std::string& machine, const std::string& figure,
              const std::string& axis, std::optional<double> tolerance) {
-            auto h = db.history(machine, figure, axis);
             records::TrendOptions o;
             o.tolerance = tolerance;
-            auto t = records::fit_trend(h.points, o);
+            const auto t = db.trend(machine, figure, axis, o);
             const auto n = static_cast<py::ssize_t>(t.points.size());
             py::array_t<double> value(n), u(n);
             py::list dates, states;
@@ -145,15 +147,16 @@ already stored for the machine. Returns the stored records as dicts.)doc")
               value.mutable_at(i) = p.value;
               u.mutable_at(i) = p.u ? *p.u : NAN;
               dates.append(p.date);
-              states.append(p.state == records::State::None ? py::object(py::none())
-                                                            : py::object(py::str(to_string(p.state))));
+              states.append(p.state == records::State::None
+                                ? py::object(py::none())
+                                : py::object(py::str(to_string(p.state))));
             }
             py::dict d;
             d["kind"] = "trend";
             d["machine"] = machine;
             d["figure"] = figure;
             d["axis"] = axis;
-            d["unit"] = h.unit;
+            d["unit"] = t.unit;
             d["dates"] = dates;
             d["values"] = value;
             d["u"] = u;
@@ -169,15 +172,50 @@ already stored for the machine. Returns the stored records as dicts.)doc")
           py::arg("tolerance") = py::none(),
           R"doc(One figure's history on a machine and its drift per year: {'dates', 'values', 'u' (numpy,
 NaN where not stated), 'states', 'drift_per_year', 'u_drift', 'due' (the date the trend reaches
-`tolerance`, the figure's upper limit), 'u_due_days', 'not_resolved' (why a figure is None)}.)doc");
+`tolerance`, the figure's upper limit), 'u_due_days', 'not_resolved' (why a figure is None)}.)doc")
+      .def(
+          "due",
+          [](const records::Database& db, int interval_months, const py::dict& limits,
+             const std::string& machine, const std::string& today) {
+            records::DueOptions o;
+            o.interval_months = interval_months;
+            o.machine = machine;
+            o.today = today;
+            for (const auto& [k, v] : limits)
+              o.limits.push_back(
+                  records::Limit::parse(fmt::format("{}={}", py::str(k).cast<std::string>(),
+                                                    fmt::format("{:.17g}", v.cast<double>()))));
+            py::list out;
+            for (const auto& d : records::due_dates(db, o)) {
+              py::dict e;
+              e["machine"] = d.machine;
+              e["last_visit"] = d.last_visit;
+              e["due"] = d.due;
+              e["u_days"] = opt(d.u_days);
+              e["because"] = d.because;
+              e["overdue"] = d.overdue;
+              e["notes"] = d.notes;
+              out.append(e);
+            }
+            return out;
+          },
+          py::kw_only(), py::arg("interval_months") = 12, py::arg("limits") = py::dict(),
+          py::arg("machine") = "", py::arg("today") = "",
+          R"doc(When each machine is next due, soonest first: its last visit plus interval_months, or
+earlier when a figure's trend reaches its limit ({'A': 25, 'A@X': 20, 'E0': 3.5}, in the figure's
+unit). Dicts: 'machine', 'last_visit', 'due', 'u_days' (None unless a trend set the date),
+'because', 'overdue', 'notes' (limits whose trend gave no date, and why).)doc");
   sub.def(
       "open",
-      [](const std::optional<std::string>& path) {
-        return std::make_shared<records::Database>(records::database_path(path.value_or("")));
+      [](const std::optional<std::string>& path, bool read_only) {
+        return std::make_shared<records::Database>(
+            records::database_path(path.value_or("")),
+            read_only ? records::Access::ReadOnly : records::Access::ReadWrite);
       },
-      py::arg("db") = py::none(),
-      "Opens (creating it) the records database: `db`, else $TRUEAXIS_DB, else "
-      "trueaxis-records.db in the working directory.");
+      py::arg("db") = py::none(), py::kw_only(), py::arg("read_only") = false,
+      "Opens the records: `db` (an SQLite file, created when absent, or "
+      "postgresql://[user@]host[:port]/dbname), else $TRUEAXIS_DB, else trueaxis-records.db in "
+      "the working directory. read_only: nothing is written, a read-only file can be read.");
 }
 
 }  // namespace trueaxis::python

@@ -1,6 +1,5 @@
-// The records' SQLite database (records.hpp), through SQLiteCpp: parameterised statements only,
-// one transaction per add.
-#include <SQLiteCpp/SQLiteCpp.h>
+// The records' database (records.hpp) on either back end (backend.hpp): parameterised
+// statements only, one transaction per add, the schema created or migrated on open.
 #include <fmt/format.h>
 
 #include <chrono>
@@ -9,9 +8,11 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <regex>
 #include <sstream>
 
+#include "backend.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/result_file.hpp"
 #include "trueaxis/records/records.hpp"
@@ -33,21 +34,9 @@ std::string digest(const std::string& bytes) {
   return fmt::format("{:016x}-{}", h, bytes.size());
 }
 
-std::string today() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char b[16];
-  std::strftime(b, sizeof b, "%Y-%m-%d", &tm);
-  return b;
-}
-
 // A number, or NULL when there is none (never a zero in its place).
-void bind_optional(SQLite::Statement& q, int index, const std::optional<double>& v) {
-  if (v)
-    q.bind(index, *v);
-  else
-    q.bind(index);
+detail::Param optional_param(const std::optional<double>& v) {
+  return v ? detail::Param(*v) : detail::Param();
 }
 
 State state_of(const std::string& s) {
@@ -56,14 +45,45 @@ State state_of(const std::string& s) {
   return State::None;
 }
 
-// Runs `f`, turning SQLite's exceptions into the project's, with what was being done.
+// Runs `f`, naming the database and what was being done in its errors.
 template <class F>
-auto guarded(const std::string& what, F&& f) -> decltype(f()) {
+auto guarded(const detail::Backend& b, const std::string& what, F&& f) -> decltype(f()) {
   try {
     return f();
-  } catch (const SQLite::Exception& e) {
-    throw Error(fmt::format("records database: {}: {}", what, e.what()));
+  } catch (const Error& e) {
+    throw Error(fmt::format("records database {}: {}: {}", b.describe(), what, e.what()));
   }
+}
+
+// Text every back end stores as it is: UTF-8 (RFC 3629) without NUL.
+void check_text(const char* field, const std::string& s) {
+  if (s.find('\0') != std::string::npos)
+    throw Error(fmt::format("record: the {} holds a NUL character, which cannot be stored", field));
+  for (std::size_t i = 0; i < s.size();) {
+    const auto c = static_cast<unsigned char>(s[i]);
+    const std::size_t n = c < 0x80         ? 1
+                          : (c >> 5) == 6  ? 2
+                          : (c >> 4) == 14 ? 3
+                          : (c >> 3) == 30 ? 4
+                                           : 0;
+    bool ok = n != 0 && i + n <= s.size();
+    for (std::size_t k = 1; ok && k < n; ++k) ok = (static_cast<unsigned char>(s[i + k]) >> 6) == 2;
+    if (ok && n == 2) ok = c >= 0xC2;  // no overlong form
+    if (ok && n == 3) {
+      const auto c1 = static_cast<unsigned char>(s[i + 1]);
+      ok = !(c == 0xE0 && c1 < 0xA0) && !(c == 0xED && c1 >= 0xA0);  // overlong, surrogates
+    }
+    if (ok && n == 4) {
+      const auto c1 = static_cast<unsigned char>(s[i + 1]);
+      ok = c <= 0xF4 && !(c == 0xF0 && c1 < 0x90) && !(c == 0xF4 && c1 >= 0x90);
+    }
+    if (!ok) throw Error(fmt::format("record: the {} is not UTF-8 text (byte {})", field, i + 1));
+    i += n;
+  }
+}
+
+bool is_url(const std::string& location) {
+  return location.rfind("postgresql://", 0) == 0 || location.rfind("postgres://", 0) == 0;
 }
 
 }  // namespace
@@ -94,52 +114,114 @@ void AddOptions::validate() const {
   }
   if (temperature && !(*temperature > -50 && *temperature < 100))
     throw Error("record: the temperature must be a number of °C (−50 … 100)");
+  check_text("machine id", machine);
+  check_text("operator", operator_name);
+  check_text("instrument", instrument);
+  check_text("note", note);
+  check_text("axis", axis);
 }
 
 struct Database::Impl {
-  SQLite::Database db;
-  explicit Impl(const std::string& path)
-      : db(path, SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE | SQLite::OPEN_FULLMUTEX) {}
+  std::unique_ptr<detail::Backend> b;
 };
 
-Database::Database(const std::string& path) {
-  const auto parent = std::filesystem::path(path).parent_path();
-  if (!parent.empty() && !std::filesystem::is_directory(parent))
-    throw Error(fmt::format("records database {}: no such directory {}", path, parent.string()));
-  guarded("opening " + path, [&] {
-    impl_ = std::make_unique<Impl>(path);
-    // Another process adding at the same time waits for it (up to 10 s) instead of failing.
-    impl_->db.setBusyTimeout(10000);
-    impl_->db.exec("PRAGMA foreign_keys = ON");
-    SQLite::Transaction t(impl_->db, SQLite::TransactionBehavior::IMMEDIATE);
-    impl_->db.exec("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)");
-    SQLite::Statement q(impl_->db, "SELECT value FROM meta WHERE key = 'schema_version'");
-    int version = 0;
-    if (q.executeStep()) version = std::atoi(q.getColumn(0).getString().c_str());
-    if (version > kSchemaVersion)
+namespace {
+
+using detail::Param;
+using detail::Row;
+
+// The schema's version, 0 when there is none yet; throws Error when the database holds no
+// trueaxis records and cannot be given them (read-only).
+int stored_version(detail::Backend& b) {
+  const auto rows = b.query("SELECT value FROM meta WHERE key = 'schema_version'", {});
+  return rows.empty() ? 0 : std::atoi(detail::text(rows[0][0]).c_str());
+}
+
+void refuse_newer(const detail::Backend& b, int version) {
+  if (version > kSchemaVersion)
+    throw Error(fmt::format(
+        "records database {} was written by a newer trueaxis (schema {}; this one reads up to "
+        "{}): update trueaxis to open it",
+        b.describe(), version, kSchemaVersion));
+}
+
+// Creates the schema, or migrates an older one, in one transaction with the writers' lock.
+void create_or_migrate(detail::Backend& b) {
+  detail::Transaction t(b, true);
+  b.script("CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)");
+  const int version = stored_version(b);
+  refuse_newer(b, version);
+  if (version == kSchemaVersion) return;  // rolled back: nothing was changed
+  if (version < 1) {
+    b.script(fmt::format(
+        "CREATE TABLE machines (id TEXT PRIMARY KEY, created TEXT NOT NULL);"
+        "CREATE TABLE records (id {key}, machine TEXT NOT NULL REFERENCES machines(id), date "
+        "TEXT NOT NULL, kind TEXT NOT NULL, state TEXT NOT NULL, operator TEXT NOT NULL, "
+        "instrument TEXT NOT NULL, temperature_C {real}, note TEXT NOT NULL, trueaxis_version "
+        "TEXT NOT NULL, file_name TEXT NOT NULL, digest TEXT NOT NULL, content {blob} NOT NULL, "
+        "UNIQUE (machine, digest));"
+        "CREATE TABLE figures (record BIGINT NOT NULL REFERENCES records(id), seq INTEGER NOT "
+        "NULL, name TEXT NOT NULL, axis TEXT NOT NULL, value {real} NOT NULL, u {real}, unit "
+        "TEXT NOT NULL);"
+        "CREATE INDEX figures_by_record ON figures(record, seq);"
+        "CREATE INDEX records_by_machine ON records(machine, date);",
+        fmt::arg("key", b.key_type()), fmt::arg("real", b.real_type()),
+        fmt::arg("blob", b.blob_type())));
+  } else if (version == 1) {
+    // Version 1 existed on SQLite only: the figures' order was their rowid.
+    b.script(
+        "ALTER TABLE figures ADD COLUMN seq INTEGER NOT NULL DEFAULT 0;"
+        "UPDATE figures SET seq = rowid;"
+        "DROP INDEX figures_by_record;"
+        "CREATE INDEX figures_by_record ON figures(record, seq);");
+  }
+  b.query(
+      "INSERT INTO meta (key, value) VALUES ('schema_version', $1) ON CONFLICT (key) DO UPDATE "
+      "SET value = excluded.value",
+      {Param(std::to_string(kSchemaVersion))});
+  t.commit();
+}
+
+std::unique_ptr<detail::Backend> open_backend(const std::string& location, Access access) {
+  return is_url(location) ? detail::open_postgresql(location, access)
+                          : detail::open_sqlite(location, access);
+}
+
+}  // namespace
+
+Database::Database(const std::string& location, Access access) : impl_(std::make_unique<Impl>()) {
+  try {
+    impl_->b = open_backend(location, access);
+  } catch (const Error& e) {
+    throw Error(fmt::format("records database {}: {}",
+                            is_url(location) ? std::string("on the server") : location, e.what()));
+  }
+  auto& b = *impl_->b;
+  if (access == Access::ReadWrite) {
+    guarded(b, "creating or migrating its schema", [&] { create_or_migrate(b); });
+    return;
+  }
+  int version = 0;
+  try {
+    version = stored_version(b);
+  } catch (const Error&) {
+    version = 0;  // no meta table
+  }
+  if (version == 0)
+    throw Error(fmt::format("records database {}: it holds no trueaxis records", b.describe()));
+  refuse_newer(b, version);
+  if (version < kSchemaVersion) {
+    // An older schema is migrated, which needs writing once.
+    try {
+      impl_->b = open_backend(location, Access::ReadWrite);
+      create_or_migrate(*impl_->b);
+    } catch (const Error& e) {
       throw Error(fmt::format(
-          "records database {} was written by a newer trueaxis (schema {}; this one reads up to "
-          "{}): update trueaxis to open it",
-          path, version, kSchemaVersion));
-    if (version < 1) {
-      impl_->db.exec(
-          "CREATE TABLE machines (id TEXT PRIMARY KEY, created TEXT NOT NULL);"
-          "CREATE TABLE records (id INTEGER PRIMARY KEY, machine TEXT NOT NULL REFERENCES "
-          "machines(id), date TEXT NOT NULL, kind TEXT NOT NULL, state TEXT NOT NULL, operator "
-          "TEXT NOT NULL, instrument TEXT NOT NULL, temperature_C REAL, note TEXT NOT NULL, "
-          "trueaxis_version TEXT NOT NULL, file_name TEXT NOT NULL, digest TEXT NOT NULL, "
-          "content BLOB NOT NULL, UNIQUE (machine, digest));"
-          "CREATE TABLE figures (record INTEGER NOT NULL REFERENCES records(id), name TEXT NOT "
-          "NULL, axis TEXT NOT NULL, value REAL NOT NULL, u REAL, unit TEXT NOT NULL);"
-          "CREATE INDEX figures_by_record ON figures(record);"
-          "CREATE INDEX records_by_machine ON records(machine, date);");
-      SQLite::Statement v(impl_->db,
-                          "INSERT OR REPLACE INTO meta (key, value) VALUES ('schema_version', ?)");
-      v.bind(1, std::to_string(kSchemaVersion));
-      v.exec();
+          "records database {} was written by an older trueaxis (schema {}) and must be "
+          "migrated to schema {}, which needs writing to it: {}",
+          b.describe(), version, kSchemaVersion, e.what()));
     }
-    t.commit();
-  });
+  }
 }
 
 Database::~Database() = default;
@@ -147,11 +229,7 @@ Database::Database(Database&&) noexcept = default;
 Database& Database::operator=(Database&&) noexcept = default;
 
 int Database::schema_version() const {
-  return guarded("reading its schema", [&] {
-    return std::atoi(impl_->db.execAndGet("SELECT value FROM meta WHERE key = 'schema_version'")
-                         .getString()
-                         .c_str());
-  });
+  return guarded(*impl_->b, "reading its schema", [&] { return stored_version(*impl_->b); });
 }
 
 Record Database::add(const std::string& path, const AddOptions& options) {
@@ -162,7 +240,7 @@ Record Database::add(const std::string& path, const AddOptions& options) {
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   Record r;
   r.machine = options.machine;
-  r.date = options.date.empty() ? today() : options.date;
+  r.date = options.date.empty() ? today_utc() : options.date;
   r.kind = file.kind;
   r.state = options.state;
   r.operator_name = options.operator_name;
@@ -173,62 +251,40 @@ Record Database::add(const std::string& path, const AddOptions& options) {
   r.file_name = std::filesystem::path(path).filename().string();
   r.figures = headline_figures(file.kind, bytes, options.axis);
   const std::string id = digest(bytes);
-  guarded("adding " + path, [&] {
-    // IMMEDIATE: the write lock is taken first, so a second process adding waits for it (the
-    // busy timeout) instead of both reading and one then failing to write.
-    SQLite::Transaction t(impl_->db, SQLite::TransactionBehavior::IMMEDIATE);
-    SQLite::Statement known(impl_->db, "SELECT 1 FROM machines WHERE id = ?");
-    known.bind(1, r.machine);
-    if (!known.executeStep()) {
+  auto& b = *impl_->b;
+  guarded(b, "adding " + path, [&] {
+    // The writers' lock is taken first, so that a second process adding waits for it instead of
+    // both reading and one then failing to write.
+    detail::Transaction t(b, true);
+    if (b.query("SELECT 1 FROM machines WHERE id = $1", {Param(r.machine)}).empty()) {
       if (!options.new_machine)
         throw Error(fmt::format(
             "no machine '{}' in the records; add it with --new-machine (a typing mistake would "
             "otherwise start a second history)",
             r.machine));
-      SQLite::Statement m(impl_->db, "INSERT INTO machines (id, created) VALUES (?, ?)");
-      m.bind(1, r.machine);
-      m.bind(2, today());
-      m.exec();
+      b.query("INSERT INTO machines (id, created) VALUES ($1, $2)",
+              {Param(r.machine), Param(today_utc())});
     }
-    SQLite::Statement dup(impl_->db,
-                          "SELECT id, date FROM records WHERE machine = ? AND digest = ?");
-    dup.bind(1, r.machine);
-    dup.bind(2, id);
-    if (dup.executeStep())
+    const auto dup = b.query("SELECT id, date FROM records WHERE machine = $1 AND digest = $2",
+                             {Param(r.machine), Param(id)});
+    if (!dup.empty())
       throw Error(fmt::format("{} is already stored for machine '{}' (record {}, {})", path,
-                              r.machine, dup.getColumn(0).getInt64(),
-                              dup.getColumn(1).getString()));
-    SQLite::Statement ins(
-        impl_->db,
+                              r.machine, detail::integer(dup[0][0]), detail::text(dup[0][1])));
+    const auto ins = b.query(
         "INSERT INTO records (machine, date, kind, state, operator, instrument, temperature_C, "
-        "note, trueaxis_version, file_name, digest, content) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?, "
-        "?, ?, ?)");
-    ins.bind(1, r.machine);
-    ins.bind(2, r.date);
-    ins.bind(3, r.kind);
-    ins.bind(4, to_string(r.state));
-    ins.bind(5, r.operator_name);
-    ins.bind(6, r.instrument);
-    bind_optional(ins, 7, r.temperature);
-    ins.bind(8, r.note);
-    ins.bind(9, r.trueaxis_version);
-    ins.bind(10, r.file_name);
-    ins.bind(11, id);
-    ins.bind(12, bytes.data(), static_cast<int>(bytes.size()));
-    ins.exec();
-    r.id = impl_->db.getLastInsertRowid();
-    SQLite::Statement fig(impl_->db,
-                          "INSERT INTO figures (record, name, axis, value, u, unit) VALUES (?, ?, "
-                          "?, ?, ?, ?)");
-    for (const auto& f : r.figures) {
-      fig.bind(1, static_cast<std::int64_t>(r.id));
-      fig.bind(2, f.name);
-      fig.bind(3, f.axis);
-      fig.bind(4, f.value);
-      bind_optional(fig, 5, f.u);
-      fig.bind(6, f.unit);
-      fig.exec();
-      fig.reset();
+        "note, trueaxis_version, file_name, digest, content) VALUES ($1, $2, $3, $4, $5, $6, $7, "
+        "$8, $9, $10, $11, $12) RETURNING id",
+        {Param(r.machine), Param(r.date), Param(r.kind), Param(std::string(to_string(r.state))),
+         Param(r.operator_name), Param(r.instrument), optional_param(r.temperature), Param(r.note),
+         Param(r.trueaxis_version), Param(r.file_name), Param(id), Param(detail::Blob{bytes})});
+    r.id = detail::integer(ins.at(0).at(0));
+    for (std::size_t k = 0; k < r.figures.size(); ++k) {
+      const auto& f = r.figures[k];
+      b.query(
+          "INSERT INTO figures (record, seq, name, axis, value, u, unit) VALUES ($1, $2, $3, $4, "
+          "$5, $6, $7)",
+          {Param(static_cast<std::int64_t>(r.id)), Param(static_cast<std::int64_t>(k)),
+           Param(f.name), Param(f.axis), Param(f.value), optional_param(f.u), Param(f.unit)});
     }
     t.commit();
   });
@@ -236,15 +292,16 @@ Record Database::add(const std::string& path, const AddOptions& options) {
 }
 
 std::vector<MachineSummary> Database::machines() const {
-  return guarded("listing the machines", [&] {
+  auto& b = *impl_->b;
+  return guarded(b, "listing the machines", [&] {
     std::vector<MachineSummary> out;
-    SQLite::Statement q(impl_->db,
-                        "SELECT m.id, COUNT(r.id), COALESCE(MIN(r.date), ''), "
-                        "COALESCE(MAX(r.date), '') FROM machines m LEFT JOIN records r ON "
-                        "r.machine = m.id GROUP BY m.id ORDER BY m.id");
-    while (q.executeStep())
-      out.push_back({q.getColumn(0).getString(), q.getColumn(1).getInt64(),
-                     q.getColumn(2).getString(), q.getColumn(3).getString()});
+    for (const auto& row :
+         b.query("SELECT m.id, COUNT(r.id), COALESCE(MIN(r.date), ''), COALESCE(MAX(r.date), "
+                 "'') FROM machines m LEFT JOIN records r ON r.machine = m.id GROUP BY m.id "
+                 "ORDER BY m.id",
+                 {}))
+      out.push_back({detail::text(row[0]), detail::integer(row[1]), detail::text(row[2]),
+                     detail::text(row[3])});
     return out;
   });
 }
@@ -254,46 +311,48 @@ std::vector<Record> Database::list(const ListFilter& f) const {
 }
 
 std::vector<Record> Database::query(const ListFilter& f, long long id) const {
-  return guarded("listing the records", [&] {
+  auto& b = *impl_->b;
+  return guarded(b, "listing the records", [&] {
     std::vector<Record> out;
-    SQLite::Statement q(
-        impl_->db,
+    const auto rows = b.query(
         "SELECT id, machine, date, kind, state, operator, instrument, temperature_C, note, "
-        "trueaxis_version, file_name FROM records WHERE (?1 = '' OR machine = ?1) AND (?2 = '' "
-        "OR kind = ?2) AND (?3 = '' OR date >= ?3) AND (?4 = '' OR substr(date, 1, 10) <= ?4) "
-        "AND (?5 = 0 OR id = ?5) ORDER BY date, id");
-    q.bind(1, f.machine);
-    q.bind(2, f.kind);
-    q.bind(3, f.from);
-    q.bind(4, f.to);
-    q.bind(5, static_cast<std::int64_t>(id));
-    SQLite::Statement figs(impl_->db,
-                           "SELECT name, axis, value, u, unit FROM figures WHERE record = ? "
-                           "ORDER BY rowid");
-    while (q.executeStep()) {
+        "trueaxis_version, file_name FROM records WHERE ($1 = '' OR machine = $1) AND ($2 = '' "
+        "OR kind = $2) AND ($3 = '' OR date >= $3) AND ($4 = '' OR substr(date, 1, 10) <= $4) "
+        "AND ($5 = 0 OR id = $5) ORDER BY date, id",
+        {Param(f.machine), Param(f.kind), Param(f.from), Param(f.to),
+         Param(static_cast<std::int64_t>(id))});
+    // The figures of every record listed, in one statement (not one per record).
+    std::map<long long, std::vector<Figure>> figures;
+    const auto figs = b.query(
+        "SELECT f.record, f.name, f.axis, f.value, f.u, f.unit FROM figures f JOIN records r ON "
+        "r.id = f.record WHERE ($1 = '' OR r.machine = $1) AND ($2 = '' OR r.kind = $2) AND ($3 "
+        "= '' OR r.date >= $3) AND ($4 = '' OR substr(r.date, 1, 10) <= $4) AND ($5 = 0 OR r.id "
+        "= $5) ORDER BY f.record, f.seq",
+        {Param(f.machine), Param(f.kind), Param(f.from), Param(f.to),
+         Param(static_cast<std::int64_t>(id))});
+    for (const auto& g : figs) {
+      Figure fg;
+      fg.name = detail::text(g[1]);
+      fg.axis = detail::text(g[2]);
+      fg.value = detail::real(g[3]);
+      if (!detail::is_null(g[4])) fg.u = detail::real(g[4]);
+      fg.unit = detail::text(g[5]);
+      figures[detail::integer(g[0])].push_back(std::move(fg));
+    }
+    for (const auto& q : rows) {
       Record r;
-      r.id = q.getColumn(0).getInt64();
-      r.machine = q.getColumn(1).getString();
-      r.date = q.getColumn(2).getString();
-      r.kind = q.getColumn(3).getString();
-      r.state = state_of(q.getColumn(4).getString());
-      r.operator_name = q.getColumn(5).getString();
-      r.instrument = q.getColumn(6).getString();
-      if (!q.getColumn(7).isNull()) r.temperature = q.getColumn(7).getDouble();
-      r.note = q.getColumn(8).getString();
-      r.trueaxis_version = q.getColumn(9).getString();
-      r.file_name = q.getColumn(10).getString();
-      figs.bind(1, static_cast<std::int64_t>(r.id));
-      while (figs.executeStep()) {
-        Figure fg;
-        fg.name = figs.getColumn(0).getString();
-        fg.axis = figs.getColumn(1).getString();
-        fg.value = figs.getColumn(2).getDouble();
-        if (!figs.getColumn(3).isNull()) fg.u = figs.getColumn(3).getDouble();
-        fg.unit = figs.getColumn(4).getString();
-        r.figures.push_back(std::move(fg));
-      }
-      figs.reset();
+      r.id = detail::integer(q[0]);
+      r.machine = detail::text(q[1]);
+      r.date = detail::text(q[2]);
+      r.kind = detail::text(q[3]);
+      r.state = state_of(detail::text(q[4]));
+      r.operator_name = detail::text(q[5]);
+      r.instrument = detail::text(q[6]);
+      if (!detail::is_null(q[7])) r.temperature = detail::real(q[7]);
+      r.note = detail::text(q[8]);
+      r.trueaxis_version = detail::text(q[9]);
+      r.file_name = detail::text(q[10]);
+      if (auto it = figures.find(r.id); it != figures.end()) r.figures = std::move(it->second);
       out.push_back(std::move(r));
     }
     return out;
@@ -307,50 +366,46 @@ Record Database::show(long long id) const {
 }
 
 std::string Database::content(long long id) const {
-  return guarded("reading a stored file", [&] {
-    SQLite::Statement q(impl_->db, "SELECT content FROM records WHERE id = ?");
-    q.bind(1, static_cast<std::int64_t>(id));
-    if (!q.executeStep()) throw Error(fmt::format("no record {} in the records database", id));
-    const auto c = q.getColumn(0);
-    return std::string(static_cast<const char*>(c.getBlob()),
-                       static_cast<std::size_t>(c.getBytes()));
+  auto& b = *impl_->b;
+  return guarded(b, "reading a stored file", [&] {
+    const auto rows = b.query("SELECT content FROM records WHERE id = $1",
+                              {Param(static_cast<std::int64_t>(id))});
+    if (rows.empty()) throw Error(fmt::format("no record {} in the records database", id));
+    return detail::text(rows[0][0]);
   });
 }
 
 Trend Database::history(const std::string& machine, const std::string& figure,
                         const std::string& axis) const {
-  return guarded("reading a figure's history", [&] {
+  auto& b = *impl_->b;
+  return guarded(b, "reading a figure's history", [&] {
     Trend t;
     t.figure = figure;
     t.axis = axis;
-    SQLite::Statement q(impl_->db,
-                        "SELECT r.id, r.date, r.state, f.value, f.u, f.unit FROM figures f JOIN "
-                        "records r ON r.id = f.record WHERE r.machine = ? AND f.name = ? AND "
-                        "f.axis = ? ORDER BY r.date, r.id");
-    q.bind(1, machine);
-    q.bind(2, figure);
-    q.bind(3, axis);
-    while (q.executeStep()) {
+    for (const auto& q :
+         b.query("SELECT r.id, r.date, r.state, f.value, f.u, f.unit FROM figures f JOIN "
+                 "records r ON r.id = f.record WHERE r.machine = $1 AND f.name = $2 AND f.axis = "
+                 "$3 ORDER BY r.date, r.id",
+                 {Param(machine), Param(figure), Param(axis)})) {
       TrendPoint p;
-      p.record = q.getColumn(0).getInt64();
-      p.date = q.getColumn(1).getString();
-      p.state = state_of(q.getColumn(2).getString());
-      p.value = q.getColumn(3).getDouble();
-      if (!q.getColumn(4).isNull()) p.u = q.getColumn(4).getDouble();
-      t.unit = q.getColumn(5).getString();
+      p.record = detail::integer(q[0]);
+      p.date = detail::text(q[1]);
+      p.state = state_of(detail::text(q[2]));
+      p.value = detail::real(q[3]);
+      if (!detail::is_null(q[4])) p.u = detail::real(q[4]);
+      t.unit = detail::text(q[5]);
       t.points.push_back(p);
     }
     if (t.points.empty()) {
       // Say which figures there are, so that a misspelt name or axis is seen at once.
-      SQLite::Statement names(impl_->db,
-                              "SELECT DISTINCT f.name, f.axis FROM figures f JOIN records r ON "
-                              "r.id = f.record WHERE r.machine = ? ORDER BY f.name, f.axis");
-      names.bind(1, machine);
       std::string known;
-      while (names.executeStep()) {
-        const std::string a = names.getColumn(1).getString();
-        known += (known.empty() ? "" : ", ") + names.getColumn(0).getString() +
-                 (a.empty() ? "" : " --axis " + a);
+      for (const auto& q :
+           b.query("SELECT DISTINCT f.name, f.axis FROM figures f JOIN records r ON r.id = "
+                   "f.record WHERE r.machine = $1 ORDER BY f.name, f.axis",
+                   {Param(machine)})) {
+        const std::string a = detail::text(q[1]);
+        known +=
+            (known.empty() ? "" : ", ") + detail::text(q[0]) + (a.empty() ? "" : " --axis " + a);
       }
       throw Error(fmt::format("machine '{}' has no figure {}{} in the records{}", machine, figure,
                               axis.empty() ? "" : " on axis " + axis,
@@ -358,6 +413,25 @@ Trend Database::history(const std::string& machine, const std::string& figure,
     }
     return t;
   });
+}
+
+Trend Database::trend(const std::string& machine, const std::string& figure,
+                      const std::string& axis, const TrendOptions& options) const {
+  const Trend h = history(machine, figure, axis);
+  Trend t = fit_trend(h.points, options);
+  t.figure = h.figure;
+  t.axis = h.axis;
+  t.unit = h.unit;
+  return t;
+}
+
+std::string today_utc() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char b[16];
+  std::strftime(b, sizeof b, "%Y-%m-%d", &tm);
+  return b;
 }
 
 std::string database_path(const std::string& explicit_path) {

@@ -46,3 +46,17 @@ def test_records_from_python_and_the_command_line(tmp_path):
     pd = pytest.importorskip("pandas")
     frame = pd.DataFrame(rows)
     assert list(frame["date"]) == ["2024-05-01", "2025-05-01", "2025-05-01"]
+    # When it is due: a year after the last visit unless PForm's trend reaches its limit sooner.
+    due = db.due(interval_months=12, limits={"PForm": 1e6}, today="2025-06-01")
+    assert len(due) == 1 and due[0]["machine"] == "CMM 1" and due[0]["due"] == "2026-05-01"
+    assert due[0]["because"] == "12 months after the last visit" and not due[0]["overdue"]
+    assert len(due[0]["notes"]) == 1 and due[0]["notes"][0].startswith("PForm: ")
+    with pytest.raises(trueaxis.Error, match="the value after '=' must be a number"):
+        db.due(limits={"PForm": float("nan")})
+    # Opened read-only: read, never written.
+    ro = trueaxis.records.open(str(tmp_path / "r.db"), read_only=True)
+    assert len(ro.list()) == 3
+    with pytest.raises(trueaxis.Error, match="read-only"):
+        ro.add(files[0], machine="CMM 3", new_machine=True)
+    with pytest.raises(trueaxis.Error, match="no records database"):
+        trueaxis.records.open(str(tmp_path / "absent.db"), read_only=True)

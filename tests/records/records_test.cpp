@@ -1,12 +1,16 @@
 // Machine records: results stored with their machine, date and state and read back exactly;
-// refusals; strings that cannot break a query; a newer schema refused; two processes adding at
-// once, and one killed while adding, lose nothing and leave the database consistent.
+// refusals; strings that cannot break a query; a newer schema refused, an older one migrated;
+// two processes adding at once, and one killed while adding, lose nothing and leave the database
+// consistent; a read-only database is read, a full disk loses nothing. Every test of the
+// database runs on both back ends, SQLite and PostgreSQL (a server the tests start).
 #include "trueaxis/records/records.hpp"
 
 #include <SQLiteCpp/SQLiteCpp.h>
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <signal.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -17,6 +21,7 @@
 #include <random>
 
 #include "../test_util.hpp"
+#include "backends.hpp"
 #include "trueaxis/acceptance/acceptance.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/io/acceptance/acceptance.hpp"
@@ -25,13 +30,6 @@
 using namespace trueaxis;
 
 namespace {
-
-// A fresh database file in the tests' temporary directory.
-std::string fresh_db(const std::string& name) {
-  const std::string path = test::temp_dir() + "/" + name;
-  std::filesystem::remove(path);
-  return path;
-}
 
 // A probing result (ISO 10360-5) of the virtual CMM, different for each seed.
 std::string probing_file(const std::string& name, std::uint64_t seed) {
@@ -52,8 +50,17 @@ std::string probing_file(const std::string& name, std::uint64_t seed) {
 
 }  // namespace
 
-TEST(Records, ResultsAreStoredWithTheirFiguresAndReadBackExactly) {
-  const std::string path = fresh_db("records-roundtrip.db");
+// Each test of the database, on each back end.
+class RecordsOn : public ::testing::TestWithParam<std::string> {
+ protected:
+  std::string fresh_db(const std::string& name) const {
+    return test::fresh_records(GetParam(), name);
+  }
+  bool sqlite() const { return GetParam() == "sqlite"; }
+};
+
+TEST_P(RecordsOn, ResultsAreStoredWithTheirFiguresAndReadBackExactly) {
+  const std::string path = fresh_db("roundtrip");
   sim::MachineOptions mo;
   mo.seed = 2;
   const auto m = sim::random_machine(mo);
@@ -125,8 +132,8 @@ TEST(Records, ResultsAreStoredWithTheirFiguresAndReadBackExactly) {
   EXPECT_EQ(again.list().size(), 2u);
 }
 
-TEST(Records, UnknownMachinesDuplicatesAndNonResultsAreRefused) {
-  const std::string path = fresh_db("records-refusals.db");
+TEST_P(RecordsOn, UnknownMachinesDuplicatesAndNonResultsAreRefused) {
+  const std::string path = fresh_db("refusals");
   records::Database db(path);
   const std::string probing = probing_file("records-refuse.json", 2);
   records::AddOptions a;
@@ -144,19 +151,32 @@ TEST(Records, UnknownMachinesDuplicatesAndNonResultsAreRefused) {
   a.date = "2026-13-01";
   EXPECT_THROW(db.add(probing, a), Error);
   EXPECT_EQ(db.list().size(), 2u);
-  EXPECT_THROW(records::Database(test::temp_dir() + "/no/such/dir/r.db"), Error);
-  const std::string junk = test::temp_file("records-junk.db", std::string(4096, 'x'));
-  EXPECT_THROW(records::Database{junk}, Error);
+  if (sqlite()) {
+    EXPECT_THROW(records::Database(test::temp_dir() + "/no/such/dir/r.db"), Error);
+    const std::string junk = test::temp_file("records-junk.db", std::string(4096, 'x'));
+    EXPECT_NE(test::error_of([&] { records::Database{junk}; }).find("not an SQLite database"),
+              std::string::npos);
+  } else {
+    // A server that is not there, and a database the server does not have: named, not crashed.
+    EXPECT_NE(test::error_of([] {
+                records::Database("postgresql://nobody@127.0.0.1:1/x");
+              }).find("cannot reach the PostgreSQL server"),
+              std::string::npos);
+    const std::string url = path.substr(0, path.rfind('/') + 1) + "no_such_database";
+    EXPECT_NE(test::error_of([&] { records::Database{url}; }).find("no_such_database"),
+              std::string::npos);
+  }
 }
 
-// Machine ids, notes and file contents are data: quotes, semicolons, SQL, NUL and a 1 MB note
-// are stored and read back as they were.
-TEST(Records, NoStringCanBreakAQuery) {
-  const std::string path = fresh_db("records-strings.db");
+// Machine ids, notes and file contents are data: quotes, semicolons, SQL and a 1 MB note are
+// stored and read back as they were; a NUL character or bytes that are not UTF-8 in a text are
+// refused by name (no back end can store both), and nothing is stored.
+TEST_P(RecordsOn, NoStringCanBreakAQuery) {
+  const std::string path = fresh_db("strings");
   records::Database db(path);
   records::AddOptions a;
   a.machine = "M'1\"; DROP TABLE records; --";
-  a.operator_name = std::string("O'Brien\0x", 9);
+  a.operator_name = "O'Brien; Ångström µm";
   a.note = std::string(1 << 20, 'n') + "'; DELETE FROM figures; --";
   a.new_machine = true;
   const auto r = db.add(probing_file("records-strings.json", 3), a);
@@ -170,24 +190,32 @@ TEST(Records, NoStringCanBreakAQuery) {
   EXPECT_EQ(db.list(f).size(), 1u);
   f.machine = "' OR '1'='1";
   EXPECT_EQ(db.list(f).size(), 0u);
+  a.note = "";
+  a.operator_name = std::string("O'Brien\0x", 9);
+  const std::string other = probing_file("records-strings-2.json", 4);
+  EXPECT_NE(test::error_of([&] { db.add(other, a); }).find("operator holds a NUL"),
+            std::string::npos);
+  a.operator_name = "ok";
+  a.note = "\xC3\x28 not UTF-8";
+  EXPECT_NE(test::error_of([&] { db.add(other, a); }).find("note is not UTF-8"), std::string::npos);
+  EXPECT_EQ(db.list().size(), 1u);
 }
 
-TEST(Records, ADatabaseFromANewerTrueaxisIsRefused) {
-  const std::string path = fresh_db("records-newer.db");
+TEST_P(RecordsOn, ADatabaseFromANewerTrueaxisIsRefused) {
+  const std::string path = fresh_db("newer");
   { records::Database db(path); }
-  {
-    SQLite::Database raw(path, SQLite::OPEN_READWRITE);
-    raw.exec("UPDATE meta SET value = '99' WHERE key = 'schema_version'");
+  test::raw_value(path, "UPDATE meta SET value = '99' WHERE key = 'schema_version'");
+  for (const auto access : {records::Access::ReadWrite, records::Access::ReadOnly}) {
+    const std::string e = test::error_of([&] { records::Database db(path, access); });
+    EXPECT_NE(e.find("newer trueaxis"), std::string::npos) << e;
+    EXPECT_NE(e.find("schema 99"), std::string::npos) << e;
   }
-  const std::string e = test::error_of([&] { records::Database db(path); });
-  EXPECT_NE(e.find("newer trueaxis"), std::string::npos) << e;
-  EXPECT_NE(e.find("schema 99"), std::string::npos) << e;
 }
 
 // Two processes adding at once: every record is there. A process killed while adding leaves
 // every record whole (its figures with it) and the database usable.
-TEST(Records, ConcurrentAddsLoseNothingAndAKilledAddLeavesItConsistent) {
-  const std::string path = fresh_db("records-concurrent.db");
+TEST_P(RecordsOn, ConcurrentAddsLoseNothingAndAKilledAddLeavesItConsistent) {
+  const std::string path = fresh_db("concurrent");
   { records::Database db(path); }
   constexpr int kEach = 8;
   std::vector<std::string> files[2];
@@ -248,12 +276,135 @@ TEST(Records, ConcurrentAddsLoseNothingAndAKilledAddLeavesItConsistent) {
   const auto all = after.list();
   EXPECT_GE(all.size(), 2u * kEach);
   for (const auto& r : all) EXPECT_EQ(r.figures.size(), 2u) << r.machine;
-  SQLite::Database raw(path, SQLite::OPEN_READONLY);
-  EXPECT_EQ(raw.execAndGet("PRAGMA integrity_check").getString(), "ok");
-  EXPECT_EQ(raw.execAndGet("SELECT COUNT(*) FROM figures WHERE record NOT IN (SELECT id FROM "
-                           "records)")
-                .getInt(),
-            0);
+  if (sqlite()) {
+    EXPECT_EQ(test::raw_value(path, "PRAGMA integrity_check"), "ok");
+  }
+  EXPECT_EQ(test::raw_value(
+                path, "SELECT COUNT(*) FROM figures WHERE record NOT IN (SELECT id FROM records)"),
+            "0");
+}
+
+// Opened for reading, a database is listed and nothing is written; one in a directory and file
+// that cannot be written is still read, and adding to it fails with the reason.
+TEST_P(RecordsOn, AReadOnlyDatabaseIsReadAndRefusesWritesClearly) {
+  const std::string path = fresh_db("readonly");
+  records::AddOptions a;
+  a.machine = "RO-1";
+  a.new_machine = true;
+  { records::Database(path).add(probing_file("records-ro.json", 5), a); }
+  a.new_machine = false;
+  const std::string more = probing_file("records-ro-2.json", 6);
+  {
+    const records::Database ro(path, records::Access::ReadOnly);
+    EXPECT_EQ(ro.list().size(), 1u);
+    EXPECT_EQ(ro.machines().size(), 1u);
+    const std::string e =
+        test::error_of([&] { records::Database(path, records::Access::ReadOnly).add(more, a); });
+    EXPECT_NE(e.find("read-only"), std::string::npos) << e;
+  }
+  if (sqlite()) {
+    EXPECT_NE(test::error_of([&] {
+                records::Database(test::temp_dir() + "/absent.db", records::Access::ReadOnly);
+              }).find("no records database"),
+              std::string::npos);
+    // A read-only directory and file. Root may write anything: the check runs as 'nobody'.
+    const std::string dir = std::filesystem::path(path).parent_path().string() + "/ro-dir";
+    std::filesystem::create_directories(dir);
+    const std::string db = dir + "/r.db";
+    std::filesystem::copy_file(path, db, std::filesystem::copy_options::overwrite_existing);
+    ::chmod(db.c_str(), 0444);
+    ::chmod(dir.c_str(), 0555);
+    const pid_t k = fork();
+    ASSERT_GE(k, 0);
+    if (k == 0) {
+      int code = 0;
+      if (geteuid() == 0 && setuid(65534) != 0) _exit(9);
+      try {
+        if (records::Database(db, records::Access::ReadOnly).list().size() != 1) code = 3;
+        const std::string e = test::error_of([&] { records::Database(db).add(more, a); });
+        if (e.find("cannot be written") == std::string::npos) {
+          fprintf(stderr, "read-only: %s\n", e.c_str());
+          code = 4;
+        }
+      } catch (const std::exception& e) {
+        fprintf(stderr, "read-only: %s\n", e.what());
+        code = 5;
+      }
+      _exit(code);
+    }
+    int status = 0;
+    waitpid(k, &status, 0);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << WEXITSTATUS(status);
+    ::chmod(dir.c_str(), 0755);
+    EXPECT_EQ(records::Database(db, records::Access::ReadOnly).list().size(), 1u);
+  }
+}
+
+// The disk fills while a record is added (the file size limit of a child process, as a full
+// disk answers): the add fails and says so, and every record stored before is intact.
+TEST(Records, AFullDiskLosesNothingStoredBefore) {
+  const std::string path = test::fresh_records("sqlite", "full-disk");
+  records::AddOptions a;
+  a.machine = "FULL-1";
+  a.new_machine = true;
+  { records::Database(path).add(probing_file("records-full.json", 7), a); }
+  a.new_machine = false;
+  a.note = std::string(4 << 20, 'n');  // 4 MB: far past the limit below
+  const std::string more = probing_file("records-full-2.json", 8);
+  const pid_t k = fork();
+  ASSERT_GE(k, 0);
+  if (k == 0) {
+    signal(SIGXFSZ, SIG_IGN);  // a write past the limit fails (EFBIG) instead of killing
+    const auto size = static_cast<rlim_t>(std::filesystem::file_size(path));
+    const rlimit limit{size + 65536, size + 65536};
+    setrlimit(RLIMIT_FSIZE, &limit);
+    const std::string e = test::error_of([&] { records::Database(path).add(more, a); });
+    if (e.find("disk") == std::string::npos) fprintf(stderr, "full disk: %s\n", e.c_str());
+    _exit(e.find("disk") == std::string::npos ? 3 : 0);
+  }
+  int status = 0;
+  waitpid(k, &status, 0);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << WEXITSTATUS(status);
+  records::Database db(path);
+  ASSERT_EQ(db.list().size(), 1u);
+  EXPECT_EQ(db.list()[0].figures.size(), 2u);
+  EXPECT_EQ(test::raw_value(path, "PRAGMA integrity_check"), "ok");
+  a.note = "after";
+  EXPECT_EQ(db.add(more, a).figures.size(), 2u);  // and it is usable again
+}
+
+// A database of schema 1 (figures ordered by SQLite's rowid) is migrated when opened: the
+// figures keep their order, the version becomes the current one.
+TEST(Records, ASchemaOneDatabaseIsMigrated) {
+  const std::string path = test::fresh_records("sqlite", "schema-1");
+  {
+    SQLite::Database raw(path, SQLite::OPEN_READWRITE | SQLite::OPEN_CREATE);
+    raw.exec(
+        "CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);"
+        "INSERT INTO meta VALUES ('schema_version', '1');"
+        "CREATE TABLE machines (id TEXT PRIMARY KEY, created TEXT NOT NULL);"
+        "CREATE TABLE records (id INTEGER PRIMARY KEY, machine TEXT NOT NULL REFERENCES "
+        "machines(id), date TEXT NOT NULL, kind TEXT NOT NULL, state TEXT NOT NULL, operator "
+        "TEXT NOT NULL, instrument TEXT NOT NULL, temperature_C REAL, note TEXT NOT NULL, "
+        "trueaxis_version TEXT NOT NULL, file_name TEXT NOT NULL, digest TEXT NOT NULL, "
+        "content BLOB NOT NULL, UNIQUE (machine, digest));"
+        "CREATE TABLE figures (record INTEGER NOT NULL REFERENCES records(id), name TEXT NOT "
+        "NULL, axis TEXT NOT NULL, value REAL NOT NULL, u REAL, unit TEXT NOT NULL);"
+        "CREATE INDEX figures_by_record ON figures(record);"
+        "INSERT INTO machines VALUES ('OLD-1', '2025-01-01');"
+        "INSERT INTO records VALUES (1, 'OLD-1', '2025-01-02', 'positioning', 'as-found', '', "
+        "'', NULL, '', '1.0', 'p.json', 'abc-3', X'7B7D');"
+        "INSERT INTO figures VALUES (1, 'R', 'X', 3.5, NULL, 'µm');"
+        "INSERT INTO figures VALUES (1, 'A', 'X', 7.25, NULL, 'µm');");
+  }
+  const records::Database db(path, records::Access::ReadOnly);
+  EXPECT_EQ(db.schema_version(), records::kSchemaVersion);
+  const auto r = db.show(1);
+  ASSERT_EQ(r.figures.size(), 2u);
+  EXPECT_EQ(r.figures[0].name, "R");  // the order they were stored in, not by name
+  EXPECT_EQ(r.figures[1].name, "A");
+  EXPECT_EQ(r.figures[1].value, 7.25);
+  EXPECT_EQ(db.content(1), "{}");
 }
 
 TEST(Records, DaysAndDatesRoundTripOverLeapYears) {
@@ -354,8 +505,8 @@ TEST(Records, TrendSaysWhatTheDataCannotSupport) {
 
 // The database hands a figure's history to the trend; a figure it does not have is named with
 // the ones it has.
-TEST(Records, HistoryFromTheDatabase) {
-  const std::string path = fresh_db("records-history.db");
+TEST_P(RecordsOn, HistoryFromTheDatabase) {
+  const std::string path = fresh_db("history");
   records::Database db(path);
   records::AddOptions a;
   a.machine = "CMM-H";
@@ -379,3 +530,6 @@ TEST(Records, HistoryFromTheDatabase) {
   EXPECT_EQ(j["points"].size(), 3u);
   EXPECT_TRUE(j["due"]["date"].is_null());
 }
+
+INSTANTIATE_TEST_SUITE_P(Backends, RecordsOn, ::testing::Values("sqlite", "postgresql"),
+                         [](const auto& info) { return info.param; });

@@ -1,13 +1,16 @@
 // trueaxis::records — a machine's calibration history: every result file trueaxis writes,
 // stored with who measured it, when, with which instrument, in which state (as found, as left),
-// and its headline figures, in an embedded SQLite database (one file, no server).
+// and its headline figures, in an embedded SQLite database (one file, no server) or on a
+// PostgreSQL server.
 //
 // Schema (version kSchemaVersion; a newer one is refused, an older one migrated on open):
 //   meta(key, value)                         'schema_version'
 //   machines(id, created)
 //   records(id, machine, date, kind, state, operator, instrument, temperature_C, note,
 //           trueaxis_version, file_name, digest, content)   unique (machine, digest)
-//   figures(record, name, axis, value, u, unit)
+//   figures(record, seq, name, axis, value, u, unit)         seq: the order in the result
+// Version 1 had no figures.seq (their order was SQLite's rowid). The same schema on PostgreSQL
+// for a history shared by many workstations.
 // Every statement is parameterised: machine ids, notes and file contents are data, never SQL.
 // An add is one transaction: a process killed in the middle leaves the database as it was.
 //
@@ -22,7 +25,7 @@
 
 namespace trueaxis::records {
 
-inline constexpr int kSchemaVersion = 1;
+inline constexpr int kSchemaVersion = 2;
 
 // A headline figure of a result: its name as the standard gives it ("A", "E0", "G", "flatness"),
 // the axis or plane it belongs to ("" when none), its value and standard uncertainty (none when
@@ -54,7 +57,9 @@ struct AddOptions {
   std::string operator_name, instrument, note, axis;
   std::optional<double> temperature;  // °C
   bool new_machine = false;           // register an unknown machine instead of refusing it
-  void validate() const;              // throws Error
+  // Throws Error: no machine, a date that is not ISO 8601, a temperature out of −50 … 100 °C,
+  // text that is not UTF-8 or holds a NUL character (neither can be stored on every back end).
+  void validate() const;
 };
 
 struct Record {
@@ -118,12 +123,19 @@ struct ListFilter {
   std::string machine, kind, from, to;  // empty: any; dates inclusive
 };
 
+// ReadOnly: for reading (list, show, export, trend); nothing is locked or written, and a
+// database on a read-only disk or directory can be read.
+enum class Access { ReadWrite, ReadOnly };
+
 class Database {
  public:
-  // Opens (creating when absent) the SQLite database at `path`. Throws Error: a file that is not
-  // a database, one written by a newer trueaxis (schema newer than kSchemaVersion), a directory
-  // that cannot be written.
-  explicit Database(const std::string& path);
+  // Opens the records at `location`: a PostgreSQL server when it is a URL
+  // (postgresql://[user[:password]@]host[:port]/dbname, libpq's connection URI; the database
+  // must exist), else an SQLite file, created when absent for ReadWrite. The schema is created
+  // or migrated to kSchemaVersion. Throws Error: a file that is not a database, one written by a
+  // newer trueaxis (schema newer than kSchemaVersion), a directory that cannot be written, a
+  // server that cannot be reached; for ReadOnly, a database that does not exist.
+  explicit Database(const std::string& location, Access access = Access::ReadWrite);
   ~Database();
   Database(Database&&) noexcept;
   Database& operator=(Database&&) noexcept;
@@ -141,6 +153,9 @@ class Database {
   // Throws Error naming the figures the machine has when there is none of that name.
   Trend history(const std::string& machine, const std::string& figure,
                 const std::string& axis) const;
+  // That history with its drift and due date (fit_trend), named with its figure, axis and unit.
+  Trend trend(const std::string& machine, const std::string& figure, const std::string& axis,
+              const TrendOptions& options = {}) const;
 
  private:
   struct Impl;
@@ -148,11 +163,42 @@ class Database {
   std::vector<Record> query(const ListFilter& filter, long long id) const;  // id 0: any
 };
 
+// A figure's upper limit for `record due`: "A=25" (every axis), "A@X=20", "G_ccw@XY=15",
+// "E0=3.5", in the figure's unit.
+struct Limit {
+  std::string figure, axis;  // axis "": any axis or none
+  double value = 0;
+  static Limit parse(const std::string& text);  // throws Error naming what is wrong
+};
+
+struct DueOptions {
+  int interval_months = 12;   // the longest time between two visits
+  std::vector<Limit> limits;  // figures whose trend may bring the date forward
+  std::string machine;        // "" for every machine
+  std::string today;          // ISO 8601; "" for today (UTC): what is overdue
+  void validate() const;      // throws Error
+};
+
+// One machine's next due date: the last visit plus the interval, or earlier when a figure's
+// trend reaches its limit before that (the trend's central date, with its u).
+struct Due {
+  std::string machine, last_visit, due;
+  std::optional<double> u_days;    // when a trend set the date
+  std::string because;             // "12 months after the last visit", "A@X reaches 25 µm …"
+  bool overdue = false;            // due before `today`
+  std::vector<std::string> notes;  // limits whose trend could not give a date, and why
+};
+std::vector<Due> due_dates(const Database& db, const DueOptions& options);
+std::string to_json(const std::vector<Due>& due);
+std::string add_months(const std::string& date, int months);  // the day clamped to the month's end
+
 // The records as a JSON array ({"id", "machine", "date", "kind", "state", "operator",
 // "instrument", "temperature_C", "note", "file", "trueaxis_version", "figures": {name or
 // name@axis: {"value", "u", "unit"}}}) or CSV (one row per figure).
 std::string to_json(const std::vector<Record>& records);
 std::string to_csv(const std::vector<Record>& records);
+
+std::string today_utc();  // ISO 8601 (YYYY-MM-DD)
 
 // The database path the commands use: `explicit_path`, else $TRUEAXIS_DB, else
 // trueaxis-records.db in the working directory.
