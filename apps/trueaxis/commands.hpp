@@ -111,6 +111,11 @@ std::vector<Command> add_ipp_commands(CLI::App& app);
 report::Section demo_acceptance(const sim::Machine& machine, const std::string& dir,
                                 std::uint64_t seed,
                                 const std::function<void(const std::string&)>& say);
+// The demo's records scenario (demo_records.cpp): three visits over two years in records.db,
+// the backlash trend (its report section) and certificate.html of the last visit.
+report::Section demo_records(const sim::Machine& machine, const std::string& dir,
+                             std::uint64_t seed,
+                             const std::function<void(const std::string&)>& say);
 // --correction's file: a ball-gauge grid map (map.json, held at its edges) or an identified
 // model (model.json, points outside its span left as read), as a CMM controller applies it to
 // every point it reads (ipp_cmds.cpp).
@@ -126,6 +131,8 @@ std::vector<Command> add_acceptance_commands(CLI::App& app);
 std::vector<Command> add_serve_command(CLI::App& app);
 // 'record add|machines|list|show|export' (record_cmds.cpp).
 std::vector<Command> add_record_commands(CLI::App& app);
+// 'certificate' (certificate_cmds.cpp).
+std::vector<Command> add_certificate_command(CLI::App& app);
 
 // The grammar every command shares (grammar.cpp). apply_grammar: once every command is added,
 // the help lists commands one per line with their purpose, and every command takes --version.

@@ -597,6 +597,9 @@ int run_demo(const DemoOptions& o) {
   // Scenario: the CMM accepted by ISO 10360-2 and -5, failing, mapped and corrected.
   sections.push_back(demo_acceptance(machine, dir.string(), o.seed, say));
 
+  // Scenario: the machine's records over three visits, its trend and a certificate.
+  sections.push_back(demo_records(machine, dir.string(), o.seed, say));
+
   // Scenario 6: error-tolerant scanning of NIST's I++ test part, from its STEP file, on the same
   // CMM (its geometric errors included). Two parts of a batch that sit 1.8 mm off in the fixture
   // and carry a 2 mm bump the design does not have.

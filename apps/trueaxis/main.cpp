@@ -321,6 +321,7 @@ int main(int argc, char** argv) {
   for (auto& c : cli::add_ipp_commands(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_acceptance_commands(app)) machine_cmds.push_back(std::move(c));
   for (auto& c : cli::add_record_commands(app)) machine_cmds.push_back(std::move(c));
+  for (auto& c : cli::add_certificate_command(app)) machine_cmds.push_back(std::move(c));
 
   // report -----------------------------------------------------------------------------------
   std::string rin, rout = "report.html";

@@ -10,6 +10,7 @@
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
 #include "trueaxis/records/records.hpp"
+#include "trueaxis/report/records.hpp"
 
 namespace trueaxis::cli {
 namespace {
@@ -27,7 +28,7 @@ struct RecordArgs {
   long long id = 0;
   bool quiet = false;
   // trend
-  std::string figure, axis, plane;
+  std::string figure, axis, plane, report, points = "auto";
   double tolerance = NAN;
   // due
   records::DueOptions due;
@@ -119,15 +120,26 @@ int run_trend(const RecordArgs& a) {
   for (char& c : axis) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   records::TrendOptions o;
   if (!std::isnan(a.tolerance)) o.tolerance = a.tolerance;
+  using Use = records::TrendOptions::Use;
+  o.use = a.points == "as-found"  ? Use::AsFound
+          : a.points == "as-left" ? Use::AsLeft
+          : a.points == "all"     ? Use::All
+                                  : Use::Auto;
   const auto t = db.trend(a.filter.machine, a.figure, axis, o);
   if (!a.output.empty()) {
     std::ofstream out(a.output, std::ios::binary);
     out << records::to_json(t, a.filter.machine);
     if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
   }
+  if (!a.report.empty())
+    report::write(a.report,
+                  report::render(fmt::format("{}: {} history", a.filter.machine, t.figure),
+                                 {report::trend_section(t, a.filter.machine, o.tolerance)}, 4000,
+                                 {{"machine", a.filter.machine}, {"records", db.describe()}}));
   if (!a.quiet)
-    fmt::print("{}: {}{}\n", a.filter.machine, t.summary(),
-               a.output.empty() ? std::string() : " -> " + a.output);
+    fmt::print("{}: {}{}{}\n", a.filter.machine, t.summary(),
+               a.output.empty() ? std::string() : " -> " + a.output,
+               a.report.empty() ? std::string() : " -> " + a.report);
   return 0;
 }
 
@@ -232,7 +244,16 @@ std::vector<Command> add_record_commands(CLI::App& app) {
       ->excludes("--axis");
   trend->add_option("--tolerance", a->tolerance,
                     "the figure's upper limit, in its unit: when the trend reaches it");
+  trend
+      ->add_option("--points", a->points,
+                   "the points fitted: as-found, as-left, all, or auto (as found when the "
+                   "history has as-found and as-left points, else all)")
+      ->check(CLI::IsMember({"auto", "as-found", "as-left", "all"}))
+      ->capture_default_str();
   trend->add_option("--output,-o", a->output, "trend.json");
+  trend->add_option("--report", a->report,
+                    "an HTML report: the history (as found, as left), the drift and its band, "
+                    "the limit");
   trend->add_flag("--quiet,-q", a->quiet, "print nothing on success");
   auto* due = group->add_subcommand(
       "due",

@@ -13,7 +13,9 @@
 #include <variant>
 
 #include "bindings.hpp"
+#include "trueaxis/certificate/certificate.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/report/html.hpp"
 
 namespace py = pybind11;
 
@@ -64,7 +66,9 @@ void bind_records(py::module_& m) {
       "records",
       "Machine records: every result stored with its machine, date, state, operator and "
       "instrument in an SQLite database, as 'trueaxis record'.");
-  py::class_<records::Database, std::shared_ptr<records::Database>>(sub, "Database")
+  auto db_class =
+      py::class_<records::Database, std::shared_ptr<records::Database>>(sub, "Database");
+  db_class
       .def(
           "add",
           [](records::Database& db,
@@ -135,9 +139,20 @@ already stored for the machine. Returns the stored records as dicts.)doc")
       .def(
           "trend",
           [](const records::Database& db, const std::string& machine, const std::string& figure,
-             const std::string& axis, std::optional<double> tolerance) {
+             const std::string& axis, std::optional<double> tolerance, const std::string& points) {
             records::TrendOptions o;
             o.tolerance = tolerance;
+            using Use = records::TrendOptions::Use;
+            if (points == "as-found")
+              o.use = Use::AsFound;
+            else if (points == "as-left")
+              o.use = Use::AsLeft;
+            else if (points == "all")
+              o.use = Use::All;
+            else if (points != "auto")
+              throw Error(fmt::format(
+                  "points='{}': the points fitted are 'auto', 'as-found', 'as-left' or 'all'",
+                  points));
             const auto t = db.trend(machine, figure, axis, o);
             const auto n = static_cast<py::ssize_t>(t.points.size());
             py::array_t<double> value(n), u(n);
@@ -166,13 +181,16 @@ already stored for the machine. Returns the stored records as dicts.)doc")
             d["due"] = t.due ? py::object(py::str(*t.due)) : py::none();
             d["u_due_days"] = opt(t.u_due_days);
             d["not_resolved"] = t.not_resolved;
+            d["fitted_on"] = t.fitted_on;
             return d;
           },
           py::kw_only(), py::arg("machine"), py::arg("figure"), py::arg("axis") = "",
-          py::arg("tolerance") = py::none(),
+          py::arg("tolerance") = py::none(), py::arg("points") = "auto",
           R"doc(One figure's history on a machine and its drift per year: {'dates', 'values', 'u' (numpy,
 NaN where not stated), 'states', 'drift_per_year', 'u_drift', 'due' (the date the trend reaches
-`tolerance`, the figure's upper limit), 'u_due_days', 'not_resolved' (why a figure is None)}.)doc")
+`tolerance`, the figure's upper limit), 'u_due_days', 'not_resolved' (why a figure is None),
+'fitted_on'}. points: which are fitted, 'as-found', 'as-left', 'all' or 'auto' (as found when the
+history has as-found and as-left points: the machine drifts between adjustments).)doc")
       .def(
           "due",
           [](const records::Database& db, int interval_months, const py::dict& limits,
@@ -205,6 +223,45 @@ NaN where not stated), 'states', 'drift_per_year', 'u_drift', 'due' (the date th
 earlier when a figure's trend reaches its limit ({'A': 25, 'A@X': 20, 'E0': 3.5}, in the figure's
 unit). Dicts: 'machine', 'last_visit', 'due', 'u_days' (None unless a trend set the date),
 'because', 'overdue', 'notes' (limits whose trend gave no date, and why).)doc");
+  db_class.def(
+      "certificate",
+      [](const records::Database& db, const std::string& machine, const std::string& date,
+         const std::string& to, const std::optional<std::string>& lab,
+         const std::optional<std::string>& output, const std::string& issued) {
+        const certificate::Lab l = lab ? certificate::read_lab(*lab) : certificate::Lab{};
+        certificate::Options o;
+        o.machine = machine;
+        o.date = date;
+        o.to = to;
+        o.issued = issued;
+        const auto c = certificate::make(db, l, o);
+        if (output) report::write(*output, c.html());
+        py::list lines;
+        for (const auto& ln : c.lines) {
+          py::dict d;
+          d["record"] = ln.record;
+          d["kind"] = ln.kind;
+          d["state"] = ln.state;
+          d["figure"] = ln.figure;
+          d["value"] = ln.value;
+          d["unit"] = ln.unit;
+          d["U"] = opt(ln.U);
+          d["limit"] = opt(ln.limit);
+          d["decision"] = ln.decision;
+          lines.append(d);
+        }
+        py::dict out;
+        out["title"] = c.title;
+        out["lines"] = lines;
+        out["warnings"] = c.warnings;
+        return out;
+      },
+      py::kw_only(), py::arg("machine"), py::arg("date"), py::arg("to") = "",
+      py::arg("lab") = py::none(), py::arg("output") = py::none(), py::arg("issued") = "",
+      R"doc(The calibration certificate of one visit (`date`, to `to` for several days): written as
+HTML to `output` when given; returns {'title', 'lines': [{'record', 'kind', 'state', 'figure',
+'value', 'unit', 'U' (k = 2, None when not stated), 'limit', 'decision'}], 'warnings'}. `lab`: the
+laboratory's JSON (machine description, instruments, limits, decision rule, laser budget).)doc");
   sub.def(
       "open",
       [](const std::optional<std::string>& path, bool read_only) {

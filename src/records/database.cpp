@@ -2,14 +2,16 @@
 // statements only, one transaction per add, the schema created or migrated on open.
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdlib>
+#include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <map>
-#include <regex>
 #include <sstream>
 
 #include "backend.hpp"
@@ -82,6 +84,36 @@ void check_text(const char* field, const std::string& s) {
   }
 }
 
+// ISO 8601 as the records store it: a calendar date YYYY-MM-DD, optionally with a time
+// (T or a space, hh:mm, optionally :ss and a fraction, optionally Z or an offset ±hh[:]mm).
+bool iso8601(const std::string& s) {
+  std::size_t i = 0;
+  const auto digits = [&](std::size_t n) {
+    for (std::size_t k = 0; k < n; ++k, ++i)
+      if (i >= s.size() || !std::isdigit(static_cast<unsigned char>(s[i]))) return false;
+    return true;
+  };
+  const auto is = [&](const char* chars) {
+    if (i < s.size() && std::strchr(chars, s[i]) != nullptr && s[i] != '\0') return ++i, true;
+    return false;
+  };
+  if (!(digits(4) && is("-") && digits(2) && is("-") && digits(2))) return false;
+  if (i == s.size()) return true;
+  if (!(is("T ") && digits(2) && is(":") && digits(2))) return false;
+  if (is(":")) {
+    if (!digits(2)) return false;
+    if (is(".")) {
+      if (!digits(1)) return false;
+      while (i < s.size() && std::isdigit(static_cast<unsigned char>(s[i]))) ++i;
+    }
+  }
+  if (i == s.size()) return true;
+  if (is("Z")) return i == s.size();
+  if (!(is("+-") && digits(2))) return false;
+  is(":");
+  return digits(2) && i == s.size();
+}
+
 bool is_url(const std::string& location) {
   return location.rfind("postgresql://", 0) == 0 || location.rfind("postgres://", 0) == 0;
 }
@@ -102,10 +134,7 @@ const char* to_string(State s) {
 
 void AddOptions::validate() const {
   if (machine.empty()) throw Error("record: give the machine's id");
-  // ISO 8601: a calendar date, optionally with a time.
-  static const std::regex iso(
-      R"(\d{4}-\d{2}-\d{2}([T ]\d{2}:\d{2}(:\d{2}(\.\d+)?)?(Z|[+-]\d{2}:?\d{2})?)?)");
-  if (!date.empty() && !std::regex_match(date, iso))
+  if (!date.empty() && !iso8601(date))
     throw Error(fmt::format("record: the date '{}' is not ISO 8601 (e.g. 2026-11-29)", date));
   if (!date.empty()) {
     const int month = std::stoi(date.substr(5, 2)), day = std::stoi(date.substr(8, 2));
@@ -227,6 +256,10 @@ Database::Database(const std::string& location, Access access) : impl_(std::make
 Database::~Database() = default;
 Database::Database(Database&&) noexcept = default;
 Database& Database::operator=(Database&&) noexcept = default;
+
+std::string Database::describe() const {
+  return impl_->b->describe();
+}
 
 int Database::schema_version() const {
   return guarded(*impl_->b, "reading its schema", [&] { return stored_version(*impl_->b); });
@@ -418,10 +451,28 @@ Trend Database::history(const std::string& machine, const std::string& figure,
 Trend Database::trend(const std::string& machine, const std::string& figure,
                       const std::string& axis, const TrendOptions& options) const {
   const Trend h = history(machine, figure, axis);
-  Trend t = fit_trend(h.points, options);
+  using Use = TrendOptions::Use;
+  Use use = options.use;
+  const auto has = [&](State s) {
+    return std::any_of(h.points.begin(), h.points.end(),
+                       [&](const TrendPoint& p) { return p.state == s; });
+  };
+  if (use == Use::Auto) use = has(State::AsFound) && has(State::AsLeft) ? Use::AsFound : Use::All;
+  std::vector<TrendPoint> fitted, others;
+  for (const auto& p : h.points)
+    ((use == Use::All || (use == Use::AsFound && p.state == State::AsFound) ||
+      (use == Use::AsLeft && p.state == State::AsLeft))
+         ? fitted
+         : others)
+        .push_back(p);
+  TrendOptions o = options;
+  o.unit = h.unit;
+  Trend t = fit_trend(fitted, o);
   t.figure = h.figure;
   t.axis = h.axis;
   t.unit = h.unit;
+  t.fitted_on = use == Use::AsFound ? "as found" : use == Use::AsLeft ? "as left" : "all";
+  t.not_fitted = std::move(others);
   return t;
 }
 

@@ -3,8 +3,12 @@
 #include <fmt/format.h>
 
 #include <cstdlib>
-#include <pqxx/pqxx>
-#include <regex>
+#include <pqxx/binarystring>
+#include <pqxx/connection>
+#include <pqxx/except>
+#include <pqxx/nontransaction>
+#include <pqxx/result>
+#include <pqxx/transaction>
 
 #include "backend.hpp"
 #include "trueaxis/error.hpp"
@@ -29,10 +33,17 @@ std::string hex_bytea(const std::string& bytes) {
   return s;
 }
 
-// The URL without its password, for messages.
+// The URL without its password, for messages: postgresql://user:secret@host → user:***@host.
 std::string without_password(const std::string& url) {
-  static const std::regex pw(R"(^(postgres(?:ql)?://[^:/@]*):[^@]*@)");
-  return std::regex_replace(url, pw, "$1:***@");
+  const auto scheme = url.find("://");
+  if (scheme == std::string::npos) return url;
+  const auto at = url.find('@', scheme + 3);
+  if (at == std::string::npos) return url;
+  const auto colon = url.find(':', scheme + 3);
+  const auto slash = url.find('/', scheme + 3);
+  if (colon == std::string::npos || colon > at || (slash != std::string::npos && slash < at))
+    return url;
+  return url.substr(0, colon + 1) + "***" + url.substr(at);
 }
 
 std::string trimmed(std::string s) {

@@ -3,10 +3,10 @@
 // propagation (JCGM 100:2008, 5.1.2), the points' scatter taken in through the Birge ratio.
 #include <fmt/format.h>
 
-#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/records/records.hpp"
@@ -57,7 +57,7 @@ Trend fit_trend(std::vector<TrendPoint> points, const TrendOptions& options) {
     return day_number(a.date) < day_number(b.date);
   });
   t.points = points;
-  const auto n = static_cast<Eigen::Index>(points.size());
+  const auto n = points.size();
   if (n < 2) {
     t.not_resolved =
         fmt::format("{} point{}: a drift needs at least two dates", n, n == 1 ? "" : "s");
@@ -70,24 +70,37 @@ Trend fit_trend(std::vector<TrendPoint> points, const TrendOptions& options) {
   }
   const bool weighted =
       std::all_of(points.begin(), points.end(), [](const auto& p) { return p.u && *p.u > 0; });
-  // value = a + b·(t − t_last), t in years: the intercept is the value at the last date.
-  Eigen::MatrixXd A(n, 2);
-  Eigen::VectorXd y(n), w(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const auto& p = points[static_cast<std::size_t>(i)];
-    A(i, 0) = 1;
-    A(i, 1) = static_cast<double>(day_number(p.date) - d1) / kDaysPerYear;
-    y[i] = p.value;
+  // value = a + b·(t − t_last), t in years: the intercept is the value at the last date. Two
+  // parameters: the normal equations N·(a, b) = r solved in closed form.
+  double S = 0, Sx = 0, Sxx = 0, Sy = 0, Sxy = 0;
+  std::vector<double> tx(points.size()), w(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto& p = points[i];
+    tx[i] = static_cast<double>(day_number(p.date) - d1) / kDaysPerYear;
     w[i] = weighted ? 1 / (*p.u * *p.u) : 1.0;
+    S += w[i];
+    Sx += w[i] * tx[i];
+    Sxx += w[i] * tx[i] * tx[i];
+    Sy += w[i] * p.value;
+    Sxy += w[i] * tx[i] * p.value;
   }
-  const Eigen::MatrixXd N = A.transpose() * w.asDiagonal() * A;
-  const Eigen::Vector2d x = N.ldlt().solve(A.transpose() * w.asDiagonal() * y);
-  Eigen::Matrix2d cov = N.inverse();
-  const Eigen::Index dof = n - 2;
-  const double chi2 = (w.array() * (y - A * x).array().square()).sum();
+  const double det = S * Sxx - Sx * Sx;  // > 0: two dates at least
+  const double x[2] = {(Sxx * Sy - Sx * Sxy) / det, (S * Sxy - Sx * Sy) / det};
+  // cov = N⁻¹ = [Sxx, −Sx; −Sx, S] / det.
+  double cov[2][2] = {{Sxx / det, -Sx / det}, {-Sx / det, S / det}};
+  const auto dof = static_cast<long long>(points.size()) - 2;
+  double chi2 = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const double r = points[i].value - x[0] - x[1] * tx[i];
+    chi2 += w[i] * r * r;
+  }
+  auto scale = [&](double f) {
+    for (auto& row : cov)
+      for (double& c : row) c *= f;
+  };
   if (weighted) {
     // The points' own u, or their scatter when it is the larger (Birge ratio χ²/dof > 1).
-    if (dof > 0 && chi2 / static_cast<double>(dof) > 1) cov *= chi2 / static_cast<double>(dof);
+    if (dof > 0 && chi2 / static_cast<double>(dof) > 1) scale(chi2 / static_cast<double>(dof));
   } else {
     if (dof < 1) {
       t.drift_per_year = x[1];
@@ -97,19 +110,20 @@ Trend fit_trend(std::vector<TrendPoint> points, const TrendOptions& options) {
           "(a third date, or the figures' u, is needed)";
       return t;
     }
-    cov *= chi2 / static_cast<double>(dof);
+    scale(chi2 / static_cast<double>(dof));
   }
   t.drift_per_year = x[1];
-  t.u_drift = std::sqrt(cov(1, 1));
+  t.u_drift = std::sqrt(cov[1][1]);
   t.value_now = x[0];
-  t.u_value_now = std::sqrt(cov(0, 0));
+  t.u_value_now = std::sqrt(cov[0][0]);
+  t.cov_now_drift = cov[0][1];
   if (!options.tolerance) return t;
   const double T = *options.tolerance, b = x[1];
   if (!(std::abs(b) >= 2 * *t.u_drift) || b == 0) {
     t.not_resolved = fmt::format(
-        "the drift, {:.3g} ± {:.2g} per year, does not stand out of its uncertainty: no due date "
+        "the drift, {:.3g} ± {:.2g} {}per year, does not stand out of its uncertainty: no due date "
         "can be given from the trend",
-        b, *t.u_drift);
+        b, *t.u_drift, options.unit.empty() ? "" : options.unit + " ");
     return t;
   }
   if (b < 0) {
@@ -119,16 +133,28 @@ Trend fit_trend(std::vector<TrendPoint> points, const TrendOptions& options) {
   // From the last date; negative when the line crossed the limit before it.
   const double years = (T - x[0]) / b;
   // t* = (T − a)/b: ∂t*/∂a = −1/b, ∂t*/∂b = −(T − a)/b².
-  const Eigen::Vector2d J(-1 / b, -(T - x[0]) / (b * b));
-  const double u_years = std::sqrt(J.dot(cov * J));
+  const double J[2] = {-1 / b, -(T - x[0]) / (b * b)};
+  const double u_years =
+      std::sqrt(J[0] * J[0] * cov[0][0] + 2 * J[0] * J[1] * cov[0][1] + J[1] * J[1] * cov[1][1]);
   t.due = date_of_day(d1 + std::llround(years * kDaysPerYear));
   t.u_due_days = u_years * kDaysPerYear;
   return t;
 }
 
+std::pair<double, std::optional<double>> Trend::line_at(long long day) const {
+  if (!drift_per_year || !value_now || points.empty())
+    throw Error("trend: the line is not resolved");
+  const double years = static_cast<double>(day - day_number(points.back().date)) / kDaysPerYear;
+  const double value = *value_now + *drift_per_year * years;
+  if (!u_drift || !u_value_now || !cov_now_drift) return {value, std::nullopt};
+  const double var = *u_value_now * *u_value_now + years * years * *u_drift * *u_drift +
+                     2 * years * *cov_now_drift;
+  return {value, std::sqrt(std::max(var, 0.0))};
+}
+
 std::string Trend::summary() const {
-  std::string s =
-      fmt::format("{}{}: {} points", figure, axis.empty() ? "" : " " + axis, points.size());
+  std::string s = fmt::format("{}{}: {} points{}", figure, axis.empty() ? "" : " " + axis,
+                              points.size(), fitted_on == "all" ? "" : " " + fitted_on);
   if (drift_per_year)
     s += fmt::format(", drift {:.3g}{} {}/year", *drift_per_year,
                      u_drift ? fmt::format(" ± {:.2g}", *u_drift) : std::string(), unit);
@@ -152,14 +178,18 @@ std::string to_json(const Trend& t, const std::string& machine) {
   j["figure"] = t.figure;
   j["axis"] = t.axis.empty() ? ojson(nullptr) : ojson(t.axis);
   j["unit"] = t.unit;
+  auto point = [&](const TrendPoint& p) {
+    return ojson{{"date", p.date},
+                 {"value", p.value},
+                 {"u", opt(p.u)},
+                 {"state", p.state == State::None ? ojson(nullptr) : ojson(to_string(p.state))},
+                 {"record", p.record}};
+  };
+  j["fitted_on"] = t.fitted_on;
   j["points"] = ojson::array();
-  for (const auto& p : t.points)
-    j["points"].push_back(
-        {{"date", p.date},
-         {"value", p.value},
-         {"u", opt(p.u)},
-         {"state", p.state == State::None ? ojson(nullptr) : ojson(to_string(p.state))},
-         {"record", p.record}});
+  for (const auto& p : t.points) j["points"].push_back(point(p));
+  j["not_fitted"] = ojson::array();
+  for (const auto& p : t.not_fitted) j["not_fitted"].push_back(point(p));
   j["drift_per_year"] = {{"value", opt(t.drift_per_year)}, {"u", opt(t.u_drift)}};
   j["due"] = {{"date", t.due ? ojson(*t.due) : ojson(nullptr)}, {"u_days", opt(t.u_due_days)}};
   if (!t.not_resolved.empty()) j["not_resolved"] = t.not_resolved;

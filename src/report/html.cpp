@@ -320,9 +320,11 @@ svg.ta-fig{max-width:100%;height:auto}
               js_string(s2.label), color, color, color, color);
         else
           series +=
-              fmt::format(",{{label:{},stroke:'{}',width:1.5{}{}{}}}", js_string(s2.label), color,
+              fmt::format(",{{label:{},stroke:'{}',width:1.5{}{}{}{}}}", js_string(s2.label), color,
                           s2.dashed ? ",dash:[6,4]" : "", p.span_gaps ? ",spanGaps:true" : "",
-                          s2.in_legend ? "" : ",edge:true");
+                          s2.in_legend ? "" : ",edge:true",
+                          // A line over dates is sampled for its shape: its samples are not data.
+                          p.x_dates ? ",points:{show:false}" : "");
         // The ±2u band: u here, its edges made by the page (below).
         if (s2.band.size() == s2.y.size()) {
           u += fmt::format("{}:", si);
@@ -335,9 +337,9 @@ svg.ta-fig{max-width:100%;height:auto}
       series += "]";
       u += "}";
       script += fmt::format(
-          "TA_PLOTS.push({{el:'{}',data:{},u:{},series:{},xl:{},yl:{},log:{},pts:{}{}}});\n", id,
+          "TA_PLOTS.push({{el:'{}',data:{},u:{},series:{},xl:{},yl:{},log:{},pts:{}{}{}}});\n", id,
           data, u, series, js_string(p.x_label), js_string(p.y_label), p.log_y ? "true" : "false",
-          scatter ? "true" : "false", p.whole_x ? ",wx:true" : "");
+          scatter ? "true" : "false", p.whole_x ? ",wx:true" : "", p.x_dates ? ",xd:true" : "");
     }
     if (!s.views.empty() || !s.heat_maps.empty() || !s.grids.empty() || !s.planes.empty()) {
       h += "<div class=\"figs\">";
@@ -387,6 +389,8 @@ function taAxisSize(u,values){
   TA_PLOTS.forEach(function(p){
     p.data=p.data.map(filled);
     Object.keys(p.u).forEach(function(k){p.u[k]=filled(p.u[k]);});
+    // Dates: days since 1970 as the seconds a time axis counts.
+    if(p.xd)p.data[0]=p.data[0].map(function(d){return d===null?null:d*86400;});
   });
   TA_PLOTS.forEach(function(p){
     var el=document.getElementById(p.el);
@@ -400,14 +404,18 @@ function taAxisSize(u,values){
       var lo=y.map(function(v,j){return v===null||u[j]===null?null:v-2*u[j];});
       data.push(up,lo);
       var g=!!p.series[i].spanGaps;
-      series.push({label:p.series[i].label+' upper edge',stroke:c+'44',width:0.5,edge:true,spanGaps:g},
-                  {label:p.series[i].label+' lower edge',stroke:c+'44',width:0.5,edge:true,spanGaps:g});
+      var edge=function(l){var e={label:p.series[i].label+l,stroke:c+'44',width:0.5,edge:true,spanGaps:g};
+        if(p.xd)e.points={show:false};return e;};
+      series.push(edge(' upper edge'),edge(' lower edge'));
       bands.push({series:[data.length-2,data.length-1],fill:c+'22'});
     });
+    var pad=function(u,mn,mx){var d=(mx-mn)*0.03||1;return [mn-d,mx+d];};
     var opts={width:w,height:300,series:series,bands:bands,
-      scales:{x:p.pts?{time:false,range:function(u,mn,mx){var d=(mx-mn)*0.03||1;return [mn-d,mx+d];}}:{time:false},
+      // Dates in UTC, the day each was recorded, wherever the report is read.
+      tzDate:function(ts){return uPlot.tzDate(new Date(ts*1e3),'Etc/UTC');},
+      scales:{x:p.xd?(p.pts?{time:true,range:pad}:{time:true}):p.pts?{time:false,range:pad}:{time:false},
               y:p.log?{distr:3}:{}},
-      axes:[p.wx?{label:p.xl,values:taTicks,incrs:[1,2,5,10,20,50,100,200,500,1000]}:{label:p.xl,values:taTicks},
+      axes:[p.xd?{label:p.xl}:p.wx?{label:p.xl,values:taTicks,incrs:[1,2,5,10,20,50,100,200,500,1000]}:{label:p.xl,values:taTicks},
             p.log?{label:p.yl,size:70}:{label:p.yl,values:taTicks,size:taAxisSize}],
       cursor:{drag:{x:true,y:false}}};
     var u=new uPlot(opts,data,el);
@@ -426,7 +434,9 @@ function taAxisSize(u,values){
       }
       var lines=[head.join(',')];
       for(var j=0;j<p.data[0].length;j++)
-        lines.push(cols.map(function(c){var v=c<0?p.u[-c][j]:p.data[c][j];return v===null?'':v;}).join(','));
+        lines.push(cols.map(function(c){var v=c<0?p.u[-c][j]:p.data[c][j];
+          if(v!==null&&c===0&&p.xd)return new Date(v*1000).toISOString().slice(0,10);
+          return v===null?'':v;}).join(','));
       a.href=URL.createObjectURL(new Blob([lines.join('\n')+'\n'],{type:'text/csv'}));
     });
   });

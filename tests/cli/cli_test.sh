@@ -850,7 +850,7 @@ ok = ok and abs(r[0]['figures']['E0']['value'] - e0['E0_max_um']) < 1e-9
 sys.exit(0 if ok else 1)" && ok || bad "record export: $(head -c 600 acc/records.json)"
 grep -q "^3,CMM-7,2025-03-02,acceptance-probing,as-left,.*,PForm,," acc/records.csv && ok || bad "record export csv: $(head -3 acc/records.csv)"
 # A figure's trend: two dates without stated u give a drift but no uncertainty, and say so.
-expect_ok "$T" record trend --machine CMM-7 --figure E0 --tolerance 30 -o acc/trend.json
+expect_ok "$T" record trend --machine CMM-7 --figure E0 --tolerance 30 --points all -o acc/trend.json
 grep -q "CMM-7: E0: 2 points, drift .* µm/year; two points without stated uncertainties" out.txt && ok || bad "record trend: $(cat out.txt)"
 python3 -c "
 import json, sys

@@ -49,11 +49,32 @@ expect_code 1 "$T" record list --db absent.db
 grep -q "no records database at absent.db" err.txt && ok || bad "record list: no database: $(cat err.txt)"
 [ ! -e absent.db ] && ok || bad "record list created a database"
 
+# A certificate of the last visit: as found, adjusted, as left the same day.
+"$T" simulate positioning --axis x --targets 0:100:800 --backlash 1 --noise 0.2 --seed 40 -o left.csv -q &&
+  "$T" positioning --input left.csv --output left.json -q || bad "as left: simulate and evaluate"
+expect_ok "$T" record add left.json --db hist.db --machine VMC-1 --axis x --date 2025-10-15 --as-left --instrument XL-80 --temperature 20.6 -q
+cp "$here/../data/fuzz/certificate-lab.json" lab.json
+expect_ok "$T" certificate --db hist.db --machine VMC-1 --date 2025-10-15 --lab lab.json --issued 2025-10-16 -o cert.html --pdf cert.pdf
+grep -q "Calibration certificate C-2026-017: 10 figures (.* conform, .* do not, .* without a decision) -> cert.html" out.txt && ok || bad "certificate: $(cat out.txt)"
+grep -q "LC-99" cert.html && ok || bad "certificate: the instrument's calibration certificate is not listed"
+for want in "Results as found" "Results as left" "Uncertainty of positioning on X" "u_EVE" "V8-0042" "backlash compensation of X raised by 4" "approved by: M. Rossi" "ISO 14253-1"; do
+  grep -q "$want" cert.html && ok || bad "certificate lacks '$want'"
+done
+[ "$(head -c 4 cert.pdf)" = "%PDF" ] && ok || bad "certificate: no PDF"
+# Without Chromium: the HTML and a clear message (exit 1).
+PATH=/nonexistent "$T" certificate --db hist.db --machine VMC-1 --date 2025-10-15 --lab lab.json -o cert2.html --pdf cert2.pdf >out.txt 2>err.txt
+[ $? -eq 1 ] && [ -s cert2.html ] && grep -q "Chromium is not installed" err.txt && ok || bad "certificate without Chromium: $(cat err.txt)"
+expect_code 1 "$T" certificate --db hist.db --machine VMC-1 --date 2023-01-01
+grep -q "machine 'VMC-1' has no records from 2023-01-01 to 2023-01-01 (its records run from 2024-01-15 to 2025-10-15)" err.txt && ok || bad "certificate: no records: $(cat err.txt)"
+printf '{"name": "Lab",\n "limits": {"A": "ten"}}' > badlab.json
+expect_code 1 "$T" certificate --db hist.db --machine VMC-1 --date 2025-10-15 --lab badlab.json
+grep -q "badlab.json:2:" err.txt && ok || bad "certificate: a bad lab file is located: $(cat err.txt)"
+
 # Read-only: a database in a directory and file nobody may write is still listed; adding to it
 # fails with the reason. Root may write anything: as root the commands run as 'nobody'.
 mkdir ro && cp hist.db ro/ && chmod 444 ro/hist.db && chmod 555 ro
 as=(); [ "$(id -u)" = 0 ] && as=(runuser -u nobody --)
-"${as[@]}" "$T" record list --db ro/hist.db >out.txt 2>err.txt && [ "$(wc -l <out.txt)" -eq 8 ] && ok || bad "record list, read-only: $(cat err.txt)"
+"${as[@]}" "$T" record list --db ro/hist.db >out.txt 2>err.txt && [ "$(wc -l <out.txt)" -eq 9 ] && ok || bad "record list, read-only: $(cat err.txt)"
 "${as[@]}" "$T" record add pos0.json --db ro/hist.db --machine VMC-2 --new-machine >out.txt 2>err.txt
 [ $? -eq 1 ] && grep -q "cannot be written" err.txt && ok || bad "record add, read-only: $(cat err.txt)"
 chmod 755 ro

@@ -4,6 +4,7 @@
 
 #include "fuzz_util.hpp"
 #include "trueaxis/acceptance/acceptance.hpp"
+#include "trueaxis/certificate/certificate.hpp"
 #include "trueaxis/io/acceptance/acceptance.hpp"
 #include "trueaxis/io/ballgauge/ballgauge.hpp"
 #include "trueaxis/io/circular/circular.hpp"
@@ -26,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string p = fuzz::write_input("in.json", data + 1, size - 1);
   fuzz::expect_only_trueaxis_errors([&] {
     io::JsonFile::read(p);
-    switch (data[0] % 19) {
+    switch (data[0] % 20) {
       case 0:
         io::read_machine(p);
         break;
@@ -99,6 +100,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
         break;
       }
+      case 19:  // a laboratory's statements for a certificate
+        certificate::read_lab(p);
+        break;
       default:
         io::read_positioning_result(p);
         break;

@@ -58,6 +58,7 @@ printf '\x10' | cat - tests/data/fuzz/acceptance-e150-stopped.json > "$corpus/js
 printf '\x11' | cat - tests/data/fuzz/acceptance-probing.json > "$corpus/json/probing"
 printf '\x12' | cat - tests/data/fuzz/acceptance-probing.json > "$corpus/json/figures"
 printf '\x10' | cat - tests/data/fuzz/acceptance-e0-no-complete.json > "$corpus/json/e0-found"
+printf '\x13' | cat - tests/data/fuzz/certificate-lab.json > "$corpus/json/lab"
 printf '\x04{"ball_diameter": 30, "balls": [[0,0,0],[80,0,0],[0,80,0],[80,80,0]]}' > "$corpus/json/gauge"
 find tests/data/nist-l2 -name '*.ds' | head -40 | while read -r f; do cp "$f" "$corpus/ds/$(echo "$f" | tr / _)"; done
 # Inputs the fuzzers once found a problem with (kept in tests/data/fuzz), so each run starts there.

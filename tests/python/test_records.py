@@ -35,10 +35,16 @@ def test_records_from_python_and_the_command_line(tmp_path):
     assert [r["state"] for r in rows] == ["as-found", "as-left", "as-left"]
     assert db.machines() == [{"machine": "CMM 1", "records": 3, "first": "2024-05-01",
                               "last": "2025-05-01"}]
-    t = db.trend(machine="CMM 1", figure="PForm", tolerance=5)
+    t = db.trend(machine="CMM 1", figure="PForm", tolerance=5, points="all")
     assert t["dates"] == ["2024-05-01", "2025-05-01", "2025-05-01"] and t["unit"] == "µm"
     assert isinstance(t["values"], np.ndarray) and not np.isnan(t["u"]).any()
     assert t["u_drift"] is None or t["u_drift"] > 0
+    # By default, with as-found and as-left points, the drift is the as-found values'.
+    auto = db.trend(machine="CMM 1", figure="PForm")
+    assert auto["fitted_on"] == "as found" and auto["dates"] == ["2024-05-01"]
+    assert "at least two dates" in auto["not_resolved"]
+    with pytest.raises(trueaxis.Error, match="'auto', 'as-found'"):
+        db.trend(machine="CMM 1", figure="PForm", points="found")
     # The command line reads the same database.
     out = subprocess.run([TRUEAXIS, "record", "list", "--db", str(tmp_path / "r.db")],
                          capture_output=True, text=True)
@@ -60,3 +66,12 @@ def test_records_from_python_and_the_command_line(tmp_path):
         ro.add(files[0], machine="CMM 3", new_machine=True)
     with pytest.raises(trueaxis.Error, match="no records database"):
         trueaxis.records.open(str(tmp_path / "absent.db"), read_only=True)
+    # The certificate of the second visit: both probing results as left, U from their files.
+    cert = db.certificate(machine="CMM 1", date="2025-05-01", output=str(tmp_path / "cert.html"))
+    assert cert["title"] == "Calibration certificate CMM 1-2025-05-01"
+    assert sorted({ln["figure"] for ln in cert["lines"]}) == ["PForm", "PSize"]
+    assert all(ln["U"] is not None and ln["state"] == "as-left" for ln in cert["lines"])
+    assert all(ln["decision"] == ("conforms (the test's own rule)" if ln["figure"] == "PForm"
+                                  else "no limit stated") for ln in cert["lines"])  # no MPE_size
+    assert any("does not describe machine 'CMM 1'" in w for w in cert["warnings"])
+    assert "Results as left" in open(tmp_path / "cert.html").read()

@@ -9,7 +9,9 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <pqxx/pqxx>
+#include <pqxx/connection>
+#include <pqxx/nontransaction>
+#include <pqxx/result>
 #include <string>
 
 #include "../test_util.hpp"

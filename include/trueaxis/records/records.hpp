@@ -21,6 +21,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace trueaxis::records {
@@ -84,6 +85,11 @@ struct TrendOptions {
   // The figure's upper limit, in its unit (the figures grow as a machine wears): the date the
   // trend reaches it.
   std::optional<double> tolerance;
+  // Which points Database::trend fits. A machine drifts between adjustments, which its as-found
+  // values show; an as-left value is where an adjustment put it. Auto: the as-found points when
+  // the history has as-found and as-left ones, else all.
+  enum class Use { Auto, AsFound, AsLeft, All } use = Use::Auto;
+  std::string unit;       // the figure's unit, for the messages
   void validate() const;  // throws Error
 };
 
@@ -96,13 +102,19 @@ struct TrendOptions {
 // reaches the upper limit).
 struct Trend {
   std::string figure, axis, unit;
-  std::vector<TrendPoint> points;
+  std::vector<TrendPoint> points;      // the points fitted, oldest first
+  std::string fitted_on = "all";       // "as found", "as left" or "all" (Database::trend)
+  std::vector<TrendPoint> not_fitted;  // the history's other points (drawn, not fitted)
   std::optional<double> drift_per_year, u_drift;  // unit per year
   std::optional<double> value_now, u_value_now;   // the line at the last point's date
+  std::optional<double> cov_now_drift;            // their covariance (unit² per year)
   std::optional<std::string> due;                 // ISO 8601 date
   std::optional<double> u_due_days;
   std::string not_resolved;  // why no drift or no due date ("" when both are given)
   std::string summary() const;
+  // The fitted line on a day (days since 1970-01-01) and its standard uncertainty from the
+  // line's covariance (nullopt when the drift has no uncertainty). Precondition: drift_per_year.
+  std::pair<double, std::optional<double>> line_at(long long day) const;
 };
 
 // Days since 1970-01-01 of an ISO 8601 date's day (proleptic Gregorian); throws Error when it is
@@ -149,6 +161,9 @@ class Database {
   Record show(long long id) const;          // throws Error when there is no such record
   std::string content(long long id) const;  // the stored file, as it was
   int schema_version() const;
+  // Where the records are, for messages and reports: the file's path, or the server's URL with
+  // any password masked.
+  std::string describe() const;
   // One figure's history on one machine, oldest first (axis "" matches a figure without one).
   // Throws Error naming the figures the machine has when there is none of that name.
   Trend history(const std::string& machine, const std::string& figure,

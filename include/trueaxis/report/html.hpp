@@ -49,6 +49,8 @@ struct Plot {
   bool span_gaps = false;
   // The x axis counts things (positions, points): ticks at whole numbers only.
   bool whole_x = false;
+  // x holds days since 1970-01-01 (UTC): the axis, the cursor and the CSV show dates.
+  bool x_dates = false;
 };
 
 // A colour map of values over the plane, drawn as static SVG at true aspect ratio (hover shows
