@@ -159,8 +159,8 @@ namespace {
 using detail::Param;
 using detail::Row;
 
-// The schema's version, 0 when there is none yet; throws Error when the database holds no
-// trueaxis records and cannot be given them (read-only).
+// The schema's version, 0 when the meta table holds none; the back end's Error when there is no
+// meta table at all.
 int stored_version(detail::Backend& b) {
   const auto rows = b.query("SELECT value FROM meta WHERE key = 'schema_version'", {});
   return rows.empty() ? 0 : std::atoi(detail::text(rows[0][0]).c_str());

@@ -348,3 +348,37 @@ def test_guideway_straightness_is_drawn_with_the_line_its_pv_is_about(tmp_path):
     assert json.load(open(out2))["axis"] == "X"
     subprocess.run([TRUEAXIS, "report", out2, "-o", str(tmp_path / "gx2.html"), "-q"], check=True)
     assert "<td>EAX (roll)</td>" in open(tmp_path / "gx2.html", encoding="utf-8").read()
+
+
+def test_records_trend_report_and_certificate_render_and_print(tmp_path):
+    # The demo's three yearly visits: the backlash trend over dates, and the last certificate.
+    demo = tmp_path / "demo"
+    subprocess.run([TRUEAXIS, "demo", "-o", str(demo / "index.html"), "-q"], check=True)
+    db, trend = str(demo / "records.db"), tmp_path / "trend.html"
+    subprocess.run([TRUEAXIS, "record", "trend", "--db", db, "--machine", "DEMO-VMC", "--figure",
+                    "B", "--axis", "x", "--tolerance", "6", "--report", str(trend), "-q"],
+                   check=True)
+    dom = dump_dom(trend, tmp_path)
+    assert 'data-plots-total="1"' in dom and 'data-plots-rendered="1"' in dom
+    assert 'data-script-errors="' not in dom
+    # The x axis holds dates (a time scale in seconds, the days at midnight UTC) and the CSV's
+    # first column ISO dates.
+    x = evaluate_in(trend, tmp_path, "[TA_PLOTS[0].xd, TA_PLOTS[0].data[0]]")
+    assert x[0] is True and 1736899200 in x[1], x  # 2025-01-15T00:00Z, the first visit
+    rows = plot_csvs(trend, tmp_path)[0]
+    assert rows[0][:3] == ["date", "as found", "as left"], rows[0]
+    assert all(re.fullmatch(r"\d{4}-\d{2}-\d{2}", r[0]) for r in rows[1:]), rows[:3]
+    assert "2025-01-15" in [r[0] for r in rows]  # the first visit, on its own day in any zone
+    # The certificate: every section there, no script error, printed to PDF pages.
+    cert = demo / "certificate.html"
+    dom = dump_dom(cert, tmp_path)
+    assert 'data-script-errors="' not in dom
+    for title in ("Certificate", "Instruments and their calibration", "Results as found",
+                  "Results as left", "Decision rule", "Signatures"):
+        assert re.search(f">{re.escape(title)}[^<]*</h2>", dom), title
+    pdf = tmp_path / "cert.pdf"
+    subprocess.run([chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--no-first-run",
+                    f"--user-data-dir={tmp_path / 'profile-pdf'}", "--virtual-time-budget=5000",
+                    f"--print-to-pdf={pdf}", f"file://{cert}"], capture_output=True, timeout=120)
+    data = pdf.read_bytes()
+    assert data.startswith(b"%PDF") and len(re.findall(rb"/Type\s*/Page\b", data)) >= 2
