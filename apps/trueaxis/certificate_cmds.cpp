@@ -80,17 +80,9 @@ int run_certificate(CertificateArgs& a) {
   const auto c = certificate::make(db, lab, a.options);
   report::write(a.output, c.html());
   if (!a.quiet) {
-    int conform = 0, fail = 0, undecided = 0;
-    for (const auto& l : c.lines) {
-      if (l.decision.rfind("conforms", 0) == 0)
-        ++conform;
-      else if (l.decision.rfind("does not conform", 0) == 0)
-        ++fail;
-      else if (l.limit)
-        ++undecided;
-    }
+    const auto count = certificate::tally(c.lines);
     fmt::print("{}: {} figures ({} conform, {} do not, {} without a decision) -> {}\n", c.title,
-               c.lines.size(), conform, fail, undecided, a.output);
+               c.lines.size(), count.conform, count.fail, count.undecided, a.output);
     for (const auto& w : c.warnings) fmt::print("  note: {}\n", w);
   }
   if (a.pdf.empty()) return 0;

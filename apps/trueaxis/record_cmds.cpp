@@ -4,11 +4,11 @@
 #include <CLI/CLI.hpp>
 #include <cctype>
 #include <cmath>
-#include <fstream>
 #include <memory>
 
 #include "commands.hpp"
 #include "trueaxis/error.hpp"
+#include "trueaxis/io/files.hpp"
 #include "trueaxis/records/records.hpp"
 #include "trueaxis/report/records.hpp"
 
@@ -95,9 +95,7 @@ int run_show(const RecordArgs& a) {
   if (!r.note.empty()) fmt::print("  note: {}\n", r.note);
   fmt::print("  trueaxis: {}\n  figures: {}\n", r.trueaxis_version, figures_text(r));
   if (!a.output.empty()) {
-    std::ofstream out(a.output, std::ios::binary);
-    out << db.content(r.id);
-    if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
+    io::write_text(a.output, db.content(r.id));
     fmt::print("  the stored file -> {}\n", a.output);
   }
   return 0;
@@ -107,9 +105,7 @@ int run_export(const RecordArgs& a) {
   const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   const auto rs = db.list(a.filter);
   const std::string text = a.format == "csv" ? records::to_csv(rs) : records::to_json(rs);
-  std::ofstream out(a.output, std::ios::binary);
-  out << text;
-  if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
+  io::write_text(a.output, text);
   if (!a.quiet) fmt::print("{} records -> {}\n", rs.size(), a.output);
   return 0;
 }
@@ -126,11 +122,7 @@ int run_trend(const RecordArgs& a) {
           : a.points == "all"     ? Use::All
                                   : Use::Auto;
   const auto t = db.trend(a.filter.machine, a.figure, axis, o);
-  if (!a.output.empty()) {
-    std::ofstream out(a.output, std::ios::binary);
-    out << records::to_json(t, a.filter.machine);
-    if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
-  }
+  if (!a.output.empty()) io::write_text(a.output, records::to_json(t, a.filter.machine));
   if (!a.report.empty())
     report::write(a.report,
                   report::render(fmt::format("{}: {} history", a.filter.machine, t.figure),
@@ -148,11 +140,7 @@ int run_due(RecordArgs& a) {
   for (const auto& l : a.limits) a.due.limits.push_back(records::Limit::parse(l));
   a.due.machine = a.filter.machine;
   const auto due = records::due_dates(db, a.due);
-  if (!a.output.empty()) {
-    std::ofstream out(a.output, std::ios::binary);
-    out << records::to_json(due);
-    if (!out) throw Error(fmt::format("{}: cannot be written", a.output));
-  }
+  if (!a.output.empty()) io::write_text(a.output, records::to_json(due));
   if (a.quiet) return 0;
   if (due.empty()) fmt::print("no machine with records in {}\n", records::database_path(a.db));
   for (const auto& d : due) {

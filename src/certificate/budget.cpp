@@ -99,6 +99,21 @@ std::string decide(double value, std::optional<double> U, double limit, Rule rul
   return "no decision: within U of the limit";
 }
 
+void Tally::add(const Line& l) {
+  if (l.decision.rfind("conforms", 0) == 0)
+    ++conform;
+  else if (l.decision.rfind("does not conform", 0) == 0)
+    ++fail;
+  else if (l.limit)
+    ++undecided;
+}
+
+Tally tally(const std::vector<Line>& lines) {
+  Tally t;
+  for (const auto& l : lines) t.add(l);
+  return t;
+}
+
 void Options::validate() const {
   if (machine.empty()) throw Error("certificate: give the machine's id");
   (void)records::day_number(date);

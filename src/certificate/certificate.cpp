@@ -236,7 +236,7 @@ Certificate make(const records::Database& db, const Lab& lab, const Options& opt
     report::Section s;
     s.title = "Results " + state_title(state);
     s.table.push_back({"record", "test", "figure", "value", "U (k = 2)", "limit", "decision"});
-    int conform = 0, fail = 0, undecided = 0;
+    Tally count;
     for (const auto& r : recs) {
       if (r.state != state) continue;
       any_found = any_found || state == records::State::AsFound;
@@ -308,12 +308,7 @@ Certificate make(const records::Database& db, const Lab& lab, const Options& opt
         } else {
           l.decision = "no limit stated";
         }
-        if (l.decision.rfind("conforms", 0) == 0)
-          ++conform;
-        else if (l.decision.rfind("does not conform", 0) == 0)
-          ++fail;
-        else if (l.limit)
-          ++undecided;
+        count.add(l);
         s.table.push_back({fmt::format("{}", r.id), r.kind, l.figure, num(l.value) + " " + l.unit,
                            l.U ? fmt::format("{:.2g} {}", *l.U, l.unit) : "not stated",
                            l.limit ? fmt::format("{:g} {}", *l.limit, l.unit) : "none",
@@ -322,8 +317,8 @@ Certificate make(const records::Database& db, const Lab& lab, const Options& opt
       }
     }
     if (s.table.size() == 1) continue;
-    s.summary =
-        fmt::format("{} conform, {} do not, {} without a decision", conform, fail, undecided);
+    s.summary = fmt::format("{} conform, {} do not, {} without a decision", count.conform,
+                            count.fail, count.undecided);
     c.sections.push_back(std::move(s));
   }
 

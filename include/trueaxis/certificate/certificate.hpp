@@ -96,6 +96,13 @@ struct Line {
   std::string decision;  // "conforms", "does not conform", "no decision: …"
 };
 
+// How many lines conform, do not, and have a limit but no decision (within U, or no U).
+struct Tally {
+  int conform = 0, fail = 0, undecided = 0;
+  void add(const Line& line);
+};
+Tally tally(const std::vector<Line>& lines);
+
 struct Options {
   std::string machine;
   std::string date, to;   // the visit: from `date` to `to` inclusive (`to` "": one day)
