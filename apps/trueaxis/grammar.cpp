@@ -78,6 +78,7 @@ const std::map<std::string, std::string>& purposes() {
       {"record export", "the records as JSON or CSV"},
       {"record trend", "a figure's drift per year and the date it reaches its tolerance"},
       {"record due", "when each machine is next due, from its last visit and its trends"},
+      {"record report", "every figure of one machine over time, with its drift, in HTML"},
       {"certificate", "a calibration certificate of one visit (HTML, PDF), from the records"},
       {"report", "an HTML report of any result file"},
       {"demo", "every capability on a virtual machine, with a report"},

@@ -110,17 +110,21 @@ int run_export(const RecordArgs& a) {
   return 0;
 }
 
+records::TrendOptions::Use points_of(const std::string& p) {
+  using Use = records::TrendOptions::Use;
+  return p == "as-found"  ? Use::AsFound
+         : p == "as-left" ? Use::AsLeft
+         : p == "all"     ? Use::All
+                          : Use::Auto;
+}
+
 int run_trend(const RecordArgs& a) {
   const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   std::string axis = a.plane.empty() ? a.axis : a.plane;
   for (char& c : axis) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   records::TrendOptions o;
   if (!std::isnan(a.tolerance)) o.tolerance = a.tolerance;
-  using Use = records::TrendOptions::Use;
-  o.use = a.points == "as-found"  ? Use::AsFound
-          : a.points == "as-left" ? Use::AsLeft
-          : a.points == "all"     ? Use::All
-                                  : Use::Auto;
+  o.use = points_of(a.points);
   const auto t = db.trend(a.filter.machine, a.figure, axis, o);
   if (!a.output.empty()) io::write_text(a.output, records::to_json(t, a.filter.machine));
   if (!a.report.empty())
@@ -132,6 +136,35 @@ int run_trend(const RecordArgs& a) {
     fmt::print("{}: {}{}{}\n", a.filter.machine, t.summary(),
                a.output.empty() ? std::string() : " -> " + a.output,
                a.report.empty() ? std::string() : " -> " + a.report);
+  return 0;
+}
+
+
+// Every figure of one machine: its history, drift and, where a --limit names it, the date the
+// trend reaches it; one section each.
+int run_report(RecordArgs& a) {
+  const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
+  std::vector<records::Limit> limits;
+  for (const auto& l : a.limits) limits.push_back(records::Limit::parse(l));
+  std::vector<report::Section> sections;
+  int resolved = 0;
+  for (const auto& [name, axis] : db.figures(a.filter.machine)) {
+    records::TrendOptions o;
+    o.use = points_of(a.points);
+    for (const auto& l : limits)
+      if (l.applies_to(name, axis)) o.tolerance = l.value;
+    const auto t = db.trend(a.filter.machine, name, axis, o);
+    resolved += t.drift_per_year.has_value();
+    sections.push_back(report::trend_section(t, a.filter.machine, o.tolerance));
+  }
+  if (sections.empty())
+    throw Error(fmt::format("machine '{}' has no records in {}", a.filter.machine, db.describe()));
+  io::write_text(a.report,
+                 report::render(fmt::format("{}: calibration history", a.filter.machine), sections,
+                                4000, {{"machine", a.filter.machine}, {"records", db.describe()}}));
+  if (!a.quiet)
+    fmt::print("{}: {} figures, {} with a drift -> {}\n", a.filter.machine, sections.size(),
+               resolved, a.report);
   return 0;
 }
 
@@ -260,10 +293,26 @@ std::vector<Command> add_record_commands(CLI::App& app) {
   due->add_option("--today", a->due.today, "the date that decides what is overdue (ISO 8601)");
   due->add_option("--output,-o", a->output, "due.json");
   due->add_flag("--quiet,-q", a->quiet, "print nothing on success");
-  return {{add, [a] { return run_add(*a); }},     {due, [a] { return run_due(*a); }},
-          {trend, [a] { return run_trend(*a); }}, {machines, [a] { return run_machines(*a); }},
-          {list, [a] { return run_list(*a); }},   {show, [a] { return run_show(*a); }},
-          {exp, [a] { return run_export(*a); }}};
+  auto* rep = group->add_subcommand(
+      "report",
+      "Every figure of one machine over time, in one HTML report: each history (as found, as "
+      "left), its drift with its band, and the date it reaches its --limit.\nExample: trueaxis "
+      "record report --machine VMC-3 --limit A=25 --limit B@X=6 -o history.html");
+  add_db(rep, *a);
+  rep->add_option("--machine", a->filter.machine, "the machine's id")->required();
+  rep->add_option("--limit", a->limits,
+                  "a figure's upper limit in its unit: A=25 (every axis), A@X=20 (repeatable)");
+  rep->add_option("--points", a->points,
+                  "the points fitted: as-found, as-left, all, or auto (as found when the "
+                  "history has both)")
+      ->check(CLI::IsMember({"auto", "as-found", "as-left", "all"}))
+      ->capture_default_str();
+  rep->add_option("--output,-o", a->report, "the report, HTML")->required();
+  rep->add_flag("--quiet,-q", a->quiet, "print nothing on success");
+  return {{add, [a] { return run_add(*a); }},           {rep, [a] { return run_report(*a); }},
+          {due, [a] { return run_due(*a); }},           {trend, [a] { return run_trend(*a); }},
+          {machines, [a] { return run_machines(*a); }}, {list, [a] { return run_list(*a); }},
+          {show, [a] { return run_show(*a); }},         {exp, [a] { return run_export(*a); }}};
 }
 
 }  // namespace trueaxis::cli

@@ -432,19 +432,26 @@ Trend Database::history(const std::string& machine, const std::string& figure,
     if (t.points.empty()) {
       // Say which figures there are, so that a misspelt name or axis is seen at once.
       std::string known;
-      for (const auto& q :
-           b.query("SELECT DISTINCT f.name, f.axis FROM figures f JOIN records r ON r.id = "
-                   "f.record WHERE r.machine = $1 ORDER BY f.name, f.axis",
-                   {Param(machine)})) {
-        const std::string a = detail::text(q[1]);
-        known +=
-            (known.empty() ? "" : ", ") + detail::text(q[0]) + (a.empty() ? "" : " --axis " + a);
-      }
+      for (const auto& [name, a] : figures(machine))
+        known += (known.empty() ? "" : ", ") + name + (a.empty() ? "" : " --axis " + a);
       throw Error(fmt::format("machine '{}' has no figure {}{} in the records{}", machine, figure,
                               axis.empty() ? "" : " on axis " + axis,
                               known.empty() ? " (it has none)" : " (it has: " + known + ")"));
     }
     return t;
+  });
+}
+
+std::vector<std::pair<std::string, std::string>> Database::figures(
+    const std::string& machine) const {
+  auto& b = *impl_->b;
+  return guarded(b, "listing a machine's figures", [&] {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& q : b.query("SELECT DISTINCT f.name, f.axis FROM figures f JOIN records r ON "
+                                 "r.id = f.record WHERE r.machine = $1 ORDER BY f.name, f.axis",
+                                 {Param(machine)}))
+      out.emplace_back(detail::text(q[0]), detail::text(q[1]));
+    return out;
   });
 }
 

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <set>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/records/records.hpp"
@@ -67,15 +66,10 @@ std::vector<Due> due_dates(const Database& db, const DueOptions& options) {
     d.last_visit = m.last.substr(0, 10);
     d.due = add_months(d.last_visit, options.interval_months);
     d.because = fmt::format("{} months after the last visit", options.interval_months);
-    // The figures this machine has, each with its axis.
-    ListFilter f;
-    f.machine = m.id;
-    std::set<std::pair<std::string, std::string>> figures;
-    for (const auto& r : db.list(f))
-      for (const auto& g : r.figures) figures.emplace(g.name, g.axis);
+    const auto figures = db.figures(m.id);
     for (const auto& limit : options.limits) {
       for (const auto& [name, axis] : figures) {
-        if (name != limit.figure || (!limit.axis.empty() && axis != limit.axis)) continue;
+        if (!limit.applies_to(name, axis)) continue;
         TrendOptions to;
         to.tolerance = limit.value;
         const Trend t = db.trend(m.id, name, axis, to);

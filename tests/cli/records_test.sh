@@ -49,6 +49,15 @@ expect_code 1 "$T" record list --db absent.db
 grep -q "no records database at absent.db" err.txt && ok || bad "record list: no database: $(cat err.txt)"
 [ ! -e absent.db ] && ok || bad "record list created a database"
 
+# Every figure of the machine in one report: B with its limit and due date.
+expect_ok "$T" record report --db hist.db --machine VMC-1 --limit B@x=6 -o history.html
+grep -q "VMC-1: 5 figures, 5 with a drift -> history.html" out.txt && ok || bad "record report: $(cat out.txt)"
+for f in "A on X: history and drift" "B on X: history and drift" "R on X: history and drift" "the trend reaches the limit"; do
+  grep -q "$f" history.html && ok || bad "record report lacks '$f'"
+done
+expect_code 1 "$T" record report --db hist.db --machine NOPE -o none.html
+grep -q "machine 'NOPE' has no records" err.txt && ok || bad "record report, unknown machine: $(cat err.txt)"
+
 # A certificate of the last visit: as found, adjusted, as left the same day.
 "$T" simulate positioning --axis x --targets 0:100:800 --backlash 1 --noise 0.2 --seed 40 -o left.csv -q &&
   "$T" positioning --input left.csv --output left.json -q || bad "as left: simulate and evaluate"

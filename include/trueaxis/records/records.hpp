@@ -168,6 +168,8 @@ class Database {
   // Throws Error naming the figures the machine has when there is none of that name.
   Trend history(const std::string& machine, const std::string& figure,
                 const std::string& axis) const;
+  // The figures a machine's records hold: (name, axis) pairs, sorted.
+  std::vector<std::pair<std::string, std::string>> figures(const std::string& machine) const;
   // That history with its drift and due date (fit_trend), named with its figure, axis and unit.
   Trend trend(const std::string& machine, const std::string& figure, const std::string& axis,
               const TrendOptions& options = {}) const;
@@ -184,6 +186,9 @@ struct Limit {
   std::string figure, axis;  // axis "": any axis or none
   double value = 0;
   static Limit parse(const std::string& text);  // throws Error naming what is wrong
+  bool applies_to(const std::string& name, const std::string& on_axis) const {
+    return name == figure && (axis.empty() || axis == on_axis);
+  }
 };
 
 struct DueOptions {
