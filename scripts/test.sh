@@ -3,7 +3,8 @@
 #  1. on the Release build that scripts/setup.sh built and installed (./build): the CLI end to end,
 #     every README example, pytest with the report in headless Chromium, the repository's rules;
 #  2. on one clang build with AddressSanitizer + UBSan (./build-san, which also holds the libFuzzer
-#     targets of tests/fuzz/run.sh): the GoogleTest program and the CLI end to end again.
+#     targets of tests/fuzz/run.sh): the GoogleTest program (the records' tests on SQLite and on
+#     a PostgreSQL server they start).
 # The GoogleTest program is compiled only there, once: the library is compiled twice (the
 # installed build and the checked one), the test program no longer in both.
 # Expects scripts/setup.sh to have run. Installs clang and its sanitizer runtimes if missing.
@@ -31,7 +32,7 @@ if ! command -v clang++ >/dev/null ||
     clang libclang-rt-14-dev >/dev/null
 fi
 echo "== at ${SECONDS} s: the AddressSanitizer + UBSan build (clang) and its tests"
-TRUEAXIS_SAN_TARGETS="trueaxis_tests trueaxis" bash tests/fuzz/run.sh 0
+TRUEAXIS_SAN_TARGETS="trueaxis_tests" bash tests/fuzz/run.sh 0
 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
   LSAN_OPTIONS=suppressions="$(pwd)/tests/lsan.supp":print_suppressions=0 \
   ctest --test-dir build-san --output-on-failure -j"$(nproc)"
