@@ -6,6 +6,7 @@
 #include <cmath>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <tuple>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/records/records.hpp"
@@ -54,6 +55,27 @@ std::string add_months(const std::string& date, int months) {
   return fmt::format("{:04d}-{:02d}-{:02d}", y, m, std::min(d, last));
 }
 
+namespace {
+
+// The history's latest point, fitted or not: on one day the as-left value, which an adjustment
+// left after the as-found one.
+const TrendPoint* latest(const Trend& t) {
+  const TrendPoint* best = nullptr;
+  const auto order = [](const TrendPoint& p) {
+    return std::tuple(day_number(p.date),
+                      p.state == State::AsFound ? 0
+                      : p.state == State::None  ? 1
+                                                : 2,
+                      p.record);
+  };
+  for (const auto* list : {&t.points, &t.not_fitted})
+    for (const auto& p : *list)
+      if (best == nullptr || order(*best) < order(p)) best = &p;
+  return best;
+}
+
+}  // namespace
+
 std::vector<Due> due_dates(const Database& db, const DueOptions& options) {
   options.validate();
   const std::string today = options.today.empty() ? today_utc() : options.today;
@@ -75,13 +97,15 @@ std::vector<Due> due_dates(const Database& db, const DueOptions& options) {
         const Trend t = db.trend(m.id, name, axis, to);
         const std::string label = axis.empty() ? name : name + "@" + axis;
         if (!t.due) {
-          // The last value already past the limit is due now, trend or not.
-          if (!t.points.empty() && t.points.back().value > limit.value) {
+          // The machine as it was last left already past the limit is due now, trend or not.
+          if (const TrendPoint* last = latest(t); last != nullptr && last->value > limit.value) {
             if (day_number(d.last_visit) <= day_number(d.due)) {
               d.due = d.last_visit;
               d.u_days.reset();
-              d.because = fmt::format("{} was {:.3g} {} at the last visit, over its limit {:g}",
-                                      label, t.points.back().value, t.unit, limit.value);
+              d.because = fmt::format(
+                  "{} was {:.3g} {} {}, over its limit {:g}", label, last->value, t.unit,
+                  last->state == State::AsLeft ? "as left at the last visit" : "at the last visit",
+                  limit.value);
             }
           } else {
             d.notes.push_back(fmt::format("{}: {}", label, t.not_resolved));

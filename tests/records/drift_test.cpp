@@ -208,6 +208,33 @@ TEST(RecordsDue, TheIntervalOrAnEarlierTrendSetsEachMachinesDate) {
   EXPECT_EQ(due[0].due, last);
   EXPECT_TRUE(due[0].overdue);
   EXPECT_NE(due[0].because.find("over its limit"), std::string::npos) << due[0].because;
+  // Over the limit as found but adjusted under it as left: not due at that visit.
+  sim::Machine flat = m0;
+  flat.errors[0][0] = {};  // its X positioning error compensated
+  for (int v = 0; v < 2; ++v) {
+    records::AddOptions a;
+    a.machine = "ADJUSTED";
+    a.axis = "X";
+    a.date = records::date_of_day(day0 + v * 91);
+    a.new_machine = v == 0;
+    for (const auto state : {records::State::AsFound, records::State::AsLeft}) {
+      a.state = state;
+      const std::string file =
+          test::temp_dir() + fmt::format("/due-adjusted-{}-{}.json", v, records::to_string(state));
+      positioning_E(state == records::State::AsFound ? drifted(m0, 0) : flat, kLaserNoise,
+                    static_cast<std::uint64_t>(50 + 2 * v + (state == records::State::AsLeft)),
+                    file);
+      db.add(file, a);
+      a.new_machine = false;
+    }
+  }
+  const double found_E = positioning_E(drifted(m0, 0), 0, 1), left_E = positioning_E(flat, 0, 1);
+  ASSERT_GT(found_E, left_E + 5);
+  o.limits = {records::Limit::parse(fmt::format("E@X={:.3f}", (found_E + left_E) / 2))};
+  o.machine = "ADJUSTED";
+  due = records::due_dates(db, o);
+  ASSERT_EQ(due.size(), 1u);
+  EXPECT_EQ(due[0].due, records::add_months(records::date_of_day(day0 + 91), 12)) << due[0].because;
   const auto j = nlohmann::json::parse(records::to_json(due));
   EXPECT_EQ(j["kind"], "due");
   EXPECT_TRUE(j["machines"][0]["u_days"].is_null());
