@@ -110,21 +110,13 @@ int run_export(const RecordArgs& a) {
   return 0;
 }
 
-records::TrendOptions::Use points_of(const std::string& p) {
-  using Use = records::TrendOptions::Use;
-  return p == "as-found"  ? Use::AsFound
-         : p == "as-left" ? Use::AsLeft
-         : p == "all"     ? Use::All
-                          : Use::Auto;
-}
-
 int run_trend(const RecordArgs& a) {
   const records::Database db(records::database_path(a.db), records::Access::ReadOnly);
   std::string axis = a.plane.empty() ? a.axis : a.plane;
   for (char& c : axis) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
   records::TrendOptions o;
   if (!std::isnan(a.tolerance)) o.tolerance = a.tolerance;
-  o.use = points_of(a.points);
+  o.use = records::TrendOptions::use_of(a.points);
   const auto t = db.trend(a.filter.machine, a.figure, axis, o);
   if (!a.output.empty()) io::write_text(a.output, records::to_json(t, a.filter.machine));
   if (!a.report.empty())
@@ -139,7 +131,6 @@ int run_trend(const RecordArgs& a) {
   return 0;
 }
 
-
 // Every figure of one machine: its history, drift and, where a --limit names it, the date the
 // trend reaches it; one section each.
 int run_report(RecordArgs& a) {
@@ -150,7 +141,7 @@ int run_report(RecordArgs& a) {
   int resolved = 0;
   for (const auto& [name, axis] : db.figures(a.filter.machine)) {
     records::TrendOptions o;
-    o.use = points_of(a.points);
+    o.use = records::TrendOptions::use_of(a.points);
     for (const auto& l : limits)
       if (l.applies_to(name, axis)) o.tolerance = l.value;
     const auto t = db.trend(a.filter.machine, name, axis, o);
@@ -184,6 +175,20 @@ int run_due(RecordArgs& a) {
   }
   if (!a.output.empty()) fmt::print("-> {}\n", a.output);
   return 0;
+}
+
+void add_points(CLI::App* c, RecordArgs& a) {
+  c->add_option("--points", a.points,
+                "the points fitted: as-found, as-left, all, or auto (as found when the history "
+                "has as-found and as-left points, else all)")
+      ->check(CLI::IsMember({"auto", "as-found", "as-left", "all"}))
+      ->capture_default_str();
+}
+
+void add_limits(CLI::App* c, RecordArgs& a) {
+  c->add_option("--limit", a.limits,
+                "a figure's upper limit in its unit: A=25 (every axis), A@X=20, G_ccw@XY=15 "
+                "(repeatable)");
 }
 
 void add_db(CLI::App* c, RecordArgs& a) {
@@ -265,12 +270,7 @@ std::vector<Command> add_record_commands(CLI::App& app) {
       ->excludes("--axis");
   trend->add_option("--tolerance", a->tolerance,
                     "the figure's upper limit, in its unit: when the trend reaches it");
-  trend
-      ->add_option("--points", a->points,
-                   "the points fitted: as-found, as-left, all, or auto (as found when the "
-                   "history has as-found and as-left points, else all)")
-      ->check(CLI::IsMember({"auto", "as-found", "as-left", "all"}))
-      ->capture_default_str();
+  add_points(trend, *a);
   trend->add_option("--output,-o", a->output, "trend.json");
   trend->add_option("--report", a->report,
                     "an HTML report: the history (as found, as left), the drift and its band, "
@@ -287,9 +287,7 @@ std::vector<Command> add_record_commands(CLI::App& app) {
                   "the longest time between two visits, in months")
       ->check(CLI::Range(1, 120))
       ->capture_default_str();
-  due->add_option("--limit", a->limits,
-                  "a figure's upper limit in its unit: A=25 (every axis), A@X=20, G_ccw@XY=15 "
-                  "(repeatable)");
+  add_limits(due, *a);
   due->add_option("--today", a->due.today, "the date that decides what is overdue (ISO 8601)");
   due->add_option("--output,-o", a->output, "due.json");
   due->add_flag("--quiet,-q", a->quiet, "print nothing on success");
@@ -300,13 +298,8 @@ std::vector<Command> add_record_commands(CLI::App& app) {
       "record report --machine VMC-3 --limit A=25 --limit B@X=6 -o history.html");
   add_db(rep, *a);
   rep->add_option("--machine", a->filter.machine, "the machine's id")->required();
-  rep->add_option("--limit", a->limits,
-                  "a figure's upper limit in its unit: A=25 (every axis), A@X=20 (repeatable)");
-  rep->add_option("--points", a->points,
-                  "the points fitted: as-found, as-left, all, or auto (as found when the "
-                  "history has both)")
-      ->check(CLI::IsMember({"auto", "as-found", "as-left", "all"}))
-      ->capture_default_str();
+  add_limits(rep, *a);
+  add_points(rep, *a);
   rep->add_option("--output,-o", a->report, "the report, HTML")->required();
   rep->add_flag("--quiet,-q", a->quiet, "print nothing on success");
   return {{add, [a] { return run_add(*a); }},           {rep, [a] { return run_report(*a); }},

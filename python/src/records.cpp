@@ -142,17 +142,7 @@ already stored for the machine. Returns the stored records as dicts.)doc")
              const std::string& axis, std::optional<double> tolerance, const std::string& points) {
             records::TrendOptions o;
             o.tolerance = tolerance;
-            using Use = records::TrendOptions::Use;
-            if (points == "as-found")
-              o.use = Use::AsFound;
-            else if (points == "as-left")
-              o.use = Use::AsLeft;
-            else if (points == "all")
-              o.use = Use::All;
-            else if (points != "auto")
-              throw Error(fmt::format(
-                  "points='{}': the points fitted are 'auto', 'as-found', 'as-left' or 'all'",
-                  points));
+            o.use = records::TrendOptions::use_of(points);
             const auto t = db.trend(machine, figure, axis, o);
             const auto n = static_cast<py::ssize_t>(t.points.size());
             py::array_t<double> value(n), u(n);

@@ -347,22 +347,23 @@ std::vector<Record> Database::query(const ListFilter& f, long long id) const {
   auto& b = *impl_->b;
   return guarded(b, "listing the records", [&] {
     std::vector<Record> out;
+    // The records the filter selects (r), and their figures in one more statement.
+    const std::string where =
+        " WHERE ($1 = '' OR r.machine = $1) AND ($2 = '' OR r.kind = $2) AND ($3 = '' OR r.date "
+        ">= $3) AND ($4 = '' OR substr(r.date, 1, 10) <= $4) AND ($5 = 0 OR r.id = $5)";
+    const std::vector<Param> params{Param(f.machine), Param(f.kind), Param(f.from), Param(f.to),
+                                    Param(static_cast<std::int64_t>(id))};
     const auto rows = b.query(
-        "SELECT id, machine, date, kind, state, operator, instrument, temperature_C, note, "
-        "trueaxis_version, file_name FROM records WHERE ($1 = '' OR machine = $1) AND ($2 = '' "
-        "OR kind = $2) AND ($3 = '' OR date >= $3) AND ($4 = '' OR substr(date, 1, 10) <= $4) "
-        "AND ($5 = 0 OR id = $5) ORDER BY date, id",
-        {Param(f.machine), Param(f.kind), Param(f.from), Param(f.to),
-         Param(static_cast<std::int64_t>(id))});
-    // The figures of every record listed, in one statement (not one per record).
+        "SELECT r.id, r.machine, r.date, r.kind, r.state, r.operator, r.instrument, "
+        "r.temperature_C, r.note, r.trueaxis_version, r.file_name FROM records r" +
+            where + " ORDER BY r.date, r.id",
+        params);
     std::map<long long, std::vector<Figure>> figures;
     const auto figs = b.query(
         "SELECT f.record, f.name, f.axis, f.value, f.u, f.unit FROM figures f JOIN records r ON "
-        "r.id = f.record WHERE ($1 = '' OR r.machine = $1) AND ($2 = '' OR r.kind = $2) AND ($3 "
-        "= '' OR r.date >= $3) AND ($4 = '' OR substr(r.date, 1, 10) <= $4) AND ($5 = 0 OR r.id "
-        "= $5) ORDER BY f.record, f.seq",
-        {Param(f.machine), Param(f.kind), Param(f.from), Param(f.to),
-         Param(static_cast<std::int64_t>(id))});
+        "r.id = f.record" +
+            where + " ORDER BY f.record, f.seq",
+        params);
     for (const auto& g : figs) {
       Figure fg;
       fg.name = detail::text(g[1]);

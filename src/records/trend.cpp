@@ -46,6 +46,15 @@ std::string date_of_day(long long z) {
   return fmt::format("{:04d}-{:02d}-{:02d}", y + (m <= 2), m, d);
 }
 
+TrendOptions::Use TrendOptions::use_of(const std::string& name) {
+  if (name == "auto") return Use::Auto;
+  if (name == "as-found") return Use::AsFound;
+  if (name == "as-left") return Use::AsLeft;
+  if (name == "all") return Use::All;
+  throw Error(fmt::format(
+      "points '{}': the points fitted are 'auto', 'as-found', 'as-left' or 'all'", name));
+}
+
 void TrendOptions::validate() const {
   if (tolerance && !std::isfinite(*tolerance)) throw Error("trend: the tolerance must be a number");
 }

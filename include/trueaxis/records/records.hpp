@@ -89,6 +89,8 @@ struct TrendOptions {
   // values show; an as-left value is where an adjustment put it. Auto: the as-found points when
   // the history has as-found and as-left ones, else all.
   enum class Use { Auto, AsFound, AsLeft, All } use = Use::Auto;
+  // "auto", "as-found", "as-left" or "all"; throws Error naming the choices otherwise.
+  static Use use_of(const std::string& name);
   std::string unit;       // the figure's unit, for the messages
   void validate() const;  // throws Error
 };
