@@ -168,7 +168,9 @@ Contour true_contour(const Part& part, const design::Section& s, double spacing)
     // placed by the design arc each point comes from.
     const design::Section real = moved_contour(part, s, T);
     design::Samples smp = design::sample(real, spacing, kChordTolerance);
-    const auto fine = design::sample(s, std::min(spacing, 0.05));
+    // The design curve as a polyline within the chord tolerance: its nearest points give the
+    // design arcs as exactly as the contour is built.
+    const auto fine = design::sample(s, 1.0, kChordTolerance);
     const Contour design_curve(fine.points, normal, s.closed, s.material == design::Side::Left);
     const Eigen::Affine3d back = T.inverse();
     design::Samples at_design = smp;

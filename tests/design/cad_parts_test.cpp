@@ -242,5 +242,45 @@ TEST(CadParts, FileToleranceUnitsAndSeveralSolids) {
   EXPECT_NEAR(reach, 83.75, 0.01);
 }
 
+// Even samples of real B-spline contours lie at their arc lengths, checked against an
+// independent measure: a polyline within 1e-9 mm of the curve (chords split where they leave it),
+// along which the arc is exact to far below the check. The contour's length is the same one.
+TEST(CadParts, EvenSamplesOfBsplineContoursLieAtTheirArcLengths) {
+  constexpr double kSameArc = 1e-6;  // mm
+  const auto cut = design::cut_step(
+      kCad + "nist_ctc_05_asme1_rd.stp",
+      {plane("tilt", {-105.4, -111.8, 144.8}, {1, 0, 2}), plane("z52", {0, 0, 52}, {0, 0, 1})});
+  int checked = 0;
+  for (const auto& s : cut.design.sections) {
+    if (!s.nurbs) continue;
+    const auto fine = design::sample(s, 0.2, 1e-9);
+    const Eigen::Index k = fine.points.cols();
+    const double L =
+        fine.arc[k - 1] + (s.closed ? (fine.points.col(0) - fine.points.col(k - 1)).norm() : 0.0);
+    EXPECT_NEAR(design::length(s), L, kSameArc) << s.name;
+    const auto smp = design::sample(s, 0.37);
+    const Eigen::Index m = smp.points.cols();
+    ASSERT_GE(m, 3) << s.name;
+    const double step = design::length(s) / static_cast<double>(s.closed ? m : m - 1);
+    Eigen::Index j = 0;
+    for (Eigen::Index i = 1; i < m; i += std::max<Eigen::Index>(1, m / 9)) {
+      EXPECT_NEAR(smp.arc[i], static_cast<double>(i) * step, 1e-9 * L) << s.name;
+      // The polyline's point at the same arc.
+      while (j + 2 < k && fine.arc[j + 1] < smp.arc[i]) ++j;
+      const double f = (smp.arc[i] - fine.arc[j]) / (fine.arc[j + 1] - fine.arc[j]);
+      const Eigen::Vector3d at =
+          fine.points.col(j) + f * (fine.points.col(j + 1) - fine.points.col(j));
+      EXPECT_LT((at - smp.points.col(i)).norm(), kSameArc)
+          << s.name << " at " << smp.arc[i] << " of " << L << " mm";
+      ++checked;
+    }
+    // A piece ends where the sample at its length is.
+    const Eigen::Index h = m / 3;
+    const auto head = design::sample(design::piece(s, 0, smp.arc[h], "head"), 1e3);
+    EXPECT_LT((head.points.col(head.points.cols() - 1) - smp.points.col(h)).norm(), kSameArc);
+  }
+  EXPECT_GE(checked, 20);
+}
+
 }  // namespace
 }  // namespace trueaxis

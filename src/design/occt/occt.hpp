@@ -72,6 +72,8 @@ Nurbs nurbs(const Geom_BSplineCurve& c);
 
 // Unit normal of the surface at curve parameter t: in the plane, away from the material.
 Eigen::Vector3d away_from_material(const Section& s, const Geom_BSplineCurve& c, double t);
+// The same from the curve's first derivative there (any length).
+Eigen::Vector3d away_from_material(const Section& s, const Eigen::Vector3d& tangent);
 
 // The first and last point of a NURBS section's curve (Error: OCCT rejects the curve).
 void ends(const Section& s, Eigen::Vector3d& first, Eigen::Vector3d& last);

@@ -49,6 +49,7 @@ class Outline {
       // Tangential deflection gives a first polyline; every chord is then split until it is at
       // most kLongestChord long and its quarter points lie within kSagitta of it (the first pass
       // only estimates its deflection, and misses wiggles of approximated section curves).
+      // Points come from the adaptor, which keeps the knot span's polynomial between calls.
       GeomAdaptor_Curve a(piece);
       GCPnts_TangentialDeflection td(a, 0.2, kSagitta, 2);
       const std::size_t first = pts_.size();
@@ -63,13 +64,13 @@ class Outline {
             const double len2 = chord.squaredNorm();
             double worst = 0;
             for (double f : {0.25, 0.5, 0.75}) {
-              const Eigen::Vector3d q = vec(piece->Value(ta + f * (tb - ta)));
+              const Eigen::Vector3d q = vec(a.Value(ta + f * (tb - ta)));
               const double t = len2 > 0 ? std::clamp((q - pa).dot(chord) / len2, 0.0, 1.0) : 0.0;
               worst = std::max(worst, (q - pa - t * chord).norm());
             }
             if ((worst > kSagitta || len2 > kLongestChord * kLongestChord) && depth < 30) {
               const double tm = 0.5 * (ta + tb);
-              const Eigen::Vector3d pm = vec(piece->Value(tm));
+              const Eigen::Vector3d pm = vec(a.Value(tm));
               refine(ta, tm, pa, pm, depth + 1);
               refine(tm, tb, pm, pb, depth + 1);
               return;
@@ -79,9 +80,9 @@ class Outline {
       std::vector<double> ts;
       for (int i = 1; i <= td.NbPoints(); ++i) ts.push_back(td.Parameter(i));
       if (ts.size() < 2) ts = {piece->FirstParameter(), piece->LastParameter()};
-      add(vec(piece->Value(ts.front())));
+      add(vec(a.Value(ts.front())));
       for (std::size_t i = 0; i + 1 < ts.size(); ++i)
-        refine(ts[i], ts[i + 1], vec(piece->Value(ts[i])), vec(piece->Value(ts[i + 1])), 0);
+        refine(ts[i], ts[i + 1], vec(a.Value(ts[i])), vec(a.Value(ts[i + 1])), 0);
       for (std::size_t i = first; i + 1 < pts_.size(); ++i) seg_.push_back(static_cast<int>(i));
     }
     lo_ = hi_ = pts_.front();
