@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -48,8 +49,9 @@ Planner Planner::moved(const Eigen::Affine3d& t) const {
 }
 
 double Planner::element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& u,
-                        const std::vector<char>& skip) const {
-  const double rs = stylus_.shaft(r_), rb = stylus_.body_radius, look = margin_ + kLookout;
+                        const std::vector<char>& skip, double look) const {
+  const double rs = stylus_.shaft(r_), rb = stylus_.body_radius;
+  if (look < 0) look = margin_ + kLookout;
   // As the virtual CMM checks it: the stem up to the probe's round nose.
   const Eigen::Vector3d s0 = c + r_ * u, s1 = c + (stylus_.length + rb) * u,
                         b1 = c + (stylus_.length + stylus_.body_length) * u;
@@ -74,11 +76,35 @@ double Planner::clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
       {element(0, c, axis, skip), element(1, c, axis, skip), element(2, c, axis, skip)});
 }
 
+double Planner::swept_along_axis(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                 const Eigen::Vector3d& u) const {
+  // Each element moving along its own axis sweeps a segment of that line: the ball's centre from
+  // the lower to the higher end, the stem and the body from their lower ends' bottom to their
+  // higher ends' top. The least clearance over the move is that of those segments.
+  const Eigen::Vector3d lo = (b - a).dot(u) >= 0 ? a : b, hi = (b - a).dot(u) >= 0 ? b : a;
+  const double rs = stylus_.shaft(r_), rb = stylus_.body_radius, look = margin_ + kLookout;
+  const Eigen::Vector3d s0 = lo + r_ * u, s1 = hi + (stylus_.length + rb) * u,
+                        b0 = lo + (stylus_.length + rb) * u,
+                        b1 = hi + (stylus_.length + stylus_.body_length) * u;
+  // A ball whose whole way lies inside the solid never crosses its surface: inside is inside.
+  const double ball = std::min(part_->inside(lo) ? -r_ : part_->distance(lo, hi, r_ + look) - r_,
+                               std::min(lo.z(), hi.z()) - r_ - table_z_);
+  const double stem =
+      std::min(part_->distance(s0, s1, rs + look) - rs, std::min(s0.z(), s1.z()) - rs - table_z_);
+  const double body =
+      std::min(part_->distance(b0, b1, rb + look) - rb, std::min(b0.z(), b1.z()) - rb - table_z_);
+  return std::min({ball, stem, body});
+}
+
 bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
                     double margin) const {
   if (!part_) return true;
   const double L = (b - a).norm();
   const Eigen::Vector3d d = L > 0 ? Eigen::Vector3d((b - a) / L) : Eigen::Vector3d::Zero();
+  // Along the stylus's own axis (a retract, a descent), the swept elements are checked at once:
+  // stepping by the clearance less the margin would crawl up a wall the stylus stands beside.
+  const Eigen::Vector3d u = axis.normalized();
+  if (L > 0 && d.cross(u).norm() < 1e-12) return swept_along_axis(a, b, u) >= margin + kLeast;
   // Every point of the stylus moves as far as its ball: the clearance cannot fall by more than
   // the distance moved.
   for (double t = 0;;) {
@@ -189,11 +215,36 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
   std::vector<char> contour(skip.size());  // every face but those the plane crosses
   for (std::size_t i = 0; i < skip.size(); ++i) contour[i] = !skip[i];
   const double contact = std::max(0.0, path.offset - 0.05);
+  // Each element's clearance is 1-Lipschitz in the ball centre (the capped distance to a fixed
+  // set of faces, and the height above the table): where it was last computed, e at x, it is at
+  // least e − |x' − x| at x'. The checks below visit thousands of places a fraction of a
+  // millimetre apart, and the ball (off its plane) and the body mostly stand far from
+  // everything: that lower bound decides them while it stays kTrust above the reach, and stands
+  // for the clearance in the push's step (a shorter step, never a longer one). Clearances are
+  // looked for only kLook far (the push never goes beyond the margin): a nearer bound makes each
+  // query visit fewer of the solid's boxes.
+  constexpr double kTrust = 0.25;
+  const double kLook = margin_ + 2;
+  struct Known {
+    Eigen::Vector3d x = Eigen::Vector3d::Zero();
+    double e = -INFINITY;
+  };
+  // One per element and placement (the path itself, then the eight shifts): consecutive
+  // stations' places of one placement are about a step apart.
+  std::array<std::array<Known, 9>, 3> known;
+  auto clear_of = [&](int k, int j, const Eigen::Vector3d& x) {
+    Known& m = known[static_cast<std::size_t>(k)][static_cast<std::size_t>(j + 1)];
+    const double bound = m.e - (x - m.x).norm();
+    if (bound >= kReach + kTrust) return bound;
+    m.x = x;
+    m.e = element(k, x, u, k == 0 ? skip : none, kLook);
+    return m.e;
+  };
   auto blocked = [&](double s) -> int {
     const design::PathPoint q = path.at(s);
     const Eigen::Vector3d c = q.p;
     for (int k = 0; k < 3; ++k)
-      if (element(k, c, u, k == 0 ? skip : none) < kReach) return k;
+      if (clear_of(k, -1, c) < kReach) return k;
     const Eigen::Vector3d a = q.normal, b = pn.cross(q.normal).normalized();
     for (int j = -1; j < 8; ++j) {
       const double t = std::numbers::pi / 4 * j;
@@ -214,7 +265,7 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
         if (to_contact < 0) break;
         double room = to_contact;
         for (int k = 0; k < 3; ++k) {
-          const double e = element(k, x, u, k == 0 ? skip : none);
+          const double e = clear_of(k, j, x);
           if (e < kReach) return 3 + k;
           room = std::min(room, e - kReach);
         }

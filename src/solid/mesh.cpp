@@ -75,15 +75,20 @@ double box_point2(const Eigen::AlignedBox3d& box, const V& p) {
   return box.squaredExteriorDistance(p);
 }
 
+// The squared gap between two boxes (0 where they overlap).
+double box_gap2(const Eigen::AlignedBox3d& x, const Eigen::AlignedBox3d& y) {
+  double bound = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double gap = std::max({0.0, x.min()[k] - y.max()[k], y.min()[k] - x.max()[k]});
+    bound += gap * gap;
+  }
+  return bound;
+}
+
 // A lower bound of the squared distance from the segment to the box: the larger of the box's
 // distance to the segment's own box and that of a sphere round the box to the segment.
 double box_segment2(const Eigen::AlignedBox3d& box, const V& a, const V& b) {
-  Eigen::AlignedBox3d sb(a.cwiseMin(b), a.cwiseMax(b));
-  double bound = 0;
-  for (int k = 0; k < 3; ++k) {
-    const double gap = std::max({0.0, box.min()[k] - sb.max()[k], sb.min()[k] - box.max()[k]});
-    bound += gap * gap;
-  }
+  const double bound = box_gap2(box, Eigen::AlignedBox3d(a.cwiseMin(b), a.cwiseMax(b)));
   const V c = box.center();
   const double radius = 0.5 * box.diagonal().norm();
   const V d = b - a;
@@ -239,8 +244,9 @@ std::vector<char> Mesh::faces_crossing(const V& origin, const V& normal) const {
 }
 
 // Best-first descent of the hierarchy for the least squared distance from something (a point,
-// a segment) to the faces not skipped: box_d2(box) bounds it from below for a node, tri_d2(t)
-// is it for triangle t. `limit` when nothing is nearer.
+// a segment) to the faces not skipped: box_d2(box) bounds it from below for a node, tri_d2(t,
+// best2) is it for triangle t, or anything not below best2 when the triangle cannot be nearer.
+// `limit` when nothing is nearer.
 template <class BoxD2, class TriD2>
 double Mesh::nearest(double limit, const std::vector<char>& skip, BoxD2 box_d2,
                      TriD2 tri_d2) const {
@@ -256,7 +262,7 @@ double Mesh::nearest(double limit, const std::vector<char>& skip, BoxD2 box_d2,
       for (int i = n.first; i < n.first + n.count; ++i) {
         const int t = order_[i];
         if (!skip.empty() && skip[face_[t]]) continue;
-        best2 = std::min(best2, tri_d2(t));
+        best2 = std::min(best2, tri_d2(t, best2));
       }
       continue;
     }
@@ -277,7 +283,7 @@ double Mesh::nearest(double limit, const std::vector<char>& skip, BoxD2 box_d2,
 double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) const {
   return nearest(
       limit, skip, [&](const Eigen::AlignedBox3d& box) { return box_point2(box, p); },
-      [&](int t) {
+      [&](int t, double) {
         return (closest_on_triangle(p, v_.col(tri_(0, t)), v_.col(tri_(1, t)), v_.col(tri_(2, t))) -
                 p)
             .squaredNorm();
@@ -285,11 +291,23 @@ double Mesh::distance(const V& p, double limit, const std::vector<char>& skip) c
 }
 
 double Mesh::distance(const V& a, const V& b, double limit, const std::vector<char>& skip) const {
+  // A triangle is tested in full only if its own box is nearer than the best so far (the gap
+  // between the boxes bounds the distance from below).
+  const Eigen::AlignedBox3d sb(a.cwiseMin(b), a.cwiseMax(b));
+  auto triangle = [&](int t, double best2) {
+    const V &p = v_.col(tri_(0, t)), &q = v_.col(tri_(1, t)), &r = v_.col(tri_(2, t));
+    const Eigen::AlignedBox3d tb(p.cwiseMin(q).cwiseMin(r), p.cwiseMax(q).cwiseMax(r));
+    if (box_gap2(tb, sb) >= best2) return best2;
+    return segment_triangle2(a, b, p, q, r);
+  };
+  // A segment along a coordinate axis (a stylus standing vertical) is its own box: the gap
+  // between the boxes is its exact distance from a node's box.
+  if (((a - b).array() != 0).count() <= 1)
+    return nearest(
+        limit, skip, [&](const Eigen::AlignedBox3d& box) { return box_gap2(box, sb); }, triangle);
   return nearest(
       limit, skip, [&](const Eigen::AlignedBox3d& box) { return box_segment2(box, a, b); },
-      [&](int t) {
-        return segment_triangle2(a, b, v_.col(tri_(0, t)), v_.col(tri_(1, t)), v_.col(tri_(2, t)));
-      });
+      triangle);
 }
 
 double Mesh::highest(const V& up) const {

@@ -1,0 +1,111 @@
+// Motion planning against a solid whose clearances are known by hand: a 100 × 100 × 50 mm block
+// on the table and a slab overhanging its front face higher up.
+#include "trueaxis/scan/planner.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+
+#include "trueaxis/design/design.hpp"
+
+namespace trueaxis {
+namespace {
+
+constexpr double kTip = 1, kMargin = 2.5, kReach = 0.1;  // mm (kReach: the planner's own)
+constexpr double kEdge = 0.02;  // mm: the blocked arcs' ends are found to a hundredth of the step
+
+// Boxes as one mesh, each face (two triangles) its own face id.
+std::shared_ptr<const solid::Mesh> boxes(const std::vector<Eigen::AlignedBox3d>& list) {
+  Eigen::Matrix3Xd v(3, 8 * static_cast<Eigen::Index>(list.size()));
+  Eigen::Matrix3Xi t(3, 12 * static_cast<Eigen::Index>(list.size()));
+  std::vector<int> faces;
+  // Corner k has x from bit 0, y from bit 1, z from bit 2; each face as two triangles.
+  static const int quads[6][4] = {{0, 2, 6, 4}, {1, 5, 7, 3}, {0, 4, 5, 1},
+                                  {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 6, 7, 5}};
+  for (std::size_t b = 0; b < list.size(); ++b) {
+    const Eigen::Index v0 = 8 * static_cast<Eigen::Index>(b),
+                       t0 = 12 * static_cast<Eigen::Index>(b);
+    for (int k = 0; k < 8; ++k)
+      v.col(v0 + k) << (k & 1 ? list[b].max() : list[b].min()).x(),
+          (k & 2 ? list[b].max() : list[b].min()).y(), (k & 4 ? list[b].max() : list[b].min()).z();
+    for (int f = 0; f < 6; ++f) {
+      const int* q = quads[f];
+      t.col(t0 + 2 * f) << v0 + q[0], v0 + q[1], v0 + q[2];
+      t.col(t0 + 2 * f + 1) << v0 + q[0], v0 + q[2], v0 + q[3];
+      faces.push_back(static_cast<int>(6 * b) + f);
+      faces.push_back(static_cast<int>(6 * b) + f);
+    }
+  }
+  return std::make_shared<const solid::Mesh>(std::move(v), std::move(t), std::move(faces));
+}
+
+const Eigen::AlignedBox3d kBlock(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(100, 100, 50));
+// Over the front face (y = 0) from x = 40 to 60, reaching 10 mm out, 70 to 80 mm high.
+const Eigen::AlignedBox3d kSlab(Eigen::Vector3d(40, -10, 70), Eigen::Vector3d(60, 5, 80));
+
+scan::Planner planner(const std::vector<Eigen::AlignedBox3d>& list) {
+  return scan::Planner(boxes(list), kTip, scan::Stylus{}, kMargin, 20, 0);
+}
+
+// A retract up along the stylus beside the wall it scanned, the ball 0.2 mm off it (the stem, Ø1
+// on a Ø2 ball, 0.7 mm) all the way up: the whole move is judged at once, by its least
+// clearance.
+TEST(Planner, ARetractAlongTheStylusIsJudgedByItsLeastClearance) {
+  const auto p = planner({kBlock});
+  const Eigen::Vector3d u = Eigen::Vector3d::UnitZ();
+  const Eigen::Vector3d a(50, -1.2, 25), top(50, -1.2, 120);
+  EXPECT_NEAR(p.clearance(a, u), 0.2, 1e-9);
+  EXPECT_TRUE(p.clear(a, top, u, 0.15));
+  EXPECT_FALSE(p.clear(a, top, u, 0.25));
+  EXPECT_TRUE(p.clear(top, a, u, 0.15));  // coming down the same way
+
+  // A slab above, at 150 to 160 mm: going up, the probe body's round top (96.5 mm above the
+  // ball: the stylus is 50 mm to the body's nose, the body 40 mm from there and Ø13) meets its
+  // underside when the ball is at 150 − 96.5 = 53.5 mm.
+  const auto over = planner(
+      {kBlock, Eigen::AlignedBox3d(Eigen::Vector3d(40, -10, 150), Eigen::Vector3d(60, 5, 160))});
+  EXPECT_FALSE(over.clear(a, top, u, 0.1));
+  EXPECT_TRUE(over.clear(a, Eigen::Vector3d(50, -1.2, 53.5 - 0.1 - 0.05), u, 0.1));
+  EXPECT_FALSE(over.clear(a, Eigen::Vector3d(50, -1.2, 53.5 - 0.1 + 0.05), u, 0.1));
+  // A ball whose whole way is inside the part is not clear.
+  EXPECT_FALSE(p.clear(Eigen::Vector3d(50, 50, 10), Eigen::Vector3d(50, 50, 40), u, 0.1));
+  // Nor one that ends on the table.
+  EXPECT_FALSE(p.clear(Eigen::Vector3d(-20, -20, 30), Eigen::Vector3d(-20, -20, 0.5), u, 0.1));
+}
+
+// Scanning round the block at z = 25 with the stylus vertical: the slab over the front face
+// blocks the probe body (Ø13, from 56.5 to 90 mm above the ball on its axis, so its lower end is
+// 1.5 mm above the slab's top) wherever it comes within the reach of the slab, and, for a part
+// that may stand the margin off its design, that much further on either side. Everything else is
+// reachable.
+TEST(Planner, AnOverhangBlocksTheStretchUnderItAndTheMarginBesideIt) {
+  design::Section s;
+  s.plane = {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()};
+  s.polyline.resize(3, 5);
+  s.polyline << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
+  design::PathOptions po;
+  po.tip_radius = kTip;
+  const auto path = design::make_path(s, po);
+  const Eigen::Vector3d u = Eigen::Vector3d::UnitZ();
+
+  EXPECT_TRUE(planner({kBlock}).unreachable(path, u).empty());
+
+  const auto blocked = planner({kBlock, kSlab}).unreachable(path, u);
+  ASSERT_EQ(blocked.size(), 1u);
+  const auto from = path.at(blocked[0].from).p, to = path.at(blocked[0].to).p;
+  // Across the slab's x-edges: the body's end at 25 + 56.5 = 81.5 mm, 1.5 mm above the slab.
+  const double body = 6.5 + kReach, above = 25 + 56.5 - 80;
+  const double beside = std::sqrt(body * body - above * above);
+  EXPECT_NEAR(std::min(from.x(), to.x()), 40 - beside - kMargin, kEdge) << blocked[0].why;
+  EXPECT_NEAR(std::max(from.x(), to.x()), 60 + beside + kMargin, kEdge) << blocked[0].why;
+  EXPECT_NEAR(from.y(), -(kTip - po.pushing), 1e-6);
+  EXPECT_NEAR(to.y(), -(kTip - po.pushing), 1e-6);
+  // The first place met is blocked only for a part off its design.
+  EXPECT_NE(blocked[0].why.find("probe body would run into the part if the part stood off"),
+            std::string::npos)
+      << blocked[0].why;
+}
+
+}  // namespace
+}  // namespace trueaxis
