@@ -195,6 +195,7 @@ struct SimArgs {
   std::string gauge = "gauge.json", measurements = "measurements.json",
               truth = "ballgauge-truth.csv";
   std::string alignment = "321", lengths, balls, cmm, plate;
+  const CLI::Option* tip_radius_given = nullptr;  // --tip-radius, when given
   int sections = 3, repeats = 3;
   double pitch = 100;
   double length_noise_um = -1;
@@ -238,7 +239,8 @@ int run_simulate(const SimArgs& a) {
     // Measured on the CMM: PtMeas on every ball where the poses put it, with the CMM's probe.
     ippdme::RemoteCmmOptions ro;
     std::tie(ro.client.host, ro.client.port) = address;
-    ro.tip_radius = 0;  // the server's
+    // The server's tip radius, unless one is given (a server before I++ DME 1.4.2 cannot say).
+    ro.tip_radius = a.tip_radius_given && a.tip_radius_given->count() ? o.tip_radius : 0;
     ippdme::RemoteCmm cmm(ro);
     o.tip_radius = cmm.tip_radius();
     const double total =
@@ -447,7 +449,11 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
   c->add_option("--misalignment", sa->misalignment_urad, "gauge rotation against the axes, µrad")
       ->capture_default_str();
   c->add_option("--points", sa->o.points_per_ball, "probed points per ball")->capture_default_str();
-  c->add_option("--tip-radius", sa->o.tip_radius, "stylus tip radius, mm")->capture_default_str();
+  sa->tip_radius_given =
+      c->add_option("--tip-radius", sa->o.tip_radius,
+                    "stylus tip radius, mm (with --cmm: the server's unless given here, which a "
+                    "server before I++ DME 1.4.2 needs)")
+          ->capture_default_str();
   c->add_option("--noise", sa->noise_um, "probing noise per coordinate, µm")->capture_default_str();
   c->add_option("--seed", sa->o.seed, "seed of the noise")->capture_default_str();
   c->add_option("--gauge", sa->gauge, "gauge JSON to write")->capture_default_str();
@@ -469,7 +475,6 @@ std::vector<Command> add_ballgauge_commands(CLI::App& app, CLI::App& simulate) {
                 "serve --machine machine.json --balls balls.csv): PtMeas on each ball where the "
                 "placements put it, with the CMM's probe and its noise")
       ->excludes("--noise")
-      ->excludes("--tip-radius")
       ->excludes("--seed")
       ->excludes("--lengths");
   c->add_flag("--quiet,-q", sa->quiet, "print nothing on success");

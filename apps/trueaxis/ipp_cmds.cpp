@@ -119,6 +119,7 @@ struct ServeArgs {
   int port = 1294;
   std::vector<double> part_origin;
   double time_scale = 1, tip_radius = 1, probe_noise_um = 0;
+  std::string dme_version = "1.4.3";
   std::uint64_t seed = 1;
   long sessions = 0;
   bool quiet = false;
@@ -133,6 +134,7 @@ int run_serve(const ServeArgs& a) {
   o.log = a.log;
   auto& e = o.engine;
   e.time_scale = a.time_scale;
+  e.version = a.dme_version;
   e.cmm.probe.tip_radius = a.tip_radius;
   e.cmm.probe.noise = a.probe_noise_um * 1e-3;
   e.cmm.probe.seed = a.seed;
@@ -319,6 +321,11 @@ std::vector<Command> add_serve_command(CLI::App& app) {
   c->add_option("--tip-radius", a->tip_radius, "stylus tip radius of Probe1 (mm)")
       ->capture_default_str()
       ->check(CLI::Range(0.05, 50.0));
+  c->add_option("--dme-version", a->dme_version,
+                "the I++ DME version served: 1.4.1 refuses what 1.4.2 added (ScanOnCurve, "
+                "Tool.ScanPar, Tool.AvrRadius), to try a client against an older controller")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"1.4.1", "1.4.2", "1.4.3"}));
   c->add_option("--probe-noise", a->probe_noise_um, "probe noise, standard deviation (µm)")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 100.0));

@@ -25,7 +25,7 @@ struct ScanArgs {
       strategy = "error-tolerant";
   scan::ControllerOptions o;
   std::vector<double> part_origin;
-  double probe_noise_um = 0;
+  double probe_noise_um = 0, point_step = ippdme::RemoteCmmOptions{}.point_step;
   std::uint64_t seed = 1;
   bool passive = false, quiet = false;
 };
@@ -58,7 +58,13 @@ int run_scan(ScanArgs& a) {
     std::tie(ro.client.host, ro.client.port) = parse_ipp_address(a.cmm);
     ro.part_origin = origin;
     ro.tip_radius = a.o.path.tip_radius;
+    ro.point_step = a.point_step;
     remote = std::make_unique<ippdme::RemoteCmm>(ro);
+    if (remote->scans_by_points() && !a.quiet)
+      fmt::print(stderr,
+                 "the server speaks I++ DME {}, which has no ScanOnCurve (1.4.2): scanning point "
+                 "by point, a PtMeas every {:g} mm\n",
+                 remote->version(), a.point_step);
   }
   scan::Machine& cmm = remote ? static_cast<scan::Machine&>(*remote) : *virt;
   const auto r =
@@ -212,6 +218,11 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
                 "serve --part part.json) instead of the virtual CMM in process")
       ->excludes("--machine")
       ->excludes("--passive");
+  c->add_option("--point-step", a->point_step,
+                "with --cmm on a server older than I++ DME 1.4.2 (no ScanOnCurve): a point this "
+                "far apart along the path (mm)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.01, 10.0));
   c->add_option("--probe-noise", a->probe_noise_um, "probe noise, standard deviation (µm)")
       ->capture_default_str();
   c->add_option("--seed", a->seed, "random seed of the probe noise")->capture_default_str();

@@ -214,6 +214,16 @@ void Executor::run() {
   }
   if (s_.latched) throw Fail{514};
   if (n == "GetDMEVersion") return s_.data(tag, {call("DMEVersion", {string(s_.o.version)})});
+  // A server of an older version does not know what came later: ScanOnCurve and its hint and
+  // density, the scanning parameters (Tool.ScanPar) and Tool.AvrRadius are I++ DME 1.4.2's.
+  if (s_.version() < 10402) {
+    bool newer = n == "ScanOnCurve" || n == "ScanOnCurveHint" || n == "ScanOnCurveDensity";
+    if (n == "SetProp" || n == "GetProp" || n == "GetPropE")
+      for (const auto& a : m_.args)
+        newer = newer || a.text.find("ScanPar") != std::string::npos ||
+                a.text.find("AvrRadius") != std::string::npos;
+    if (newer) throw Fail{501};
+  }
   if (n == "GetMachineClass")
     return s_.data(tag, {call("GetMachineClass", {string("CartCMMWithRotaryTable")})});
   if (n == "GetErrorInfo") {

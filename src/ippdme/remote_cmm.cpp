@@ -53,6 +53,10 @@ void RemoteCmmOptions::validate() const {
   if (!(curve_step > 0)) throw Error("I++ DME CMM: the curve step must be positive (mm)");
   if (!(follow_deviation > 0))
     throw Error("I++ DME CMM: the follow deviation must be positive (mm)");
+  if (!(point_step >= 0.01 && point_step <= 10))
+    throw Error("I++ DME CMM: the point step must be 0.01 to 10 mm");
+  if (!(point_speed > 0 && point_speed <= 100))
+    throw Error("I++ DME CMM: the point speed must be positive, at most 100 mm/s");
 }
 
 RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
@@ -70,16 +74,20 @@ RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
     const bool known =
         tr.errors.empty() && std::sscanf(version_.c_str(), "%d.%d.%d", &major, &minor, &patch) >= 2;
     const int v = 10000 * major + 100 * minor + patch;
-    if (!known || v < 10402)
+    if (!known)
       throw Error(fmt::format(
-          "I++ DME server at {}:{} speaks I++ DME {}: scanning along the design needs 1.4.2 or "
-          "later (ScanOnCurve, Tool.ScanPar, Tool.AvrRadius); trueaxis does not scan point by "
-          "point over I++ DME",
+          "I++ DME server at {}:{} does not say which I++ DME it speaks {}: trueaxis does not "
+          "guess which commands it has",
           o_.client.host, o_.client.port,
-          known               ? version_
-          : tr.errors.empty() ? "(no version given)"
-                              : "(GetDMEVersion refused: " + describe(tr.errors.front()) + ")"));
+          tr.errors.empty() ? "(no version given)"
+                            : "(GetDMEVersion refused: " + describe(tr.errors.front()) + ")"));
+    curve_scans_ = v >= 10402;
     in_plane_scans_ = v >= 10403;
+    if (!curve_scans_ && o_.tip_radius == 0)
+      throw Error(fmt::format(
+          "I++ DME server at {}:{} speaks I++ DME {}, which has no Tool.AvrRadius (1.4.2): give "
+          "the stylus tip's radius",
+          o_.client.host, o_.client.port, version_));
   }
   const auto homed = must("IsHomed()").numbers();
   if (homed.empty() || homed[0] == 0) must("Home()");
@@ -245,6 +253,7 @@ std::optional<scan::Touch> RemoteCmm::measure(const Eigen::Vector3d& at,
 scan::ScanOutcome RemoteCmm::scan_path(const design::ScanPath& path,
                                        const scan::ScanSettings& settings,
                                        const scan::Monitor& monitor) {
+  if (!curve_scans_) return point_scan(path, settings, monitor);
   // The nominal surface curve: the stylus-centre path less its offset along the normals.
   const double L = path.length();
   // At most kCurvePoints points, so that the command stays within the protocol's line length.
@@ -316,6 +325,62 @@ scan::ScanOutcome RemoteCmm::scan_path(const design::ScanPath& path,
                           o_.follow_deviation)
                     : fmt::format("the CMM stopped the scan: I++ DME {}", describe(e));
     return out;
+  }
+  out.completed = true;
+  return out;
+}
+
+scan::ScanOutcome RemoteCmm::point_scan(const design::ScanPath& path,
+                                        const scan::ScanSettings& settings,
+                                        const scan::Monitor& monitor) {
+  // Stations every point_step mm of the path. At each, a PtMeas of the design's surface point
+  // along its normal: the ball starts the approach clearance out (and as far again as the last
+  // point was found outside the design, so that a part standing proud is not met on the way),
+  // searches follow_deviation beyond it, and retracts 1 mm. The free moves between stations go
+  // straight from one retract to the next approach: a station whose approach point stands nearer
+  // another part of the path than the pushing and half the clearance (beside a concave corner,
+  // where the ball would meet the other wall on the way) is left out.
+  const double L = path.length();
+  const int n = std::max(2, static_cast<int>(std::ceil(L / o_.point_step)) + 1);
+  const int m = path.closed ? n - 1 : n;
+  std::vector<Eigen::Vector3d> line;  // the path every 0.1 mm, for the stations' room
+  const int k = std::max(2, static_cast<int>(std::ceil(L / 0.1)) + 1);
+  for (int i = 0; i < k; ++i) line.push_back(path.at(L * i / (k - 1)).p);
+  auto room = [&](const Eigen::Vector3d& x) {
+    double best = INFINITY;
+    for (const auto& p : line) best = std::min(best, (p - x).squaredNorm());
+    return std::sqrt(best);
+  };
+  constexpr double kApproachStep = 0.5;  // mm: the approach grows in these steps (fewer SetProps)
+  scan::ScanOutcome out;
+  double outside = 0;  // how far the last point was found outside the design (mm, ≥ 0)
+  for (int i = 0; i < m; ++i) {
+    const double s = L * i / (n - 1);
+    const auto q = path.at(s);
+    const Eigen::Vector3d nominal = q.p - path.offset * q.normal;
+    const double approach =
+        settings.approach_clearance + kApproachStep * std::ceil(outside / kApproachStep);
+    const double out_along = approach + settings.pushing;  // from the path point
+    if (room(q.p + out_along * q.normal) < settings.pushing + 0.5 * approach) continue;
+    const auto t = measure(nominal, q.normal, approach, o_.follow_deviation, o_.point_speed);
+    if (!t) {
+      out.fault = fmt::format(
+          "the surface was lost {:.1f} mm along the path: no contact within {:g} mm inside the "
+          "design (I++ DME error 1006)",
+          s, o_.follow_deviation);
+      return out;
+    }
+    scan::Sample smp;
+    smp.t = t->t;
+    smp.arc = s;
+    smp.surface = t->surface;
+    smp.normal = t->normal;
+    smp.delta_l = (t->surface + o_.tip_radius * t->normal - q.p).dot(q.normal) - settings.pushing;
+    smp.contact = true;
+    out.stop = smp;
+    out.samples.push_back(smp);
+    if (!monitor(smp)) return out;
+    outside = std::max(0.0, (t->surface - nominal).dot(q.normal));
   }
   out.completed = true;
   return out;

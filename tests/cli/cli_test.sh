@@ -638,6 +638,13 @@ expect_ok "$T" scan --design design.json --cmm "ipp://127.0.0.1:$PORT" --part pa
 cp out.txt there.txt
 [ -n "$(flow here.txt)" ] && [ "$(flow here.txt)" = "$(flow there.txt)" ] && grep -q "scanned through the I++ DME server at ipp://127.0.0.1:$PORT" there.txt && ok || bad "scan --cmm differs from in process: $(cat here.txt there.txt)"
 end_server
+# A server of I++ DME 1.4.1 (no ScanOnCurve): the same decisions, scanning point by point.
+start_server --part part.json --port 0 --time-scale 0 --sessions 1 --dme-version 1.4.1
+expect_ok "$T" scan --design design.json --cmm "ipp://127.0.0.1:$PORT" --part part.json -o scan-141.json --point-step 2 --truth truth-141.csv
+cp out.txt there141.txt
+[ "$(flow here.txt)" = "$(flow there141.txt)" ] && grep -q "speaks I++ DME 1.4.1, which has no ScanOnCurve (1.4.2): scanning point by point, a PtMeas every 2 mm" err.txt && ok || bad "scan --cmm on a 1.4.1 server: $(cat here.txt there141.txt err.txt)"
+end_server
+expect_code 2 "$T" serve --dme-version 1.3 --port 0
 expect_code 2 "$T" scan --design design.json --cmm "127.0.0.1:$PORT" -o s.json
 grep -q "expected ipp://HOST:PORT" err.txt && ok || bad "scan --cmm bad address: $(cat err.txt)"
 expect_code 2 "$T" scan --design design.json -o s.json
@@ -651,6 +658,12 @@ expect_code 2 "$T" simulate ballgauge --cmm "ipp://127.0.0.1:$PORT" --noise 0.5
 expect_code 2 "$T" simulate ballgauge --cmm "127.0.0.1:$PORT"
 expect_ok "$T" simulate ballgauge --machine machine.json --sections 2 --cmm "ipp://127.0.0.1:$PORT" --gauge bgi-gauge.json --measurements bgi-there.json --truth bgi-truth.csv
 grep -q "measured 2 placements of a 40-ball frame gauge through the I++ DME server at ipp://127.0.0.1:$PORT" out.txt && grep -q "60 balls of bgi-balls.csv" serve.txt && ok || bad "simulate ballgauge --cmm: $(cat out.txt serve.txt)"
+end_server
+# A 1.4.1 server cannot tell its tip radius (Tool.AvrRadius is 1.4.2's): refused until it is given.
+start_server --machine machine.json --balls bgi-balls.csv --port 0 --time-scale 0 --sessions 2 --dme-version 1.4.1
+expect_err "speaks I++ DME 1.4.1, which has no Tool.AvrRadius (1.4.2): give the stylus tip's radius" "$T" simulate ballgauge --machine machine.json --sections 2 --cmm "ipp://127.0.0.1:$PORT" --gauge bgi-gauge.json --measurements bgi-141.json --truth bgi-truth.csv
+expect_ok "$T" simulate ballgauge --machine machine.json --sections 2 --cmm "ipp://127.0.0.1:$PORT" --tip-radius 1 --gauge bgi-gauge.json --measurements bgi-141.json --truth bgi-truth.csv
+grep -q "tip radius 1 mm" out.txt && ok || bad "simulate ballgauge --cmm on 1.4.1: $(cat out.txt)"
 end_server
 expect_ok "$T" ballgauge --gauge bgi-gauge.json --measurements bgi-here.json -o bgi-here-map.json
 expect_ok "$T" ballgauge --gauge bgi-gauge.json --measurements bgi-there.json -o bgi-there-map.json

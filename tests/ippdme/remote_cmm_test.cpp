@@ -175,26 +175,72 @@ TEST(RemoteCmm, TwoSessionsInARowOnOneServer) {
   }
 }
 
-// Servers that speak older versions of I++ DME: scanning along the design needs 1.4.2, an
-// autonomous scan 1.4.3; each is refused with the reason, never sent.
-TEST(RemoteCmm, OlderServersAreAskedTheirVersionAndRefusedWithTheReason) {
+// A server older than I++ DME 1.4.2 has no ScanOnCurve (nor Tool.ScanPar, Tool.AvrRadius): the
+// server double refuses them (0501), and the client scans point by point instead. The part
+// moved in its fixture is corrected by the same flow as over ScanOnCurve, every point lies on the
+// true part within the probe's noise, and no ScanOnCurve was sent.
+TEST(RemoteCmm, AServerBefore142IsScannedPointByPoint) {
   const auto d = test::square_and_hole();
   sim::Part part{d, {}};
+  part.deviation.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  ServerOptions so = serving(part);
+  so.engine.version = "1.4.1";
+  Running r(so);
   {
-    ServerOptions so = serving(part);
-    so.engine.version = "1.4.1";
-    Running r(so);
-    const auto err = test::error_of([&] { RemoteCmm cmm(remote(r)); });
-    EXPECT_NE(err.find("speaks I++ DME 1.4.1: scanning along the design needs 1.4.2"),
-              std::string::npos)
-        << err;
+    // What the server does not have, it refuses: nothing runs that a 1.4.1 server would not.
+    Client raw(r.client());
+    ASSERT_TRUE(raw.call("StartSession()").errors.empty());
+    for (const char* newer : {"GetProp(Tool.AvrRadius())", "SetProp(Tool.ScanPar.Speed(10))",
+                              "ScanOnCurveDensity(Dis(0.2))"}) {
+      const auto tr = raw.call(newer);
+      ASSERT_FALSE(tr.errors.empty()) << newer;
+      EXPECT_EQ(tr.errors.front().items.at(0).args.at(1).number(), 501) << newer;
+      raw.call("ClearAllErrors()");
+    }
+    raw.call("EndSession()");
   }
+  // Without a tip radius the client cannot ask a 1.4.1 server for one: refused by name.
+  RemoteCmmOptions o = remote(r);
+  o.tip_radius = 0;
+  const auto err = test::error_of([&] { RemoteCmm{o}; });
+  EXPECT_NE(err.find("speaks I++ DME 1.4.1, which has no Tool.AvrRadius"), std::string::npos)
+      << err;
+
+  o.tip_radius = kTipRadius;
+  o.point_step = 2;  // mm: enough points to judge, in a test's time
+  RemoteCmm cmm(o);
+  EXPECT_EQ(cmm.version(), "1.4.1");
+  EXPECT_TRUE(cmm.scans_by_points());
+  const auto res = scan::scan(cmm, d, {});
+  ASSERT_TRUE(res.ok()) << res.summary();
+  scan::VirtualCmmOptions vo;
+  scan::VirtualCmm truth(part, vo, kHome);
+  double worst = 0;
+  std::size_t points = 0;
+  for (std::size_t i = 0; i < res.sections.size(); ++i) {
+    EXPECT_TRUE(res.sections[i].ok) << res.sections[i].name << ": " << res.sections[i].reason;
+    for (const auto& p : res.sections[i].points)
+      worst = std::max(worst, std::abs(truth.distance(d.sections[i], p.surface)));
+    points += res.sections[i].points.size();
+  }
+  EXPECT_LT(worst, kWithinNoise);
+  EXPECT_GT(static_cast<double>(points), 0.8 * 557 / o.point_step);  // a point every step
+  EXPECT_EQ(res.sections[0].corrections.back().type, "translation");
+  EXPECT_TRUE(res.sections[0].corrections.back().accepted);
+}
+
+// A 1.4.2 server scans along the design, but has no 1.4.3 ScanInPlaneEndIsSphere: a section that
+// needs an autonomous scan ends with the reason, the others are scanned.
+TEST(RemoteCmm, AnAutonomousScanOnA142ServerEndsItsSectionWithTheReason) {
+  const auto d = test::square_and_hole();
+  sim::Part part{d, {}};
   part.deviation.bumps = {{"outer", 150, 2.0, 30}};  // needs an autonomous scan
   ServerOptions so = serving(part);
   so.engine.version = "1.4.2";
   Running r(so);
   RemoteCmm cmm(remote(r));
   EXPECT_EQ(cmm.version(), "1.4.2");
+  EXPECT_FALSE(cmm.scans_by_points());
   const auto res = scan::scan(cmm, d, {});
   EXPECT_FALSE(res.sections[0].ok);
   EXPECT_NE(res.sections[0].reason.find("needs ScanInPlaneEndIsSphere of I++ DME 1.4.3"),

@@ -15,10 +15,12 @@
 //   scan_unknown  PtMeas for the first contact, then ScanInPlaneEndIsSphere in the section's
 //                 plane from it: closed contours end in a sphere around that contact (the server
 //                 ends the scan), open ones after `length` mm of points (AbortE from here).
-// Versions: the server is asked its I++ DME version first. Design-value scanning needs 1.4.2
-// (ScanOnCurve, Tool.ScanPar, Tool.AvrRadius): an older server is refused with the reason when
-// the session starts. Autonomous scanning needs 1.4.3's ScanInPlaneEndIsSphere: on a 1.4.2
-// server an autonomous scan ends its section with the reason.
+// Versions: the server is asked its I++ DME version first. Design-value scanning uses 1.4.2's
+// ScanOnCurve; a server older than 1.4.2 scans point by point instead (point_scan below: a PtMeas
+// every `point_step` mm of the path, each judged by the monitor as it comes), and the tip radius
+// must then be given (Tool.AvrRadius is 1.4.2's too). Autonomous scanning needs 1.4.3's
+// ScanInPlaneEndIsSphere: on an older server an autonomous scan ends its section with the
+// reason.
 // Frame: with `part_origin`, PartCsy is set to the part's design frame (SetCsyTransformation, a
 // translation) and every command and point is in it; without, the server's current coordinate
 // system is used as it is.
@@ -52,6 +54,10 @@ struct RemoteCmmOptions {
   double curve_step = 0.25;
   // ScanOnCurveHint's deviation: how far the server may follow the surface off the path (mm).
   double follow_deviation = 3;
+  // Scanning point by point (servers before I++ DME 1.4.2): a point this far apart along the
+  // path (mm), each probed at this speed (mm/s).
+  double point_step = 0.5;
+  double point_speed = 10;
   void validate() const;  // throws Error naming the option
 };
 
@@ -92,6 +98,8 @@ class RemoteCmm : public scan::Machine {
 
   // The I++ DME version the server reports (GetDMEVersion), e.g. "1.4.3".
   const std::string& version() const { return version_; }
+  // Whether design-value scans run point by point (the server predates ScanOnCurve).
+  bool scans_by_points() const { return !curve_scans_; }
 
   // The active tool's mean tip radius as the server knows it (GetProp(Tool.AvrRadius()), mm).
   double tool_radius();
@@ -108,6 +116,7 @@ class RemoteCmm : public scan::Machine {
   std::chrono::steady_clock::time_point t0_;
   std::string version_;
   bool in_plane_scans_ = true;  // ScanInPlaneEndIsSphere in its 1.4.3 form
+  bool curve_scans_ = true;     // ScanOnCurve (1.4.2)
   double goto_speed_ = -1, scan_speed_ = -1;
   // PtMeasPar as last set (by measure(), through which touch() goes too).
   double touch_search_ = -1, touch_speed_ = -1, touch_approach_ = 0;
@@ -125,6 +134,9 @@ class RemoteCmm : public scan::Machine {
   using PointSink =
       std::function<bool(const Eigen::Vector3d& surface, const Eigen::Vector3d& normal)>;
   Transaction scan(const std::string& command, const PointSink& take);
+  // Design-value scanning by single points along the path (servers before 1.4.2).
+  scan::ScanOutcome point_scan(const design::ScanPath& path, const scan::ScanSettings& settings,
+                               const scan::Monitor& monitor);
   void set_goto_speed(double speed);
   void set_scan_speed(double speed);
 };
