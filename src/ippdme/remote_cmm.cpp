@@ -133,11 +133,12 @@ Transaction RemoteCmm::scan(const std::string& command, const PointSink& take) {
   const Tag tag = client_->send(command);
   std::vector<double> pending;  // numbers of a point not complete yet
   bool stop = false, aborted = false;
+  std::size_t points = 0;
   auto tr = client_->wait(tag, [&](const Response& d) {
     const auto v = numbers_of(d);
     pending.insert(pending.end(), v.begin(), v.end());
     std::size_t i = 0;
-    for (; i + 6 <= pending.size() && !stop; i += 6)
+    for (; i + 6 <= pending.size() && !stop; i += 6, ++points)
       stop = !take(Eigen::Vector3d(pending[i], pending[i + 1], pending[i + 2]),
                    Eigen::Vector3d(pending[i + 3], pending[i + 4], pending[i + 5]).normalized());
     pending.erase(pending.begin(), pending.begin() + static_cast<std::ptrdiff_t>(i));
@@ -147,9 +148,12 @@ Transaction RemoteCmm::scan(const std::string& command, const PointSink& take) {
       aborted = true;
     }
   });
+  // A warning is dropped when the scan ran; a scan that gave no point at all failed, whatever
+  // the severity the server gave it (0504, an argument out of range, is a warning by number).
   auto& e = tr.errors;
-  e.erase(std::remove_if(e.begin(), e.end(), [](const Response& r) { return severity(r) < 2; }),
-          e.end());
+  if (points > 0)
+    e.erase(std::remove_if(e.begin(), e.end(), [](const Response& r) { return severity(r) < 2; }),
+            e.end());
   if (!e.empty() || aborted) call("ClearAllErrors()");
   if (aborted) e.clear();  // the 0006 of the stop asked for
   return tr;
@@ -410,9 +414,10 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
   const Eigen::Vector3d t =
       material == design::Side::Left ? Eigen::Vector3d(N.cross(nm)) : Eigen::Vector3d(nm.cross(N));
   const Eigen::Vector3d S = first->surface, D = S + 5 * t;
-  // The end sphere, which the scanned (surface) points enter: around the first contact
-  // (closed), or far off the plane (open: never met, the scan is stopped here after `length`).
-  const Eigen::Vector3d E = closed ? S : Eigen::Vector3d(S + 1e4 * N);
+  // The end sphere (Ø2), which the scanned (surface) points enter: around the first contact
+  // (closed), or 3 mm off the plane (open: never met by points in the plane, the scan is stopped
+  // here after `length`; near the first contact, since the server wants it within its travel).
+  const Eigen::Vector3d E = closed ? S : Eigen::Vector3d(S + 3 * N);
   set_scan_speed(speed);
   must("SetProp(Tool.PtMeasPar.Approach(2), Tool.PtMeasPar.Search(4))");
   touch_search_ = -1;
