@@ -20,6 +20,7 @@ std::string event_words(const std::string& id) {
       {"correction_carried", "correction carried over from another section"},
       {"autonomous_scan", "autonomous scan"},
       {"design_overwritten", "design data replaced by the measured contour"},
+      {"design_spliced", "design data replaced by the measured contour where the part left it"},
       {"rescan", "rescan"},
       {"section_done", "section done"},
       {"error_exit", "error exit"},

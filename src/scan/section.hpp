@@ -49,6 +49,23 @@ Eigen::Vector3d point_at(const design::Section& s, const design::Samples& smp, d
 // path offset from it: the sample nearest the path point's foot on the contour.
 double contour_arc(const design::Samples& smp, const design::ScanPath& path, double along);
 
+// The measured section as design data: the samples' surface points as a polyline in the
+// section's plane, thinned to the vertices that keep every point within 2 µm of it.
+design::Section overwrite(const design::Section& s, const std::vector<Sample>& samples);
+
+// A local deviation measured and spliced into a closed contour's design data.
+struct Splice {
+  design::Section section;  // the design with the measured stretch in place of [from, to]
+  double from = 0, to = 0;  // where the part leaves the design and rejoins it (mm along it)
+  double largest = 0;       // the largest deviation from the design in between (mm)
+};
+// Where an autonomous scan through `at` (mm along the design, where a trajectory error stopped
+// the design-value scan) leaves the design by `rejoin` mm or more and comes back within it for
+// 2 mm: the design with the measured points in between (thinned as overwrite does). Nothing when
+// the scan does not show both ends of the deviation, or for an open or space-curve section.
+std::optional<Splice> splice(const design::Section& s, const std::vector<Sample>& samples,
+                             double at, double rejoin);
+
 // Scans `section` (its design data are corrected in place) and returns its result. Throws what
 // the machine throws (a collision); `partial` then holds what was measured until then.
 SectionResult run_section(const SectionContext& context, design::Section& section);

@@ -521,7 +521,7 @@ expect_ok "$T" simulate part --design design.json --translate 1.8,-1.1,0 --bump 
 expect_ok "$T" scan --design design.json --part bumped.json -o scan.json --points points.csv --log events.csv --corrected-design design2.json --truth truth.csv
 grep -q "2 of 2 sections scanned" out.txt && grep -q "max |distance| 0.00 µm" out.txt && ok || bad "scan summary: $(cat out.txt)"
 head -1 points.csv | grep -qx "section,x,y,z,nx,ny,nz,t" && head -1 events.csv | grep -qx "t,section,arc_mm,delta_l_mm,mode,event,decision" && ok || bad "scan csv headers"
-for ev in trajectory_error touch correction_applied autonomous_scan design_overwritten rescan section_done; do
+for ev in trajectory_error touch correction_applied autonomous_scan design_spliced rescan section_done; do
   grep -q ",$ev," events.csv && ok || bad "events.csv lacks $ev"
 done
 python3 -c "

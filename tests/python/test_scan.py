@@ -37,7 +37,7 @@ def test_scan_returns_points_on_the_part_and_the_log(files):
     ev = r["events"]
     assert len(ev["t"]) == len(ev["event"]) == len(ev["decision"])
     assert np.all(np.diff(ev["t"]) >= 0)
-    assert "design_overwritten" in ev["event"]
+    assert "design_spliced" in ev["event"]  # the bump's stretch, not the whole outline
     assert r["machine_time_s"]["total"] == pytest.approx(
         sum(s["machine_time_s"]["total"] for s in r["sections"]))
     # The next part of the batch, with the corrected design: no trajectory error.

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
@@ -173,6 +174,11 @@ TEST(Controller, CorrectionMenuAcceptsTurnsUpTo45DegreesAndRefusesLarger) {
   EXPECT_TRUE(named);
 }
 
+// A 2 mm bump, 30 mm wide (a raised cosine from 135 to 165 mm along the outline): the touch
+// points find the rest of the outline on its design, so only the stretch round the stop is
+// scanned autonomously and spliced into the design data where the part leaves it and comes
+// back (within 3 % of the tolerance); the first part then takes less machine time than scanning
+// it autonomously.
 TEST(Controller, LocalBumpFallsBackToAutonomousAndTheNextPartScansClean) {
   const auto d = square_and_hole();
   sim::Part part{d, {}};
@@ -182,7 +188,28 @@ TEST(Controller, LocalBumpFallsBackToAutonomousAndTheNextPartScansClean) {
   ASSERT_TRUE(r.ok()) << r.summary();
   const auto& outer = r.sections[0];
   EXPECT_EQ(outer.autonomous_count, 1);
-  EXPECT_EQ(count(r, "design_overwritten"), 1);
+  EXPECT_EQ(count(r, "design_overwritten"), 0);
+  ASSERT_EQ(count(r, "design_spliced"), 1);
+  for (const auto& e : r.events)
+    if (e.event == "design_spliced") {
+      // From where the bump is 0.045 mm high to where it is again (135 + 30·acos(1 − 0.045)/2π
+      // and as far before 165), to a sample's spacing (0.2 mm).
+      const double edge = 30 * std::acos(1 - 2 * 0.045 / 2.0) / (2 * M_PI);
+      double from = 0, to = 0;
+      ASSERT_EQ(std::sscanf(e.decision.c_str(), "the design data from %lf to %lf", &from, &to), 2)
+          << e.decision;
+      EXPECT_NEAR(from, 135 + edge, 0.25) << e.decision;
+      EXPECT_NEAR(to, 165 - edge, 0.25) << e.decision;
+      EXPECT_NEAR(e.delta_l, 2.0, 1e-3);  // the largest deviation: the bump's height
+    }
+  {
+    scan::VirtualCmm alone(part, {}, Eigen::Vector3d(50, -20, 40));
+    scan::ControllerOptions ao;
+    ao.strategy = scan::Strategy::Autonomous;
+    const auto a = scan::scan(alone, d, ao);
+    ASSERT_TRUE(a.ok()) << a.summary();
+    EXPECT_LT(r.time.total, a.time.total);  // the target: first part ≤ autonomous
+  }
   EXPECT_EQ(count(r, "correction_applied"), 0);
   EXPECT_GE(count(r, "correction_rejected"), 1);
   EXPECT_LT(worst_distance(cmm, d.sections[0], outer.points), kRoundoff);
@@ -420,10 +447,12 @@ TEST(Controller, BatchWithABumpPaysOnceForTheAutonomousScan) {
   RecordProperty("machine_s_error_tolerant", std::to_string(bt.tolerant));
   RecordProperty("machine_s_autonomous", std::to_string(bt.autonomous));
   RecordProperty("machine_s_first_part", std::to_string(bt.first));
-  // The first part costs more than scanning it autonomously (touches, the autonomous scan of
-  // the bumped section, rescans); the four after it cost a design-value scan each.
-  EXPECT_GT(bt.first, bt.first_autonomous);
-  EXPECT_GT(bt.autonomous / bt.tolerant, 2) << bt.tolerant << " s against " << bt.autonomous;
+  RecordProperty("machine_s_first_part_autonomous", std::to_string(bt.first_autonomous));
+  // The first part pays the touches, the correction, the autonomous scan of the stretch round
+  // the bump and the rescans, and still costs less than scanning it autonomously (the issue's
+  // target); the four after it cost a design-value scan each.
+  EXPECT_LT(bt.first, bt.first_autonomous);
+  EXPECT_GT(bt.autonomous / bt.tolerant, 4) << bt.tolerant << " s against " << bt.autonomous;
 }
 
 }  // namespace

@@ -87,7 +87,8 @@ struct Event {
   double arc = 0, delta_l = 0;  // where on the path, and the trajectory error there (mm)
   std::string mode;             // design, touch, autonomous, correction, section
   // trajectory_error, touch, correction_applied, correction_rejected, correction_carried,
-  // autonomous_scan, design_overwritten, rescan, section_done, error_exit, loop_limit,
+  // autonomous_scan, design_overwritten, design_spliced (a local deviation's measured stretch
+  // put in the design data), rescan, section_done, error_exit, loop_limit,
   // two_dimensional (a space curve found to lie in a plane), not_reachable, restart (a closed
   // contour started elsewhere)
   std::string event;
