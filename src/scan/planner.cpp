@@ -48,52 +48,45 @@ Planner Planner::moved(const Eigen::Affine3d& t) const {
   return p;
 }
 
-double Planner::element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& u,
-                        const std::vector<char>& skip, double look) const {
+double Planner::element(int k, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                        const Eigen::Vector3d& u, const std::vector<char>& skip,
+                        double look) const {
   const double rs = stylus_.shaft(r_), rb = stylus_.body_radius;
   if (look < 0) look = margin_ + kLookout;
-  // As the virtual CMM checks it: the stem up to the probe's round nose.
-  const Eigen::Vector3d s0 = c + r_ * u, s1 = c + (stylus_.length + rb) * u,
-                        b1 = c + (stylus_.length + stylus_.body_length) * u;
+  // As the virtual CMM checks it: the stem up to the probe's round nose, then the body. Moving
+  // along its own axis, each element sweeps a segment of that line: from its lower end at the
+  // lowest ball centre to its higher end at the highest.
   if (k == 0) {
     // Signed: a ball whose centre is inside the solid (a real part off its design lets the ball
     // stand where the design has material) is that far in, so that backing away leads out.
-    double d = part_->distance(c, r_ + look, skip);
-    if (skip.empty() && part_->inside(c)) d = -d;
-    return std::min(d - r_, c.z() - r_ - table_z_);
+    double d =
+        lo == hi ? part_->distance(lo, r_ + look, skip) : part_->distance(lo, hi, r_ + look, skip);
+    if (skip.empty() && part_->inside(lo)) d = -d;
+    return std::min(d - r_, std::min(lo.z(), hi.z()) - r_ - table_z_);
   }
-  if (k == 1)
-    return std::min(part_->distance(s0, s1, rs + look, skip) - rs,
-                    std::min(s0.z(), s1.z()) - rs - table_z_);
-  return std::min(part_->distance(s1, b1, rb + look, skip) - rb,
-                  std::min(s1.z(), b1.z()) - rb - table_z_);
+  const Eigen::Vector3d a = lo + (k == 1 ? r_ : stylus_.length + rb) * u,
+                        b = hi +
+                            (k == 1 ? stylus_.length + rb : stylus_.length + stylus_.body_length) *
+                                u;
+  const double radius = k == 1 ? rs : rb;
+  return std::min(part_->distance(a, b, radius + look, skip) - radius,
+                  std::min(a.z(), b.z()) - radius - table_z_);
 }
 
 double Planner::clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
                           const std::vector<char>& skip) const {
   if (!part_) return INFINITY;
   return std::min(
-      {element(0, c, axis, skip), element(1, c, axis, skip), element(2, c, axis, skip)});
+      {element(0, c, c, axis, skip), element(1, c, c, axis, skip), element(2, c, c, axis, skip)});
 }
 
 double Planner::swept_along_axis(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                  const Eigen::Vector3d& u) const {
-  // Each element moving along its own axis sweeps a segment of that line: the ball's centre from
-  // the lower to the higher end, the stem and the body from their lower ends' bottom to their
-  // higher ends' top. The least clearance over the move is that of those segments.
-  const Eigen::Vector3d lo = (b - a).dot(u) >= 0 ? a : b, hi = (b - a).dot(u) >= 0 ? b : a;
-  const double rs = stylus_.shaft(r_), rb = stylus_.body_radius, look = margin_ + kLookout;
-  const Eigen::Vector3d s0 = lo + r_ * u, s1 = hi + (stylus_.length + rb) * u,
-                        b0 = lo + (stylus_.length + rb) * u,
-                        b1 = hi + (stylus_.length + stylus_.body_length) * u;
-  // A ball whose whole way lies inside the solid never crosses its surface: inside is inside.
-  const double ball = std::min(part_->inside(lo) ? -r_ : part_->distance(lo, hi, r_ + look) - r_,
-                               std::min(lo.z(), hi.z()) - r_ - table_z_);
-  const double stem =
-      std::min(part_->distance(s0, s1, rs + look) - rs, std::min(s0.z(), s1.z()) - rs - table_z_);
-  const double body =
-      std::min(part_->distance(b0, b1, rb + look) - rb, std::min(b0.z(), b1.z()) - rb - table_z_);
-  return std::min({ball, stem, body});
+  const bool up = (b - a).dot(u) >= 0;
+  const Eigen::Vector3d& lo = up ? a : b;
+  const Eigen::Vector3d& hi = up ? b : a;
+  return std::min(
+      {element(0, lo, hi, u, {}), element(1, lo, hi, u, {}), element(2, lo, hi, u, {})});
 }
 
 bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
@@ -237,7 +230,7 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
     const double bound = m.e - (x - m.x).norm();
     if (bound >= kReach + kTrust) return bound;
     m.x = x;
-    m.e = element(k, x, u, k == 0 ? skip : none, kLook);
+    m.e = element(k, x, x, u, k == 0 ? skip : none, kLook);
     return m.e;
   };
   auto blocked = [&](double s) -> int {

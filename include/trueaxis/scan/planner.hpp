@@ -93,10 +93,12 @@ class Planner {
   Stylus stylus_;
   double table_z_ = -INFINITY;
   Eigen::Affine3d placement_ = Eigen::Affine3d::Identity();
-  // Clearance of each element: 0 ball, 1 stylus, 2 body; a clearance beyond `look` mm (by
-  // default the margin and a lookout of 20 mm) counts as that far.
-  double element(int k, const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
-                 const std::vector<char>& skip, double look = -1) const;
+  // Clearance of each element (0 ball, 1 stylus, 2 body) over the ball centres from lo to hi
+  // along the axis (lo == hi: one place); a clearance beyond `look` mm (by default the margin
+  // and a lookout of 20 mm) counts as that far.
+  double element(int k, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
+                 const Eigen::Vector3d& axis, const std::vector<char>& skip,
+                 double look = -1) const;
   // The least clearance of the ball, stylus and body (no face skipped) over a move from a to b
   // along the unit axis u itself.
   double swept_along_axis(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
