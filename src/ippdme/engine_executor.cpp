@@ -216,7 +216,7 @@ void Executor::run() {
   if (n == "GetDMEVersion") return s_.data(tag, {call("DMEVersion", {string(s_.o.version)})});
   // A server of an older version does not know what came later: ScanOnCurve and its hint and
   // density, the scanning parameters (Tool.ScanPar) and Tool.AvrRadius are I++ DME 1.4.2's.
-  if (s_.version() < 10402) {
+  if (version_number(s_.o.version).value_or(10403) < 10402) {
     bool newer = n == "ScanOnCurve" || n == "ScanOnCurveHint" || n == "ScanOnCurveDensity";
     if (n == "SetProp" || n == "GetProp" || n == "GetPropE")
       for (const auto& a : m_.args)

@@ -10,7 +10,6 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
-#include <cstdio>
 #include <deque>
 #include <functional>
 #include <map>
@@ -236,13 +235,6 @@ struct Engine::State {
   std::chrono::steady_clock::time_point wall0;
   double machine0 = 0;
   std::uint64_t ticks = 0;
-
-  // The version the server speaks as 10000·major + 100·minor + patch (1.4.3: 10403).
-  int version() const {
-    int major = 0, minor = 0, patch = 0;
-    std::sscanf(o.version.c_str(), "%d.%d.%d", &major, &minor, &patch);
-    return 10000 * major + 100 * minor + patch;
-  }
 
   State(EngineOptions options, Send s) : o(std::move(options)), send(std::move(s)), cmm(o.cmm) {
     const auto& servo = o.cmm.servo;

@@ -325,6 +325,21 @@ double Value::number() const {
   return std::strtod(text.c_str(), nullptr);
 }
 
+std::optional<int> version_number(std::string_view version) {
+  int part[3] = {0, 0, 0};
+  const char* p = version.data();
+  const char* end = p + version.size();
+  for (int i = 0; i < 3; ++i) {
+    const auto [next, ec] = std::from_chars(p, end, part[i]);
+    if (ec != std::errc() || part[i] < 0 || part[i] > 99) return std::nullopt;
+    p = next;
+    if (p == end)
+      return i >= 1 ? std::optional<int>(10000 * part[0] + 100 * part[1] + part[2]) : std::nullopt;
+    if (*p++ != '.' || i == 2) return std::nullopt;
+  }
+  return std::nullopt;
+}
+
 std::optional<Tag> parse_tag(std::string_view line) {
   if (line.size() < 5) return std::nullopt;
   Tag t;

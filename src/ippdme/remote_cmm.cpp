@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "trueaxis/error.hpp"
 #include "trueaxis/scan/planner.hpp"
@@ -70,19 +69,17 @@ RemoteCmm::RemoteCmm(const RemoteCmmOptions& options) : o_(options) {
     for (const auto& d : tr.data)
       for (const auto& it : d.items)
         if (it.is_call("DMEVersion") && !it.args.empty()) version_ = it.args[0].text;
-    int major = 0, minor = 0, patch = 0;
-    const bool known =
-        tr.errors.empty() && std::sscanf(version_.c_str(), "%d.%d.%d", &major, &minor, &patch) >= 2;
-    const int v = 10000 * major + 100 * minor + patch;
-    if (!known)
+    const auto v = tr.errors.empty() ? version_number(version_) : std::nullopt;
+    if (!v)
       throw Error(fmt::format(
           "I++ DME server at {}:{} does not say which I++ DME it speaks {}: trueaxis does not "
           "guess which commands it has",
           o_.client.host, o_.client.port,
-          tr.errors.empty() ? "(no version given)"
-                            : "(GetDMEVersion refused: " + describe(tr.errors.front()) + ")"));
-    curve_scans_ = v >= 10402;
-    in_plane_scans_ = v >= 10403;
+          !tr.errors.empty() ? "(GetDMEVersion refused: " + describe(tr.errors.front()) + ")"
+          : version_.empty() ? std::string("(no version given)")
+                             : "('" + version_ + "' is not a version)"));
+    curve_scans_ = *v >= 10402;
+    in_plane_scans_ = *v >= 10403;
     if (!curve_scans_ && o_.tip_radius == 0)
       throw Error(fmt::format(
           "I++ DME server at {}:{} speaks I++ DME {}, which has no Tool.AvrRadius (1.4.2): give "

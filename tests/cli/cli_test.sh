@@ -645,6 +645,7 @@ cp out.txt there141.txt
 [ "$(flow here.txt)" = "$(flow there141.txt)" ] && grep -q "speaks I++ DME 1.4.1, which has no ScanOnCurve (1.4.2): scanning point by point, a PtMeas every 2 mm" err.txt && ok || bad "scan --cmm on a 1.4.1 server: $(cat here.txt there141.txt err.txt)"
 end_server
 expect_code 2 "$T" serve --dme-version 1.3 --port 0
+expect_code 2 "$T" scan --design design.json --cmm "ipp://127.0.0.1:1" --point-step 0 -o s.json
 expect_code 2 "$T" scan --design design.json --cmm "127.0.0.1:$PORT" -o s.json
 grep -q "expected ipp://HOST:PORT" err.txt && ok || bad "scan --cmm bad address: $(cat err.txt)"
 expect_code 2 "$T" scan --design design.json -o s.json

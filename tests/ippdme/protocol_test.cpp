@@ -319,5 +319,15 @@ TEST(IppProtocol, ResponsesAndBuiltLines) {
   EXPECT_EQ((ippdme::Tag{true, 7}.text()), "E0007");
 }
 
+// GetDMEVersion's answer as one number that orders versions; anything else is no version.
+TEST(IppProtocol, VersionsAreNumbersThatOrderThem) {
+  EXPECT_EQ(ippdme::version_number("1.4.3"), 10403);
+  EXPECT_EQ(ippdme::version_number("1.4"), 10400);
+  EXPECT_LT(*ippdme::version_number("1.4.1"), *ippdme::version_number("1.4.2"));
+  EXPECT_LT(*ippdme::version_number("1.4.3"), *ippdme::version_number("1.5"));
+  for (const char* bad : {"", "1", "1.", "1.4.", "1.4.3.2", "a.b", "1.4x", "1.100", "-1.4"})
+    EXPECT_FALSE(ippdme::version_number(bad).has_value()) << bad;
+}
+
 }  // namespace
 }  // namespace trueaxis

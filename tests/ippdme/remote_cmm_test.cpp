@@ -229,6 +229,17 @@ TEST(RemoteCmm, AServerBefore142IsScannedPointByPoint) {
   EXPECT_TRUE(res.sections[0].corrections.back().accepted);
 }
 
+// A server whose version is no version is not guessed at: refused, with what it said.
+TEST(RemoteCmm, AServerThatGivesNoVersionIsRefused) {
+  ServerOptions so = serving(sim::Part{test::square_and_hole(), {}});
+  so.engine.version = "unknown";
+  Running r(so);
+  const auto err = test::error_of([&] { RemoteCmm cmm(remote(r)); });
+  EXPECT_NE(err.find("does not say which I++ DME it speaks ('unknown' is not a version)"),
+            std::string::npos)
+      << err;
+}
+
 // A 1.4.2 server scans along the design, but has no 1.4.3 ScanInPlaneEndIsSphere: a section that
 // needs an autonomous scan ends with the reason, the others are scanned.
 TEST(RemoteCmm, AnAutonomousScanOnA142ServerEndsItsSectionWithTheReason) {
@@ -257,6 +268,12 @@ TEST(RemoteCmm, ABadAddressOrOptionIsNamed) {
   RemoteCmmOptions o;
   o.tip_radius = -1;
   EXPECT_NE(test::error_of([&] { RemoteCmm{o}; }).find("tip radius"), std::string::npos);
+  RemoteCmmOptions step;
+  step.point_step = 0;
+  EXPECT_NE(test::error_of([&] { RemoteCmm{step}; }).find("point step"), std::string::npos);
+  RemoteCmmOptions speed;
+  speed.point_speed = -10;
+  EXPECT_NE(test::error_of([&] { RemoteCmm{speed}; }).find("point speed"), std::string::npos);
   RemoteCmmOptions closed;
   closed.client.port = 1;  // nothing listens there
   const auto err = test::error_of([&] { RemoteCmm{closed}; });

@@ -97,6 +97,10 @@ struct Parsed {
 // The tag a line starts with (its first five characters), if they are one; E0000 included.
 std::optional<Tag> parse_tag(std::string_view line);
 
+// An I++ DME version as GetDMEVersion gives it ("1.4.3", or "1.4"), as one number that orders
+// versions: 10000·major + 100·minor + patch (1.4.3: 10403). Nothing if it is not one.
+std::optional<int> version_number(std::string_view version);
+
 // `line` without its CR LF (a trailing CR is an error: the framing belongs to the transport).
 Parsed<Command> parse_command(std::string_view line);
 Parsed<Response> parse_response(std::string_view line);

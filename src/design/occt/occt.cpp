@@ -155,13 +155,6 @@ Nurbs nurbs(const Geom_BSplineCurve& c) {
   return n;
 }
 
-Eigen::Vector3d away_from_material(const Section& s, const Geom_BSplineCurve& c, double t) {
-  gp_Pnt p;
-  gp_Vec d1;
-  c.D1(t, p, d1);
-  return away_from_material(s, vec(d1));
-}
-
 Eigen::Vector3d away_from_material(const Section& s, const Eigen::Vector3d& tangent) {
   const Eigen::Vector3d left = s.plane.normal.cross(tangent);
   const Eigen::Vector3d n = s.material == Side::Left ? -left : left;

@@ -70,9 +70,8 @@ double signed_area(const Geom_BSplineCurve& c, const Eigen::Vector3d& normal);
 // A B-spline back to our flat-knot NURBS.
 Nurbs nurbs(const Geom_BSplineCurve& c);
 
-// Unit normal of the surface at curve parameter t: in the plane, away from the material.
-Eigen::Vector3d away_from_material(const Section& s, const Geom_BSplineCurve& c, double t);
-// The same from the curve's first derivative there (any length).
+// Unit normal of the surface where the curve's first derivative is `tangent` (any length): in
+// the plane, away from the material.
 Eigen::Vector3d away_from_material(const Section& s, const Eigen::Vector3d& tangent);
 
 // The first and last point of a NURBS section's curve (Error: OCCT rejects the curve).
