@@ -28,6 +28,10 @@ constexpr double kRangeGuard = 0.1;
 // stop (then four times as far, if the part is not back on its design by then), and the part
 // counts as back on its design within kRejoin times the trajectory tolerance.
 constexpr double kLocalScan = 60, kLocalLead = 10, kRejoin = 0.03;
+// An open stretch's touch points tell where the whole part stands when they tell a move from a
+// scale at least this well (PartMove::resolution; a closed contour's are about 0.7): a
+// parameter is then known to within ten times what it would be from well-spread points.
+constexpr double kTellsPart = 0.1;
 
 // Machine time of one operation, added to a category.
 template <class Fn>
@@ -83,25 +87,30 @@ struct SectionRun {
   // stylus to the clearance level, across, and down. Where the planner finds no way (the ball
   // stands under an overhang, where a scan ended), it first moves out sideways, across the
   // stylus, to where it does (the nearest of 8 directions and 4 distances, in order).
-  void safe_move(const Eigen::Vector3d& to) {
+  // `keep`: the margin to keep instead, when larger than the planner's.
+  void safe_move(const Eigen::Vector3d& to, double keep = 0) {
     const Eigen::Vector3d from = m.position();
     if ((to - from).norm() < 1e-6) return;
     const Eigen::Vector3d u = m.stylus_axis();
+    const std::optional<Planner> wider = keep > planner().margin()
+                                             ? std::optional<Planner>(planner().with_margin(keep))
+                                             : std::nullopt;
+    const Planner& solid = wider ? *wider : planner();
     std::vector<Eigen::Vector3d> way;
     try {
-      way = planner().route(from, to, u, first_move);
+      way = solid.route(from, to, u, first_move);
     } catch (const NoWay&) {
       // Not on the run's first move: where the machine stands then is not trusted.
       if (first_move) throw;
       const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
-      const double margin = std::min(planner().margin(), planner().clearance(from, u) - 0.01);
+      const double margin = std::min(solid.margin(), solid.clearance(from, u) - 0.01);
       for (const double d : {5.0, 10.0, 20.0, 40.0}) {
         for (int k = 0; k < 8 && way.empty(); ++k) {
           const double t = std::numbers::pi / 4 * k;
           const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
-          if (!planner().clear(from, side, u, margin)) continue;
+          if (!solid.clear(from, side, u, margin)) continue;
           try {
-            way = planner().route(side, to, u, false);
+            way = solid.route(side, to, u, false);
             way.insert(way.begin(), side);
           } catch (const NoWay&) {
           }
@@ -169,23 +178,31 @@ struct SectionRun {
       at = best;
     }
     legs.push_back(next_start);
-    // The first leg leaves the surface just touched, out along the approach line through the
-    // touch's start: it may start nearer than the margin, but must not come nearer than it starts.
+    // The legs keep the planner's margin from the solid where the corrections put it, or 1 mm
+    // more than the touches found the part off it: a correction carried from another section
+    // may be wrong here by more than the margin allows for. The first and the last leg follow
+    // the touches' approach lines, out from the surface just touched and in to the edge of the
+    // band the next touch searches: each may come as near as its nearer end, no nearer.
+    const Planner& solid = planner();
+    const Eigen::Vector3d u = m.stylus_axis();
+    const double keep_off = std::max(solid.margin(), seen + 1);
+    const double at_next = std::min(keep_off, solid.clearance(next_start, u) - 0.01);
     Eigen::Vector3d leg_start = m.position();
-    double margin =
-        std::min(planner().margin(), planner().clearance(leg_start, m.stylus_axis()) - 0.01);
-    for (const auto& p : legs) {
-      if (!planner().clear(leg_start, p, m.stylus_axis(), margin)) {
+    double margin = std::min(keep_off, solid.clearance(leg_start, u) - 0.01);
+    for (std::size_t k = 0; k < legs.size(); ++k) {
+      const Eigen::Vector3d& p = legs[k];
+      if (k + 1 == legs.size()) margin = std::min(margin, at_next);
+      if (!solid.clear(leg_start, p, u, margin)) {
         // The planner's way (over the part), from the touch's start, outside the band.
         timed(m, r.time.moves, [&] {
           m.move(back_to, o.move_speed);
           return 0;
         });
-        safe_move(next_start);
+        safe_move(next_start, at_next);
         return;
       }
       leg_start = p;
-      margin = planner().margin();
+      margin = keep_off;
     }
     timed(m, r.time.moves, [&] {
       through(legs);
@@ -655,7 +672,7 @@ struct SectionRun {
     for (const auto& c : part_move) {
       step = c.transform * step;
       r.corrections.push_back(c);
-      const std::string params = " " + c.parameters_text();
+      const std::string params = fmt::format(" {}", c.parameters_text());
       what += fmt::format("{}{} ({}:{})", what.empty() ? "" : ", ", c.found_on, c.type, params);
     }
     correct_by(step);
@@ -665,25 +682,43 @@ struct SectionRun {
                     what));
   }
 
+  // The part's move as each round of this section's own touch points told it, by the index in
+  // r.corrections of the correction that round accepted.
+  std::vector<std::pair<std::size_t, PartMove>> told;
+
   // After the section: its rigid corrections are where the part stands, for the sections after
-  // it (all of them rigid, at least one its own), when the section is a whole closed contour.
-  // The touch points of an open stretch do not tell a move from a scale, nor see a move along
-  // a straight wall: a wall of a scaled part fits a translation, which is wrong for the wall
-  // opposite (carried there, it put the planned moves 4 mm off the part).
+  // it (all of them rigid, at least one its own). Each own correction is handed on as the rigid
+  // fit of its touch points (PartMove) where they show a turn (one that a move fitted to a small
+  // contour leaves out, and that grows with the distance to the next section): a turn they see
+  // (round a circle they see none) and larger than three of its standard uncertainties.
+  // Otherwise the menu's own correction is handed on. A closed contour's touch points surround
+  // it and tell a move from a scale; an open stretch's only when they are spread well enough
+  // (kTellsPart): one straight wall's do not see a move along it, and two walls at a corner do
+  // not tell a scale from a move, which is wrong for the wall opposite (carried there, it put
+  // the planned moves 4 mm off the part).
   void hand_on_part_move() const {
-    if (!current.closed) return;
     std::vector<Correction> rigid;
     bool own = false;
-    for (const auto& c : r.corrections) {
+    for (std::size_t i = 0; i < r.corrections.size(); ++i) {
+      const Correction& c = r.corrections[i];
       if (!c.accepted) continue;
-      const Eigen::Matrix3d R = c.transform.linear();
-      if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9 || R.determinant() < 0)
-        return;
-      rigid.push_back(c);
+      Correction moved = c;
       if (c.found_on.empty()) {
-        rigid.back().found_on = current.name;
+        const auto t =
+            std::find_if(told.begin(), told.end(), [&](const auto& x) { return x.first == i; });
+        if (t == told.end()) return;
+        if (!current.closed && t->second.resolution < kTellsPart) return;
+        const PartMove& pm = t->second;
+        if (pm.rigid.accepted && pm.turn_resolution >= kTellsPart &&
+            std::abs(pm.rigid.parameters.front().second) > 3 * pm.turn_u)
+          moved = pm.rigid;
+        moved.found_on = current.name;
         own = true;
       }
+      const Eigen::Matrix3d R = moved.transform.linear();
+      if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9 || R.determinant() < 0)
+        return;
+      rigid.push_back(moved);
     }
     if (own) part_move = std::move(rigid);
   }
@@ -732,7 +767,7 @@ struct SectionRun {
                               c.residual_before));
               continue;
             }
-            const std::string params = " " + c.parameters_text();
+            const std::string params = fmt::format(" {}", c.parameters_text());
             if (!c.diverged.empty())
               log(stop.arc, stop.delta_l, "correction", "correction_rejected",
                   fmt::format("{}: the fit diverged ({}); where it stopped:{}", c.type, c.diverged,
@@ -747,6 +782,8 @@ struct SectionRun {
           for (const auto& c : tried)
             if (c.type != "none") r.corrections.push_back(c);
           if (corrected) {
+            // What these touch points tell of the whole part, to hand on (hand_on_part_move).
+            told.push_back({r.corrections.size() - 1, fit_part_move(current, feet, got, o.accept)});
             Eigen::Affine3d step = Eigen::Affine3d::Identity();
             for (const auto& c : tried)
               if (c.accepted) step = c.transform * step;

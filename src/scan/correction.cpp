@@ -2,6 +2,7 @@
 // touched points by Gauss–Newton on their normal distances.
 #include <fmt/format.h>
 
+#include <Eigen/LU>
 #include <Eigen/SVD>
 #include <cmath>
 
@@ -156,6 +157,9 @@ design::Section apply(const design::Section& s, const Frame& f, const Affine2& a
   return out;
 }
 
+// The least scatter a touch point is taken to have (mm): a CMM's resolution.
+constexpr double kResolution = 1e-4;
+
 // Signed distances of the touched points from a section's curve, sampled every 0.05 mm (chords
 // within 0.05²/8R of the curve: 0.3 µm at R = 1 mm).
 constexpr double kSampling = 0.05;
@@ -173,28 +177,156 @@ Eigen::VectorXd distances(const sim::Contour& c, const Eigen::Matrix3Xd& touched
   return d;
 }
 
+// The touch points in the section's plane frame, with their feet on the design.
+struct Touches {
+  sim::Contour curve;
+  Frame f;
+  std::vector<Eigen::Vector2d> p0, m0, t;  // feet, design normals there, touched points
+  Eigen::VectorXd before;                  // signed distances of the touched points (mm)
+  double extent = 0;                       // the contour's size in its plane (mm)
+  const Eigen::Matrix3Xd& touched;
+};
+
+Touches prepare(const design::Section& section, const Eigen::Matrix3Xd& feet,
+                const Eigen::Matrix3Xd& touched) {
+  sim::Contour curve = curve_of(section);
+  const Frame f = frame_of(section, curve.points());
+  Touches in{std::move(curve), f, {}, {}, {}, {}, 0, touched};
+  for (Eigen::Index i = 0; i < feet.cols(); ++i) {
+    const auto nr = in.curve.nearest(feet.col(i));
+    in.p0.push_back(f.to2(nr.point));
+    in.m0.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
+    in.t.push_back(f.to2(touched.col(i)));
+  }
+  in.before = distances(in.curve, touched);
+  const Eigen::Matrix3Xd& q = in.curve.points();
+  in.extent = (q.rowwise().maxCoeff() - q.rowwise().minCoeff()).norm();
+  return in;
+}
+
+// One model of the menu fitted to the touch points. `closer` is set when it leaves every touch
+// point within `accept` and none further than before; `corrected` receives the section with it
+// applied when the fit did not diverge.
+Correction fit_one(Kind k, const design::Section& section, const Touches& in, double accept,
+                   bool& closer, design::Section* corrected, Eigen::VectorXd* left = nullptr) {
+  const Frame& f = in.f;
+  std::vector<Eigen::Vector2d> p = in.p0, m = in.m0;
+  const std::vector<Eigen::Vector2d>& t = in.t;
+  Eigen::VectorXd best;
+  double best_cost = 1e300;
+  for (int start = 0; start < (k == Kind::Directional ? 4 : 1); ++start) {
+    Eigen::VectorXd q = Eigen::VectorXd::Zero(params(k));
+    if (k == Kind::Directional) q[3] = start * M_PI / 4;
+    q = gauss_newton(k, q, p, m, t);
+    const double cost = residuals(k, q, p, m, t).squaredNorm();
+    if (q.allFinite() && cost < best_cost) {
+      best_cost = cost;
+      best = q;
+    }
+  }
+  if (best.size() == 0) best = Eigen::VectorXd::Constant(params(k), NAN);
+  // A fit that ran away is reported as such, and its design data are never built (a scale of
+  // 1e-3 or 1e3 would make a curve nothing can sample).
+  auto runaway = [&](const Eigen::VectorXd& q) -> std::string {
+    if (!q.allFinite()) return "the fit did not converge";
+    const Affine2 a = model(k, q);
+    const Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    const auto sv = svd.singularValues();
+    if (!(sv.minCoeff() >= 0.5 && sv.maxCoeff() <= 2) || a.A.determinant() <= 0)
+      return fmt::format("a scale of {:.4g} to {:.4g}: no fixture or size error is that large",
+                         sv.minCoeff(), sv.maxCoeff());
+    const Eigen::Matrix2d R = svd.matrixU() * svd.matrixV().transpose();
+    // The turn as fitted, not only as the map shows it: a fit that wound round a circle's
+    // centre (where no turn is seen) by -742° shows a map turned by -22°.
+    double turn = std::abs(std::atan2(R(1, 0), R(0, 0))) * 180 / M_PI;
+    if (k == Kind::Rotation || k == Kind::ScaleRotation)
+      turn = std::max(turn, std::abs(q[k == Kind::Rotation ? 2 : 3]) * 180 / M_PI);
+    if (turn > 45) return fmt::format("a turn of {:.4g}°: more than 45°", turn);
+    double moved = 0;
+    for (const auto& x : in.p0) moved = std::max(moved, (a.A * x + a.t - x).norm());
+    if (moved > std::max(10.0, in.extent))
+      return fmt::format(
+          "design points moved by up to {:.4g} mm, more than the contour's "
+          "{:.4g} mm size",
+          moved, in.extent);
+    return "";
+  };
+  std::string why = runaway(best);
+  // Refine on the exact curve: take each touched point's nearest point on the corrected design
+  // as its new foot (mapped back to the design), and fit again, until the feet settle.
+  for (int it = 0; it < 8 && why.empty(); ++it) {
+    const Affine2 a = model(k, best);
+    const design::Section moved = apply(section, f, a);
+    const sim::Contour mc = curve_of(moved);
+    const Eigen::Matrix2d Ainv = a.A.inverse();
+    double shift = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const auto nr = mc.nearest(in.touched.col(static_cast<Eigen::Index>(i)));
+      const Eigen::Vector2d foot = Ainv * (f.to2(nr.point) - a.t);
+      const Eigen::Vector2d n2(nr.normal.dot(f.e1), nr.normal.dot(f.e2));
+      shift = std::max(shift, (foot - p[i]).norm());
+      p[i] = foot;
+      m[i] = (a.A.transpose() * n2).normalized();
+    }
+    best = gauss_newton(k, best, p, m, t);
+    why = runaway(best);
+    if (shift < 1e-7) break;
+  }
+  const Affine2 a = model(k, best);
+  Eigen::VectorXd after = Eigen::VectorXd::Constant(in.touched.cols(), NAN);
+  if (why.empty()) {
+    design::Section cand = apply(section, f, a);
+    after = distances(curve_of(cand), in.touched);
+    if (corrected) *corrected = std::move(cand);
+  }
+  Correction c;
+  c.type = name(k);
+  c.diverged = why;
+  {
+    // The same map in 3-D: in the plane A about the frame's origin, then t; along the normal
+    // nothing.
+    Eigen::Matrix<double, 3, 2> E;
+    E << f.e1, f.e2;
+    const Eigen::Matrix3d lin = E * a.A * E.transpose() + f.n * f.n.transpose();
+    c.transform.linear() = lin;
+    c.transform.translation() = f.o + E * a.t - lin * f.o;
+  }
+  c.residual_before = in.before.cwiseAbs().maxCoeff();
+  c.residual_after = why.empty() ? after.cwiseAbs().maxCoeff() : NAN;
+  const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();
+  if (k == Kind::Rotation || k == Kind::ScaleRotation)
+    c.parameters.push_back({"rotation_deg", best[k == Kind::Rotation ? 2 : 3] * 180 / M_PI});
+  if (k == Kind::Scale || k == Kind::ScaleRotation || k == Kind::Directional)
+    c.parameters.push_back({"scale", 1 + best[2]});
+  if (k == Kind::Directional) {
+    const Eigen::Vector3d u = f.e1 * std::cos(best[3]) + f.e2 * std::sin(best[3]);
+    c.parameters.push_back({"direction_x", u.x()});
+    c.parameters.push_back({"direction_y", u.y()});
+    c.parameters.push_back({"direction_z", u.z()});
+  }
+  c.parameters.push_back({"dx_mm", t3.x()});
+  c.parameters.push_back({"dy_mm", t3.y()});
+  c.parameters.push_back({"dz_mm", t3.z()});
+  if (k != Kind::Translation) {
+    c.parameters.push_back({"centre_x_mm", f.o.x()});
+    c.parameters.push_back({"centre_y_mm", f.o.y()});
+    c.parameters.push_back({"centre_z_mm", f.o.z()});
+  }
+  if (left) *left = after;
+  closer = why.empty() && c.residual_after <= accept;
+  for (Eigen::Index i = 0; closer && i < after.size(); ++i)
+    closer = std::abs(after[i]) <= std::max(std::abs(in.before[i]), accept);
+  return c;
+}
+
 }  // namespace
 
 std::vector<Correction> fit_corrections(const design::Section& section,
                                         const Eigen::Matrix3Xd& feet,
                                         const Eigen::Matrix3Xd& touched, double accept,
                                         design::Section* corrected) {
-  const sim::Contour design_curve = curve_of(section);
-  const Frame f = frame_of(section, design_curve.points());
-  std::vector<Eigen::Vector2d> p0, m0, t;
-  for (Eigen::Index i = 0; i < feet.cols(); ++i) {
-    const auto nr = design_curve.nearest(feet.col(i));
-    p0.push_back(f.to2(nr.point));
-    m0.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
-    t.push_back(f.to2(touched.col(i)));
-  }
-  const Eigen::VectorXd before = distances(design_curve, touched);
-  double extent = 0;  // the contour's size in its plane (mm)
-  {
-    const Eigen::Matrix3Xd& q = design_curve.points();
-    extent = (q.rowwise().maxCoeff() - q.rowwise().minCoeff()).norm();
-  }
-  const double worst_before = before.cwiseAbs().maxCoeff();
+  const Touches in = prepare(section, feet, touched);
+  const double worst_before = in.before.cwiseAbs().maxCoeff();
   std::vector<Correction> out;
   if (worst_before <= accept) {
     // The touch points already agree with the design: the deviation that stopped the scan is
@@ -205,117 +337,75 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     out.push_back(c);
     return out;
   }
-  bool done = false;
   for (Kind k :
        {Kind::Translation, Kind::Rotation, Kind::Scale, Kind::ScaleRotation, Kind::Directional}) {
-    if (static_cast<int>(p0.size()) < params(k) + 2) continue;  // keep some redundancy
-    std::vector<Eigen::Vector2d> p = p0, m = m0;
-    Eigen::VectorXd best;
-    double best_cost = 1e300;
-    for (int start = 0; start < (k == Kind::Directional ? 4 : 1); ++start) {
-      Eigen::VectorXd q = Eigen::VectorXd::Zero(params(k));
-      if (k == Kind::Directional) q[3] = start * M_PI / 4;
-      q = gauss_newton(k, q, p, m, t);
-      const double cost = residuals(k, q, p, m, t).squaredNorm();
-      if (q.allFinite() && cost < best_cost) {
-        best_cost = cost;
-        best = q;
-      }
-    }
-    if (best.size() == 0) continue;
-    // A fit that ran away is reported as such, and its design data are never built (a scale of
-    // 1e-3 or 1e3 would make a curve nothing can sample).
-    auto runaway = [&](const Eigen::VectorXd& q) -> std::string {
-      if (!q.allFinite()) return "the fit did not converge";
-      const Affine2 a = model(k, q);
-      const Eigen::JacobiSVD<Eigen::Matrix2d> svd(a.A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      const auto sv = svd.singularValues();
-      if (!(sv.minCoeff() >= 0.5 && sv.maxCoeff() <= 2) || a.A.determinant() <= 0)
-        return fmt::format("a scale of {:.4g} to {:.4g}: no fixture or size error is that large",
-                           sv.minCoeff(), sv.maxCoeff());
-      const Eigen::Matrix2d R = svd.matrixU() * svd.matrixV().transpose();
-      const double turn = std::abs(std::atan2(R(1, 0), R(0, 0))) * 180 / M_PI;
-      if (turn > 45) return fmt::format("a turn of {:.4g}°: more than 45°", turn);
-      double moved = 0;
-      for (const auto& x : p0) moved = std::max(moved, (a.A * x + a.t - x).norm());
-      if (moved > std::max(10.0, extent))
-        return fmt::format(
-            "design points moved by up to {:.4g} mm, more than the contour's "
-            "{:.4g} mm size",
-            moved, extent);
-      return "";
-    };
-    std::string why = runaway(best);
-    // Refine on the exact curve: take each touched point's nearest point on the corrected design
-    // as its new foot (mapped back to the design), and fit again, until the feet settle.
-    for (int it = 0; it < 8 && why.empty(); ++it) {
-      const Affine2 a = model(k, best);
-      const design::Section moved = apply(section, f, a);
-      const sim::Contour mc = curve_of(moved);
-      const Eigen::Matrix2d Ainv = a.A.inverse();
-      double shift = 0;
-      for (std::size_t i = 0; i < p.size(); ++i) {
-        const auto nr = mc.nearest(touched.col(static_cast<Eigen::Index>(i)));
-        const Eigen::Vector2d foot = Ainv * (f.to2(nr.point) - a.t);
-        const Eigen::Vector2d n2(nr.normal.dot(f.e1), nr.normal.dot(f.e2));
-        shift = std::max(shift, (foot - p[i]).norm());
-        p[i] = foot;
-        m[i] = (a.A.transpose() * n2).normalized();
-      }
-      best = gauss_newton(k, best, p, m, t);
-      why = runaway(best);
-      if (shift < 1e-7) break;
-    }
-    const Affine2 a = model(k, best);
+    if (static_cast<int>(in.p0.size()) < params(k) + 2) continue;  // keep some redundancy
+    bool closer = false;
     design::Section cand;
-    Eigen::VectorXd after = Eigen::VectorXd::Constant(touched.cols(), NAN);
-    if (why.empty()) {
-      cand = apply(section, f, a);
-      after = distances(curve_of(cand), touched);
+    out.push_back(fit_one(k, section, in, accept, closer, &cand));
+    if (closer) {
+      out.back().accepted = true;
+      if (corrected) *corrected = std::move(cand);
+      break;
     }
-    Correction c;
-    c.type = name(k);
-    c.diverged = why;
-    {
-      // The same map in 3-D: in the plane A about the frame's origin, then t; along the normal
-      // nothing.
-      Eigen::Matrix<double, 3, 2> E;
-      E << f.e1, f.e2;
-      const Eigen::Matrix3d lin = E * a.A * E.transpose() + f.n * f.n.transpose();
-      c.transform.linear() = lin;
-      c.transform.translation() = f.o + E * a.t - lin * f.o;
+  }
+  return out;
+}
+
+PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& feet,
+                       const Eigen::Matrix3Xd& touched, double accept) {
+  const Touches in = prepare(section, feet, touched);
+  PartMove out;
+  // The normal distances' Jacobian in a move (x, y) and a third map about the feet's centroid,
+  // its column in mm (times the feet's rms distance from it): a uniform scale, or a turn.
+  const auto n = static_cast<Eigen::Index>(in.p0.size());
+  if (n >= 3) {
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& p : in.p0) c += p / static_cast<double>(n);
+    double size = 0;
+    for (const auto& p : in.p0) size += (p - c).squaredNorm() / static_cast<double>(n);
+    size = std::sqrt(size);
+    auto resolution = [&](bool turn) {
+      if (!(size > 0)) return 0.0;
+      Eigen::MatrixX3d J(n, 3);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const Eigen::Vector2d v = in.p0[static_cast<std::size_t>(i)] - c;
+        const Eigen::Vector2d& m = in.m0[static_cast<std::size_t>(i)];
+        J.row(i) << m.x(), m.y(), (turn ? v.x() * m.y() - v.y() * m.x() : v.dot(m)) / size;
+      }
+      const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(J);
+      const auto sv = svd.singularValues();
+      return sv[0] > 0 ? sv[2] / sv[0] : 0.0;
+    };
+    out.resolution = resolution(false);
+    out.turn_resolution = resolution(true);
+  }
+  bool closer = false;
+  if (static_cast<int>(in.p0.size()) >= params(Kind::Rotation) + 2) {
+    Eigen::VectorXd left;
+    out.rigid = fit_one(Kind::Rotation, section, in, accept, closer, nullptr, &left);
+    out.rigid.accepted = closer;
+    // The turn's standard uncertainty from the fit's scatter (each residual at least 0.1 µm, a
+    // CMM's resolution, so that noise-free points do not make round-off a turn), linearised at
+    // the feet: s² (JᵀJ)⁻¹ with J in the move (x, y) and the turn (mm per rad).
+    if (closer && left.allFinite()) {
+      Eigen::MatrixX3d J(n, 3);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const Eigen::Vector2d& v = in.p0[static_cast<std::size_t>(i)];
+        const Eigen::Vector2d& m = in.m0[static_cast<std::size_t>(i)];
+        J.row(i) << m.x(), m.y(), v.x() * m.y() - v.y() * m.x();
+      }
+      const double s2 =
+          std::max(left.squaredNorm() / static_cast<double>(n - 3), kResolution * kResolution);
+      const Eigen::Matrix3d JtJ = J.transpose() * J;
+      const Eigen::FullPivLU<Eigen::Matrix3d> lu(JtJ);
+      if (lu.isInvertible()) out.turn_u = std::sqrt(s2 * lu.inverse()(2, 2)) * 180 / M_PI;
     }
-    c.residual_before = worst_before;
-    c.residual_after = why.empty() ? after.cwiseAbs().maxCoeff() : NAN;
-    const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();
-    if (k == Kind::Rotation || k == Kind::ScaleRotation)
-      c.parameters.push_back({"rotation_deg", best[k == Kind::Rotation ? 2 : 3] * 180 / M_PI});
-    if (k == Kind::Scale || k == Kind::ScaleRotation || k == Kind::Directional)
-      c.parameters.push_back({"scale", 1 + best[2]});
-    if (k == Kind::Directional) {
-      const Eigen::Vector3d u = f.e1 * std::cos(best[3]) + f.e2 * std::sin(best[3]);
-      c.parameters.push_back({"direction_x", u.x()});
-      c.parameters.push_back({"direction_y", u.y()});
-      c.parameters.push_back({"direction_z", u.z()});
-    }
-    c.parameters.push_back({"dx_mm", t3.x()});
-    c.parameters.push_back({"dy_mm", t3.y()});
-    c.parameters.push_back({"dz_mm", t3.z()});
-    if (k != Kind::Translation) {
-      c.parameters.push_back({"centre_x_mm", f.o.x()});
-      c.parameters.push_back({"centre_y_mm", f.o.y()});
-      c.parameters.push_back({"centre_z_mm", f.o.z()});
-    }
-    bool closer = why.empty() && c.residual_after <= accept;
-    for (Eigen::Index i = 0; closer && i < after.size(); ++i)
-      closer = std::abs(after[i]) <= std::max(std::abs(before[i]), accept);
-    if (!done && closer) {
-      c.accepted = true;
-      done = true;
-      if (corrected) *corrected = cand;
-    }
-    out.push_back(std::move(c));
-    if (done) break;
+  } else {
+    out.rigid.type = name(Kind::Rotation);
+    out.rigid.diverged = "too few touch points for a turn and a move";
+    out.rigid.residual_before = in.before.size() ? in.before.cwiseAbs().maxCoeff() : NAN;
+    out.rigid.residual_after = NAN;
   }
   return out;
 }

@@ -3,7 +3,10 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "../design/design_json.hpp"
 #include "trueaxis/io/files.hpp"
@@ -228,6 +231,16 @@ ScanFile read_scan(const std::string& path) {
         (void)v;
         x.parameters.push_back({name, finite(f, c / "parameters" / name)});
       }
+      // A JSON object keeps no order: back in the order the fit gives them (the turn or scale
+      // first, then the move, then the centre), so that the report reads as the run's did.
+      static const std::vector<std::string> kOrder{
+          "rotation_deg", "scale", "direction_x", "direction_y", "direction_z", "dx_mm",
+          "dy_mm",        "dz_mm", "centre_x_mm", "centre_y_mm", "centre_z_mm"};
+      const auto rank = [](const std::string& name) {
+        return std::find(kOrder.begin(), kOrder.end(), name) - kOrder.begin();
+      };
+      std::stable_sort(x.parameters.begin(), x.parameters.end(),
+                       [&](const auto& a, const auto& b) { return rank(a.first) < rank(b.first); });
       s.corrections.push_back(std::move(x));
     }
     const auto& pts = f.array(p / "points");

@@ -1,0 +1,141 @@
+// What touch points tell of where the whole part stands (fit_part_move): the rigid fit handed on
+// to other sections, whether the feet tell a move from a scale and see a turn, and the turn's
+// uncertainty. Touched points are the feet moved by a known map, so the answers are known.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include "trueaxis/scan/controller.hpp"
+
+namespace trueaxis {
+namespace {
+
+// Resolutions are ratios of singular values: a combination of parameters the feet do not see
+// at all comes out at round-off.
+constexpr double kUnseen = 1e-6;
+// Noise-free touched points: the fitted turn to the fit's own convergence.
+constexpr double kTurnDeg = 1e-6;
+
+design::Section rectangle() {
+  design::Section s;
+  s.name = "rectangle";
+  s.plane = {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()};
+  s.polyline.resize(3, 5);
+  s.polyline << 0, 80, 80, 0, 0, 0, 0, 30, 30, 0, 10, 10, 10, 10, 10;
+  return s;
+}
+
+design::Section circle(double r) {
+  design::Section s;
+  s.name = "hole";
+  s.plane = {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()};
+  s.material = design::Side::Right;
+  const int n = 361;
+  s.polyline.resize(3, n);
+  for (int i = 0; i < n; ++i) {
+    const double t = 2 * M_PI * i / (n - 1);
+    s.polyline.col(i) << r * std::cos(t), r * std::sin(t), 10;
+  }
+  return s;
+}
+
+// Feet at `count` places along the sides from..to of a polyline (a side k runs from vertex k).
+Eigen::Matrix3Xd feet_on(const design::Section& s, int from, int to, int per_side) {
+  Eigen::Matrix3Xd f(3, (to - from) * per_side);
+  for (int k = from; k < to; ++k)
+    for (int j = 0; j < per_side; ++j) {
+      const double u = (j + 0.5) / per_side;
+      f.col((k - from) * per_side + j) =
+          s.polyline.col(k) + u * (s.polyline.col(k + 1) - s.polyline.col(k));
+    }
+  return f;
+}
+
+// The feet moved as a part turned `deg` about `centre` and moved by `t` (in the plane).
+Eigen::Matrix3Xd moved(const Eigen::Matrix3Xd& feet, double deg, const Eigen::Vector3d& centre,
+                       const Eigen::Vector3d& t) {
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(deg * M_PI / 180, Eigen::Vector3d::UnitZ()).matrix();
+  return (R * (feet.colwise() - centre)).colwise() + (centre + t);
+}
+
+double turn_of(const scan::Correction& c) {
+  for (const auto& [k, v] : c.parameters)
+    if (k == "rotation_deg") return v;
+  return NAN;
+}
+
+TEST(PartMove, ACornerOrAWallDoesNotTellAMoveFromAScaleAWholeOutlineDoes) {
+  const auto rect = rectangle();
+  const Eigen::Vector3d t(1.8, -1.1, 0), c(40, 15, 10);
+  // One straight wall: a move along it is not seen.
+  const auto wall = feet_on(rect, 0, 1, 6);
+  EXPECT_LT(scan::fit_part_move(rect, wall, moved(wall, 0, c, t), 0.05).resolution, kUnseen);
+  // Two walls at a corner: a scale about the corner's point is a move.
+  const auto corner = feet_on(rect, 0, 2, 4);
+  EXPECT_LT(scan::fit_part_move(rect, corner, moved(corner, 0, c, t), 0.05).resolution, kUnseen);
+  // Three walls (an open stretch round two corners) and the whole outline tell them apart.
+  const auto three = feet_on(rect, 0, 3, 3);
+  EXPECT_GT(scan::fit_part_move(rect, three, moved(three, 0, c, t), 0.05).resolution, 0.1);
+  const auto all = feet_on(rect, 0, 4, 2);
+  EXPECT_GT(scan::fit_part_move(rect, all, moved(all, 0, c, t), 0.05).resolution, 0.1);
+}
+
+// A 20 × 30 mm rectangle's touch points fit a move within 0.1 mm when the part is also turned
+// 0.3°, so a menu accepting 0.1 mm takes the move; handed on to a section 130 mm away, the turn
+// left out would put it 0.68 mm off. The rigid fit has the turn, far beyond its uncertainty.
+TEST(PartMove, TheRigidFitHasTheTurnAMoveLeavesOutWithItsUncertainty) {
+  design::Section small = rectangle();
+  small.polyline.row(0) *= 0.25;  // 20 × 30 mm
+  const Eigen::Vector3d t(1.8, -1.1, 0), c(10, 15, 10);
+  const auto feet = feet_on(small, 0, 4, 2);
+  const auto touched = moved(feet, 0.3, c, t);
+  design::Section corrected;
+  const auto menu = scan::fit_corrections(small, feet, touched, 0.1, &corrected);
+  ASSERT_FALSE(menu.empty());
+  EXPECT_TRUE(menu.front().accepted);
+  EXPECT_EQ(menu.front().type, "translation");
+
+  const auto pm = scan::fit_part_move(small, feet, touched, 0.1);
+  ASSERT_TRUE(pm.rigid.accepted);
+  EXPECT_GT(pm.turn_resolution, 0.1);
+  EXPECT_NEAR(turn_of(pm.rigid), 0.3, kTurnDeg);
+  // Noise-free: the uncertainty is the 0.1 µm floor's, far below the turn.
+  ASSERT_TRUE(std::isfinite(pm.turn_u));
+  EXPECT_GT(pm.turn_u, 0);
+  EXPECT_GT(std::abs(turn_of(pm.rigid)), 100 * pm.turn_u);
+  // The map itself: a far point goes where the turned and moved part takes it.
+  const Eigen::Vector3d far(140, 15, 10);
+  const Eigen::Vector3d want = moved(far, 0.3, c, t).col(0);
+  EXPECT_LT((pm.rigid.transform * far - want).norm(), 1e-5);
+}
+
+// Round a circle no turn about its centre moves a touch point: the turn is not seen, and a fit
+// that would wind round the centre is reported as diverged, never handed on as a turn.
+TEST(PartMove, RoundACircleNoTurnIsSeen) {
+  const auto hole = circle(6);
+  Eigen::Matrix3Xd feet(3, 8);
+  for (int i = 0; i < 8; ++i) {
+    const double a = 2 * M_PI * (i + 0.5) / 8;
+    feet.col(i) << 6 * std::cos(a), 6 * std::sin(a), 10;
+  }
+  const auto touched = moved(feet, 0, Eigen::Vector3d::Zero(), Eigen::Vector3d(0, 2, 0));
+  const auto pm = scan::fit_part_move(hole, feet, touched, 0.05);
+  EXPECT_GT(pm.resolution, 0.5);
+  EXPECT_LT(pm.turn_resolution, kUnseen);
+  if (pm.rigid.diverged.empty()) {
+    EXPECT_LE(std::abs(turn_of(pm.rigid)), 45);
+  }
+}
+
+TEST(PartMove, TooFewTouchPointsForATurnSaySo) {
+  const auto rect = rectangle();
+  const auto feet = feet_on(rect, 0, 4, 1);
+  const auto pm = scan::fit_part_move(rect, feet, feet, 0.05);
+  EXPECT_FALSE(pm.rigid.accepted);
+  EXPECT_FALSE(pm.rigid.diverged.empty());
+  EXPECT_TRUE(std::isnan(pm.turn_u));
+}
+
+}  // namespace
+}  // namespace trueaxis
