@@ -131,11 +131,12 @@ struct SectionRun {
   // the design kRouteMargin beyond that: along the design's offset, cutting straight wherever
   // the chord keeps clear of the design.
   // The ball stands on the last touch's approach line, between the surface and `back_to` (that
-  // touch's start).
+  // touch's start); `from` and `to` are the samples nearest the two touches, `next_start` the
+  // next touch's start.
   void route(const design::Samples& smp, const sim::Contour& design, double reach,
-             Eigen::Index from, Eigen::Index to, const Eigen::Vector3d& back_to) {
+             Eigen::Index from, Eigen::Index to, const Eigen::Vector3d& back_to,
+             const Eigen::Vector3d& next_start) {
     const Eigen::Index n = smp.points.cols();
-    const Eigen::Vector3d next_start = smp.points.col(to) + reach * smp.normals.col(to);
     // Waypoints kRouteMargin beyond the touch starts; chords between them may cut in to half
     // of that margin.
     const double keep = reach + 0.5 * kRouteMargin;
@@ -372,18 +373,30 @@ struct SectionRun {
     const double reach = o.path.tip_radius + o.tolerance + kMargin;
     const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
                                current.material == design::Side::Left);
+    // Evenly spread, or where they tell the part's move, turn and scale apart when evenly
+    // spread ones do not (then each foot from samples 0.25 mm apart, not the route's).
+    const auto places = detail::touch_places(current, k, kTellsPart);
+    const design::Samples fine = places.even ? design::Samples{} : design::sample(current, 0.25);
+    if (!places.even)
+      log(0, 0, "touch", "touch",
+          fmt::format("touch points placed where they tell the part's move, turn and scale "
+                      "apart (resolution {:.2f}; evenly spread, {:.2f})",
+                      places.resolution, places.even_resolution));
     Eigen::Index last = -1;
     Eigen::Vector3d last_start = Eigen::Vector3d::Zero();
-    for (int i = 0; i < k; ++i) {
-      const double arc = current.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / (k - 1)) * L;
-      Eigen::Index j = 0;
+    for (const double arc : places.arcs) {
+      const bool final_touch = &arc == &places.arcs.back();
+      Eigen::Index j = 0, f = 0;
       (smp.arc.array() - arc).abs().minCoeff(&j);
-      const Eigen::Vector3d p = smp.points.col(j), nn = smp.normals.col(j);
+      const design::Samples& at = places.even ? smp : fine;
+      if (!places.even) (fine.arc.array() - arc).abs().minCoeff(&f);
+      const Eigen::Vector3d p = at.points.col(places.even ? j : f),
+                            nn = at.normals.col(places.even ? j : f);
       try {
         if (last < 0)
           safe_move(p + reach * nn);
         else
-          route(smp, outline, reach, last, j, last_start);
+          route(smp, outline, reach, last, j, last_start, p + reach * nn);
       } catch (const NoWay& e) {
         // The next touch point is tried with a free move planned from wherever the machine
         // stands (a route may have stopped part way).
@@ -402,7 +415,7 @@ struct SectionRun {
         // back the way the ball came, to the touch's start: outside the band the part may be
         // in, where the next move can be planned against the design's solid. Before another
         // touch, the route to it leaves along that line anyway.
-        if (i + 1 == k || !got) m.move(last_start, o.move_speed);
+        if (final_touch || !got) m.move(last_start, o.move_speed);
         return got;
       });
       if (!t) {

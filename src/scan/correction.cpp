@@ -4,8 +4,11 @@
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
+#include "section.hpp"
 #include "trueaxis/scan/controller.hpp"
 #include "trueaxis/sim/cmm.hpp"
 
@@ -319,6 +322,42 @@ Correction fit_one(Kind k, const design::Section& section, const Touches& in, do
   return c;
 }
 
+// The singular values (largest first) of the normal distances' Jacobian of touch points at p
+// (plane frame, mm) with design normals m, in a move (x, y) and the maps picked, each about the
+// points' centroid with its column in mm (times their rms distance from it): a turn, a uniform
+// scale. Empty when there are fewer points than columns, or all at one place.
+Eigen::VectorXd singular_values(const std::vector<Eigen::Vector2d>& p,
+                                const std::vector<Eigen::Vector2d>& m, bool turn, bool scale) {
+  const auto n = static_cast<Eigen::Index>(p.size());
+  const int cols = 2 + turn + scale;
+  if (n < cols) return {};
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& x : p) c += x / static_cast<double>(n);
+  double size = 0;
+  for (const auto& x : p) size += (x - c).squaredNorm() / static_cast<double>(n);
+  size = std::sqrt(size);
+  if (!(size > 0)) return {};
+  Eigen::MatrixXd J(n, cols);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector2d v = p[static_cast<std::size_t>(i)] - c;
+    const Eigen::Vector2d& u = m[static_cast<std::size_t>(i)];
+    J(i, 0) = u.x();
+    J(i, 1) = u.y();
+    int k = 2;
+    if (turn) J(i, k++) = (v.x() * u.y() - v.y() * u.x()) / size;
+    if (scale) J(i, k) = v.dot(u) / size;
+  }
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
+}
+
+// How well they tell those apart: the smallest singular value over the largest; 0 when a
+// combination is not seen at all.
+double resolution(const std::vector<Eigen::Vector2d>& p, const std::vector<Eigen::Vector2d>& m,
+                  bool turn, bool scale) {
+  const Eigen::VectorXd sv = singular_values(p, m, turn, scale);
+  return sv.size() && sv[0] > 0 ? sv[sv.size() - 1] / sv[0] : 0.0;
+}
+
 }  // namespace
 
 std::vector<Correction> fit_corrections(const design::Section& section,
@@ -356,30 +395,9 @@ PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& f
                        const Eigen::Matrix3Xd& touched, double accept) {
   const Touches in = prepare(section, feet, touched);
   PartMove out;
-  // The normal distances' Jacobian in a move (x, y) and a third map about the feet's centroid,
-  // its column in mm (times the feet's rms distance from it): a uniform scale, or a turn.
+  out.resolution = resolution(in.p0, in.m0, false, true);
+  out.turn_resolution = resolution(in.p0, in.m0, true, false);
   const auto n = static_cast<Eigen::Index>(in.p0.size());
-  if (n >= 3) {
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (const auto& p : in.p0) c += p / static_cast<double>(n);
-    double size = 0;
-    for (const auto& p : in.p0) size += (p - c).squaredNorm() / static_cast<double>(n);
-    size = std::sqrt(size);
-    auto resolution = [&](bool turn) {
-      if (!(size > 0)) return 0.0;
-      Eigen::MatrixX3d J(n, 3);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const Eigen::Vector2d v = in.p0[static_cast<std::size_t>(i)] - c;
-        const Eigen::Vector2d& m = in.m0[static_cast<std::size_t>(i)];
-        J.row(i) << m.x(), m.y(), (turn ? v.x() * m.y() - v.y() * m.x() : v.dot(m)) / size;
-      }
-      const Eigen::JacobiSVD<Eigen::MatrixX3d> svd(J);
-      const auto sv = svd.singularValues();
-      return sv[0] > 0 ? sv[2] / sv[0] : 0.0;
-    };
-    out.resolution = resolution(false);
-    out.turn_resolution = resolution(true);
-  }
   bool closer = false;
   if (static_cast<int>(in.p0.size()) >= params(Kind::Rotation) + 2) {
     Eigen::VectorXd left;
@@ -409,6 +427,100 @@ PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& f
   }
   return out;
 }
+
+namespace detail {
+
+TouchPlaces touch_places(const design::Section& s, int k, double least) {
+  TouchPlaces out;
+  const double L = design::length(s);
+  for (int i = 0; i < k; ++i)
+    out.arcs.push_back(s.closed ? (i + 0.5) * L / k : (0.05 + 0.9 * i / std::max(1, k - 1)) * L);
+  if (k < 4 || s.space_curve()) return out;
+  const design::Samples smp = design::sample(s, 0.5);
+  const Eigen::Index n = smp.points.cols();
+  if (n < k) return out;
+  const Frame f = frame_of(s, smp.points);
+  auto nearest = [&](double arc) {
+    Eigen::Index j = 0;
+    (smp.arc.array() - arc).abs().minCoeff(&j);
+    return j;
+  };
+  // The resolution, and what the exchange raises: the sum of log(σ² + ε) over the singular
+  // values (a D-optimal design, regularised so that a place that sees a combination no other
+  // does counts before the set sees them all: one touch on a short leg of a U does not yet tell
+  // a move along the long wall from a scale, two do).
+  auto score_of = [&](const std::vector<Eigen::Index>& at, double* res) {
+    std::vector<Eigen::Vector2d> p, m;
+    for (const Eigen::Index j : at) {
+      p.push_back(f.to2(smp.points.col(j)));
+      const Eigen::Vector3d nn = smp.normals.col(j);
+      m.push_back(Eigen::Vector2d(nn.dot(f.e1), nn.dot(f.e2)).normalized());
+    }
+    const Eigen::VectorXd sv = singular_values(p, m, true, true);
+    if (sv.size() == 0) return -std::numeric_limits<double>::infinity();
+    if (res) *res = sv[0] > 0 ? sv[sv.size() - 1] / sv[0] : 0.0;
+    const double eps = 1e-6 * static_cast<double>(at.size());
+    return static_cast<double>((sv.array().square() + eps).log().sum());
+  };
+  std::vector<Eigen::Index> chosen;
+  for (const double a : out.arcs) chosen.push_back(nearest(a));
+  double best = score_of(chosen, &out.resolution);
+  out.even_resolution = out.resolution;
+  if (out.resolution >= least) return out;
+  // Candidates: every sample 1 mm clear of an open stretch's ends and off the corners (the
+  // normal turns by less than 0.2 rad to the samples either side).
+  std::vector<Eigen::Index> cand;
+  for (Eigen::Index j = 0; j < n; ++j) {
+    if (!s.closed && (smp.arc[j] < 1 || smp.arc[j] > L - 1)) continue;
+    const Eigen::Index a = s.closed ? (j + n - 1) % n : std::max<Eigen::Index>(0, j - 1);
+    const Eigen::Index b = s.closed ? (j + 1) % n : std::min(n - 1, j + 1);
+    if (smp.normals.col(a).dot(smp.normals.col(j)) < std::cos(0.2) ||
+        smp.normals.col(b).dot(smp.normals.col(j)) < std::cos(0.2))
+      continue;
+    cand.push_back(j);
+  }
+  auto apart = [&](Eigen::Index j, std::size_t skip) {
+    for (std::size_t q = 0; q < chosen.size(); ++q) {
+      if (q == skip) continue;
+      double d = std::abs(smp.arc[j] - smp.arc[chosen[q]]);
+      if (s.closed) d = std::min(d, L - d);
+      if (d < 1) return false;
+    }
+    return true;
+  };
+  // Exchange one place at a time for the candidate that raises the score most, until no
+  // exchange does (Fedorov's exchange).
+  for (int pass = 0; pass < 4; ++pass) {
+    bool better = false;
+    for (std::size_t i = 0; i < chosen.size(); ++i) {
+      const Eigen::Index was = chosen[i];
+      Eigen::Index keep = was;
+      for (const Eigen::Index j : cand) {
+        if (!apart(j, i)) continue;
+        chosen[i] = j;
+        const double r = score_of(chosen, nullptr);
+        if (r > best + 1e-9) {
+          best = r;
+          keep = j;
+          better = true;
+        }
+      }
+      chosen[i] = keep;
+    }
+    if (!better) break;
+  }
+  double res = 0;
+  score_of(chosen, &res);
+  if (res < least) return out;
+  out.resolution = res;
+  out.even = false;
+  out.arcs.clear();
+  for (const Eigen::Index j : chosen) out.arcs.push_back(smp.arc[j]);
+  std::sort(out.arcs.begin(), out.arcs.end());
+  return out;
+}
+
+}  // namespace detail
 
 std::string Correction::parameters_text() const {
   // Each parameter in words, to what touch points on a CMM resolve: translations to 1 µm,

@@ -66,6 +66,21 @@ struct Splice {
 std::optional<Splice> splice(const design::Section& s, const std::vector<Sample>& samples,
                              double at, double rejoin);
 
+// Where along a section (mm from its start, in order) its k touch points go. Evenly spread (a
+// closed contour's at the middles of k equal pieces, an open stretch's from 5 % to 95 % of it),
+// unless those do not tell the part's move, turn and scale apart (their resolution, as
+// PartMove's, below `least`): a stretch that is one long wall between two short legs gets them
+// all on the wall, which does not see a move along it. Then places are exchanged, one at a
+// time, for those among every 0.5 mm of the section (1 mm clear of an open stretch's ends, off
+// its corners, 1 mm from each other) that raise the resolution most, when that brings it to
+// `least`.
+struct TouchPlaces {
+  std::vector<double> arcs;
+  bool even = true;  // the evenly spread places
+  double resolution = 0, even_resolution = 0;
+};
+TouchPlaces touch_places(const design::Section& s, int k, double least);
+
 // Scans `section` (its design data are corrected in place) and returns its result. Throws what
 // the machine throws (a collision); `partial` then holds what was measured until then.
 SectionResult run_section(const SectionContext& context, design::Section& section);

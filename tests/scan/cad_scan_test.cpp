@@ -141,7 +141,10 @@ TEST(CadScan, DaimlerChryslerPartMovedOrBumpedScansWhatTheStylusReaches) {
 // 2.7 mm off its design at the corner where the reachable stretch meets the wall under the
 // overhang, more than the 2.5 mm the reachability allowed for: the autonomous scan once started
 // 1 mm from that end, its approach passed the wall it was meant for, and the probe body ran into
-// the overhang; and the touch points, all on one straight wall, made the rotation's fit diverge.
+// the overhang. The stretch is one long wall between two 2.8 mm legs: evenly spread touch points
+// all fell on the wall, which does not see a move along it (the fit once diverged on them, then
+// left that move at 0, the rescan failed at the legs and the stretch was scanned autonomously).
+// Two of them now go on the legs, and the correction is the part's whole move.
 TEST(CadScan, NistCtc05BsplineWallsMovedAndScaled) {
   std::vector<ScanCase> cases(3);
   cases[0].label = "moved 2 mm along y";
@@ -151,27 +154,32 @@ TEST(CadScan, NistCtc05BsplineWallsMovedAndScaled) {
   cases[2].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
   cases[2].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
   cases[2].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
-  const auto runs = golden(std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ctc_05_asme1_rd.stp",
-                           {Eigen::Vector3d(0, 0, 178.5675), Eigen::Vector3d::UnitZ()}, cases, 1);
-  // On the one straight wall its touch points reach, the rotation fits the tilt and the move
-  // across the wall, and leaves the move along it (which they cannot see) at 0.
+  const std::string file = std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ctc_05_asme1_rd.stp";
+  const design::Plane plane{Eigen::Vector3d(0, 0, 178.5675), Eigen::Vector3d::UnitZ()};
+  const auto runs = golden(file, plane, cases, 1);
+  const auto& turned = runs[2];
+  EXPECT_EQ(count(turned, "autonomous_scan"), 0) << turned.summary();
+  EXPECT_EQ(count(turned, "trajectory_error"), 1) << turned.summary();
+  const sim::Part part{design::from_step(file, {{"z", plane}}), cases[2].dev};
+  const Eigen::Affine3d truth = sim::transform(part);
   bool rotation = false;
-  for (const auto& s : runs[2].sections)
+  for (const auto& s : turned.sections)
     for (const auto& c : s.corrections) {
       EXPECT_TRUE(c.diverged.empty()) << c.type << ": " << c.diverged;
-      if (c.accepted && c.type == "rotation") {
-        rotation = true;
-        for (const auto& [k, v] : c.parameters) {
-          if (k == "rotation_deg") {
-            EXPECT_NEAR(v, 0.3, 1e-3);
-          }
-          if (k == "dx_mm") {  // along the wall (x)
-            EXPECT_NEAR(v, 0, 1e-6);
-          }
+      if (!c.accepted) continue;
+      EXPECT_EQ(c.type, "rotation");
+      rotation = true;
+      for (const auto& [k, v] : c.parameters)
+        if (k == "rotation_deg") {
+          EXPECT_NEAR(v, 0.3, 1e-3);
         }
+      // The design's points go where the part's turn and move take them, at both legs.
+      for (const double x : {-100.0, 100.0}) {
+        const Eigen::Vector3d p(x, -80, 178.5675);
+        EXPECT_LT((c.transform * p - truth * p).norm(), 2e-3) << x;
       }
     }
-  EXPECT_TRUE(rotation) << runs[2].summary();
+  EXPECT_TRUE(rotation) << turned.summary();
 }
 
 // CTC 05 cut in a vertical plane through its axis, moved 2 mm down: after the correction the

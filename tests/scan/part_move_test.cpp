@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "../../src/scan/section.hpp"
 #include "trueaxis/scan/controller.hpp"
 
 namespace trueaxis {
@@ -135,6 +136,56 @@ TEST(PartMove, TooFewTouchPointsForATurnSaySo) {
   EXPECT_FALSE(pm.rigid.accepted);
   EXPECT_FALSE(pm.rigid.diverged.empty());
   EXPECT_TRUE(std::isnan(pm.turn_u));
+}
+
+// An open stretch that is one 178 mm wall between two 2.8 mm legs (CTC 05's reachable stretch at
+// z = 178.6 mm): evenly spread touch points all fall on the wall, which does not see a move
+// along it. The places then go where the move, turn and scale are told apart: some on each leg,
+// each 1 mm clear of the ends and of each other. A whole rectangle keeps its even places.
+TEST(PartMove, TouchPointsGoWhereTheyTellTheMoveAlongAWall) {
+  design::Section u;
+  u.name = "U";
+  u.closed = false;
+  u.plane = {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()};
+  u.polyline.resize(3, 4);
+  u.polyline << -89, -89, 89, 89, -76.7, -79.5, -79.5, -76.7, 10, 10, 10, 10;
+  const auto places = scan::detail::touch_places(u, 8, 0.1);
+  EXPECT_LT(places.even_resolution, kUnseen);
+  ASSERT_FALSE(places.even);
+  EXPECT_GE(places.resolution, 0.1);
+  ASSERT_EQ(places.arcs.size(), 8u);
+  const double L = 2.8 + 178 + 2.8;
+  int on_legs = 0;
+  for (std::size_t i = 0; i < places.arcs.size(); ++i) {
+    const double a = places.arcs[i];
+    EXPECT_GE(a, 1 - 1e-9);
+    EXPECT_LE(a, L - 1 + 1e-9);
+    if (i > 0) {
+      EXPECT_GE(a - places.arcs[i - 1], 1 - 1e-9);
+    }
+    on_legs += a < 2.8 || a > L - 2.8;
+  }
+  EXPECT_GE(on_legs, 2);
+  // The fit on those places sees the move along the wall: a part moved 1.8 mm along it and
+  // 1.1 mm across is corrected by that move.
+  const auto smp = design::sample(u, 0.25);
+  Eigen::Matrix3Xd feet(3, 8);
+  for (int i = 0; i < 8; ++i) {
+    Eigen::Index j = 0;
+    (smp.arc.array() - places.arcs[static_cast<std::size_t>(i)]).abs().minCoeff(&j);
+    feet.col(i) = smp.points.col(j);
+  }
+  const Eigen::Vector3d t(1.8, -1.1, 0);
+  const auto touched = moved(feet, 0, Eigen::Vector3d::Zero(), t);
+  design::Section corrected;
+  const auto menu = scan::fit_corrections(u, feet, touched, 0.05, &corrected);
+  ASSERT_FALSE(menu.empty());
+  EXPECT_TRUE(menu.front().accepted);
+  EXPECT_LT((menu.front().transform.translation() - t).norm(), 1e-6);
+
+  const auto rect = scan::detail::touch_places(rectangle(), 8, 0.1);
+  EXPECT_TRUE(rect.even);
+  EXPECT_GE(rect.resolution, 0.1);
 }
 
 }  // namespace
