@@ -282,5 +282,34 @@ TEST(CadParts, EvenSamplesOfBsplineContoursLieAtTheirArcLengths) {
   EXPECT_GE(checked, 20);
 }
 
+// Pieces of a closed contour across its start, and pieces that reach past its end or start by
+// less than a micrometre (the DaimlerChrysler part cut at x = 0: the scan's reachable ends once
+// asked for such a piece, and Open CASCADE threw "NCollection_Array1::Create" instead of a
+// stretch). A piece of no length is refused by name.
+TEST(CadParts, PiecesOfAClosedContourAtItsStart) {
+  const auto d = design::from_step(kCad + "DaimlerChryslerTestPartAP214.stp",
+                                   {{"x0", {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitX()}}});
+  int checked = 0;
+  for (const auto& s : d.sections) {
+    if (!s.nurbs || !s.closed) continue;
+    const double L = design::length(s);
+    const Eigen::Vector3d start = design::sample(s, 1e3).points.col(0);
+    for (const double sliver : {0.0, 1e-9, 5e-7}) {
+      // From a third of the way to just past the end: ends at the contour's start.
+      const auto a = design::sample(design::piece(s, L / 3, L + sliver, "a"), 1e3);
+      EXPECT_LT((a.points.col(a.points.cols() - 1) - start).norm(), 1e-6) << s.name;
+      EXPECT_NEAR(design::length(design::piece(s, L / 3, L + sliver, "a")), 2 * L / 3, 1e-6);
+      // From just before the end, round the start, to a third of the way.
+      const auto b = design::piece(s, L - sliver, L + L / 3, "b");
+      EXPECT_NEAR(design::length(b), L / 3 + sliver, 1e-6) << s.name;
+    }
+    // Across the start: both sides of it.
+    EXPECT_NEAR(design::length(design::piece(s, 0.9 * L, 1.2 * L, "c")), 0.3 * L, 1e-6);
+    EXPECT_THROW(design::piece(s, L / 2, L / 2, "none"), Error);
+    ++checked;
+  }
+  EXPECT_GE(checked, 1);
+}
+
 }  // namespace
 }  // namespace trueaxis

@@ -7,6 +7,7 @@
 #include <list>
 #include <memory>
 #include <mutex>
+#include <string>
 
 #include "occt.hpp"
 #include "trueaxis/error.hpp"
@@ -149,6 +150,18 @@ Section piece(const Section& s, double from, double to) {
   const ArcTable table(a, *c);
   const double total = table.total();
   auto param = [&](double arc) { return table.parameter(std::clamp(arc, 0.0, total)); };
+  // A stretch that wraps round a closed curve's start by less than a micrometre either way is
+  // taken without that sliver: OCCT cannot cut a B-spline to a span of no length (it threw
+  // "NCollection_Array1::Create" for the DaimlerChrysler part cut at x = 0).
+  constexpr double kSliver = 1e-6;  // mm
+  if (to > total && to - total < kSliver) to = total;
+  if (to > total && from > total - kSliver) {
+    from -= total;
+    to -= total;
+  }
+  if (!(to - from >= kSliver))
+    throw Error("a piece of the curve from " + std::to_string(from) + " to " + std::to_string(to) +
+                " mm along it has no length");
   Handle(Geom_BSplineCurve) out;
   if (to <= total + 1e-9) {
     out = Handle(Geom_BSplineCurve)::DownCast(c->Copy());
