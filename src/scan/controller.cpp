@@ -796,7 +796,8 @@ struct SectionRun {
             if (c.type != "none") r.corrections.push_back(c);
           if (corrected) {
             // What these touch points tell of the whole part, to hand on (hand_on_part_move).
-            told.push_back({r.corrections.size() - 1, fit_part_move(current, feet, got, o.accept)});
+            told.push_back({r.corrections.size() - 1,
+                            fit_part_move(current, feet, got, o.accept, &r.corrections.back())});
             Eigen::Affine3d step = Eigen::Affine3d::Identity();
             for (const auto& c : tried)
               if (c.accepted) step = c.transform * step;

@@ -392,16 +392,37 @@ std::vector<Correction> fit_corrections(const design::Section& section,
 }
 
 PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& feet,
-                       const Eigen::Matrix3Xd& touched, double accept) {
+                       const Eigen::Matrix3Xd& touched, double accept, const Correction* chosen) {
   const Touches in = prepare(section, feet, touched);
   PartMove out;
   out.resolution = resolution(in.p0, in.m0, false, true);
   out.turn_resolution = resolution(in.p0, in.m0, true, false);
   const auto n = static_cast<Eigen::Index>(in.p0.size());
   bool closer = false;
-  if (static_cast<int>(in.p0.size()) >= params(Kind::Rotation) + 2) {
+  if (out.turn_resolution < 1e-6) {
+    // Round a circle: nothing to fit a turn to.
+    out.rigid.type = name(Kind::Rotation);
+    out.rigid.diverged = "the touch points see no turn";
+    out.rigid.residual_before = in.before.size() ? in.before.cwiseAbs().maxCoeff() : NAN;
+    out.rigid.residual_after = NAN;
+  } else if (static_cast<int>(in.p0.size()) >= params(Kind::Rotation) + 2) {
     Eigen::VectorXd left;
-    out.rigid = fit_one(Kind::Rotation, section, in, accept, closer, nullptr, &left);
+    if (chosen && chosen->accepted && chosen->type == name(Kind::Rotation)) {
+      // The menu's own choice is the rigid fit: only its residuals are needed.
+      out.rigid = *chosen;
+      design::Section moved = section;
+      auto map = [&](Eigen::Matrix3Xd& pts) {
+        for (Eigen::Index i = 0; i < pts.cols(); ++i) pts.col(i) = chosen->transform * pts.col(i);
+      };
+      if (moved.nurbs)
+        map(moved.nurbs->control_points);
+      else
+        map(moved.polyline);
+      left = distances(curve_of(moved), touched);
+      closer = true;
+    } else {
+      out.rigid = fit_one(Kind::Rotation, section, in, accept, closer, nullptr, &left);
+    }
     out.rigid.accepted = closer;
     // The turn's standard uncertainty from the fit's scatter (each residual at least 0.1 µm, a
     // CMM's resolution, so that noise-free points do not make round-off a turn), linearised at

@@ -217,7 +217,10 @@ struct PartMove {
   // nothing the touch points show.
   double turn_u = NAN;
 };
+// `chosen`: the menu's accepted correction for these touch points, if any (when it is a
+// rotation, it is the rigid fit, and is not fitted again).
 PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& feet,
-                       const Eigen::Matrix3Xd& touched, double accept);
+                       const Eigen::Matrix3Xd& touched, double accept,
+                       const Correction* chosen = nullptr);
 
 }  // namespace trueaxis::scan
