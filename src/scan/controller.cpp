@@ -28,10 +28,6 @@ constexpr double kRangeGuard = 0.1;
 // stop (then four times as far, if the part is not back on its design by then), and the part
 // counts as back on its design within kRejoin times the trajectory tolerance.
 constexpr double kLocalScan = 60, kLocalLead = 10, kRejoin = 0.03;
-// An open stretch's touch points tell where the whole part stands when they tell a move from a
-// scale at least this well (PartMove::resolution; a closed contour's are about 0.7): a
-// parameter is then known to within ten times what it would be from well-spread points.
-constexpr double kTellsPart = 0.1;
 
 // Machine time of one operation, added to a category.
 template <class Fn>
@@ -375,7 +371,7 @@ struct SectionRun {
                                current.material == design::Side::Left);
     // Evenly spread, or where they tell the part's move, turn and scale apart when evenly
     // spread ones do not (then each foot from samples 0.25 mm apart, not the route's).
-    const auto places = detail::touch_places(current, k, kTellsPart);
+    const auto places = detail::touch_places(current, k, detail::kTellsPart);
     const design::Samples fine = places.even ? design::Samples{} : design::sample(current, 0.25);
     if (!places.even)
       log(0, 0, "touch", "touch",
@@ -699,41 +695,11 @@ struct SectionRun {
   // r.corrections of the correction that round accepted.
   std::vector<std::pair<std::size_t, PartMove>> told;
 
-  // After the section: its rigid corrections are where the part stands, for the sections after
-  // it (all of them rigid, at least one its own). Each own correction is handed on as the rigid
-  // fit of its touch points (PartMove) where they show a turn (one that a move fitted to a small
-  // contour leaves out, and that grows with the distance to the next section): a turn they see
-  // (round a circle they see none) and larger than three of its standard uncertainties.
-  // Otherwise the menu's own correction is handed on. A closed contour's touch points surround
-  // it and tell a move from a scale; an open stretch's only when they are spread well enough
-  // (kTellsPart): one straight wall's do not see a move along it, and two walls at a corner do
-  // not tell a scale from a move, which is wrong for the wall opposite (carried there, it put
-  // the planned moves 4 mm off the part).
+  // After the section: where it found the part is where the part stands for the sections after
+  // it (detail::part_move_of).
   void hand_on_part_move() const {
-    std::vector<Correction> rigid;
-    bool own = false;
-    for (std::size_t i = 0; i < r.corrections.size(); ++i) {
-      const Correction& c = r.corrections[i];
-      if (!c.accepted) continue;
-      Correction moved = c;
-      if (c.found_on.empty()) {
-        const auto t =
-            std::find_if(told.begin(), told.end(), [&](const auto& x) { return x.first == i; });
-        if (t == told.end()) return;
-        if (!current.closed && t->second.resolution < kTellsPart) return;
-        const PartMove& pm = t->second;
-        if (pm.rigid.accepted && pm.turn_resolution >= kTellsPart &&
-            std::abs(pm.rigid.parameters.front().second) > 3 * pm.turn_u)
-          moved = pm.rigid;
-        moved.found_on = current.name;
-        own = true;
-      }
-      const Eigen::Matrix3d R = moved.transform.linear();
-      if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9 || R.determinant() < 0)
-        return;
-      rigid.push_back(moved);
-    }
-    if (own) part_move = std::move(rigid);
+    if (auto moved = detail::part_move_of(r.corrections, told, current.closed, current.name))
+      part_move = std::move(*moved);
   }
 
   void run() {

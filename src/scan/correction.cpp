@@ -451,6 +451,37 @@ PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& f
 
 namespace detail {
 
+std::optional<std::vector<Correction>> part_move_of(
+    const std::vector<Correction>& corrections,
+    const std::vector<std::pair<std::size_t, PartMove>>& told, bool closed,
+    const std::string& name) {
+  std::vector<Correction> rigid;
+  bool own = false;
+  for (std::size_t i = 0; i < corrections.size(); ++i) {
+    const Correction& c = corrections[i];
+    if (!c.accepted) continue;
+    Correction moved = c;
+    if (c.found_on.empty()) {
+      const auto t =
+          std::find_if(told.begin(), told.end(), [&](const auto& x) { return x.first == i; });
+      if (t == told.end()) return std::nullopt;
+      const PartMove& pm = t->second;
+      if (!closed && pm.resolution < kTellsPart) return std::nullopt;
+      if (pm.rigid.accepted && pm.turn_resolution >= kTellsPart &&
+          std::abs(pm.rigid.parameters.front().second) > 3 * pm.turn_u)
+        moved = pm.rigid;
+      moved.found_on = name;
+      own = true;
+    }
+    const Eigen::Matrix3d R = moved.transform.linear();
+    if ((R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9 || R.determinant() < 0)
+      return std::nullopt;
+    rigid.push_back(moved);
+  }
+  if (!own) return std::nullopt;
+  return rigid;
+}
+
 TouchPlaces touch_places(const design::Section& s, int k, double least) {
   TouchPlaces out;
   const double L = design::length(s);

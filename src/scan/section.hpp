@@ -3,6 +3,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -65,6 +66,27 @@ struct Splice {
 // the scan does not show both ends of the deviation, or for an open or space-curve section.
 std::optional<Splice> splice(const design::Section& s, const std::vector<Sample>& samples,
                              double at, double rejoin);
+
+// Touch points tell where the whole part stands (its move, and a turn or a scale) when they
+// tell them apart at least this well (PartMove::resolution; a closed contour's are about 0.7):
+// a parameter is then known to within ten times what it would be from well-spread points.
+inline constexpr double kTellsPart = 0.1;
+
+// The rigid corrections a section's run leaves as where the part stands, for the sections after
+// it: all its accepted corrections (those carried to it and its own; `told` gives, by their
+// index in `corrections`, what each round of its own touch points told of the part). Nothing
+// when one of them is not rigid, none is its own, or an open stretch's touch points do not tell
+// a move from a scale (kTellsPart): one straight wall's do not see a move along it, and two
+// walls at a corner do not tell a scale from a move, which is wrong for the wall opposite
+// (carried there, it put the planned moves 4 mm off the part); a closed contour's surround it.
+// Each own correction is handed on as the rigid fit of its touch points where they show a turn
+// (one a move fitted to a small contour leaves out, and that grows with the distance to the
+// next section): a turn they see (round a circle they see none) and larger than three of its
+// standard uncertainties. Otherwise the menu's own correction is handed on.
+std::optional<std::vector<Correction>> part_move_of(
+    const std::vector<Correction>& corrections,
+    const std::vector<std::pair<std::size_t, PartMove>>& told, bool closed,
+    const std::string& name);
 
 // Where along a section (mm from its start, in order) its k touch points go. Evenly spread (a
 // closed contour's at the middles of k equal pieces, an open stretch's from 5 % to 95 % of it),
