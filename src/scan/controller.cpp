@@ -736,7 +736,8 @@ struct SectionRun {
         auto [feet, got] = touch();
         if (got.cols() >= 4) {
           design::Section fixed;
-          auto tried = fit_corrections(current, feet, got, o.accept, &fixed);
+          PartMove told_here;
+          auto tried = fit_corrections(current, feet, got, o.accept, &fixed, &told_here);
           for (const auto& c : tried) {
             if (c.type == "none") {
               local = true;
@@ -762,8 +763,7 @@ struct SectionRun {
             if (c.type != "none") r.corrections.push_back(c);
           if (corrected) {
             // What these touch points tell of the whole part, to hand on (hand_on_part_move).
-            told.push_back({r.corrections.size() - 1,
-                            fit_part_move(current, feet, got, o.accept, &r.corrections.back())});
+            told.push_back({r.corrections.size() - 1, std::move(told_here)});
             Eigen::Affine3d step = Eigen::Affine3d::Identity();
             for (const auto& c : tried)
               if (c.accepted) step = c.transform * step;

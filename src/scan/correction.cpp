@@ -322,12 +322,13 @@ Correction fit_one(Kind k, const design::Section& section, const Touches& in, do
   return c;
 }
 
-// The singular values (largest first) of the normal distances' Jacobian of touch points at p
-// (plane frame, mm) with design normals m, in a move (x, y) and the maps picked, each about the
-// points' centroid with its column in mm (times their rms distance from it): a turn, a uniform
-// scale. Empty when there are fewer points than columns, or all at one place.
-Eigen::VectorXd singular_values(const std::vector<Eigen::Vector2d>& p,
-                                const std::vector<Eigen::Vector2d>& m, bool turn, bool scale) {
+// The normal distances' Jacobian of touch points at p (plane frame, mm) with design normals m, in
+// a move (x, y) and the maps picked, each about the points' centroid: a turn, a uniform scale.
+// Their columns are in mm per radian or unit, or (`in_mm`) in mm, times the points' rms distance
+// from the centroid, comparable with the move's. Empty when there are fewer points than columns,
+// or all at one place.
+Eigen::MatrixXd jacobian(const std::vector<Eigen::Vector2d>& p,
+                         const std::vector<Eigen::Vector2d>& m, bool turn, bool scale, bool in_mm) {
   const auto n = static_cast<Eigen::Index>(p.size());
   const int cols = 2 + turn + scale;
   if (n < cols) return {};
@@ -337,6 +338,7 @@ Eigen::VectorXd singular_values(const std::vector<Eigen::Vector2d>& p,
   for (const auto& x : p) size += (x - c).squaredNorm() / static_cast<double>(n);
   size = std::sqrt(size);
   if (!(size > 0)) return {};
+  const double unit = in_mm ? size : 1.0;
   Eigen::MatrixXd J(n, cols);
   for (Eigen::Index i = 0; i < n; ++i) {
     const Eigen::Vector2d v = p[static_cast<std::size_t>(i)] - c;
@@ -344,9 +346,17 @@ Eigen::VectorXd singular_values(const std::vector<Eigen::Vector2d>& p,
     J(i, 0) = u.x();
     J(i, 1) = u.y();
     int k = 2;
-    if (turn) J(i, k++) = (v.x() * u.y() - v.y() * u.x()) / size;
-    if (scale) J(i, k) = v.dot(u) / size;
+    if (turn) J(i, k++) = (v.x() * u.y() - v.y() * u.x()) / unit;
+    if (scale) J(i, k) = v.dot(u) / unit;
   }
+  return J;
+}
+
+// Its singular values, largest first (columns in mm).
+Eigen::VectorXd singular_values(const std::vector<Eigen::Vector2d>& p,
+                                const std::vector<Eigen::Vector2d>& m, bool turn, bool scale) {
+  const Eigen::MatrixXd J = jacobian(p, m, turn, scale, true);
+  if (J.size() == 0) return {};
   return Eigen::JacobiSVD<Eigen::MatrixXd>(J).singularValues();
 }
 
@@ -358,12 +368,56 @@ double resolution(const std::vector<Eigen::Vector2d>& p, const std::vector<Eigen
   return sv.size() && sv[0] > 0 ? sv[sv.size() - 1] / sv[0] : 0.0;
 }
 
+// What the prepared touch points tell of the part's move (fit_part_move). `chosen` and `left`:
+// the menu's accepted correction and its residuals at the touch points, when it has one (a
+// rotation is then the rigid fit, not fitted again).
+PartMove part_move(const design::Section& section, const Touches& in, double accept,
+                   const Correction* chosen, const Eigen::VectorXd* left_by_chosen) {
+  PartMove out;
+  out.resolution = resolution(in.p0, in.m0, false, true);
+  out.turn_resolution = resolution(in.p0, in.m0, true, false);
+  auto none = [&](const char* why) {
+    out.rigid.type = name(Kind::Rotation);
+    out.rigid.diverged = why;
+    out.rigid.residual_before = in.before.size() ? in.before.cwiseAbs().maxCoeff() : NAN;
+    out.rigid.residual_after = NAN;
+    return out;
+  };
+  // Round a circle: nothing to fit a turn to.
+  if (out.turn_resolution < 1e-6) return none("the touch points see no turn");
+  const auto n = static_cast<Eigen::Index>(in.p0.size());
+  if (n < params(Kind::Rotation) + 2) return none("too few touch points for a turn and a move");
+  Eigen::VectorXd left;
+  bool closer = false;
+  if (chosen && left_by_chosen && chosen->accepted && chosen->type == name(Kind::Rotation)) {
+    out.rigid = *chosen;
+    left = *left_by_chosen;
+    closer = true;
+  } else {
+    out.rigid = fit_one(Kind::Rotation, section, in, accept, closer, nullptr, &left);
+  }
+  out.rigid.accepted = closer;
+  // The turn's standard uncertainty from the fit's scatter (each residual at least 0.1 µm, a
+  // CMM's resolution, so that noise-free points do not make round-off a turn), linearised at the
+  // feet: s² (JᵀJ)⁻¹ with J in the move (x, y) and the turn (mm per rad; the turn's variance is
+  // the same about any centre).
+  if (closer && left.allFinite()) {
+    const Eigen::MatrixXd J = jacobian(in.p0, in.m0, true, false, false);
+    const double s2 =
+        std::max(left.squaredNorm() / static_cast<double>(n - 3), kResolution * kResolution);
+    const Eigen::Matrix3d JtJ = J.transpose() * J;
+    const Eigen::FullPivLU<Eigen::Matrix3d> lu(JtJ);
+    if (lu.isInvertible()) out.turn_u = std::sqrt(s2 * lu.inverse()(2, 2)) * 180 / M_PI;
+  }
+  return out;
+}
+
 }  // namespace
 
 std::vector<Correction> fit_corrections(const design::Section& section,
                                         const Eigen::Matrix3Xd& feet,
                                         const Eigen::Matrix3Xd& touched, double accept,
-                                        design::Section* corrected) {
+                                        design::Section* corrected, PartMove* move) {
   const Touches in = prepare(section, feet, touched);
   const double worst_before = in.before.cwiseAbs().maxCoeff();
   std::vector<Correction> out;
@@ -376,77 +430,27 @@ std::vector<Correction> fit_corrections(const design::Section& section,
     out.push_back(c);
     return out;
   }
+  Eigen::VectorXd left;
   for (Kind k :
        {Kind::Translation, Kind::Rotation, Kind::Scale, Kind::ScaleRotation, Kind::Directional}) {
     if (static_cast<int>(in.p0.size()) < params(k) + 2) continue;  // keep some redundancy
     bool closer = false;
     design::Section cand;
-    out.push_back(fit_one(k, section, in, accept, closer, &cand));
+    out.push_back(fit_one(k, section, in, accept, closer, &cand, &left));
     if (closer) {
       out.back().accepted = true;
       if (corrected) *corrected = std::move(cand);
       break;
     }
   }
+  if (move && !out.empty() && out.back().accepted)
+    *move = part_move(section, in, accept, &out.back(), &left);
   return out;
 }
 
 PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& feet,
-                       const Eigen::Matrix3Xd& touched, double accept, const Correction* chosen) {
-  const Touches in = prepare(section, feet, touched);
-  PartMove out;
-  out.resolution = resolution(in.p0, in.m0, false, true);
-  out.turn_resolution = resolution(in.p0, in.m0, true, false);
-  const auto n = static_cast<Eigen::Index>(in.p0.size());
-  bool closer = false;
-  if (out.turn_resolution < 1e-6) {
-    // Round a circle: nothing to fit a turn to.
-    out.rigid.type = name(Kind::Rotation);
-    out.rigid.diverged = "the touch points see no turn";
-    out.rigid.residual_before = in.before.size() ? in.before.cwiseAbs().maxCoeff() : NAN;
-    out.rigid.residual_after = NAN;
-  } else if (static_cast<int>(in.p0.size()) >= params(Kind::Rotation) + 2) {
-    Eigen::VectorXd left;
-    if (chosen && chosen->accepted && chosen->type == name(Kind::Rotation)) {
-      // The menu's own choice is the rigid fit: only its residuals are needed.
-      out.rigid = *chosen;
-      design::Section moved = section;
-      auto map = [&](Eigen::Matrix3Xd& pts) {
-        for (Eigen::Index i = 0; i < pts.cols(); ++i) pts.col(i) = chosen->transform * pts.col(i);
-      };
-      if (moved.nurbs)
-        map(moved.nurbs->control_points);
-      else
-        map(moved.polyline);
-      left = distances(curve_of(moved), touched);
-      closer = true;
-    } else {
-      out.rigid = fit_one(Kind::Rotation, section, in, accept, closer, nullptr, &left);
-    }
-    out.rigid.accepted = closer;
-    // The turn's standard uncertainty from the fit's scatter (each residual at least 0.1 µm, a
-    // CMM's resolution, so that noise-free points do not make round-off a turn), linearised at
-    // the feet: s² (JᵀJ)⁻¹ with J in the move (x, y) and the turn (mm per rad).
-    if (closer && left.allFinite()) {
-      Eigen::MatrixX3d J(n, 3);
-      for (Eigen::Index i = 0; i < n; ++i) {
-        const Eigen::Vector2d& v = in.p0[static_cast<std::size_t>(i)];
-        const Eigen::Vector2d& m = in.m0[static_cast<std::size_t>(i)];
-        J.row(i) << m.x(), m.y(), v.x() * m.y() - v.y() * m.x();
-      }
-      const double s2 =
-          std::max(left.squaredNorm() / static_cast<double>(n - 3), kResolution * kResolution);
-      const Eigen::Matrix3d JtJ = J.transpose() * J;
-      const Eigen::FullPivLU<Eigen::Matrix3d> lu(JtJ);
-      if (lu.isInvertible()) out.turn_u = std::sqrt(s2 * lu.inverse()(2, 2)) * 180 / M_PI;
-    }
-  } else {
-    out.rigid.type = name(Kind::Rotation);
-    out.rigid.diverged = "too few touch points for a turn and a move";
-    out.rigid.residual_before = in.before.size() ? in.before.cwiseAbs().maxCoeff() : NAN;
-    out.rigid.residual_after = NAN;
-  }
-  return out;
+                       const Eigen::Matrix3Xd& touched, double accept) {
+  return part_move(section, prepare(section, feet, touched), accept, nullptr, nullptr);
 }
 
 namespace detail {
@@ -467,8 +471,10 @@ std::optional<std::vector<Correction>> part_move_of(
       if (t == told.end()) return std::nullopt;
       const PartMove& pm = t->second;
       if (!closed && pm.resolution < kTellsPart) return std::nullopt;
+      const auto turn = std::find_if(pm.rigid.parameters.begin(), pm.rigid.parameters.end(),
+                                     [](const auto& q) { return q.first == "rotation_deg"; });
       if (pm.rigid.accepted && pm.turn_resolution >= kTellsPart &&
-          std::abs(pm.rigid.parameters.front().second) > 3 * pm.turn_u)
+          turn != pm.rigid.parameters.end() && std::abs(turn->second) > 3 * pm.turn_u)
         moved = pm.rigid;
       moved.found_on = name;
       own = true;

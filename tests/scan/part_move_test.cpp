@@ -15,8 +15,10 @@ namespace {
 // Resolutions are ratios of singular values: a combination of parameters the feet do not see
 // at all comes out at round-off.
 constexpr double kUnseen = 1e-6;
-// Noise-free touched points: the fitted turn to the fit's own convergence.
+// Noise-free touched points: the fitted turn to the fit's own convergence, and the map to
+// round-off.
 constexpr double kTurnDeg = 1e-6;
+constexpr double kSameMap = 1e-9;  // mm
 
 design::Section rectangle() {
   design::Section s;
@@ -108,7 +110,7 @@ TEST(PartMove, TheRigidFitHasTheTurnAMoveLeavesOutWithItsUncertainty) {
   // The map itself: a far point goes where the turned and moved part takes it.
   const Eigen::Vector3d far(140, 15, 10);
   const Eigen::Vector3d want = moved(far, 0.3, c, t).col(0);
-  EXPECT_LT((pm.rigid.transform * far - want).norm(), 1e-5);
+  EXPECT_LT((pm.rigid.transform * far - want).norm(), kSameMap);
 }
 
 // Round a circle no turn about its centre moves a touch point: the turn is not seen, and a fit
@@ -181,11 +183,36 @@ TEST(PartMove, TouchPointsGoWhereTheyTellTheMoveAlongAWall) {
   const auto menu = scan::fit_corrections(u, feet, touched, 0.05, &corrected);
   ASSERT_FALSE(menu.empty());
   EXPECT_TRUE(menu.front().accepted);
-  EXPECT_LT((menu.front().transform.translation() - t).norm(), 1e-6);
+  EXPECT_LT((menu.front().transform.translation() - t).norm(), kSameMap);
 
   const auto rect = scan::detail::touch_places(rectangle(), 8, 0.1);
   EXPECT_TRUE(rect.even);
   EXPECT_GE(rect.resolution, 0.1);
+}
+
+// The menu gives the same part move as fit_part_move, without fitting again: with a move as its
+// choice (the turn fitted on top), and with a turn as its choice (that turn itself).
+TEST(PartMove, TheMenuGivesThePartMoveItsTouchPointsTell) {
+  design::Section small = rectangle();
+  small.polyline.row(0) *= 0.25;  // 20 × 30 mm
+  const Eigen::Vector3d t(1.8, -1.1, 0), c(10, 15, 10);
+  const auto feet = feet_on(small, 0, 4, 2);
+  const auto touched = moved(feet, 0.3, c, t);
+  for (const double accept : {0.1, 0.01}) {
+    scan::PartMove from_menu;
+    design::Section corrected;
+    const auto menu = scan::fit_corrections(small, feet, touched, accept, &corrected, &from_menu);
+    ASSERT_TRUE(menu.back().accepted);
+    EXPECT_EQ(menu.back().type, accept == 0.1 ? "translation" : "rotation");
+    const auto alone = scan::fit_part_move(small, feet, touched, accept);
+    ASSERT_TRUE(from_menu.rigid.accepted) << accept;
+    EXPECT_NEAR(turn_of(from_menu.rigid), turn_of(alone.rigid), kTurnDeg);
+    EXPECT_NEAR(from_menu.turn_u, alone.turn_u, 1e-3 * alone.turn_u);
+    EXPECT_EQ(from_menu.resolution, alone.resolution);
+    EXPECT_EQ(from_menu.turn_resolution, alone.turn_resolution);
+    const Eigen::Vector3d far(140, 15, 10);
+    EXPECT_LT((from_menu.rigid.transform * far - moved(far, 0.3, c, t).col(0)).norm(), kSameMap);
+  }
 }
 
 }  // namespace

@@ -183,17 +183,6 @@ using Progress = std::function<void(std::size_t, std::size_t, const std::string&
 Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
             const Progress& progress = {});
 
-// The geometric-correction menu on its own. `touched` (3 × m, mm) are surface points found by
-// touching along the design normals at `feet` (3 × m, points of the design curve). Returns every
-// model tried, in menu order, with `accepted` set on the one chosen (at most one); `corrected`
-// receives the section with that correction applied (its curve transformed, the plane kept).
-// When the touch points already lie within `accept` of the design, nothing is fitted: the result
-// is one entry of type "none" (the deviation is local).
-std::vector<Correction> fit_corrections(const design::Section& section,
-                                        const Eigen::Matrix3Xd& feet,
-                                        const Eigen::Matrix3Xd& touched, double accept,
-                                        design::Section* corrected);
-
 // What touch points tell of where the whole part stands, to carry it to other sections.
 struct PartMove {
   // The rigid fit (a turn about the contour's centroid and a move in its plane) of the touch
@@ -217,10 +206,20 @@ struct PartMove {
   // nothing the touch points show.
   double turn_u = NAN;
 };
-// `chosen`: the menu's accepted correction for these touch points, if any (when it is a
-// rotation, it is the rigid fit, and is not fitted again).
 PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& feet,
-                       const Eigen::Matrix3Xd& touched, double accept,
-                       const Correction* chosen = nullptr);
+                       const Eigen::Matrix3Xd& touched, double accept);
+
+// The geometric-correction menu on its own. `touched` (3 × m, mm) are surface points found by
+// touching along the design normals at `feet` (3 × m, points of the design curve). Returns every
+// model tried, in menu order, with `accepted` set on the one chosen (at most one); `corrected`
+// receives the section with that correction applied (its curve transformed, the plane kept).
+// When the touch points already lie within `accept` of the design, nothing is fitted: the result
+// is one entry of type "none" (the deviation is local). `move` (if given), when a correction is
+// accepted, receives what the same touch points tell of the whole part (as fit_part_move,
+// without preparing them again, nor fitting a turn again when the menu chose one).
+std::vector<Correction> fit_corrections(const design::Section& section,
+                                        const Eigen::Matrix3Xd& feet,
+                                        const Eigen::Matrix3Xd& touched, double accept,
+                                        design::Section* corrected, PartMove* move = nullptr);
 
 }  // namespace trueaxis::scan
