@@ -62,6 +62,19 @@ Eigen::Matrix3Xd moved(const Eigen::Matrix3Xd& feet, double deg, const Eigen::Ve
   return (R * (feet.colwise() - centre)).colwise() + (centre + t);
 }
 
+// A 20 × 30 mm rectangle, two feet on each side, touched on the part moved 1.8 mm, -1.1 mm and
+// turned 0.3° about its centre.
+struct TurnedRectangle {
+  design::Section small = [] {
+    design::Section s = rectangle();
+    s.polyline.row(0) *= 0.25;
+    return s;
+  }();
+  Eigen::Vector3d t{1.8, -1.1, 0}, c{10, 15, 10};
+  Eigen::Matrix3Xd feet = feet_on(small, 0, 4, 2);
+  Eigen::Matrix3Xd touched = moved(feet, 0.3, c, t);
+};
+
 double turn_of(const scan::Correction& c) {
   for (const auto& [k, v] : c.parameters)
     if (k == "rotation_deg") return v;
@@ -88,11 +101,8 @@ TEST(PartMove, ACornerOrAWallDoesNotTellAMoveFromAScaleAWholeOutlineDoes) {
 // 0.3°, so a menu accepting 0.1 mm takes the move; handed on to a section 130 mm away, the turn
 // left out would put it 0.68 mm off. The rigid fit has the turn, far beyond its uncertainty.
 TEST(PartMove, TheRigidFitHasTheTurnAMoveLeavesOutWithItsUncertainty) {
-  design::Section small = rectangle();
-  small.polyline.row(0) *= 0.25;  // 20 × 30 mm
-  const Eigen::Vector3d t(1.8, -1.1, 0), c(10, 15, 10);
-  const auto feet = feet_on(small, 0, 4, 2);
-  const auto touched = moved(feet, 0.3, c, t);
+  const TurnedRectangle r;
+  const auto& [small, t, c, feet, touched] = r;
   design::Section corrected;
   const auto menu = scan::fit_corrections(small, feet, touched, 0.1, &corrected);
   ASSERT_FALSE(menu.empty());
@@ -193,11 +203,8 @@ TEST(PartMove, TouchPointsGoWhereTheyTellTheMoveAlongAWall) {
 // The menu gives the same part move as fit_part_move, without fitting again: with a move as its
 // choice (the turn fitted on top), and with a turn as its choice (that turn itself).
 TEST(PartMove, TheMenuGivesThePartMoveItsTouchPointsTell) {
-  design::Section small = rectangle();
-  small.polyline.row(0) *= 0.25;  // 20 × 30 mm
-  const Eigen::Vector3d t(1.8, -1.1, 0), c(10, 15, 10);
-  const auto feet = feet_on(small, 0, 4, 2);
-  const auto touched = moved(feet, 0.3, c, t);
+  const TurnedRectangle r;
+  const auto& [small, t, c, feet, touched] = r;
   for (const double accept : {0.1, 0.01}) {
     scan::PartMove from_menu;
     design::Section corrected;
