@@ -28,6 +28,7 @@ std::string event_words(const std::string& id) {
       {"two_dimensional", "the curve lies in a plane"},
       {"not_reachable", "not reachable"},
       {"restart", "started again elsewhere"},
+      {"design_moved", "design data moved for the next part where other sections found the part"},
   };
   for (const auto& [k, w] : words)
     if (id == k) return w;

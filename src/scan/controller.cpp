@@ -559,7 +559,18 @@ struct SectionRun {
         fmt::format("{} points over {:.1f} mm", out.samples.size(), out.samples.back().arc));
     r.points = out.samples;
     if (o.strategy == Strategy::Autonomous) return true;
-    current = detail::overwrite(current, out.samples);
+    design::Section measured = detail::overwrite(current, out.samples);
+    // The measured contour is the design for the rescan and for the next part, if the ball can
+    // follow it: a measured polyline may have a notch (a corner of the real part, noise) where
+    // no path keeps the offset. The section is then measured by the autonomous scan, and the
+    // design data stay as they were.
+    if (const std::string why = unpathable(measured); !why.empty()) {
+      measured_only = true;
+      log(0, 0, "autonomous", "section_done",
+          "measured by the autonomous scan; its contour is not kept as the design data: " + why);
+      return true;
+    }
+    current = std::move(measured);
     moved = true;
     log(0, 0, "autonomous", "design_overwritten",
         fmt::format("the section's design data replaced by the measured contour ({} points, "
@@ -623,7 +634,9 @@ struct SectionRun {
                 (out.fault.empty() ? "too few points" : out.fault));
         return false;
       }
-      if (auto sp = detail::splice(current, out.samples, at, kRejoin * o.tolerance)) {
+      auto sp = detail::splice(current, out.samples, at, kRejoin * o.tolerance);
+      if (sp && !unpathable(sp->section).empty()) sp.reset();  // as in autonomous()
+      if (sp) {
         log(out.stop.arc, 0, "autonomous", "autonomous_scan",
             fmt::format("{} points over {:.1f} mm round the stop", out.samples.size(),
                         out.samples.back().arc));
@@ -642,6 +655,20 @@ struct SectionRun {
                       length));
     }
     return false;
+  }
+
+  // Set when an autonomous scan measured the section but its contour could not become the
+  // design data (autonomous()): the section is done.
+  bool measured_only = false;
+
+  // Why no scanning path can be made along s (empty if one can).
+  std::string unpathable(const design::Section& s) const {
+    try {
+      design::make_path(s, o.path);
+      return {};
+    } catch (const Error& e) {
+      return e.what();
+    }
   }
 
   // Applies accepted corrections to the section's design data and to where the planner stands
@@ -798,6 +825,10 @@ struct SectionRun {
       // correction just applied) is local: scanned round the stop, the rest kept.
       local = local || flag == 1;
       if (!(local && local_autonomous(stop)) && !autonomous()) break;
+      if (measured_only) {
+        r.ok = true;
+        break;
+      }
       flag = 0;
       log(0, 0, "design", "rescan", "rescan in design mode with the measured design data");
     }

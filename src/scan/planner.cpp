@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include "trueaxis/error.hpp"
 
@@ -193,9 +194,22 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
   // between two checks is the only thing the push could step over.
   constexpr double kPushStep = 0.05;
   // Until a trajectory error stops it, the ball follows the design path while the real part may
-  // stand off its design by up to the margin in any direction in the plane: from every such
-  // place the ball can get to without crossing the contour, the ball must stay clear of the
-  // faces it does not measure and the stylus and body of every face.
+  // stand off its design by up to the margin in any direction: from every such place the ball
+  // can get to without crossing the contour, the ball must stay clear of the faces it does not
+  // measure and the stylus and body of every face. In the plane, eight directions at the margin.
+  // Across it, as far as a move on the table takes the part across (the part rests on the table,
+  // which keeps its height: a move of up to the margin in x and y, none in z), offsets every
+  // kAcross either way, where the ball's contour is cut from the faces crossing the plane the
+  // real part is then cut in: where the plane runs along an edge, or through a face at a small
+  // angle to it, the real part's section there is not the design's, or not there at all, and the
+  // ball is pushed on (CTC 05 cut at y = 0 runs along the edge of a wall and a face at 33° to the
+  // plane: a part 1.6 mm off across the plane lost the wall the ball scanned, and the stem met
+  // the part's top edge). Off the plane the ball may
+  // touch the faces that plane crosses, and others only where their normal lies near the plane
+  // (solid::scans_on: the scanned wall's continuation, where the CAD file splits a wall at or
+  // near the plane), as the virtual CMM judges it. As in the plane, these are samples: between
+  // two offsets a clearance can fall below the reach by at most half their spacing, so the
+  // stylus and body never touch.
   static const char* why[6] = {
       "the ball would touch the part off the section's plane",
       "the stylus would run into the part",
@@ -205,8 +219,27 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
       "the probe body would run into the part if the part stood off its design",
   };
   const Eigen::Vector3d pn = path.plane.normal.normalized();
-  std::vector<char> contour(skip.size());  // every face but those the plane crosses
-  for (std::size_t i = 0; i < skip.size(); ++i) contour[i] = !skip[i];
+  constexpr int kInPlane = 8;
+  constexpr double kAcross = 0.2;  // == 2 kReach
+  const double across_max = margin_ * (pn - pn.z() * Eigen::Vector3d::UnitZ()).norm();
+  const int per_side = static_cast<int>(std::ceil(across_max / kAcross - 1e-9));
+  const int placements = kInPlane + 2 * per_side;
+  // For each placement (the path itself first), its offset across the plane and every face but
+  // those the plane it is cut in crosses.
+  std::vector<double> across(static_cast<std::size_t>(placements + 1), 0.0);
+  std::vector<std::vector<char>> crossings(static_cast<std::size_t>(placements + 1)),
+      contours(static_cast<std::size_t>(placements + 1));
+  for (int j = -1; j < placements; ++j) {
+    const auto i = static_cast<std::size_t>(j + 1);
+    if (j >= kInPlane) {
+      const int k = j - kInPlane;
+      across[i] = (k % 2 ? -1 : 1) * std::min(across_max, kAcross * (k / 2 + 1));
+    }
+    const std::vector<char>& crossing = crossings[i] =
+        across[i] == 0 ? skip : part_->faces_crossing(path.plane.origin + across[i] * pn, pn);
+    contours[i].resize(crossing.size());
+    for (std::size_t f = 0; f < crossing.size(); ++f) contours[i][f] = !crossing[f];
+  }
   const double contact = std::max(0.0, path.offset - 0.05);
   // Each element's clearance is 1-Lipschitz in the ball centre (the capped distance to a fixed
   // set of faces, and the height above the table): where it was last computed, e at x, it is at
@@ -222,15 +255,19 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
     Eigen::Vector3d x = Eigen::Vector3d::Zero();
     double e = -INFINITY;
   };
-  // One per element and placement (the path itself, then the eight shifts): consecutive
-  // stations' places of one placement are about a step apart.
-  std::array<std::array<Known, 9>, 3> known;
+  // One per element and placement (the path itself, then the shifts): consecutive stations'
+  // places of one placement are about a step apart.
+  std::vector<std::array<Known, 3>> known(static_cast<std::size_t>(placements + 1));
   auto clear_of = [&](int k, int j, const Eigen::Vector3d& x) {
-    Known& m = known[static_cast<std::size_t>(k)][static_cast<std::size_t>(j + 1)];
+    Known& m = known[static_cast<std::size_t>(j + 1)][static_cast<std::size_t>(k)];
     const double bound = m.e - (x - m.x).norm();
     if (bound >= kReach + kTrust) return bound;
     m.x = x;
-    m.e = element(k, x, x, u, k == 0 ? skip : none, kLook);
+    const std::vector<char>& sk = crossings[static_cast<std::size_t>(j + 1)];
+    m.e = element(k, x, x, u, k == 0 ? sk : none, kLook);
+    if (k == 0 && j >= kInPlane && m.e < kReach && m.e > -solid::kScansOnDepth * r_ &&
+        x.z() - r_ - table_z_ >= kReach && solid::scans_on(*part_, x, sk, pn))
+      m.e = kReach;
     return m.e;
   };
   auto blocked = [&](double s) -> int {
@@ -239,11 +276,14 @@ std::vector<Planner::Blocked> Planner::unreachable(const design::ScanPath& path,
     for (int k = 0; k < 3; ++k)
       if (clear_of(k, -1, c) < kReach) return k;
     const Eigen::Vector3d a = q.normal, b = pn.cross(q.normal).normalized();
-    for (int j = -1; j < 8; ++j) {
+    for (int j = -1; j < placements; ++j) {
+      const auto i = static_cast<std::size_t>(j + 1);
       const double t = std::numbers::pi / 4 * j;
       const Eigen::Vector3d shift =
-          j < 0 ? Eigen::Vector3d(Eigen::Vector3d::Zero())
-                : Eigen::Vector3d(margin_ * (std::cos(t) * a + std::sin(t) * b));
+          j < 0          ? Eigen::Vector3d(Eigen::Vector3d::Zero())
+          : j < kInPlane ? Eigen::Vector3d(margin_ * (std::cos(t) * a + std::sin(t) * b))
+                         : Eigen::Vector3d(across[i] * pn);
+      const std::vector<char>& contour = contours[i];
       // The ball where the part, off by `shift`, leaves it: on the path, and pushed on from
       // there towards the material side where the part is not there (up to the margin, before
       // the trajectory error stops it). A place inside the part, or nearer the contour than the

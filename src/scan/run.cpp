@@ -252,6 +252,41 @@ Eigen::Vector3d start_position(const design::Design& design, const ControllerOpt
                          top + options.clearance + options.path.tip_radius);
 }
 
+namespace {
+
+// Sections a run did not measure, and that found nothing of the part themselves, keep their
+// design data as planned: the next part of a batch would meet the same trajectory error there.
+// The part's move the run handed on last (detail::part_move_of) is where the part stands for
+// them too, in the corrected design data, as it is for the sections after the one that found
+// it, when it keeps their plane.
+void carry_to_unmeasured(const std::vector<Correction>& move, double t, Result& res) {
+  if (move.empty()) return;
+  Eigen::Affine3d step = Eigen::Affine3d::Identity();
+  std::string found_on;
+  for (const auto& c : move) {
+    step = c.transform * step;
+    found_on = c.found_on;
+  }
+  for (std::size_t i = 0; i < res.sections.size(); ++i) {
+    const SectionResult& r = res.sections[i];
+    design::Section& s = res.design.sections[i];
+    const Eigen::Vector3d n = s.plane.normal.normalized();
+    if (r.ok || !r.corrections.empty() || s.space_curve() ||
+        (step.linear() * n - n).norm() > 1e-9 ||
+        std::abs((step * s.plane.origin - s.plane.origin).dot(n)) > 1e-9)
+      continue;
+    auto& pts = s.nurbs ? s.nurbs->control_points : s.polyline;
+    for (Eigen::Index k = 0; k < pts.cols(); ++k) pts.col(k) = step * pts.col(k);
+    s.solid_placement = step * s.solid_placement;
+    res.events.push_back({t, s.name, 0, 0, "correction", "design_moved",
+                          fmt::format("not measured: its design data for the next part are moved "
+                                      "where the touch points of {} found the part",
+                                      found_on)});
+  }
+}
+
+}  // namespace
+
 Result scan(Machine& machine, const design::Design& design, const ControllerOptions& options,
             const Progress& progress) {
   options.validate();
@@ -362,12 +397,23 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       }
     } catch (const NoWay& e) {
       // No free way to go on with this section: the machine stands where it was; the next
-      // section starts from there.
+      // section starts from there. What the stylus cannot get to is not reachable, and what
+      // the section had not measured is reported as such.
       r.name = it.section.name;
       r.ok = false;
-      r.reason = e.what();
+      r.not_reachable = true;
+      r.reason = fmt::format("not reachable: {}", e.what());
       r.time.total = machine.time() - t0;
-      res.events.push_back({machine.time(), r.name, 0, 0, "section", "error_exit", e.what()});
+      res.events.push_back({machine.time(), r.name, 0, 0, "section", "error_exit", r.reason});
+      if (r.points.empty()) {
+        const auto smp = design::sample(it.section, 0.05);
+        const double L = design::length(it.section);
+        res.unreachable.push_back({r.name, 0, L, detail::point_at(it.section, smp, 0),
+                                   detail::point_at(it.section, smp, L), e.what()});
+        res.events.push_back(
+            {machine.time(), r.name, 0, 0, "section", "not_reachable",
+             fmt::format("0.0 to {:.1f} mm along the contour not scanned: {}", L, e.what())});
+      }
     } catch (const Error& e) {
       r.name = it.section.name;
       r.ok = false;
@@ -386,6 +432,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
     res.time.moves += r.time.moves;
     res.sections.push_back(std::move(r));
   }
+  carry_to_unmeasured(part_move, machine.time(), res);
   return res;
 }
 

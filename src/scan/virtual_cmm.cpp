@@ -131,6 +131,7 @@ void VirtualCmm::touch_faces(const design::Plane* plane) {
   if (!solid_) return;
   touchable_ = plane ? solid_->faces_crossing(plane->origin, plane->normal)
                      : std::vector<char>(static_cast<std::size_t>(solid_->face_count()), 0);
+  plane_normal_ = plane ? Eigen::Vector3d(plane->normal.normalized()) : Eigen::Vector3d::Zero();
 }
 
 void VirtualCmm::check_solid() {
@@ -155,6 +156,9 @@ void VirtualCmm::check_solid() {
     double clear = 0, table = INFINITY;
     if (k == 0) {
       clear = solid_->distance(ball, r + kSolidLookout, touchable_) - (r - ball_allowance_);
+      if (clear < 0 && clear > -solid::kScansOnDepth * r && plane_normal_.squaredNorm() > 0 &&
+          solid::scans_on(*solid_, ball, touchable_, plane_normal_))
+        clear = 0;  // on the scanned wall's continuation: checked again at the next tick
       table = ball.z() - r - table_z_;
     } else if (k == 1) {
       // Beside a dent the stem follows the ball into the design solid: into the face the section

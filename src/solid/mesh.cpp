@@ -227,6 +227,19 @@ bool Mesh::inside(const V& p) const {
   return false;
 }
 
+bool scans_on(const Mesh& mesh, const Eigen::Vector3d& c, const std::vector<char>& skip,
+              const Eigen::Vector3d& plane_normal) {
+  constexpr double h = 1e-4;  // mm: central differences of the distance
+  Eigen::Vector3d g;
+  for (int i = 0; i < 3; ++i) {
+    Eigen::Vector3d e = Eigen::Vector3d::Zero();
+    e[i] = h;
+    g[i] = (mesh.distance(c + e, INFINITY, skip) - mesh.distance(c - e, INFINITY, skip)) / (2 * h);
+  }
+  if (!(g.norm() > 0.5)) return false;  // a ridge or a corner: no one normal
+  return std::abs(g.normalized().dot(plane_normal)) < 0.5;
+}
+
 std::vector<char> Mesh::faces_crossing(const V& origin, const V& normal) const {
   std::vector<char> out(face_box_.size(), 0);
   const V n = normal.normalized();

@@ -196,6 +196,28 @@ TEST(CadScan, NistCtc05VerticalPlaneMovedDown) {
   EXPECT_EQ(count(runs[0], "not_reachable"), static_cast<int>(runs[0].unreachable.size()));
 }
 
+// CTC 05 cut in its symmetry plane y = 0, which runs along the edge of a wall and a face at 33°
+// to the plane: a part off its design across the plane is cut there somewhere else, or not at
+// all (1.6 mm off, the 5 mm wall the ball scanned is gone). Moved 1.8 mm and -1.1 mm, the stem
+// once met the part's top edge there (the reachability shifted the part only in the plane);
+// moved 2 mm across the plane, the ball met it. Every section now finishes, and the next part
+// meets no trajectory error.
+TEST(CadScan, NistCtc05SymmetryPlaneMovedAcrossIt) {
+  std::vector<ScanCase> cases(2);
+  cases[0].label = "moved 1.8 mm, -1.1 mm";
+  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  cases[1].label = "moved 2 mm across the plane";
+  cases[1].dev.translation = Eigen::Vector3d(0, -2, 0);
+  const auto runs = golden(std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ctc_05_asme1_rd.stp",
+                           {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitY()}, cases, 20);
+  for (const auto& r : runs) {
+    bool across = false;
+    for (const auto& u : r.unreachable)
+      across = across || u.why.find("if the part stood off its design") != std::string::npos;
+    EXPECT_TRUE(across) << r.summary();
+  }
+}
+
 // NIST MBE PMI FTC 10 cut in a vertical plane (y = 15.83 mm) and scanned with a vertical
 // stylus: the walls along the stylus are scanned, the undersides and the grooves the stem cannot
 // enter are reported. Moved 2 mm down, the part brings a lip down over the wall below a narrow

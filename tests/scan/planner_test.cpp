@@ -107,5 +107,51 @@ TEST(Planner, AnOverhangBlocksTheStretchUnderItAndTheMarginBesideIt) {
       << blocked[0].why;
 }
 
+// Scanning the block in the vertical plane y = 0 with the stylus vertical, over its top: a post
+// stands on the top at x = 48 to 52, off the plane by `gap`. A part that is off its design across
+// the plane (up to the margin, as a move on the table takes it) brings the post onto the ball
+// and stylus unless it stands farther off than the margin and the ball's radius (and the reach);
+// the plane does not cross the post, so the ball may not touch it. In a horizontal plane the
+// part rests on the table: nothing is looked for across it.
+TEST(Planner, APostBesideAVerticalPlaneBlocksThePathForAPartOffAcrossThePlane) {
+  design::Section s;
+  s.plane = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitY()};
+  // Counter-clockwise seen from +y (material on the left): in the plane's (x, -z) frame.
+  s.polyline.resize(3, 5);
+  s.polyline << 0, 0, 100, 100, 0, 0, 0, 0, 0, 0, 0, 50, 50, 0, 0;
+  design::PathOptions po;
+  po.tip_radius = kTip;
+  const auto path = design::make_path(s, po);
+  const Eigen::Vector3d u = Eigen::Vector3d::UnitZ();
+  // The path over the top is above it (its normal away from the material).
+  ASSERT_GT(path.at(path.length() * 0.375).normal.z(), 0.99);
+  const Eigen::AlignedBox3d block(Eigen::Vector3d(0, -50, 0), Eigen::Vector3d(100, 50, 50));
+  auto post = [](double gap) {
+    return Eigen::AlignedBox3d(Eigen::Vector3d(48, gap, 50), Eigen::Vector3d(52, gap + 4, 80));
+  };
+  // Whether the path over the post's x is blocked, and why.
+  auto over_post = [&](const std::vector<scan::Planner::Blocked>& blocked) -> std::string {
+    for (const auto& b : blocked)
+      for (double a = b.from; a <= b.to; a += 0.25) {
+        const Eigen::Vector3d p = path.at(a).p;
+        if (p.z() > 50 && std::abs(p.x() - 50) < 1) return b.why;
+      }
+    return "";
+  };
+  EXPECT_EQ(over_post(planner({block}).unreachable(path, u)), "");
+  const double beyond = kMargin + kTip + kReach;  // the post no placement brings to the ball
+  EXPECT_EQ(over_post(planner({block, post(beyond + 0.1)}).unreachable(path, u)), "");
+  const std::string why = over_post(planner({block, post(beyond - 0.1)}).unreachable(path, u));
+  EXPECT_NE(why.find("if the part stood off its design"), std::string::npos) << why;
+
+  // A horizontal plane 1 mm under the block's top: a part that stood higher would be cut above
+  // its top (no wall, the ball pushed on over the top face), but the part rests on the table.
+  design::Section h;
+  h.plane = {Eigen::Vector3d(0, 0, 49), Eigen::Vector3d::UnitZ()};
+  h.polyline.resize(3, 5);
+  h.polyline << 0, 100, 100, 0, 0, -50, -50, 50, 50, -50, 49, 49, 49, 49, 49;
+  EXPECT_TRUE(planner({block}).unreachable(design::make_path(h, po), u).empty());
+}
+
 }  // namespace
 }  // namespace trueaxis

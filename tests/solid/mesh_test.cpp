@@ -68,6 +68,27 @@ TEST(SolidMesh, PointAndSegmentClearanceOfACube) {
               kExact);
 }
 
+// A ball touching a face a section plane does not cross is on the wall it scans when the face's
+// normal lies near the plane there (a wall the CAD file split at the plane), not when it faces
+// across the plane. Faces: 0 bottom, 1 top, 2 y = 0, 3 y = 10, 4 x = 0, 5 x = 10.
+TEST(SolidMesh, ABallScansOnAFaceWhoseNormalLiesNearThePlane) {
+  const auto m = cube();
+  const Eigen::Vector3d y = Eigen::Vector3d::UnitY();
+  // The plane y = 10.05 crosses no face; the ball beside the x = 0 side touches its edge, with
+  // the contact normal 3° from the plane.
+  const auto none = m.faces_crossing(Eigen::Vector3d(0, 10.05, 0), y);
+  EXPECT_EQ(none, std::vector<char>(6, 0));
+  const Eigen::Vector3d beside(-0.9, 10.05, 5);
+  EXPECT_LT(m.distance(beside), 1.0);
+  EXPECT_TRUE(solid::scans_on(m, beside, none, y));
+  // The plane y = 5: the ball against the y = 10 side touches a face that faces across it.
+  const auto mid = m.faces_crossing(Eigen::Vector3d(0, 5, 0), y);
+  EXPECT_EQ(mid, std::vector<char>({1, 1, 0, 0, 1, 1}));
+  EXPECT_FALSE(solid::scans_on(m, Eigen::Vector3d(5, 10.5, 5), mid, y));
+  // Nor does a ball off the top face at 45° (contact normal 45° from the plane).
+  EXPECT_FALSE(solid::scans_on(m, Eigen::Vector3d(5, 10.6, 10.6), mid, y));
+}
+
 TEST(SolidMesh, BadMeshesAreRefused) {
   Eigen::Matrix3Xd v(3, 3);
   v << 0, 1, 0, 0, 0, 1, 0, 0, 0;

@@ -93,8 +93,9 @@ struct Event {
   // trajectory_error, touch, correction_applied, correction_rejected, correction_carried,
   // autonomous_scan, design_overwritten, design_spliced (a local deviation's measured stretch
   // put in the design data), rescan, section_done, error_exit, loop_limit,
-  // two_dimensional (a space curve found to lie in a plane), not_reachable, restart (a closed
-  // contour started elsewhere)
+  // two_dimensional (a space curve found to lie in a plane), not_reachable, design_moved (a
+  // section not measured given the part's move found on others, for the next part), restart (a
+  // closed contour started elsewhere)
   std::string event;
   std::string decision;  // in words
 };

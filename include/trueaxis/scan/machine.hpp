@@ -230,6 +230,10 @@ class VirtualCmm : public Machine {
   std::shared_ptr<const solid::Mesh> solid_;
   double table_z_ = -INFINITY;
   std::vector<char> touchable_;
+  // The operation's plane normal (zero in a free move): a ball touching a face the plane does not
+  // cross whose normal there lies near the plane is on the wall it scans, where the CAD file
+  // splits it at or near the plane (solid::scans_on).
+  Eigen::Vector3d plane_normal_ = Eigen::Vector3d::Zero();
   double ball_allowance_ = 0;
   // How deep the real part lies inside the moved design solid where it is dented (its deepest
   // dent and form noise, mm): the stylus may enter the solid that far.

@@ -85,6 +85,16 @@ class Mesh {
   std::vector<int> order_;
 };
 
+// Whether a ball centred at c, touching the faces `skip` leaves in (those a section plane with
+// unit normal `plane_normal` does not cross), touches them where their normal lies within 30°
+// of the plane: the continuation of the wall it scans, where the CAD file splits a smooth wall
+// into faces at or near the plane (CTC 05 at its symmetry plane y = 0), not a face off the
+// plane. The contact normal is the gradient of the distance to those faces at c. Callers accept
+// such a contact only as deep as kScansOnDepth of the ball's radius (a probe's deflection).
+constexpr double kScansOnDepth = 0.5;
+bool scans_on(const Mesh& mesh, const Eigen::Vector3d& c, const std::vector<char>& skip,
+              const Eigen::Vector3d& plane_normal);
+
 // The part of a STEP file (the union of its solids) as a mesh, with chords within `deflection`
 // of its faces (mm, 1e-4 to 1). Read once per file and deflection and kept for the life of the
 // process (a batch scans the same part many times). Throws Error naming the file if it cannot be
