@@ -205,6 +205,10 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
       ->capture_default_str();
   c->add_option("--tolerance", a->o.tolerance, "trajectory-error tolerance |ΔL| (mm)")
       ->capture_default_str();
+  c->add_option("--margin", a->o.margin,
+                "how far off its design the part may stand (mm): free moves keep this far from "
+                "the part's solid, and only stretches a part this far off cannot bring onto the "
+                "stylus are scanned (default: the tolerance + 1 mm)");
   c->add_option("--max-autonomous", a->o.max_autonomous,
                 "autonomous corrections allowed per section before it is given up")
       ->capture_default_str();

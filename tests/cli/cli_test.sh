@@ -541,6 +541,7 @@ expect_code 2 "$T" scan --design design.json --part bumped.json --strategy fast 
 expect_ok "$T" report scan.json -o scan-from-json.html
 grep -q "every decision of the flow" scan-from-json.html && grep -q "trajectory error ΔL along each design-value scan" scan-from-json.html && ok || bad "report scan.json"
 expect_code 2 "$T" scan --design design.json --part bumped.json --tolerance 0 -o s.json
+expect_code 2 "$T" scan --design design.json --part bumped.json --margin -1 -o s.json
 # A CMM with geometric errors: the part scans as before, and its points carry the machine's errors.
 expect_ok "$T" scan --design design2.json --part bumped2.json --machine machine.json -o scan4.json --truth truth4.csv
 grep -q "CMM with the geometric errors of 'random FXYZ machine, seed 3'" out.txt && ok || bad "scan --machine: $(cat out.txt)"
