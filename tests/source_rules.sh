@@ -18,11 +18,11 @@ while IFS= read -r f; do
     status=1
   fi
 done < <(find src include apps python tests benchmarks -type f \
-           \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' -o -name '*.in' \) | sort)
-# file:line of every citation of a document readers do not have (cli_test.sh names these words
-# to check that the reports and the help never say them).
+           \( -name '*.cpp' -o -name '*.hpp' -o -name '*.py' -o -name '*.in' -o -name '*.sh' \) | sort)
+# file:line of every citation of a document readers do not have (the command line's grammar test,
+# cli/grammar_part.sh, names these words to check that the reports and the help never say them).
 if grep -rnE --include='*.cpp' --include='*.hpp' --include='*.py' --include='*.sh' \
-     --exclude=source_rules.sh --exclude=cli_test.sh '\bspecs? 0[0-9]|\bseed 0[0-9]{2}|\bthe seed'"'"'s|\bthe paper\b|ThePaper|\bmust-show\b' \
+     --exclude=source_rules.sh --exclude=grammar_part.sh '\bspecs? 0[0-9]|\bseed 0[0-9]{2}|\bthe seed'"'"'s|\bthe paper\b|ThePaper|\bmust-show\b' \
      src include apps python tests benchmarks scripts; then
   echo "cite what the code implements (standard and clause, patent number, paper), not the above"
   status=1
