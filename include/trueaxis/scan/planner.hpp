@@ -60,6 +60,8 @@ class Planner {
 
   // Arcs of a scanning path (mm along it) the stylus cannot reach in orientation `axis`, each
   // with the reason, every `step` mm; the ball may touch the faces crossing the path's plane.
+  // The part is taken off its design by the margin in eight directions in the plane, and across
+  // the plane as far as a move on the table (x and y, not z) takes it, every 0.2 mm.
   struct Blocked {
     double from = 0, to = 0;
     std::string why;
