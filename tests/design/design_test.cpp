@@ -384,6 +384,44 @@ TEST(Design, MeasuredPolylineWithNanometreRippleGetsAPath) {
   }
 }
 
+// A measured contour with a slit far narrower than the tip (a notch of the real part, or a drill
+// point's bottom cut off the axis): the offsets of the slit's flanks land in the material beyond
+// it, clear of the curve, and once stopped the whole path ("the path breaks off ... the tip does
+// not fit"), though the tip only has to pass over the slit's mouth. Now the path keeps the offset
+// from the curve, stays out of the material, and crosses the mouth straight.
+TEST(Design, ASlitNarrowerThanTheTipIsPassedOver) {
+  for (double width : {0.001, 0.01, 0.2, 1.0})  // mm, into the square's bottom side
+    for (double depth : {0.3, 1.5, 3.0}) {
+      SCOPED_TRACE(testing::Message() << "width " << width << " depth " << depth);
+      design::Section s;
+      s.name = "slit";
+      s.plane = z_plane(0);
+      s.closed = true;
+      s.material = design::Side::Left;
+      s.polyline.resize(3, 8);
+      s.polyline << 0, 50 - width / 2, 50, 50 + width / 2, 100, 100, 0, 0,  //
+          0, 0, depth, 0, 0, 60, 60, 0,                                     //
+          0, 0, 0, 0, 0, 0, 0, 0;
+      design::PathOptions o;
+      const double off = o.tip_radius - o.pushing;
+      design::ScanPath path;
+      ASSERT_NO_THROW(path = design::make_path(s, o));
+      for (const auto& seg : path.segments)
+        for (double t : {0.0, 0.25, 0.5, 0.75, 1.0}) {
+          const Eigen::Vector3d p = seg.point(t);
+          double near = 1e300;  // from the polyline's sides
+          for (Eigen::Index i = 0; i + 1 < s.polyline.cols(); ++i) {
+            const Eigen::Vector3d a = s.polyline.col(i), d = s.polyline.col(i + 1) - a;
+            const double u = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+            near = std::min(near, (a + u * d - p).norm());
+          }
+          EXPECT_GT(near, off - o.chordal_tolerance) << p.transpose();
+          // Out of the material: below the bottom side, beside or above the square.
+          EXPECT_TRUE(p.y() < 0 || p.x() < 0 || p.x() > 100 || p.y() > 60) << p.transpose();
+        }
+    }
+}
+
 // A solid bounded by B-spline surfaces, built here with OCCT, exported to STEP and sectioned.
 TEST(Design, BsplineSolidFromStep) {
   const std::string path = test::temp_dir() + "/lobed.stp";

@@ -113,6 +113,32 @@ class Outline {
     return {(p - origin_).dot(e1_), (p - origin_).dot(e2_)};
   }
 
+  // Which side of the curve q lies on, as the segment nearest to it (within r) says: +1 the
+  // side its right-hand normal points to, −1 the other; 0 when the nearest point is a segment's
+  // end (a corner, where either side may be meant) or no segment lies within r.
+  int side(const Eigen::Vector2d& q, double r) const {
+    const int x0 = cx(q.x() - r), x1 = cx(q.x() + r), y0 = cy(q.y() - r), y1 = cy(q.y() + r);
+    double best = r * r, best_t = 0;
+    int best_s = -1;
+    for (int y = y0; y <= y1; ++y)
+      for (int x = x0; x <= x1; ++x) {
+        const std::size_t c = static_cast<std::size_t>(y) * nx_ + x;
+        for (int k = start_[c]; k < start_[c + 1]; ++k) {
+          const Eigen::Vector2d a = pts_[items_[k]], d = pts_[items_[k] + 1] - a;
+          const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+          const double d2 = (q - a - t * d).squaredNorm();
+          if (d2 < best) {
+            best = d2;
+            best_t = t;
+            best_s = items_[k];
+          }
+        }
+      }
+    if (best_s < 0 || best_t <= 1e-9 || best_t >= 1 - 1e-9) return 0;
+    const Eigen::Vector2d a = pts_[best_s], d = pts_[best_s + 1] - a;
+    return (q - a).dot(Eigen::Vector2d(d.y(), -d.x())) > 0 ? 1 : -1;
+  }
+
   // True when some point of the curve lies closer than r to q.
   bool closer_than(const Eigen::Vector2d& q, double r) const {
     const int x0 = cx(q.x() - r), x1 = cx(q.x() + r), y0 = cy(q.y() - r), y1 = cy(q.y() + r);
@@ -289,6 +315,14 @@ std::vector<OffsetSpan> offset_curve(const Section& s, const Handle(Geom_BSpline
   auto where = [](const Eigen::Vector3d& p) {
     return fmt::format("({:.3f}, {:.3f}, {:.3f})", p.x(), p.y(), p.z());
   };
+  // An offset that crossed a slit narrower than the tip lands in the material beyond it (both
+  // flanks' offsets do), clear of the curve: a stretch whose middle lies on the material side of
+  // the curve there is dropped, and the offsets on either side of the slit are bridged below.
+  const int away_side = s.material == Side::Left ? 1 : -1;
+  std::erase_if(kept, [&](const Stretch& k) {
+    const Link& l = links[k.link];
+    return outline.side(outline.to2(vec(l.curve->Value(0.5 * (k.a + k.b)))), 4 * d) == -away_side;
+  });
   if (kept.empty())
     throw Error(fmt::format(
         "section '{}': no scanning path at {:g} mm from the surface (tip radius less pushing "
@@ -319,7 +353,17 @@ std::vector<OffsetSpan> offset_curve(const Section& s, const Handle(Geom_BSpline
       B.a = std::min(tb, B.b);
       continue;
     }
-    if ((pb - pa).norm() < kBridgeGap) {
+    // A gap narrower than the tip between two kept stretches (the mouth of a slit it does not
+    // enter) is bridged straight when the bridge keeps the offset from the curve all along.
+    auto bridge_clear = [&] {
+      const double gap = (pb - pa).norm();
+      if (gap > 2 * d) return false;
+      const int k = std::max(4, static_cast<int>(std::ceil(gap / step)));
+      for (int i = 1; i < k; ++i)
+        if (outline.closer_than(outline.to2(pa + (pb - pa) * i / k), clear)) return false;
+      return true;
+    };
+    if ((pb - pa).norm() < kBridgeGap || bridge_clear()) {
       bridge[j] = true;
       continue;
     }
