@@ -1,5 +1,6 @@
-# Shared by the parts of the command line's end-to-end test (cli_test.sh sources this, then each
-# part in order, in one working directory: later parts use files earlier ones wrote).
+# Shared by the command line's end-to-end tests: cli_test.sh (which sources this, then each of its
+# parts in order, in one working directory: later parts use files earlier ones wrote) and
+# records_test.sh. Takes the working directory as the script's first argument.
 T=${TRUEAXIS:?set TRUEAXIS to the trueaxis binary}
 DATA=$(cd "$(dirname "$0")/../data" && pwd)
 dir=${1:-$(mktemp -d)}

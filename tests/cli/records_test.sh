@@ -4,19 +4,9 @@
 # limit, `record due` brings the visit forward; the same history on a PostgreSQL server gives the
 # same trend; a read-only database is still listed.
 set -u
-T=${TRUEAXIS:?set TRUEAXIS to the trueaxis binary}
 here=$(cd "$(dirname "$0")" && pwd)
-dir=${1:-$(mktemp -d)}
-rm -rf "$dir"; mkdir -p "$dir"; cd "$dir" || exit 1
-fails=0; passes=0
-ok() { passes=$((passes+1)); }
-bad() { echo "FAIL: $*"; fails=$((fails+1)); }
-expect_ok() { if "$@" >out.txt 2>err.txt; then ok; else bad "$* -> $(cat err.txt)"; fi; }
-expect_code() {
-  local want=$1; shift
-  "$@" >out.txt 2>err.txt; local got=$?
-  [ "$got" -eq "$want" ] && ok || bad "$* -> exit $got, not $want: $(cat err.txt)"
-}
+# shellcheck source=lib.sh
+. "$here/lib.sh"
 unset TRUEAXIS_DB
 
 # Eight visits, every three months from 2024-01-15: backlash 2 µm growing 1.5 µm a year.

@@ -48,6 +48,17 @@ scan::Planner planner(const std::vector<Eigen::AlignedBox3d>& list) {
   return scan::Planner(boxes(list), kTip, scan::Stylus{}, kMargin, 20, 0);
 }
 
+// The scanning path of a closed polyline section (corners 3 × n, the first repeated at the end,
+// material on the left) with the ball of kTip.
+design::ScanPath path_round(const design::Plane& plane, const Eigen::Matrix3Xd& corners) {
+  design::Section s;
+  s.plane = plane;
+  s.polyline = corners;
+  design::PathOptions po;
+  po.tip_radius = kTip;
+  return design::make_path(s, po);
+}
+
 // A retract up along the stylus beside the wall it scanned, the ball 0.2 mm off it (the stem, Ø1
 // on a Ø2 ball, 0.7 mm) all the way up: the whole move is judged at once, by its least
 // clearance.
@@ -80,13 +91,9 @@ TEST(Planner, ARetractAlongTheStylusIsJudgedByItsLeastClearance) {
 // that may stand the margin off its design, that much further on either side. Everything else is
 // reachable.
 TEST(Planner, AnOverhangBlocksTheStretchUnderItAndTheMarginBesideIt) {
-  design::Section s;
-  s.plane = {Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()};
-  s.polyline.resize(3, 5);
-  s.polyline << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
-  design::PathOptions po;
-  po.tip_radius = kTip;
-  const auto path = design::make_path(s, po);
+  Eigen::Matrix3Xd corners(3, 5);
+  corners << 0, 100, 100, 0, 0, 0, 0, 100, 100, 0, 25, 25, 25, 25, 25;
+  const auto path = path_round({Eigen::Vector3d(0, 0, 25), Eigen::Vector3d::UnitZ()}, corners);
   const Eigen::Vector3d u = Eigen::Vector3d::UnitZ();
 
   EXPECT_TRUE(planner({kBlock}).unreachable(path, u).empty());
@@ -99,8 +106,8 @@ TEST(Planner, AnOverhangBlocksTheStretchUnderItAndTheMarginBesideIt) {
   const double beside = std::sqrt(body * body - above * above);
   EXPECT_NEAR(std::min(from.x(), to.x()), 40 - beside - kMargin, kEdge) << blocked[0].why;
   EXPECT_NEAR(std::max(from.x(), to.x()), 60 + beside + kMargin, kEdge) << blocked[0].why;
-  EXPECT_NEAR(from.y(), -(kTip - po.pushing), 1e-6);
-  EXPECT_NEAR(to.y(), -(kTip - po.pushing), 1e-6);
+  EXPECT_NEAR(from.y(), -(kTip - design::PathOptions{}.pushing), 1e-6);
+  EXPECT_NEAR(to.y(), -(kTip - design::PathOptions{}.pushing), 1e-6);
   // The first place met is blocked only for a part off its design.
   EXPECT_NE(blocked[0].why.find("probe body would run into the part if the part stood off"),
             std::string::npos)
@@ -114,14 +121,10 @@ TEST(Planner, AnOverhangBlocksTheStretchUnderItAndTheMarginBesideIt) {
 // the plane does not cross the post, so the ball may not touch it. In a horizontal plane the
 // part rests on the table: nothing is looked for across it.
 TEST(Planner, APostBesideAVerticalPlaneBlocksThePathForAPartOffAcrossThePlane) {
-  design::Section s;
-  s.plane = {Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitY()};
   // Counter-clockwise seen from +y (material on the left): in the plane's (x, -z) frame.
-  s.polyline.resize(3, 5);
-  s.polyline << 0, 0, 100, 100, 0, 0, 0, 0, 0, 0, 0, 50, 50, 0, 0;
-  design::PathOptions po;
-  po.tip_radius = kTip;
-  const auto path = design::make_path(s, po);
+  Eigen::Matrix3Xd corners(3, 5);
+  corners << 0, 0, 100, 100, 0, 0, 0, 0, 0, 0, 0, 50, 50, 0, 0;
+  const auto path = path_round({Eigen::Vector3d::Zero(), Eigen::Vector3d::UnitY()}, corners);
   const Eigen::Vector3d u = Eigen::Vector3d::UnitZ();
   // The path over the top is above it (its normal away from the material).
   ASSERT_GT(path.at(path.length() * 0.375).normal.z(), 0.99);
@@ -146,11 +149,9 @@ TEST(Planner, APostBesideAVerticalPlaneBlocksThePathForAPartOffAcrossThePlane) {
 
   // A horizontal plane 1 mm under the block's top: a part that stood higher would be cut above
   // its top (no wall, the ball pushed on over the top face), but the part rests on the table.
-  design::Section h;
-  h.plane = {Eigen::Vector3d(0, 0, 49), Eigen::Vector3d::UnitZ()};
-  h.polyline.resize(3, 5);
-  h.polyline << 0, 100, 100, 0, 0, -50, -50, 50, 50, -50, 49, 49, 49, 49, 49;
-  EXPECT_TRUE(planner({block}).unreachable(design::make_path(h, po), u).empty());
+  corners << 0, 100, 100, 0, 0, -50, -50, 50, 50, -50, 49, 49, 49, 49, 49;
+  EXPECT_TRUE(
+      planner({block}).unreachable(path_round({Eigen::Vector3d(0, 0, 49), u}, corners), u).empty());
 }
 
 }  // namespace

@@ -117,23 +117,16 @@ class Outline {
   // side its right-hand normal points to, −1 the other; 0 when the nearest point is a segment's
   // end (a corner, where either side may be meant) or no segment lies within r.
   int side(const Eigen::Vector2d& q, double r) const {
-    const int x0 = cx(q.x() - r), x1 = cx(q.x() + r), y0 = cy(q.y() - r), y1 = cy(q.y() + r);
     double best = r * r, best_t = 0;
     int best_s = -1;
-    for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) {
-        const std::size_t c = static_cast<std::size_t>(y) * nx_ + x;
-        for (int k = start_[c]; k < start_[c + 1]; ++k) {
-          const Eigen::Vector2d a = pts_[items_[k]], d = pts_[items_[k] + 1] - a;
-          const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-          const double d2 = (q - a - t * d).squaredNorm();
-          if (d2 < best) {
-            best = d2;
-            best_t = t;
-            best_s = items_[k];
-          }
-        }
+    near(q, r, [&](int s, double t, double d2) {
+      if (d2 < best) {
+        best = d2;
+        best_t = t;
+        best_s = s;
       }
+      return false;
+    });
     if (best_s < 0 || best_t <= 1e-9 || best_t >= 1 - 1e-9) return 0;
     const Eigen::Vector2d a = pts_[best_s], d = pts_[best_s + 1] - a;
     return (q - a).dot(Eigen::Vector2d(d.y(), -d.x())) > 0 ? 1 : -1;
@@ -141,21 +134,27 @@ class Outline {
 
   // True when some point of the curve lies closer than r to q.
   bool closer_than(const Eigen::Vector2d& q, double r) const {
+    return near(q, r, [r2 = r * r](int, double, double d2) { return d2 < r2; });
+  }
+
+ private:
+  // Calls fn(segment, t, squared distance of q from the segment's point at t, its nearest) for
+  // the segments in the grid cells within r of q, until fn returns true; returns whether it did.
+  template <class Fn>
+  bool near(const Eigen::Vector2d& q, double r, Fn&& fn) const {
     const int x0 = cx(q.x() - r), x1 = cx(q.x() + r), y0 = cy(q.y() - r), y1 = cy(q.y() + r);
-    const double r2 = r * r;
     for (int y = y0; y <= y1; ++y)
       for (int x = x0; x <= x1; ++x) {
         const std::size_t c = static_cast<std::size_t>(y) * nx_ + x;
         for (int k = start_[c]; k < start_[c + 1]; ++k) {
           const Eigen::Vector2d a = pts_[items_[k]], d = pts_[items_[k] + 1] - a;
           const double t = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-          if ((q - a - t * d).squaredNorm() < r2) return true;
+          if (fn(items_[k], t, (q - a - t * d).squaredNorm())) return true;
         }
       }
     return false;
   }
 
- private:
   int cx(double x) const { return std::clamp(static_cast<int>((x - lo_.x()) / h_), 0, nx_ - 1); }
   int cy(double y) const { return std::clamp(static_cast<int>((y - lo_.y()) / h_), 0, ny_ - 1); }
   Eigen::Vector3d origin_, e1_, e2_;
