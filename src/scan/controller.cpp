@@ -674,34 +674,20 @@ struct SectionRun {
   // Applies accepted corrections to the section's design data and to where the planner stands
   // the solid.
   void correct_by(const Eigen::Affine3d& step) {
-    auto map = [&](Eigen::Matrix3Xd& pts) {
-      for (Eigen::Index i = 0; i < pts.cols(); ++i) pts.col(i) = step * pts.col(i);
-    };
-    if (current.nurbs)
-      map(current.nurbs->control_points);
-    else
-      map(current.polyline);
-    learnt = step * learnt;
-    moved = true;
     // The design's solid follows the corrected curve (the nominal planner already stands it at
     // the section's placement).
-    current.solid_placement = step * current.solid_placement;
+    detail::move_section(current, step);
+    learnt = step * learnt;
+    moved = true;
     moved_planner.emplace(nominal.moved(learnt));
-  }
-
-  // A correction keeps this section's plane: it maps the plane onto itself (a translation in it,
-  // a rotation about its normal), as a correction found on a parallel section does.
-  bool keeps_plane(const Correction& c) const {
-    const Eigen::Vector3d n = current.plane.normal.normalized(), at = current.plane.origin;
-    return (c.transform.linear() * n - n).norm() < 1e-9 &&
-           std::abs((c.transform * at - at).dot(n)) < 1e-9;
   }
 
   // Before the first scan: where the part stands, as the corrections an earlier section found.
   void carry_part_move() {
     if (part_move.empty() || current.space_curve() ||
-        !std::all_of(part_move.begin(), part_move.end(),
-                     [&](const Correction& c) { return keeps_plane(c); }))
+        !std::all_of(part_move.begin(), part_move.end(), [&](const Correction& c) {
+          return detail::keeps_plane(current, c.transform);
+        }))
       return;
     Eigen::Affine3d step = Eigen::Affine3d::Identity();
     std::string what;

@@ -455,6 +455,17 @@ PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& f
 
 namespace detail {
 
+void move_section(design::Section& s, const Eigen::Affine3d& step) {
+  Eigen::Matrix3Xd& pts = s.nurbs ? s.nurbs->control_points : s.polyline;
+  for (Eigen::Index i = 0; i < pts.cols(); ++i) pts.col(i) = step * pts.col(i);
+  s.solid_placement = step * s.solid_placement;
+}
+
+bool keeps_plane(const design::Section& s, const Eigen::Affine3d& t) {
+  const Eigen::Vector3d n = s.plane.normal.normalized(), at = s.plane.origin;
+  return (t.linear() * n - n).norm() < 1e-9 && std::abs((t * at - at).dot(n)) < 1e-9;
+}
+
 std::optional<std::vector<Correction>> part_move_of(
     const std::vector<Correction>& corrections,
     const std::vector<std::pair<std::size_t, PartMove>>& told, bool closed,

@@ -270,14 +270,9 @@ void carry_to_unmeasured(const std::vector<Correction>& move, double t, Result& 
   for (std::size_t i = 0; i < res.sections.size(); ++i) {
     const SectionResult& r = res.sections[i];
     design::Section& s = res.design.sections[i];
-    const Eigen::Vector3d n = s.plane.normal.normalized();
-    if (r.ok || !r.corrections.empty() || s.space_curve() ||
-        (step.linear() * n - n).norm() > 1e-9 ||
-        std::abs((step * s.plane.origin - s.plane.origin).dot(n)) > 1e-9)
+    if (r.ok || !r.corrections.empty() || s.space_curve() || !detail::keeps_plane(s, step))
       continue;
-    auto& pts = s.nurbs ? s.nurbs->control_points : s.polyline;
-    for (Eigen::Index k = 0; k < pts.cols(); ++k) pts.col(k) = step * pts.col(k);
-    s.solid_placement = step * s.solid_placement;
+    detail::move_section(s, step);
     res.events.push_back({t, s.name, 0, 0, "correction", "design_moved",
                           fmt::format("not measured: its design data for the next part are moved "
                                       "where the touch points of {} found the part",

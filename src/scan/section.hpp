@@ -72,6 +72,12 @@ std::optional<Splice> splice(const design::Section& s, const std::vector<Sample>
 // a parameter is then known to within ten times what it would be from well-spread points.
 inline constexpr double kTellsPart = 0.1;
 
+// The section's design data moved by x -> step·x: its curve, and where its solid stands.
+void move_section(design::Section& s, const Eigen::Affine3d& step);
+// Whether t maps the section's plane onto itself (a move in it, a turn about its normal), as a
+// correction found on a parallel section does.
+bool keeps_plane(const design::Section& s, const Eigen::Affine3d& t);
+
 // The rigid corrections a section's run leaves as where the part stands, for the sections after
 // it: all its accepted corrections (those carried to it and its own; `told` gives, by their
 // index in `corrections`, what each round of its own touch points told of the part). Nothing
