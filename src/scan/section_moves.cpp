@@ -1,0 +1,279 @@
+// The error-tolerant controller's free moves and touch points on one section.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "section_run.hpp"
+#include "trueaxis/error.hpp"
+
+namespace trueaxis::scan::detail {
+namespace {
+
+// Free moves between touch points keep this much beyond the band the surface is searched in
+// (mm): room for a part that is off its design by more than that band somewhere between them.
+constexpr double kRouteMargin = 2.0;
+}  // namespace
+
+void SectionRun::through(const std::vector<Eigen::Vector3d>& way) {
+  if (planner().margin() >= 2 * Machine::kCornerCut)
+    m.move_through(way, o.move_speed);
+  else
+    for (const auto& p : way) m.move(p, o.move_speed);
+}
+
+void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
+  const Eigen::Vector3d from = m.position();
+  if ((to - from).norm() < 1e-6) return;
+  const Eigen::Vector3d u = m.stylus_axis();
+  const std::optional<Planner> wider = keep > planner().margin()
+                                           ? std::optional<Planner>(planner().with_margin(keep))
+                                           : std::nullopt;
+  const Planner& solid = wider ? *wider : planner();
+  std::vector<Eigen::Vector3d> way;
+  try {
+    way = solid.route(from, to, u, first_move);
+  } catch (const NoWay&) {
+    // Not on the run's first move: where the machine stands then is not trusted.
+    if (first_move) throw;
+    const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+    const double margin = std::min(solid.margin(), solid.clearance(from, u) - 0.01);
+    for (const double d : {5.0, 10.0, 20.0, 40.0}) {
+      for (int k = 0; k < 8 && way.empty(); ++k) {
+        const double t = std::numbers::pi / 4 * k;
+        const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
+        if (!solid.clear(from, side, u, margin)) continue;
+        try {
+          way = solid.route(side, to, u, false);
+          way.insert(way.begin(), side);
+        } catch (const NoWay&) {
+        }
+      }
+      if (!way.empty()) break;
+    }
+    if (way.empty()) throw;
+  }
+  first_move = false;
+  timed(m, r.time.moves, [&] {
+    through(way);
+    return 0;
+  });
+}
+
+void SectionRun::route(const design::Samples& smp, const sim::Contour& design, double reach,
+                       Eigen::Index from, Eigen::Index to, const Eigen::Vector3d& back_to,
+                       const Eigen::Vector3d& next_start) {
+  const Eigen::Index n = smp.points.cols();
+  // Waypoints kRouteMargin beyond the touch starts; chords between them may cut in to half
+  // of that margin.
+  const double keep = reach + 0.5 * kRouteMargin;
+  reach += kRouteMargin;
+  std::vector<Eigen::Vector3d> way;
+  for (Eigen::Index k = from;; k = (k + 1) % n) {
+    const Eigen::Index next = (k + 1) % n;
+    way.push_back(smp.points.col(k) + reach * smp.normals.col(k));
+    if (k == to) break;
+    // Round a corner (normals turning by more than 15°) on an arc of waypoints.
+    const Eigen::Vector3d a = smp.normals.col(k), b = smp.normals.col(next);
+    const double turn = std::acos(std::clamp(a.dot(b), -1.0, 1.0));
+    const int steps = static_cast<int>(turn / (M_PI / 12));
+    const Eigen::Vector3d corner = smp.points.col(next);
+    for (int j = 1; j <= steps; ++j) {
+      const double f = static_cast<double>(j) / (steps + 1);
+      way.push_back(corner + reach * ((1 - f) * a + f * b).normalized());
+    }
+  }
+  auto clear = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+    const int k = std::max(2, static_cast<int>((q - p).norm() / 0.5));
+    for (int j = 0; j <= k; ++j)
+      if (design.nearest(p + (q - p) * (static_cast<double>(j) / k)).distance < keep) return false;
+    return true;
+  };
+  // Back out along the last touch's approach line to the route (the touch start lies on the
+  // way), round, and in along the next touch's approach line; every leg clear of the part's
+  // solid, or else the planner's way (over the part).
+  std::vector<Eigen::Vector3d> legs{way.front()};
+  std::size_t at = 0;
+  while (at + 1 < way.size()) {
+    std::size_t best = at + 1;
+    for (std::size_t j = way.size() - 1; j > at + 1; --j)
+      if (clear(way[at], way[j])) {
+        best = j;
+        break;
+      }
+    legs.push_back(way[best]);
+    at = best;
+  }
+  legs.push_back(next_start);
+  // The legs keep the planner's margin from the solid where the corrections put it, or 1 mm
+  // more than the touches found the part off it: a correction carried from another section
+  // may be wrong here by more than the margin allows for. The first and the last leg follow
+  // the touches' approach lines, out from the surface just touched and in to the edge of the
+  // band the next touch searches: each may come as near as its nearer end, no nearer.
+  const Planner& solid = planner();
+  const Eigen::Vector3d u = m.stylus_axis();
+  const double keep_off = std::max(solid.margin(), seen + 1);
+  const double at_next = std::min(keep_off, solid.clearance(next_start, u) - 0.01);
+  Eigen::Vector3d leg_start = m.position();
+  double margin = std::min(keep_off, solid.clearance(leg_start, u) - 0.01);
+  for (std::size_t k = 0; k < legs.size(); ++k) {
+    const Eigen::Vector3d& p = legs[k];
+    if (k + 1 == legs.size()) margin = std::min(margin, at_next);
+    if (!solid.clear(leg_start, p, u, margin)) {
+      // The planner's way (over the part), from the touch's start, outside the band.
+      timed(m, r.time.moves, [&] {
+        m.move(back_to, o.move_speed);
+        return 0;
+      });
+      safe_move(next_start, at_next);
+      return;
+    }
+    leg_start = p;
+    margin = keep_off;
+  }
+  timed(m, r.time.moves, [&] {
+    through(legs);
+    return 0;
+  });
+}
+
+std::vector<std::pair<double, double>> SectionRun::room_with(double margin) const {
+  const double L = design::length(current);
+  const design::ScanPath path = design::make_path(current, o.path);
+  const auto blocked = planner().with_margin(margin).unreachable(path, m.stylus_axis());
+  const auto smp = design::sample(current, 0.05);
+  std::vector<std::pair<double, double>> free;
+  double at = 0;
+  for (const auto& b : blocked) {
+    const double a0 = b.from <= 0 ? 0 : detail::contour_arc(smp, path, b.from) - 0.5;
+    const double a1 = b.to >= path.length() ? L : detail::contour_arc(smp, path, b.to) + 0.5;
+    if (a0 > at) free.emplace_back(at, a0);
+    at = std::max(at, a1);
+  }
+  if (at < L) free.emplace_back(at, L);
+  return free;
+}
+
+void SectionRun::cut_off(double from, double to, const std::string& why) {
+  const auto smp = design::sample(current, 0.05);
+  unreachable.push_back({current.name, from, to, detail::point_at(current, smp, from),
+                         detail::point_at(current, smp, to), why});
+  log(from, 0, "section", "not_reachable",
+      fmt::format("{:.1f} to {:.1f} mm along the stretch not scanned: {}", from, to, why));
+}
+
+bool SectionRun::reach_ends() {
+  if (!planner().part() || current.space_curve() || !moved) return true;
+  moved = false;
+  const double approach = settings().approach_clearance;
+  const std::string covered =
+      "the part, where the corrections put it, covers it: no way down to it from above";
+  if (current.closed) {
+    const auto a = detail::reachable_start(current, planner(), o, approach);
+    if (!a) {
+      r.not_reachable = true;
+      r.reason = "not reachable: " + covered;
+      log(0, 0, "section", "error_exit", r.reason);
+      return false;
+    }
+    if (*a > 0) {
+      log(*a, 0, "section", "restart",
+          fmt::format("the contour is scanned from {:.0f} mm along it, where the ball can come "
+                      "down to it",
+                      *a));
+      current = detail::started_at(current, *a);
+    }
+    return true;
+  }
+  const double L = design::length(current);
+  const auto ends = detail::reachable_ends(current, 0, L, planner(), o, approach);
+  if (!ends) {
+    const auto smp = design::sample(current, 0.05);
+    unreachable.push_back({current.name, 0, L, detail::point_at(current, smp, 0),
+                           detail::point_at(current, smp, L), covered});
+    r.not_reachable = true;
+    r.reason = "not reachable: " + covered;
+    log(0, 0, "section", "error_exit", r.reason);
+    return false;
+  }
+  const auto [a, b] = *ends;
+  if (a == 0 && b == L) return true;
+  // Each piece cut off is reported, as the run reports the stretches it leaves out.
+  if (a > 0) cut_off(0, a, covered);
+  if (b < L) cut_off(b, L, covered);
+  current = design::piece(current, a, b, current.name);
+  return true;
+}
+
+std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
+  const double L = design::length(current);
+  const int k = o.touch_points;
+  const auto smp = design::sample(current, L / (current.closed ? k : k - 1) / 4);
+  Eigen::Matrix3Xd feet(3, 0), got(3, 0);
+  // Start just outside the band where the surface is looked for (the tolerance and 1.5 mm
+  // more each way), and search across the band.
+  constexpr double kMargin = 1.5;
+  const double reach = o.path.tip_radius + o.tolerance + kMargin;
+  const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
+                             current.material == design::Side::Left);
+  // Evenly spread, or where they tell the part's move, turn and scale apart when evenly
+  // spread ones do not (then each foot from samples 0.25 mm apart, not the route's).
+  const auto places = detail::touch_places(current, k, detail::kTellsPart);
+  const design::Samples fine = places.even ? design::Samples{} : design::sample(current, 0.25);
+  if (!places.even)
+    log(0, 0, "touch", "touch",
+        fmt::format("touch points placed where they tell the part's move, turn and scale "
+                    "apart (resolution {:.2f}; evenly spread, {:.2f})",
+                    places.resolution, places.even_resolution));
+  Eigen::Index last = -1;
+  Eigen::Vector3d last_start = Eigen::Vector3d::Zero();
+  for (const double arc : places.arcs) {
+    const bool final_touch = &arc == &places.arcs.back();
+    Eigen::Index j = 0, f = 0;
+    (smp.arc.array() - arc).abs().minCoeff(&j);
+    const design::Samples& at = places.even ? smp : fine;
+    if (!places.even) (fine.arc.array() - arc).abs().minCoeff(&f);
+    const Eigen::Vector3d p = at.points.col(places.even ? j : f),
+                          nn = at.normals.col(places.even ? j : f);
+    try {
+      if (last < 0)
+        safe_move(p + reach * nn);
+      else
+        route(smp, outline, reach, last, j, last_start, p + reach * nn);
+    } catch (const NoWay& e) {
+      // The next touch point is tried with a free move planned from wherever the machine
+      // stands (a route may have stopped part way).
+      log(arc, 0, "touch", "touch",
+          fmt::format("touch point left out: no free way to its start ({})", e.what()));
+      last = -1;
+      continue;
+    }
+    last = j;
+    last_start = p + reach * nn;
+    const auto t = timed(m, r.time.touch, [&] {
+      auto got =
+          m.touch(current.plane, last_start, -nn, 2 * (o.tolerance + kMargin) + o.touch_trigger,
+                  o.touch_speed, o.touch_trigger);
+      // After the last touch (or a search that found nothing, and went through the band),
+      // back the way the ball came, to the touch's start: outside the band the part may be
+      // in, where the next move can be planned against the design's solid. Before another
+      // touch, the route to it leaves along that line anyway.
+      if (final_touch || !got) m.move(last_start, o.move_speed);
+      return got;
+    });
+    if (!t) {
+      log(arc, 0, "touch", "touch", "no surface found along the design normal here");
+      continue;
+    }
+    const double dev = (t->surface - p).dot(nn);
+    log(arc, dev, "touch", "touch", fmt::format("surface {:+.4f} mm from the design", dev));
+    feet.conservativeResize(3, feet.cols() + 1);
+    got.conservativeResize(3, got.cols() + 1);
+    feet.col(feet.cols() - 1) = p;
+    got.col(got.cols() - 1) = t->surface;
+  }
+  return {feet, got};
+}
+
+}  // namespace trueaxis::scan::detail

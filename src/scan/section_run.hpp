@@ -1,0 +1,196 @@
+// Internal to trueaxis::scan: the error-tolerant flow on one section, as one object. Its free
+// moves and touch points are in section_moves.cpp, the scans and the decisions between them in
+// controller.cpp.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "section.hpp"
+#include "trueaxis/error.hpp"
+#include "trueaxis/sim/cmm.hpp"
+
+namespace trueaxis::scan::detail {
+
+// Machine time of one operation, added to a category.
+template <class Fn>
+auto timed(Machine& m, double& bucket, Fn&& fn) {
+  const double t0 = m.time();
+  struct Add {
+    Machine& m;
+    double& b;
+    double t0;
+    ~Add() { b += m.time() - t0; }
+  } add{m, bucket, t0};
+  return fn();
+}
+
+// One section scanned by the error-tolerant controller (or by autonomous scanning only).
+struct SectionRun {
+  SectionRun(const detail::SectionContext& c, design::Section section)
+      : m(c.machine),
+        o(c.options),
+        nominal(c.planner),
+        events(c.events),
+        first_move(c.first_move),
+        part_move(c.part_move),
+        unreachable(c.unreachable),
+        current(std::move(section)) {}
+  Machine& m;
+  const ControllerOptions& o;
+  const Planner& nominal;  // against the design's solid
+  std::vector<Event>& events;
+  bool& first_move;  // the run's first free move rises along the stylus whatever is around
+  std::vector<Correction>& part_move;  // the run's rigid corrections so far (section.hpp)
+  std::vector<NotReachable>& unreachable;
+  SectionResult r;
+  design::Section current;
+  // Against the solid moved by the corrections accepted for this section so far (what the
+  // controller knows of where the part really is).
+  std::optional<Planner> moved_planner;
+  Eigen::Affine3d learnt = Eigen::Affine3d::Identity();
+  // The design data changed (a correction, an overwrite) since the run checked that the ball can
+  // come down to the section's ends.
+  bool moved = false;
+  const Planner& planner() const { return moved_planner ? *moved_planner : nominal; }
+
+  // Free moves through waypoints whose legs the planner found clear by its margin: without a
+  // stop at each waypoint where the margin leaves room for the corner the machine cuts there.
+  void through(const std::vector<Eigen::Vector3d>& way);
+
+  // A free move the planner finds: straight when clear of the part, else retract along the
+  // stylus to the clearance level, across, and down. Where the planner finds no way (the ball
+  // stands under an overhang, where a scan ended), it first moves out sideways, across the
+  // stylus, to where it does (the nearest of 8 directions and 4 distances, in order).
+  // `keep`: the margin to keep instead, when larger than the planner's.
+  void safe_move(const Eigen::Vector3d& to, double keep = 0);
+
+  // A free move in the section's plane from one touch start to the next (each at `reach` from
+  // the design, the edge of the band the real surface is searched in), around the outside of
+  // the design kRouteMargin beyond that: along the design's offset, cutting straight wherever
+  // the chord keeps clear of the design.
+  // The ball stands on the last touch's approach line, between the surface and `back_to` (that
+  // touch's start); `from` and `to` are the samples nearest the two touches, `next_start` the
+  // next touch's start.
+  void route(const design::Samples& smp, const sim::Contour& design, double reach,
+             Eigen::Index from, Eigen::Index to, const Eigen::Vector3d& back_to,
+             const Eigen::Vector3d& next_start);
+
+  // How design-value and autonomous scans approach, push and record.
+  ScanSettings settings() const {
+    ScanSettings st;
+    st.pushing = o.path.pushing;
+    st.active = o.active;
+    st.record_spacing = o.record_spacing;
+    // Start the approach beyond the band the real surface may lie in (the tolerance and 1.5 mm
+    // more), so that the free move there cannot meet a part that is off its design.
+    st.approach_clearance = o.tolerance + 1.5;
+    st.approach_limit = o.tolerance + 1.0;
+    return st;
+  }
+  // Adds an event at the machine's present time.
+  void log(double arc, double dl, const std::string& mode, const std::string& ev,
+           const std::string& decision) {
+    events.push_back({m.time(), current.name, arc, dl, mode, ev, decision});
+    if (ev == "trajectory_error" || ev == "touch") seen = std::max(seen, std::abs(dl));
+  }
+  // How far off its design (where the corrections put it) this section's surface was found so
+  // far: the largest trajectory error and touch deviation since the last accepted correction,
+  // or what that correction left at its touch points (mm).
+  double seen = 0;
+
+  // Where along the section's contour (mm, [from, to] pieces in order) the stylus keeps
+  // `margin` from the design's solid where the corrections put it, the ball on the path.
+  std::vector<std::pair<double, double>> room_with(double margin) const;
+
+  // Reports [from, to] (mm along the section) as not scanned, and why.
+  void cut_off(double from, double to, const std::string& why);
+
+  // Before a design-value scan: the ball must come down from above to where the scan starts
+  // and ends (the reachability of the run's stretches was decided for the design data as they
+  // were; a correction may have moved an end under the part, or down to the table). A closed
+  // contour is started again where it can, an open stretch trimmed to where it can, the rest
+  // reported as not reachable. False (the section not reachable) when nothing is left.
+  bool reach_ends();
+
+  // Design-value scan; true when it ran through within the tolerance.
+  bool design_scan(Sample& stop, std::string& why);
+
+  // Touch points along the design normals; returns the feet and touched points.
+  std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> touch();
+
+  // The 2-D test: geometric correction and autonomous scanning work in a plane section. A
+  // space curve that lies in a plane becomes that plane section; any other ends the section.
+  bool two_dimensional(double arc, double dl);
+
+  // The stretch [from, to] (mm along the section, initially all of it) an autonomous scan keeps
+  // to. The stylus's room was decided for the design with the planner's margin; a surface found
+  // further off its design than that (less 1 mm) may stand nearer the stylus or the probe body
+  // than the margin wherever the ball follows it. The scan then keeps to where the stylus has
+  // that much room, and 1 mm more, from the design's solid (an open stretch: the longest such
+  // piece, the rest reported not reachable), or is not made (false: a closed contour the stylus
+  // could not follow all round, or nothing long enough left).
+  bool autonomous_range(double& from, double& to);
+
+  // An autonomous scan of the section (an open stretch: from near its start to near its end),
+  // which becomes its measurement and, where the ball can follow it, its design data. False when
+  // it failed or could not be made.
+  bool autonomous();
+
+  // A local deviation (the touch points agree with the design elsewhere, so no correction
+  // fits): an autonomous scan from a little before the stop until the part is back on its
+  // design, spliced into the design data, instead of following the whole contour (a 2 mm bump
+  // on a 557 mm outline: ~60 mm at the autonomous speed instead of all of it). False when the
+  // scans do not show the part leaving its design and coming back: the caller then scans the
+  // whole contour.
+  bool local_autonomous(const Sample& stop);
+
+  // Set when an autonomous scan measured the section but its contour could not become the
+  // design data (autonomous()): the section is done.
+  bool measured_only = false;
+
+  // Why no scanning path can be made along s (empty if one can).
+  std::string unpathable(const design::Section& s) const {
+    try {
+      design::make_path(s, o.path);
+      return {};
+    } catch (const Error& e) {
+      return e.what();
+    }
+  }
+
+  // Applies accepted corrections to the section's design data and to where the planner stands
+  // the solid.
+  void correct_by(const Eigen::Affine3d& step) {
+    // The design's solid follows the corrected curve (the nominal planner already stands it at
+    // the section's placement).
+    detail::move_section(current, step);
+    learnt = step * learnt;
+    moved = true;
+    moved_planner.emplace(nominal.moved(learnt));
+  }
+
+  // Before the first scan: where the part stands, as the corrections an earlier section found.
+  void carry_part_move();
+
+  // The part's move as each round of this section's own touch points told it, by the index in
+  // r.corrections of the correction that round accepted.
+  std::vector<std::pair<std::size_t, PartMove>> told;
+
+  // After the section: where it found the part is where the part stands for the sections after
+  // it (detail::part_move_of).
+  void hand_on_part_move() const {
+    if (auto moved = detail::part_move_of(r.corrections, told, current.closed, current.name))
+      part_move = std::move(*moved);
+  }
+
+  // The section's flow: design-value scans, and on a trajectory error touch points and a
+  // correction, or an autonomous scan (of the whole contour, or locally round the stop), then a
+  // rescan; until a scan runs through, the section is found not reachable, or a limit is met.
+  void run();
+};
+
+}  // namespace trueaxis::scan::detail
