@@ -137,7 +137,7 @@ void VirtualCmm::touch_faces(const design::Plane* plane) {
 void VirtualCmm::check_solid() {
   if (!solid_) return;
   // The probe's body rides on the carriage; the stylus and its ball move with the deflection.
-  const Eigen::Vector3d c = free_ball_centre(), ball = c + deflection_;
+  const Eigen::Vector3d c = free_ball_centre(), ball = c + deflection_ + corner_;
   const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
   const Eigen::Vector3d& u = axis_;
   // The stem from the ball to the probe's nose; the body a capsule whose round nose ends where
@@ -229,6 +229,7 @@ sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part)
   if (space_) {
     const sim::ProbeReading reading = probe_.read(space_->nearest(pos));
     deflection_ = reading.true_deflection;
+    corner_.setZero();
     return reading;
   }
   std::size_t first = 0;
@@ -246,6 +247,28 @@ sim::ProbeReading VirtualCmm::read(const std::vector<const sim::Contour*>& part)
   }
   const sim::ProbeReading reading = probe_.read(best);
   deflection_ = reading.true_deflection;
+  // The probe reads its contact with the nearest wall. Where the ball, pushed out of that one, is
+  // still within its radius of another (a concave corner: the walls meet at less than 180°), it
+  // rests against both: pushed out of each in turn (alternating projections onto the walls'
+  // offsets, which meet where the ball touches both), as the solid check takes it. Otherwise
+  // the stem, which follows the ball, would be caught inside the wall the ball cannot enter.
+  corner_.setZero();
+  if (reading.contact) {
+    const double r = probe_.options().tip_radius;
+    Eigen::Vector3d b = pos + deflection_;
+    for (int it = 0; it < 16; ++it) {
+      double worst = 0;
+      Eigen::Vector3d push = Eigen::Vector3d::Zero();
+      for (const sim::Contour* c : part)
+        if (const auto n = c->nearest_within(b, r); n && r - n->distance > worst + 1e-12) {
+          worst = r - n->distance;
+          push = worst * n->normal;
+        }
+      if (worst <= 1e-9) break;
+      b += push;
+    }
+    corner_ = b - pos - deflection_;
+  }
   return reading;
 }
 
@@ -372,6 +395,7 @@ void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double sp
     s = std::min(L, s + v * dt);
     // The stylus leaves a surface deflected by it (a retract), then free.
     const double depth = penetration(&deflection_);
+    corner_.setZero();
     if (depth <= probe_.options().range) check_solid();
     if (depth > start + kCollision) {
       const Eigen::Vector3d p = servo_.position();

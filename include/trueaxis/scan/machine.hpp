@@ -239,6 +239,9 @@ class VirtualCmm : public Machine {
   // dent and form noise, mm): the stylus may enter the solid that far.
   double dent_ = 0;
   Eigen::Vector3d deflection_ = Eigen::Vector3d::Zero();  // the probe's, as last read (true)
+  // Where the ball stands off the deflected centre in a concave corner (mm, in the plane): the
+  // probe reads the contact with the nearer wall, while the ball rests against both.
+  Eigen::Vector3d corner_ = Eigen::Vector3d::Zero();
   // Per element (ball, stylus, body): where it was last checked and the clearance found then
   // (< 0: check at the next tick).
   std::array<Eigen::Vector3d, 3> guard_at_{};
