@@ -18,6 +18,7 @@ std::string event_words(const std::string& id) {
       {"correction_applied", "correction applied"},
       {"correction_rejected", "correction rejected"},
       {"correction_carried", "correction carried over from another section"},
+      {"part_move_found", "the part's move found from several sections' touch points"},
       {"autonomous_scan", "autonomous scan"},
       {"design_overwritten", "design data replaced by the measured contour"},
       {"design_spliced", "design data replaced by the measured contour where the part left it"},

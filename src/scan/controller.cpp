@@ -179,11 +179,31 @@ bool SectionRun::autonomous() {
   }
   if (best < 0) throw NoWay(no_way);
   const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
+  // An open stretch is followed to `keep` short of its end, which may border on what the stylus
+  // cannot reach: the scan measures its length along the real part from where it met it, and
+  // where that is along the design is known only to within the part's move along the contour
+  // (followed to 1 mm short, a part moved 1.8 mm along it took the stem under the tab beyond the
+  // end of the DaimlerChrysler part's outline at z = 15 mm).
+  const double short_of = planner().part() ? keep : 1.0;
+  if (!current.closed && to - smp.arc[best] - short_of < detail::kShortest) {
+    const std::string why = fmt::format(
+        "too short to follow autonomously: {:.1f} mm from where the ball meets it to {:.1f} mm "
+        "short of its end, as near as the part's unknown place along it lets the scan go",
+        std::max(0.0, to - smp.arc[best]), short_of);
+    cut_off(from, to, why);
+    r.not_reachable = true;
+    r.reason = "not reachable: " + why;
+    log(0, 0, "autonomous", "error_exit", r.reason);
+    return false;
+  }
+  if (!current.closed && short_of > 1)
+    cut_off(to - short_of, to,
+            fmt::format("an autonomous scan is not followed closer than {:.1f} mm to the end of "
+                        "the stretch: where the part stands along it is known only that well",
+                        short_of));
   const auto out = timed(m, r.time.autonomous, [&] {
     return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
-                          // an open stretch: stop 1 mm short of its end, which may border
-                          // on what the stylus cannot reach
-                          current.closed ? L : std::max(1.0, to - smp.arc[best] - 1),
+                          current.closed ? L : std::max(1.0, to - smp.arc[best] - short_of),
                           o.autonomous_speed, settings());
   });
   ++r.autonomous_count;
@@ -210,6 +230,7 @@ bool SectionRun::autonomous() {
   }
   current = std::move(measured);
   moved = true;
+  as_designed = false;
   log(0, 0, "autonomous", "design_overwritten",
       fmt::format("the section's design data replaced by the measured contour ({} points, "
                   "tip radius and pushing amount compensated)",
@@ -274,6 +295,7 @@ bool SectionRun::local_autonomous(const Sample& stop) {
                       out.samples.back().arc));
       current = std::move(sp->section);
       moved = true;
+      as_designed = false;
       r.points = out.samples;
       log(0, sp->largest, "autonomous", "design_spliced",
           fmt::format("the design data from {:.1f} to {:.1f} mm along the contour replaced by "
@@ -289,30 +311,125 @@ bool SectionRun::local_autonomous(const Sample& stop) {
   return false;
 }
 
-void SectionRun::carry_part_move() {
-  if (part_move.empty() || current.space_curve() ||
-      !std::all_of(part_move.begin(), part_move.end(),
+std::optional<Eigen::Affine3d> SectionRun::applicable(const std::vector<Correction>& cs) const {
+  if (cs.empty() || current.space_curve() ||
+      !std::all_of(cs.begin(), cs.end(),
                    [&](const Correction& c) { return detail::keeps_plane(current, c.transform); }))
-    return;
+    return std::nullopt;
   Eigen::Affine3d step = Eigen::Affine3d::Identity();
+  for (const auto& c : cs) step = c.transform * step;
+  return step;
+}
+
+void SectionRun::carry_part_move() {
+  const auto step = applicable(part_move);
+  if (!step) return;
   std::string what;
   for (const auto& c : part_move) {
-    step = c.transform * step;
     r.corrections.push_back(c);
     const std::string params = fmt::format(" {}", c.parameters_text());
     what += fmt::format("{}{} ({}:{})", what.empty() ? "" : ", ", c.found_on, c.type, params);
   }
-  correct_by(step);
+  correct_by(*step);
   log(0, 0, "correction", "correction_carried",
       fmt::format("the part is where the touch points of {} found it: corrections applied "
                   "before the first scan",
                   what));
 }
 
+void SectionRun::guess_part_move() {
+  const auto guessed = applicable(guess);
+  if (!guessed) return;
+  const Eigen::Affine3d step = *guessed;
+  design::Section moved_design = current;
+  detail::move_section(moved_design, step);
+  const std::string from = guess.front().found_on;
+  double shift = 0;
+  const auto smp = design::sample(current, 1.0);
+  for (Eigen::Index i = 0; i < smp.points.cols(); ++i)
+    shift = std::max(shift, (step * smp.points.col(i) - smp.points.col(i)).norm());
+  try {
+    const auto start = design::make_path(moved_design, o.path).at(0);
+    const Eigen::Vector3d a = start.p + (settings().approach_clearance + shift) * start.normal;
+    if (nominal.part() && nominal.clearance(a, m.stylus_axis()) < nominal.margin()) {
+      log(0, 0, "correction", "correction_rejected",
+          fmt::format("the part's move as the touch points of {} suggest it is not tried here: "
+                      "the scan would start within {:g} mm of the part where the design puts it",
+                      from, nominal.margin()));
+      return;
+    }
+  } catch (const Error&) {
+    return;  // no path along the moved design: scanned as designed
+  }
+  approach_extra = shift;
+  learnt = step;  // where the guess puts the part; the planner stands it as designed until then
+  unguessed = current;
+  current = std::move(moved_design);
+  moved = true;
+  as_designed = false;
+  std::string what;
+  for (const auto& c : guess) {
+    r.corrections.push_back(c);
+    what += fmt::format("{}{}: {}", what.empty() ? "" : ", ", c.type, c.parameters_text());
+  }
+  log(0, 0, "correction", "correction_carried",
+      fmt::format("the part's move as the touch points of {} suggest it ({}), tried before the "
+                  "first scan: they did not tell a move from a scale, so free moves keep to the "
+                  "part where the design puts it until this section's touch points confirm it",
+                  from, what));
+}
+
+void SectionRun::drop_guess(const Sample& stop) {
+  r.corrections.erase(r.corrections.begin(),
+                      r.corrections.begin() + static_cast<std::ptrdiff_t>(guess.size()));
+  current = std::move(*unguessed);
+  unguessed.reset();
+  approach_extra = 0;
+  learnt = Eigen::Affine3d::Identity();
+  moved = true;
+  as_designed = true;
+  // What the scan and the touch points found was off the guessed design: the section starts
+  // again as it would have without the guess.
+  seen = 0;
+  log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+      "the part's move tried as a guess does not hold here (the touch points fit no correction "
+      "to it): the section starts again from its design data");
+}
+
+void SectionRun::confirm_by_points() {
+  // 24 of the scan's points, evenly spread over it, as touch points about the guessed design.
+  const auto& pts = r.points;
+  constexpr std::size_t kPoints = 24;
+  if (pts.size() < kPoints) return;
+  const auto smp = design::sample(current, 0.05);
+  const sim::Contour curve(smp.points, current.plane.normal.normalized(), current.closed,
+                           current.material == design::Side::Left);
+  Eigen::Matrix3Xd feet(3, kPoints), got(3, kPoints);
+  for (std::size_t i = 0; i < kPoints; ++i) {
+    const auto& p = pts[i * (pts.size() - 1) / (kPoints - 1)].surface;
+    got.col(static_cast<Eigen::Index>(i)) = p;
+    feet.col(static_cast<Eigen::Index>(i)) = curve.nearest(p).point;
+  }
+  const PartMove tells = fit_part_move(current, feet, got, o.accept);
+  double worst = 0;
+  for (Eigen::Index i = 0; i < got.cols(); ++i)
+    worst = std::max(worst, std::abs(curve.nearest(got.col(i)).distance));
+  if (worst > o.accept || (!current.closed && tells.resolution < detail::kTellsPart)) return;
+  guess_confirmed = true;
+  confirm_guess();
+  log(0, 0, "correction", "correction_applied",
+      fmt::format("the part's move tried as a guess holds: the scan's points lie within {:.4f} mm "
+                  "of the guessed design all along the {}, which tells a move from a scale",
+                  worst, current.closed ? "contour" : "stretch"));
+}
+
 void SectionRun::run() {
   r.name = current.name;
   const double t0 = m.time();
-  if (o.strategy == Strategy::ErrorTolerant) carry_part_move();
+  if (o.strategy == Strategy::ErrorTolerant) {
+    carry_part_move();
+    if (r.corrections.empty()) guess_part_move();
+  }
   if (o.strategy == Strategy::Autonomous) {
     r.ok = autonomous();
     if (r.ok) log(0, 0, "section", "section_done", "measured by autonomous scanning only");
@@ -328,6 +445,7 @@ void SectionRun::run() {
       r.ok = true;
       log(stop.arc, stop.delta_l, "design", "section_done",
           loop == 0 ? "scanned along the design" : "rescan succeeded");
+      if (unguessed) confirm_by_points();
       break;
     }
     ++r.trajectory_errors;
@@ -340,6 +458,8 @@ void SectionRun::run() {
     if (!two_dimensional(stop.arc, stop.delta_l)) break;
     bool corrected = false, local = false;
     if (flag == 0) {
+      const bool nominal = as_designed;
+      const design::Section touched_on = current;
       auto [feet, got] = touch();
       if (got.cols() >= 4) {
         design::Section fixed;
@@ -371,6 +491,7 @@ void SectionRun::run() {
         if (corrected) {
           // What these touch points tell of the whole part, to hand on (hand_on_part_move).
           told.push_back({r.corrections.size() - 1, std::move(told_here)});
+          if (nominal) own_rounds.push_back({touched_on, feet, got});
           Eigen::Affine3d step = Eigen::Affine3d::Identity();
           for (const auto& c : tried)
             if (c.accepted) step = c.transform * step;
@@ -388,6 +509,16 @@ void SectionRun::run() {
       } else {
         log(stop.arc, stop.delta_l, "correction", "correction_rejected",
             fmt::format("only {} touch points found: no correction can be fitted", got.cols()));
+      }
+      if (unguessed) {
+        // Touch points that agree with the guessed design confirm it (corrected: correct_by
+        // made it this section's); otherwise the section starts again without it.
+        if (local) {
+          confirm_guess();
+        } else if (!corrected) {
+          drop_guess(stop);
+          continue;
+        }
       }
     }
     if (corrected) {
@@ -414,6 +545,65 @@ void SectionRun::run() {
   }
   hand_on_part_move();
   r.time.total = m.time() - t0;
+}
+
+void SectionRun::hand_on_part_move() {
+  if (auto moved = detail::part_move_of(r.corrections, told, current.closed, current.name)) {
+    part_move = std::move(*moved);
+    rounds.clear();
+    guess.clear();
+    return;
+  }
+  if (guess_confirmed) {
+    // The guess is where the part stands (every accepted correction rigid: the guess's own).
+    part_move.clear();
+    for (const auto& c : r.corrections)
+      if (c.accepted) part_move.push_back(c);
+    rounds.clear();
+    guess.clear();
+    return;
+  }
+  if (own_rounds.empty()) return;
+  // What this section's own touch points found, made on the design as it stands the part: the
+  // run's guess of the part's move when it is rigid, and no guess at all when it is not.
+  std::vector<Correction> own;
+  bool rigid = true;
+  for (const auto& c : r.corrections) {
+    if (!c.accepted) continue;
+    if (!c.found_on.empty()) rigid = false;  // not found on the design as it stands the part
+    const Eigen::Matrix3d R = c.transform.linear();
+    rigid = rigid && (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() < 1e-9 &&
+            R.determinant() > 0;
+    own.push_back(c);
+    own.back().found_on = current.name;
+  }
+  guess.clear();
+  if (rigid) guess = std::move(own);
+  const Eigen::Vector3d n = own_rounds.front().section.plane.normal.normalized();
+  if (!rounds.empty() &&
+      std::abs(rounds.front().section.plane.normal.normalized().dot(n)) < 1 - 1e-9)
+    rounds.clear();
+  rounds.insert(rounds.end(), own_rounds.begin(), own_rounds.end());
+  std::vector<std::string> names;
+  for (const auto& t : rounds)
+    if (std::find(names.begin(), names.end(), t.section.name) == names.end())
+      names.push_back(t.section.name);
+  if (names.size() < 2) return;
+  std::string on;
+  for (const auto& nm : names) on += (on.empty() ? "" : ", ") + nm;
+  const auto c = detail::pooled_part_move(rounds, o.accept, on);
+  if (!c) return;
+  Eigen::Index points = 0;
+  for (const auto& t : rounds) points += t.touched.cols();
+  part_move = {*c};
+  rounds.clear();
+  guess.clear();
+  log(0, 0, "correction", "part_move_found",
+      fmt::format("the touch points of {} together tell where the part stands ({} of them): "
+                  "{}: {}; all within {:.4f} mm of the moved design (were {:.4f}); the sections "
+                  "after this one in parallel planes start there",
+                  on, points, c->type, c->parameters_text(), c->residual_after,
+                  c->residual_before));
 }
 
 SectionResult run_section(const SectionContext& c, design::Section& section) {

@@ -207,6 +207,39 @@ Touches prepare(const design::Section& section, const Eigen::Matrix3Xd& feet,
   return in;
 }
 
+// A model's parameters q (plane frame f) as a correction: the map in 3-D (in the plane A about
+// the frame's origin, then t; along the normal nothing) and its parameters as reported.
+Correction describe(Kind k, const Eigen::VectorXd& q, const Frame& f) {
+  const Affine2 a = model(k, q);
+  Correction c;
+  c.type = name(k);
+  Eigen::Matrix<double, 3, 2> E;
+  E << f.e1, f.e2;
+  const Eigen::Matrix3d lin = E * a.A * E.transpose() + f.n * f.n.transpose();
+  c.transform.linear() = lin;
+  c.transform.translation() = f.o + E * a.t - lin * f.o;
+  const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();
+  if (k == Kind::Rotation || k == Kind::ScaleRotation)
+    c.parameters.push_back({"rotation_deg", q[k == Kind::Rotation ? 2 : 3] * 180 / M_PI});
+  if (k == Kind::Scale || k == Kind::ScaleRotation || k == Kind::Directional)
+    c.parameters.push_back({"scale", 1 + q[2]});
+  if (k == Kind::Directional) {
+    const Eigen::Vector3d u = f.e1 * std::cos(q[3]) + f.e2 * std::sin(q[3]);
+    c.parameters.push_back({"direction_x", u.x()});
+    c.parameters.push_back({"direction_y", u.y()});
+    c.parameters.push_back({"direction_z", u.z()});
+  }
+  c.parameters.push_back({"dx_mm", t3.x()});
+  c.parameters.push_back({"dy_mm", t3.y()});
+  c.parameters.push_back({"dz_mm", t3.z()});
+  if (k != Kind::Translation) {
+    c.parameters.push_back({"centre_x_mm", f.o.x()});
+    c.parameters.push_back({"centre_y_mm", f.o.y()});
+    c.parameters.push_back({"centre_z_mm", f.o.z()});
+  }
+  return c;
+}
+
 // One model of the menu fitted to the touch points. `closer` is set when it leaves every touch
 // point within `accept` and none further than before; `corrected` receives the section with it
 // applied when the fit did not diverge.
@@ -282,39 +315,10 @@ Correction fit_one(Kind k, const design::Section& section, const Touches& in, do
     after = distances(curve_of(cand), in.touched);
     if (corrected) *corrected = std::move(cand);
   }
-  Correction c;
-  c.type = name(k);
+  Correction c = describe(k, best, f);
   c.diverged = why;
-  {
-    // The same map in 3-D: in the plane A about the frame's origin, then t; along the normal
-    // nothing.
-    Eigen::Matrix<double, 3, 2> E;
-    E << f.e1, f.e2;
-    const Eigen::Matrix3d lin = E * a.A * E.transpose() + f.n * f.n.transpose();
-    c.transform.linear() = lin;
-    c.transform.translation() = f.o + E * a.t - lin * f.o;
-  }
   c.residual_before = in.before.cwiseAbs().maxCoeff();
   c.residual_after = why.empty() ? after.cwiseAbs().maxCoeff() : NAN;
-  const Eigen::Vector3d t3 = f.e1 * a.t.x() + f.e2 * a.t.y();
-  if (k == Kind::Rotation || k == Kind::ScaleRotation)
-    c.parameters.push_back({"rotation_deg", best[k == Kind::Rotation ? 2 : 3] * 180 / M_PI});
-  if (k == Kind::Scale || k == Kind::ScaleRotation || k == Kind::Directional)
-    c.parameters.push_back({"scale", 1 + best[2]});
-  if (k == Kind::Directional) {
-    const Eigen::Vector3d u = f.e1 * std::cos(best[3]) + f.e2 * std::sin(best[3]);
-    c.parameters.push_back({"direction_x", u.x()});
-    c.parameters.push_back({"direction_y", u.y()});
-    c.parameters.push_back({"direction_z", u.z()});
-  }
-  c.parameters.push_back({"dx_mm", t3.x()});
-  c.parameters.push_back({"dy_mm", t3.y()});
-  c.parameters.push_back({"dz_mm", t3.z()});
-  if (k != Kind::Translation) {
-    c.parameters.push_back({"centre_x_mm", f.o.x()});
-    c.parameters.push_back({"centre_y_mm", f.o.y()});
-    c.parameters.push_back({"centre_z_mm", f.o.z()});
-  }
   if (left) *left = after;
   closer = why.empty() && c.residual_after <= accept;
   for (Eigen::Index i = 0; closer && i < after.size(); ++i)
@@ -499,7 +503,83 @@ std::optional<std::vector<Correction>> part_move_of(
   return rigid;
 }
 
-TouchPlaces touch_places(const design::Section& s, int k, double least) {
+std::optional<Correction> pooled_part_move(const std::vector<TouchRound>& rounds, double accept,
+                                           const std::string& found_on) {
+  if (rounds.empty()) return std::nullopt;
+  const Eigen::Vector3d n = rounds.front().section.plane.normal.normalized();
+  Eigen::Index count = 0;
+  for (const auto& r : rounds) {
+    if (r.section.space_curve() ||
+        std::abs(r.section.plane.normal.normalized().dot(n)) < 1 - 1e-9 ||
+        r.feet.cols() != r.touched.cols())
+      return std::nullopt;
+    count += r.feet.cols();
+  }
+  if (count < params(Kind::Rotation) + 2) return std::nullopt;  // as the menu: some redundancy
+  // One frame for all: the plane's, centred on all the feet.
+  Eigen::Matrix3Xd feet(3, count);
+  Eigen::Index at = 0;
+  for (const auto& r : rounds) {
+    feet.middleCols(at, r.feet.cols()) = r.feet;
+    at += r.feet.cols();
+  }
+  const Frame f = frame_of(rounds.front().section, feet);
+  std::vector<Eigen::Vector2d> p, m, t;
+  double before = 0;
+  for (const auto& r : rounds) {
+    const sim::Contour curve = curve_of(r.section);
+    for (Eigen::Index j = 0; j < r.feet.cols(); ++j) {
+      const auto nr = curve.nearest(r.feet.col(j));
+      p.push_back(f.to2(nr.point));
+      m.push_back(Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)).normalized());
+      t.push_back(f.to2(r.touched.col(j)));
+      before = std::max(before, std::abs(curve.nearest(r.touched.col(j)).distance));
+    }
+  }
+  if (resolution(p, m, false, true) < kTellsPart) return std::nullopt;
+  // A turn only where the touch points see one (round a circle they do not).
+  const Kind k = resolution(p, m, true, false) >= kTellsPart ? Kind::Rotation : Kind::Translation;
+  Eigen::VectorXd q = gauss_newton(k, Eigen::VectorXd::Zero(params(k)), p, m, t);
+  // On the exact curves, as fit_one: each touched point's nearest point on its moved design as
+  // its foot, until the feet settle.
+  for (int it = 0; it < 8 && q.allFinite(); ++it) {
+    const Affine2 a = model(k, q);
+    const Eigen::Matrix2d back = a.A.inverse();
+    double shift = 0;
+    std::size_t i = 0;
+    for (const auto& r : rounds) {
+      const sim::Contour moved = curve_of(apply(r.section, f, a));
+      for (Eigen::Index j = 0; j < r.touched.cols(); ++j, ++i) {
+        const auto nr = moved.nearest(r.touched.col(j));
+        const Eigen::Vector2d foot = back * (f.to2(nr.point) - a.t);
+        shift = std::max(shift, (foot - p[i]).norm());
+        p[i] = foot;
+        m[i] = (a.A.transpose() * Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)))
+                   .normalized();
+      }
+    }
+    q = gauss_newton(k, q, p, m, t);
+    if (shift < 1e-7) break;
+  }
+  if (!q.allFinite()) return std::nullopt;
+  const Affine2 a = model(k, q);
+  // A fit that ran away (a turn beyond 45°, a move beyond 10 mm) tells nothing.
+  if (k == Kind::Rotation && std::abs(q[2]) > M_PI / 4) return std::nullopt;
+  if (a.t.norm() > 10) return std::nullopt;
+  double after = 0;
+  for (const auto& r : rounds)
+    after = std::max(after,
+                     distances(curve_of(apply(r.section, f, a)), r.touched).cwiseAbs().maxCoeff());
+  if (!(after <= accept)) return std::nullopt;
+  Correction c = describe(k, q, f);
+  c.residual_before = before;
+  c.residual_after = after;
+  c.accepted = true;
+  c.found_on = found_on;
+  return c;
+}
+
+TouchPlaces touch_places(const design::Section& s, int k, double least, const Usable& usable) {
   TouchPlaces out;
   const double L = design::length(s);
   for (int i = 0; i < k; ++i)
@@ -531,11 +611,62 @@ TouchPlaces touch_places(const design::Section& s, int k, double least) {
     const double eps = 1e-6 * static_cast<double>(at.size());
     return static_cast<double>((sv.array().square() + eps).log().sum());
   };
+  // Whether the ball can get to a sample's touch start (asked once per sample).
+  std::vector<signed char> ok(static_cast<std::size_t>(n), -1);
+  auto usable_at = [&](Eigen::Index j) {
+    if (!usable) return true;
+    signed char& o = ok[static_cast<std::size_t>(j)];
+    if (o < 0) o = usable(smp.points.col(j), smp.normals.col(j)) ? 1 : 0;
+    return o == 1;
+  };
   std::vector<Eigen::Index> chosen;
-  for (const double a : out.arcs) chosen.push_back(nearest(a));
+  auto apart = [&](Eigen::Index j, std::size_t skip) {
+    for (std::size_t q = 0; q < chosen.size(); ++q) {
+      if (q == skip) continue;
+      double d = std::abs(smp.arc[j] - smp.arc[chosen[q]]);
+      if (s.closed) d = std::min(d, L - d);
+      if (d < 1) return false;
+    }
+    return true;
+  };
+  // Each even place the ball cannot get to is taken to the nearest sample it can (1 mm from the
+  // others, and from an open stretch's ends), or left out when there is none.
+  bool shifted = false;
+  for (const double a : out.arcs) {
+    const Eigen::Index j = nearest(a);
+    if (usable_at(j)) {
+      chosen.push_back(j);
+      continue;
+    }
+    shifted = true;
+    ++out.unreachable;
+    for (Eigen::Index d = 1; d < n; ++d) {
+      Eigen::Index found = -1;
+      for (const Eigen::Index c : {j - d, j + d}) {
+        const Eigen::Index w = s.closed ? ((c % n) + n) % n : c;
+        if (w < 0 || w >= n || (!s.closed && (smp.arc[w] < 1 || smp.arc[w] > L - 1))) continue;
+        if (usable_at(w) && apart(w, chosen.size())) {
+          found = w;
+          break;
+        }
+      }
+      if (found >= 0) {
+        chosen.push_back(found);
+        break;
+      }
+    }
+  }
+  auto as_chosen = [&] {
+    out.even = false;
+    out.arcs.clear();
+    for (const Eigen::Index j : chosen) out.arcs.push_back(smp.arc[j]);
+    std::sort(out.arcs.begin(), out.arcs.end());
+    return out;
+  };
   double best = score_of(chosen, &out.resolution);
   out.even_resolution = out.resolution;
-  if (out.resolution >= least) return out;
+  if (out.resolution >= least) return shifted ? as_chosen() : out;
+  const std::vector<Eigen::Index> first = chosen;
   // Candidates: every sample 1 mm clear of an open stretch's ends and off the corners (the
   // normal turns by less than 0.2 rad to the samples either side).
   std::vector<Eigen::Index> cand;
@@ -548,15 +679,6 @@ TouchPlaces touch_places(const design::Section& s, int k, double least) {
       continue;
     cand.push_back(j);
   }
-  auto apart = [&](Eigen::Index j, std::size_t skip) {
-    for (std::size_t q = 0; q < chosen.size(); ++q) {
-      if (q == skip) continue;
-      double d = std::abs(smp.arc[j] - smp.arc[chosen[q]]);
-      if (s.closed) d = std::min(d, L - d);
-      if (d < 1) return false;
-    }
-    return true;
-  };
   // Exchange one place at a time for the candidate that raises the score most, until no
   // exchange does (Fedorov's exchange).
   for (int pass = 0; pass < 4; ++pass) {
@@ -565,7 +687,7 @@ TouchPlaces touch_places(const design::Section& s, int k, double least) {
       const Eigen::Index was = chosen[i];
       Eigen::Index keep = was;
       for (const Eigen::Index j : cand) {
-        if (!apart(j, i)) continue;
+        if (!apart(j, i) || !usable_at(j)) continue;
         chosen[i] = j;
         const double r = score_of(chosen, nullptr);
         if (r > best + 1e-9) {
@@ -580,13 +702,12 @@ TouchPlaces touch_places(const design::Section& s, int k, double least) {
   }
   double res = 0;
   score_of(chosen, &res);
-  if (res < least) return out;
+  if (res < least) {
+    chosen = first;
+    return shifted ? as_chosen() : out;
+  }
   out.resolution = res;
-  out.even = false;
-  out.arcs.clear();
-  for (const Eigen::Index j : chosen) out.arcs.push_back(smp.arc[j]);
-  std::sort(out.arcs.begin(), out.arcs.end());
-  return out;
+  return as_chosen();
 }
 
 }  // namespace detail

@@ -354,6 +354,8 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
 
   bool first_move = true;
   std::vector<Correction> part_move;
+  std::vector<detail::TouchRound> rounds;
+  std::vector<Correction> guess;
   for (std::size_t i = 0; i < items.size(); ++i) {
     Item& it = items[i];
     if (progress) progress(i, items.size(), it.section.name);
@@ -384,7 +386,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       SectionResult partial;
       try {
         r = detail::run_section({machine, options, *it.planner, res.events, first_move, partial,
-                                 part_move, res.unreachable},
+                                 part_move, res.unreachable, rounds, guess},
                                 it.section);
       } catch (...) {
         r = std::move(partial);

@@ -2,6 +2,7 @@
 // the run over all sections (run.cpp).
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <utility>
@@ -11,6 +12,13 @@
 #include "trueaxis/scan/planner.hpp"
 
 namespace trueaxis::scan::detail {
+
+// One round of touch points on a section's design data: the feet on the design and the surface
+// points found along the design normals there (3 x m each, mm, the part's design frame).
+struct TouchRound {
+  design::Section section;
+  Eigen::Matrix3Xd feet, touched;
+};
 
 struct SectionContext {
   Machine& machine;
@@ -25,6 +33,13 @@ struct SectionContext {
   std::vector<Correction>& part_move;
   // The run's stretches not reachable: a section adds what a correction moved out of reach.
   std::vector<NotReachable>& unreachable;
+  // Touch rounds made on design data where the design puts the part, whose sections could not
+  // tell the part's move on their own (pooled_part_move): kept until one tells it.
+  std::vector<TouchRound>& rounds;
+  // The part's move as the last section's touch points suggest it where they could not tell it
+  // (a move from a scale): rigid corrections, tried on the next sections in parallel planes
+  // before their own touch points are made (SectionRun::guess_part_move).
+  std::vector<Correction>& guess;
 };
 
 // A reachable stretch shorter than this is not scanned (mm): nothing to follow.
@@ -94,6 +109,17 @@ std::optional<std::vector<Correction>> part_move_of(
     const std::vector<std::pair<std::size_t, PartMove>>& told, bool closed,
     const std::string& name);
 
+// The part's rigid move (a move in the plane, and a turn about its normal where the touch points
+// see one) that the touch rounds of several sections in parallel planes tell together, when none
+// tells it alone: two stretches of a contour cut by what the stylus cannot reach, each seeing one
+// wall, tell a move from a scale together. Fitted to the touch points' normal distances from each
+// section's design (Gauss-Newton, the feet refined on the moved design as the menu does).
+// Nothing unless the rounds' planes are parallel, their touch points tell a move from a scale
+// (kTellsPart), and the move leaves every one within `accept` of its section's moved design.
+// `found_on` names the correction's sections.
+std::optional<Correction> pooled_part_move(const std::vector<TouchRound>& rounds, double accept,
+                                           const std::string& found_on);
+
 // Where along a section (mm from its start, in order) its k touch points go. Evenly spread (a
 // closed contour's at the middles of k equal pieces, an open stretch's from 5 % to 95 % of it),
 // unless those do not tell the part's move, turn and scale apart (their resolution, as
@@ -101,13 +127,17 @@ std::optional<std::vector<Correction>> part_move_of(
 // all on the wall, which does not see a move along it. Then places are exchanged, one at a
 // time, for those among every 0.5 mm of the section (1 mm clear of an open stretch's ends, off
 // its corners, 1 mm from each other) that raise the resolution most, when that brings it to
-// `least`.
+// `least`. `usable` (when given) says whether the ball can get to the touch start for a foot on
+// the design with its normal there: places it cannot are taken to the nearest one it can, and
+// never exchanged for.
 struct TouchPlaces {
   std::vector<double> arcs;
   bool even = true;  // the evenly spread places
   double resolution = 0, even_resolution = 0;
+  int unreachable = 0;  // even places the ball cannot get to (moved, or left out)
 };
-TouchPlaces touch_places(const design::Section& s, int k, double least);
+using Usable = std::function<bool(const Eigen::Vector3d& foot, const Eigen::Vector3d& normal)>;
+TouchPlaces touch_places(const design::Section& s, int k, double least, const Usable& usable = {});
 
 // Scans `section` (its design data are corrected in place) and returns its result. Throws what
 // the machine throws (a collision); `partial` then holds what was measured until then.

@@ -214,14 +214,28 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
   // Start just outside the band where the surface is looked for (the tolerance and 1.5 mm
   // more each way), and search across the band.
   constexpr double kMargin = 1.5;
-  const double reach = o.path.tip_radius + o.tolerance + kMargin;
+  // About a guessed design the band reaches further out by the guess's move (approach_extra).
+  const double reach = o.path.tip_radius + o.tolerance + kMargin + approach_extra;
   const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
                              current.material == design::Side::Left);
   // Evenly spread, or where they tell the part's move, turn and scale apart when evenly
   // spread ones do not (then each foot from samples 0.25 mm apart, not the route's).
-  const auto places = detail::touch_places(current, k, detail::kTellsPart);
+  // Where the ball can come down to the touch's start from above (and, about a guessed design,
+  // where that start keeps the margin from the part as designed too).
+  const Eigen::Vector3d u = m.stylus_axis();
+  auto usable = [&](const Eigen::Vector3d& foot, const Eigen::Vector3d& normal) {
+    const Eigen::Vector3d start = foot + reach * normal;
+    if (unguessed && nominal.part() && nominal.clearance(start, u) < nominal.margin()) return false;
+    return planner().from_above(start, u);
+  };
+  const auto places = detail::touch_places(current, k, detail::kTellsPart, usable);
   const design::Samples fine = places.even ? design::Samples{} : design::sample(current, 0.25);
-  if (!places.even)
+  if (places.unreachable > 0)
+    log(0, 0, "touch", "touch",
+        fmt::format("{} of the evenly spread touch points moved to where the ball can come "
+                    "down to their start (resolution {:.2f})",
+                    places.unreachable, places.resolution));
+  if (!places.even && places.resolution > places.even_resolution)
     log(0, 0, "touch", "touch",
         fmt::format("touch points placed where they tell the part's move, turn and scale "
                     "apart (resolution {:.2f}; evenly spread, {:.2f})",
@@ -236,6 +250,15 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
     if (!places.even) (fine.arc.array() - arc).abs().minCoeff(&f);
     const Eigen::Vector3d p = at.points.col(places.even ? j : f),
                           nn = at.normals.col(places.even ? j : f);
+    // About a guessed design, from where the part as designed leaves the planner's margin too.
+    if (unguessed && nominal.part() &&
+        nominal.clearance(p + reach * nn, m.stylus_axis()) < nominal.margin()) {
+      log(arc, 0, "touch", "touch",
+          fmt::format("touch point left out: its start lies within {:g} mm of the part where the "
+                      "design puts it, and the guessed move is not confirmed",
+                      nominal.margin()));
+      continue;
+    }
     try {
       if (last < 0)
         safe_move(p + reach * nn);
@@ -252,9 +275,9 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
     last = j;
     last_start = p + reach * nn;
     const auto t = timed(m, r.time.touch, [&] {
-      auto got =
-          m.touch(current.plane, last_start, -nn, 2 * (o.tolerance + kMargin) + o.touch_trigger,
-                  o.touch_speed, o.touch_trigger);
+      auto got = m.touch(current.plane, last_start, -nn,
+                         2 * (o.tolerance + kMargin) + approach_extra + o.touch_trigger,
+                         o.touch_speed, o.touch_trigger);
       // After the last touch (or a search that found nothing, and went through the band),
       // back the way the ball came, to the touch's start: outside the band the part may be
       // in, where the next move can be planned against the design's solid. Before another

@@ -38,6 +38,8 @@ struct SectionRun {
         first_move(c.first_move),
         part_move(c.part_move),
         unreachable(c.unreachable),
+        rounds(c.rounds),
+        guess(c.guess),
         current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
@@ -46,6 +48,8 @@ struct SectionRun {
   bool& first_move;  // the run's first free move rises along the stylus whatever is around
   std::vector<Correction>& part_move;  // the run's rigid corrections so far (section.hpp)
   std::vector<NotReachable>& unreachable;
+  std::vector<TouchRound>& rounds;  // the run's touch rounds that did not tell the part's move
+  std::vector<Correction>& guess;   // the part's move as far as the run could guess it
   SectionResult r;
   design::Section current;
   // Against the solid moved by the corrections accepted for this section so far (what the
@@ -87,7 +91,7 @@ struct SectionRun {
     st.record_spacing = o.record_spacing;
     // Start the approach beyond the band the real surface may lie in (the tolerance and 1.5 mm
     // more), so that the free move there cannot meet a part that is off its design.
-    st.approach_clearance = o.tolerance + 1.5;
+    st.approach_clearance = o.tolerance + 1.5 + approach_extra;
     st.approach_limit = o.tolerance + 1.0;
     return st;
   }
@@ -168,24 +172,62 @@ struct SectionRun {
     // The design's solid follows the corrected curve (the nominal planner already stands it at
     // the section's placement).
     detail::move_section(current, step);
+    as_designed = false;
+    // A guess of the part's move this section's touch points corrected is part of what they
+    // found (learnt holds it already).
+    unguessed.reset();
+    approach_extra = 0;
     learnt = step * learnt;
     moved = true;
     moved_planner.emplace(nominal.moved(learnt));
   }
 
+  // The corrections' map, applied in order, when the section is a plane section whose plane
+  // they all keep (as those found on parallel sections do).
+  std::optional<Eigen::Affine3d> applicable(const std::vector<Correction>& cs) const;
   // Before the first scan: where the part stands, as the corrections an earlier section found.
   void carry_part_move();
+
+  // Where nothing was carried: the design data (not the solid free moves are planned against)
+  // moved by the run's guess of the part's move, the design-value scan's approach starting
+  // further out by as much, when it then starts outside the planner's margin from the part where
+  // the design puts it. A guess that holds saves the section its touch round. On a trajectory
+  // error the touch points are made about the guessed design, each from a start outside that
+  // margin from the part where the design puts it (touch), and every free move still keeps to
+  // that part: a correction they fit, or their agreeing with the guess, makes it this section's
+  // (confirm_guess); otherwise the guess is dropped (drop_guess) and the section starts again
+  // from its design data, as it would have without it.
+  void guess_part_move();
+  void drop_guess(const Sample& stop);
+  // After a design-value scan about the guessed design ran through: its points confirm the
+  // guess where they all lie within the menu's acceptance of it and tell a move from a scale (a
+  // closed contour's do): then it is where the part stands, handed on as a correction found.
+  void confirm_by_points();
+  bool guess_confirmed = false;
+  void confirm_guess() {
+    unguessed.reset();
+    approach_extra = 0;
+    moved_planner.emplace(nominal.moved(learnt));
+  }
+  std::optional<design::Section> unguessed;  // the design data before the guess
+  // How much further out a design-value scan starts its approach (mm): by the guess's move, so
+  // that it starts outside the band the part may be in both where the design puts it and where
+  // the guess does.
+  double approach_extra = 0;
 
   // The part's move as each round of this section's own touch points told it, by the index in
   // r.corrections of the correction that round accepted.
   std::vector<std::pair<std::size_t, PartMove>> told;
 
+  // This section's touch rounds made on its design data as the design stands the part (no
+  // correction carried or applied, nothing measured put in them), with those data.
+  std::vector<TouchRound> own_rounds;
+  bool as_designed = true;
+
   // After the section: where it found the part is where the part stands for the sections after
-  // it (detail::part_move_of).
-  void hand_on_part_move() const {
-    if (auto moved = detail::part_move_of(r.corrections, told, current.closed, current.name))
-      part_move = std::move(*moved);
-  }
+  // it (detail::part_move_of). Where its touch points do not tell that on their own, with those
+  // of earlier sections in parallel planes that did not either (detail::pooled_part_move).
+  void hand_on_part_move();
 
   // The section's flow: design-value scans, and on a trajectory error touch points and a
   // correction, or an autonomous scan (of the whole contour, or locally round the stop), then a

@@ -238,6 +238,64 @@ TEST(CadScan, NistFtc10VerticalPlaneMovedAlongTheWalls) {
   for (const auto& r : runs) EXPECT_FALSE(r.unreachable.empty()) << r.summary();
 }
 
+// FTC 10 at y = 15.83 mm, moved 1.8 mm, -1.1 mm and turned 0.3° as a batch's parts are. The
+// outline is reached in stretches of one or two walls, whose touch points do not tell a move from
+// a scale: each once made its own touch round, and the first part took a quarter more machine
+// time than scanning it autonomously. The move the first corrected stretch's touch points
+// suggest is now tried on the stretches after it (free moves keeping to the part as designed),
+// and holds: the first part takes less machine time than autonomous scanning.
+TEST(CadScan, NistFtc10VerticalPlaneTriesTheMoveAStretchSuggests) {
+  std::vector<ScanCase> cases(1);
+  cases[0].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
+  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  cases[0].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  const std::string file = std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ftc_10_asme1_rb.stp";
+  const design::Plane plane{Eigen::Vector3d(0, 15.83, 0), Eigen::Vector3d::UnitY()};
+  const auto runs = golden(file, plane, cases, 6);
+  const auto& r = runs[0];
+  int guessed = 0;
+  for (const auto& e : r.events)
+    guessed += e.event == "correction_carried" &&
+               e.decision.find("tried before the first scan") != std::string::npos;
+  EXPECT_GE(guessed, 1) << r.summary();
+  EXPECT_LE(count(r, "trajectory_error"), 2) << r.summary();
+  const design::Design d = design::from_step(file, {{"z", plane}});
+  scan::ControllerOptions aut;
+  aut.strategy = scan::Strategy::Autonomous;
+  scan::VirtualCmm cmm(sim::Part{d, cases[0].dev}, {}, scan::start_position(d, aut));
+  const auto ra = scan::scan(cmm, d, aut);
+  expect_finished(ra, "autonomous");
+  EXPECT_LT(r.time.total, ra.time.total) << r.summary() << "\n" << ra.summary();
+}
+
+// The DaimlerChrysler part at z = 15 mm, moved and turned. The move a small circle's touch
+// points find leaves the turn out (round a circle none is seen), and the outline scanned with it
+// meets a 90° inside corner 0.4 mm early. The probe reads the wall nearer its ball, but the ball
+// rests against both: the scan stops there on the probe's range and is corrected (the virtual
+// CMM once pushed the ball out of one wall only, into the other, and took the stem that followed
+// it for a collision). Scanned autonomously, the part moved along the outline is followed to as
+// far short of a stretch's ends as it may be off along it (followed to 1 mm short, the stem went
+// under the tab beyond the end).
+TEST(CadScan, DaimlerChryslerOutlineAtZ15MovedAndTurned) {
+  std::vector<ScanCase> cases(1);
+  cases[0].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
+  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  cases[0].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  const design::Plane plane{Eigen::Vector3d(0, 0, 15), Eigen::Vector3d::UnitZ()};
+  golden(kPart, plane, cases, 6);
+  const design::Design d = design::from_step(kPart, {{"z", plane}});
+  sim::PartDeviation moved;
+  moved.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  scan::ControllerOptions aut;
+  aut.strategy = scan::Strategy::Autonomous;
+  scan::VirtualCmm cmm(sim::Part{d, moved}, {}, scan::start_position(d, aut));
+  const auto ra = scan::scan(cmm, d, aut);
+  expect_finished(ra, "autonomous, moved");
+  int scanned = 0;
+  for (const auto& s : ra.sections) scanned += s.ok;
+  EXPECT_GE(scanned, 6) << ra.summary();
+}
+
 // What one section's touch points find of where the part stands is handed on to the others: a
 // batch's fixture error (moved 1.8 mm, -1.1 mm and turned 0.3°) costs the first part one
 // trajectory error, and the next part none.
@@ -272,10 +330,20 @@ TEST(CadScan, DaimlerChryslerSlotsShareTheTurnAMoveLeavesOut) {
   const auto runs = golden(kPart, {Eigen::Vector3d(0, 0, 40), Eigen::Vector3d::UnitZ()}, cases, 2);
   EXPECT_EQ(count(runs[0], "trajectory_error"), 1) << runs[0].summary();
   EXPECT_EQ(carried(runs[0]), 1) << runs[0].summary();
-  for (const auto& e : runs[0].events)
-    if (e.event == "correction_carried") {
-      EXPECT_NE(e.decision.find("rotation 0.3"), std::string::npos) << e.decision;
-    }
+  // The carried turn is the part's: eight noise-free touch points on the 64 mm slot, whose
+  // design the file's 5 µm joins, tell it to a few thousandths of a degree (0.01° is 23 µm at
+  // the other slot, 130 mm away; the 0.3° a move leaves out is 0.65 mm).
+  constexpr double kCarriedTurn = 0.01;  // °
+  int turns = 0;
+  for (const auto& s : runs[0].sections)
+    for (const auto& c : s.corrections)
+      if (!c.found_on.empty())
+        for (const auto& [k, v] : c.parameters)
+          if (k == "rotation_deg") {
+            EXPECT_NEAR(v, 0.3, kCarriedTurn) << s.name;
+            ++turns;
+          }
+  EXPECT_EQ(turns, 1) << runs[0].summary();
 }
 
 // A batch of five CTC 05 parts cut at z = 100 mm (the 962 mm outline the stylus reaches all

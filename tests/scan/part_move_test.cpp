@@ -43,6 +43,17 @@ design::Section circle(double r) {
   return s;
 }
 
+// An open stretch: one 178 mm wall between two 2.8 mm legs.
+design::Section u_stretch() {
+  design::Section u;
+  u.name = std::string("U");
+  u.closed = false;
+  u.plane = {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()};
+  u.polyline.resize(3, 4);
+  u.polyline << -89, -89, 89, 89, -76.7, -79.5, -79.5, -76.7, 10, 10, 10, 10;
+  return u;
+}
+
 // Feet at `count` places along the sides from..to of a polyline (a side k runs from vertex k).
 Eigen::Matrix3Xd feet_on(const design::Section& s, int from, int to, int per_side) {
   Eigen::Matrix3Xd f(3, (to - from) * per_side);
@@ -155,12 +166,7 @@ TEST(PartMove, TooFewTouchPointsForATurnSaySo) {
 // along it. The places then go where the move, turn and scale are told apart: some on each leg,
 // each 1 mm clear of the ends and of each other. A whole rectangle keeps its even places.
 TEST(PartMove, TouchPointsGoWhereTheyTellTheMoveAlongAWall) {
-  design::Section u;
-  u.name = "U";
-  u.closed = false;
-  u.plane = {Eigen::Vector3d(0, 0, 10), Eigen::Vector3d::UnitZ()};
-  u.polyline.resize(3, 4);
-  u.polyline << -89, -89, 89, 89, -76.7, -79.5, -79.5, -76.7, 10, 10, 10, 10;
+  const design::Section u = u_stretch();
   const auto places = scan::detail::touch_places(u, 8, 0.1);
   EXPECT_LT(places.even_resolution, kUnseen);
   ASSERT_FALSE(places.even);
@@ -219,6 +225,89 @@ TEST(PartMove, TheMenuGivesThePartMoveItsTouchPointsTell) {
     EXPECT_EQ(from_menu.turn_resolution, alone.turn_resolution);
     const Eigen::Vector3d far(140, 15, 10);
     EXPECT_LT((from_menu.rigid.transform * far - moved(far, 0.3, c, t).col(0)).norm(), kSameMap);
+  }
+}
+
+// Two stretches of one outline cut apart by what the stylus cannot reach, each of two walls at
+// a corner: neither tells a move from a scale, together they do. Pooled, their touch points give
+// the part's turn and move; on a part scaled instead, no rigid move fits them, and nothing is
+// told; rounds in planes that are not parallel are not pooled.
+TEST(PartMove, StretchesThatCannotTellAMoveAloneTellItTogether) {
+  const auto rect = rectangle();
+  auto stretch = [&](int from, int to, const std::string& name) {
+    design::Section s = rect;
+    s.name = name;
+    s.closed = false;
+    s.polyline = rect.polyline.middleCols(from, to - from + 1);
+    return s;
+  };
+  const design::Section a = stretch(0, 2, "a"), b = stretch(2, 4, "b");
+  const Eigen::Vector3d t(1.8, -1.1, 0), c(40, 15, 10);
+  const Eigen::Matrix3Xd fa = feet_on(rect, 0, 2, 4), fb = feet_on(rect, 2, 4, 4);
+  EXPECT_LT(scan::fit_part_move(a, fa, moved(fa, 0.3, c, t), 0.05).resolution, kUnseen);
+  EXPECT_LT(scan::fit_part_move(b, fb, moved(fb, 0.3, c, t), 0.05).resolution, kUnseen);
+  const std::vector<scan::detail::TouchRound> rounds{{a, fa, moved(fa, 0.3, c, t)},
+                                                     {b, fb, moved(fb, 0.3, c, t)}};
+  const auto both = scan::detail::pooled_part_move(rounds, 0.05, "a, b");
+  ASSERT_TRUE(both);
+  EXPECT_TRUE(both->accepted);
+  EXPECT_EQ(both->found_on, "a, b");
+  EXPECT_NEAR(turn_of(*both), 0.3, kTurnDeg);
+  for (const Eigen::Vector3d& far : {Eigen::Vector3d(140, 15, 10), Eigen::Vector3d(-60, 90, 10)})
+    EXPECT_LT((both->transform * far - moved(far, 0.3, c, t).col(0)).norm(), kSameMap);
+  EXPECT_LT(both->residual_after, kSameMap);
+
+  // Scaled 1 % about the outline's centre: each stretch alone fits a move; together, no rigid
+  // move leaves the touch points within 0.05 mm.
+  auto scaled = [&](const Eigen::Matrix3Xd& f) {
+    return Eigen::Matrix3Xd((1.01 * (f.colwise() - c)).colwise() + c);
+  };
+  EXPECT_FALSE(
+      scan::detail::pooled_part_move({{a, fa, scaled(fa)}, {b, fb, scaled(fb)}}, 0.05, "a, b"));
+  // A stretch in a plane at right angles is not pooled with one in the outline's plane.
+  design::Section side = b;
+  side.plane.normal = Eigen::Vector3d::UnitX();
+  EXPECT_FALSE(scan::detail::pooled_part_move(
+      {{a, fa, moved(fa, 0.3, c, t)}, {side, fb, moved(fb, 0.3, c, t)}}, 0.05, "a, side"));
+  // One round alone is what part_move_of judges; too few points for a turn and a move, nothing.
+  EXPECT_FALSE(scan::detail::pooled_part_move({}, 0.05, ""));
+  EXPECT_FALSE(scan::detail::pooled_part_move(
+      {{a, fa.leftCols(2), moved(fa.leftCols(2), 0.3, c, t)}}, 0.05, "a"));
+}
+
+// Touch places the ball cannot get to are taken to the nearest it can, never exchanged for,
+// and the set still tells the move along a wall where it can.
+TEST(PartMove, TouchPointsGoOnlyWhereTheBallGetsTo) {
+  const design::Section u = u_stretch();
+  // Nothing from x = -20 to 20 on the wall (a post over it, say).
+  const auto usable = [](const Eigen::Vector3d& foot, const Eigen::Vector3d&) {
+    return std::abs(foot.x()) > 20;
+  };
+  const auto places = scan::detail::touch_places(u, 8, 0.1, usable);
+  ASSERT_EQ(places.arcs.size(), 8u);
+  EXPECT_GE(places.unreachable, 1);
+  EXPECT_FALSE(places.even);
+  EXPECT_GE(places.resolution, 0.1);
+  const auto smp = design::sample(u, 0.5);
+  for (const double a : places.arcs) {
+    Eigen::Index j = 0;
+    (smp.arc.array() - a).abs().minCoeff(&j);
+    EXPECT_GT(std::abs(smp.points(0, j)), 20 - 1e-9) << a;
+  }
+  // A rectangle's even places, where all are usable, stay even; where one is not, it moves.
+  EXPECT_TRUE(scan::detail::touch_places(rectangle(), 8, 0.1, [](const auto&, const auto&) {
+                return true;
+              }).even);
+  const auto moved_one = scan::detail::touch_places(
+      rectangle(), 8, 0.1, [](const Eigen::Vector3d& f, const auto&) { return f.x() > 12; });
+  EXPECT_FALSE(moved_one.even);
+  EXPECT_GE(moved_one.unreachable, 1);
+  EXPECT_EQ(moved_one.arcs.size(), 8u);
+  const auto rs = design::sample(rectangle(), 0.5);
+  for (const double a : moved_one.arcs) {
+    Eigen::Index j = 0;
+    (rs.arc.array() - a).abs().minCoeff(&j);
+    EXPECT_GT(rs.points(0, j), 12 - 1e-9) << a;
   }
 }
 

@@ -30,6 +30,13 @@
 // it. So that the move reaches the open stretches too (whose touch points often cannot tell it),
 // the whole closed contours among consecutive sections in parallel planes with one probe
 // orientation are scanned first; Result::sections is in the order scanned.
+// Where the touch points could not tell the move, the rigid correction they accepted is tried on
+// the next parallel sections as a guess: their design data move by it (not the solid free moves
+// are planned against, and the approach starts further out by as much); a scan that runs
+// through needs no touch points, and a closed contour whose points all lie within `accept` of
+// the moved design makes the guess where the part stands. On a trajectory error the touch
+// points are made about the guess (each from a start outside the margin of the part as
+// designed); when they fit no correction, the section starts again from its design data.
 //
 // With the part's solid (the design's STEP file), every free move is planned against it
 // (planner.hpp), the run's first move rises along the stylus before it goes anywhere (a machine
@@ -95,7 +102,8 @@ struct Event {
   // put in the design data), rescan, section_done, error_exit, loop_limit,
   // two_dimensional (a space curve found to lie in a plane), not_reachable, design_moved (a
   // section not measured given the part's move found on others, for the next part), restart (a
-  // closed contour started elsewhere)
+  // closed contour started elsewhere), part_move_found (the part's move from the touch points of
+  // several stretches together)
   std::string event;
   std::string decision;  // in words
 };
