@@ -379,7 +379,7 @@ void SectionRun::guess_part_move() {
                   from, what));
 }
 
-void SectionRun::drop_guess(const Sample& stop) {
+bool SectionRun::drop_guess(const Sample& stop, const Eigen::Matrix3Xd& touched) {
   r.corrections.erase(r.corrections.begin(),
                       r.corrections.begin() + static_cast<std::ptrdiff_t>(guess.size()));
   current = std::move(*unguessed);
@@ -388,12 +388,27 @@ void SectionRun::drop_guess(const Sample& stop) {
   learnt = Eigen::Affine3d::Identity();
   moved = true;
   as_designed = true;
-  // What the scan and the touch points found was off the guessed design: the section starts
-  // again as it would have without the guess.
+  // How far off the design data the touch points found the part (they were made about the
+  // guess): what the section starts again with.
+  const auto smp = design::sample(current, 0.05);
+  const sim::Contour curve(smp.points, current.plane.normal.normalized(), current.closed,
+                           current.material == design::Side::Left);
   seen = 0;
+  for (Eigen::Index i = 0; i < touched.cols(); ++i)
+    seen = std::max(seen, std::abs(curve.nearest(touched.col(i)).distance));
   log(stop.arc, stop.delta_l, "correction", "correction_rejected",
       "the part's move tried as a guess does not hold here (the touch points fit no correction "
       "to it): the section starts again from its design data");
+  if (!nominal.part() || seen <= nominal.margin()) return true;
+  // The free moves of a section keep the margin from the part as designed: a part found further
+  // off than that would be met by them (the way down to the scan's start, 3 mm off the design).
+  r.not_reachable = true;
+  r.reason = fmt::format(
+      "not reachable: its touch points found the part up to {:.2f} mm off its design, more than "
+      "the {:g} mm the free moves keep from it",
+      seen, nominal.margin());
+  log(stop.arc, seen, "section", "error_exit", r.reason);
+  return false;
 }
 
 void SectionRun::confirm_by_points() {
@@ -516,7 +531,7 @@ void SectionRun::run() {
         if (local) {
           confirm_guess();
         } else if (!corrected) {
-          drop_guess(stop);
+          if (!drop_guess(stop, got)) break;
           continue;
         }
       }

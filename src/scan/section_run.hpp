@@ -198,7 +198,9 @@ struct SectionRun {
   // (confirm_guess); otherwise the guess is dropped (drop_guess) and the section starts again
   // from its design data, as it would have without it.
   void guess_part_move();
-  void drop_guess(const Sample& stop);
+  // False when the touch points (made about the guess) found the part further off its design
+  // than the margin the free moves keep: the section is then not reachable.
+  bool drop_guess(const Sample& stop, const Eigen::Matrix3Xd& touched);
   // After a design-value scan about the guessed design ran through: its points confirm the
   // guess where they all lie within the menu's acceptance of it and tell a move from a scale (a
   // closed contour's do): then it is where the part stands, handed on as a correction found.
