@@ -390,9 +390,7 @@ bool SectionRun::drop_guess(const Sample& stop, const Eigen::Matrix3Xd& touched)
   as_designed = true;
   // How far off the design data the touch points found the part (they were made about the
   // guess): what the section starts again with.
-  const auto smp = design::sample(current, 0.05);
-  const sim::Contour curve(smp.points, current.plane.normal.normalized(), current.closed,
-                           current.material == design::Side::Left);
+  const sim::Contour curve = detail::contour_of(current);
   seen = 0;
   for (Eigen::Index i = 0; i < touched.cols(); ++i)
     seen = std::max(seen, std::abs(curve.nearest(touched.col(i)).distance));
@@ -416,9 +414,7 @@ void SectionRun::confirm_by_points() {
   const auto& pts = r.points;
   constexpr std::size_t kPoints = 24;
   if (pts.size() < kPoints) return;
-  const auto smp = design::sample(current, 0.05);
-  const sim::Contour curve(smp.points, current.plane.normal.normalized(), current.closed,
-                           current.material == design::Side::Left);
+  const sim::Contour curve = detail::contour_of(current);
   Eigen::Matrix3Xd feet(3, kPoints), got(3, kPoints);
   for (std::size_t i = 0; i < kPoints; ++i) {
     const auto& p = pts[i * (pts.size() - 1) / (kPoints - 1)].surface;

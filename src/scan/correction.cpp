@@ -168,9 +168,7 @@ constexpr double kResolution = 1e-4;
 constexpr double kSampling = 0.05;
 // A section's curve as a contour for distance queries.
 sim::Contour curve_of(const design::Section& s) {
-  const auto smp = design::sample(s, kSampling);
-  return sim::Contour(smp.points, s.plane.normal.normalized(), s.closed,
-                      s.material == design::Side::Left);
+  return detail::contour_of(s, kSampling);
 }
 
 // Signed distances of the touched points from a curve.
@@ -240,6 +238,31 @@ Correction describe(Kind k, const Eigen::VectorXd& q, const Frame& f) {
   return c;
 }
 
+// One step of fitting on the exact curves: each touched point's nearest point on its section's
+// design moved by the model as its new foot (mapped back to the design), with the design normal
+// there. `rounds`: the sections with their touched points, in the order of p and m. Returns how
+// far the feet moved (mm).
+using Rounds = std::vector<std::pair<const design::Section*, const Eigen::Matrix3Xd*>>;
+double refoot(Kind k, const Eigen::VectorXd& q, const Frame& f, const Rounds& rounds,
+              std::vector<Eigen::Vector2d>& p, std::vector<Eigen::Vector2d>& m) {
+  const Affine2 a = model(k, q);
+  const Eigen::Matrix2d back = a.A.inverse();
+  double shift = 0;
+  std::size_t i = 0;
+  for (const auto& [section, touched] : rounds) {
+    const sim::Contour moved = curve_of(apply(*section, f, a));
+    for (Eigen::Index j = 0; j < touched->cols(); ++j, ++i) {
+      const auto nr = moved.nearest(touched->col(j));
+      const Eigen::Vector2d foot = back * (f.to2(nr.point) - a.t);
+      shift = std::max(shift, (foot - p[i]).norm());
+      p[i] = foot;
+      m[i] = (a.A.transpose() * Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)))
+                 .normalized();
+    }
+  }
+  return shift;
+}
+
 // One model of the menu fitted to the touch points. `closer` is set when it leaves every touch
 // point within `accept` and none further than before; `corrected` receives the section with it
 // applied when the fit did not diverge.
@@ -291,19 +314,7 @@ Correction fit_one(Kind k, const design::Section& section, const Touches& in, do
   // Refine on the exact curve: take each touched point's nearest point on the corrected design
   // as its new foot (mapped back to the design), and fit again, until the feet settle.
   for (int it = 0; it < 8 && why.empty(); ++it) {
-    const Affine2 a = model(k, best);
-    const design::Section moved = apply(section, f, a);
-    const sim::Contour mc = curve_of(moved);
-    const Eigen::Matrix2d Ainv = a.A.inverse();
-    double shift = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      const auto nr = mc.nearest(in.touched.col(static_cast<Eigen::Index>(i)));
-      const Eigen::Vector2d foot = Ainv * (f.to2(nr.point) - a.t);
-      const Eigen::Vector2d n2(nr.normal.dot(f.e1), nr.normal.dot(f.e2));
-      shift = std::max(shift, (foot - p[i]).norm());
-      p[i] = foot;
-      m[i] = (a.A.transpose() * n2).normalized();
-    }
+    const double shift = refoot(k, best, f, {{&section, &in.touched}}, p, m);
     best = gauss_newton(k, best, p, m, t);
     why = runaway(best);
     if (shift < 1e-7) break;
@@ -459,6 +470,12 @@ PartMove fit_part_move(const design::Section& section, const Eigen::Matrix3Xd& f
 
 namespace detail {
 
+sim::Contour contour_of(const design::Section& s, double spacing) {
+  const auto smp = design::sample(s, spacing);
+  return sim::Contour(smp.points, s.plane.normal.normalized(), s.closed,
+                      s.material == design::Side::Left);
+}
+
 void move_section(design::Section& s, const Eigen::Affine3d& step) {
   Eigen::Matrix3Xd& pts = s.nurbs ? s.nurbs->control_points : s.polyline;
   for (Eigen::Index i = 0; i < pts.cols(); ++i) pts.col(i) = step * pts.col(i);
@@ -540,24 +557,11 @@ std::optional<Correction> pooled_part_move(const std::vector<TouchRound>& rounds
   // A turn only where the touch points see one (round a circle they do not).
   const Kind k = resolution(p, m, true, false) >= kTellsPart ? Kind::Rotation : Kind::Translation;
   Eigen::VectorXd q = gauss_newton(k, Eigen::VectorXd::Zero(params(k)), p, m, t);
-  // On the exact curves, as fit_one: each touched point's nearest point on its moved design as
-  // its foot, until the feet settle.
+  // On the exact curves, as fit_one, until the feet settle.
+  Rounds on;
+  for (const auto& r : rounds) on.emplace_back(&r.section, &r.touched);
   for (int it = 0; it < 8 && q.allFinite(); ++it) {
-    const Affine2 a = model(k, q);
-    const Eigen::Matrix2d back = a.A.inverse();
-    double shift = 0;
-    std::size_t i = 0;
-    for (const auto& r : rounds) {
-      const sim::Contour moved = curve_of(apply(r.section, f, a));
-      for (Eigen::Index j = 0; j < r.touched.cols(); ++j, ++i) {
-        const auto nr = moved.nearest(r.touched.col(j));
-        const Eigen::Vector2d foot = back * (f.to2(nr.point) - a.t);
-        shift = std::max(shift, (foot - p[i]).norm());
-        p[i] = foot;
-        m[i] = (a.A.transpose() * Eigen::Vector2d(nr.normal.dot(f.e1), nr.normal.dot(f.e2)))
-                   .normalized();
-      }
-    }
+    const double shift = refoot(k, q, f, on, p, m);
     q = gauss_newton(k, q, p, m, t);
     if (shift < 1e-7) break;
   }

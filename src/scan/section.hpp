@@ -10,6 +10,7 @@
 
 #include "trueaxis/scan/controller.hpp"
 #include "trueaxis/scan/planner.hpp"
+#include "trueaxis/sim/cmm.hpp"
 
 namespace trueaxis::scan::detail {
 
@@ -87,6 +88,9 @@ std::optional<Splice> splice(const design::Section& s, const std::vector<Sample>
 // a parameter is then known to within ten times what it would be from well-spread points.
 inline constexpr double kTellsPart = 0.1;
 
+// A plane section's curve as a contour for distance queries, sampled every `spacing` mm (chords
+// within spacing²/8R of the curve: 0.3 µm at R = 1 mm for the default).
+sim::Contour contour_of(const design::Section& s, double spacing = 0.05);
 // The section's design data moved by x -> step·x: its curve, and where its solid stands.
 void move_section(design::Section& s, const Eigen::Affine3d& step);
 // Whether t maps the section's plane onto itself (a move in it, a turn about its normal), as a

@@ -53,6 +53,15 @@ struct ScanCase {
   sim::PartDeviation dev;
 };
 
+// A batch's part as a fixture error puts it: moved 1.8 mm, -1.1 mm and turned 0.3° about z.
+ScanCase batch_part() {
+  ScanCase c;
+  c.label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
+  c.dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
+  c.dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  return c;
+}
+
 // Scans each case's part and the next part of its batch; `at_least` sections (or stretches) of
 // the first must be scanned. Returns the first part's results.
 std::vector<scan::Result> golden(const std::string& file, const design::Plane& plane,
@@ -245,10 +254,7 @@ TEST(CadScan, NistFtc10VerticalPlaneMovedAlongTheWalls) {
 // suggest is now tried on the stretches after it (free moves keeping to the part as designed),
 // and holds: the first part takes less machine time than autonomous scanning.
 TEST(CadScan, NistFtc10VerticalPlaneTriesTheMoveAStretchSuggests) {
-  std::vector<ScanCase> cases(1);
-  cases[0].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
-  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
-  cases[0].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  const std::vector<ScanCase> cases{batch_part()};
   const std::string file = std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ftc_10_asme1_rb.stp";
   const design::Plane plane{Eigen::Vector3d(0, 15.83, 0), Eigen::Vector3d::UnitY()};
   const auto runs = golden(file, plane, cases, 6);
@@ -277,10 +283,7 @@ TEST(CadScan, NistFtc10VerticalPlaneTriesTheMoveAStretchSuggests) {
 // far short of a stretch's ends as it may be off along it (followed to 1 mm short, the stem went
 // under the tab beyond the end).
 TEST(CadScan, DaimlerChryslerOutlineAtZ15MovedAndTurned) {
-  std::vector<ScanCase> cases(1);
-  cases[0].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
-  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
-  cases[0].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  const std::vector<ScanCase> cases{batch_part()};
   const design::Plane plane{Eigen::Vector3d(0, 0, 15), Eigen::Vector3d::UnitZ()};
   golden(kPart, plane, cases, 6);
   const design::Design d = design::from_step(kPart, {{"z", plane}});
@@ -308,10 +311,7 @@ int carried(const scan::Result& r) {
 // the turn, so the part's move is carried to the other four stretches (it once was not: one
 // stretch failed on every part of a batch, and the rest ran up to 1.4 mm off their path).
 TEST(CadScan, NistFtc10OpenStretchesShareThePartsMove) {
-  std::vector<ScanCase> cases(1);
-  cases[0].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
-  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
-  cases[0].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  const std::vector<ScanCase> cases{batch_part()};
   const auto runs = golden(std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ftc_10_asme1_rb.stp",
                            {Eigen::Vector3d(0, 0, 20), Eigen::Vector3d::UnitZ()}, cases, 5);
   EXPECT_EQ(count(runs[0], "trajectory_error"), 1) << runs[0].summary();
@@ -323,10 +323,7 @@ TEST(CadScan, NistFtc10OpenStretchesShareThePartsMove) {
 // put the second slot 0.65 mm off (its scan then stopped on the probe's range). The rigid fit of
 // the same touch points, turn included, is what is carried.
 TEST(CadScan, DaimlerChryslerSlotsShareTheTurnAMoveLeavesOut) {
-  std::vector<ScanCase> cases(1);
-  cases[0].label = "moved 1.8 mm, -1.1 mm and turned 0.3°";
-  cases[0].dev.translation = Eigen::Vector3d(1.8, -1.1, 0);
-  cases[0].dev.rotation_deg = Eigen::Vector3d(0, 0, 0.3);
+  const std::vector<ScanCase> cases{batch_part()};
   const auto runs = golden(kPart, {Eigen::Vector3d(0, 0, 40), Eigen::Vector3d::UnitZ()}, cases, 2);
   EXPECT_EQ(count(runs[0], "trajectory_error"), 1) << runs[0].summary();
   EXPECT_EQ(carried(runs[0]), 1) << runs[0].summary();
