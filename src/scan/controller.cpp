@@ -472,7 +472,7 @@ void SectionRun::run() {
       const bool nominal = as_designed;
       const design::Section touched_on = current;
       auto [feet, got] = touch();
-      if (got.cols() >= 4) {
+      if (got.cols() >= kFewestTouches) {
         design::Section fixed;
         PartMove told_here;
         auto tried = fit_corrections(current, feet, got, o.accept, &fixed, &told_here);
@@ -517,6 +517,12 @@ void SectionRun::run() {
           current.polyline = fixed.polyline;
           current.nurbs = fixed.nurbs;
         }
+      } else if (const int k = touch_count(); k < kFewestTouches) {
+        log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+            fmt::format("no touch points made: the {:.1f} mm long {} holds {} a ball's diameter "
+                        "apart, and a correction needs {}",
+                        design::length(current), current.closed ? "contour" : "stretch",
+                        std::max(k, 0), kFewestTouches));
       } else {
         log(stop.arc, stop.delta_l, "correction", "correction_rejected",
             fmt::format("only {} touch points found: no correction can be fitted", got.cols()));

@@ -321,7 +321,11 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       const auto pieces = stretches(s, *sp, options, approach, res);
       for (const auto& p : pieces) items.push_back({p, p.name == s.name ? "" : s.name, "", sp});
     } catch (const Error& e) {
-      items.push_back({s, "", e.what(), sp});
+      // Whatever stops it (a tip that fits nowhere along it, a head that cannot take the
+      // orientation), a section none of which can be scanned is not reachable, and says so.
+      const std::string why = e.what();
+      items.push_back(
+          {s, "", why.rfind("not reachable", 0) == 0 ? why : "not reachable: " + why, sp});
     }
   }
   // A move of the part found on a whole closed contour is carried to the sections after it in

@@ -46,6 +46,16 @@ struct SectionContext {
 // A reachable stretch shorter than this is not scanned (mm): nothing to follow.
 inline constexpr double kShortest = 2.0;
 
+// A geometric correction is fitted to this many touch points or more: with fewer, the menu's
+// four-parameter candidates (translation, rotation and a scale in the plane) are not over-
+// determined and their residuals tell nothing.
+inline constexpr int kFewestTouches = 4;
+// Touch points of one round stand at least this many ball diameters apart along the contour.
+// Nearer ones touch what their neighbours did, within the ball's own contact patch, and add
+// little to the fit for about 0.75 s of machine time each (a 4.9 mm stretch took 8 touch points
+// 0.64 mm apart, 6.3 s, and none of the fits they gave was accepted).
+inline constexpr double kTouchSpacing = 1.0;
+
 // Where the ball can come down along the stylus, from above the part, to the approach distance
 // off a stretch's path at both its ends: [a, b] (mm along the section's contour) moved in from
 // the given ends, 0.5 mm at a time, until it can. Nothing when less than kShortest is left.

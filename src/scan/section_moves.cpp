@@ -206,9 +206,19 @@ bool SectionRun::reach_ends() {
   return true;
 }
 
+int SectionRun::touch_count() const {
+  // touch_places spreads a closed contour's points over all of it, an open stretch's over the
+  // middle nine tenths.
+  const double span = (current.closed ? 1.0 : 0.9) * design::length(current);
+  const double spacing = kTouchSpacing * 2 * o.path.tip_radius;
+  const int fit = static_cast<int>(std::floor(span / spacing)) + (current.closed ? 0 : 1);
+  return std::min(o.touch_points, fit);
+}
+
 std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
   const double L = design::length(current);
-  const int k = o.touch_points;
+  const int k = touch_count();
+  if (k < kFewestTouches) return {Eigen::Matrix3Xd(3, 0), Eigen::Matrix3Xd(3, 0)};
   const auto smp = design::sample(current, L / (current.closed ? k : k - 1) / 4);
   Eigen::Matrix3Xd feet(3, 0), got(3, 0);
   // Start just outside the band where the surface is looked for (the tolerance and 1.5 mm

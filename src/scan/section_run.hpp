@@ -125,6 +125,10 @@ struct SectionRun {
 
   // Touch points along the design normals; returns the feet and touched points.
   std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> touch();
+  // How many touch points the section's round makes: the options' count, fewer on a stretch too
+  // short to hold that many a ball's diameter apart (kTouchSpacing). Below kFewestTouches no
+  // correction can be fitted, and no round is made.
+  int touch_count() const;
 
   // The 2-D test: geometric correction and autonomous scanning work in a plane section. A
   // space curve that lies in a plane becomes that plane section; any other ends the section.
