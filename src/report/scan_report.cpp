@@ -19,6 +19,8 @@ std::string event_words(const std::string& id) {
       {"correction_rejected", "correction rejected"},
       {"correction_carried", "correction carried over from another section"},
       {"part_move_found", "the part's move found from several sections' touch points"},
+      {"part_move_guessed",
+       "the part's solid moved to fit the touch points, tried on the next sections"},
       {"autonomous_scan", "autonomous scan"},
       {"design_overwritten", "design data replaced by the measured contour"},
       {"design_spliced", "design data replaced by the measured contour where the part left it"},

@@ -311,38 +311,72 @@ bool SectionRun::local_autonomous(const Sample& stop) {
   return false;
 }
 
-std::optional<Eigen::Affine3d> SectionRun::applicable(const std::vector<Correction>& cs) const {
-  if (cs.empty() || current.space_curve() ||
-      !std::all_of(cs.begin(), cs.end(),
-                   [&](const Correction& c) { return detail::keeps_plane(current, c.transform); }))
-    return std::nullopt;
+std::optional<std::pair<design::Section, Eigen::Affine3d>> SectionRun::placed_by(
+    const std::vector<Correction>& cs) const {
+  if (cs.empty() || current.space_curve()) return std::nullopt;
   Eigen::Affine3d step = Eigen::Affine3d::Identity();
   for (const auto& c : cs) step = c.transform * step;
-  return step;
+  if (std::all_of(cs.begin(), cs.end(),
+                  [&](const Correction& c) { return detail::keeps_plane(current, c.transform); })) {
+    design::Section moved_design = current;
+    detail::move_section(moved_design, step);
+    return std::pair{std::move(moved_design), step};
+  }
+  // Only a move of the solid fitted in three dimensions is cut from the solid in another plane:
+  // a move found in a plane says nothing of the move across it.
+  const Eigen::Matrix3d R = step.linear();
+  if (!solid_guess(cs) || solid_file.empty() ||
+      (R.transpose() * R - Eigen::Matrix3d::Identity()).norm() > 1e-9 || R.determinant() < 0)
+    return std::nullopt;
+  try {
+    if (auto cut = detail::on_moved_solid(current, solid_file, step))
+      return std::pair{std::move(*cut), step};
+  } catch (const Error&) {
+    // No section of the moved solid: the section is scanned as designed.
+  }
+  return std::nullopt;
 }
 
+namespace {
+// How a carried correction was brought to a section, in words.
+std::string how_placed(const std::vector<Correction>& cs) {
+  return std::any_of(cs.begin(), cs.end(),
+                     [](const Correction& c) { return c.type == "solid-move"; })
+             ? "its design data cut from the part's solid moved there"
+             : "its design data moved with it";
+}
+}  // namespace
+
 void SectionRun::carry_part_move() {
-  const auto step = applicable(part_move);
-  if (!step) return;
+  auto placed = placed_by(part_move);
+  if (!placed) return;
   std::string what;
   for (const auto& c : part_move) {
     r.corrections.push_back(c);
     const std::string params = fmt::format(" {}", c.parameters_text());
     what += fmt::format("{}{} ({}:{})", what.empty() ? "" : ", ", c.found_on, c.type, params);
   }
-  correct_by(*step);
+  current = std::move(placed->first);
+  took(placed->second);
   log(0, 0, "correction", "correction_carried",
-      fmt::format("the part is where the touch points of {} found it: corrections applied "
-                  "before the first scan",
-                  what));
+      fmt::format("the part is where the touch points of {} found it: {} before the first scan",
+                  what, how_placed(part_move)));
+}
+
+bool SectionRun::in_touched_plane() const {
+  const Eigen::Vector3d n = current.plane.normal.normalized();
+  return std::any_of(touched.begin(), touched.end(), [&](const SolidTouches& t) {
+    return t.solid == nominal.part().get() && t.plane.normal.normalized().cross(n).norm() < 1e-9 &&
+           std::abs((t.plane.origin - current.plane.origin).dot(n)) < 1e-9;
+  });
 }
 
 void SectionRun::guess_part_move() {
-  const auto guessed = applicable(guess);
-  if (!guessed) return;
-  const Eigen::Affine3d step = *guessed;
-  design::Section moved_design = current;
-  detail::move_section(moved_design, step);
+  if (solid_guess(guess) && !in_touched_plane()) return;
+  auto placed = placed_by(guess);
+  if (!placed) return;
+  const Eigen::Affine3d step = placed->second;
+  design::Section moved_design = std::move(placed->first);
   const std::string from = guess.front().found_on;
   double shift = 0;
   const auto smp = design::sample(current, 1.0);
@@ -362,7 +396,9 @@ void SectionRun::guess_part_move() {
     return;  // no path along the moved design: scanned as designed
   }
   approach_extra = shift;
-  learnt = step;  // where the guess puts the part; the planner stands it as designed until then
+  // Where the guess puts the part; the planner stands it as designed until then. A move of the
+  // solid fitted to touch points in a plane is known only in its part in the plane.
+  learnt = solid_guess(guess) ? detail::in_plane_part(step, current.plane) : step;
   unguessed = current;
   current = std::move(moved_design);
   moved = true;
@@ -374,12 +410,12 @@ void SectionRun::guess_part_move() {
   }
   log(0, 0, "correction", "correction_carried",
       fmt::format("the part's move as the touch points of {} suggest it ({}), tried before the "
-                  "first scan: they did not tell a move from a scale, so free moves keep to the "
-                  "part where the design puts it until this section's touch points confirm it",
-                  from, what));
+                  "first scan, {}: they did not tell a move from a scale, so free moves keep to "
+                  "the part where the design puts it until this section's touch points confirm it",
+                  from, what, how_placed(guess)));
 }
 
-bool SectionRun::drop_guess(const Sample& stop, const Eigen::Matrix3Xd& touched) {
+void SectionRun::drop_guess(const Sample& stop) {
   r.corrections.erase(r.corrections.begin(),
                       r.corrections.begin() + static_cast<std::ptrdiff_t>(guess.size()));
   current = std::move(*unguessed);
@@ -388,15 +424,18 @@ bool SectionRun::drop_guess(const Sample& stop, const Eigen::Matrix3Xd& touched)
   learnt = Eigen::Affine3d::Identity();
   moved = true;
   as_designed = true;
-  // How far off the design data the touch points found the part (they were made about the
-  // guess): what the section starts again with.
+  log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+      "the part's move tried as a guess does not hold here (the touch points fit no correction "
+      "to it): the section goes on from its design data");
+}
+
+bool SectionRun::beyond_margin(const Sample& stop, const Eigen::Matrix3Xd& touched) {
+  // How far off the design data the touch points found the part: what the section starts again
+  // with.
   const sim::Contour curve = detail::contour_of(current);
   seen = 0;
   for (Eigen::Index i = 0; i < touched.cols(); ++i)
     seen = std::max(seen, std::abs(curve.nearest(touched.col(i)).distance));
-  log(stop.arc, stop.delta_l, "correction", "correction_rejected",
-      "the part's move tried as a guess does not hold here (the touch points fit no correction "
-      "to it): the section starts again from its design data");
   if (!nominal.part() || seen <= nominal.margin()) return true;
   // The free moves of a section keep the margin from the part as designed: a part found further
   // off than that would be met by them (the way down to the scan's start, 3 mm off the design).
@@ -432,6 +471,57 @@ void SectionRun::confirm_by_points() {
       fmt::format("the part's move tried as a guess holds: the scan's points lie within {:.4f} mm "
                   "of the guessed design all along the {}, which tells a move from a scale",
                   worst, current.closed ? "contour" : "stretch"));
+}
+
+bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
+                             const Eigen::Matrix3Xd& got, bool nominal,
+                             const design::Section& touched_on, bool& local) {
+  bool corrected = false;
+  design::Section fixed;
+  PartMove told_here;
+  auto tried = fit_corrections(current, feet, got, o.accept, &fixed, &told_here);
+  for (const auto& c : tried) {
+    if (c.type == "none") {
+      local = true;
+      log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+          fmt::format("the touch points agree with the design within {:.4f} mm: the "
+                      "deviation is local, no geometric correction fits it",
+                      c.residual_before));
+      continue;
+    }
+    const std::string params = fmt::format(" {}", c.parameters_text());
+    if (!c.diverged.empty())
+      log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+          fmt::format("{}: the fit diverged ({}); where it stopped:{}", c.type, c.diverged,
+                      params));
+    else
+      log(stop.arc, stop.delta_l, "correction",
+          c.accepted ? "correction_applied" : "correction_rejected",
+          fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f})", c.type, params,
+                      c.residual_after, c.residual_before));
+    if (c.accepted) corrected = true;
+  }
+  for (const auto& c : tried)
+    if (c.type != "none") r.corrections.push_back(c);
+  if (corrected) {
+    // What these touch points tell of the whole part, to hand on (hand_on_part_move).
+    told.push_back({r.corrections.size() - 1, std::move(told_here)});
+    if (nominal) own_rounds.push_back({touched_on, feet, got});
+    Eigen::Affine3d step = Eigen::Affine3d::Identity();
+    for (const auto& c : tried)
+      if (c.accepted) step = c.transform * step;
+    // The fit's own corrected curve (the same map, applied as the fit did).
+    correct_by(step);
+    // Where the planner now stands the part, what is left known of its offset is what
+    // the accepted corrections left at the touch points (a later trajectory error adds
+    // what they could not see).
+    seen = 0;
+    for (const auto& c : tried)
+      if (c.accepted) seen = std::max(seen, c.residual_after);
+    current.polyline = fixed.polyline;
+    current.nurbs = fixed.nurbs;
+  }
+  return corrected;
 }
 
 void SectionRun::run() {
@@ -472,51 +562,12 @@ void SectionRun::run() {
       const bool nominal = as_designed;
       const design::Section touched_on = current;
       auto [feet, got] = touch();
+      if (got.cols() >= kFewestTouches && this->nominal.part()) {
+        touched.push_back({this->nominal.part().get(), current.name, current.plane, got});
+        made_round = true;
+      }
       if (got.cols() >= kFewestTouches) {
-        design::Section fixed;
-        PartMove told_here;
-        auto tried = fit_corrections(current, feet, got, o.accept, &fixed, &told_here);
-        for (const auto& c : tried) {
-          if (c.type == "none") {
-            local = true;
-            log(stop.arc, stop.delta_l, "correction", "correction_rejected",
-                fmt::format("the touch points agree with the design within {:.4f} mm: the "
-                            "deviation is local, no geometric correction fits it",
-                            c.residual_before));
-            continue;
-          }
-          const std::string params = fmt::format(" {}", c.parameters_text());
-          if (!c.diverged.empty())
-            log(stop.arc, stop.delta_l, "correction", "correction_rejected",
-                fmt::format("{}: the fit diverged ({}); where it stopped:{}", c.type, c.diverged,
-                            params));
-          else
-            log(stop.arc, stop.delta_l, "correction",
-                c.accepted ? "correction_applied" : "correction_rejected",
-                fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f})", c.type, params,
-                            c.residual_after, c.residual_before));
-          if (c.accepted) corrected = true;
-        }
-        for (const auto& c : tried)
-          if (c.type != "none") r.corrections.push_back(c);
-        if (corrected) {
-          // What these touch points tell of the whole part, to hand on (hand_on_part_move).
-          told.push_back({r.corrections.size() - 1, std::move(told_here)});
-          if (nominal) own_rounds.push_back({touched_on, feet, got});
-          Eigen::Affine3d step = Eigen::Affine3d::Identity();
-          for (const auto& c : tried)
-            if (c.accepted) step = c.transform * step;
-          // The fit's own corrected curve (the same map, applied as the fit did).
-          correct_by(step);
-          // Where the planner now stands the part, what is left known of its offset is what
-          // the accepted corrections left at the touch points (a later trajectory error adds
-          // what they could not see).
-          seen = 0;
-          for (const auto& c : tried)
-            if (c.accepted) seen = std::max(seen, c.residual_after);
-          current.polyline = fixed.polyline;
-          current.nurbs = fixed.nurbs;
-        }
+        corrected = fit_touches(stop, feet, got, nominal, touched_on, local);
       } else if (const int k = touch_count(); k < kFewestTouches) {
         log(stop.arc, stop.delta_l, "correction", "correction_rejected",
             fmt::format("no touch points made: the {:.1f} mm long {} holds {} a ball's diameter "
@@ -533,8 +584,21 @@ void SectionRun::run() {
         if (local) {
           confirm_guess();
         } else if (!corrected) {
-          if (!drop_guess(stop, got)) break;
-          continue;
+          drop_guess(stop);
+          // The touch points are the part's wherever the guess put the design data: fitted
+          // again to those data without it, they may still correct the section (a part scaled
+          // about its middle: a stretch on one side suggests a move the other side's refutes,
+          // and its touch points tell that side's own move).
+          const sim::Contour curve = detail::contour_of(current);
+          Eigen::Matrix3Xd at(3, got.cols());
+          for (Eigen::Index i = 0; i < got.cols(); ++i) at.col(i) = curve.nearest(got.col(i)).point;
+          bool agree = false;
+          if (got.cols() >= kFewestTouches)
+            corrected = fit_touches(stop, at, got, true, current, agree);
+          if (!corrected) {
+            if (!beyond_margin(stop, got)) break;
+            continue;
+          }
         }
       }
     }
@@ -565,11 +629,55 @@ void SectionRun::run() {
 }
 
 void SectionRun::hand_on_part_move() {
+  if (!hand_on_in_plane() && made_round) guess_solid_move();
+}
+
+void SectionRun::guess_solid_move() {
+  if (!nominal.part() || solid_file.empty()) return;
+  Eigen::Index n = 0;
+  std::vector<std::string> names;
+  for (const auto& t : touched)
+    if (t.solid == nominal.part().get()) {
+      n += t.points.cols();
+      if (std::find(names.begin(), names.end(), t.section) == names.end())
+        names.push_back(t.section);
+    }
+  Eigen::Matrix3Xd pts(3, n);
+  Eigen::Index at = 0;
+  for (const auto& t : touched)
+    if (t.solid == nominal.part().get()) {
+      pts.middleCols(at, t.points.cols()) = t.points;
+      at += t.points.cols();
+    }
+  std::string on;
+  for (const auto& nm : names) on += (on.empty() ? "" : ", ") + nm;
+  const auto c = detail::fit_solid_move(*nominal.part(), pts, o.accept, on);
+  if (!c) {
+    if (solid_guess(guess)) guess.clear();  // the touch points since contradict it
+    return;
+  }
+  guess = {*c};
+  log(0, 0, "correction", "part_move_guessed",
+      fmt::format("the touch points of {} ({} of them) all lie within {:.4f} mm of the part's "
+                  "solid moved by {} (were {:.4f}). Touch points in one plane may fit other "
+                  "moves alike (its mirror image across the plane), so this is not reported as "
+                  "where the part stands: it is tried on the sections after this one in the "
+                  "planes of these touch points, their design data cut from the solid moved so",
+                  on, n, c->residual_after, c->parameters_text(), c->residual_before));
+}
+
+bool SectionRun::hand_on_in_plane() {
+  // A move of the solid stays a guess, however well this section's points agree with it: touch
+  // points in one plane do not tell it from its mirror image (guess_solid_move fits it again
+  // with this section's touch points).
+  if (std::any_of(r.corrections.begin(), r.corrections.end(),
+                  [](const Correction& c) { return c.accepted && c.type == "solid-move"; }))
+    return false;
   if (auto moved = detail::part_move_of(r.corrections, told, current.closed, current.name)) {
     part_move = std::move(*moved);
     rounds.clear();
     guess.clear();
-    return;
+    return true;
   }
   if (guess_confirmed) {
     // The guess is where the part stands (every accepted correction rigid: the guess's own).
@@ -578,9 +686,9 @@ void SectionRun::hand_on_part_move() {
       if (c.accepted) part_move.push_back(c);
     rounds.clear();
     guess.clear();
-    return;
+    return true;
   }
-  if (own_rounds.empty()) return;
+  if (own_rounds.empty()) return false;
   // What this section's own touch points found, made on the design as it stands the part: the
   // run's guess of the part's move when it is rigid, and no guess at all when it is not.
   std::vector<Correction> own;
@@ -605,11 +713,11 @@ void SectionRun::hand_on_part_move() {
   for (const auto& t : rounds)
     if (std::find(names.begin(), names.end(), t.section.name) == names.end())
       names.push_back(t.section.name);
-  if (names.size() < 2) return;
+  if (names.size() < 2) return !guess.empty();
   std::string on;
   for (const auto& nm : names) on += (on.empty() ? "" : ", ") + nm;
   const auto c = detail::pooled_part_move(rounds, o.accept, on);
-  if (!c) return;
+  if (!c) return !guess.empty();
   Eigen::Index points = 0;
   for (const auto& t : rounds) points += t.touched.cols();
   part_move = {*c};
@@ -621,6 +729,7 @@ void SectionRun::hand_on_part_move() {
                   "after this one in parallel planes start there",
                   on, points, c->type, c->parameters_text(), c->residual_after,
                   c->residual_before));
+  return true;
 }
 
 SectionResult run_section(const SectionContext& c, design::Section& section) {

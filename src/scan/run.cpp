@@ -360,6 +360,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
   std::vector<Correction> part_move;
   std::vector<detail::TouchRound> rounds;
   std::vector<Correction> guess;
+  std::vector<detail::SolidTouches> touched;
   for (std::size_t i = 0; i < items.size(); ++i) {
     Item& it = items[i];
     if (progress) progress(i, items.size(), it.section.name);
@@ -390,7 +391,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       SectionResult partial;
       try {
         r = detail::run_section({machine, options, *it.planner, res.events, first_move, partial,
-                                 part_move, res.unreachable, rounds, guess},
+                                 part_move, res.unreachable, rounds, guess, design.solid, touched},
                                 it.section);
       } catch (...) {
         r = std::move(partial);

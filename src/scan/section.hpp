@@ -21,6 +21,15 @@ struct TouchRound {
   Eigen::Matrix3Xd feet, touched;
 };
 
+// The surface points one touch round found (3 x m, mm, the part's frame), with the solid the
+// planner stood the part's design at when they were made (the solid they are fitted against).
+struct SolidTouches {
+  const solid::Mesh* solid = nullptr;
+  std::string section;
+  design::Plane plane;  // the section's
+  Eigen::Matrix3Xd points;
+};
+
 struct SectionContext {
   Machine& machine;
   const ControllerOptions& options;
@@ -41,6 +50,10 @@ struct SectionContext {
   // (a move from a scale): rigid corrections, tried on the next sections in parallel planes
   // before their own touch points are made (SectionRun::guess_part_move).
   std::vector<Correction>& guess;
+  // The STEP file of the part's solid ("" without one), and every touch round's points so far
+  // (fit_solid_move).
+  const std::string& solid_file;
+  std::vector<SolidTouches>& touched;
 };
 
 // A reachable stretch shorter than this is not scanned (mm): nothing to follow.
@@ -131,6 +144,34 @@ std::optional<std::vector<Correction>> part_move_of(
 // Nothing unless the rounds' planes are parallel, their touch points tell a move from a scale
 // (kTellsPart), and the move leaves every one within `accept` of its section's moved design.
 // `found_on` names the correction's sections.
+// The rigid move of the part's solid (x_part = transform · x_solid, about every axis) that puts
+// every point (touched surface points, mm, the part's frame) on its surface: Gauss–Newton on the
+// points' signed distances from the solid, in which only what the points resolve moves (the
+// normal equations' eigenvectors whose eigenvalue per point reaches 0.03²; a move along the
+// walls they touched, or a turn they do not see, stays zero). Touch points in one plane may fit
+// other moves alike (the mirror image of the move across a plane the part is symmetric about):
+// the result is a move that fits, not necessarily the part's. A correction of type
+// "solid-move" (parameters dx, dy, dz in mm and the turn as a rotation vector, turn_x..z in °)
+// when it leaves every point within `accept` of the moved solid, some were farther before, the
+// points are at least three more than what they resolve, and the move is one a fixture error
+// makes (within 20 mm and 5°). Nothing otherwise.
+std::optional<Correction> fit_solid_move(const solid::Mesh& solid, const Eigen::Matrix3Xd& points,
+                                         double accept, const std::string& found_on);
+
+// The part of a rigid move that keeps the plane: its turn about the plane's normal and where it
+// takes the plane's origin, in the plane. Touch points in the plane tell that part of a move of
+// the solid without the ambiguity of its move across the plane and its tilts (a mirror image).
+Eigen::Affine3d in_plane_part(const Eigen::Affine3d& move, const design::Plane& plane);
+
+// Section s's design data where the part's solid (the STEP file `step`, which s.solid_placement
+// places for s) moved by `move` meets s's plane, exactly as Open CASCADE cuts it: of the moved
+// solid's contours there, the one nearest s's design moved by `move`, started where s's start
+// moved to (a closed contour) or cut between where its ends moved to (a stretch). Its
+// solid_placement is in_plane_part(move) · s.solid_placement. Nothing when no contour stands for
+// it.
+std::optional<design::Section> on_moved_solid(const design::Section& s, const std::string& step,
+                                              const Eigen::Affine3d& move);
+
 std::optional<Correction> pooled_part_move(const std::vector<TouchRound>& rounds, double accept,
                                            const std::string& found_on);
 

@@ -40,6 +40,8 @@ struct SectionRun {
         unreachable(c.unreachable),
         rounds(c.rounds),
         guess(c.guess),
+        solid_file(c.solid_file),
+        touched(c.touched),
         current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
@@ -48,8 +50,10 @@ struct SectionRun {
   bool& first_move;  // the run's first free move rises along the stylus whatever is around
   std::vector<Correction>& part_move;  // the run's rigid corrections so far (section.hpp)
   std::vector<NotReachable>& unreachable;
-  std::vector<TouchRound>& rounds;  // the run's touch rounds that did not tell the part's move
-  std::vector<Correction>& guess;   // the part's move as far as the run could guess it
+  std::vector<TouchRound>& rounds;     // the run's touch rounds that did not tell the part's move
+  std::vector<Correction>& guess;      // the part's move as far as the run could guess it
+  const std::string& solid_file;       // the part's STEP file ("" without a solid)
+  std::vector<SolidTouches>& touched;  // every touch round's points so far in the run
   SectionResult r;
   design::Section current;
   // Against the solid moved by the corrections accepted for this section so far (what the
@@ -176,6 +180,11 @@ struct SectionRun {
     // The design's solid follows the corrected curve (the nominal planner already stands it at
     // the section's placement).
     detail::move_section(current, step);
+    took(step);
+  }
+  // The design data are where `step` puts the part (moved with it, or cut from the solid moved
+  // with it): the planner stands the solid there too.
+  void took(const Eigen::Affine3d& step) {
     as_designed = false;
     // A guess of the part's move this section's touch points corrected is part of what they
     // found (learnt holds it already).
@@ -189,6 +198,12 @@ struct SectionRun {
   // The corrections' map, applied in order, when the section is a plane section whose plane
   // they all keep (as those found on parallel sections do).
   std::optional<Eigen::Affine3d> applicable(const std::vector<Correction>& cs) const;
+  // The section's design data where the corrections `cs` (in order) put the part, and their map:
+  // moved with them when they keep its plane; cut from the part's solid moved with them when
+  // they are a move of the solid (fit_solid_move) that does not keep it (detail::on_moved_solid:
+  // a move across the plane changes the section's shape). Nothing when neither can be done.
+  std::optional<std::pair<design::Section, Eigen::Affine3d>> placed_by(
+      const std::vector<Correction>& cs) const;
   // Before the first scan: where the part stands, as the corrections an earlier section found.
   void carry_part_move();
 
@@ -202,9 +217,18 @@ struct SectionRun {
   // (confirm_guess); otherwise the guess is dropped (drop_guess) and the section starts again
   // from its design data, as it would have without it.
   void guess_part_move();
-  // False when the touch points (made about the guess) found the part further off its design
-  // than the margin the free moves keep: the section is then not reachable.
-  bool drop_guess(const Sample& stop, const Eigen::Matrix3Xd& touched);
+  // The guess does not hold: the section's design data as they were.
+  void drop_guess(const Sample& stop);
+  // After a dropped guess whose touch points fit no correction to the design data either: false
+  // (the section not reachable) when they found the part further off its design than the margin
+  // the free moves keep.
+  bool beyond_margin(const Sample& stop, const Eigen::Matrix3Xd& touched);
+  // The correction menu on a round of touch points (feet on the design data, got the surface
+  // points found), each candidate logged; an accepted one applied to the section. `nominal`:
+  // the round was made on design data as the design stands the part (touched_on). True when a
+  // correction was applied; `local` set when the touch points agree with the design.
+  bool fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet, const Eigen::Matrix3Xd& got,
+                   bool nominal, const design::Section& touched_on, bool& local);
   // After a design-value scan about the guessed design ran through: its points confirm the
   // guess where they all lie within the menu's acceptance of it and tell a move from a scale (a
   // closed contour's do): then it is where the part stands, handed on as a correction found.
@@ -234,6 +258,19 @@ struct SectionRun {
   // it (detail::part_move_of). Where its touch points do not tell that on their own, with those
   // of earlier sections in parallel planes that did not either (detail::pooled_part_move).
   void hand_on_part_move();
+  // What hand_on_part_move does in the section's plane; true when it handed a move or a guess on.
+  bool hand_on_in_plane();
+  // Where nothing in the plane was handed on after a touch round of this section: the part's
+  // solid fitted to every touch round of the run made about the same solid (fit_solid_move),
+  // the guess for the sections after it, in any plane.
+  void guess_solid_move();
+  bool made_round = false;  // this section made a touch round
+  // Whether the section lies in the plane of a touch round made about its solid (where a move of
+  // the solid fitted to touch points in that plane is tried, and nowhere else).
+  bool in_touched_plane() const;
+  static bool solid_guess(const std::vector<Correction>& cs) {
+    return !cs.empty() && cs.front().type == "solid-move";
+  }
 
   // The section's flow: design-value scans, and on a trajectory error touch points and a
   // correction, or an autonomous scan (of the whole contour, or locally round the stop), then a

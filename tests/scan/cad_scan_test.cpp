@@ -15,6 +15,7 @@
 #include <map>
 #include <string>
 
+#include "../../src/scan/section.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/design/design.hpp"
 #include "trueaxis/scan/controller.hpp"
@@ -325,6 +326,33 @@ TEST(CadScan, DaimlerChryslerObliqueShortStretchGetsNoTouchRound) {
     for (std::size_t i = 1; i < a.size(); ++i)
       EXPECT_GE(a[i] - a[i - 1], 2 * scan::ControllerOptions{}.path.tip_radius - 0.1) << name;
   }
+}
+
+// The DaimlerChrysler part cut at x = 0 (a vertical plane through its middle), moved 1.8 mm across
+// the plane, -1.1 mm along it and turned 0.3°. Moved across the plane, the contours change their
+// shape where faces slope across it: no correction in the plane fits them, and each stretch paid
+// its own touch round (four in all, 41 s against 22 s scanned autonomously). The touch points of
+// two stretches fit the part's solid moved in three dimensions; the sections after them are cut
+// from the solid moved so, and their scans run through. Points in one plane do not tell the move
+// from its mirror image across the plane (both cut it alike): the move is tried, not reported.
+TEST(CadScan, DaimlerChryslerVerticalPlaneCutFromTheSolidTheTouchPointsPlace) {
+  const design::Plane plane{Eigen::Vector3d(0, 0, 27), Eigen::Vector3d::UnitX()};
+  const auto runs = golden(kPart, plane, {batch_part()}, 8);
+  const auto& r = runs[0];
+  EXPECT_GE(count(r, "part_move_guessed"), 1) << r.summary();
+  int cut = 0, holds = 0;
+  for (const auto& e : r.events) {
+    cut += e.event == "correction_carried" &&
+           e.decision.find("cut from the part's solid") != std::string::npos;
+    holds += e.event == "correction_applied" &&
+             e.decision.find("tried as a guess holds") != std::string::npos;
+  }
+  EXPECT_GE(cut, 3) << r.summary();
+  EXPECT_GE(holds, 1) << r.summary();
+  EXPECT_LE(count(r, "trajectory_error"), 2) << r.summary();
+  // No section's design data for the next part stand the solid off the plane's own move.
+  for (const auto& s : r.design.sections)
+    EXPECT_TRUE(scan::detail::keeps_plane(s, s.solid_placement)) << s.name;
 }
 
 // What one section's touch points find of where the part stands is handed on to the others: a

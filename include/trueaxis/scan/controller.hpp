@@ -103,7 +103,8 @@ struct Event {
   // two_dimensional (a space curve found to lie in a plane), not_reachable, design_moved (a
   // section not measured given the part's move found on others, for the next part), restart (a
   // closed contour started elsewhere), part_move_found (the part's move from the touch points of
-  // several stretches together)
+  // several stretches together), part_move_guessed (the part's solid moved to fit the touch
+  // points so far, tried on the sections after)
   std::string event;
   std::string decision;  // in words
 };
