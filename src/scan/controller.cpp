@@ -473,6 +473,52 @@ void SectionRun::confirm_by_points() {
                   worst, current.closed ? "contour" : "stretch"));
 }
 
+bool SectionRun::solid_instead(const Sample& stop, const std::vector<Correction>& tried,
+                               Eigen::Index round) {
+  // The menu's move or turn in the plane, or touch points that agree with the design, stand.
+  if (std::any_of(tried.begin(), tried.end(), [](const Correction& c) {
+        return c.type == "none" ||
+               (c.accepted && (c.type == "translation" || c.type == "rotation"));
+      }))
+    return false;
+  // Only on design data as the design stands the part, or as a guess moved them.
+  if (!(as_designed || unguessed) || current.space_curve()) return false;
+  Eigen::Index n = 0;
+  auto c = pooled_solid_move(n);
+  if (!c) return false;
+  const design::Section& base = unguessed ? *unguessed : current;
+  std::optional<design::Section> cut;
+  try {
+    cut = detail::on_moved_solid(base, solid_file, c->transform);
+  } catch (const Error&) {
+  }
+  if (!cut) return false;
+  for (const auto& t : tried)
+    if (t.type != "none" && t.diverged.empty())
+      log(stop.arc, stop.delta_l, "correction", "correction_rejected",
+          fmt::format("{}: {}; touch points within {:.4f} mm (were {:.4f}): a move of the part's "
+                      "solid fits them, and those of the sections before, as well",
+                      t.type, t.parameters_text(), t.residual_after, t.residual_before));
+  if (unguessed) {
+    r.corrections.erase(r.corrections.begin(),
+                        r.corrections.begin() + static_cast<std::ptrdiff_t>(guess.size()));
+    unguessed.reset();
+  }
+  c->found_on.clear();  // this section's own touch points are among those it fits
+  r.corrections.push_back(*c);
+  // Touch points in one plane tell the move in it; the planner stands the solid there.
+  current = std::move(*cut);
+  learnt = Eigen::Affine3d::Identity();
+  took(detail::in_plane_part(c->transform, current.plane));
+  seen = c->residual_after;
+  log(stop.arc, stop.delta_l, "correction", "correction_applied",
+      fmt::format("solid-move: {}; these touch points and the {} before them all within {:.4f} mm "
+                  "of the part's solid moved so (were {:.4f}): the section's design data cut "
+                  "from it",
+                  c->parameters_text(), n - round, c->residual_after, c->residual_before));
+  return true;
+}
+
 bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
                              const Eigen::Matrix3Xd& got, bool nominal,
                              const design::Section& touched_on, bool& local) {
@@ -480,6 +526,7 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
   design::Section fixed;
   PartMove told_here;
   auto tried = fit_corrections(current, feet, got, o.accept, &fixed, &told_here);
+  if (solid_instead(stop, tried, got.cols())) return true;
   for (const auto& c : tried) {
     if (c.type == "none") {
       local = true;
@@ -632,17 +679,17 @@ void SectionRun::hand_on_part_move() {
   if (!hand_on_in_plane() && made_round) guess_solid_move();
 }
 
-void SectionRun::guess_solid_move() {
-  if (!nominal.part() || solid_file.empty()) return;
-  Eigen::Index n = 0;
+std::optional<Correction> SectionRun::pooled_solid_move(Eigen::Index& points) const {
+  points = 0;
+  if (!nominal.part() || solid_file.empty()) return std::nullopt;
   std::vector<std::string> names;
   for (const auto& t : touched)
     if (t.solid == nominal.part().get()) {
-      n += t.points.cols();
+      points += t.points.cols();
       if (std::find(names.begin(), names.end(), t.section) == names.end())
         names.push_back(t.section);
     }
-  Eigen::Matrix3Xd pts(3, n);
+  Eigen::Matrix3Xd pts(3, points);
   Eigen::Index at = 0;
   for (const auto& t : touched)
     if (t.solid == nominal.part().get()) {
@@ -651,11 +698,17 @@ void SectionRun::guess_solid_move() {
     }
   std::string on;
   for (const auto& nm : names) on += (on.empty() ? "" : ", ") + nm;
-  const auto c = detail::fit_solid_move(*nominal.part(), pts, o.accept, on);
+  return detail::fit_solid_move(*nominal.part(), pts, o.accept, on);
+}
+
+void SectionRun::guess_solid_move() {
+  Eigen::Index n = 0;
+  const auto c = pooled_solid_move(n);
   if (!c) {
     if (solid_guess(guess)) guess.clear();  // the touch points since contradict it
     return;
   }
+  const std::string& on = c->found_on;
   guess = {*c};
   log(0, 0, "correction", "part_move_guessed",
       fmt::format("the touch points of {} ({} of them) all lie within {:.4f} mm of the part's "

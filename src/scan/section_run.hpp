@@ -265,6 +265,16 @@ struct SectionRun {
   // the guess for the sections after it, in any plane.
   void guess_solid_move();
   bool made_round = false;  // this section made a touch round
+  // The part's solid fitted to every touch round of the run made about the section's solid
+  // (`points` of them); nothing when no move fits them all.
+  std::optional<Correction> pooled_solid_move(Eigen::Index& points) const;
+  // After the menu on a round of touch points (`round` of them, pooled in `touched` already)
+  // found no move or turn in the plane: a move of the solid that fits them and the run's earlier
+  // ones is more likely than a scale of the part (a part moved across the plane changes the
+  // section's shape, and a scale along some direction may fit that locally). When one does, the
+  // section's design data are cut from the solid moved so, the menu's candidates are rejected,
+  // and true is returned.
+  bool solid_instead(const Sample& stop, const std::vector<Correction>& tried, Eigen::Index round);
   // Whether the section lies in the plane of a touch round made about its solid (where a move of
   // the solid fitted to touch points in that plane is tried, and nowhere else).
   bool in_touched_plane() const;
