@@ -4,6 +4,11 @@
 // the plane: no correction in the plane fits it, and each section paid its own touch round. The
 // solid tells what the touch points cannot: where faces slope, a move across the plane moves
 // them in it.
+// The fit is point-to-surface registration (Y. Chen and G. Medioni, "Object modelling by
+// registration of multiple range images", Image and Vision Computing 10(3), 1992: each point's
+// distance along the surface normal), its Gauss–Newton steps solved by a truncated eigen-
+// decomposition of the normal equations (P. C. Hansen, "The truncated SVD as a method for
+// regularization", BIT 27, 1987), so that what the points do not resolve does not move.
 #include <fmt/format.h>
 
 #include <Eigen/Eigenvalues>
@@ -104,10 +109,10 @@ std::optional<Correction> fit_solid_move(const solid::Mesh& mesh, const Eigen::M
     if (dt.norm() < 1e-7 && dw.norm() * spread < 1e-7) break;
   }
   // Some redundancy over what was resolved, as the menu asks of a correction in the plane.
+  if (resolved == 0 || n < resolved + 3) return std::nullopt;
   const double after = worst(mesh, points, move);
   const Eigen::AngleAxisd turn(move.linear());
   const Eigen::Vector3d w = turn.angle() * turn.axis() * 180 / M_PI;
-  if (resolved == 0 || n < resolved + 3) return std::nullopt;
   // A fixture error is a few millimetres and a fraction of a degree: anything larger is not a
   // move of this part but a fit gone astray.
   if (!(after <= accept) || !(before > accept) || move.translation().norm() > 20 || w.norm() > 5)
