@@ -27,33 +27,46 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
   const Eigen::Vector3d from = m.position();
   if ((to - from).norm() < 1e-6) return;
   const Eigen::Vector3d u = m.stylus_axis();
-  const std::optional<Planner> wider = keep > planner().margin()
-                                           ? std::optional<Planner>(planner().with_margin(keep))
-                                           : std::nullopt;
-  const Planner& solid = wider ? *wider : planner();
-  std::vector<Eigen::Vector3d> way;
-  try {
-    way = solid.route(from, to, u, first_move);
-  } catch (const NoWay&) {
-    // Not on the run's first move: where the machine stands then is not trusted.
-    if (first_move) throw;
-    const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
-    const double margin = std::min(solid.margin(), solid.clearance(from, u) - 0.01);
-    for (const double d : {5.0, 10.0, 20.0, 40.0}) {
-      for (int k = 0; k < 8 && way.empty(); ++k) {
-        const double t = std::numbers::pi / 4 * k;
-        const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
-        if (!solid.clear(from, side, u, margin)) continue;
-        try {
-          way = solid.route(side, to, u, false);
-          way.insert(way.begin(), side);
-        } catch (const NoWay&) {
+  auto plan = [&](const Planner& solid) {
+    std::vector<Eigen::Vector3d> way;
+    try {
+      way = solid.route(from, to, u, first_move);
+    } catch (const NoWay&) {
+      // Not on the run's first move: where the machine stands then is not trusted.
+      if (first_move) throw;
+      const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+      const double margin = std::min(solid.margin(), solid.clearance(from, u) - 0.01);
+      for (const double d : {5.0, 10.0, 20.0, 40.0}) {
+        for (int k = 0; k < 8 && way.empty(); ++k) {
+          const double t = std::numbers::pi / 4 * k;
+          const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
+          if (!solid.clear(from, side, u, margin)) continue;
+          try {
+            way = solid.route(side, to, u, false);
+            way.insert(way.begin(), side);
+          } catch (const NoWay&) {
+          }
         }
+        if (!way.empty()) break;
       }
-      if (!way.empty()) break;
+      if (way.empty()) throw;
     }
-    if (way.empty()) throw;
+    return way;
+  };
+  // Where this section found the part further off its design than the margin allows for, less
+  // 1 mm (a trajectory error, a touch point), the move keeps 1 mm more than that from the part
+  // where the planner stands it, as the route between touch points does; as far as the target
+  // itself lies from it. Where no way keeps that much, the planner's margin (or `keep`) is kept.
+  std::vector<Eigen::Vector3d> way;
+  const double found = std::min(std::max(keep, seen + 1), planner().clearance(to, u) - 0.01);
+  if (found > std::max(keep, planner().margin())) {
+    try {
+      way = plan(planner().with_margin(found));
+    } catch (const NoWay&) {
+      way.clear();
+    }
   }
+  if (way.empty()) way = plan(keep > planner().margin() ? planner().with_margin(keep) : planner());
   first_move = false;
   timed(m, r.time.moves, [&] {
     through(way);

@@ -375,6 +375,19 @@ TEST(CadScan, NistCtc05ObliquePlaneCutFromTheSolidTheTouchPointsPlace) {
   EXPECT_EQ(count(r, "autonomous_scan"), 0) << r.summary();
 }
 
+// The DaimlerChrysler part at z = 15 mm, 3 % larger than designed: 2.9 mm off its design 97 mm
+// from its middle, beyond the 2.5 mm the free moves keep from the part by default. The first
+// outline's trajectory error found it 1.9 mm off at the start, and the first move of its touch
+// round, straight along the outline at the margin, met the part where it stands further off. A
+// free move now keeps from the part 1 mm more than the section found it off its design (as the
+// moves between touch points did already), where a way does.
+TEST(CadScan, DaimlerChryslerOutlineAtZ15ScaledBeyondTheMargin) {
+  std::vector<ScanCase> cases(1);
+  cases[0].label = "3 % larger";
+  cases[0].dev.scale = 1.03;
+  golden(kPart, {Eigen::Vector3d(0, 0, 15), Eigen::Vector3d::UnitZ()}, cases, 7);
+}
+
 // What one section's touch points find of where the part stands is handed on to the others: a
 // batch's fixture error (moved 1.8 mm, -1.1 mm and turned 0.3°) costs the first part one
 // trajectory error, and the next part none.
