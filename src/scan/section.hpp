@@ -136,14 +136,6 @@ std::optional<std::vector<Correction>> part_move_of(
     const std::vector<std::pair<std::size_t, PartMove>>& told, bool closed,
     const std::string& name);
 
-// The part's rigid move (a move in the plane, and a turn about its normal where the touch points
-// see one) that the touch rounds of several sections in parallel planes tell together, when none
-// tells it alone: two stretches of a contour cut by what the stylus cannot reach, each seeing one
-// wall, tell a move from a scale together. Fitted to the touch points' normal distances from each
-// section's design (Gauss-Newton, the feet refined on the moved design as the menu does).
-// Nothing unless the rounds' planes are parallel, their touch points tell a move from a scale
-// (kTellsPart), and the move leaves every one within `accept` of its section's moved design.
-// `found_on` names the correction's sections.
 // The rigid move of the part's solid (x_part = transform · x_solid, about every axis) that puts
 // every point (touched surface points, mm, the part's frame) on its surface: Gauss–Newton on the
 // points' signed distances from the solid, in which only what the points resolve moves (the
@@ -172,6 +164,14 @@ Eigen::Affine3d in_plane_part(const Eigen::Affine3d& move, const design::Plane& 
 std::optional<design::Section> on_moved_solid(const design::Section& s, const std::string& step,
                                               const Eigen::Affine3d& move);
 
+// The part's rigid move (a move in the plane, and a turn about its normal where the touch points
+// see one) that the touch rounds of several sections in parallel planes tell together, when none
+// tells it alone: two stretches of a contour cut by what the stylus cannot reach, each seeing one
+// wall, tell a move from a scale together. Fitted to the touch points' normal distances from each
+// section's design (Gauss-Newton, the feet refined on the moved design as the menu does).
+// Nothing unless the rounds' planes are parallel, their touch points tell a move from a scale
+// (kTellsPart), and the move leaves every one within `accept` of its section's moved design.
+// `found_on` names the correction's sections.
 std::optional<Correction> pooled_part_move(const std::vector<TouchRound>& rounds, double accept,
                                            const std::string& found_on);
 
