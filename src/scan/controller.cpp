@@ -318,8 +318,14 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
   design::Section fixed;
   PartMove told_here;
   auto tried = fit_corrections(current, feet, got, o.accept, &fixed, &told_here);
-  if (solid_instead(stop, tried, got.cols())) return true;
-  for (const auto& c : tried) {
+  Eigen::Index pooled = 0;
+  auto solid = solid_instead(tried, pooled);
+  // Where a move of the solid fits instead, the menu's candidates are logged as rejected for it.
+  const std::string instead =
+      solid ? ": a move of the part's solid fits them, and those of the sections before, as well"
+            : "";
+  for (auto& c : tried) {
+    if (solid) c.accepted = false;
     if (c.type == "none") {
       local = true;
       log(stop.arc, stop.delta_l, "correction", "correction_rejected",
@@ -336,12 +342,32 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
     else
       log(stop.arc, stop.delta_l, "correction",
           c.accepted ? "correction_applied" : "correction_rejected",
-          fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f})", c.type, params,
-                      c.residual_after, c.residual_before));
+          fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f}){}", c.type, params,
+                      c.residual_after, c.residual_before, instead));
     if (c.accepted) corrected = true;
   }
   for (const auto& c : tried)
     if (c.type != "none") r.corrections.push_back(c);
+  if (solid) {
+    auto& [move, cut] = *solid;
+    if (unguessed)
+      r.corrections.erase(r.corrections.begin(),
+                          r.corrections.begin() + static_cast<std::ptrdiff_t>(guess.size()));
+    r.corrections.push_back(move);
+    // Touch points in one plane tell the move in it; the planner stands the solid there.
+    current = std::move(cut);
+    learnt = Eigen::Affine3d::Identity();
+    took(detail::in_plane_part(move.transform, current.plane));
+    seen = move.residual_after;
+    log(stop.arc, stop.delta_l, "correction", "correction_applied",
+        fmt::format("solid-move: {}; these touch points and the {} before them all within "
+                    "{:.4f} mm of the part's solid moved so (were {:.4f}): the section's design "
+                    "data cut from it (touch points in one plane tell such a move only up to its "
+                    "mirror image across the plane, which cuts the plane alike)",
+                    move.parameters_text(), pooled - got.cols(), move.residual_after,
+                    move.residual_before));
+    return true;
+  }
   if (corrected) {
     // What these touch points tell of the whole part, to hand on (hand_on_part_move).
     told.push_back({r.corrections.size() - 1, std::move(told_here)});
@@ -435,7 +461,7 @@ void SectionRun::run() {
           if (got.cols() >= kFewestTouches)
             corrected = fit_touches(stop, at, got, true, current, agree);
           if (!corrected) {
-            if (!beyond_margin(stop, got)) break;
+            if (!beyond_margin(stop, curve, got)) break;
             continue;
           }
         }

@@ -39,6 +39,18 @@ std::optional<std::pair<design::Section, Eigen::Affine3d>> SectionRun::placed_by
 }
 
 namespace {
+// The names, each once, in order, joined by ", ".
+std::string joined(const std::vector<std::string>& names) {
+  std::vector<std::string> once;
+  std::string out;
+  for (const auto& n : names)
+    if (std::find(once.begin(), once.end(), n) == once.end()) {
+      once.push_back(n);
+      out += (out.empty() ? "" : ", ") + n;
+    }
+  return out;
+}
+
 // How a carried correction was brought to a section, in words.
 std::string how_placed(const std::vector<Correction>& cs) {
   return std::any_of(cs.begin(), cs.end(),
@@ -130,10 +142,10 @@ void SectionRun::drop_guess(const Sample& stop) {
       "to it): the section goes on from its design data");
 }
 
-bool SectionRun::beyond_margin(const Sample& stop, const Eigen::Matrix3Xd& touched) {
+bool SectionRun::beyond_margin(const Sample& stop, const sim::Contour& curve,
+                               const Eigen::Matrix3Xd& touched) {
   // How far off the design data the touch points found the part: what the section starts again
   // with.
-  const sim::Contour curve = detail::contour_of(current);
   seen = 0;
   for (Eigen::Index i = 0; i < touched.cols(); ++i)
     seen = std::max(seen, std::abs(curve.nearest(touched.col(i)).distance));
@@ -174,51 +186,28 @@ void SectionRun::confirm_by_points() {
                   worst, current.closed ? "contour" : "stretch"));
 }
 
-bool SectionRun::solid_instead(const Sample& stop, const std::vector<Correction>& tried,
-                               Eigen::Index round) {
+std::optional<std::pair<Correction, design::Section>> SectionRun::solid_instead(
+    const std::vector<Correction>& tried, Eigen::Index& points) const {
   // The menu's move or turn in the plane, or touch points that agree with the design, stand.
   if (std::any_of(tried.begin(), tried.end(), [](const Correction& c) {
         return c.type == "none" ||
                (c.accepted && (c.type == "translation" || c.type == "rotation"));
       }))
-    return false;
+    return std::nullopt;
   // Only on design data as the design stands the part, or as a guess moved them.
-  if (!(as_designed || unguessed) || current.space_curve()) return false;
-  Eigen::Index n = 0;
-  auto c = pooled_solid_move(n);
-  if (!c) return false;
-  const design::Section& base = unguessed ? *unguessed : current;
-  std::optional<design::Section> cut;
+  if (!(as_designed || unguessed) || current.space_curve()) return std::nullopt;
+  auto c = pooled_solid_move(points);
+  if (!c) return std::nullopt;
   try {
-    cut = detail::on_moved_solid(base, solid_file, c->transform);
+    if (auto cut =
+            detail::on_moved_solid(unguessed ? *unguessed : current, solid_file, c->transform)) {
+      c->found_on.clear();  // this section's own touch points are among those it fits
+      return std::pair{std::move(*c), std::move(*cut)};
+    }
   } catch (const Error&) {
+    // No section of the moved solid: the menu's candidates stand.
   }
-  if (!cut) return false;
-  for (const auto& t : tried)
-    if (t.type != "none" && t.diverged.empty())
-      log(stop.arc, stop.delta_l, "correction", "correction_rejected",
-          fmt::format("{}: {}; touch points within {:.4f} mm (were {:.4f}): a move of the part's "
-                      "solid fits them, and those of the sections before, as well",
-                      t.type, t.parameters_text(), t.residual_after, t.residual_before));
-  if (unguessed) {
-    r.corrections.erase(r.corrections.begin(),
-                        r.corrections.begin() + static_cast<std::ptrdiff_t>(guess.size()));
-    unguessed.reset();
-  }
-  c->found_on.clear();  // this section's own touch points are among those it fits
-  r.corrections.push_back(*c);
-  // Touch points in one plane tell the move in it; the planner stands the solid there.
-  current = std::move(*cut);
-  learnt = Eigen::Affine3d::Identity();
-  took(detail::in_plane_part(c->transform, current.plane));
-  seen = c->residual_after;
-  log(stop.arc, stop.delta_l, "correction", "correction_applied",
-      fmt::format("solid-move: {}; these touch points and the {} before them all within {:.4f} mm "
-                  "of the part's solid moved so (were {:.4f}): the section's design data cut "
-                  "from it (touch points in one plane tell such a move only up to its mirror "
-                  "image across the plane, which cuts the plane alike)",
-                  c->parameters_text(), n - round, c->residual_after, c->residual_before));
-  return true;
+  return std::nullopt;
 }
 
 void SectionRun::hand_on_part_move() {
@@ -232,8 +221,7 @@ std::optional<Correction> SectionRun::pooled_solid_move(Eigen::Index& points) co
   for (const auto& t : touched)
     if (t.solid == nominal.part().get()) {
       points += t.points.cols();
-      if (std::find(names.begin(), names.end(), t.section) == names.end())
-        names.push_back(t.section);
+      names.push_back(t.section);
     }
   Eigen::Matrix3Xd pts(3, points);
   Eigen::Index at = 0;
@@ -242,9 +230,7 @@ std::optional<Correction> SectionRun::pooled_solid_move(Eigen::Index& points) co
       pts.middleCols(at, t.points.cols()) = t.points;
       at += t.points.cols();
     }
-  std::string on;
-  for (const auto& nm : names) on += (on.empty() ? "" : ", ") + nm;
-  return detail::fit_solid_move(*nominal.part(), pts, o.accept, on);
+  return detail::fit_solid_move(*nominal.part(), pts, o.accept, joined(names));
 }
 
 void SectionRun::guess_solid_move() {
@@ -313,8 +299,7 @@ bool SectionRun::hand_on_in_plane() {
     if (std::find(names.begin(), names.end(), t.section.name) == names.end())
       names.push_back(t.section.name);
   if (names.size() < 2) return !guess.empty();
-  std::string on;
-  for (const auto& nm : names) on += (on.empty() ? "" : ", ") + nm;
+  const std::string on = joined(names);
   const auto c = detail::pooled_part_move(rounds, o.accept, on);
   if (!c) return !guess.empty();
   Eigen::Index points = 0;

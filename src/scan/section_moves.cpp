@@ -58,12 +58,15 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
   // where the planner stands it, as the route between touch points does; as far as the target
   // itself lies from it. Where no way keeps that much, the planner's margin (or `keep`) is kept.
   std::vector<Eigen::Vector3d> way;
-  const double found = std::min(std::max(keep, seen + 1), planner().clearance(to, u) - 0.01);
-  if (found > std::max(keep, planner().margin())) {
-    try {
-      way = plan(planner().with_margin(found));
-    } catch (const NoWay&) {
-      way.clear();
+  const double kept = std::max(keep, planner().margin());
+  if (seen + 1 > kept) {
+    const double found = std::min(seen + 1, planner().clearance(to, u) - 0.01);
+    if (found > kept) {
+      try {
+        way = plan(planner().with_margin(found));
+      } catch (const NoWay&) {
+        way.clear();
+      }
     }
   }
   if (way.empty()) way = plan(keep > planner().margin() ? planner().with_margin(keep) : planner());

@@ -195,9 +195,6 @@ struct SectionRun {
     moved_planner.emplace(nominal.moved(learnt));
   }
 
-  // The corrections' map, applied in order, when the section is a plane section whose plane
-  // they all keep (as those found on parallel sections do).
-  std::optional<Eigen::Affine3d> applicable(const std::vector<Correction>& cs) const;
   // The section's design data where the corrections `cs` (in order) put the part, and their map:
   // moved with them when they keep its plane; cut from the part's solid moved with them when
   // they are a move of the solid (fit_solid_move) that does not keep it (detail::on_moved_solid:
@@ -220,9 +217,10 @@ struct SectionRun {
   // The guess does not hold: the section's design data as they were.
   void drop_guess(const Sample& stop);
   // After a dropped guess whose touch points fit no correction to the design data either: false
-  // (the section not reachable) when they found the part further off its design than the margin
-  // the free moves keep.
-  bool beyond_margin(const Sample& stop, const Eigen::Matrix3Xd& touched);
+  // (the section not reachable) when they found the part further off its design (`curve`, the
+  // section's contour) than the margin the free moves keep.
+  bool beyond_margin(const Sample& stop, const sim::Contour& curve,
+                     const Eigen::Matrix3Xd& touched);
   // The correction menu on a round of touch points (feet on the design data, got the surface
   // points found), each candidate logged; an accepted one applied to the section. `nominal`:
   // the round was made on design data as the design stands the part (touched_on). True when a
@@ -262,19 +260,20 @@ struct SectionRun {
   bool hand_on_in_plane();
   // Where nothing in the plane was handed on after a touch round of this section: the part's
   // solid fitted to every touch round of the run made about the same solid (fit_solid_move),
-  // the guess for the sections after it, in any plane.
+  // the guess for the sections after it in the planes of those rounds (in_touched_plane).
   void guess_solid_move();
   bool made_round = false;  // this section made a touch round
   // The part's solid fitted to every touch round of the run made about the section's solid
   // (`points` of them); nothing when no move fits them all.
   std::optional<Correction> pooled_solid_move(Eigen::Index& points) const;
-  // After the menu on a round of touch points (`round` of them, pooled in `touched` already)
-  // found no move or turn in the plane: a move of the solid that fits them and the run's earlier
-  // ones is more likely than a scale of the part (a part moved across the plane changes the
-  // section's shape, and a scale along some direction may fit that locally). When one does, the
-  // section's design data are cut from the solid moved so, the menu's candidates are rejected,
-  // and true is returned.
-  bool solid_instead(const Sample& stop, const std::vector<Correction>& tried, Eigen::Index round);
+  // After the menu on a round of touch points (pooled in `touched` already) found no move or
+  // turn in the plane: a move of the solid that fits them and the run's earlier ones is more
+  // likely than a scale of the part (a part moved across the plane changes the section's shape,
+  // and a scale along some direction may fit that locally). When one does: that move (with the
+  // number of touch points it fits in `points`) and the section's design data cut from the
+  // solid moved so.
+  std::optional<std::pair<Correction, design::Section>> solid_instead(
+      const std::vector<Correction>& tried, Eigen::Index& points) const;
   // Whether the section lies in the plane of a touch round made about its solid (where a move of
   // the solid fitted to touch points in that plane is tried, and nowhere else).
   bool in_touched_plane() const;
