@@ -26,7 +26,17 @@ constexpr double kLocalScan = 60, kLocalLead = 10, kRejoin = 0.03;
 bool SectionRun::design_scan(Sample& stop, std::string& why) {
   const auto path = design::make_path(current, o.path);
   const auto start = path.at(0);
-  safe_move(start.p + settings().approach_clearance * start.normal);
+  // Where an unexpected touch on the way found the part further off than the approach allows
+  // for, the approach starts further out (found_extra).
+  for (;;) {
+    const int before = unexpected;
+    try {
+      safe_move(start.p + settings().approach_clearance * start.normal);
+      break;
+    } catch (const NoWay&) {
+      if (unexpected == before || unexpected >= kMostUnexpected) throw;
+    }
+  }
   bool error = false, range = false;
   Trace tr;
   tr.label = r.traces.empty() ? "design" : fmt::format("rescan {}", r.traces.size());

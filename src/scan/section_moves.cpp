@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "section_run.hpp"
 #include "trueaxis/error.hpp"
@@ -14,13 +15,134 @@ namespace {
 // Free moves between touch points keep this much beyond the band the surface is searched in
 // (mm): room for a part that is off its design by more than that band somewhere between them.
 constexpr double kRouteMargin = 2.0;
+// Free moves slow to the machine's guarded speed where the ball, the stylus or the probe's body
+// comes within this much beyond what the section keeps from the part's design (mm): a part that
+// far further off than the move allows for stops it on the probe's trigger, not in a collision.
+constexpr double kGuardBand = 2.0;
+// Touches and scans start this far beyond the band the surface is searched in (the tolerance
+// each way, mm).
+constexpr double kBandMargin = 1.5;
 }  // namespace
 
-void SectionRun::through(const std::vector<Eigen::Vector3d>& way) {
-  if (planner().margin() >= 2 * Machine::kCornerCut)
-    m.move_through(way, o.move_speed);
-  else
-    for (const auto& p : way) m.move(p, o.move_speed);
+std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded(
+    const std::vector<Eigen::Vector3d>& way) const {
+  const std::optional<double> slow = m.guarded_speed();
+  if (!slow || *slow >= o.move_speed || !planner().part())
+    return {way, std::vector<double>(way.size(), o.move_speed)};
+  const Planner& solid = planner();
+  const Eigen::Vector3d u = m.stylus_axis();
+  const double band = std::max(solid.margin(), seen + 1) + kGuardBand;
+  // How far from a along the leg to b the band is first entered (the leg's length if never):
+  // steps never longer than the clearance beyond the band (every element moves as far as the
+  // ball), nor shorter than 0.2 mm.
+  auto enters = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+    const double L = (b - a).norm();
+    for (double t = 0; t <= L;) {
+      const double c = solid.clearance(a + (b - a) * (t / L), u);
+      if (c < band) return t;
+      t += std::max(0.2, c - band);
+    }
+    return L;
+  };
+  // A way that ends coming down along the stylus beside the part comes down outside the band
+  // where it can, and goes across to its end in it: the way down at full speed, the last
+  // millimetres at the guarded one.
+  std::vector<Eigen::Vector3d> to_go = way;
+  if (const std::size_t n = to_go.size(); n >= 2) {
+    const Eigen::Vector3d &top = to_go[n - 2], &end = to_go[n - 1];
+    const Eigen::Vector3d down = end - top;
+    const double c_end = solid.clearance(end, u);
+    if (down.dot(u) < 0 && down.cross(u).norm() < 1e-6 * down.norm() && c_end < band) {
+      const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
+      std::optional<Eigen::Vector3d> best;
+      double best_d = INFINITY;
+      for (int k = 0; k < 16; ++k) {
+        const double t = std::numbers::pi / 8 * k;
+        const Eigen::Vector3d h = std::cos(t) * e1 + std::sin(t) * e2;
+        for (double d = 0.5; d <= band + 1 && d < best_d; d += 0.5) {
+          const Eigen::Vector3d q = end + d * h;
+          if (solid.clearance(q, u) < band) continue;
+          if (solid.clear(q, end, u, std::min(solid.margin(), c_end - 0.01)) &&
+              solid.clear(top + d * h, q, u, band)) {
+            best = q;
+            best_d = d;
+          }
+          break;
+        }
+      }
+      if (best) {
+        to_go[n - 2] = top + best_d * (*best - end) / best_d;
+        to_go.insert(to_go.end() - 1, *best);
+        // The leg across to the way down's new top keeps clear too, or nothing changes.
+        const Eigen::Vector3d before = n >= 3 ? to_go[n - 3] : m.position();
+        if (!solid.clear(before, to_go[n - 2], u, solid.margin())) to_go = way;
+      }
+    }
+  }
+  std::vector<Eigen::Vector3d> legs;
+  std::vector<double> speeds;
+  Eigen::Vector3d a = m.position();
+  for (const Eigen::Vector3d& b : to_go) {
+    const double L = (b - a).norm();
+    if (L < 1e-9) {
+      legs.push_back(b);
+      speeds.push_back(o.move_speed);
+      continue;
+    }
+    const double in = enters(a, b);
+    const double out = in >= L ? L : L - enters(b, a);
+    const Eigen::Vector3d d = (b - a) / L;
+    if (in >= L) {
+      legs.push_back(b);
+      speeds.push_back(o.move_speed);
+    } else {
+      if (in > 1e-6) {
+        legs.push_back(a + in * d);
+        speeds.push_back(o.move_speed);
+      }
+      legs.push_back(a + std::max(in, out) * d);
+      speeds.push_back(*slow);
+      if (out < L - 1e-6) {
+        legs.push_back(b);
+        speeds.push_back(o.move_speed);
+      }
+    }
+    a = b;
+  }
+  return {legs, speeds};
+}
+
+void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
+  const Eigen::Vector3d from = m.position();
+  auto [legs, speeds] =
+      guard ? guarded(way) : std::pair{way, std::vector<double>(way.size(), o.move_speed)};
+  try {
+    if (planner().margin() >= 2 * Machine::kCornerCut)
+      m.move_legs(legs, speeds);
+    else
+      for (std::size_t i = 0; i < legs.size(); ++i) {
+        try {
+          m.move(legs[i], speeds[i]);
+        } catch (const UnexpectedTouch& e) {
+          throw UnexpectedTouch(e.what(), e.at, i);
+        }
+      }
+  } catch (const UnexpectedTouch& e) {
+    // Back the way the ball came, at the guarded speed, to the last waypoint it passed (where
+    // the guarded leg began, or where the move started): free there when it passed.
+    const Eigen::Vector3d back = e.passed > 0 ? legs[std::min(e.passed, legs.size()) - 1] : from;
+    m.move(back, std::min(o.move_speed, m.guarded_speed().value_or(o.move_speed)));
+    ++unexpected;
+    const double off = planner().clearance(e.at, m.stylus_axis());
+    seen = std::max(seen, off);
+    // Scans and touches start outside the band the part may be in, now as far as it was met.
+    found_extra = std::max(found_extra, off + 1 - (o.tolerance + kBandMargin));
+    log(0, 0, "correction", "unexpected_touch",
+        fmt::format("{}: the part stands at least {:.2f} mm off its design there; the ball went "
+                    "back the way it came, and free moves on this section keep {:.2f} mm from it",
+                    e.what(), off, seen + 1));
+    throw;
+  }
 }
 
 void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
@@ -71,10 +193,21 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
   }
   if (way.empty()) way = plan(keep > planner().margin() ? planner().with_margin(keep) : planner());
   first_move = false;
-  timed(m, r.time.moves, [&] {
-    through(way);
-    return 0;
-  });
+  try {
+    timed(m, r.time.moves, [&] {
+      through(way);
+      return 0;
+    });
+  } catch (const UnexpectedTouch& e) {
+    // Planned again from where the move started, keeping what the touch found, when the target
+    // itself keeps that much; otherwise the caller finds another (a scan's start further out).
+    const std::string why = fmt::format(
+        "the part stands further off its design than the free move to ({:.2f}, {:.2f}, {:.2f}) "
+        "mm can keep from it ({} unexpected touches, the last at ({:.2f}, {:.2f}, {:.2f}) mm)",
+        to.x(), to.y(), to.z(), unexpected, e.at.x(), e.at.y(), e.at.z());
+    if (unexpected >= kMostUnexpected || planner().clearance(to, u) < seen + 1) throw NoWay(why);
+    safe_move(to, keep);
+  }
 }
 
 void SectionRun::route(const design::Samples& smp, const sim::Contour& design, double reach,
@@ -148,10 +281,15 @@ void SectionRun::route(const design::Samples& smp, const sim::Contour& design, d
     leg_start = p;
     margin = keep_off;
   }
-  timed(m, r.time.moves, [&] {
-    through(legs);
-    return 0;
-  });
+  try {
+    timed(m, r.time.moves, [&] {
+      through(legs, false);
+      return 0;
+    });
+  } catch (const UnexpectedTouch&) {
+    // Back at the last touch's approach line: the planner's way, keeping what the touch found.
+    safe_move(next_start, at_next);
+  }
 }
 
 std::vector<std::pair<double, double>> SectionRun::room_with(double margin) const {
@@ -239,9 +377,10 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
   Eigen::Matrix3Xd feet(3, 0), got(3, 0);
   // Start just outside the band where the surface is looked for (the tolerance and 1.5 mm
   // more each way), and search across the band.
-  constexpr double kMargin = 1.5;
-  // About a guessed design the band reaches further out by the guess's move (approach_extra).
-  const double reach = o.path.tip_radius + o.tolerance + kMargin + approach_extra;
+  constexpr double kMargin = kBandMargin;
+  // About a guessed design the band reaches further out by the guess's move (approach_extra),
+  // and as far as an unexpected touch found the part (found_extra).
+  const double reach = o.path.tip_radius + o.tolerance + kMargin + approach_extra + found_extra;
   const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
                              current.material == design::Side::Left);
   // Evenly spread, or where they tell the part's move, turn and scale apart when evenly
@@ -300,17 +439,29 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
     }
     last = j;
     last_start = p + reach * nn;
-    const auto t = timed(m, r.time.touch, [&] {
-      auto got = m.touch(current.plane, last_start, -nn,
-                         2 * (o.tolerance + kMargin) + approach_extra + o.touch_trigger,
-                         o.touch_speed, o.touch_trigger);
-      // After the last touch (or a search that found nothing, and went through the band),
-      // back the way the ball came, to the touch's start: outside the band the part may be
-      // in, where the next move can be planned against the design's solid. Before another
-      // touch, the route to it leaves along that line anyway.
-      if (final_touch || !got) m.move(last_start, o.move_speed);
-      return got;
-    });
+    std::optional<Touch> t;
+    try {
+      t = timed(m, r.time.touch, [&] {
+        auto got =
+            m.touch(current.plane, last_start, -nn,
+                    2 * (o.tolerance + kMargin) + approach_extra + found_extra + o.touch_trigger,
+                    o.touch_speed, o.touch_trigger);
+        // After the last touch (or a search that found nothing, and went through the band),
+        // back the way the ball came, to the touch's start: outside the band the part may be
+        // in, where the next move can be planned against the design's solid. Before another
+        // touch, the route to it leaves along that line anyway.
+        if (final_touch || !got) m.move(last_start, o.move_speed);
+        return got;
+      });
+    } catch (const UnexpectedTouch& e) {
+      // The stem, or the ball off the plane, met the part first: no point the probe can place.
+      m.move(last_start, std::min(o.move_speed, m.guarded_speed().value_or(o.move_speed)));
+      ++unexpected;
+      log(arc, 0, "touch", "unexpected_touch", fmt::format("touch point left out: {}", e.what()));
+      last = -1;
+      if (unexpected >= kMostUnexpected) break;
+      continue;
+    }
     if (!t) {
       log(arc, 0, "touch", "touch", "no surface found along the design normal here");
       continue;

@@ -28,6 +28,10 @@ auto timed(Machine& m, double& bucket, Fn&& fn) {
   return fn();
 }
 
+// A section gives up a free move (the part is not where it can be reached) after this many
+// unexpected touches (UnexpectedTouch).
+constexpr int kMostUnexpected = 3;
+
 // One section scanned by the error-tolerant controller (or by autonomous scanning only).
 struct SectionRun {
   SectionRun(const detail::SectionContext& c, design::Section section)
@@ -66,8 +70,19 @@ struct SectionRun {
   const Planner& planner() const { return moved_planner ? *moved_planner : nominal; }
 
   // Free moves through waypoints whose legs the planner found clear by its margin: without a
-  // stop at each waypoint where the margin leaves room for the corner the machine cuts there.
-  void through(const std::vector<Eigen::Vector3d>& way);
+  // stop at each waypoint where the margin leaves room for the corner the machine cuts there,
+  // and (with `guard`) at the machine's guarded speed where they come within kGuardBand beyond
+  // what the section keeps from the part: not the routes between touch points, which keep
+  // beyond the band the surface is searched in. Where the probe stops the move on the part (a part
+  // further off its design than that), the ball goes back the way it came to the last
+  // waypoint it passed, `seen` takes how far off the part was met, and UnexpectedTouch is
+  // thrown on.
+  void through(const std::vector<Eigen::Vector3d>& way, bool guard = true);
+  // The legs of a free move with their speeds: split where they enter and leave the band in
+  // which the move is guarded.
+  std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> guarded(
+      const std::vector<Eigen::Vector3d>& way) const;
+  int unexpected = 0;  // unexpected touches in this section so far
 
   // A free move the planner finds: straight when clear of the part, else retract along the
   // stylus to the clearance level, across, and down. Where the planner finds no way (the ball
@@ -95,7 +110,7 @@ struct SectionRun {
     st.record_spacing = o.record_spacing;
     // Start the approach beyond the band the real surface may lie in (the tolerance and 1.5 mm
     // more), so that the free move there cannot meet a part that is off its design.
-    st.approach_clearance = o.tolerance + 1.5 + approach_extra;
+    st.approach_clearance = o.tolerance + 1.5 + approach_extra + found_extra;
     st.approach_limit = o.tolerance + 1.0;
     return st;
   }
@@ -190,6 +205,7 @@ struct SectionRun {
     // found (learnt holds it already).
     unguessed.reset();
     approach_extra = 0;
+    found_extra = 0;
     learnt = step * learnt;
     moved = true;
     moved_planner.emplace(nominal.moved(learnt));
@@ -242,6 +258,9 @@ struct SectionRun {
   // that it starts outside the band the part may be in both where the design puts it and where
   // the guess does.
   double approach_extra = 0;
+  // How much further out scans and touches start since an unexpected touch found the part
+  // further off its design than they allow for (mm); until a correction is applied.
+  double found_extra = 0;
 
   // The part's move as each round of this section's own touch points told it, by the index in
   // r.corrections of the correction that round accepted.

@@ -165,13 +165,19 @@ void VirtualCmm::check_solid() {
       // cuts and past the edges beside it (the dent reaches through them, the solid holds none of
       // it). So the stem may enter the solid as deep as the part's deepest dent (dent_): a stem
       // driven into a face is caught that much later, a graze shallower than a dent not at all.
-      clear = solid_->distance(s0, s1, rs + kSolidLookout) - rs + dent_;
+      clear = solid_->distance(s0, s1, rs + kSolidLookout) - rs + dent_ + stem_allowance_;
       table = std::min(s0.z(), s1.z()) - rs - table_z_;
     } else {
       clear = solid_->distance(n0, b1, rb + kSolidLookout) - rb;
       table = std::min(n0.z(), b1.z()) - rb - table_z_;
     }
     if (clear < 0 || table < -(k == 0 ? ball_allowance_ : 0)) {
+      if (guarded_ && k < 2) {
+        // The stylus gives way: the probe triggers, and the motion brakes (stop_on_contact).
+        if (triggered_ < 0) triggered_ = k;
+        guard_clear_[k] = -1;
+        continue;
+      }
       settle();  // the machine stops
       throw Error(fmt::format(
           "collision: the {} ran into the {} with the ball centre at ({:.2f}, {:.2f}, {:.2f}) mm "
@@ -311,39 +317,141 @@ void VirtualCmm::settle() {
     servo_.step(hold, Eigen::Vector3d::Zero());
 }
 
+void Machine::move_legs(const std::vector<Eigen::Vector3d>& way,
+                        const std::vector<double>& speeds) {
+  if (speeds.size() != way.size()) throw Error("move: one speed per waypoint");
+  for (std::size_t i = 0; i < way.size(); ++i) {
+    try {
+      move(way[i], speeds[i]);
+    } catch (const UnexpectedTouch& e) {
+      throw UnexpectedTouch(e.what(), e.at, i);
+    }
+  }
+}
+
+std::optional<double> VirtualCmm::guarded_speed() const {
+  // Braking from v at the path's acceleration a after the servo's lag τ takes v·τ + v²/(2a):
+  // half the overtravel.
+  const double a = o_.path_acceleration,
+               tau = servo_.options().lag + 1 / servo_.options().position_gain,
+               room = 0.5 * o_.overtravel;
+  return a * (-tau + std::sqrt(tau * tau + 2 * room / a));
+}
+
 void VirtualCmm::move(const Eigen::Vector3d& to, double speed) {
   move_through({to}, speed);
 }
 
 void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double speed) {
-  if (!(speed > 0) || way.empty() ||
+  move_legs(way, std::vector<double>(way.size(), speed));
+}
+
+double VirtualCmm::pushed_in() const {
+  double deepest = penetration();
+  if (!solid_) return deepest;
+  const Eigen::Vector3d c = free_ball_centre(), ball = c + deflection_ + corner_;
+  const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
+  const Eigen::Vector3d& u = axis_;
+  deepest = std::max(deepest, r - solid_->distance(ball, r + 1, touchable_));
+  deepest = std::max(
+      deepest, rs - dent_ -
+                   solid_->distance(ball + r * u,
+                                    ball + (o_.stylus.length + o_.stylus.body_radius) * u, rs + 1));
+  return deepest;
+}
+
+void VirtualCmm::stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
+                                 const Eigen::Vector3d& dir, double speed, double start,
+                                 std::size_t passed) {
+  // The probe triggered: the machine brakes along its way at the path's acceleration, the
+  // stylus giving way against the part, and comes to rest.
+  const double a = o_.path_acceleration, dt = servo_.options().dt();
+  const int what = triggered_;
+  double v = speed, s = 0;
+  // The stylus gives way by as far as the carriage runs on after the trigger, at least.
+  const Eigen::Vector3d at = servo_.position();
+  const double first = std::max(0.0, pushed_in() - start);
+  double deepest = first;
+  auto push = [&] {
+    deepest = std::max({deepest, pushed_in() - start, first + (servo_.position() - at).norm()});
+  };
+  while (v > 0) {
+    v = std::max(0.0, v - a * dt);
+    s += v * dt;
+    servo_.step(target + s * dir, v * dir);
+    penetration(&deflection_);
+    check_solid();  // the probe's body still collides
+    push();
+  }
+  settle();
+  triggered_ = -1;
+  push();
+  const char* element = what == 1 ? "stylus" : "ball";
+  if (deepest > o_.overtravel)
+    throw Error(fmt::format(
+        "collision: the {} met the part at ({:.2f}, {:.2f}, {:.2f}) mm on a free move at {:.0f} "
+        "mm/s, too fast to stop within the probe's {:g} mm overtravel (pushed in {:.2f} mm)",
+        element, hit.x(), hit.y(), hit.z(), speed, o_.overtravel, deepest));
+  throw UnexpectedTouch(
+      fmt::format("the probe triggered on a free move: the {} met the part with the ball centre at "
+                  "({:.2f}, {:.2f}, {:.2f}) mm, and the machine stopped",
+                  element, hit.x(), hit.y(), hit.z()),
+      hit, passed);
+}
+
+void VirtualCmm::move_legs(const std::vector<Eigen::Vector3d>& way,
+                           const std::vector<double>& speeds) {
+  if (way.empty() || speeds.size() != way.size() ||
+      std::any_of(speeds.begin(), speeds.end(), [](double v) { return !(v > 0); }) ||
       std::any_of(way.begin(), way.end(), [](const auto& p) { return !p.allFinite(); }))
     throw Error("move: bad target or speed");
   const Eigen::Vector3d from = servo_.position();
   // The ball may leave a surface it touches (a retract) but enter none: it may be as deep in a
-  // face as it starts, and kCollision more.
+  // face as it starts, and kCollision more; the stem too (a move off an unexpected touch).
   struct Allowance {
     double& slot;
     double saved;
     ~Allowance() { slot = saved; }
-  } keep{ball_allowance_, ball_allowance_};
+  } keep{ball_allowance_, ball_allowance_}, keep_stem{stem_allowance_, stem_allowance_};
+  struct Guarded {
+    bool& on;
+    ~Guarded() { on = false; }
+  } guarded{guarded_};
+  guarded_ = true;
+  triggered_ = -1;
   if (solid_) {
-    const double r = probe_.options().tip_radius;
-    ball_allowance_ = std::max(
-        ball_allowance_, r - solid_->distance(free_ball_centre(), r, touchable_) + kCollision);
-    guard_clear_[0] = -1;
+    const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
+    const Eigen::Vector3d c = free_ball_centre();
+    ball_allowance_ =
+        std::max(ball_allowance_, r - solid_->distance(c, r, touchable_) + kCollision);
+    const Eigen::Vector3d& u = axis_;
+    stem_allowance_ = std::max(
+        0.0, rs - dent_ -
+                 solid_->distance(c + r * u, c + (o_.stylus.length + o_.stylus.body_radius) * u,
+                                  rs + 1) +
+                 kCollision);
+    guard_clear_ = {-1, -1, -1};
   }
   // A free move must not push the ball into the part's sections either: more than the deflection
-  // it started with (a retract starts in contact) and kCollision is a collision.
-  const double start = penetration();
+  // it started with (a retract starts in contact) and kCollision triggers the probe.
+  const double start = penetration(), start_in = pushed_in();
   // The legs (waypoints where the last one is left out), the arc length at each waypoint, and
   // the speed allowed there: 0 at the end, and at a turn of θ that of the arc of radius R that
   // cuts the corner by kCornerCut, R = kCornerCut / (1/cos(θ/2) − 1), and fits on half of each
   // leg, R·tan(θ/2) — at the path's acceleration as normal acceleration.
   const double a = o_.path_acceleration, dt = servo_.options().dt();
   std::vector<Eigen::Vector3d> pts{from};
-  for (const auto& p : way)
-    if ((p - pts.back()).norm() > 1e-9) pts.push_back(p);
+  std::vector<double> cap{0.0};       // the speed of the leg to each point
+  std::vector<std::size_t> index{0};  // how many waypoints are reached at each point
+  for (std::size_t i = 0; i < way.size(); ++i) {
+    if ((way[i] - pts.back()).norm() > 1e-9) {
+      pts.push_back(way[i]);
+      cap.push_back(speeds[i]);
+      index.push_back(i + 1);
+    } else {
+      index.back() = i + 1;
+    }
+  }
   const std::size_t legs = pts.size() - 1;
   std::vector<double> arc(pts.size(), 0.0), turn_speed(pts.size(), 0.0);
   std::vector<Eigen::Vector3d> dir(std::max<std::size_t>(legs, 1), Eigen::Vector3d::Zero());
@@ -369,6 +477,9 @@ void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double sp
     const double tau = servo_.options().lag + 1 / servo_.options().position_gain;
     turn_speed[i] = std::min(std::sqrt(a * R), kCornerCut / (2 * std::sin(half) * tau));
   }
+  // No faster at a waypoint than either leg at it.
+  for (std::size_t i = 1; i < legs; ++i)
+    turn_speed[i] = std::min({turn_speed[i], cap[i], cap[i + 1]});
   // The speed allowed at each waypoint also lets the carriage brake to the next one's.
   for (std::size_t i = legs; i-- > 1;)
     turn_speed[i] = std::min(turn_speed[i], std::sqrt(turn_speed[i + 1] * turn_speed[i + 1] +
@@ -386,8 +497,8 @@ void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double sp
     } else {
       // Slow enough to brake to the speed allowed at the next waypoint.
       const double next = turn_speed[leg + 1];
-      v = std::min(
-          {speed, v + a * dt, std::sqrt(next * next + 2 * a * std::max(0.0, arc[leg + 1] - s))});
+      v = std::min({cap[leg + 1], v + a * dt,
+                    std::sqrt(next * next + 2 * a * std::max(0.0, arc[leg + 1] - s))});
     }
     const Eigen::Vector3d target =
         legs ? Eigen::Vector3d(pts[leg] + dir[leg] * (std::min(s, L) - arc[leg])) : to;
@@ -397,14 +508,11 @@ void VirtualCmm::move_through(const std::vector<Eigen::Vector3d>& way, double sp
     const double depth = penetration(&deflection_);
     corner_.setZero();
     if (depth <= probe_.options().range) check_solid();
-    if (depth > start + kCollision) {
-      const Eigen::Vector3d p = servo_.position();
-      const Eigen::Vector3d a0 = pts[legs ? leg : 0], b0 = pts[legs ? leg + 1 : 0];
-      settle();  // the machine stops
-      throw Error(fmt::format(
-          "collision: a free move from ({:.2f}, {:.2f}, {:.2f}) to ({:.2f}, {:.2f}, {:.2f}) mm "
-          "ran the stylus into the part at ({:.2f}, {:.2f}, {:.2f}) mm",
-          a0.x(), a0.y(), a0.z(), b0.x(), b0.y(), b0.z(), p.x(), p.y(), p.z()));
+    if (triggered_ >= 0 || depth > start + kCollision) {
+      // The probe triggers on the contact; the machine brakes.
+      if (triggered_ < 0) triggered_ = 0;
+      stop_on_contact(free_ball_centre(), target, legs ? dir[leg] : Eigen::Vector3d::Zero(),
+                      servo_.velocity().norm(), start_in, index[legs ? leg : 0]);
     }
   }
   throw Error("move: the carriage did not settle");
@@ -420,11 +528,21 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
   const double dt = servo_.options().dt();
   std::optional<Touch> out;
   double s = 0;
+  // The stem, or the ball on a face off the plane, meeting the part stops the touch as it would
+  // a free move: the probe cannot tell where it is touched.
+  struct Guarded {
+    bool& on;
+    ~Guarded() { on = false; }
+  } guarded{guarded_};
+  guarded_ = true;
+  triggered_ = -1;
+  const double start_in = pushed_in();
   while (s <= distance) {
     servo_.step(start + d * s, d * speed);
     s += speed * dt;
     const auto r = read(c);
     if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
+    if (triggered_ >= 0) stop_on_contact(free_ball_centre(), start + d * s, d, speed, start_in, 0);
     if (r.overtravel) break;
     if (r.contact && r.deflection.norm() >= trigger) {
       const Sample smp = sample(r, 0);
@@ -526,8 +644,27 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   // Retract away from the surface.
   const auto end = path.at(s);
   settle();
-  move(servo_.position() + st.approach_clearance * end.normal, o_.positioning_speed);
+  retract({end.normal, out.stop.normal}, st.approach_clearance, out);
   return out;
+}
+
+void VirtualCmm::retract(const std::vector<Eigen::Vector3d>& along, double distance,
+                         ScanOutcome& out) {
+  // Along the first direction whose move the probe does not stop on the part (a part off its
+  // design may stand in the design normal's way at a corner), back to the scan's end between.
+  const Eigen::Vector3d end = servo_.position();
+  std::string met;
+  for (const Eigen::Vector3d& d : along) {
+    if (!(d.norm() > 0.5)) continue;
+    try {
+      move(end + distance * d.normalized(), o_.positioning_speed);
+      return;
+    } catch (const UnexpectedTouch& e) {
+      met = e.what();
+      move(end, o_.positioning_speed);
+    }
+  }
+  if (out.fault.empty()) out.fault = "the retract from the surface: " + met;
 }
 
 ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Vector3d& start,
@@ -610,7 +747,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
     }
   }
   settle();
-  move(servo_.position() + st.approach_clearance * dhat, o_.positioning_speed);
+  retract({dhat, out.stop.normal}, st.approach_clearance, out);
   return out;
 }
 

@@ -310,12 +310,30 @@ TEST(Controller, FreeMovesGoRoundThePartAndACollisionIsCaught) {
   sim::Part moved{d, {}};
   moved.deviation.translation = Eigen::Vector3d(2.4, -1.8, 0);  // 3 mm: the edge of the band
   {
+    // At 100 mm/s the machine cannot brake within the probe's overtravel: a collision.
     scan::VirtualCmm cmm(moved, {}, Eigen::Vector3d(50, -20, 25));
+    ASSERT_TRUE(cmm.guarded_speed());
+    EXPECT_LT(*cmm.guarded_speed(), 100);
     const std::string e = test::error_of([&] { cmm.move(Eigen::Vector3d(50, 120, 25), 100); });
-    EXPECT_NE(e.find("collision: a free move from (50.00, -20.00, 25.00) to (50.00, 120.00, "
-                     "25.00) mm ran the stylus into the part at (50.00, -"),
-              std::string::npos)
+    EXPECT_NE(e.find("collision: the ball met the part at (50.00, -"), std::string::npos) << e;
+    EXPECT_NE(e.find("too fast to stop within the probe's 2 mm overtravel"), std::string::npos)
         << e;
+  }
+  {
+    // At the guarded speed the probe stops it (UnexpectedTouch), within the overtravel; back the
+    // way it came is free.
+    scan::VirtualCmm cmm(moved, {}, Eigen::Vector3d(50, -20, 25));
+    const double v = *cmm.guarded_speed();
+    try {
+      cmm.move_through({Eigen::Vector3d(50, -10, 25), Eigen::Vector3d(50, 120, 25)}, v);
+      ADD_FAILURE() << "the move went through the part";
+    } catch (const scan::UnexpectedTouch& t) {
+      EXPECT_EQ(t.passed, 1u);
+      // The part's edge, 3 mm off its design's at y = 0, meets the ball (tip radius 1 mm).
+      EXPECT_NEAR(t.at.y(), -1.8 - 1.0, 0.1);
+      EXPECT_LT(cmm.position().y() - t.at.y(), 2.0);
+    }
+    cmm.move(Eigen::Vector3d(50, -10, 25), v);
     // Above the section plane by more than the tip radius the slice is not met.
     cmm.move(Eigen::Vector3d(50, -20, 40), 100);
     cmm.move(Eigen::Vector3d(50, 120, 40), 100);

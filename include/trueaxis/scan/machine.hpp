@@ -16,9 +16,11 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "trueaxis/design/design.hpp"
+#include "trueaxis/error.hpp"
 #include "trueaxis/sim/cmm.hpp"
 #include "trueaxis/sim/machine.hpp"
 #include "trueaxis/sim/part.hpp"
@@ -47,6 +49,18 @@ struct ScanOutcome {
   bool completed = false;       // ran to the end (else stopped by the monitor or a fault)
   Sample stop;                  // the last tick's state (where it stopped)
   std::string fault;            // why the machine stopped by itself ("" if it did not)
+};
+
+// A free move stopped by the probe: the ball, or the stem above it, met the part where the move
+// expected none, and the machine braked within the probe's overtravel. The machine stands
+// where it stopped, the stylus still against the part. Over I++ DME: error 1001, "Illegal
+// touch", on a GoTo.
+class UnexpectedTouch : public Error {
+ public:
+  UnexpectedTouch(const std::string& what, const Eigen::Vector3d& ball, std::size_t passed)
+      : Error(what), at(ball), passed(passed) {}
+  Eigen::Vector3d at;      // the ball centre (scale reading) where the probe triggered (mm)
+  std::size_t passed = 0;  // how many of the move's waypoints it had reached
 };
 
 struct Touch {
@@ -93,8 +107,15 @@ class Machine {
   virtual std::optional<double> probe_range() const { return std::nullopt; }
   virtual Eigen::Vector3d position() const = 0;
   // Free move of the (undeflected) stylus centre to `to` at `speed` mm/s, in a straight line.
-  // Throws Error if it runs the stylus into the part (a collision).
+  // Throws UnexpectedTouch if the probe stops it on the part, and Error if it runs the stylus
+  // into the part (a collision: too fast to stop within the probe's overtravel, or the probe's
+  // body).
   virtual void move(const Eigen::Vector3d& to, double speed) = 0;
+  // The fastest free move the machine stops within half the probe's overtravel when the ball
+  // meets the part (mm/s): a move near the part at most this fast ends in UnexpectedTouch, not a
+  // collision, where the part is further off its design than the move allowed for. Empty when
+  // the machine does not say (then nothing is slowed for it).
+  virtual std::optional<double> guarded_speed() const { return std::nullopt; }
   // Free move through the waypoints in turn, straight from each to the next, at up to `speed`.
   // A machine that can (the virtual CMM) does not stop at a waypoint: it turns there at the
   // speed of an arc that cuts the corner by at most kCornerCut and fits on half of each leg, so
@@ -102,8 +123,12 @@ class Machine {
   // legs. By default, one move() per waypoint.
   static constexpr double kCornerCut = 0.2;  // mm
   virtual void move_through(const std::vector<Eigen::Vector3d>& way, double speed) {
-    for (const auto& p : way) move(p, speed);
+    move_legs(way, std::vector<double>(way.size(), speed));
   }
+  // The same with a speed per leg: speeds[i] on the way to way[i] (mm/s, as many as waypoints).
+  // UnexpectedTouch::passed counts the waypoints reached.
+  virtual void move_legs(const std::vector<Eigen::Vector3d>& way,
+                         const std::vector<double>& speeds);
   // From `start` (stylus centre), approach along unit `direction` at `speed` until the deflection
   // reaches `trigger`; then retract 1 mm along the approach (no further than `start`). Nothing if
   // no contact within `distance` mm.
@@ -161,6 +186,10 @@ struct VirtualCmmOptions {
   std::shared_ptr<const solid::Mesh> solid;
   Stylus stylus;
   bool table = true;  // the part stands on the machine's table (a plane at its lowest point)
+  // How far the stylus gives way past the probe's trigger before the probe is damaged (mm): a
+  // free move that meets the part stops on the probe's trigger (UnexpectedTouch) when the machine
+  // brakes, at path_acceleration, within this; beyond, it is a collision.
+  double overtravel = 2.0;
 };
 
 class VirtualCmm : public Machine {
@@ -169,10 +198,13 @@ class VirtualCmm : public Machine {
              const Eigen::Vector3d& home = Eigen::Vector3d::Zero());
   double time() const override { return servo_.time(); }
   std::optional<double> probe_range() const override { return probe_.options().range; }
+  std::optional<double> guarded_speed() const override;
   Eigen::Vector3d position() const override { return servo_.position(); }
   void orient(const Eigen::Vector3d& axis) override;
   void move(const Eigen::Vector3d& to, double speed) override;
   void move_through(const std::vector<Eigen::Vector3d>& way, double speed) override;
+  void move_legs(const std::vector<Eigen::Vector3d>& way,
+                 const std::vector<double>& speeds) override;
   std::optional<Touch> touch(const design::Plane& plane, const Eigen::Vector3d& start,
                              const Eigen::Vector3d& direction, double distance, double speed,
                              double trigger) override;
@@ -223,6 +255,10 @@ class VirtualCmm : public Machine {
   double penetration(Eigen::Vector3d* push = nullptr) const;
   // Brings the carriage to rest where it is (the end of a scan or touch, before retracting).
   void settle();
+  // After a scan: `distance` away from the surface along the first of `along` the probe is not
+  // stopped on (back to the scan's end after each that is); where none, the ball stays at the
+  // end and out.fault says why.
+  void retract(const std::vector<Eigen::Vector3d>& along, double distance, ScanOutcome& out);
 
   // The solid: the real part, the table's height, the faces the ball may touch (those crossing
   // the plane of the operation under way), how far the ball may enter the others, and where and
@@ -250,7 +286,21 @@ class VirtualCmm : public Machine {
   // The operation in `plane`: its faces may be touched by the ball (null: none, a free move).
   void touch_faces(const design::Plane* plane);
   // Checks the ball, stylus and body at the carriage's position; throws Error at a collision.
+  // In a guarded motion (a free move, a touch's approach) the ball or the stem meeting the part
+  // is not thrown: it sets triggered_ (0 ball, 1 stem), and the motion brakes.
   void check_solid();
+  bool guarded_ = false;
+  int triggered_ = -1;
+  double stem_allowance_ = 0;  // how deep the stem may be in the part (a move that starts there)
+  // How far the ball and the stem are pushed into the part (the section's contours and the
+  // solid) where the carriage stands (mm).
+  double pushed_in() const;
+  // After the probe triggered at `speed` along `dir` with the ball at `hit`: brakes, then throws
+  // UnexpectedTouch (passed: waypoints reached), or Error when the stylus was pushed in beyond
+  // the overtravel.
+  [[noreturn]] void stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
+                                    const Eigen::Vector3d& dir, double speed, double start,
+                                    std::size_t passed);
   struct Operation;  // sets and restores the touchable faces
 };
 
