@@ -547,7 +547,10 @@ struct Engine::State {
   }
   void go(const Eigen::Vector3d& x, double speed, double accel) {
     if (!cmm.within_travel(x)) throw Fail{2500};
-    if (!cmm.move(x, speed, accel, world())) throw Fail{2504};
+    // The probe stopped the move on the part: an illegal touch when the machine stopped within
+    // the probe's overtravel, a collision beyond.
+    if (!cmm.move(x, speed, accel, world()))
+      throw Fail{cmm.last_push() <= cmm.options().overtravel ? 1001 : 2504};
     // With the probe above every box, the operator may change the set-up: none is there until
     // a PtMeas aims at one.
     if (boxes && cmm.position().z() > boxes->top + cmm.tip_radius()) boxes->active->store(-1);

@@ -208,6 +208,12 @@ void RemoteCmm::move(const Eigen::Vector3d& to, double speed) {
   const auto tr = run(fmt::format("GoTo({})", xyz(to)));
   if (tr.errors.empty()) return;
   const auto& e = tr.errors.front();
+  if (number(e) == 1001)
+    throw scan::UnexpectedTouch(
+        fmt::format("the probe stopped the move to ({:.3f}, {:.3f}, {:.3f}) mm on the part (I++ "
+                    "DME {})",
+                    to.x(), to.y(), to.z(), describe(e)),
+        position(), 0);
   if (number(e) == 2504)
     throw Error(
         fmt::format("collision: the stylus met the part on the way to ({:.3f}, {:.3f}, "

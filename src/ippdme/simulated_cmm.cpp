@@ -24,6 +24,8 @@ void SimulatedCmmOptions::validate() const {
   if (!(trigger > 0 && trigger < probe.range))
     throw Error(fmt::format("virtual CMM: trigger deflection {:g} mm must be in (0, {:g})", trigger,
                             probe.range));
+  if (!(overtravel > 0 && overtravel <= 20))
+    throw Error(fmt::format("virtual CMM: overtravel {:g} mm must be in (0, 20]", overtravel));
   if (!(point_deflection >= trigger && point_deflection < max_deflection))
     throw Error(fmt::format(
         "virtual CMM: the point deflection {:g} mm must lie between trigger and over-push",
@@ -120,7 +122,18 @@ bool SimulatedCmm::move(const Eigen::Vector3d& to, double speed, double accel,
     tick(from + dir * std::min(s, L), dir * v);
     s = std::min(L, s + v * dt);
     if (surface && read(surface).true_deflection.norm() > start + o_.trigger) {
+      // The probe triggers: the machine brakes at the move's acceleration, the stylus giving
+      // way by as far as the carriage runs on.
+      const Eigen::Vector3d at = servo_.position();
+      double b = s;
+      while (v > 0) {
+        v = std::max(0.0, v - a * dt);
+        b += v * dt;
+        tick(from + dir * b, dir * v);
+      }
       settle();
+      pushed_ = std::max(read(surface).true_deflection.norm() - start,
+                         (servo_.position() - at).norm() + o_.trigger);
       return false;
     }
   }

@@ -50,9 +50,10 @@ Planner Planner::moved(const Eigen::Affine3d& t) const {
 }
 
 double Planner::element(int k, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
-                        const Eigen::Vector3d& u, const std::vector<char>& skip,
-                        double look) const {
+                        const Eigen::Vector3d& u, const std::vector<char>& skip, double look,
+                        bool table) const {
   const double rs = stylus_.shaft(r_), rb = stylus_.body_radius;
+  const double table_z = table ? table_z_ : -INFINITY;
   if (look < 0) look = margin_ + kLookout;
   // As the virtual CMM checks it: the stem up to the probe's round nose, then the body. Moving
   // along its own axis, each element sweeps a segment of that line: from its lower end at the
@@ -63,7 +64,7 @@ double Planner::element(int k, const Eigen::Vector3d& lo, const Eigen::Vector3d&
     double d =
         lo == hi ? part_->distance(lo, r_ + look, skip) : part_->distance(lo, hi, r_ + look, skip);
     if (skip.empty() && part_->inside(lo)) d = -d;
-    return std::min(d - r_, std::min(lo.z(), hi.z()) - r_ - table_z_);
+    return std::min(d - r_, std::min(lo.z(), hi.z()) - r_ - table_z);
   }
   const Eigen::Vector3d a = lo + (k == 1 ? r_ : stylus_.length + rb) * u,
                         b = hi +
@@ -71,7 +72,7 @@ double Planner::element(int k, const Eigen::Vector3d& lo, const Eigen::Vector3d&
                                 u;
   const double radius = k == 1 ? rs : rb;
   return std::min(part_->distance(a, b, radius + look, skip) - radius,
-                  std::min(a.z(), b.z()) - radius - table_z_);
+                  std::min(a.z(), b.z()) - radius - table_z);
 }
 
 double Planner::clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
@@ -79,6 +80,12 @@ double Planner::clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
   if (!part_) return INFINITY;
   return std::min(
       {element(0, c, c, axis, skip), element(1, c, c, axis, skip), element(2, c, c, axis, skip)});
+}
+
+double Planner::part_clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis) const {
+  if (!part_) return INFINITY;
+  return std::min({element(0, c, c, axis, {}, -1, false), element(1, c, c, axis, {}, -1, false),
+                   element(2, c, c, axis, {}, -1, false)});
 }
 
 double Planner::swept_along_axis(const Eigen::Vector3d& a, const Eigen::Vector3d& b,

@@ -38,44 +38,50 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
   auto enters = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
     const double L = (b - a).norm();
     for (double t = 0; t <= L;) {
-      const double c = solid.clearance(a + (b - a) * (t / L), u);
+      const double c = solid.part_clearance(a + (b - a) * (t / L), u);
       if (c < band) return t;
       t += std::max(0.2, c - band);
     }
     return L;
   };
-  // A way that ends coming down along the stylus beside the part comes down outside the band
-  // where it can, and goes across to its end in it: the way down at full speed, the last
-  // millimetres at the guarded one.
+  // A way that ends coming down along the stylus beside the part comes down further out where
+  // that leaves less of it to go at the guarded speed: down a column whose foot lies outside the
+  // band (one of 16 directions across the stylus), then across to its end.
+  auto slow_down = [&](const Eigen::Vector3d& top, const Eigen::Vector3d& foot) {
+    return (foot - top).norm() - enters(top, foot);
+  };
   std::vector<Eigen::Vector3d> to_go = way;
   if (const std::size_t n = to_go.size(); n >= 2) {
-    const Eigen::Vector3d &top = to_go[n - 2], &end = to_go[n - 1];
+    const Eigen::Vector3d top = to_go[n - 2], end = to_go[n - 1];
     const Eigen::Vector3d down = end - top;
+    const Eigen::Vector3d before = n >= 3 ? to_go[n - 3] : m.position();
     const double c_end = solid.clearance(end, u);
-    if (down.dot(u) < 0 && down.cross(u).norm() < 1e-6 * down.norm() && c_end < band) {
+    if (down.dot(u) < 0 && down.cross(u).norm() < 1e-6 * down.norm() &&
+        solid.part_clearance(end, u) < band) {
       const Eigen::Vector3d e1 = u.unitOrthogonal(), e2 = u.cross(e1);
-      std::optional<Eigen::Vector3d> best;
-      double best_d = INFINITY;
-      for (int k = 0; k < 16; ++k) {
+      double best = slow_down(top, end);
+      std::optional<Eigen::Vector3d> shift;
+      for (int k = 0; k < 16 && best > 0; ++k) {
         const double t = std::numbers::pi / 8 * k;
         const Eigen::Vector3d h = std::cos(t) * e1 + std::sin(t) * e2;
-        for (double d = 0.5; d <= band + 1 && d < best_d; d += 0.5) {
+        for (double d = 0.5; d <= band + 1 && d < best; d += 0.5) {
           const Eigen::Vector3d q = end + d * h;
-          if (solid.clearance(q, u) < band) continue;
+          if (solid.part_clearance(q, u) < band) continue;
           if (solid.clear(q, end, u, std::min(solid.margin(), c_end - 0.01)) &&
-              solid.clear(top + d * h, q, u, band)) {
-            best = q;
-            best_d = d;
+              solid.clear(top + d * h, q, u, solid.margin()) &&
+              solid.clear(before, top + d * h, u, solid.margin())) {
+            const double cost = slow_down(top + d * h, q) + d;
+            if (cost < best) {
+              best = cost;
+              shift = d * h;
+            }
           }
           break;
         }
       }
-      if (best) {
-        to_go[n - 2] = top + best_d * (*best - end) / best_d;
-        to_go.insert(to_go.end() - 1, *best);
-        // The leg across to the way down's new top keeps clear too, or nothing changes.
-        const Eigen::Vector3d before = n >= 3 ? to_go[n - 3] : m.position();
-        if (!solid.clear(before, to_go[n - 2], u, solid.margin())) to_go = way;
+      if (shift) {
+        to_go[n - 2] = top + *shift;
+        to_go.insert(to_go.end() - 1, end + *shift);
       }
     }
   }
@@ -89,7 +95,9 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
       speeds.push_back(o.move_speed);
       continue;
     }
-    const double in = enters(a, b);
+    // A rise along the stylus takes the ball through where the stylus stood: not slowed.
+    const bool rise = (b - a).dot(u) > 0 && (b - a).cross(u).norm() < 1e-6 * L;
+    const double in = rise ? L : enters(a, b);
     const double out = in >= L ? L : L - enters(b, a);
     const Eigen::Vector3d d = (b - a) / L;
     if (in >= L) {

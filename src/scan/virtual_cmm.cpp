@@ -21,6 +21,18 @@ constexpr double kCollision = 0.05;
 // counts as this far.
 constexpr double kSolidLookout = 10;
 
+// Within a motion the probe's trigger stops (a free move, a touch's approach, a scan): the ball
+// off its surface or the stem meeting the part sets the trigger instead of being a collision.
+struct Guard {
+  bool& on;
+  bool saved;
+  Guard(bool& flag, int& triggered) : on(flag), saved(flag) {
+    on = true;
+    triggered = -1;
+  }
+  ~Guard() { on = saved; }
+};
+
 bool same_plane(const design::Plane& a, const design::Plane& b) {
   const Eigen::Vector3d na = a.normal.normalized(), nb = b.normal.normalized();
   return na.cross(nb).norm() < 1e-9 && std::abs((b.origin - a.origin).dot(na)) < 1e-6;
@@ -360,9 +372,9 @@ double VirtualCmm::pushed_in() const {
   return deepest;
 }
 
-void VirtualCmm::stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
-                                 const Eigen::Vector3d& dir, double speed, double start,
-                                 std::size_t passed) {
+std::string VirtualCmm::brake(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
+                              const Eigen::Vector3d& dir, double speed, double start,
+                              const char* doing) {
   // The probe triggered: the machine brakes along its way at the path's acceleration, the
   // stylus giving way against the part, and comes to rest.
   const double a = o_.path_acceleration, dt = servo_.options().dt();
@@ -389,14 +401,19 @@ void VirtualCmm::stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector
   const char* element = what == 1 ? "stylus" : "ball";
   if (deepest > o_.overtravel)
     throw Error(fmt::format(
-        "collision: the {} met the part at ({:.2f}, {:.2f}, {:.2f}) mm on a free move at {:.0f} "
-        "mm/s, too fast to stop within the probe's {:g} mm overtravel (pushed in {:.2f} mm)",
-        element, hit.x(), hit.y(), hit.z(), speed, o_.overtravel, deepest));
-  throw UnexpectedTouch(
-      fmt::format("the probe triggered on a free move: the {} met the part with the ball centre at "
-                  "({:.2f}, {:.2f}, {:.2f}) mm, and the machine stopped",
-                  element, hit.x(), hit.y(), hit.z()),
-      hit, passed);
+        "collision: the {} met the part at ({:.2f}, {:.2f}, {:.2f}) mm {} at {:.0f} mm/s, too "
+        "fast to stop within the probe's {:g} mm overtravel (pushed in {:.2f} mm)",
+        element, hit.x(), hit.y(), hit.z(), doing, speed, o_.overtravel, deepest));
+  return fmt::format(
+      "the probe triggered {}: the {} met the part with the ball centre at ({:.2f}, "
+      "{:.2f}, {:.2f}) mm, and the machine stopped",
+      doing, element, hit.x(), hit.y(), hit.z());
+}
+
+void VirtualCmm::stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
+                                 const Eigen::Vector3d& dir, double speed, double start,
+                                 std::size_t passed) {
+  throw UnexpectedTouch(brake(hit, target, dir, speed, start, "on a free move"), hit, passed);
 }
 
 void VirtualCmm::move_legs(const std::vector<Eigen::Vector3d>& way,
@@ -413,12 +430,7 @@ void VirtualCmm::move_legs(const std::vector<Eigen::Vector3d>& way,
     double saved;
     ~Allowance() { slot = saved; }
   } keep{ball_allowance_, ball_allowance_}, keep_stem{stem_allowance_, stem_allowance_};
-  struct Guarded {
-    bool& on;
-    ~Guarded() { on = false; }
-  } guarded{guarded_};
-  guarded_ = true;
-  triggered_ = -1;
+  const Guard guard(guarded_, triggered_);
   if (solid_) {
     const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
     const Eigen::Vector3d c = free_ball_centre();
@@ -530,12 +542,7 @@ std::optional<Touch> VirtualCmm::touch(const design::Plane& plane, const Eigen::
   double s = 0;
   // The stem, or the ball on a face off the plane, meeting the part stops the touch as it would
   // a free move: the probe cannot tell where it is touched.
-  struct Guarded {
-    bool& on;
-    ~Guarded() { on = false; }
-  } guarded{guarded_};
-  guarded_ = true;
-  triggered_ = -1;
+  const Guard guard(guarded_, triggered_);
   const double start_in = pushed_in();
   while (s <= distance) {
     servo_.step(start + d * s, d * speed);
@@ -577,6 +584,7 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
   // Approach: from outside the path, along the normal, until the probe is pushed by Ep.
   const Eigen::Vector3d outside = p0.p + st.approach_clearance * p0.normal;
   move(outside, o_.positioning_speed);
+  const Guard guard(guarded_, triggered_);
   double cnorm = st.approach_clearance;  // the normal correction: offset from the path (mm)
   const double approach_speed = o_.approach_speed;
   for (;;) {
@@ -584,6 +592,12 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
     cnorm -= approach_speed * dt;
     const auto r = read(c);
     if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
+    if (triggered_ >= 0) {
+      out.fault = brake(free_ball_centre(), p0.p + cnorm * p0.normal, -p0.normal, approach_speed,
+                        penetration(), "on the approach to the scan");
+      move(outside, o_.positioning_speed);
+      return out;
+    }
     Sample smp = sample(r, 0);
     smp.delta_l = (servo_.position() + r.deflection - p0.p).dot(p0.normal) - st.pushing;
     if (r.contact && r.deflection.norm() >= st.pushing) break;
@@ -619,6 +633,11 @@ ScanOutcome VirtualCmm::scan_path(const design::ScanPath& path, const ScanSettin
     const auto& now = here;
     const auto r = read(c);
     if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
+    if (triggered_ >= 0) {
+      out.fault = brake(free_ball_centre(), here.p + cnorm * here.normal, here.tangent, v,
+                        penetration(), "scanning");
+      break;
+    }
     Sample smp = sample(r, s);
     // On a perfect part the ball centre runs Ep outside the (pushed-in) path.
     smp.delta_l = (servo_.position() + r.deflection - now.p).dot(now.normal) - st.pushing;
@@ -652,16 +671,18 @@ void VirtualCmm::retract(const std::vector<Eigen::Vector3d>& along, double dista
                          ScanOutcome& out) {
   // Along the first direction whose move the probe does not stop on the part (a part off its
   // design may stand in the design normal's way at a corner), back to the scan's end between.
+  // At the guarded speed: the way off a part that is not where its design is may meet it.
   const Eigen::Vector3d end = servo_.position();
+  const double v = std::min(o_.positioning_speed, *guarded_speed());
   std::string met;
   for (const Eigen::Vector3d& d : along) {
     if (!(d.norm() > 0.5)) continue;
     try {
-      move(end + distance * d.normalized(), o_.positioning_speed);
+      move(end + distance * d.normalized(), v);
       return;
     } catch (const UnexpectedTouch& e) {
       met = e.what();
-      move(end, o_.positioning_speed);
+      move(end, v);
     }
   }
   if (out.fault.empty()) out.fault = "the retract from the surface: " + met;
@@ -677,6 +698,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
   const double dt = servo_.options().dt(), gain = 40;
   ScanOutcome out;
   move(start, o_.positioning_speed);
+  const Guard guard(guarded_, triggered_);
   // Approach until pushed by Ep.
   const Eigen::Vector3d dir = approach.normalized();
   double s = 0;
@@ -686,6 +708,12 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
     s += o_.approach_speed * dt;
     r = read(c);
     if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
+    if (triggered_ >= 0) {
+      out.fault = brake(free_ball_centre(), start + s * dir, dir, o_.approach_speed, penetration(),
+                        "on the approach to the scan");
+      move(start, o_.positioning_speed);
+      return out;
+    }
     if (r.contact && r.deflection.norm() >= st.pushing) break;
     if (s > 2 * (st.approach_clearance + st.approach_limit) + 10) {
       out.fault = "autonomous scan: no surface found on the approach";
@@ -710,6 +738,10 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
     servo_.step(servo_.position(), vel);
     r = read(c);
     if (!r.overtravel) check_solid();  // over-travel: the probe stops the machine first
+    if (triggered_ >= 0) {
+      out.fault = brake(free_ball_centre(), servo_.position(), d, v, penetration(), "scanning");
+      break;
+    }
     Sample smp = sample(r, arc);
     if (r.contact) {
       arc += (smp.surface - last_surface).norm();

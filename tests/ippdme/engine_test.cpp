@@ -369,6 +369,20 @@ TEST(IppEngine, PtMeasReportsWhereTheProbeMetTheSurfaceWithTheMachinesErrorsInIt
   // move from the home through the part is a collision (2504); round it, above the section.
   EXPECT_NE(ps("00003 GoTo(X(75), Y(5), Z(0))")[1].find("2504"), std::string::npos);
   ps("00004 ClearAllErrors()");
+  {
+    // Slowly, the probe stops it within its overtravel: an illegal touch (1001), and back the
+    // way it came is free.
+    Session slow(op);
+    slow("00001 StartSession()");
+    slow("00002 Home()");
+    slow("00003 SetProp(Tool.GoToPar.Speed(20))");
+    const auto touched = slow("00004 GoTo(X(75), Y(5), Z(0))");
+    ASSERT_GE(touched.size(), 2u);
+    EXPECT_NE(touched[1].find("1001"), std::string::npos) << touched[1];
+    slow("00005 ClearAllErrors()");
+    const auto back = slow("00006 GoTo(X(0), Y(0), Z(0))");
+    EXPECT_EQ(back.back().find("E"), std::string::npos) << back.back();
+  }
   ps("00005 GoTo(Z(10))");
   ps("00006 GoTo(X(75), Y(5))");
   ps("00007 GoTo(Z(0))");

@@ -145,7 +145,19 @@ TEST(RemoteCmm, CollisionsAndMissedSurfacesAreReportedAsTheControllerExpects) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("collision"), std::string::npos) << e.what();
   }
+  // Slowly, the server's probe stops the move within its overtravel (1001): an unexpected
+  // touch, where the machine stopped, that the controller backs off from.
+  cmm.move(kHome, 100);
+  try {
+    cmm.move(Eigen::Vector3d(kHome.x(), kHome.y(), on.z()), 20);
+    cmm.move(Eigen::Vector3d(kHome.x(), 200, on.z()), 20);
+    ADD_FAILURE() << "a slow move through the part was not stopped";
+  } catch (const scan::UnexpectedTouch& e) {
+    EXPECT_NE(std::string(e.what()).find("1001"), std::string::npos) << e.what();
+    EXPECT_NEAR((e.at - cmm.position()).norm(), 0, 1e-3);
+  }
   // After the error the session goes on: a touch into empty space finds nothing (1006).
+  cmm.move(Eigen::Vector3d(kHome.x(), kHome.y(), on.z()), 20);
   cmm.move(kHome, 100);
   const auto none = cmm.touch(s.plane, kHome, Eigen::Vector3d::UnitZ(), 5, 10, 0.3);
   EXPECT_FALSE(none.has_value());

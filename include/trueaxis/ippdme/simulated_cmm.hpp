@@ -56,6 +56,10 @@ struct SimulatedCmmOptions {
   double min_scan_deflection = 0.1;
   double correction_gain = 60;  // scanning: how fast the deflection is held (1/s)
   double max_deflection = 0.8;  // beyond this the probe is over-pushed (error 2001)
+  // How far the stylus gives way past the trigger before the probe is damaged (mm): a GoTo that
+  // meets the part brakes at its acceleration and ends in error 1001 ("Illegal touch") when it
+  // stops within this, in 2504 ("Collision") beyond.
+  double overtravel = 2.0;
   // Throws Error naming the option (the home outside the travel, a trigger outside (0, range)).
   void validate() const;
 };
@@ -80,6 +84,9 @@ class SimulatedCmm {
   // `surface` (if set) is checked for a collision: the move stops with the stylus against it
   // and the function returns false. True when it arrived.
   bool move(const Eigen::Vector3d& to, double speed, double accel, const Surface& surface = {});
+  // How far the stylus was pushed into the surface when the last move stopped on it: the probe
+  // triggered and the machine braked at the move's acceleration (mm).
+  double last_push() const { return pushed_; }
 
   // One probing: from the current position along unit `direction` for up to `distance` mm at
   // `speed`, until the deflection reaches the trigger. Latches the ball centre as read and the
@@ -125,6 +132,7 @@ class SimulatedCmm {
   void settle();
 
  private:
+  double pushed_ = 0;
   SimulatedCmmOptions o_;
   sim::Servo servo_;
   sim::Probe probe_;

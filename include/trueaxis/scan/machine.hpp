@@ -298,6 +298,10 @@ class VirtualCmm : public Machine {
   // After the probe triggered at `speed` along `dir` with the ball at `hit`: brakes, then throws
   // UnexpectedTouch (passed: waypoints reached), or Error when the stylus was pushed in beyond
   // the overtravel.
+  // The braking: throws Error at a collision, else returns what met the part where, in words
+  // (`doing`: "on a free move", "scanning").
+  std::string brake(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
+                    const Eigen::Vector3d& dir, double speed, double start, const char* doing);
   [[noreturn]] void stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
                                     const Eigen::Vector3d& dir, double speed, double start,
                                     std::size_t passed);

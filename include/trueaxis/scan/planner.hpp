@@ -46,6 +46,9 @@ class Planner {
   // skip[face] set do not count for the ball.
   double clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis,
                    const std::vector<char>& skip = {}) const;
+  // The same from the part alone, the table left out (a part off its design stands on the
+  // table as the design does).
+  double part_clearance(const Eigen::Vector3d& c, const Eigen::Vector3d& axis) const;
   // Whether the straight move from a to b keeps every element `margin` from the part (checked
   // by conservative advancement: a step never longer than the clearance less the margin).
   bool clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
@@ -99,8 +102,8 @@ class Planner {
   // along the axis (lo == hi: one place); a clearance beyond `look` mm (by default the margin
   // and a lookout of 20 mm) counts as that far.
   double element(int k, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
-                 const Eigen::Vector3d& axis, const std::vector<char>& skip,
-                 double look = -1) const;
+                 const Eigen::Vector3d& axis, const std::vector<char>& skip, double look = -1,
+                 bool table = true) const;
   // The least clearance of the ball, stylus and body (no face skipped) over a move from a to b
   // along the unit axis u itself.
   double swept_along_axis(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
