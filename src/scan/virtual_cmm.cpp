@@ -60,6 +60,8 @@ VirtualCmm::VirtualCmm(sim::Part part, const VirtualCmmOptions& options,
     contours_.emplace_back(pl, sim::true_contour(part_, s));
   }
   o_.stylus.validate(probe_.options().tip_radius);
+  if (!(o_.overtravel > 0 && o_.overtravel <= 20))
+    throw Error(fmt::format("probe overtravel {:g} mm: must be in (0, 20]", o_.overtravel));
   std::shared_ptr<const solid::Mesh> design_solid = o_.solid;
   if (!design_solid && !part_.design.solid.empty())
     design_solid = solid::load_step(part_.design.solid);

@@ -44,6 +44,25 @@ TEST(VirtualCmm, FreeMoveThroughWaypointsTurnsWithoutStopping) {
   EXPECT_GT(time_through(90), time_through(10));
   EXPECT_THROW(through.move_through({}, 200), Error);
   EXPECT_THROW(through.move_through({Eigen::Vector3d(NAN, 0, 0)}, 200), Error);
+  // A speed per leg: the same way with one leg slowed to the guarded speed takes longer, and
+  // no slower leg than the speed it is given.
+  scan::VirtualCmm slowed(part, {}, home);
+  std::vector<double> speeds(way.size(), 200);
+  speeds[3] = *slowed.guarded_speed();
+  slowed.move_legs(way, speeds);
+  EXPECT_LT((slowed.position() - way.back()).norm(), 1e-4);
+  EXPECT_GT(slowed.time(), through.time());
+  EXPECT_THROW(slowed.move_legs(way, {200}), Error);
+  speeds[3] = 0;
+  EXPECT_THROW(slowed.move_legs(way, speeds), Error);
+  // The guarded speed stops the machine within half the probe's overtravel: braking at the
+  // path's acceleration after the servo's lag (2000 mm/s², 7 ms, 2 mm: 50.8 mm/s).
+  constexpr double kSpeedTol = 0.1;  // mm/s
+  EXPECT_NEAR(*slowed.guarded_speed(), 50.8, kSpeedTol);
+  scan::VirtualCmmOptions bad;
+  bad.overtravel = 0;
+  EXPECT_NE(test::error_of([&] { scan::VirtualCmm(part, bad, home); }).find("overtravel"),
+            std::string::npos);
 }
 
 TEST(VirtualCmm, DesignValueScanOfAPerfectPartFollowsItsSurface) {
