@@ -209,6 +209,12 @@ std::vector<Command> add_scan_commands(CLI::App& app) {
                 "how far off its design the part may stand (mm): free moves keep this far from "
                 "the part's solid, and only stretches a part this far off cannot bring onto the "
                 "stylus are scanned (default: the tolerance + 1 mm)");
+  c->add_option("--guarded-speed", a->o.guarded_speed,
+                "free moves within 2 mm beyond that margin go at most this fast (mm/s), so that "
+                "the probe stops the machine on a part further off than the margin instead of a "
+                "collision (default 0: the machine's; the virtual CMM's is 51 mm/s, and over "
+                "--cmm nothing is slowed unless this is given)")
+      ->capture_default_str();
   c->add_option("--max-autonomous", a->o.max_autonomous,
                 "autonomous corrections allowed per section before it is given up")
       ->capture_default_str();

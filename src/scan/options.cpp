@@ -41,6 +41,8 @@ void ControllerOptions::validate() const {
     bad("clearance", clearance, "must be in [1, 1000] mm");
   if (!(margin >= 0 && margin <= 100))
     bad("margin", margin, "must be in [0, 100] mm (0: automatic)");
+  if (!(guarded_speed >= 0 && guarded_speed <= move_speed))
+    bad("guarded speed", guarded_speed, "must be in [0, the move speed] mm/s (0: the machine's)");
   stylus.validate(path.tip_radius);
   if (!(autonomous_speed > 0 && autonomous_speed <= 100))
     bad("autonomous speed", autonomous_speed, "must be in (0, 100] mm/s");

@@ -26,7 +26,7 @@ constexpr double kBandMargin = 1.5;
 
 std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded(
     const std::vector<Eigen::Vector3d>& way) const {
-  const std::optional<double> slow = m.guarded_speed();
+  const std::optional<double> slow = guard_speed();
   if (!slow || *slow >= o.move_speed || !planner().part())
     return {way, std::vector<double>(way.size(), o.move_speed)};
   const Planner& solid = planner();
@@ -139,7 +139,7 @@ void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
     // Back the way the ball came, at the guarded speed, to the last waypoint it passed (where
     // the guarded leg began, or where the move started): free there when it passed.
     const Eigen::Vector3d back = e.passed > 0 ? legs[std::min(e.passed, legs.size()) - 1] : from;
-    m.move(back, std::min(o.move_speed, m.guarded_speed().value_or(o.move_speed)));
+    m.move(back, std::min(o.move_speed, guard_speed().value_or(o.move_speed)));
     ++unexpected;
     const double off = planner().clearance(e.at, m.stylus_axis());
     seen = std::max(seen, off);
@@ -463,7 +463,7 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
       });
     } catch (const UnexpectedTouch& e) {
       // The stem, or the ball off the plane, met the part first: no point the probe can place.
-      m.move(last_start, std::min(o.move_speed, m.guarded_speed().value_or(o.move_speed)));
+      m.move(last_start, std::min(o.move_speed, guard_speed().value_or(o.move_speed)));
       ++unexpected;
       log(arc, 0, "touch", "unexpected_touch", fmt::format("touch point left out: {}", e.what()));
       last = -1;

@@ -83,6 +83,11 @@ struct SectionRun {
   std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> guarded(
       const std::vector<Eigen::Vector3d>& way) const;
   int unexpected = 0;  // unexpected touches in this section so far
+  // The speed of guarded legs: the options', else the machine's (none: moves are not slowed).
+  std::optional<double> guard_speed() const {
+    if (o.guarded_speed > 0) return o.guarded_speed;
+    return m.guarded_speed();
+  }
 
   // A free move the planner finds: straight when clear of the part, else retract along the
   // stylus to the clearance level, across, and down. Where the planner finds no way (the ball

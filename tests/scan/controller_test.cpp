@@ -689,6 +689,37 @@ TEST(Controller, ADentDeeperThanThePushIsFollowedWithoutAFalseCollision) {
   }
 }
 
+// Free moves near the part go at the guarded speed: the machine's (the virtual CMM's 50.8 mm/s),
+// or the one the options give (an I++ DME server gives none). A slower one costs machine time in
+// moves only; one beyond the move speed, or negative, is refused by name.
+TEST(Controller, GuardedSpeedIsTheOptionsOrTheMachines) {
+  const auto d =
+      design::from_step(TRUEAXIS_TEST_DATA "/ippdme/ipp_simple.stp",
+                        {{"mid", {Eigen::Vector3d(0, 0, 37.5), Eigen::Vector3d::UnitZ()}}});
+  const sim::Part part{d, {}};
+  auto moves = [&](double guarded) {
+    scan::ControllerOptions o;
+    o.guarded_speed = guarded;
+    scan::VirtualCmm cmm(part, {}, scan::start_position(d, o));
+    const auto r = scan::scan(cmm, d, o);
+    EXPECT_TRUE(r.ok()) << r.summary();
+    return std::pair{r.time.moves, r.time.total - r.time.moves};
+  };
+  const auto machine = moves(0), slow = moves(10), fast = moves(200);
+  EXPECT_GT(slow.first, machine.first);
+  EXPECT_GT(machine.first, fast.first);
+  // The scans themselves are the same but for a few servo ticks of settling where the moves
+  // left the carriage.
+  constexpr double kSameScan = 0.05;  // s
+  EXPECT_NEAR(slow.second, machine.second, kSameScan);
+  EXPECT_GT(slow.first - machine.first, 4 * kSameScan);
+  scan::ControllerOptions bad;
+  bad.guarded_speed = -1;
+  EXPECT_NE(test::error_of([&] { bad.validate(); }).find("guarded speed"), std::string::npos);
+  bad.guarded_speed = bad.move_speed + 1;
+  EXPECT_NE(test::error_of([&] { bad.validate(); }).find("guarded speed"), std::string::npos);
+}
+
 // The tolerance holds on both sides. A surface that departs slowly from its design is followed
 // to the tolerance either way: just inside it scans along the design, just beyond it is a
 // trajectory error at the tolerance. One that rises faster than the servo follows is taken up by

@@ -88,6 +88,11 @@ struct ControllerOptions {
   // the tolerance + 1 mm, room for a part that is off its design by about the tolerance (touch
   // and scan starts lie 1.5 mm beyond it).
   double margin = 0;
+  // Free moves near the part (within 2 mm beyond what they keep from it) at most this fast, so
+  // that the probe, meeting a part further off than that, stops the machine within its
+  // overtravel (mm/s). 0: the machine's own (Machine::guarded_speed; the virtual CMM's); a
+  // machine that gives none (an I++ DME server) is then not slowed.
+  double guarded_speed = 0;
   // Throws Error naming the option when out of range.
   void validate() const;
 };
