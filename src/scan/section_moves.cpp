@@ -143,8 +143,10 @@ void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
     ++unexpected;
     const double off = planner().clearance(e.at, m.stylus_axis());
     seen = std::max(seen, off);
-    // Scans and touches start outside the band the part may be in, now as far as it was met.
-    found_extra = std::max(found_extra, off + 1 - (o.tolerance + kBandMargin));
+    // Scans and touches start outside the band the part may be in, now as far as it was met,
+    // and at least 1 mm further out each time: where the part is met near a start, how far it
+    // is off there is known only as at least that.
+    found_extra = std::max(found_extra + 1, off + 1 - (o.tolerance + kBandMargin));
     log(0, 0, "correction", "unexpected_touch",
         fmt::format("{}: the part stands at least {:.2f} mm off its design there; the ball went "
                     "back the way it came, and free moves on this section keep {:.2f} mm from it",
