@@ -138,9 +138,14 @@ void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
   } catch (const UnexpectedTouch& e) {
     // Back the way the ball came, at the guarded speed, to the last waypoint it passed (where
     // the guarded leg began, or where the move started): free there when it passed.
-    const Eigen::Vector3d back = e.passed > 0 ? legs[std::min(e.passed, legs.size()) - 1] : from;
-    m.move(back, std::min(o.move_speed, guard_speed().value_or(o.move_speed)));
     ++unexpected;
+    const Eigen::Vector3d back = e.passed > 0 ? legs[std::min(e.passed, legs.size()) - 1] : from;
+    try {
+      m.move(back, std::min(o.move_speed, guard_speed().value_or(o.move_speed)));
+    } catch (const UnexpectedTouch& again) {
+      throw Error(fmt::format("{}; on the way back the probe stopped the machine again: {}",
+                              e.what(), again.what()));
+    }
     const double off = planner().clearance(e.at, m.stylus_axis());
     seen = std::max(seen, off);
     // Scans and touches start outside the band the part may be in, now as far as it was met,

@@ -188,7 +188,10 @@ void VirtualCmm::check_solid() {
     if (clear < 0 || table < -(k == 0 ? ball_allowance_ : 0)) {
       if (guarded_ && k < 2) {
         // The stylus gives way: the probe triggers, and the motion brakes (stop_on_contact).
-        if (triggered_ < 0) triggered_ = k;
+        if (triggered_ < 0) {
+          triggered_ = k;
+          on_table_ = clear >= 0;
+        }
         guard_clear_[k] = -1;
         continue;
       }
@@ -401,15 +404,16 @@ std::string VirtualCmm::brake(const Eigen::Vector3d& hit, const Eigen::Vector3d&
   triggered_ = -1;
   push();
   const char* element = what == 1 ? "stylus" : "ball";
+  const char* met = on_table_ ? "the table" : "the part";
   if (deepest > o_.overtravel)
     throw Error(fmt::format(
-        "collision: the {} met the part at ({:.2f}, {:.2f}, {:.2f}) mm {} at {:.0f} mm/s, too "
-        "fast to stop within the probe's {:g} mm overtravel (pushed in {:.2f} mm)",
-        element, hit.x(), hit.y(), hit.z(), doing, speed, o_.overtravel, deepest));
+        "collision: the {} met {} at ({:.2f}, {:.2f}, {:.2f}) mm {} at {:.0f} mm/s, too fast "
+        "to stop within the probe's {:g} mm overtravel (pushed in {:.2f} mm)",
+        element, met, hit.x(), hit.y(), hit.z(), doing, speed, o_.overtravel, deepest));
   return fmt::format(
-      "the probe triggered {}: the {} met the part with the ball centre at ({:.2f}, "
-      "{:.2f}, {:.2f}) mm, and the machine stopped",
-      doing, element, hit.x(), hit.y(), hit.z());
+      "the probe triggered {}: the {} met {} with the ball centre at ({:.2f}, {:.2f}, {:.2f}) "
+      "mm, and the machine stopped",
+      doing, element, met, hit.x(), hit.y(), hit.z());
 }
 
 void VirtualCmm::stop_on_contact(const Eigen::Vector3d& hit, const Eigen::Vector3d& target,
@@ -436,8 +440,10 @@ void VirtualCmm::move_legs(const std::vector<Eigen::Vector3d>& way,
   if (solid_) {
     const double r = probe_.options().tip_radius, rs = o_.stylus.shaft(r);
     const Eigen::Vector3d c = free_ball_centre();
+    // The table too: a move off the table the ball was stopped on.
     ball_allowance_ =
-        std::max(ball_allowance_, r - solid_->distance(c, r, touchable_) + kCollision);
+        std::max({ball_allowance_, r - solid_->distance(c, r, touchable_) + kCollision,
+                  r - (c.z() - table_z_) + kCollision});
     const Eigen::Vector3d& u = axis_;
     stem_allowance_ = std::max(
         0.0, rs - dent_ -

@@ -291,6 +291,7 @@ class VirtualCmm : public Machine {
   void check_solid();
   bool guarded_ = false;
   int triggered_ = -1;
+  bool on_table_ = false;      // what triggered it met the table, not the part
   double stem_allowance_ = 0;  // how deep the stem may be in the part (a move that starts there)
   // How far the ball and the stem are pushed into the part (the section's contours and the
   // solid) where the carriage stands (mm).
