@@ -19,9 +19,6 @@ constexpr double kRouteMargin = 2.0;
 // comes within this much beyond what the section keeps from the part's design (mm): a part that
 // far further off than the move allows for stops it on the probe's trigger, not in a collision.
 constexpr double kGuardBand = 2.0;
-// Touches and scans start this far beyond the band the surface is searched in (the tolerance
-// each way, mm).
-constexpr double kBandMargin = 1.5;
 }  // namespace
 
 std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded(
@@ -128,13 +125,7 @@ void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
     if (planner().margin() >= 2 * Machine::kCornerCut)
       m.move_legs(legs, speeds);
     else
-      for (std::size_t i = 0; i < legs.size(); ++i) {
-        try {
-          m.move(legs[i], speeds[i]);
-        } catch (const UnexpectedTouch& e) {
-          throw UnexpectedTouch(e.what(), e.at, i);
-        }
-      }
+      m.Machine::move_legs(legs, speeds);  // one move per waypoint, stopping at each
   } catch (const UnexpectedTouch& e) {
     // Back the way the ball came, at the guarded speed, to the last waypoint it passed (where
     // the guarded leg began, or where the move started): free there when it passed.
@@ -392,10 +383,9 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
   Eigen::Matrix3Xd feet(3, 0), got(3, 0);
   // Start just outside the band where the surface is looked for (the tolerance and 1.5 mm
   // more each way), and search across the band.
-  constexpr double kMargin = kBandMargin;
   // About a guessed design the band reaches further out by the guess's move (approach_extra),
   // and as far as an unexpected touch found the part (found_extra).
-  const double reach = o.path.tip_radius + o.tolerance + kMargin + approach_extra + found_extra;
+  const double reach = o.path.tip_radius + o.tolerance + kBandMargin + approach_extra + found_extra;
   const sim::Contour outline(smp.points, current.plane.normal.normalized(), current.closed,
                              current.material == design::Side::Left);
   // Evenly spread, or where they tell the part's move, turn and scale apart when evenly
@@ -457,10 +447,10 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
     std::optional<Touch> t;
     try {
       t = timed(m, r.time.touch, [&] {
-        auto got =
-            m.touch(current.plane, last_start, -nn,
-                    2 * (o.tolerance + kMargin) + approach_extra + found_extra + o.touch_trigger,
-                    o.touch_speed, o.touch_trigger);
+        auto got = m.touch(
+            current.plane, last_start, -nn,
+            2 * (o.tolerance + kBandMargin) + approach_extra + found_extra + o.touch_trigger,
+            o.touch_speed, o.touch_trigger);
         // After the last touch (or a search that found nothing, and went through the band),
         // back the way the ball came, to the touch's start: outside the band the part may be
         // in, where the next move can be planned against the design's solid. Before another

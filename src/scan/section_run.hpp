@@ -28,6 +28,10 @@ auto timed(Machine& m, double& bucket, Fn&& fn) {
   return fn();
 }
 
+// Touches and scans start this far beyond the band the surface is searched in (the tolerance
+// each way, mm).
+constexpr double kBandMargin = 1.5;
+
 // A section gives up a free move (the part is not where it can be reached) after this many
 // unexpected touches (UnexpectedTouch).
 constexpr int kMostUnexpected = 3;
@@ -115,7 +119,7 @@ struct SectionRun {
     st.record_spacing = o.record_spacing;
     // Start the approach beyond the band the real surface may lie in (the tolerance and 1.5 mm
     // more), so that the free move there cannot meet a part that is off its design.
-    st.approach_clearance = o.tolerance + 1.5 + approach_extra + found_extra;
+    st.approach_clearance = o.tolerance + kBandMargin + approach_extra + found_extra;
     st.approach_limit = o.tolerance + 1.0;
     return st;
   }
