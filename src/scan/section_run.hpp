@@ -1,6 +1,7 @@
 // Internal to trueaxis::scan: the error-tolerant flow on one section, as one object. Its free
-// moves and touch points are in section_moves.cpp, the scans and the decisions between them in
-// controller.cpp, what it takes from the sections before it and hands on in part_move.cpp.
+// moves and touch points are in section_moves.cpp, the design-value scans and the decisions
+// between them in controller.cpp, the autonomous scans in autonomous.cpp, what it takes from the
+// sections before it and hands on in part_move.cpp.
 #pragma once
 
 #include <Eigen/Geometry>
