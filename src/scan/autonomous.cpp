@@ -14,6 +14,27 @@ namespace {
 // stop (then four times as far, if the part is not back on its design by then), and the part
 // counts as back on its design within kRejoin times the trajectory tolerance.
 constexpr double kLocalScan = 60, kLocalLead = 10, kRejoin = 0.03;
+
+// The rest of a stretch is scanned autonomously from a smooth place at most this far (mm) before
+// the stop.
+constexpr double kRestBack = 10;
+// What a free move loses to accelerating, braking and settling, and a touch to its retract,
+// beyond its length at speed (s): on the virtual CMM (2000 mm/s², a 7 ms servo lag) a touch
+// round on the shared CAD parts took 0.4–1.3 s a point, 0.8 s at the median, of which about
+// 0.35 s are the search across the band and the route at speed.
+constexpr double kMoveOverhead = 0.3;
+// The correction menu is fitted to this many of the measured points, evenly spread (a touch
+// round has 8).
+constexpr Eigen::Index kRestFitPoints = 24;
+
+// Whether the design normals turn less than 0.2 rad over a sample either side of sample i.
+bool smooth_at(const design::Samples& smp, Eigen::Index i, bool closed) {
+  const Eigen::Index n = smp.points.cols();
+  if (!closed && (i == 0 || i + 1 >= n)) return false;
+  const Eigen::Index a = (i + n - 1) % n, b = (i + 1) % n;
+  return smp.normals.col(a).dot(smp.normals.col(i)) > std::cos(0.2) &&
+         smp.normals.col(b).dot(smp.normals.col(i)) > std::cos(0.2);
+}
 }  // namespace
 
 bool SectionRun::autonomous_range(double& from, double& to) {
@@ -234,6 +255,133 @@ bool SectionRun::local_autonomous(const Sample& stop) {
                     length));
   }
   return false;
+}
+
+bool SectionRun::rest_autonomous(const Sample& stop) {
+  // Only where nothing is being tried out (a guess is confirmed or dropped by its touch round),
+  // on the section's first error, and where the flow would make a touch round.
+  if (current.closed || current.space_curve() || unguessed || r.trajectory_errors != 1)
+    return false;
+  const int k = touch_count();
+  if (k < kFewestTouches) return false;
+  const auto path = design::make_path(current, o.path);
+  const auto smp = design::sample(current, 1.0);
+  const double L = design::length(current);
+  const double at = detail::contour_arc(smp, path, stop.arc);
+  // As autonomous(): an open stretch is followed from `lead` in and to `short_of` before its
+  // end, where a solid tells what lies beyond them.
+  const double keep = planner().part() ? std::max({1.0, planner().margin(), seen + 1}) : 1.0;
+  const double short_of = planner().part() ? keep : 1.0, lead = std::min(keep, 0.1 * L);
+  auto sample_at = [&](double a) {
+    Eigen::Index i = 0;
+    (smp.arc.array() - a).abs().minCoeff(&i);
+    return i;
+  };
+  // The start: the nearest smooth place at or before the stop, else after it within the first
+  // quarter of the stretch.
+  Eigen::Index best = -1;
+  for (double a = std::min(at, L - short_of); a >= std::max(lead, at - kRestBack) && best < 0;
+       a -= 1)
+    if (smooth_at(smp, sample_at(a), false)) best = sample_at(a);
+  for (double a = std::max(at, lead); a <= std::max(lead, 0.25 * L) && best < 0; a += 1)
+    if (smooth_at(smp, sample_at(a), false)) best = sample_at(a);
+  if (best < 0) return false;
+  const double from = smp.arc[best], length = L - from - short_of;
+  if (length < detail::kShortest) return false;
+  // The stylus's room, as for any autonomous scan (autonomous_range).
+  if (planner().part() && seen + 1 > planner().margin()) {
+    const auto room = room_with(seen + 1);
+    for (double a = from; a <= L - short_of; a += 1)
+      if (std::none_of(room.begin(), room.end(),
+                       [&](const auto& p) { return a >= p.first && a <= p.second; }))
+        return false;
+  }
+  // The machine time of each way on (s). The touch round: each point searched across the
+  // band at the touch speed, routed a spacing on and back out at the move speed; then back to
+  // the path's start and the whole path at its design speeds. The approach to the surface is
+  // alike for both ways and left out.
+  const double band = o.tolerance + kBandMargin + approach_extra + found_extra;
+  const double spacing = 0.9 * L / (k - 1);
+  const double touching = k * (band / o.touch_speed + 2 * spacing / o.move_speed + kMoveOverhead);
+  const double rescan =
+      (stop.surface - path.at(0).p).norm() / o.move_speed + kMoveOverhead + path.nominal_time();
+  const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
+  const double rest =
+      (stop.surface - p).norm() / o.move_speed + kMoveOverhead + length / o.autonomous_speed;
+  if (rest >= touching + rescan) return false;
+  const double reach = o.path.tip_radius + o.tolerance + 3;
+  try {
+    safe_move(p + reach * nn);
+  } catch (const NoWay&) {
+    return false;
+  }
+  log(at, stop.delta_l, "autonomous", "rest_autonomous",
+      fmt::format("the rest of the stretch scanned autonomously from {:.1f} mm: about {:.1f} s "
+                  "of machine time against {:.1f} s for {} touch points and a rescan",
+                  from, rest, touching + rescan, k));
+  const auto out = timed(m, r.time.autonomous, [&] {
+    return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, false, length,
+                          o.autonomous_speed, settings());
+  });
+  ++r.autonomous_count;
+  if (!out.completed || out.samples.size() < 10) {
+    log(out.stop.arc, 0, "autonomous", "autonomous_scan",
+        "the autonomous scan of the rest failed: " +
+            (out.fault.empty() ? "too few points" : out.fault));
+    return false;
+  }
+  // The measurement: the design-value scan's points before where the autonomous scan started,
+  // then the autonomous scan's.
+  const sim::Contour curve = detail::contour_of(current);
+  std::vector<Sample> all;
+  for (const auto& s : partial)
+    if (curve.nearest(s.surface).arc < from) all.push_back(s);
+  const std::size_t designed = all.size();
+  all.insert(all.end(), out.samples.begin(), out.samples.end());
+  log(out.stop.arc, 0, "autonomous", "autonomous_scan",
+      fmt::format("{} points over {:.1f} mm; with the design-value scan's {} before them",
+                  out.samples.size(), out.samples.back().arc, designed));
+  // The correction menu on points spread over all of them.
+  const Eigen::Index count = std::min<Eigen::Index>(kRestFitPoints, all.size());
+  Eigen::Matrix3Xd feet(3, count), got(3, count);
+  for (Eigen::Index j = 0; j < count; ++j) {
+    const auto i = static_cast<std::size_t>(
+        std::lround(static_cast<double>(j) * static_cast<double>(all.size() - 1) /
+                    static_cast<double>(count - 1)));
+    got.col(j) = all[i].surface;
+    feet.col(j) = curve.nearest(got.col(j)).point;
+  }
+  if (nominal.part()) {
+    touched.push_back({nominal.part().get(), current.name, current.plane, got});
+    made_round = true;
+  }
+  bool local = false;
+  const design::Section measured_on = current;
+  const bool corrected =
+      fit_touches(stop, feet, got, as_designed, measured_on, local, "scan points");
+  if (!corrected) {
+    // The next part's design data: the measured contour, where the ball can follow it.
+    design::Section measured = detail::overwrite(current, all);
+    if (const std::string why = unpathable(measured); why.empty()) {
+      current = std::move(measured);
+      moved = true;
+      as_designed = false;
+      log(0, 0, "autonomous", "design_overwritten",
+          fmt::format("the section's design data replaced by the measured contour ({} points, "
+                      "tip radius and pushing amount compensated)",
+                      current.polyline.cols()));
+    } else {
+      log(0, 0, "autonomous", "design_kept",
+          "the measured contour is not kept as the design data: " + why);
+    }
+  }
+  r.points = std::move(all);
+  r.ok = true;
+  log(at, 0, "autonomous", "section_done",
+      fmt::format("measured by the design-value scan to {:.1f} mm and autonomous scanning from "
+                  "there",
+                  from));
+  return true;
 }
 
 }  // namespace trueaxis::scan::detail

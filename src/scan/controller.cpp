@@ -66,8 +66,10 @@ bool SectionRun::design_scan(Sample& stop, std::string& why) {
   r.traces.push_back(std::move(tr));
   if (out.completed && !error) {
     r.points = out.samples;
+    partial.clear();
     return true;
   }
+  partial = out.samples;
   why = !out.fault.empty() ? out.fault
         : range            ? fmt::format(
                                  "the surface came nearer faster than the probe follows: its deflection "
@@ -99,7 +101,8 @@ bool SectionRun::two_dimensional(double arc, double dl) {
 
 bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
                              const Eigen::Matrix3Xd& got, bool nominal,
-                             const design::Section& touched_on, bool& local) {
+                             const design::Section& touched_on, bool& local,
+                             const std::string& what) {
   bool corrected = false;
   design::Section fixed;
   PartMove told_here;
@@ -115,9 +118,9 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
     if (c.type == "none") {
       local = true;
       log(stop.arc, stop.delta_l, "correction", "correction_rejected",
-          fmt::format("the touch points agree with the design within {:.4f} mm: the "
+          fmt::format("the {} agree with the design within {:.4f} mm: the "
                       "deviation is local, no geometric correction fits it",
-                      c.residual_before));
+                      what, c.residual_before));
       continue;
     }
     const std::string params = fmt::format(" {}", c.parameters_text());
@@ -128,7 +131,7 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
     else
       log(stop.arc, stop.delta_l, "correction",
           c.accepted ? "correction_applied" : "correction_rejected",
-          fmt::format("{}:{}; touch points within {:.4f} mm (were {:.4f}){}", c.type, params,
+          fmt::format("{}:{}; {} within {:.4f} mm (were {:.4f}){}", c.type, params, what,
                       c.residual_after, c.residual_before, instead));
     if (c.accepted) corrected = true;
   }
@@ -146,11 +149,11 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
     took(detail::in_plane_part(move.transform, current.plane));
     seen = move.residual_after;
     log(stop.arc, stop.delta_l, "correction", "correction_applied",
-        fmt::format("solid-move: {}; these touch points and the {} before them all within "
+        fmt::format("solid-move: {}; these {} and the {} points before them all within "
                     "{:.4f} mm of the part's solid moved so (were {:.4f}): the section's design "
-                    "data cut from it (touch points in one plane tell such a move only up to its "
+                    "data cut from it (points in one plane tell such a move only up to its "
                     "mirror image across the plane, which cuts the plane alike)",
-                    move.parameters_text(), pooled - got.cols(), move.residual_after,
+                    move.parameters_text(), what, pooled - got.cols(), move.residual_after,
                     move.residual_before));
     return true;
   }
@@ -208,6 +211,7 @@ void SectionRun::run() {
     }
     log(stop.arc, stop.delta_l, "design", "trajectory_error", why);
     if (!two_dimensional(stop.arc, stop.delta_l)) break;
+    if (flag == 0 && rest_autonomous(stop)) break;
     bool corrected = false, local = false;
     if (flag == 0) {
       const bool nominal = as_designed;

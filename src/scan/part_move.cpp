@@ -72,7 +72,7 @@ void SectionRun::carry_part_move() {
   current = std::move(placed->first);
   took(placed->second);
   log(0, 0, "correction", "correction_carried",
-      fmt::format("the part is where the touch points of {} found it: {} before the first scan",
+      fmt::format("the part is where the points measured on {} found it: {} before the first scan",
                   what, how_placed(part_move)));
 }
 
@@ -100,7 +100,7 @@ void SectionRun::guess_part_move() {
     const Eigen::Vector3d a = start.p + (settings().approach_clearance + shift) * start.normal;
     if (nominal.part() && nominal.clearance(a, m.stylus_axis()) < nominal.margin()) {
       log(0, 0, "correction", "correction_rejected",
-          fmt::format("the part's move as the touch points of {} suggest it is not tried here: "
+          fmt::format("the part's move as the points measured on {} suggest it is not tried here: "
                       "the scan would start within {:g} mm of the part where the design puts it",
                       from, nominal.margin()));
       return;
@@ -122,7 +122,7 @@ void SectionRun::guess_part_move() {
     what += fmt::format("{}{}: {}", what.empty() ? "" : ", ", c.type, c.parameters_text());
   }
   log(0, 0, "correction", "correction_carried",
-      fmt::format("the part's move as the touch points of {} suggest it ({}), tried before the "
+      fmt::format("the part's move as the points measured on {} suggest it ({}), tried before the "
                   "first scan, {}: they did not tell a move from a scale, so free moves keep to "
                   "the part where the design puts it until this section's touch points confirm it",
                   from, what, how_placed(guess)));
@@ -243,8 +243,8 @@ void SectionRun::guess_solid_move() {
   const std::string& on = c->found_on;
   guess = {*c};
   log(0, 0, "correction", "part_move_guessed",
-      fmt::format("the touch points of {} ({} of them) all lie within {:.4f} mm of the part's "
-                  "solid moved by {} (were {:.4f}). Touch points in one plane may fit other "
+      fmt::format("the points measured on {} ({} of them) all lie within {:.4f} mm of the part's "
+                  "solid moved by {} (were {:.4f}). Points in one plane may fit other "
                   "moves alike (its mirror image across the plane), so this is not reported as "
                   "where the part stands: it is tried on the sections after this one in the "
                   "planes of these touch points, their design data cut from the solid moved so",
@@ -308,7 +308,7 @@ bool SectionRun::hand_on_in_plane() {
   rounds.clear();
   guess.clear();
   log(0, 0, "correction", "part_move_found",
-      fmt::format("the touch points of {} together tell where the part stands ({} of them): "
+      fmt::format("the points measured on {} together tell where the part stands ({} of them): "
                   "{}: {}; all within {:.4f} mm of the moved design (were {:.4f}); the sections "
                   "after this one in parallel planes start there",
                   on, points, c->type, c->parameters_text(), c->residual_after,

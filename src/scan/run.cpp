@@ -275,7 +275,7 @@ void carry_to_unmeasured(const std::vector<Correction>& move, double t, Result& 
     detail::move_section(s, step);
     res.events.push_back({t, s.name, 0, 0, "correction", "design_moved",
                           fmt::format("not measured: its design data for the next part are moved "
-                                      "where the touch points of {} found the part",
+                                      "where the points measured on {} found the part",
                                       found_on)});
   }
 }

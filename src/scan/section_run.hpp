@@ -185,6 +185,18 @@ struct SectionRun {
   // whole contour.
   bool local_autonomous(const Sample& stop);
 
+  // On an open stretch's first trajectory error, when it takes less machine time than the
+  // touch round and the rescan that would follow (estimated from the speeds, the band searched
+  // and the path's design time): the rest of the stretch scanned autonomously from a smooth place
+  // at or a little before the stop. The design-value scan's points before that and the
+  // autonomous scan's are the section's measurement; the correction menu fitted to them (as to a
+  // touch round's) tells where the part stands, for the sections after it and the next part's
+  // design data; where none fits, the measured contour becomes the design data. False (nothing
+  // done, or a scan that failed) leaves the flow to its touch round.
+  bool rest_autonomous(const Sample& stop);
+  // The last design-value scan's samples, up to where it stopped.
+  std::vector<Sample> partial;
+
   // Set when an autonomous scan measured the section but its contour could not become the
   // design data (autonomous()): the section is done.
   bool measured_only = false;
@@ -251,8 +263,10 @@ struct SectionRun {
   // points found), each candidate logged; an accepted one applied to the section. `nominal`:
   // the round was made on design data as the design stands the part (touched_on). True when a
   // correction was applied; `local` set when the touch points agree with the design.
+  // `what`: what the points are, as the log names them.
   bool fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet, const Eigen::Matrix3Xd& got,
-                   bool nominal, const design::Section& touched_on, bool& local);
+                   bool nominal, const design::Section& touched_on, bool& local,
+                   const std::string& what = "touch points");
   // After a design-value scan about the guessed design ran through: its points confirm the
   // guess where they all lie within the menu's acceptance of it and tell a move from a scale (a
   // closed contour's do): then it is where the part stands, handed on as a correction found.
