@@ -259,9 +259,8 @@ bool SectionRun::local_autonomous(const Sample& stop) {
 
 bool SectionRun::rest_autonomous(const Sample& stop) {
   // Only where nothing is being tried out (a guess is confirmed or dropped by its touch round),
-  // on the section's first error, and where the flow would make a touch round.
-  if (current.closed || current.space_curve() || unguessed || r.trajectory_errors != 1)
-    return false;
+  // and where the flow would make a touch round.
+  if (current.closed || current.space_curve() || unguessed) return false;
   const int k = touch_count();
   if (k < kFewestTouches) return false;
   const auto path = design::make_path(current, o.path);
@@ -378,9 +377,12 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   r.points = std::move(all);
   r.ok = true;
   log(at, 0, "autonomous", "section_done",
-      fmt::format("measured by the design-value scan to {:.1f} mm and autonomous scanning from "
-                  "there",
-                  from));
+      designed > 0 ? fmt::format("measured by the design-value scan to {:.1f} mm and autonomous "
+                                 "scanning from {:.1f} mm",
+                                 at, from)
+                   : fmt::format("measured by autonomous scanning from {:.1f} mm (the "
+                                 "design-value scan stopped at its start)",
+                                 from));
   return true;
 }
 

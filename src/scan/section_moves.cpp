@@ -412,7 +412,21 @@ std::pair<Eigen::Matrix3Xd, Eigen::Matrix3Xd> SectionRun::touch() {
                     places.resolution, places.even_resolution));
   Eigen::Index last = -1;
   Eigen::Vector3d last_start = Eigen::Vector3d::Zero();
+  // A round that can no longer find the points a correction needs stops there (a part far off
+  // its design, searched for along normals that miss it: ~1 s a point for nothing).
+  const auto total = static_cast<Eigen::Index>(places.arcs.size());
+  Eigen::Index tried = 0;
+  auto hopeless = [&] {
+    if (got.cols() + (total - tried) >= kFewestTouches) return false;
+    log(0, 0, "touch", "touch",
+        fmt::format("touch round stopped after {} of {} points: with {} found, it cannot give "
+                    "the {} a correction needs",
+                    tried, total, got.cols(), kFewestTouches));
+    return true;
+  };
   for (const double arc : places.arcs) {
+    if (tried > 0 && hopeless()) break;
+    ++tried;
     const bool final_touch = &arc == &places.arcs.back();
     Eigen::Index j = 0, f = 0;
     (smp.arc.array() - arc).abs().minCoeff(&j);
