@@ -258,9 +258,9 @@ bool SectionRun::local_autonomous(const Sample& stop) {
 }
 
 bool SectionRun::rest_autonomous(const Sample& stop) {
-  // Only where nothing is being tried out (a guess is confirmed or dropped by its touch round),
-  // and where the flow would make a touch round.
-  if (current.closed || current.space_curve() || unguessed) return false;
+  // Where the flow would make a touch round. About a guessed move of the part, the scan's
+  // points confirm or drop the guess as that round's would.
+  if (current.closed || current.space_curve()) return false;
   const int k = touch_count();
   if (k < kFewestTouches) return false;
   const auto path = design::make_path(current, o.path);
@@ -276,14 +276,25 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
     (smp.arc.array() - a).abs().minCoeff(&i);
     return i;
   };
-  // The start: the nearest smooth place at or before the stop, else after it within the first
-  // quarter of the stretch.
+  // The start: the nearest smooth place at or before the stop, else after it, from which the
+  // approach can be made: the ball comes down to it from above, and about a guessed design it
+  // keeps the planner's margin from the part where the design puts it too (as a touch's start
+  // does).
+  const double reach = o.path.tip_radius + o.tolerance + 3;
+  const Eigen::Vector3d u = m.stylus_axis();
+  auto usable = [&](Eigen::Index i) {
+    if (!smooth_at(smp, i, false)) return false;
+    const Eigen::Vector3d start = smp.points.col(i) + reach * smp.normals.col(i);
+    if (unguessed && nominal.part() && nominal.clearance(start, u) < nominal.margin()) return false;
+    return planner().from_above(start, u);
+  };
   Eigen::Index best = -1;
   for (double a = std::min(at, L - short_of); a >= std::max(lead, at - kRestBack) && best < 0;
        a -= 1)
-    if (smooth_at(smp, sample_at(a), false)) best = sample_at(a);
-  for (double a = std::max(at, lead); a <= std::max(lead, 0.25 * L) && best < 0; a += 1)
-    if (smooth_at(smp, sample_at(a), false)) best = sample_at(a);
+    if (usable(sample_at(a))) best = sample_at(a);
+  for (double a = std::max(at, lead); a <= std::min(at + kRestBack, L - short_of) && best < 0;
+       a += 1)
+    if (usable(sample_at(a))) best = sample_at(a);
   if (best < 0) return false;
   const double from = smp.arc[best], length = L - from - short_of;
   if (length < detail::kShortest) return false;
@@ -308,7 +319,6 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   const double rest =
       (stop.surface - p).norm() / o.move_speed + kMoveOverhead + length / o.autonomous_speed;
   if (rest >= touching + rescan) return false;
-  const double reach = o.path.tip_radius + o.tolerance + 3;
   try {
     safe_move(p + reach * nn);
   } catch (const NoWay&) {
@@ -356,9 +366,23 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   }
   bool local = false;
   const design::Section measured_on = current;
-  const bool corrected =
-      fit_touches(stop, feet, got, as_designed, measured_on, local, "scan points");
-  if (!corrected) {
+  bool corrected = fit_touches(stop, feet, got, as_designed, measured_on, local, "scan points");
+  bool confirmed = false;
+  if (unguessed) {
+    if (local) {
+      confirm_guess();
+      confirmed = true;
+    } else if (!corrected) {
+      // Fitted again to the design data without the guess (as after a touch round).
+      drop_guess(stop);
+      const sim::Contour designed_curve = detail::contour_of(current);
+      for (Eigen::Index j = 0; j < got.cols(); ++j)
+        feet.col(j) = designed_curve.nearest(got.col(j)).point;
+      bool agree = false;
+      corrected = fit_touches(stop, feet, got, true, current, agree, "scan points");
+    }
+  }
+  if (!corrected && !confirmed) {
     // The next part's design data: the measured contour, where the ball can follow it.
     design::Section measured = detail::overwrite(current, all);
     if (const std::string why = unpathable(measured); why.empty()) {

@@ -138,7 +138,7 @@ void SectionRun::drop_guess(const Sample& stop) {
   moved = true;
   as_designed = true;
   log(stop.arc, stop.delta_l, "correction", "correction_rejected",
-      "the part's move tried as a guess does not hold here (the touch points fit no correction "
+      "the part's move tried as a guess does not hold here (the points measured fit no correction "
       "to it): the section goes on from its design data");
 }
 
