@@ -292,7 +292,9 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   for (double a = std::min(at, L - short_of); a >= std::max(lead, at - kRestBack) && best < 0;
        a -= 1)
     if (usable(sample_at(a))) best = sample_at(a);
-  for (double a = std::max(at, lead); a <= std::min(at + kRestBack, L - short_of) && best < 0;
+  // After the stop only where it stopped at the stretch's start (what lies between would not be
+  // measured).
+  for (double a = std::max(at, lead); a <= std::min(lead + kRestBack, L - short_of) && best < 0;
        a += 1)
     if (usable(sample_at(a))) best = sample_at(a);
   if (best < 0) return false;
@@ -339,6 +341,19 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
             (out.fault.empty() ? "too few points" : out.fault));
     return false;
   }
+  // What neither scan measured, as autonomous() reports it: before the start, where the
+  // design-value scan stopped short of it, and the end the scan keeps away from.
+  if (from > at + 1)
+    cut_off(at, from,
+            fmt::format("the design-value scan stopped here, and the autonomous scan of the rest "
+                        "could start no nearer ({:.1f} mm in from the stretch's start, on the "
+                        "design's smooth part that the ball can come down to)",
+                        from));
+  if (short_of > 1)
+    cut_off(L - short_of, L,
+            fmt::format("an autonomous scan is not followed closer than {:.1f} mm to the end of "
+                        "the stretch: where the part stands along it is known only that well",
+                        short_of));
   // The measurement: the design-value scan's points before where the autonomous scan started,
   // then the autonomous scan's.
   const sim::Contour curve = detail::contour_of(current);

@@ -548,6 +548,11 @@ TEST(CadScan, FirstPartNoSlowerThanAutonomousWhereATouchRoundCostsMore) {
     const auto runs = golden(file, plane, {batch_part()}, 1);
     const auto& r = runs[0];
     EXPECT_GE(count(r, "rest_autonomous"), 1) << r.summary();
+    // What the autonomous scan keeps away from, the stretch's last millimetres, is reported.
+    int reported = 0;
+    for (const auto& u : r.unreachable)
+      reported += u.why.find("autonomous scan is not followed closer") != std::string::npos;
+    EXPECT_GE(reported, count(r, "rest_autonomous")) << r.summary();
     const design::Design d = design::from_step(file, {{"z", plane}});
     const sim::Part part{d, batch_part().dev};
     scan::ControllerOptions aut;
