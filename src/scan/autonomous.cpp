@@ -260,7 +260,8 @@ bool SectionRun::local_autonomous(const Sample& stop) {
 bool SectionRun::rest_autonomous(const Sample& stop) {
   // Where the flow would make a touch round. About a guessed move of the part, the scan's
   // points confirm or drop the guess as that round's would.
-  if (current.closed || current.space_curve()) return false;
+  if (current.space_curve()) return false;
+  const bool closed = current.closed;
   const int k = touch_count();
   if (k < kFewestTouches) return false;
   const auto path = design::make_path(current, o.path);
@@ -272,6 +273,7 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   const double keep = planner().part() ? std::max({1.0, planner().margin(), seen + 1}) : 1.0;
   const double short_of = planner().part() ? keep : 1.0, lead = std::min(keep, 0.1 * L);
   auto sample_at = [&](double a) {
+    if (closed) a -= L * std::floor(a / L);
     Eigen::Index i = 0;
     (smp.arc.array() - a).abs().minCoeff(&i);
     return i;
@@ -283,27 +285,34 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   const double reach = o.path.tip_radius + o.tolerance + 3;
   const Eigen::Vector3d u = m.stylus_axis();
   auto usable = [&](Eigen::Index i) {
-    if (!smooth_at(smp, i, false)) return false;
+    if (!smooth_at(smp, i, closed)) return false;
     const Eigen::Vector3d start = smp.points.col(i) + reach * smp.normals.col(i);
     if (unguessed && nominal.part() && nominal.clearance(start, u) < nominal.margin()) return false;
     return planner().from_above(start, u);
   };
   Eigen::Index best = -1;
-  for (double a = std::min(at, L - short_of); a >= std::max(lead, at - kRestBack) && best < 0;
-       a -= 1)
-    if (usable(sample_at(a))) best = sample_at(a);
-  // After the stop only where it stopped at the stretch's start (what lies between would not be
-  // measured).
-  for (double a = std::max(at, lead); a <= std::min(lead + kRestBack, L - short_of) && best < 0;
-       a += 1)
-    if (usable(sample_at(a))) best = sample_at(a);
+  if (closed) {
+    // A closed contour is followed all round, from before the stop or after it.
+    for (double d = 0; d <= kRestBack && best < 0; d += 1)
+      for (const double a : {at - d, at + d})
+        if (best < 0 && usable(sample_at(a))) best = sample_at(a);
+  } else {
+    for (double a = std::min(at, L - short_of); a >= std::max(lead, at - kRestBack) && best < 0;
+         a -= 1)
+      if (usable(sample_at(a))) best = sample_at(a);
+    // After the stop only where it stopped at the stretch's start (what lies between would not
+    // be measured).
+    for (double a = std::max(at, lead); a <= std::min(lead + kRestBack, L - short_of) && best < 0;
+         a += 1)
+      if (usable(sample_at(a))) best = sample_at(a);
+  }
   if (best < 0) return false;
-  const double from = smp.arc[best], length = L - from - short_of;
+  const double from = smp.arc[best], length = closed ? L : L - from - short_of;
   if (length < detail::kShortest) return false;
   // The stylus's room, as for any autonomous scan (autonomous_range).
   if (planner().part() && seen + 1 > planner().margin()) {
     const auto room = room_with(seen + 1);
-    for (double a = from; a <= L - short_of; a += 1)
+    for (double a = closed ? 0 : from; a <= (closed ? L : L - short_of); a += 1)
       if (std::none_of(room.begin(), room.end(),
                        [&](const auto& p) { return a >= p.first && a <= p.second; }))
         return false;
@@ -313,7 +322,7 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   // the path's start and the whole path at its design speeds. The approach to the surface is
   // alike for both ways and left out.
   const double band = o.tolerance + kBandMargin + approach_extra + found_extra;
-  const double spacing = 0.9 * L / (k - 1);
+  const double spacing = closed ? L / k : 0.9 * L / (k - 1);
   const double touching = k * (band / o.touch_speed + 2 * spacing / o.move_speed + kMoveOverhead);
   const double rescan =
       (stop.surface - path.at(0).p).norm() / o.move_speed + kMoveOverhead + path.nominal_time();
@@ -327,11 +336,12 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
     return false;
   }
   log(at, stop.delta_l, "autonomous", "rest_autonomous",
-      fmt::format("the rest of the stretch scanned autonomously from {:.1f} mm: about {:.1f} s "
-                  "of machine time against {:.1f} s for {} touch points and a rescan",
-                  from, rest, touching + rescan, k));
+      fmt::format("{} scanned autonomously from {:.1f} mm: about {:.1f} s of machine time "
+                  "against {:.1f} s for {} touch points and a rescan",
+                  closed ? "the contour" : "the rest of the stretch", from, rest, touching + rescan,
+                  k));
   const auto out = timed(m, r.time.autonomous, [&] {
-    return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, false, length,
+    return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, closed, length,
                           o.autonomous_speed, settings());
   });
   ++r.autonomous_count;
@@ -343,13 +353,13 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   }
   // What neither scan measured, as autonomous() reports it: before the start, where the
   // design-value scan stopped short of it, and the end the scan keeps away from.
-  if (from > at + 1)
+  if (!closed && from > at + 1)
     cut_off(at, from,
             fmt::format("the design-value scan stopped here, and the autonomous scan of the rest "
                         "could start no nearer ({:.1f} mm in from the stretch's start, on the "
                         "design's smooth part that the ball can come down to)",
                         from));
-  if (short_of > 1)
+  if (!closed && short_of > 1)
     cut_off(L - short_of, L,
             fmt::format("an autonomous scan is not followed closer than {:.1f} mm to the end of "
                         "the stretch: where the part stands along it is known only that well",
@@ -358,8 +368,9 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   // then the autonomous scan's.
   const sim::Contour curve = detail::contour_of(current);
   std::vector<Sample> all;
+  // (A closed contour's autonomous scan went all round.)
   for (const auto& s : partial)
-    if (curve.nearest(s.surface).arc < from) all.push_back(s);
+    if (!closed && curve.nearest(s.surface).arc < from) all.push_back(s);
   const std::size_t designed = all.size();
   all.insert(all.end(), out.samples.begin(), out.samples.end());
   log(out.stop.arc, 0, "autonomous", "autonomous_scan",
@@ -416,12 +427,13 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   r.points = std::move(all);
   r.ok = true;
   log(at, 0, "autonomous", "section_done",
-      designed > 0 ? fmt::format("measured by the design-value scan to {:.1f} mm and autonomous "
-                                 "scanning from {:.1f} mm",
-                                 at, from)
-                   : fmt::format("measured by autonomous scanning from {:.1f} mm (the "
-                                 "design-value scan stopped at its start)",
-                                 from));
+      closed         ? fmt::format("measured by autonomous scanning all round from {:.1f} mm", from)
+      : designed > 0 ? fmt::format("measured by the design-value scan to {:.1f} mm and autonomous "
+                                   "scanning from {:.1f} mm",
+                                   at, from)
+                     : fmt::format("measured by autonomous scanning from {:.1f} mm (the "
+                                   "design-value scan stopped at its start)",
+                                   from));
   return true;
 }
 

@@ -185,15 +185,15 @@ struct SectionRun {
   // whole contour.
   bool local_autonomous(const Sample& stop);
 
-  // On an open stretch's trajectory error where the flow would make a touch round (not one
-  // made to confirm a guess), when it takes less machine time than that round and the rescan
-  // after it (estimated from the speeds, the band searched and the path's design time): the
-  // rest of the stretch scanned autonomously from a smooth place at or a little before the
-  // stop. The design-value scan's points before that and the autonomous scan's are the
-  // section's measurement; the correction menu fitted to them (as to a touch round's) tells
-  // where the part stands, for the sections after it and the next part's design data; where
-  // none fits, the measured contour becomes the design data. False (nothing done, or a scan
-  // that failed) leaves the flow to its touch round.
+  // On a trajectory error where the flow would make a touch round (not one made to confirm a
+  // guess), when it takes less machine time than that round and the rescan after it (estimated
+  // from the speeds, the band searched and the path's design time): the rest of an open
+  // stretch scanned autonomously from a smooth place at or a little before the stop, a closed
+  // contour all round from near it. The design-value scan's points before that (a stretch's)
+  // and the autonomous scan's are the section's measurement; the correction menu fitted to them
+  // (as to a touch round's) tells where the part stands, for the sections after it and the next
+  // part's design data; where none fits, the measured contour becomes the design data. False
+  // (nothing done, or a scan that failed) leaves the flow to its touch round.
   bool rest_autonomous(const Sample& stop);
   // The last design-value scan's samples, up to where it stopped.
   std::vector<Sample> partial;
