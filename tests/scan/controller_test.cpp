@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "../../src/scan/section.hpp"
 #include "../test_parts.hpp"
 #include "../test_util.hpp"
 #include "trueaxis/io/files.hpp"
@@ -132,6 +133,30 @@ TEST(Controller, RotatedAndScaledPartsGetTheirCorrections) {
   c = correction(scaled);
   EXPECT_EQ(c.type, "scale");
   EXPECT_NEAR(param(c, "scale"), 1.04, kParamTol);
+}
+
+// A part too far inside its design for the touch points to meet it along the design normals
+// (the square's sides 5 mm in, the band searched reaches 2 mm in): once the round can no longer
+// find the 4 points a correction needs, it stops (5 of 8 misses), and the outline is scanned
+// autonomously instead. Each miss searches the whole band (~1 s a point).
+TEST(Controller, ATouchRoundThatCannotFindEnoughPointsStops) {
+  const auto d = square_and_hole();
+  sim::PartDeviation shrunk;
+  shrunk.scale = 0.9;
+  scan::VirtualCmm cmm(sim::Part{d, shrunk}, {}, Eigen::Vector3d(50, -20, 40));
+  auto outline = d;
+  outline.sections.resize(1);
+  const scan::ControllerOptions o;
+  const auto r = scan::scan(cmm, outline, o);
+  int missed = 0, stopped = 0;
+  for (const auto& e : r.events) {
+    missed += e.event == "touch" && e.decision.find("no surface found") != std::string::npos;
+    stopped += e.decision.find("touch round stopped after 5 of 8 points") != std::string::npos;
+  }
+  EXPECT_EQ(stopped, 1) << r.summary();
+  EXPECT_EQ(missed, o.touch_points - scan::detail::kFewestTouches + 1) << r.summary();
+  EXPECT_TRUE(r.ok()) << r.summary();
+  EXPECT_LT(worst_distance(cmm, d.sections[0], r.sections[0].points), kRoundoff);
 }
 
 // The menu's turn check reads the fit's rotation from its polar decomposition (Eigen's SVD with
