@@ -264,14 +264,30 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   const bool closed = current.closed;
   const int k = touch_count();
   if (k < kFewestTouches) return false;
-  const auto path = design::make_path(current, o.path);
-  const auto smp = design::sample(current, 1.0);
   const double L = design::length(current);
-  const double at = detail::contour_arc(smp, path, stop.arc);
   // As autonomous(): an open stretch is followed from `lead` in and to `short_of` before its
   // end, where a solid tells what lies beyond them.
   const double keep = planner().part() ? std::max({1.0, planner().margin(), seen + 1}) : 1.0;
   const double short_of = planner().part() ? keep : 1.0, lead = std::min(keep, 0.1 * L);
+  // The machine time of each way on (s). The touch round: each point searched across the
+  // band at the touch speed, routed a spacing on and back out at the move speed; then back to
+  // the path's start and the whole path at its design speeds. The autonomous scan: the move to
+  // its start and its length at the autonomous speed. The approach to the surface is alike for
+  // both ways and left out.
+  const double band = o.tolerance + kBandMargin + approach_extra + found_extra;
+  const double spacing = closed ? L / k : 0.9 * L / (k - 1);
+  const double touching = k * (band / o.touch_speed + 2 * spacing / o.move_speed + kMoveOverhead);
+  const double rescan =
+      (stop.surface - path_start).norm() / o.move_speed + kMoveOverhead + path_time;
+  auto scanning = [&](double length, double move) {
+    return move / o.move_speed + kMoveOverhead + length / o.autonomous_speed;
+  };
+  // Before the start is looked for (queries of the solid): the least the rest can cost, started
+  // at the stop.
+  const double at_most = path_length > 0 ? stop.arc / path_length * L : 0;
+  if (scanning(closed ? L : L - at_most - short_of, 0) >= touching + rescan) return false;
+  const auto smp = design::sample(current, 1.0);
+  const double at = detail::contour_arc(smp, design::make_path(current, o.path), stop.arc);
   auto sample_at = [&](double a) {
     if (closed) a -= L * std::floor(a / L);
     Eigen::Index i = 0;
@@ -317,18 +333,8 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
                        [&](const auto& p) { return a >= p.first && a <= p.second; }))
         return false;
   }
-  // The machine time of each way on (s). The touch round: each point searched across the
-  // band at the touch speed, routed a spacing on and back out at the move speed; then back to
-  // the path's start and the whole path at its design speeds. The approach to the surface is
-  // alike for both ways and left out.
-  const double band = o.tolerance + kBandMargin + approach_extra + found_extra;
-  const double spacing = closed ? L / k : 0.9 * L / (k - 1);
-  const double touching = k * (band / o.touch_speed + 2 * spacing / o.move_speed + kMoveOverhead);
-  const double rescan =
-      (stop.surface - path.at(0).p).norm() / o.move_speed + kMoveOverhead + path.nominal_time();
   const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
-  const double rest =
-      (stop.surface - p).norm() / o.move_speed + kMoveOverhead + length / o.autonomous_speed;
+  const double rest = scanning(length, (stop.surface - p).norm());
   if (rest >= touching + rescan) return false;
   try {
     safe_move(p + reach * nn);

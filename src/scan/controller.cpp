@@ -22,6 +22,9 @@ constexpr double kRangeGuard = 0.1;
 bool SectionRun::design_scan(Sample& stop, std::string& why) {
   const auto path = design::make_path(current, o.path);
   const auto start = path.at(0);
+  path_length = path.length();
+  path_time = path.nominal_time();
+  path_start = start.p;
   // Where an unexpected touch on the way found the part further off than the approach allows
   // for, the approach starts further out (found_extra).
   for (;;) {

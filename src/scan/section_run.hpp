@@ -195,8 +195,11 @@ struct SectionRun {
   // part's design data; where none fits, the measured contour becomes the design data. False
   // (nothing done, or a scan that failed) leaves the flow to its touch round.
   bool rest_autonomous(const Sample& stop);
-  // The last design-value scan's samples, up to where it stopped.
+  // The last design-value scan's samples, up to where it stopped, and its path's length (mm),
+  // design time (s) and start.
   std::vector<Sample> partial;
+  double path_length = 0, path_time = 0;
+  Eigen::Vector3d path_start = Eigen::Vector3d::Zero();
 
   // Set when an autonomous scan measured the section but its contour could not become the
   // design data (autonomous()): the section is done.
