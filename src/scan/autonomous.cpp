@@ -163,17 +163,21 @@ bool SectionRun::autonomous() {
       fmt::format("{} points over {:.1f} mm", out.samples.size(), out.samples.back().arc));
   r.points = out.samples;
   if (o.strategy == Strategy::Autonomous) return true;
-  design::Section measured = detail::overwrite(current, out.samples);
   // The measured contour is the design for the rescan and for the next part, if the ball can
   // follow it: a measured polyline may have a notch (a corner of the real part, noise) where
   // no path keeps the offset. The section is then measured by the autonomous scan, and the
   // design data stay as they were.
-  if (const std::string why = unpathable(measured); !why.empty()) {
+  if (const std::string why = take_measured(out.samples); !why.empty()) {
     measured_only = true;
     log(0, 0, "autonomous", "section_done",
         "measured by the autonomous scan; its contour is not kept as the design data: " + why);
-    return true;
   }
+  return true;
+}
+
+std::string SectionRun::take_measured(const std::vector<Sample>& samples) {
+  design::Section measured = detail::overwrite(current, samples);
+  if (std::string why = unpathable(measured); !why.empty()) return why;
   current = std::move(measured);
   moved = true;
   as_designed = false;
@@ -181,7 +185,7 @@ bool SectionRun::autonomous() {
       fmt::format("the section's design data replaced by the measured contour ({} points, "
                   "tip radius and pushing amount compensated)",
                   current.polyline.cols()));
-  return true;
+  return {};
 }
 
 bool SectionRun::local_autonomous(const Sample& stop) {
@@ -222,17 +226,9 @@ bool SectionRun::local_autonomous(const Sample& stop) {
     } catch (const NoWay&) {
       return false;
     }
-    const auto out = timed(m, r.time.autonomous, [&] {
-      return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, false, length,
-                            o.autonomous_speed, settings());
-    });
-    ++r.autonomous_count;
-    if (!out.completed || out.samples.size() < 10) {
-      log(out.stop.arc, 0, "autonomous", "autonomous_scan",
-          "the autonomous scan round the stop failed: " +
-              (out.fault.empty() ? "too few points" : out.fault));
-      return false;
-    }
+    const auto scanned = follow(p + reach * nn, nn, false, length, "round the stop");
+    if (!scanned) return false;
+    const ScanOutcome& out = *scanned;
     auto sp = detail::splice(current, out.samples, at, kRejoin * o.tolerance);
     if (sp && !unpathable(sp->section).empty()) sp.reset();  // as in autonomous()
     if (sp) {
@@ -255,6 +251,23 @@ bool SectionRun::local_autonomous(const Sample& stop) {
                     length));
   }
   return false;
+}
+
+std::optional<ScanOutcome> SectionRun::follow(const Eigen::Vector3d& start,
+                                              const Eigen::Vector3d& normal, bool closed,
+                                              double length, const std::string& what) {
+  auto out = timed(m, r.time.autonomous, [&] {
+    return m.scan_unknown(current.plane, start, -normal, current.material, closed, length,
+                          o.autonomous_speed, settings());
+  });
+  ++r.autonomous_count;
+  if (!out.completed || out.samples.size() < 10) {
+    log(out.stop.arc, 0, "autonomous", "autonomous_scan",
+        fmt::format("the autonomous scan {} failed: {}", what,
+                    out.fault.empty() ? "too few points" : out.fault));
+    return std::nullopt;
+  }
+  return out;
 }
 
 bool SectionRun::rest_autonomous(const Sample& stop) {
@@ -346,17 +359,9 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
                   "against {:.1f} s for {} touch points and a rescan",
                   closed ? "the contour" : "the rest of the stretch", from, rest, touching + rescan,
                   k));
-  const auto out = timed(m, r.time.autonomous, [&] {
-    return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, closed, length,
-                          o.autonomous_speed, settings());
-  });
-  ++r.autonomous_count;
-  if (!out.completed || out.samples.size() < 10) {
-    log(out.stop.arc, 0, "autonomous", "autonomous_scan",
-        "the autonomous scan of the rest failed: " +
-            (out.fault.empty() ? "too few points" : out.fault));
-    return false;
-  }
+  const auto scanned = follow(p + reach * nn, nn, closed, length, "of the rest");
+  if (!scanned) return false;
+  const ScanOutcome& out = *scanned;
   // What neither scan measured, as autonomous() reports it: before the start, where the
   // design-value scan stopped short of it, and the end the scan keeps away from.
   if (!closed && from > at + 1)
@@ -416,19 +421,9 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   }
   if (!corrected && !confirmed) {
     // The next part's design data: the measured contour, where the ball can follow it.
-    design::Section measured = detail::overwrite(current, all);
-    if (const std::string why = unpathable(measured); why.empty()) {
-      current = std::move(measured);
-      moved = true;
-      as_designed = false;
-      log(0, 0, "autonomous", "design_overwritten",
-          fmt::format("the section's design data replaced by the measured contour ({} points, "
-                      "tip radius and pushing amount compensated)",
-                      current.polyline.cols()));
-    } else {
+    if (const std::string why = take_measured(all); !why.empty())
       log(0, 0, "autonomous", "design_kept",
           "the measured contour is not kept as the design data: " + why);
-    }
   }
   r.points = std::move(all);
   r.ok = true;

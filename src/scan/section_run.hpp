@@ -195,6 +195,13 @@ struct SectionRun {
   // part's design data; where none fits, the measured contour becomes the design data. False
   // (nothing done, or a scan that failed) leaves the flow to its touch round.
   bool rest_autonomous(const Sample& stop);
+  // The measured contour of `samples` as the section's design data (logged): "" when it became
+  // them, else why not (the ball cannot follow it; the design data stay as they were).
+  std::string take_measured(const std::vector<Sample>& samples);
+  // An autonomous scan of `length` mm (all round, `closed`) from `start`, approached against
+  // `normal`, the ball standing there; nothing when it failed (logged as the scan `what`).
+  std::optional<ScanOutcome> follow(const Eigen::Vector3d& start, const Eigen::Vector3d& normal,
+                                    bool closed, double length, const std::string& what);
   // The last design-value scan's samples, up to where it stopped, and its path's length (mm),
   // design time (s) and start.
   std::vector<Sample> partial;
