@@ -297,8 +297,8 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   };
   // Before the start is looked for (queries of the solid): the least the rest can cost, started
   // at the stop.
-  const double at_most = path_length > 0 ? stop.arc / path_length * L : 0;
-  if (scanning(closed ? L : L - at_most - short_of, 0) >= touching + rescan) return false;
+  const double at_about = path_length > 0 ? stop.arc / path_length * L : 0;
+  if (scanning(closed ? L : L - at_about - short_of, 0) >= touching + rescan) return false;
   const auto smp = design::sample(current, 1.0);
   const double at = detail::contour_arc(smp, design::make_path(current, o.path), stop.arc);
   auto sample_at = [&](double a) {

@@ -16,7 +16,6 @@ namespace {
 // fraction of the room the pushing leaves in its range (range − pushing): 0.07 mm of a 1 mm
 // probe pushed 0.3 mm, about one servo tick of a surface rising 45° at 70 mm/s.
 constexpr double kRangeGuard = 0.1;
-
 }  // namespace
 
 bool SectionRun::design_scan(Sample& stop, std::string& why) {
