@@ -361,6 +361,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
   std::vector<detail::TouchRound> rounds;
   std::vector<Correction> guess;
   std::vector<detail::SolidTouches> touched;
+  bool found = false;
   for (std::size_t i = 0; i < items.size(); ++i) {
     Item& it = items[i];
     if (progress) progress(i, items.size(), it.section.name);
@@ -390,9 +391,10 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       }
       SectionResult partial;
       try {
-        r = detail::run_section({machine, options, *it.planner, res.events, first_move, partial,
-                                 part_move, res.unreachable, rounds, guess, design.solid, touched},
-                                it.section);
+        r = detail::run_section(
+            {machine, options, *it.planner, res.events, first_move, partial, part_move,
+             res.unreachable, rounds, guess, design.solid, touched, found},
+            it.section);
       } catch (...) {
         r = std::move(partial);
         throw;

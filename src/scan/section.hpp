@@ -54,6 +54,10 @@ struct SectionContext {
   // (fit_solid_move).
   const std::string& solid_file;
   std::vector<SolidTouches>& touched;
+  // The run has found the part where its design data put it (a design-value scan ran through, a
+  // correction was accepted, a section was measured): until then nothing bounds how far off its
+  // design the part was placed, and free moves are guarded further out.
+  bool& found;
 };
 
 // A reachable stretch shorter than this is not scanned (mm): nothing to follow.

@@ -19,6 +19,10 @@ constexpr double kRouteMargin = 2.0;
 // comes within this much beyond what the section keeps from the part's design (mm): a part that
 // far further off than the move allows for stops it on the probe's trigger, not in a collision.
 constexpr double kGuardBand = 2.0;
+// Until the run has found the part, free moves are guarded this much further out (mm): a part
+// placed up to about 13 mm off its design (the margin, both bands and the 1 mm the guarded speed
+// stops in) is met by the probe at the guarded speed on the first moves to it, not at full speed.
+constexpr double kUnfoundBand = 10.0;
 }  // namespace
 
 std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded(
@@ -28,7 +32,8 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
     return {way, std::vector<double>(way.size(), o.move_speed)};
   const Planner& solid = planner();
   const Eigen::Vector3d u = m.stylus_axis();
-  const double band = std::max(solid.margin(), seen + 1) + kGuardBand;
+  const double band =
+      std::max(solid.margin(), seen + 1) + kGuardBand + (found ? 0.0 : kUnfoundBand);
   // How far from a along the leg to b the band is first entered (the leg's length if never):
   // steps never longer than the clearance beyond the band (every element moves as far as the
   // ball), nor shorter than 0.2 mm.

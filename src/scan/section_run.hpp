@@ -51,6 +51,7 @@ struct SectionRun {
         guess(c.guess),
         solid_file(c.solid_file),
         touched(c.touched),
+        found(c.found),
         current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
@@ -63,6 +64,7 @@ struct SectionRun {
   std::vector<Correction>& guess;      // the part's move as far as the run could guess it
   const std::string& solid_file;       // the part's STEP file ("" without a solid)
   std::vector<SolidTouches>& touched;  // every touch round's points so far in the run
+  bool& found;                         // the run has found the part (SectionContext)
   SectionResult r;
   design::Section current;
   // Against the solid moved by the corrections accepted for this section so far (what the

@@ -531,6 +531,32 @@ TEST(CadScan, NistCtc05BatchOfFiveAgainstAutonomousOnly) {
   EXPECT_LT(first, first_autonomous);
 }
 
+// A part placed further off its design than any band the moves keep: CTC 05 3 % larger stands
+// 8 mm off at the ends of the y section, and the first move, down beside its end at full speed,
+// met it (pushed in 9.8 mm, a collision). Until the run has found the part, free moves near it go
+// at the guarded speed 10 mm further out, so the probe stops that move, and the run goes on.
+TEST(CadScan, APartPlacedFarOffIsFirstMetByTheProbeNotInACollision) {
+  const std::string file = std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ctc_05_asme1_rd.stp";
+  const design::Design d = design::from_step(
+      file, {{"y", {Eigen::Vector3d(0, -72.67, 241.3), Eigen::Vector3d::UnitY()}}});
+  sim::Part part{d, {}};
+  part.deviation.scale = 1.03;
+  const scan::ControllerOptions o;
+  scan::VirtualCmm cmm(part, {}, scan::start_position(d, o));
+  const auto r = scan::scan(cmm, d, o);
+  expect_finished(r, "3 % larger");
+  EXPECT_GE(count(r, "unexpected_touch"), 1) << r.summary();
+  int scanned = 0;
+  double worst = 0;
+  for (std::size_t i = 0; i < r.sections.size(); ++i) {
+    scanned += r.sections[i].ok;
+    for (const auto& p : r.sections[i].points)
+      worst = std::max(worst, std::abs(cmm.distance(r.planned.sections[i].plane, p.surface)));
+  }
+  EXPECT_GE(scanned, 4) << r.summary();
+  EXPECT_LT(worst, kOnTrueContour);
+}
+
 // A first part is never slower than scanning it autonomously. On FTC 10 cut at x = 33.49 mm and
 // the DaimlerChrysler part at x = 0, moved and turned as a batch's parts are, an open stretch's
 // first trajectory error came 33 mm into an 80 mm stretch (FTC 10) and 27 mm into a 41 mm one:
