@@ -214,10 +214,7 @@ bool SectionRun::local_autonomous(const Sample& stop) {
     Eigen::Index best = -1;
     for (double back = kLocalLead; back <= 3 * kLocalLead && best < 0; back += 1) {
       const Eigen::Index i = static_cast<Eigen::Index>(std::lround((at - back + L) / L * n)) % n;
-      const Eigen::Index a = (i + n - 1) % n, b = (i + 1) % n;
-      if (smp.normals.col(a).dot(smp.normals.col(i)) > std::cos(0.2) &&
-          smp.normals.col(b).dot(smp.normals.col(i)) > std::cos(0.2))
-        best = i;
+      if (smooth_at(smp, i, true)) best = i;
     }
     if (best < 0) return false;
     const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
@@ -273,7 +270,8 @@ std::optional<ScanOutcome> SectionRun::follow(const Eigen::Vector3d& start,
 bool SectionRun::rest_autonomous(const Sample& stop) {
   // Where the flow would make a touch round. About a guessed move of the part, the scan's
   // points confirm or drop the guess as that round's would.
-  if (current.space_curve()) return false;
+  if (current.space_curve() || !scanned_path) return false;
+  const design::ScanPath& path = *scanned_path;
   const bool closed = current.closed;
   const int k = touch_count();
   if (k < kFewestTouches) return false;
@@ -291,16 +289,16 @@ bool SectionRun::rest_autonomous(const Sample& stop) {
   const double spacing = closed ? L / k : 0.9 * L / (k - 1);
   const double touching = k * (band / o.touch_speed + 2 * spacing / o.move_speed + kMoveOverhead);
   const double rescan =
-      (stop.surface - path_start).norm() / o.move_speed + kMoveOverhead + path_time;
+      (stop.surface - path.at(0).p).norm() / o.move_speed + kMoveOverhead + path.nominal_time();
   auto scanning = [&](double length, double move) {
     return move / o.move_speed + kMoveOverhead + length / o.autonomous_speed;
   };
   // Before the start is looked for (queries of the solid): the least the rest can cost, started
   // at the stop.
-  const double at_about = path_length > 0 ? stop.arc / path_length * L : 0;
+  const double at_about = stop.arc / path.length() * L;
   if (scanning(closed ? L : L - at_about - short_of, 0) >= touching + rescan) return false;
   const auto smp = design::sample(current, 1.0);
-  const double at = detail::contour_arc(smp, design::make_path(current, o.path), stop.arc);
+  const double at = detail::contour_arc(smp, path, stop.arc);
   auto sample_at = [&](double a) {
     if (closed) a -= L * std::floor(a / L);
     Eigen::Index i = 0;

@@ -19,11 +19,8 @@ constexpr double kRangeGuard = 0.1;
 }  // namespace
 
 bool SectionRun::design_scan(Sample& stop, std::string& why) {
-  const auto path = design::make_path(current, o.path);
+  const auto& path = scanned_path.emplace(design::make_path(current, o.path));
   const auto start = path.at(0);
-  path_length = path.length();
-  path_time = path.nominal_time();
-  path_start = start.p;
   // Where an unexpected touch on the way found the part further off than the approach allows
   // for, the approach starts further out (found_extra).
   for (;;) {
@@ -149,7 +146,6 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
     current = std::move(cut);
     learnt = Eigen::Affine3d::Identity();
     took(detail::in_plane_part(move.transform, current.plane));
-    found = true;
     seen = move.residual_after;
     log(stop.arc, stop.delta_l, "correction", "correction_applied",
         fmt::format("solid-move: {}; these {} and the {} points before them all within "
@@ -161,7 +157,6 @@ bool SectionRun::fit_touches(const Sample& stop, const Eigen::Matrix3Xd& feet,
     return true;
   }
   if (corrected) {
-    found = true;
     // What these touch points tell of the whole part, to hand on (hand_on_part_move).
     told.push_back({r.corrections.size() - 1, std::move(told_here)});
     if (nominal) own_rounds.push_back({touched_on, feet, got});
@@ -192,7 +187,6 @@ void SectionRun::run() {
   if (o.strategy == Strategy::Autonomous) {
     r.ok = autonomous();
     if (r.ok) log(0, 0, "section", "section_done", "measured by autonomous scanning only");
-    found = found || r.ok;
     r.time.total = m.time() - t0;
     return;
   }
@@ -203,7 +197,6 @@ void SectionRun::run() {
     if (!reach_ends()) break;
     if (design_scan(stop, why)) {
       r.ok = true;
-      found = true;
       log(stop.arc, stop.delta_l, "design", "section_done",
           loop == 0 ? "scanned along the design" : "rescan succeeded");
       if (unguessed) confirm_by_points();
@@ -286,7 +279,6 @@ void SectionRun::run() {
     log(0, 0, "design", "rescan", "rescan in design mode with the measured design data");
   }
   hand_on_part_move();
-  found = found || r.ok;
   r.time.total = m.time() - t0;
 }
 
@@ -301,6 +293,8 @@ SectionResult run_section(const SectionContext& c, design::Section& section) {
     throw;
   }
   section = run.current;
+  // A section measured found the part where its design data put it.
+  c.found = c.found || run.r.ok;
   return std::move(run.r);
 }
 

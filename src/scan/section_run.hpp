@@ -204,11 +204,9 @@ struct SectionRun {
   // `normal`, the ball standing there; nothing when it failed (logged as the scan `what`).
   std::optional<ScanOutcome> follow(const Eigen::Vector3d& start, const Eigen::Vector3d& normal,
                                     bool closed, double length, const std::string& what);
-  // The last design-value scan's samples, up to where it stopped, and its path's length (mm),
-  // design time (s) and start.
+  // The last design-value scan's path, and its samples up to where it stopped.
+  std::optional<design::ScanPath> scanned_path;
   std::vector<Sample> partial;
-  double path_length = 0, path_time = 0;
-  Eigen::Vector3d path_start = Eigen::Vector3d::Zero();
 
   // Set when an autonomous scan measured the section but its contour could not become the
   // design data (autonomous()): the section is done.
@@ -235,6 +233,7 @@ struct SectionRun {
   // The design data are where `step` puts the part (moved with it, or cut from the solid moved
   // with it): the planner stands the solid there too.
   void took(const Eigen::Affine3d& step) {
+    found = true;  // the part is where these corrections put it
     as_designed = false;
     // A guess of the part's move this section's touch points corrected is part of what they
     // found (learnt holds it already).
