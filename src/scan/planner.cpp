@@ -19,6 +19,12 @@ constexpr double kLookout = 20;
 // Steps of a conservative advance are at least this long (mm): a clearance within it of the
 // margin counts as touching it.
 constexpr double kLeast = 1e-3;
+// Ways round the part at a move's level: how far out across the move they go (mm).
+// How much less than its start's clearance the first leg of a way round the part may keep (mm):
+// backing away stops where the margin is reached along the clearance's slope, which need not be
+// the most clearance across the way out.
+constexpr double kLeaveDip = 0.1;
+constexpr std::array<double, 12> kRoundAboutOffsets{2, 3, 5, 8, 12, 18, 27, 40, 60, 90, 135, 200};
 
 std::string at(const Eigen::Vector3d& p) {
   return fmt::format("({:.2f}, {:.2f}, {:.2f})", p.x(), p.y(), p.z());
@@ -117,7 +123,8 @@ bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
 }
 
 std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                            const Eigen::Vector3d& axis, bool rise) const {
+                                            const Eigen::Vector3d& axis, bool rise,
+                                            const WayCost& cost) const {
   const Eigen::Vector3d u = axis.normalized();
   std::vector<Eigen::Vector3d> out;
   // Back away from the part first if the ball stands nearer than the margin: in small steps up
@@ -147,6 +154,54 @@ std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eige
     return out;
   }
   const Eigen::Vector3d start = from;
+  std::vector<std::vector<Eigen::Vector3d>> ways;
+  std::string blocked;
+  try {
+    ways.push_back(over_the_top(a, start, b, u));
+  } catch (const NoWay& e) {
+    blocked = e.what();
+  }
+  if (!rise && part_) {
+    // No longer than the way over the top, where there is one.
+    double longest = INFINITY;
+    if (!ways.empty()) {
+      longest = 0;
+      Eigen::Vector3d p = start;
+      for (const Eigen::Vector3d& q : ways.front()) {
+        longest += (q - p).norm();
+        p = q;
+      }
+    }
+    for (auto& w : round_about(start, b, u, longest)) ways.push_back(std::move(w));
+  }
+  if (ways.empty()) throw NoWay(blocked);
+  const WayCost length = [&](const std::vector<Eigen::Vector3d>& way) {
+    double L = 0;
+    Eigen::Vector3d p = a;
+    for (const Eigen::Vector3d& q : way) {
+      L += (q - p).norm();
+      p = q;
+    }
+    return L;
+  };
+  const WayCost& measure = cost ? cost : length;
+  std::vector<Eigen::Vector3d> best;
+  double least = INFINITY;
+  for (const auto& w : ways) {
+    std::vector<Eigen::Vector3d> way = out;
+    way.insert(way.end(), w.begin(), w.end());
+    if (const double c = measure(way); c < least) {
+      least = c;
+      best = std::move(way);
+    }
+  }
+  return best;
+}
+
+std::vector<Eigen::Vector3d> Planner::over_the_top(const Eigen::Vector3d& a,
+                                                   const Eigen::Vector3d& start,
+                                                   const Eigen::Vector3d& b,
+                                                   const Eigen::Vector3d& u) const {
   // The level along the axis the stylus crosses at: the part's highest point under the move
   // (within the probe body's reach of its line), the ball's radius and the clearance above it.
   const double reach = std::max(r_, stylus_.body_radius) + margin_;
@@ -170,10 +225,71 @@ std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eige
         fmt::format("no free way to {} mm: the part is in the way of the approach along "
                     "the stylus from {}",
                     at(b), at(b1)));
+  std::vector<Eigen::Vector3d> out;
   if ((a1 - start).norm() > 1e-9) out.push_back(a1);
   if ((b1 - a1).norm() > 1e-9) out.push_back(b1);
   out.push_back(b);
   return out;
+}
+
+std::vector<std::vector<Eigen::Vector3d>> Planner::round_about(const Eigen::Vector3d& a,
+                                                               const Eigen::Vector3d& b,
+                                                               const Eigen::Vector3d& u,
+                                                               double longest) const {
+  std::vector<std::vector<Eigen::Vector3d>> found;
+  const Eigen::Vector3d d = b - a;
+  const Eigen::Vector3d side = u.cross(d);
+  // A move along the stylus has no level to go round at.
+  if (!(side.norm() > 1e-6 * std::max(1.0, d.norm()))) return found;
+  const Eigen::Vector3d n = side.normalized();
+  // Out across the move by h on either side, then along it and in (a box), or through one
+  // intermediate point a quarter, half or three quarters along at that offset.
+  struct Candidate {
+    double length;
+    int group;
+    std::vector<Eigen::Vector3d> way;
+  };
+  std::vector<Candidate> all;
+  int group = 0;
+  for (const double h : kRoundAboutOffsets)
+    for (const double sign : {1.0, -1.0}) {
+      const Eigen::Vector3d off = sign * h * n;
+      all.push_back({2 * h + d.norm(), group, {a + off, b + off, b}});
+      for (const double t : {0.25, 0.5, 0.75}) {
+        const Eigen::Vector3d w = a + t * d + off;
+        all.push_back({(w - a).norm() + (b - w).norm(), group, {w, b}});
+      }
+      ++group;
+    }
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Candidate& x, const Candidate& y) { return x.length < y.length; });
+  // The shortest clear way of each offset no longer than `longest`: a longer way further out may
+  // still cost less where it leaves the band the caller slows down in.
+  std::vector<char> taken(static_cast<std::size_t>(group), 0);
+  // A start that backing away left just at the margin may lie on a ridge of the clearance across
+  // the way out: the first leg keeps its own clearance less kLeaveDip.
+  const double leave = std::min(margin_, clearance(a, u) - kLeaveDip);
+  for (const Candidate& c : all) {
+    if (c.length > longest) break;
+    if (taken[static_cast<std::size_t>(c.group)]) continue;
+    // Waypoints within the margin first: one query each, not a leg's advance.
+    bool free = true;
+    for (std::size_t k = 0; k + 1 < c.way.size() && free; ++k)
+      free = clearance(c.way[k], u) >= margin_ + kLeast;
+    if (!free) continue;
+    Eigen::Vector3d p = a;
+    for (const Eigen::Vector3d& q : c.way) {
+      if (!clear(p, q, u, p == a ? leave : margin_)) {
+        free = false;
+        break;
+      }
+      p = q;
+    }
+    if (!free) continue;
+    taken[static_cast<std::size_t>(c.group)] = 1;
+    found.push_back(c.way);
+  }
+  return found;
 }
 
 std::vector<char> Planner::faces_crossing(const design::Plane& plane) const {

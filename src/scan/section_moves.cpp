@@ -23,10 +23,14 @@ constexpr double kGuardBand = 2.0;
 // placed up to about 13 mm off its design (the margin, both bands and the 1 mm the guarded speed
 // stops in) is met by the probe at the guarded speed on the first moves to it, not at full speed.
 constexpr double kUnfoundBand = 10.0;
+// What speeding up to a leg's speed and slowing down from it adds to the leg's time at that speed,
+// at the move speed (s; v/a: 200 mm/s at 2000 mm/s²); at lower speeds in proportion. Only ways
+// are compared with it.
+constexpr double kLegRamp = 0.1;
 }  // namespace
 
 std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded(
-    const std::vector<Eigen::Vector3d>& way) const {
+    const std::vector<Eigen::Vector3d>& way, const Eigen::Vector3d& from) const {
   const std::optional<double> slow = guard_speed();
   if (!slow || *slow >= o.move_speed || !planner().part())
     return {way, std::vector<double>(way.size(), o.move_speed)};
@@ -56,7 +60,7 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
   if (const std::size_t n = to_go.size(); n >= 2) {
     const Eigen::Vector3d top = to_go[n - 2], end = to_go[n - 1];
     const Eigen::Vector3d down = end - top;
-    const Eigen::Vector3d before = n >= 3 ? to_go[n - 3] : m.position();
+    const Eigen::Vector3d before = n >= 3 ? to_go[n - 3] : from;
     const double c_end = solid.clearance(end, u);
     if (down.dot(u) < 0 && down.cross(u).norm() < 1e-6 * down.norm() &&
         solid.part_clearance(end, u) < band) {
@@ -89,7 +93,7 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
   }
   std::vector<Eigen::Vector3d> legs;
   std::vector<double> speeds;
-  Eigen::Vector3d a = m.position();
+  Eigen::Vector3d a = from;
   for (const Eigen::Vector3d& b : to_go) {
     const double L = (b - a).norm();
     if (L < 1e-9) {
@@ -122,10 +126,22 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
   return {legs, speeds};
 }
 
+double SectionRun::way_time(const std::vector<Eigen::Vector3d>& way,
+                            const Eigen::Vector3d& from) const {
+  const auto [legs, speeds] = guarded(way, from);
+  double t = 0;
+  Eigen::Vector3d a = from;
+  for (std::size_t k = 0; k < legs.size(); ++k) {
+    t += (legs[k] - a).norm() / speeds[k] + kLegRamp * speeds[k] / o.move_speed;
+    a = legs[k];
+  }
+  return t;
+}
+
 void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
   const Eigen::Vector3d from = m.position();
   auto [legs, speeds] =
-      guard ? guarded(way) : std::pair{way, std::vector<double>(way.size(), o.move_speed)};
+      guard ? guarded(way, from) : std::pair{way, std::vector<double>(way.size(), o.move_speed)};
   try {
     if (planner().margin() >= 2 * Machine::kCornerCut)
       m.move_legs(legs, speeds);
@@ -163,7 +179,8 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
   auto plan = [&](const Planner& solid) {
     std::vector<Eigen::Vector3d> way;
     try {
-      way = solid.route(from, to, u, first_move);
+      way = solid.route(from, to, u, first_move,
+                        [&](const std::vector<Eigen::Vector3d>& w) { return way_time(w, from); });
     } catch (const NoWay&) {
       // Not on the run's first move: where the machine stands then is not trusted.
       if (first_move) throw;
@@ -175,7 +192,9 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
           const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
           if (!solid.clear(from, side, u, margin)) continue;
           try {
-            way = solid.route(side, to, u, false);
+            way = solid.route(side, to, u, false, [&](const std::vector<Eigen::Vector3d>& w) {
+              return way_time(w, side);
+            });
             way.insert(way.begin(), side);
           } catch (const NoWay&) {
           }

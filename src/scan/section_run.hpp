@@ -88,7 +88,10 @@ struct SectionRun {
   // The legs of a free move with their speeds: split where they enter and leave the band in
   // which the move is guarded.
   std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> guarded(
-      const std::vector<Eigen::Vector3d>& way) const;
+      const std::vector<Eigen::Vector3d>& way, const Eigen::Vector3d& from) const;
+  // About how long a free move from `from` through `way` takes (machine s): its legs at their
+  // speeds, guarded where guarded, and each leg's speeding up and slowing down.
+  double way_time(const std::vector<Eigen::Vector3d>& way, const Eigen::Vector3d& from) const;
   int unexpected = 0;  // unexpected touches in this section so far
   // The speed of guarded legs: the options', else the machine's (none: moves are not slowed).
   std::optional<double> guard_speed() const {
@@ -97,7 +100,8 @@ struct SectionRun {
   }
 
   // A free move the planner finds: straight when clear of the part, else retract along the
-  // stylus to the clearance level, across, and down. Where the planner finds no way (the ball
+  // stylus to the clearance level, across, and down, or round the part at the move's level,
+  // whichever way_time() finds shorter. Where the planner finds no way (the ball
   // stands under an overhang, where a scan ended), it first moves out sideways, across the
   // stylus, to where it does (the nearest of 8 directions and 4 distances, in order).
   // `keep`: the margin to keep instead, when larger than the planner's.

@@ -154,5 +154,57 @@ TEST(Planner, APostBesideAVerticalPlaneBlocksThePathForAPartOffAcrossThePlane) {
       planner({block}).unreachable(path_round({Eigen::Vector3d(0, 0, 49), u}, corners), u).empty());
 }
 
+// A free move past a tall post (20 × 20 mm, 200 mm high), from one side of it to the other at
+// 25 mm: over the top, the stylus would rise 196 mm and come down as far. A CMM program goes
+// round beside the post at the move's own level instead, each leg keeping the margin (the probe
+// body, Ø13, as well as the ball). The caller's cost chooses among the ways; the first move of a
+// run, which does not trust where the machine stands, still rises first.
+TEST(Planner, AMovePastATallPostGoesRoundItAtItsLevelWhereThatCostsLess) {
+  const auto p =
+      planner({Eigen::AlignedBox3d(Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(20, 20, 200))});
+  const Eigen::Vector3d u = Eigen::Vector3d::UnitZ(), a(-10, 10, 25), b(30, 10, 25);
+  ASSERT_FALSE(p.clear(a, b, u, kMargin));
+  auto length = [&](const std::vector<Eigen::Vector3d>& way) {
+    double L = 0;
+    Eigen::Vector3d at = a;
+    for (const Eigen::Vector3d& q : way) {
+      L += (q - at).norm();
+      at = q;
+    }
+    return L;
+  };
+  const auto round = p.route(a, b, u);
+  ASSERT_FALSE(round.empty());
+  EXPECT_LT((round.back() - b).norm(), 1e-12);
+  Eigen::Vector3d at = a;
+  for (const Eigen::Vector3d& q : round) {
+    EXPECT_NEAR(q.z(), 25, 1e-9);
+    EXPECT_TRUE(p.clear(at, q, u, kMargin)) << q.transpose();
+    at = q;
+  }
+  // Over the top: up to the post's top, the ball's radius and the 20 mm clearance, and down.
+  const double top = 200 + kTip + 20;
+  const double over = 2 * (top - 25) + (b - a).norm();
+  EXPECT_LT(length(round), over);
+
+  const auto first = p.route(a, b, u, true);
+  ASSERT_EQ(first.size(), 3u);
+  EXPECT_NEAR(first[0].z(), top, 1e-9);
+  EXPECT_NEAR(length(first), over, 1e-9);
+
+  // A cost that counts only the time spent below 100 mm (say, where something else stands).
+  const auto high = p.route(a, b, u, false, [&](const std::vector<Eigen::Vector3d>& way) {
+    double low = 0;
+    Eigen::Vector3d from = a;
+    for (const Eigen::Vector3d& q : way) {
+      if (std::max(from.z(), q.z()) < 100) low += (q - from).norm();
+      from = q;
+    }
+    return low;
+  });
+  ASSERT_EQ(high.size(), 3u);
+  EXPECT_NEAR(high[0].z(), top, 1e-9);
+}
+
 }  // namespace
 }  // namespace trueaxis

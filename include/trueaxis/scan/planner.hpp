@@ -3,11 +3,13 @@
 // orientation.
 //
 // What a CMM program does: a free move goes straight when the ball, the stylus and the probe body
-// keep a margin from the part all the way; otherwise the stylus retracts along its own axis to a
-// clearance level above everything under the move, crosses there, and comes back down along its
-// axis. A stretch of a path is reachable when, with the ball on the path, nothing but the faces
-// the ball measures comes within a margin of the ball, and nothing at all within a margin of the
-// stylus or the body (a vertical stylus cannot reach under the part).
+// keep a margin from the part all the way; otherwise either the stylus retracts along its own axis
+// to a clearance level above everything under the move, crosses there, and comes back down along
+// its axis, or it goes round the part at the move's level through intermediate points, whichever
+// the caller finds costs less (a retract over a tall part costs more than a way round it). A
+// stretch of a path is reachable when, with the ball on the path, nothing but the faces the ball
+// measures comes within a margin of the ball, and nothing at all within a margin of the stylus or
+// the body (a vertical stylus cannot reach under the part).
 //
 // Units: mm. Frame: the part's design frame (the solid is the design's, not the real part: the
 // margins absorb what the part may be off). Stylus positions are ball centres; `axis` is the unit
@@ -15,6 +17,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -53,13 +56,19 @@ class Planner {
   // by conservative advancement: a step never longer than the clearance less the margin).
   bool clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
              double margin) const;
+  // What a way costs (the points to move to from a, b last): the caller's estimate of its time,
+  // or by default its length (mm).
+  using WayCost = std::function<double(const std::vector<Eigen::Vector3d>&)>;
   // The way from a to b as the points to move to (b last). `rise` forces the retract along the
   // axis first (the start of a run: a machine is not trusted to stand anywhere in particular).
   // A start nearer the part than the margin (the ball just left a surface) first backs away from
-  // the part, up the clearance's slope, until the margin is reached. Throws NoWay saying which
-  // leg the part blocks.
+  // the part, up the clearance's slope, until the margin is reached. Where the straight move is
+  // not clear, the way over the top competes with ways round the part at the move's own level
+  // (out across the move, along it, and in: a CMM program's intermediate points), and the one
+  // that costs least is taken. Throws NoWay saying which leg the part blocks.
   std::vector<Eigen::Vector3d> route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
-                                     const Eigen::Vector3d& axis, bool rise = false) const;
+                                     const Eigen::Vector3d& axis, bool rise = false,
+                                     const WayCost& cost = {}) const;
 
   // Arcs of a scanning path (mm along it) the stylus cannot reach in orientation `axis`, each
   // with the reason, every `step` mm; the ball may touch the faces crossing the path's plane.
@@ -108,6 +117,16 @@ class Planner {
   // along the unit axis u itself.
   double swept_along_axis(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                           const Eigen::Vector3d& u) const;
+  // The way from start (a after backing away) up along the axis, across above the part and down.
+  std::vector<Eigen::Vector3d> over_the_top(const Eigen::Vector3d& a, const Eigen::Vector3d& start,
+                                            const Eigen::Vector3d& b,
+                                            const Eigen::Vector3d& u) const;
+  // Ways from a to b round the part at the move's level, clear by the margin, none longer than
+  // `longest` (mm): the shortest of each offset across the move.
+  std::vector<std::vector<Eigen::Vector3d>> round_about(const Eigen::Vector3d& a,
+                                                        const Eigen::Vector3d& b,
+                                                        const Eigen::Vector3d& u,
+                                                        double longest) const;
 };
 
 }  // namespace trueaxis::scan
