@@ -19,11 +19,11 @@ constexpr double kLookout = 20;
 // Steps of a conservative advance are at least this long (mm): a clearance within it of the
 // margin counts as touching it.
 constexpr double kLeast = 1e-3;
-// Ways round the part at a move's level: how far out across the move they go (mm).
 // How much less than its start's clearance the first leg of a way round the part may keep (mm):
 // backing away stops where the margin is reached along the clearance's slope, which need not be
 // the most clearance across the way out.
 constexpr double kLeaveDip = 0.1;
+// Ways round the part at a move's level: how far out across the move they go (mm).
 constexpr std::array<double, 12> kRoundAboutOffsets{2, 3, 5, 8, 12, 18, 27, 40, 60, 90, 135, 200};
 
 std::string at(const Eigen::Vector3d& p) {
