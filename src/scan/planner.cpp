@@ -124,7 +124,7 @@ bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
 
 std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                             const Eigen::Vector3d& axis, bool rise,
-                                            const WayCost& cost) const {
+                                            const WayCost& cost, double least_per_mm) const {
   const Eigen::Vector3d u = axis.normalized();
   std::vector<Eigen::Vector3d> out;
   // Back away from the part first if the ball stands nearer than the margin: in small steps up
@@ -154,27 +154,6 @@ std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eige
     return out;
   }
   const Eigen::Vector3d start = from;
-  std::vector<std::vector<Eigen::Vector3d>> ways;
-  std::string blocked;
-  try {
-    ways.push_back(over_the_top(a, start, b, u));
-  } catch (const NoWay& e) {
-    blocked = e.what();
-  }
-  if (!rise && part_) {
-    // No longer than the way over the top, where there is one.
-    double longest = INFINITY;
-    if (!ways.empty()) {
-      longest = 0;
-      Eigen::Vector3d p = start;
-      for (const Eigen::Vector3d& q : ways.front()) {
-        longest += (q - p).norm();
-        p = q;
-      }
-    }
-    for (auto& w : round_about(start, b, u, longest)) ways.push_back(std::move(w));
-  }
-  if (ways.empty()) throw NoWay(blocked);
   const WayCost length = [&](const std::vector<Eigen::Vector3d>& way) {
     double L = 0;
     Eigen::Vector3d p = a;
@@ -185,16 +164,32 @@ std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eige
     return L;
   };
   const WayCost& measure = cost ? cost : length;
-  std::vector<Eigen::Vector3d> best;
-  double least = INFINITY;
-  for (const auto& w : ways) {
+  const double per_mm = cost ? least_per_mm : 1.0;
+  auto whole = [&](const std::vector<Eigen::Vector3d>& w) {
     std::vector<Eigen::Vector3d> way = out;
     way.insert(way.end(), w.begin(), w.end());
-    if (const double c = measure(way); c < least) {
-      least = c;
-      best = std::move(way);
-    }
+    return way;
+  };
+  std::vector<Eigen::Vector3d> best;
+  double least = INFINITY;
+  std::string blocked;
+  try {
+    best = whole(over_the_top(a, start, b, u));
+    least = measure(best);
+  } catch (const NoWay& e) {
+    blocked = e.what();
   }
+  // Round the part, where a way could cost less than over the top: no longer than that cost
+  // allows at the least cost a millimetre can have.
+  if (!rise && part_)
+    for (const auto& w : round_about(start, b, u, least / per_mm)) {
+      std::vector<Eigen::Vector3d> way = whole(w);
+      if (const double c = measure(way); c < least) {
+        least = c;
+        best = std::move(way);
+      }
+    }
+  if (best.empty()) throw NoWay(blocked);
   return best;
 }
 

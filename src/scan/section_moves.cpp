@@ -179,8 +179,10 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
   auto plan = [&](const Planner& solid) {
     std::vector<Eigen::Vector3d> way;
     try {
-      way = solid.route(from, to, u, first_move,
-                        [&](const std::vector<Eigen::Vector3d>& w) { return way_time(w, from); });
+      way = solid.route(
+          from, to, u, first_move,
+          [&](const std::vector<Eigen::Vector3d>& w) { return way_time(w, from); },
+          1 / o.move_speed);
     } catch (const NoWay&) {
       // Not on the run's first move: where the machine stands then is not trusted.
       if (first_move) throw;
@@ -192,9 +194,10 @@ void SectionRun::safe_move(const Eigen::Vector3d& to, double keep) {
           const Eigen::Vector3d side = from + d * (std::cos(t) * e1 + std::sin(t) * e2);
           if (!solid.clear(from, side, u, margin)) continue;
           try {
-            way = solid.route(side, to, u, false, [&](const std::vector<Eigen::Vector3d>& w) {
-              return way_time(w, side);
-            });
+            way = solid.route(
+                side, to, u, false,
+                [&](const std::vector<Eigen::Vector3d>& w) { return way_time(w, side); },
+                1 / o.move_speed);
             way.insert(way.begin(), side);
           } catch (const NoWay&) {
           }

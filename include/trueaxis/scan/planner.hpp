@@ -57,7 +57,9 @@ class Planner {
   bool clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& axis,
              double margin) const;
   // What a way costs (the points to move to from a, b last): the caller's estimate of its time,
-  // or by default its length (mm).
+  // or by default its length (mm). A way of length L costs at least `least_per_mm`·L (with the
+  // default cost, 1): ways round the part too long to cost less than over the top are not
+  // looked at.
   using WayCost = std::function<double(const std::vector<Eigen::Vector3d>&)>;
   // The way from a to b as the points to move to (b last). `rise` forces the retract along the
   // axis first (the start of a run: a machine is not trusted to stand anywhere in particular).
@@ -68,7 +70,7 @@ class Planner {
   // that costs least is taken. Throws NoWay saying which leg the part blocks.
   std::vector<Eigen::Vector3d> route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                      const Eigen::Vector3d& axis, bool rise = false,
-                                     const WayCost& cost = {}) const;
+                                     const WayCost& cost = {}, double least_per_mm = 1) const;
 
   // Arcs of a scanning path (mm along it) the stylus cannot reach in orientation `axis`, each
   // with the reason, every `step` mm; the ball may touch the faces crossing the path's plane.
