@@ -270,13 +270,22 @@ void SectionRun::run() {
     // A failure the touch points do not show (they agree with the design, or with the
     // correction just applied) is local: scanned round the stop, the rest kept.
     local = local || flag == 1;
-    if (!(local && local_autonomous(stop)) && !autonomous()) break;
-    if (measured_only) {
-      r.ok = true;
-      break;
+    if (local && local_autonomous(stop)) {
+      flag = 0;
+      log(0, 0, "design", "rescan", "rescan in design mode with the spliced design data");
+      continue;
     }
-    flag = 0;
-    log(0, 0, "design", "rescan", "rescan in design mode with the measured design data");
+    if (!autonomous()) break;
+    // The whole section (or all of the stretch it can follow) is measured: the autonomous scan
+    // is the measurement, and its contour the design data for the next part. A rescan in design
+    // mode would measure it again, and might not be possible at all: a part off its design by
+    // more than the margin lies where the design's solid leaves the ball no way down to it.
+    r.ok = true;
+    if (!measured_only)
+      log(0, 0, "autonomous", "section_done",
+          "measured by autonomous scanning; the measured contour is the design data for the next "
+          "part");
+    break;
   }
   hand_on_part_move();
   r.time.total = m.time() - t0;
