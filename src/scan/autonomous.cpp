@@ -162,6 +162,10 @@ bool SectionRun::autonomous() {
   log(out.stop.arc, 0, "autonomous", "autonomous_scan",
       fmt::format("{} points over {:.1f} mm", out.samples.size(), out.samples.back().arc));
   r.points = out.samples;
+  // How far off its design data the part stood along the scan: no correction accounts for it.
+  const sim::Contour design = detail::contour_of(current);
+  for (const Sample& s : out.samples)
+    off_design = std::max(off_design, std::abs(design.nearest(s.surface).distance));
   if (o.strategy == Strategy::Autonomous) return true;
   // The measured contour is the design for the rescan and for the next part, if the ball can
   // follow it: a measured polyline may have a notch (a corner of the real part, noise) where

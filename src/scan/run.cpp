@@ -362,6 +362,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
   std::vector<Correction> guess;
   std::vector<detail::SolidTouches> touched;
   bool found = false;
+  double off_design = 0;
   for (std::size_t i = 0; i < items.size(); ++i) {
     Item& it = items[i];
     if (progress) progress(i, items.size(), it.section.name);
@@ -393,7 +394,7 @@ Result scan(Machine& machine, const design::Design& design, const ControllerOpti
       try {
         r = detail::run_section(
             {machine, options, *it.planner, res.events, first_move, partial, part_move,
-             res.unreachable, rounds, guess, design.solid, touched, found},
+             res.unreachable, rounds, guess, design.solid, touched, found, off_design},
             it.section);
       } catch (...) {
         r = std::move(partial);

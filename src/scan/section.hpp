@@ -58,6 +58,11 @@ struct SectionContext {
   // correction was accepted, a section was measured): until then nothing bounds how far off its
   // design the part was placed, and free moves are guarded further out.
   bool& found;
+  // The most this run found the part off its design data, where its sections' corrections put
+  // it, by the probe stopping a free move or by a whole autonomous scan (mm): free moves of later
+  // sections are guarded that far out too. A part 5 mm off met on one section is as far off on
+  // the next, which autonomous scanning does not correct for.
+  double& off_design;
 };
 
 // A reachable stretch shorter than this is not scanned (mm): nothing to follow.

@@ -36,8 +36,8 @@ std::pair<std::vector<Eigen::Vector3d>, std::vector<double>> SectionRun::guarded
     return {way, std::vector<double>(way.size(), o.move_speed)};
   const Planner& solid = planner();
   const Eigen::Vector3d u = m.stylus_axis();
-  const double band =
-      std::max(solid.margin(), seen + 1) + kGuardBand + (found ? 0.0 : kUnfoundBand);
+  const double band = std::max({solid.margin(), seen + 1, off_design + 1}) + kGuardBand +
+                      (found ? 0.0 : kUnfoundBand);
   // How far from a along the leg to b the band is first entered (the leg's length if never):
   // steps never longer than the clearance beyond the band (every element moves as far as the
   // ball), nor shorter than 0.2 mm.
@@ -160,6 +160,7 @@ void SectionRun::through(const std::vector<Eigen::Vector3d>& way, bool guard) {
     }
     const double off = planner().clearance(e.at, m.stylus_axis());
     seen = std::max(seen, off);
+    off_design = std::max(off_design, off);
     // Scans and touches start outside the band the part may be in, now as far as it was met,
     // and at least 1 mm further out each time: where the part is met near a start, how far it
     // is off there is known only as at least that.

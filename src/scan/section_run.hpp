@@ -52,6 +52,7 @@ struct SectionRun {
         solid_file(c.solid_file),
         touched(c.touched),
         found(c.found),
+        off_design(c.off_design),
         current(std::move(section)) {}
   Machine& m;
   const ControllerOptions& o;
@@ -65,6 +66,7 @@ struct SectionRun {
   const std::string& solid_file;       // the part's STEP file ("" without a solid)
   std::vector<SolidTouches>& touched;  // every touch round's points so far in the run
   bool& found;                         // the run has found the part (SectionContext)
+  double& off_design;                  // how far off it, at most (SectionContext)
   SectionResult r;
   design::Section current;
   // Against the solid moved by the corrections accepted for this section so far (what the

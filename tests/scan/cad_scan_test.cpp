@@ -419,11 +419,13 @@ TEST(CadScan, PartsBeyondTheMarginStopOnTheProbeNotInACollision) {
 // NIST MBE PMI CTC 05 cut at y = -72.67 mm (six stretches reachable from above), scanned on a
 // part that deviates as `dev` says; every point measured lies on the true contour to round-off.
 // Returns the result, with how many stretches were measured in `scanned`.
-scan::Result ctc05_y_scan(const sim::PartDeviation& dev, int& scanned) {
+scan::Result ctc05_y_scan(const sim::PartDeviation& dev, int& scanned,
+                          scan::Strategy strategy = scan::Strategy::ErrorTolerant) {
   const std::string file = std::string(TRUEAXIS_TEST_DATA) + "/cad/nist_ctc_05_asme1_rd.stp";
   const design::Design d = design::from_step(
       file, {{"y", {Eigen::Vector3d(0, -72.67, 241.3), Eigen::Vector3d::UnitY()}}});
-  const scan::ControllerOptions o;
+  scan::ControllerOptions o;
+  o.strategy = strategy;
   scan::VirtualCmm cmm(sim::Part{d, dev}, {}, scan::start_position(d, o));
   auto r = scan::scan(cmm, d, o);
   scanned = 0;
@@ -560,6 +562,22 @@ TEST(CadScan, APartPlacedFarOffIsFirstMetByTheProbeNotInACollision) {
   const auto r = ctc05_y_scan(dev, scanned);
   expect_finished(r, "3 % larger");
   EXPECT_GE(count(r, "unexpected_touch"), 1) << r.summary();
+  EXPECT_GE(scanned, 4) << r.summary();
+}
+
+// What one section finds of the part holds for the next. CTC 05 moved 5 mm along x, scanned
+// autonomously: the first stretch's probe stops a free move 5.2 mm before the design's surface
+// and the stretches after it are measured; once the part is found, free moves were guarded only
+// within the margin and 2 mm of the design, so the move down beside the last stretch met the
+// part at 130 mm/s, a collision that ended the run. Later sections now guard their moves as far
+// out as the run has found the part off its design.
+TEST(CadScan, APartFoundFarOffOnOneSectionIsMetByTheProbeOnTheNext) {
+  sim::PartDeviation dev;
+  dev.translation = Eigen::Vector3d(5, 0, 0);
+  int scanned = 0;
+  const auto r = ctc05_y_scan(dev, scanned, scan::Strategy::Autonomous);
+  expect_finished(r, "autonomous, moved 5 mm");
+  EXPECT_GE(count(r, "unexpected_touch"), 2) << r.summary();
   EXPECT_GE(scanned, 4) << r.summary();
 }
 
