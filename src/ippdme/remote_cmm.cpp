@@ -410,6 +410,7 @@ scan::ScanOutcome RemoteCmm::scan_unknown(const design::Plane& plane, const Eige
             settings.pushing);
   if (!first) {
     out.fault = "autonomous scan: no surface found on the approach";
+    out.missed_surface = true;
     return out;
   }
   // The direction of travel with the material on its `material` side (seen from N).

@@ -18,6 +18,9 @@ constexpr double kLocalScan = 60, kLocalLead = 10, kRejoin = 0.03;
 // The rest of a stretch is scanned autonomously from a smooth place at most this far (mm) before
 // the stop.
 constexpr double kRestBack = 10;
+// An open stretch's autonomous scan whose approach finds no surface is tried from further along
+// the stretch, up to this many approaches in all.
+constexpr int kApproachTries = 4;
 // What a free move loses to accelerating, braking and settling, and a touch to its retract,
 // beyond its length at speed (s): on the virtual CMM (2000 mm/s², a 7 ms servo lag) a touch
 // round on the shared CAD parts took 0.4–1.3 s a point, 0.8 s at the median, of which about
@@ -109,56 +112,92 @@ bool SectionRun::autonomous() {
     order.emplace_back(0, i);
   }
   const double reach = o.path.tip_radius + o.tolerance + 3;
-  Eigen::Index best = -1;
-  std::string no_way;
-  // Up to 12 candidates, every 8th of the ranked samples (not the neighbours of one that
-  // failed).
-  for (std::size_t k = 0; k < order.size() && k < 8 * 12; k += 8) {
-    const Eigen::Index i = order[k].second;
-    try {
-      safe_move(smp.points.col(i) + reach * smp.normals.col(i));
-      best = i;
-      break;
-    } catch (const NoWay& e) {
-      no_way = e.what();
-    }
-  }
-  if (best < 0) throw NoWay(no_way);
-  const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
   // An open stretch is followed to `keep` short of its end, which may border on what the stylus
   // cannot reach: the scan measures its length along the real part from where it met it, and
   // where that is along the design is known only to within the part's move along the contour
   // (followed to 1 mm short, a part moved 1.8 mm along it took the stem under the tab beyond the
   // end of the DaimlerChrysler part's outline at z = 15 mm).
   const double short_of = planner().part() ? keep : 1.0;
-  if (!current.closed && to - smp.arc[best] - short_of < detail::kShortest) {
-    const std::string why = fmt::format(
-        "too short to follow autonomously: {:.1f} mm from where the ball meets it to {:.1f} mm "
-        "short of its end, as near as the part's unknown place along it lets the scan go",
-        std::max(0.0, to - smp.arc[best]), short_of);
-    cut_off(from, to, why);
-    r.not_reachable = true;
-    r.reason = "not reachable: " + why;
-    log(0, 0, "autonomous", "error_exit", r.reason);
-    return false;
+  // The first of `starts` the ball can be brought to: up to 12 candidates, every 8th (not the
+  // neighbours of one that failed).
+  auto bring = [&](const std::vector<std::pair<double, Eigen::Index>>& starts, std::size_t every) {
+    std::string no_way;
+    for (std::size_t k = 0; k < starts.size() && k < every * 12; k += every) {
+      const Eigen::Index i = starts[k].second;
+      try {
+        safe_move(smp.points.col(i) + reach * smp.normals.col(i));
+        return i;
+      } catch (const NoWay& e) {
+        no_way = e.what();
+      }
+    }
+    throw NoWay(no_way);
+  };
+  Eigen::Index best = bring(order, 8);
+  ScanOutcome out;
+  double missed = -1;  // the last approach that found no surface (mm along the stretch)
+  // Where the approach finds no surface within its search (the part is not where its design
+  // puts it there: moved across a vertical section's plane, the part is cut elsewhere), an open
+  // stretch is tried again from further along, the first smooth place 1 mm beyond, up to
+  // kApproachTries times; what lies before the start that met the part is reported.
+  for (int attempt = 0;; ++attempt) {
+    if (!current.closed && to - smp.arc[best] - short_of < detail::kShortest) {
+      const std::string why =
+          attempt == 0 ? fmt::format(
+                             "too short to follow autonomously: {:.1f} mm from where the ball "
+                             "meets it to {:.1f} mm short of its end, as near as the part's "
+                             "unknown place along it lets the scan go",
+                             std::max(0.0, to - smp.arc[best]), short_of)
+                       : fmt::format(
+                             "no surface found on the approaches up to {:.1f} mm along it, and "
+                             "too short beyond them to follow autonomously",
+                             smp.arc[best]);
+      cut_off(from, to, why);
+      r.not_reachable = true;
+      r.reason = "not reachable: " + why;
+      log(0, 0, "autonomous", "error_exit", r.reason);
+      return false;
+    }
+    const Eigen::Vector3d p = smp.points.col(best), nn = smp.normals.col(best);
+    out = timed(m, r.time.autonomous, [&] {
+      return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
+                            current.closed ? L : std::max(1.0, to - smp.arc[best] - short_of),
+                            o.autonomous_speed, settings());
+    });
+    ++r.autonomous_count;
+    if (out.completed || !out.missed_surface || current.closed || attempt + 1 >= kApproachTries)
+      break;
+    missed = smp.arc[best];
+    std::vector<std::pair<double, Eigen::Index>> later;
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (smp.arc[i] >= missed + 1 && smooth_at(smp, i, false)) later.emplace_back(smp.arc[i], i);
+    if (later.empty()) break;
+    log(missed, 0, "autonomous", "approach_missed",
+        fmt::format("no surface found on the approach at {:.1f} mm along the stretch: tried "
+                    "again from further along",
+                    missed));
+    try {
+      best = bring(later, 1);
+    } catch (const NoWay&) {
+      break;
+    }
   }
-  if (!current.closed && short_of > 1)
-    cut_off(to - short_of, to,
-            fmt::format("an autonomous scan is not followed closer than {:.1f} mm to the end of "
-                        "the stretch: where the part stands along it is known only that well",
-                        short_of));
-  const auto out = timed(m, r.time.autonomous, [&] {
-    return m.scan_unknown(current.plane, p + reach * nn, -nn, current.material, current.closed,
-                          current.closed ? L : std::max(1.0, to - smp.arc[best] - short_of),
-                          o.autonomous_speed, settings());
-  });
-  ++r.autonomous_count;
   if (!out.completed || out.samples.size() < 10) {
     log(out.stop.arc, 0, "autonomous", "error_exit",
         "the autonomous scan failed: " + (out.fault.empty() ? "too few points" : out.fault));
     r.reason = "autonomous scan failed: " + out.fault;
     return false;
   }
+  if (missed >= 0 && smp.arc[best] > from)
+    cut_off(from, smp.arc[best],
+            fmt::format("no surface found on the approach {:.1f} mm along the stretch: the part "
+                        "is not within the approach's search of its design there",
+                        missed));
+  if (!current.closed && short_of > 1)
+    cut_off(to - short_of, to,
+            fmt::format("an autonomous scan is not followed closer than {:.1f} mm to the end of "
+                        "the stretch: where the part stands along it is known only that well",
+                        short_of));
   log(out.stop.arc, 0, "autonomous", "autonomous_scan",
       fmt::format("{} points over {:.1f} mm", out.samples.size(), out.samples.back().arc));
   r.points = out.samples;

@@ -501,6 +501,7 @@ ScanOutcome VirtualCmm::scan_unknown(const design::Plane& plane, const Eigen::Ve
     if (r.contact && r.deflection.norm() >= st.pushing) break;
     if (s > 2 * (st.approach_clearance + st.approach_limit) + 10) {
       out.fault = "autonomous scan: no surface found on the approach";
+      out.missed_surface = true;
       move(start, o_.positioning_speed);
       return out;
     }

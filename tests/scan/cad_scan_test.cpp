@@ -457,6 +457,31 @@ TEST(CadScan, NistCtc05StemMeetingThePartStopsTheScanNotTheRun) {
   EXPECT_GE(scanned, 4) << r.summary();
 }
 
+// Moved across the plane of a vertical section, a part is cut elsewhere: CTC 05 moved 2.2 mm
+// across the y plane and turned -0.4° has no surface within the approach's search at the start
+// of the 14 mm stretch y:4, and its autonomous scan failed there (an error, nothing measured).
+// The approach is tried again from further along the stretch: the part is met 6 mm in, the rest
+// is measured on the true contour, and what lies before is reported with why.
+TEST(CadScan, AnApproachThatFindsNoSurfaceIsTriedFurtherAlongTheStretch) {
+  sim::PartDeviation dev;
+  dev.translation = Eigen::Vector3d(0, 2.2, 0);
+  dev.rotation_deg = Eigen::Vector3d(0, 0, -0.4);
+  int scanned = 0;
+  const auto r = ctc05_y_scan(dev, scanned, scan::Strategy::Autonomous);
+  EXPECT_TRUE(r.stopped.empty()) << r.stopped;
+  EXPECT_GE(count(r, "approach_missed"), 1) << r.summary();
+  for (const auto& s : r.sections)
+    if (s.name == "y:4") {
+      EXPECT_TRUE(s.ok) << s.reason;
+      EXPECT_GE(s.points.size(), 10u);
+    }
+  int reported = 0;
+  for (const auto& u : r.unreachable)
+    reported += u.section == "y:4" && u.why.find("no surface found on the approach") == 0;
+  EXPECT_EQ(reported, 1) << r.summary();
+  EXPECT_GE(scanned, 5) << r.summary();
+}
+
 // What one section's touch points find of where the part stands is handed on to the others: a
 // batch's fixture error (moved 1.8 mm, -1.1 mm and turned 0.3°) costs the first part one
 // trajectory error, and the next part none.

@@ -49,6 +49,7 @@ struct ScanOutcome {
   bool completed = false;       // ran to the end (else stopped by the monitor or a fault)
   Sample stop;                  // the last tick's state (where it stopped)
   std::string fault;            // why the machine stopped by itself ("" if it did not)
+  bool missed_surface = false;  // an autonomous scan's approach found no surface in its search
 };
 
 // A free move stopped by the probe: the ball, or the stem above it, met the part where the move
