@@ -109,7 +109,10 @@ struct Event {
   // section not measured given the part's move found on others, for the next part), restart (a
   // closed contour started elsewhere), part_move_found (the part's move from the touch points of
   // several stretches together), part_move_guessed (the part's solid moved to fit the touch
-  // points so far, tried on the sections after)
+  // points so far, tried on the sections after), rest_autonomous (the rest of a stretch scanned
+  // autonomously instead of a touch round and a rescan), approach_missed (an autonomous scan's
+  // approach met no surface: tried further along), unexpected_touch (the probe stopped a free
+  // move on the part)
   std::string event;
   std::string decision;  // in words
 };
