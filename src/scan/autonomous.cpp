@@ -138,7 +138,8 @@ bool SectionRun::autonomous() {
   double missed = -1;  // the last approach that found no surface (mm along the stretch)
   // Where the approach finds no surface within its search (the part is not where its design
   // puts it there: moved across a vertical section's plane, the part is cut elsewhere), an open
-  // stretch is tried again from further along, the first smooth place 1 mm beyond, up to
+  // stretch is tried again from further along, the first smooth place (`lead` from a corner) 1 mm
+  // beyond, up to
   // kApproachTries times; what lies before the start that met the part is reported.
   for (int attempt = 0;; ++attempt) {
     if (!current.closed && to - smp.arc[best] - short_of < detail::kShortest) {
@@ -169,8 +170,12 @@ bool SectionRun::autonomous() {
       break;
     missed = smp.arc[best];
     std::vector<std::pair<double, Eigen::Index>> later;
-    for (Eigen::Index i = 0; i < n; ++i)
-      if (smp.arc[i] >= missed + 1 && smooth_at(smp, i, false)) later.emplace_back(smp.arc[i], i);
+    for (Eigen::Index i = 0; i < n; ++i) {
+      if (smp.arc[i] < missed + 1 || smp.arc[i] > to || !smooth_at(smp, i, false)) continue;
+      const bool by_corner = std::any_of(corners.begin(), corners.end(),
+                                         [&](double c) { return std::abs(smp.arc[i] - c) < lead; });
+      if (!by_corner) later.emplace_back(smp.arc[i], i);
+    }
     if (later.empty()) break;
     log(missed, 0, "autonomous", "approach_missed",
         fmt::format("no surface found on the approach at {:.1f} mm along the stretch: tried "
