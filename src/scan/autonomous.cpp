@@ -211,15 +211,16 @@ bool SectionRun::autonomous() {
   for (const Sample& s : out.samples)
     off_design = std::max(off_design, std::abs(design.nearest(s.surface).distance));
   if (o.strategy == Strategy::Autonomous) return true;
-  // The measured contour is the design for the rescan and for the next part, if the ball can
-  // follow it: a measured polyline may have a notch (a corner of the real part, noise) where
-  // no path keeps the offset. The section is then measured by the autonomous scan, and the
-  // design data stay as they were.
-  if (const std::string why = take_measured(out.samples); !why.empty()) {
-    measured_only = true;
-    log(0, 0, "autonomous", "section_done",
-        "measured by the autonomous scan; its contour is not kept as the design data: " + why);
-  }
+  // The scan is the section's measurement. The measured contour is the design data for the next
+  // part, if the ball can follow it: a measured polyline may have a notch (a corner of the real
+  // part, noise) where no path keeps the offset; the design data then stay as they were.
+  const std::string why = take_measured(out.samples);
+  log(0, 0, "autonomous", "section_done",
+      why.empty() ? "measured by autonomous scanning; the measured contour is the design data for "
+                    "the next part"
+                  : "measured by the autonomous scan; its contour is not kept as the design "
+                    "data: " +
+                        why);
   return true;
 }
 

@@ -281,10 +281,6 @@ void SectionRun::run() {
     // mode would measure it again, and might not be possible at all: a part off its design by
     // more than the margin lies where the design's solid leaves the ball no way down to it.
     r.ok = true;
-    if (!measured_only)
-      log(0, 0, "autonomous", "section_done",
-          "measured by autonomous scanning; the measured contour is the design data for the next "
-          "part");
     break;
   }
   hand_on_part_move();

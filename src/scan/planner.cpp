@@ -122,6 +122,16 @@ bool Planner::clear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Ei
   }
 }
 
+double Planner::length(const Eigen::Vector3d& a, const std::vector<Eigen::Vector3d>& way) {
+  double L = 0;
+  Eigen::Vector3d p = a;
+  for (const Eigen::Vector3d& q : way) {
+    L += (q - p).norm();
+    p = q;
+  }
+  return L;
+}
+
 std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eigen::Vector3d& b,
                                             const Eigen::Vector3d& axis, bool rise,
                                             const WayCost& cost, double least_per_mm) const {
@@ -154,16 +164,8 @@ std::vector<Eigen::Vector3d> Planner::route(const Eigen::Vector3d& a, const Eige
     return out;
   }
   const Eigen::Vector3d start = from;
-  const WayCost length = [&](const std::vector<Eigen::Vector3d>& way) {
-    double L = 0;
-    Eigen::Vector3d p = a;
-    for (const Eigen::Vector3d& q : way) {
-      L += (q - p).norm();
-      p = q;
-    }
-    return L;
-  };
-  const WayCost& measure = cost ? cost : length;
+  const WayCost by_length = [&](const std::vector<Eigen::Vector3d>& way) { return length(a, way); };
+  const WayCost& measure = cost ? cost : by_length;
   const double per_mm = cost ? least_per_mm : 1.0;
   auto whole = [&](const std::vector<Eigen::Vector3d>& w) {
     std::vector<Eigen::Vector3d> way = out;

@@ -214,10 +214,6 @@ struct SectionRun {
   std::optional<design::ScanPath> scanned_path;
   std::vector<Sample> partial;
 
-  // Set when an autonomous scan measured the section but its contour could not become the
-  // design data (autonomous()): the section is done.
-  bool measured_only = false;
-
   // Why no scanning path can be made along s (empty if one can).
   std::string unpathable(const design::Section& s) const {
     try {

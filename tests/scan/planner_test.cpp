@@ -165,13 +165,7 @@ TEST(Planner, AMovePastATallPostGoesRoundItAtItsLevelWhereThatCostsLess) {
   const Eigen::Vector3d u = Eigen::Vector3d::UnitZ(), a(-10, 10, 25), b(30, 10, 25);
   ASSERT_FALSE(p.clear(a, b, u, kMargin));
   auto length = [&](const std::vector<Eigen::Vector3d>& way) {
-    double L = 0;
-    Eigen::Vector3d at = a;
-    for (const Eigen::Vector3d& q : way) {
-      L += (q - at).norm();
-      at = q;
-    }
-    return L;
+    return scan::Planner::length(a, way);
   };
   const auto round = p.route(a, b, u);
   ASSERT_FALSE(round.empty());

@@ -61,6 +61,8 @@ class Planner {
   // default cost, 1): ways round the part too long to cost less than over the top are not
   // looked at.
   using WayCost = std::function<double(const std::vector<Eigen::Vector3d>&)>;
+  // The length of a way from a through its points (mm): the default cost.
+  static double length(const Eigen::Vector3d& a, const std::vector<Eigen::Vector3d>& way);
   // The way from a to b as the points to move to (b last). `rise` forces the retract along the
   // axis first (the start of a run: a machine is not trusted to stand anywhere in particular).
   // A start nearer the part than the margin (the ball just left a surface) first backs away from
